@@ -1,0 +1,16 @@
+# The two commands of the README: `make demo` and `make test`.
+PY := .venv/bin/python
+
+.PHONY: setup demo test test-serial test-mpi benchmark
+setup:
+	bash scripts/setup.sh
+
+demo: setup
+	$(PY) demos/punch.py
+
+test: setup
+	$(PY) -m pytest -q tests
+	mpirun --allow-run-as-root --oversubscribe -n 2 $(PY) -m pytest -q -m "not serial" tests
+
+benchmark: setup
+	$(PY) benchmarks/contact_phases.py

@@ -1,0 +1,1 @@
+"""Node-to-face penalty contact for dolfinx, reproducing CalculiX 2.20 node-to-surface contact."""
