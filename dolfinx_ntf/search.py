@@ -1,0 +1,467 @@
+"""Master triangulation, nodal normals, bounding planes and the triangle walk (spec §2.3, §3.2).
+
+Each master face is split into the sub-triangles of its `FaceType`. At every pairing the surface is
+updated in the current configuration: averaged nodal normals, one bounding plane per triangle edge
+(shared exactly by the two triangles of an interior edge, so the prisms tile space without gaps)
+and a k-d tree of triangle centroids. A slave node is then located by walking from the triangle
+with the nearest centroid across violated bounding planes, as CalculiX does.
+
+Pure numpy/scipy; nodes are integer ids indexing rows of a coordinate array.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from dolfinx_ntf.faces import FaceType
+
+__all__ = ["MAX_WALK_STEPS", "MasterSurface"]
+
+MAX_WALK_STEPS = 100
+"""A walk taking more steps than this finds no face (spec §3.2)."""
+
+
+class MasterSurface:
+    """Triangulated master surface with the search prisms of spec §2.3.
+
+    Args:
+        face_type: Type of all faces of the surface.
+        faces: (F, n) node ids of the faces, in CalculiX order (outward normal).
+        name: Surface name used in error messages.
+        coords: Optional (num_nodes, 3) coordinates. When given, error messages about invalid
+            edges include the node coordinates, and `update(coords)` is run at construction.
+
+    Raises:
+        ValueError: If `faces` is malformed, if a face edge is shared by more than two faces, or
+            if two faces sharing an edge are oriented inconsistently (edge used twice in the same
+            direction).
+    """
+
+    def __init__(
+        self,
+        face_type: FaceType,
+        faces: np.ndarray,
+        *,
+        name: str = "master",
+        coords: np.ndarray | None = None,
+    ) -> None:
+        self._face_type = face_type
+        self._name = name
+        faces = _check_faces(face_type, faces, name)
+        self._faces = faces
+        self._nodes, local = np.unique(faces, return_inverse=True)
+        self._local_faces = local.reshape(faces.shape)
+        ref = None if coords is None else np.asarray(coords, dtype=float)
+
+        nc = face_type.num_corners
+        corners = faces[:, :nc]
+        face_edges = np.stack([corners, np.roll(corners, -1, axis=1)], axis=2).reshape(-1, 2)
+        _group_edges(face_edges, nc, name, ref, "face", "faces")
+
+        tri_local = np.asarray(face_type.triangles, dtype=np.int64)
+        t_per_face = tri_local.shape[0]
+        self._triangle_faces = np.repeat(np.arange(faces.shape[0]), t_per_face)
+        self._triangles = faces[:, tri_local].reshape(-1, 3)
+        self._local_triangles = self._local_faces[:, tri_local].reshape(-1, 3)
+        tri_edges = np.stack(
+            [self._triangles, np.roll(self._triangles, -1, axis=1)], axis=2
+        ).reshape(-1, 2)
+        rep, edge_id, sign, pairs = _group_edges(tri_edges, 3, name, ref, "triangle", "triangles")
+        neighbours = np.full(tri_edges.shape[0], -1, dtype=np.int64)
+        neighbours[pairs[:, 0]] = pairs[:, 1] // 3
+        neighbours[pairs[:, 1]] = pairs[:, 0] // 3
+        self._neighbours = neighbours.reshape(-1, 3)
+        # Unique edges as (start, end) master-local indices; each triangle edge is one of them,
+        # traversed forward (sign +1) or backward (sign -1).
+        local_edges = np.stack(
+            [self._local_triangles, np.roll(self._local_triangles, -1, axis=1)], axis=2
+        ).reshape(-1, 2)
+        self._edges = local_edges[rep]
+        self._edge_id = edge_id.reshape(-1, 3)
+        self._edge_sign = sign.reshape(-1, 3).astype(float)
+
+        self._updated = False
+        if ref is not None:
+            self.update(ref)
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def name(self) -> str:
+        """Surface name used in messages."""
+        return self._name
+
+    @property
+    def face_type(self) -> FaceType:
+        """Type of all faces."""
+        return self._face_type
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(F, n) node ids of the faces."""
+        return self._faces
+
+    @property
+    def num_faces(self) -> int:
+        """Number of master faces F."""
+        return int(self._faces.shape[0])
+
+    @property
+    def nodes(self) -> np.ndarray:
+        """(M,) sorted unique master node ids."""
+        return self._nodes
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(T, 3) node ids of the sub-triangles, outward order; face f owns rows f*t..f*t+t-1."""
+        return self._triangles
+
+    @property
+    def triangle_faces(self) -> np.ndarray:
+        """(T,) parent face index of each sub-triangle."""
+        return self._triangle_faces
+
+    @property
+    def triangle_neighbours(self) -> np.ndarray:
+        """(T, 3) triangle across edges (0,1), (1,2), (2,0) of each triangle, -1 for none."""
+        return self._neighbours
+
+    @property
+    def nodal_normals(self) -> np.ndarray:
+        """(M, 3) averaged unit nodal normals, rows aligned with `nodes`."""
+        self._require_update()
+        return self._nodal_normals
+
+    @property
+    def triangle_normals(self) -> np.ndarray:
+        """(T, 3) unit normals of the sub-triangle planes (outward)."""
+        self._require_update()
+        return self._triangle_normals
+
+    @property
+    def triangle_centroids(self) -> np.ndarray:
+        """(T, 3) centroids of the sub-triangles."""
+        self._require_update()
+        return self._centroids
+
+    # ------------------------------------------------------------------ update
+    def update(self, coords: np.ndarray) -> None:
+        """Recompute normals, bounding planes and the centroid tree for current coordinates.
+
+        Args:
+            coords: (num_nodes, 3) current node positions, indexed by node id.
+
+        Raises:
+            ValueError: If `coords` has the wrong shape or non-finite master coordinates, or if a
+                face normal, nodal normal, triangle or bounding plane is degenerate.
+        """
+        self._updated = False  # a failed update leaves no half-updated geometry in use
+        coords = np.asarray(coords, dtype=float)
+        if coords.ndim != 2 or coords.shape[1] != 3 or coords.shape[0] <= self._nodes[-1]:
+            raise ValueError(
+                f"Master surface '{self._name}': coords must have shape (num_nodes, 3) with "
+                f"num_nodes > {self._nodes[-1]} (largest master node id), got {coords.shape}"
+            )
+        x = coords[self._nodes]
+        if not np.all(np.isfinite(x)):
+            bad = self._nodes[~np.all(np.isfinite(x), axis=1)][0]
+            raise ValueError(f"Master surface '{self._name}': node {bad} has non-finite coords")
+
+        self._nodal_normals = self._compute_nodal_normals(x)
+        a, b, c = (x[self._local_triangles[:, k]] for k in range(3))
+        self._centroids = (a + b + c) / 3.0
+        m = np.cross(b - a, c - a)
+        norm = np.linalg.norm(m, axis=1)
+        if np.any(norm <= 0.0) or not np.all(np.isfinite(norm)):
+            t = int(np.flatnonzero(~(norm > 0.0))[0])
+            raise ValueError(
+                f"Master surface '{self._name}': degenerate sub-triangle {t} of face "
+                f"{self._triangle_faces[t]} (nodes {self._triangles[t].tolist()})"
+            )
+        self._triangle_normals = m / norm[:, None]
+        self._triangle_origins = a
+
+        # Bounding plane of each unique edge, oriented outward for its forward traversal.
+        xs, xe = x[self._edges[:, 0]], x[self._edges[:, 1]]
+        t = xe - xs
+        t /= np.linalg.norm(t, axis=1)[:, None]
+        e = self._nodal_normals[self._edges[:, 0]] + self._nodal_normals[self._edges[:, 1]]
+        e -= np.einsum("ij,ij->i", e, t)[:, None] * t
+        p = np.cross(t, e)
+        pnorm = np.linalg.norm(p, axis=1)  # = |e|, at most 2
+        if np.any(~(pnorm > 1e-12)):
+            k = int(np.flatnonzero(~(pnorm > 1e-12))[0])
+            ids = self._nodes[self._edges[k]].tolist()
+            raise ValueError(
+                f"Master surface '{self._name}': no bounding plane for edge {ids}: the nodal "
+                "normals at its ends cancel or lie along the edge"
+            )
+        p /= pnorm[:, None]
+        sign = self._edge_sign[:, :, None]
+        self._plane_normals = sign * p[self._edge_id]  # (T, 3, 3)
+        self._plane_points = xs[self._edge_id]  # (T, 3, 3)
+        self._tree = cKDTree(self._centroids)
+        self._updated = True
+
+    def _compute_nodal_normals(self, x: np.ndarray) -> np.ndarray:
+        """Normalized sum of the unit face normals at each master node's parametric position."""
+        ft = self._face_type
+        dphi = np.asarray(ft.shape_derivatives(np.asarray(ft.node_parameters, dtype=float)))
+        xf = x[self._local_faces]  # (F, n, 3)
+        q_xi = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 0])
+        q_eta = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 1])
+        m = np.cross(q_xi, q_eta)  # (F, n, 3)
+        norm = np.linalg.norm(m, axis=2)
+        if np.any(~(norm > 0.0)):
+            f, k = (int(v[0]) for v in np.nonzero(~(norm > 0.0)))
+            raise ValueError(
+                f"Master surface '{self._name}': face {f} (nodes {self._faces[f].tolist()}) has "
+                f"a zero normal at its node {self._faces[f, k]}"
+            )
+        unit = m / norm[:, :, None]
+        acc = np.zeros((self._nodes.size, 3))
+        np.add.at(acc, self._local_faces.ravel(), unit.reshape(-1, 3))
+        anorm = np.linalg.norm(acc, axis=1)
+        if np.any(~(anorm > 1e-12)):
+            k = int(np.flatnonzero(~(anorm > 1e-12))[0])
+            raise ValueError(
+                f"Master surface '{self._name}': the face normals at node {self._nodes[k]} "
+                f"(coords {x[k].tolist()}) cancel, no nodal normal"
+            )
+        return acc / anorm[:, None]
+
+    # ------------------------------------------------------------------ search
+    def plane_distances(self, points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+        """Signed distances of points to the three bounding planes of given triangles.
+
+        Args:
+            points: (N, 3) positions.
+            triangles: (N,) triangle indices.
+
+        Returns:
+            (N, 3) distances to the planes through edges (0,1), (1,2), (2,0); positive outside.
+        """
+        self._require_update()
+        points = np.asarray(points, dtype=float)
+        return np.einsum(
+            "nkc,nkc->nk",
+            self._plane_normals[triangles],
+            points[:, None, :] - self._plane_points[triangles],
+        )
+
+    def locate(
+        self,
+        points: np.ndarray,
+        tolerances: np.ndarray | float,
+        *,
+        max_depth: float | None = None,
+        max_steps: int = MAX_WALK_STEPS,
+    ) -> np.ndarray:
+        """Master face holding each point, by the triangle walk of spec §3.2.
+
+        Args:
+            points: (N, 3) current slave positions.
+            tolerances: (N,) or scalar plane tolerance; a plane counts as violated when the
+                signed distance exceeds it (ccx: 1e-3*sqrt(A_p), or 0 when A_p = 0).
+            max_depth: If given, reject points deeper than this below the accepted triangle's
+                plane (not in ccx, which has no penetration-side limit).
+            max_steps: A walk needing more steps than this finds nothing (ccx: 100).
+
+        Returns:
+            (N,) face index, or -1 where no face is found.
+        """
+        tri = self.locate_triangles(points, tolerances, max_depth=max_depth, max_steps=max_steps)
+        out = np.full(tri.shape, -1, dtype=np.int64)
+        found = tri >= 0
+        out[found] = self._triangle_faces[tri[found]]
+        return out
+
+    def locate_triangles(
+        self,
+        points: np.ndarray,
+        tolerances: np.ndarray | float,
+        *,
+        max_depth: float | None = None,
+        max_steps: int = MAX_WALK_STEPS,
+    ) -> np.ndarray:
+        """Sub-triangle accepted by the walk for each point (see `locate`); -1 for none.
+
+        Args:
+            points: (N, 3) current slave positions.
+            tolerances: (N,) or scalar plane tolerance (see `locate`).
+            max_depth: Optional penetration-side depth limit (see `locate`).
+            max_steps: A walk needing more steps than this finds nothing (ccx: 100).
+
+        Returns:
+            (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
+            (spec §1).
+        """
+        self._require_update()
+        points, tol = self._check_points(points, tolerances, max_depth)
+        if max_steps < 0:
+            raise ValueError(f"max_steps = {max_steps} must be >= 0")
+        n = points.shape[0]
+        result = np.full(n, -1, dtype=np.int64)
+        if n == 0:
+            return result
+        _, start = self._tree.query(points, k=1)
+        cur = np.asarray(start, dtype=np.int64)
+        prev = np.full(n, -1, dtype=np.int64)
+        idx = np.arange(n)
+        hist = np.full((n, 8), -1, dtype=np.int64)  # visited triangles of the walking points
+        hist[:, 0] = cur
+        for step in range(max_steps + 1):  # `step` = steps taken so far
+            violated = self.plane_distances(points[idx], cur) > tol[idx, None]
+            moving = violated.any(axis=1)
+            result[idx[~moving]] = cur[~moving]
+            plane = np.argmax(violated, axis=1)  # first violated plane, in order 1, 2, 3
+            nb = self._neighbours[cur, plane]
+            moving &= nb >= 0  # no neighbour: no face
+            back = moving & (nb == prev)  # neighbour is the triangle just left: accept
+            result[idx[back]] = cur[back]
+            moving &= ~back
+            moving &= ~np.any(hist[:, : step + 1] == nb[:, None], axis=1)  # visited: no face
+            if step == max_steps:
+                break  # the walking points would exceed the step limit: no face
+            idx, prev, cur, hist = idx[moving], cur[moving], nb[moving], hist[moving]
+            if idx.size == 0:
+                break
+            if step + 1 == hist.shape[1]:
+                grow = min(hist.shape[1], max_steps + 1 - hist.shape[1])
+                hist = np.concatenate([hist, np.full((idx.size, grow), -1, np.int64)], axis=1)
+            hist[:, step + 1] = cur
+
+        if max_depth is not None:
+            found = np.flatnonzero(result >= 0)
+            t = result[found]
+            depth = -np.einsum(
+                "nc,nc->n", self._triangle_normals[t], points[found] - self._triangle_origins[t]
+            )
+            result[found[depth > max_depth]] = -1
+        return result
+
+    # ------------------------------------------------------------------ helpers
+    def _require_update(self) -> None:
+        """Refuse geometric queries before the first `update`."""
+        if not self._updated:
+            raise RuntimeError(
+                f"Master surface '{self._name}': call update(coords) before searching"
+            )
+
+    def _check_points(
+        self, points: np.ndarray, tolerances: np.ndarray | float, max_depth: float | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Validate search input; return points and per-point tolerances as float arrays."""
+        points = np.asarray(points, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 3:
+            raise ValueError(f"points must have shape (N, 3), got {points.shape}")
+        if not np.all(np.isfinite(points)):
+            i = int(np.flatnonzero(~np.all(np.isfinite(points), axis=1))[0])
+            raise ValueError(f"points[{i}] is not finite: {points[i].tolist()}")
+        tol = np.asarray(tolerances, dtype=float)
+        if tol.ndim == 0:
+            tol = np.full(points.shape[0], float(tol))
+        if tol.shape != (points.shape[0],):
+            raise ValueError(
+                f"tolerances must be a scalar or have shape ({points.shape[0]},), got {tol.shape}"
+            )
+        if np.any(~(tol >= 0.0)) or not np.all(np.isfinite(tol)):
+            i = int(np.flatnonzero(~((tol >= 0.0) & np.isfinite(tol)))[0])
+            raise ValueError(f"tolerances[{i}] = {tol[i]} must be finite and >= 0")
+        if max_depth is not None and not (np.isfinite(max_depth) and max_depth >= 0.0):
+            raise ValueError(f"max_depth = {max_depth} must be finite and >= 0")
+        return points, tol
+
+
+def _check_faces(face_type: FaceType, faces: np.ndarray, name: str) -> np.ndarray:
+    """Validate the (F, n) connectivity array and return it as int64."""
+    arr = np.asarray(faces)
+    if arr.ndim != 2 or arr.shape[1] != face_type.num_nodes:
+        raise ValueError(
+            f"Master surface '{name}': faces must have shape (F, {face_type.num_nodes}) for "
+            f"{face_type.name}, got {arr.shape}"
+        )
+    if arr.shape[0] == 0:
+        raise ValueError(f"Master surface '{name}' has no faces")
+    if not np.issubdtype(arr.dtype, np.integer):
+        raise ValueError(
+            f"Master surface '{name}': faces must be integer node ids, got dtype {arr.dtype}"
+        )
+    arr = arr.astype(np.int64)
+    if np.any(arr < 0):
+        f = int(np.flatnonzero(np.any(arr < 0, axis=1))[0])
+        raise ValueError(f"Master surface '{name}': face {f} has a negative node id {arr[f]}")
+    srt = np.sort(arr, axis=1)
+    dup = np.any(srt[:, 1:] == srt[:, :-1], axis=1)
+    if np.any(dup):
+        f = int(np.flatnonzero(dup)[0])
+        raise ValueError(
+            f"Master surface '{name}': face {f} repeats a node: {arr[f].tolist()}"
+        )
+    return arr
+
+
+def _group_edges(
+    edges: np.ndarray,
+    per_item: int,
+    name: str,
+    coords: np.ndarray | None,
+    item: str,
+    items: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Group directed edges by node pair and check they are shared consistently.
+
+    Args:
+        edges: (E, 2) directed edges; edge k belongs to item k // per_item.
+        per_item: Edges per item (face or triangle).
+        name: Surface name for messages.
+        coords: Optional coordinates for messages.
+        item: Singular item name for messages.
+        items: Plural item name for messages.
+
+    Returns:
+        Representative edge index per unique edge, unique-edge id per edge, sign (+1 if the
+        edge runs like its representative, else -1) per edge, and (P, 2) pairs of edge indices
+        shared by two items.
+    """
+    lo, hi = edges.min(axis=1), edges.max(axis=1)
+    keys = lo * (int(edges.max()) + 1) + hi
+    order = np.argsort(keys, kind="stable")
+    sk = keys[order]
+    new = np.ones(sk.size, dtype=bool)
+    new[1:] = sk[1:] != sk[:-1]
+    starts = np.flatnonzero(new)
+    counts = np.diff(np.append(starts, sk.size))
+    if np.any(counts > 2):
+        g = int(np.flatnonzero(counts > 2)[0])
+        members = order[starts[g] : starts[g] + counts[g]]
+        raise ValueError(
+            f"Master surface '{name}': edge {_describe(edges[members[0]], coords)} is shared by "
+            f"{counts[g]} {items} ({items} {sorted((members // per_item).tolist())}); a master "
+            "edge may border at most two faces (spec §2.3)"
+        )
+    group = np.cumsum(new) - 1
+    edge_id = np.empty(edges.shape[0], dtype=np.int64)
+    edge_id[order] = group
+    rep = order[starts]
+    pairs = np.stack([order[:-1][~new[1:]], order[1:][~new[1:]]], axis=1)
+    same_dir = edges[pairs[:, 0], 0] == edges[pairs[:, 1], 0]
+    if np.any(same_dir):
+        a, b = pairs[int(np.flatnonzero(same_dir)[0])]
+        raise ValueError(
+            f"Master surface '{name}': edge {_describe(edges[a], coords)} is traversed in the "
+            f"same direction by {item}s {a // per_item} and {b // per_item}: neighbouring faces "
+            "are inconsistently oriented (the node order must give outward normals)"
+        )
+    sign = np.where(edges[:, 0] == edges[rep[edge_id], 0], 1, -1)
+    return rep, edge_id, sign, pairs
+
+
+def _describe(edge: np.ndarray, coords: np.ndarray | None) -> str:
+    """Edge node ids, with coordinates when available."""
+    ids = [int(v) for v in edge]
+    if coords is None or coords.ndim != 2 or coords.shape[0] <= max(ids):
+        return f"(nodes {ids[0]}, {ids[1]})"
+    return (
+        f"(nodes {ids[0]} at {coords[ids[0]].tolist()}, {ids[1]} at {coords[ids[1]].tolist()})"
+    )
