@@ -1,0 +1,304 @@
+"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual and Jacobian.
+
+:class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides assembling the
+user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule (spec §3.1) and add the spring
+elements (spec §4, §5). The step driver in ``solver.py`` tells it when an increment starts.
+"""
+
+from __future__ import annotations
+
+import logging
+import typing
+from dataclasses import dataclass, field
+
+import numpy as np
+import ufl
+from petsc4py import PETSc
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+
+from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
+from dolfinx_ntf.laws import SurfaceInteraction
+from dolfinx_ntf.search import MasterSurface
+from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
+from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
+from dolfinx_ntf.surfaces import (FacetSurface, NodeSurface, SlaveSurface, SurfaceFaces, reference_coordinates,
+                                  resolve_master, resolve_slave)
+
+__all__ = ["ContactPair", "PairState", "ContactProblem"]
+
+logger = logging.getLogger("dolfinx_ntf")
+
+#: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION (spec §3.1, ccx: iit <= 8).
+LAST_REPAIRING_ITERATION = 8
+#: Relative walk tolerance of the triangle search (spec §3.2).
+SEARCH_TOLERANCE = 1e-3
+
+
+@dataclass
+class ContactPair:
+    """One node-to-face contact pair (CalculiX ``*CONTACT PAIR, TYPE=NODE TO SURFACE``).
+
+    Args:
+        slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave surface.
+        master: Face-based master surface.
+        interaction: Pressure-overclosure law (and, later, friction).
+        small_sliding: Pair only at increment starts. As in CalculiX, the flag of the *last* pair decides for all.
+        name: Label used in messages and output.
+        active: Inactive pairs generate no springs (``*MODEL CHANGE``).
+    """
+
+    slave: FacetSurface | NodeSurface
+    master: FacetSurface
+    interaction: SurfaceInteraction
+    small_sliding: bool = False
+    name: str = ""
+    active: bool = True
+
+
+@dataclass
+class PairState:
+    """Numbering-level data of a pair and its springs at the current pairing."""
+
+    pair: ContactPair
+    slave: SlaveSurface
+    master_faces: SurfaceFaces
+    master: MasterSurface
+    overlap: np.ndarray  # (S,) initial overlap g0 per slave node (spec §3.6)
+    spring_slave: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))  # index into slave.nodes
+    spring_face: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    spring_area: np.ndarray = field(default_factory=lambda: np.empty(0))
+    xi: np.ndarray | None = None
+    evaluation: SpringEvaluation | None = None
+
+    @property
+    def num_springs(self) -> int:
+        """Number of contact spring elements of this pair."""
+        return int(self.spring_slave.size)
+
+    @property
+    def element_nodes(self) -> np.ndarray:
+        """(N, n+1) spring nodes: master face nodes, then the slave node."""
+        faces = self.master_faces.faces[self.spring_face]
+        return np.hstack([faces, self.slave.nodes[self.spring_slave][:, None]])
+
+
+class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
+    """Nonlinear problem ``F(u) + f_contact(u) = 0`` with node-to-face penalty springs.
+
+    Args:
+        F: The user's UFL residual (any bulk law: small strain, St.Venant-Kirchhoff, neo-Hookean...).
+        u: The displacement, a 3D vector Lagrange function (P1 or P2).
+        pairs: Contact pairs.
+        bcs: Dirichlet conditions.
+        J: UFL Jacobian (derived from ``F`` when omitted).
+        symmetric: Symmetrize the spring matrices like CalculiX's frictionless contact; default is the
+            consistent (unsymmetric) tangent.
+        linearize_area: Include the derivative of the spring areas (beyond CalculiX, which holds them constant).
+        max_depth: Reject nodes deeper than this below the master face (beyond CalculiX, which has no limit).
+        form_compiler_params, jit_params: Passed to dolfinx.
+    """
+
+    def __init__(self, F: ufl.form.Form, u: dolfinx.fem.Function, pairs: typing.Sequence[ContactPair],
+                 bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (), J: ufl.form.Form | None = None, *,
+                 symmetric: bool = False, linearize_area: bool = False, max_depth: float | None = None,
+                 form_compiler_params: dict | None = None, jit_params: dict | None = None) -> None:
+        super().__init__(F, u, list(bcs), J, form_compiler_params=form_compiler_params or {},
+                         jit_params=jit_params or {})
+        V = u.function_space
+        if V.dofmap.index_map_bs != 3 or V.mesh.geometry.dim != 3:
+            raise ValueError("ContactProblem needs a 3D vector displacement space (block size 3)")
+        if not pairs:
+            raise ValueError("ContactProblem needs at least one ContactPair")
+        self.u = u
+        self.symmetric = symmetric
+        self.linearize_area = linearize_area
+        self.max_depth = max_depth
+        self._reference = reference_coordinates(V)
+        self.assembler = ContactAssembler(V, self.a, self.bcs)
+        self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
+        self.small_sliding = bool(pairs[-1].small_sliding)
+        self.time_fraction = 1.0  # relative step time tau at the end of the current increment
+        self.static = True
+        self.iteration = 0
+        self.count_changed = False
+        self.pairings = 0
+        self._first_pairing_done = False
+        self.matrix: PETSc.Mat | None = None
+
+    def _resolve(self, index: int, pair: ContactPair) -> PairState:
+        name = pair.name or f"pair {index + 1}"
+        if pair.interaction.friction is not None:
+            raise NotImplementedError(f"{name}: friction is not supported yet (frictionless contact only)")
+        V = self.u.function_space
+        slave = resolve_slave(V, pair.slave, what=f"{name} slave")
+        master_faces = resolve_master(V, pair.master, what=f"{name} master")
+        if master_faces.faces.shape[0] == 0:
+            raise ValueError(f"{name}: the master surface has no faces")
+        master = MasterSurface(master_faces.face_type, master_faces.faces, name=f"{name} master",
+                               coords=self._reference)
+        both = np.intersect1d(slave.nodes, master_faces.nodes)
+        if both.size:
+            x = self._reference[both[0]]
+            raise ValueError(f"{name}: {both.size} node(s) belong to both the slave and the master surface "
+                             f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))")
+        return PairState(pair, slave, master_faces, master, np.zeros(slave.nodes.size))
+
+    # -- state --------------------------------------------------------------------------------------------
+
+    @property
+    def num_springs(self) -> int:
+        """Total number of contact spring elements over all pairs."""
+        return sum(s.num_springs for s in self.states)
+
+    def current_coordinates(self) -> np.ndarray:
+        """Node coordinates X + u (local nodes with ghosts)."""
+        return self._reference + self.u.x.array.reshape(-1, 3)
+
+    # -- pairing ------------------------------------------------------------------------------------------
+
+    def begin_increment(self, time_fraction: float, *, static: bool = True) -> None:
+        """Increment-start pairing at the last converged displacement (spec §3.1, §3.6).
+
+        Args:
+            time_fraction: Relative step time at the end of the increment (tau of the overlap ramp).
+            static: Static step (the initial overlap is ramped) or not.
+        """
+        self.time_fraction = float(time_fraction)
+        self.static = static
+        first = not self._first_pairing_done
+        for state in self.states:
+            state.overlap[:] = 0.0
+        self.pair(record_overlap=first)
+        self._first_pairing_done = True
+        self.iteration = 0
+        self.count_changed = False
+        self.ensure_matrix()
+
+    def pair(self, *, record_overlap: bool = False) -> int:
+        """Pair every slave node with a master face at the current displacement; returns the spring count."""
+        coords = self.current_coordinates()
+        for state in self.states:
+            self._pair_one(state, coords, record_overlap)
+        self.pairings += 1
+        count = self.num_springs
+        logger.info(" Number of contact spring elements=%d", count)
+        return count
+
+    def _pair_one(self, state: PairState, coords: np.ndarray, record_overlap: bool) -> None:
+        empty = np.empty(0, dtype=np.int64)
+        if not state.pair.active:
+            state.spring_slave, state.spring_face, state.spring_area, state.xi = empty, empty, np.empty(0), None
+            return
+        slave_faces = state.slave.faces
+        areas = spring_areas(slave_faces.face_type, slave_faces.faces, coords, state.slave.nodes)
+        state.master.update(coords)
+        points = coords[state.slave.nodes]
+        tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
+        face = state.master.locate(points, tolerances, max_depth=self.max_depth)
+        found = np.flatnonzero(face >= 0)
+        law = state.pair.interaction.law
+        ft = state.master_faces.face_type
+        evaluation = evaluate_springs(ft, coords[state.master_faces.faces[face[found]]], points[found],
+                                      areas[found], law, tangent=False)
+        gap = evaluation.gap
+        if record_overlap:
+            state.overlap[found] = np.minimum(gap, 0.0)
+        shift = self._gap_shift(state, found)
+        cutoff = law.cutoff(areas[found])
+        create = gap - shift <= cutoff
+        state.spring_slave = found[create]
+        state.spring_face = face[found][create].astype(np.int64)
+        state.spring_area = areas[found][create]  # 0 = no slave face: springs.py applies the fallback
+        state.xi = evaluation.xi[create]
+
+    def _gap_shift(self, state: PairState, slave_index: np.ndarray) -> np.ndarray | float:
+        """g0 (1 - tau) in static steps, 0 otherwise (spec §3.6)."""
+        if not self.static:
+            return 0.0
+        return state.overlap[slave_index] * (1.0 - self.time_fraction)
+
+    # -- springs ------------------------------------------------------------------------------------------
+
+    def evaluate(self, *, tangent: bool = True) -> list[SpringBlocks]:
+        """Evaluate every spring at the current displacement; returns the blocks to assemble."""
+        coords = self.current_coordinates()
+        blocks = []
+        for state in self.states:
+            nodes = state.element_nodes
+            ev = evaluate_springs(state.master_faces.face_type, coords[nodes[:, :-1]], coords[nodes[:, -1]],
+                                  state.spring_area, state.pair.interaction.law,
+                                  gap_shift=self._gap_shift(state, state.spring_slave), xi0=state.xi,
+                                  tangent=tangent, symmetric=self.symmetric)
+            state.evaluation = ev
+            state.xi = ev.xi
+            blocks.append(SpringBlocks(nodes, nodes, ev.stiffness, ev.forces.reshape(nodes.shape[0], -1)))
+            if tangent and self.linearize_area:
+                blocks.append(self._area_block(state, coords))
+        return blocks
+
+    def _area_block(self, state: PairState, coords: np.ndarray) -> SpringBlocks:
+        """Tangent of F_N = A_p p(d) with respect to the nodes of the slave faces around p (dA_p/du)."""
+        faces = state.slave.faces
+        slave_index, node, gradient = spring_area_gradients(faces.face_type, faces.faces, coords,
+                                                            state.slave.nodes)
+        spring_of_slave = np.full(state.slave.nodes.size, -1, dtype=np.int64)
+        spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
+        spring = spring_of_slave[slave_index]
+        keep = spring >= 0
+        spring, node, gradient = spring[keep], node[keep], gradient[keep]
+        per_area = state.evaluation.force_per_area.reshape(state.num_springs, -1)[spring]
+        values = per_area[:, :, None] * gradient[:, None, :]
+        return SpringBlocks(state.element_nodes[spring], node[:, None].astype(np.int64), values)
+
+    def ensure_matrix(self) -> PETSc.Mat:
+        """The Jacobian matrix, recreated when the current springs need couplings it lacks."""
+        blocks = [SpringBlocks(s.element_nodes, s.element_nodes) for s in self.states]
+        if self.linearize_area:
+            blocks += [self._area_pattern(s) for s in self.states]
+        if self.matrix is None or not self.assembler.has_pattern(blocks):
+            if self.matrix is not None:
+                self.matrix.destroy()
+            self.matrix = self.assembler.create_matrix(blocks)
+        return self.matrix
+
+    def _area_pattern(self, state: PairState) -> SpringBlocks:
+        faces = state.slave.faces.faces
+        nodes = state.slave.nodes[state.spring_slave]
+        touching = np.isin(faces, nodes).any(axis=1)
+        patch = np.unique(faces[touching])
+        # Couple every spring node with every node of the slave faces touching a spring (a superset).
+        elem = np.unique(state.element_nodes)
+        return SpringBlocks(elem[None, :], patch[None, :])
+
+    # -- dolfinx callbacks --------------------------------------------------------------------------------
+
+    def form(self, x: PETSc.Vec) -> None:
+        """Before F and J: update ghosts, re-pair on CalculiX's schedule, evaluate the springs."""
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self.iteration += 1
+        self.count_changed = False
+        if not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION:
+            before = self.num_springs
+            self.count_changed = self.pair() != before
+        self._blocks = self.evaluate(tangent=True)
+
+    def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """Assemble the bulk residual plus the spring forces into ``b``."""
+        with b.localForm() as b_local:
+            b_local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(b, self.L)
+        dolfinx.fem.petsc.apply_lifting(b, [self.a], bcs=[self.bcs], x0=[x], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self.assembler.add_to_vector(b, self._blocks)
+        dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
+
+    def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """Assemble the bulk Jacobian plus the spring tangents into ``A``."""
+        A.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(A, self.a, self.bcs)
+        A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
+        A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        self.assembler.add_to_matrix(A, self._blocks)
+        A.assemble()

@@ -1,0 +1,225 @@
+"""Newton solver with CalculiX's contact convergence rules, and a static step driver with cutbacks.
+
+dolfinx 0.5.2's C++ Newton loop has no convergence hook, so :class:`ContactNewtonSolver` refuses convergence from
+outside it: when the loop converges right after a re-pairing that changed the number of springs, or after fewer
+than two Newton iterations, it starts the loop again from the current iterate (the schedule of re-pairings goes on,
+because the problem counts iterations per increment, not per loop).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+import typing
+from dataclasses import dataclass, field
+
+import numpy as np
+from petsc4py import PETSc
+
+import dolfinx.fem
+import dolfinx.nls.petsc
+
+from dolfinx_ntf.problem import ContactProblem
+
+__all__ = ["ContactConvergenceError", "ContactNewtonSolver", "IncrementResult", "StaticStep", "LoadControl", "log_progress"]
+
+logger = logging.getLogger("dolfinx_ntf")
+
+#: Default linear solver: sparse direct LU by MUMPS.
+DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+
+
+class ContactConvergenceError(RuntimeError):
+    """A Newton solve or a whole step failed to converge."""
+
+
+class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
+    """dolfinx Newton solver driving a :class:`ContactProblem`.
+
+    Args:
+        comm: MPI communicator.
+        problem: The contact problem.
+        petsc_options: PETSc options of the linear solver, set under ``options_prefix``
+            (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`).
+        options_prefix: Prefix of the Krylov solver's options.
+        relative_tolerance: Converged when the residual norm falls below this fraction of the first residual
+            norm of the increment (or below ``atol``).
+        atol: Absolute residual tolerance.
+        max_it: Maximum Newton iterations per increment.
+    """
+
+    def __init__(self, comm, problem: ContactProblem, *, petsc_options: dict | None = None,
+                 options_prefix: str = "ntf_", relative_tolerance: float = 1e-10, atol: float = 1e-12,
+                 max_it: int = 30) -> None:
+        super().__init__(comm, problem)
+        self.problem = problem
+        self._A.destroy()
+        self._A = problem.ensure_matrix()
+        self.setJ(problem.J, self._A)
+        self.convergence_criterion = "residual"
+        self.relative_tolerance = relative_tolerance
+        self.absolute_tolerance = atol
+        self.rtol = 0.0
+        self.max_it = max_it
+        self.error_on_nonconvergence = False
+        self.report = False
+        self.setF(self._residual, self._b)
+        self._first_residual = None
+        self.residual_norms: list[float] = []
+        ksp = self.krylov_solver
+        ksp.setOptionsPrefix(options_prefix)
+        opts = PETSc.Options()
+        for key, value in (DEFAULT_PETSC_OPTIONS if petsc_options is None else petsc_options).items():
+            opts[f"{options_prefix}{key}"] = value
+        ksp.setFromOptions()
+
+    def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        self.problem.F(x, b)
+        norm = b.norm()
+        if not np.isfinite(norm):
+            raise ContactConvergenceError(
+                f"residual is not finite (norm {norm}) at iteration {self.problem.iteration}")
+        self.residual_norms.append(norm)
+        if self._first_residual is None:
+            self._first_residual = norm
+            self.atol = max(self.absolute_tolerance, self.relative_tolerance * norm)
+
+    def _bind_matrix(self) -> None:
+        A = self.problem.ensure_matrix()
+        if A is not self._A:
+            self._A = A
+            self.setJ(self.problem.J, A)
+
+    def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
+        """Solve one increment from the current ``u`` (after :meth:`ContactProblem.begin_increment`).
+
+        Returns:
+            The number of Newton iterations and True; a failure raises :class:`ContactConvergenceError`.
+        """
+        self._first_residual = None
+        self.residual_norms = []
+        iterations = 0
+        while True:
+            self._bind_matrix()
+            try:
+                n, converged = super().solve(u)
+            except RuntimeError as error:  # PETSc failures inside the loop (e.g. a zero pivot)
+                raise ContactConvergenceError(f"Newton iteration failed: {error}") from error
+            iterations += n
+            if not converged:
+                raise ContactConvergenceError(
+                    f"Newton did not converge in {iterations} iterations (residual {self.residual_norms[-1]:.3e}, "
+                    f"tolerance {self.atol:.3e})")
+            if self.problem.count_changed or (iterations < 2 and n > 0):
+                if iterations >= self.max_it:
+                    raise ContactConvergenceError(
+                        f"Newton: the contact set kept changing for {iterations} iterations")
+                continue
+            return iterations, True
+
+
+LoadControl = typing.Callable[[float], None]
+
+
+@dataclass
+class IncrementResult:
+    """Summary of a converged increment."""
+
+    increment: int
+    attempt: int
+    time: float
+    time_fraction: float
+    iterations: int
+    springs: int
+    residual: float
+
+
+@dataclass
+class StaticStep:
+    """A static step of ``period`` with automatic incrementation (CalculiX ``*STATIC``).
+
+    Args:
+        set_load: Called with the step time at the end of each increment (before the pairing); scales loads
+            and prescribed displacements, e.g. ``lambda t: traction.value = t * p``.
+        period: Step time.
+        initial_increment, min_increment, max_increment: Increment sizes.
+        fixed: Use ``initial_increment`` throughout (CalculiX DIRECT).
+        predictor: Start each increment from ``u_n + dt v_prev`` like CalculiX (after the pairing).
+        on_increment: Called with the :class:`IncrementResult` of each converged increment.
+    """
+
+    set_load: LoadControl
+    period: float = 1.0
+    initial_increment: float = 1.0
+    min_increment: float = 1e-5
+    max_increment: float | None = None
+    fixed: bool = False
+    predictor: bool = True
+    on_increment: typing.Callable[[IncrementResult], None] | None = None
+    results: list[IncrementResult] = field(default_factory=list)
+
+    def run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+        """Run the step; raises :class:`ContactConvergenceError` when cutbacks are exhausted."""
+        problem = solver.problem
+        max_inc = self.period if self.max_increment is None else self.max_increment
+        if not (0 < self.min_increment <= self.initial_increment <= max_inc):
+            raise ValueError(f"StaticStep: need 0 < min_increment ({self.min_increment}) <= initial_increment "
+                             f"({self.initial_increment}) <= max_increment ({max_inc})")
+        t, dt = 0.0, self.initial_increment
+        increment = 0
+        velocity = None
+        while t < self.period * (1 - 1e-12):
+            increment += 1
+            attempt = 0
+            u_start = u.x.array.copy()
+            while True:
+                attempt += 1
+                dt = min(dt, self.period - t)
+                t_new = t + dt
+                logger.info(" increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
+                            increment, attempt, dt, t_new)
+                self.set_load(t_new)
+                start = time.perf_counter()
+                try:
+                    problem.begin_increment(t_new / self.period)
+                    if self.predictor and velocity is not None:
+                        u.x.array[:] = u_start + dt * velocity
+                        u.x.scatter_forward()
+                    iterations, _ = solver.solve(u)
+                    break
+                except ContactConvergenceError as error:
+                    u.x.array[:] = u_start
+                    u.x.scatter_forward()
+                    if self.fixed or dt / 2 < self.min_increment:
+                        raise ContactConvergenceError(
+                            f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) failed after {attempt} "
+                            f"attempt(s); increment size {dt:.3e} cannot be halved below the minimum "
+                            f"{self.min_increment:.3e}: {error}") from error
+                    logger.info(" %s; cutting back to %.6e", error, dt / 2)
+                    dt /= 2
+            velocity = (u.x.array - u_start) / dt
+            t = t_new
+            result = IncrementResult(increment, attempt, t, t / self.period, iterations, problem.num_springs,
+                                     solver.residual_norms[-1])
+            self.results.append(result)
+            logger.info(" increment %d converged: time %.6g, %d iterations, %d contact elements, residual %.3e "
+                        "(%.2f s)", increment, t, iterations, result.springs, result.residual,
+                        time.perf_counter() - start)
+            if self.on_increment is not None:
+                self.on_increment(result)
+            if not self.fixed and iterations <= 5:
+                dt = min(1.5 * dt, max_inc)
+        return self.results
+
+
+def log_progress(level: int = logging.INFO) -> None:
+    """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings, convergence) on rank 0."""
+    from mpi4py import MPI
+
+    if getattr(log_progress, "_handler", None) is None and MPI.COMM_WORLD.rank == 0:
+        handler = logging.StreamHandler()
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        logger.addHandler(handler)
+        log_progress._handler = handler
+    logger.setLevel(level)
+    logger.propagate = False

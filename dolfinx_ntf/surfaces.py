@@ -1,0 +1,216 @@
+"""Contact surfaces of a dolfinx mesh as faces of displacement nodes (dolfinx glue).
+
+A *node* here is a block dof of the vector displacement space ``V`` (P1 or P2): the spring elements move with the
+displacement dofs, so surfaces are expressed in ``V``'s local block numbering (owned and ghost). Faces come out in
+CalculiX order: corners counter-clockwise seen from outside the body, then midside nodes (see ``faces.py``).
+
+Users name surfaces with :class:`FacetSurface` (facet-tag values, the face-based surfaces of CalculiX) or
+:class:`NodeSurface` (a vertex set, CalculiX's ``*SURFACE, TYPE=NODE``); :func:`resolve_master` and
+:func:`resolve_slave` turn them into numbering-level data for the pure-numpy layers.
+"""
+
+from __future__ import annotations
+
+import typing
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.mesh
+
+from dolfinx_ntf.faces import FaceType, face_type_from_num_nodes
+
+__all__ = [
+    "FacetSurface",
+    "NodeSurface",
+    "SurfaceFaces",
+    "SlaveSurface",
+    "resolve_master",
+    "resolve_slave",
+    "boundary_faces",
+    "reference_coordinates",
+]
+
+
+@dataclass(frozen=True)
+class FacetSurface:
+    """A face-based surface: the facets of ``tags`` whose value is in ``values``."""
+
+    tags: dolfinx.mesh.MeshTagsMetaClass
+    values: typing.Sequence[int] | int
+
+    def value_list(self) -> list[int]:
+        """The tag values as a list."""
+        return [int(self.values)] if np.isscalar(self.values) else [int(v) for v in self.values]
+
+
+@dataclass(frozen=True)
+class NodeSurface:
+    """A node-based slave surface (CalculiX ``*SURFACE, TYPE=NODE``): local mesh vertex indices."""
+
+    vertices: np.ndarray = field(repr=False)
+    name: str = "nodes"
+
+    @classmethod
+    def from_marker(cls, mesh: dolfinx.mesh.Mesh, marker: typing.Callable[[np.ndarray], np.ndarray],
+                    name: str = "nodes") -> NodeSurface:
+        """The vertices where ``marker(x)`` is true (``x`` of shape (3, num_points))."""
+        return cls(dolfinx.mesh.locate_entities(mesh, 0, marker), name)
+
+
+@dataclass(frozen=True)
+class SurfaceFaces:
+    """Faces of one face type as node (block dof) connectivity in CalculiX order."""
+
+    face_type: FaceType
+    faces: np.ndarray  # (F, n) local block dofs
+    facets: np.ndarray  # (F,) local facet index of each face
+
+    @property
+    def nodes(self) -> np.ndarray:
+        """Sorted unique nodes of the faces."""
+        return np.unique(self.faces)
+
+
+@dataclass(frozen=True)
+class SlaveSurface:
+    """Slave nodes and the faces that give them spring area (spec §2.1)."""
+
+    nodes: np.ndarray  # (S,) sorted local block dofs
+    faces: SurfaceFaces
+
+
+def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Reference coordinates of the nodes of ``V``, shape (num_local_blocks_with_ghosts, 3)."""
+    return V.tabulate_dof_coordinates().reshape(-1, 3).copy()
+
+
+def _cell_arrays(V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
+    """Cell-to-node table of ``V`` and the facet-closure table of the reference cell."""
+    mesh = V.mesh
+    tdim = mesh.topology.dim
+    num_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
+    cell_nodes = V.dofmap.list.array.reshape(num_cells, -1)
+    layout = V.dofmap.dof_layout
+    num_facets_per_cell = dolfinx.cpp.mesh.cell_num_entities(mesh.topology.cell_type, tdim - 1)
+    closure = np.array([layout.entity_closure_dofs(tdim - 1, i) for i in range(num_facets_per_cell)])
+    return cell_nodes, closure
+
+
+def boundary_faces(V: dolfinx.fem.FunctionSpace, facets: np.ndarray, *, what: str = "surface") -> SurfaceFaces:
+    """Faces of boundary facets as nodes of ``V`` in CalculiX order, oriented out of their cell.
+
+    Args:
+        V: Vector displacement space (P1 or P2, tetrahedra or hexahedra).
+        facets: Local facet indices; each must belong to exactly one cell.
+        what: Name of the surface, used in error messages.
+    """
+    mesh = V.mesh
+    tdim = mesh.topology.dim
+    if tdim != 3:
+        raise ValueError(f"{what}: only 3D meshes are supported, got a {tdim}D mesh")
+    facets = np.asarray(facets, dtype=np.int32)
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    mesh.topology.create_connectivity(tdim, tdim - 1)
+    f_to_c = mesh.topology.connectivity(tdim - 1, tdim)
+    c_to_f = mesh.topology.connectivity(tdim, tdim - 1)
+    num_cells_of_facet = f_to_c.offsets[facets + 1] - f_to_c.offsets[facets]
+    interior = np.flatnonzero(num_cells_of_facet != 1)
+    if interior.size:
+        x = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, facets[interior[:1]])[0]
+        raise ValueError(
+            f"{what}: {interior.size} facet(s) lie between two cells, not on the boundary "
+            f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))")
+    cells = f_to_c.array[f_to_c.offsets[facets]]
+    cell_facets = c_to_f.array.reshape(-1, c_to_f.offsets[1] - c_to_f.offsets[0])
+    local_facet = np.argmax(cell_facets[cells] == facets[:, None], axis=1)
+
+    cell_nodes, closure = _cell_arrays(V)
+    closure_nodes = cell_nodes[cells[:, None], closure[local_facet]]
+    X = reference_coordinates(V)
+    face_type = face_type_from_num_nodes(closure.shape[1])
+    num_corners = face_type.num_corners
+    corners = closure_nodes[:, :num_corners]
+    if num_corners == 4:  # dolfinx quads are in tensor order: 0-1-3-2 goes round
+        corners = corners[:, [0, 1, 3, 2]]
+
+    # Orient the corner cycle so that its normal points away from the cell centre.
+    xc = X[corners]
+    normal = np.cross(xc[:, 2] - xc[:, 0], xc[:, -1] - xc[:, 1]) if num_corners == 4 else \
+        np.cross(xc[:, 1] - xc[:, 0], xc[:, 2] - xc[:, 0])
+    outward = np.einsum("fi,fi->f", normal, xc.mean(axis=1) - X[cell_nodes[cells]].mean(axis=1))
+    flip = outward < 0
+    corners[flip, 1:] = corners[flip, 1:][:, ::-1]
+
+    faces = corners
+    if face_type.num_nodes > num_corners:
+        faces = np.hstack([corners, _midside_nodes(X, corners, closure_nodes[:, num_corners:])])
+    return SurfaceFaces(face_type, np.ascontiguousarray(faces, dtype=np.int32), facets)
+
+
+def _midside_nodes(X: np.ndarray, corners: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """Midside nodes in CalculiX order (edge c0-c1, c1-c2, ...), then any centre node.
+
+    The closure order of edge dofs is dolfinx's, so each edge's node is found as the candidate nearest the edge
+    midpoint in the reference configuration (exact for straight edges, robust for curved ones).
+    """
+    num_corners = corners.shape[1]
+    midpoints = 0.5 * (X[corners] + X[np.roll(corners, -1, axis=1)])  # (F, c, 3)
+    distance = np.linalg.norm(midpoints[:, :, None, :] - X[others][:, None, :, :], axis=-1)  # (F, c, m)
+    choice = np.argmin(distance[:, :, :num_corners], axis=2)
+    edge_nodes = np.take_along_axis(others, choice, axis=1)
+    if np.any(np.sort(choice, axis=1) != np.arange(num_corners)):
+        raise ValueError("could not match midside nodes to face edges (distorted quadratic faces)")
+    return np.hstack([edge_nodes, others[:, num_corners:]])
+
+
+def _tagged_facets(surface: FacetSurface, what: str) -> np.ndarray:
+    tags = surface.tags
+    if tags.dim != tags.mesh.topology.dim - 1:
+        raise ValueError(f"{what}: MeshTags of dimension {tags.dim} given, facet tags "
+                         f"(dimension {tags.mesh.topology.dim - 1}) needed")
+    values = surface.value_list()
+    facets = tags.indices[np.isin(tags.values, values)]
+    missing = [v for v in values if not np.any(tags.values == v)]
+    if missing:
+        raise ValueError(f"{what}: facet tag value(s) {missing} not found in the facet tags "
+                         f"(values present: {sorted(set(tags.values.tolist()))})")
+    return facets
+
+
+def resolve_master(V: dolfinx.fem.FunctionSpace, surface: FacetSurface, what: str = "master") -> SurfaceFaces:
+    """Master faces of a facet surface."""
+    if not isinstance(surface, FacetSurface):
+        raise ValueError(f"{what}: the master surface must be a FacetSurface (face-based), "
+                         f"got {type(surface).__name__}")
+    return boundary_faces(V, _tagged_facets(surface, what), what=what)
+
+
+def resolve_slave(V: dolfinx.fem.FunctionSpace, surface: FacetSurface | NodeSurface,
+                  what: str = "slave") -> SlaveSurface:
+    """Slave nodes and area faces (spec §2.1).
+
+    Face-based: the listed faces; slave nodes are all their nodes. Node-based: the slave faces are all exterior faces
+    of the mesh with at least one corner among the slave nodes.
+    """
+    if isinstance(surface, FacetSurface):
+        faces = boundary_faces(V, _tagged_facets(surface, what), what=what)
+        return SlaveSurface(faces.nodes, faces)
+    if not isinstance(surface, NodeSurface):
+        raise ValueError(f"{what}: expected a FacetSurface or NodeSurface, got {type(surface).__name__}")
+    vertices = np.asarray(surface.vertices, dtype=np.int32)
+    if vertices.size == 0:
+        raise ValueError(f"{what}: node surface '{surface.name}' has no vertices")
+    mesh = V.mesh
+    num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
+    if vertices.min() < 0 or vertices.max() >= num_vertices:
+        raise ValueError(f"{what}: node surface '{surface.name}' names vertex indices outside 0..{num_vertices - 1}")
+    nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+    all_faces = boundary_faces(V, exterior, what=what)
+    touching = np.isin(all_faces.faces[:, :all_faces.face_type.num_corners], nodes).any(axis=1)
+    faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
+    return SlaveSurface(nodes, faces)

@@ -1,0 +1,95 @@
+"""Shared fixtures: small two-body meshes built without gmsh, and MPI-safe teardown."""
+
+import gc
+
+import numpy as np
+import pytest
+import ufl
+from mpi4py import MPI
+
+import dolfinx.mesh
+
+LOWER, UPPER = 1, 2
+LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP = 11, 12, 13, 14
+
+
+@pytest.fixture(autouse=True)
+def _collect_garbage():
+    """Run collective destructors on all ranks together."""
+    yield
+    gc.collect()
+    MPI.COMM_WORLD.barrier()
+
+
+def _box_grid(origin, size, divisions):
+    axes = [np.linspace(o, o + s, n + 1) for o, s, n in zip(origin, size, divisions)]
+    z, y, x = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+    nx, ny, nz = divisions
+
+    def node(i, j, k):
+        return (k * (ny + 1) + j) * (nx + 1) + i
+
+    i, j, k = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    i, j, k = i.ravel(), j.ravel(), k.ravel()
+    hexes = np.column_stack([node(i, j, k), node(i + 1, j, k), node(i, j + 1, k), node(i + 1, j + 1, k),
+                             node(i, j, k + 1), node(i + 1, j, k + 1), node(i, j + 1, k + 1),
+                             node(i + 1, j + 1, k + 1)])
+    return points, hexes
+
+
+def _hexes_to_tets(hexes):
+    # Six tetrahedra around the 0-7 diagonal (dolfinx tensor order of hex vertices); conforming across cells.
+    paths = [(0, 1, 3, 7), (0, 1, 5, 7), (0, 4, 5, 7), (0, 2, 3, 7), (0, 2, 6, 7), (0, 4, 6, 7)]
+    return np.vstack([hexes[:, p] for p in paths])
+
+
+def two_blocks(comm=MPI.COMM_WORLD, *, lower=((0, 0, -1), (1, 1, 1), (4, 4, 2)),
+               upper=((0, 0, 0), (1, 1, 1), (4, 4, 2)), gap=0.0, cell="hexahedron"):
+    """Two boxes (origin, size, divisions) stacked along z; the upper one shifted up by ``gap``.
+
+    Returns the mesh, cell tags (LOWER, UPPER) and facet tags: LOWER_BOTTOM, LOWER_TOP (master), UPPER_BOTTOM
+    (slave), UPPER_TOP.
+    """
+    (o1, s1, n1), (o2, s2, n2) = lower, upper
+    p1, c1 = _box_grid(o1, s1, n1)
+    o2 = (o2[0], o2[1], o2[2] + gap)
+    p2, c2 = _box_grid(o2, s2, n2)
+    points = np.vstack([p1, p2])
+    cells = np.vstack([c1, c2 + p1.shape[0]])
+    marker = np.concatenate([np.full(c1.shape[0], LOWER), np.full(c2.shape[0], UPPER)])
+    if cell == "tetrahedron":
+        cells = _hexes_to_tets(cells)
+        marker = np.tile(marker, 6)
+    if comm.rank != 0:
+        points, cells = np.empty((0, 3)), np.empty((0, cells.shape[1]), dtype=np.int64)
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
+    mesh = dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
+
+    tdim = 3
+    midpoints = dolfinx.mesh.compute_midpoints(
+        mesh, tdim, np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32))
+    upper_cells = midpoints[:, 2] > o1[2] + s1[2] + 0.5 * gap
+    cell_values = np.where(upper_cells, UPPER, LOWER).astype(np.int32)
+    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, np.arange(cell_values.size, dtype=np.int32), cell_values)
+
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+    f_to_c = mesh.topology.connectivity(tdim - 1, tdim)
+    z = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, exterior)[:, 2]
+    cell_of = f_to_c.array[f_to_c.offsets[exterior]]
+    num_local_cells = mesh.topology.index_map(tdim).size_local
+    in_upper = np.zeros(exterior.size, dtype=bool)
+    owned = cell_of < num_local_cells
+    in_upper[owned] = upper_cells[cell_of[owned]]
+    bottom1, top1 = o1[2], o1[2] + s1[2]
+    bottom2, top2 = o2[2], o2[2] + s2[2]
+    values = np.zeros(exterior.size, dtype=np.int32)
+    values[~in_upper & np.isclose(z, bottom1)] = LOWER_BOTTOM
+    values[~in_upper & np.isclose(z, top1)] = LOWER_TOP
+    values[in_upper & np.isclose(z, bottom2)] = UPPER_BOTTOM
+    values[in_upper & np.isclose(z, top2)] = UPPER_TOP
+    keep = values > 0
+    order = np.argsort(exterior[keep])
+    facet_tags = dolfinx.mesh.meshtags(mesh, tdim - 1, exterior[keep][order], values[keep][order])
+    return mesh, cell_tags, facet_tags
