@@ -1,0 +1,295 @@
+"""Gmsh models and .msh files to dolfinx meshes with cell and facet tags.
+
+dolfinx 0.5.2 imports only the cells and facets that belong to gmsh physical groups, and its
+``gmshio.read_from_msh`` is broken; this module wraps ``gmshio.model_to_mesh`` instead.
+
+Shared rules:
+    * Every public function is collective over ``comm``. gmsh is touched on rank ``rank`` only,
+      so the other ranks need neither gmsh initialized nor a model.
+    * Errors found on ``rank`` (missing file, unreadable file, no physical groups, mixed cell types,
+      builder failures) are broadcast so that *all* ranks raise the same exception type instead of
+      deadlocking in the next collective.
+    * gmsh is initialized when needed (quietly: ``General.Terminal = 0``) and finalized again only
+      if this module initialized it; a session the caller opened is left open with its current
+      model and terminal setting restored.
+    * Facet tags hold the facets of the tagged surfaces seen by each rank, ghosts included.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+import gmsh
+import numpy as np
+from dolfinx import cpp as _cpp
+from dolfinx.io import gmshio as _gmshio
+from dolfinx.mesh import Mesh
+
+__all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh"]
+
+MeshTags = _cpp.mesh.MeshTags_int32
+_model_counter = itertools.count()
+
+
+def _gmsh_is_initialized() -> bool:
+    """Whether the gmsh API is initialized (gmsh 4.8 has no ``gmsh.isInitialized``)."""
+    probe = getattr(gmsh, "isInitialized", None)
+    if probe is not None:
+        return bool(probe())
+    try:
+        # Before initialize() gmsh 4.8 lists no model; after it at least the default one; after
+        # finalize() the call raises.
+        return len(gmsh.model.list()) > 0
+    except Exception:
+        return False
+
+
+@contextlib.contextmanager
+def gmsh_session(*, terminal: bool = False) -> Iterator[None]:
+    """Context in which the gmsh API is usable, on the calling process only (not collective).
+
+    Initializes gmsh if it is not yet initialized and finalizes it on exit in that case. In a
+    session opened by the caller, the current model and ``General.Terminal`` are restored on exit
+    (models added inside stay unless removed).
+
+    Args:
+        terminal: Let gmsh print its messages.
+    """
+    started = not _gmsh_is_initialized()
+    if started:
+        gmsh.initialize()
+        previous_model, previous_terminal = None, None
+    else:
+        previous_model = gmsh.model.getCurrent()
+        previous_terminal = gmsh.option.getNumber("General.Terminal")
+    gmsh.option.setNumber("General.Terminal", int(terminal))
+    try:
+        yield
+    finally:
+        if started:
+            gmsh.finalize()
+        else:
+            if previous_model in gmsh.model.list():
+                gmsh.model.setCurrent(previous_model)
+            gmsh.option.setNumber("General.Terminal", previous_terminal)
+
+
+def model_to_mesh(
+    comm: MPI.Comm = MPI.COMM_WORLD, *, rank: int = 0, gdim: int = 3
+) -> tuple[Mesh, MeshTags, MeshTags]:
+    """Distributed dolfinx mesh and tags from the current gmsh model on ``rank``.
+
+    Cells are the elements of the physical groups of the highest dimension, tagged with the group
+    numbers; facets those of the physical groups one dimension lower. Collective.
+
+    Args:
+        comm: Communicator of the mesh.
+        rank: Rank holding the gmsh model (with its mesh generated).
+        gdim: Geometric dimension of the mesh.
+
+    Returns:
+        ``(mesh, cell_tags, facet_tags)``.
+
+    Raises:
+        ValueError: The model has no physical groups or no mesh, an entity sits in two physical
+            groups of the same dimension, or the cells (facets) are not all of one element type.
+    """
+    _check_rank(comm, rank)
+    if gdim not in (1, 2, 3):
+        raise ValueError(f"gdim must be 1, 2 or 3, got {gdim!r}")
+    error = None
+    if comm.rank == rank:
+        try:
+            _prepare_model()
+        except ValueError as exc:
+            error = exc
+    _raise_everywhere(comm, rank, error)
+    return _gmshio.model_to_mesh(gmsh.model, comm, rank, gdim=gdim)
+
+
+def read_msh(
+    path: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *, rank: int = 0, gdim: int = 3
+) -> tuple[Mesh, MeshTags, MeshTags]:
+    """Distributed dolfinx mesh and tags from a gmsh .msh file read on ``rank``. Collective.
+
+    Args:
+        path: The .msh file (path as seen from ``rank``).
+        comm: Communicator of the mesh.
+        rank: Rank that reads the file with the gmsh API.
+        gdim: Geometric dimension of the mesh.
+
+    Returns:
+        ``(mesh, cell_tags, facet_tags)`` with the physical group numbers as tag values.
+
+    Raises:
+        FileNotFoundError: ``path`` is not a file.
+        ValueError: gmsh cannot read the file, or the file has no physical groups (see
+            `model_to_mesh`).
+    """
+    _check_rank(comm, rank)
+    path = Path(path)
+    with _on_rank(comm, rank):
+        added = False
+        try:
+            error: Exception | None = None
+            if comm.rank == rank:
+                if not path.is_file():
+                    error = FileNotFoundError(f"gmsh mesh file not found: '{path}'")
+                else:
+                    gmsh.model.add(f"dolfinx_ntf_read_{next(_model_counter)}")
+                    added = True
+                    try:
+                        gmsh.merge(str(path))
+                    except Exception as exc:  # gmsh raises bare Exception
+                        error = ValueError(f"gmsh cannot read mesh file '{path}': {exc}")
+            _raise_everywhere(comm, rank, error)
+            try:
+                return model_to_mesh(comm, rank=rank, gdim=gdim)
+            except ValueError as exc:
+                raise ValueError(f"mesh file '{path}': {exc}") from exc
+        finally:
+            if added:
+                gmsh.model.remove()
+
+
+def mesh_from_gmsh(
+    build: Callable[..., Any],
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    *,
+    rank: int = 0,
+    gdim: int = 3,
+    **kwargs: Any,
+) -> tuple[Mesh, MeshTags, MeshTags]:
+    """Run a gmsh model builder on ``rank`` and distribute its mesh. Collective.
+
+    Typical use with the builders of ``meshes/``:
+    ``mesh, cell_tags, facet_tags = mesh_from_gmsh(build_punch, comm, cell_type="tetrahedron")``.
+
+    Args:
+        build: Called as ``build(**kwargs)`` on ``rank`` inside a gmsh session; it must leave the
+            meshed model current (it may add a new model). Models it adds are removed afterwards.
+        comm: Communicator of the mesh.
+        rank: Rank that runs ``build``.
+        gdim: Geometric dimension of the mesh.
+        **kwargs: Passed to ``build``.
+
+    Returns:
+        ``(mesh, cell_tags, facet_tags)``.
+
+    Raises:
+        Exception: Whatever ``build`` raised, on every rank (as the same type where possible).
+        ValueError: See `model_to_mesh`.
+    """
+    _check_rank(comm, rank)
+    with _on_rank(comm, rank):
+        error: Exception | None = None
+        models_before: list[str] = []
+        if comm.rank == rank:
+            models_before = gmsh.model.list()
+            try:
+                build(**kwargs)
+            except Exception as exc:
+                error = exc
+        try:
+            _raise_everywhere(comm, rank, error)
+            return model_to_mesh(comm, rank=rank, gdim=gdim)
+        finally:
+            if comm.rank == rank:
+                for name in gmsh.model.list():
+                    if name not in models_before:
+                        gmsh.model.setCurrent(name)
+                        gmsh.model.remove()
+
+
+@contextlib.contextmanager
+def _on_rank(comm: MPI.Comm, rank: int) -> Iterator[None]:
+    """A gmsh session on ``rank`` only; a no-op context elsewhere."""
+    if comm.rank == rank:
+        with gmsh_session():
+            yield
+    else:
+        yield
+
+
+def _check_rank(comm: MPI.Comm, rank: int) -> None:
+    """Reject a root rank outside the communicator (same answer on every rank)."""
+    if not 0 <= rank < comm.size:
+        raise ValueError(f"rank must be in [0, {comm.size}), got {rank!r}")
+
+
+def _raise_everywhere(comm: MPI.Comm, rank: int, error: Exception | None) -> None:
+    """Broadcast an error found on ``rank`` and raise it on all ranks.
+
+    ``rank`` re-raises its own exception object (traceback kept); the others raise the same type
+    with the same message, or a RuntimeError if that type cannot be rebuilt from a message.
+    """
+    shared = comm.bcast(None if error is None else (type(error), str(error)), root=rank)
+    if shared is None:
+        return
+    if comm.rank == rank:
+        raise error
+    kind, message = shared
+    try:
+        rebuilt = kind(message)
+    except Exception:
+        rebuilt = RuntimeError(f"{kind.__name__} on rank {rank}: {message}")
+    raise rebuilt
+
+
+def _prepare_model() -> None:
+    """Check the current gmsh model can go through dolfinx's ``model_to_mesh``; renumber nodes.
+
+    dolfinx reads the elements of every physical group, keeps the highest dimension as cells and
+    the next one as facets, assumes one element type for each and contiguous node tags.
+
+    Raises:
+        ValueError: Naming the model and the offending group or entity.
+    """
+    model = gmsh.model.getCurrent() or "<default>"
+    groups = gmsh.model.getPhysicalGroups()
+    if not groups:
+        raise ValueError(
+            f"gmsh model '{model}' has no physical groups: dolfinx imports only the cells of "
+            "physical groups (add them with gmsh.model.addPhysicalGroup)"
+        )
+    tdim = max(dim for dim, _ in groups)
+    for dim in (tdim, tdim - 1):
+        owner: dict[int, int] = {}
+        types: set[int] = set()
+        for group_dim, group in groups:
+            if group_dim != dim:
+                continue
+            for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, group):
+                if entity in owner:
+                    raise ValueError(
+                        f"gmsh model '{model}': entity ({dim}, {entity}) is in physical groups "
+                        f"{owner[entity]} and {group}; dolfinx would duplicate its elements"
+                    )
+                owner[entity] = group
+                entity_types, _, _ = gmsh.model.mesh.getElements(dim, entity)
+                if len(entity_types) > 1:
+                    raise ValueError(
+                        f"gmsh model '{model}': entity ({dim}, {entity}) of physical group {group} "
+                        f"mixes element types {list(entity_types)}"
+                    )
+                types.update(int(t) for t in entity_types)
+        if len(types) > 1:
+            names = [gmsh.model.mesh.getElementProperties(t)[0] for t in sorted(types)]
+            raise ValueError(
+                f"gmsh model '{model}': physical groups of dimension {dim} mix element types "
+                f"{names}; dolfinx needs one cell type"
+            )
+        if dim == tdim and not types:
+            raise ValueError(
+                f"gmsh model '{model}': the physical groups of dimension {tdim} have no elements "
+                "(generate the mesh first)"
+            )
+    node_tags, _, _ = gmsh.model.mesh.getNodes()
+    if not np.array_equal(np.sort(node_tags), np.arange(1, node_tags.size + 1)):
+        gmsh.model.mesh.renumberNodes()
