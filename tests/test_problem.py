@@ -1,0 +1,208 @@
+"""Full contact solves on two-block meshes: assembly, equilibrium, patch test, Newton convergence, bad input."""
+
+import numpy as np
+import pytest
+import scipy.sparse
+import ufl
+from petsc4py import PETSc
+
+import dolfinx.fem
+import dolfinx.mesh
+
+import dolfinx_ntf as ntf
+from conftest import UPPER, LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
+
+pytestmark = pytest.mark.serial
+
+E, NU = 1000.0, 0.3
+
+
+def _elastic_residual(u, v, facet_tags, pressure):
+    mesh = u.function_space.mesh
+    mu, lmbda = E / 2 / (1 + NU), E * NU / (1 + NU) / (1 - 2 * NU)
+    eps = ufl.sym(ufl.grad(u))
+    sigma = 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    return ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(UPPER_TOP)
+
+
+def _component_bc(V, component, facets):
+    Vc, _ = V.sub(component).collapse()
+    dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, facets)
+    return dolfinx.fem.dirichletbc(dolfinx.fem.Function(Vc), dofs, V.sub(component))
+
+
+def _setup(cell="hexahedron", upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), *, rollers=False,
+           law=None, **problem_options):
+    """Upper block pressed on a lower block by a pressure on its top."""
+    mesh, _, ft = two_blocks(cell=cell, upper=upper)
+    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    F = _elastic_residual(u, v, ft, pressure)
+    if rollers:  # symmetry planes x = 0 and y = 0 for both bodies, bottom on rollers: uniform stress exact
+        x0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
+        y0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[1], 0.0))
+        bcs = [_component_bc(V, 0, x0), _component_bc(V, 1, y0), _component_bc(V, 2, ft.find(LOWER_BOTTOM))]
+    else:
+        bcs = [dolfinx.fem.dirichletbc(np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V),
+               _component_bc(V, 0, ft.find(UPPER_TOP)), _component_bc(V, 1, ft.find(UPPER_TOP))]
+    law = law or ntf.LinearLaw.with_ccx_defaults(E)
+    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
+                           ntf.SurfaceInteraction(law))
+    problem = ntf.ContactProblem(F, u, [pair], bcs, **problem_options)
+    return problem, pressure, ft
+
+
+def _solve(problem, pressure, load=10.0, increments=2):
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", load * t), initial_increment=1.0 / increments,
+                          fixed=True)
+    step.run(solver, problem.u)
+    return solver, step
+
+
+@pytest.mark.parametrize("cell", ["hexahedron", "tetrahedron"])
+def test_equilibrium_contact_force_equals_load(cell):
+    problem, pressure, _ = _setup(cell)
+    load = 10.0
+    _solve(problem, pressure, load)
+    res = ntf.contact_results(problem)[0]
+    punch_area = 0.6 * 0.6
+    vertical = res.force[:, 2].sum()  # force of the master on the slave nodes
+    assert vertical == pytest.approx(load * punch_area, rel=1e-10)
+    # Σ p·A over the slave nodes carries the load (normals are vertical up to the master's small rotation).
+    assert np.sum(res.pressure * res.area) == pytest.approx(load * punch_area, rel=1e-4)
+    assert np.all(res.clearance < 0)
+
+
+@pytest.mark.parametrize("cell", ["hexahedron", "tetrahedron"])
+def test_patch_test_uniform_pressure(cell):
+    full = ((0.0, 0.0, 0.0), (1.0, 1.0, 0.5), (4, 4, 2))
+    problem, pressure, _ = _setup(cell, upper=full, rollers=True)
+    _solve(problem, pressure, load=10.0)
+    res = ntf.contact_results(problem)[0]
+    assert res.node.size == 25
+    # Uniform to 1e-8; its value is the load over the *current* area (spring areas follow the deformation).
+    np.testing.assert_allclose(res.pressure, res.pressure.mean(), rtol=1e-8)
+    assert np.sum(res.pressure * res.area) == pytest.approx(10.0, rel=1e-10)
+    assert res.pressure.mean() == pytest.approx(10.0, rel=1e-2)
+
+
+def test_newton_converges_quadratically():
+    problem, pressure, _ = _setup("hexahedron")
+    solver, _ = _solve(problem, pressure, increments=1)
+    r = np.array(solver.residual_norms) / solver.residual_norms[0]
+    above_roundoff = r[r > 1e-12]
+    assert len(above_roundoff) >= 3
+    for before, after in zip(above_roundoff[1:-1], above_roundoff[2:]):
+        assert after <= 100 * before**2, f"residual ratios {r}"
+
+
+def test_assembled_contact_matrix_matches_element_matrices():
+    problem, pressure, _ = _setup("hexahedron")
+    _solve(problem, pressure, increments=1)
+    x = problem.u.vector
+    problem.form(x)
+    A_full = problem.ensure_matrix()
+    problem.J(x, A_full)
+    A_bulk = dolfinx.fem.petsc.assemble_matrix(problem.a, problem.bcs)
+    A_bulk.assemble()
+
+    def to_scipy(A):
+        indptr, indices, data = A.getValuesCSR()
+        return scipy.sparse.csr_matrix((data, indices, indptr), shape=A.getSize())
+
+    contact = to_scipy(A_full) - to_scipy(A_bulk)
+    rng = np.random.default_rng(0)
+    w = rng.standard_normal(contact.shape[1])
+    bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in problem.bcs])
+    w[bc_dofs] = 0.0
+    expected = np.zeros_like(w)
+    for state in problem.states:
+        nodes = state.element_nodes
+        dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(nodes.shape[0], -1)
+        np.add.at(expected, dofs, np.einsum("eij,ej->ei", state.evaluation.stiffness, w[dofs]))
+    expected[bc_dofs] = 0.0
+    np.testing.assert_allclose(contact @ w, expected, atol=1e-9 * np.abs(expected).max())
+    assert np.abs(expected).max() > 0
+
+
+def test_options_symmetric_and_linearized_area_converge():
+    for options in ({"symmetric": True}, {"linearize_area": True}):
+        problem, pressure, _ = _setup("hexahedron", **options)
+        _solve(problem, pressure)
+        res = ntf.contact_results(problem)[0]
+        assert res.force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)
+
+
+def test_exponential_law_solve():
+    problem, pressure, _ = _setup("hexahedron", law=ntf.ExponentialLaw(c0=1e-3, p0=1.0))
+    _solve(problem, pressure)
+    res = ntf.contact_results(problem)[0]
+    assert res.force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)
+
+
+def test_newton_failure_raises():
+    problem, pressure, _ = _setup("hexahedron")
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem, max_it=1)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", 10 * t), fixed=True)
+    with pytest.raises(ntf.ContactConvergenceError, match="cannot be halved"):
+        step.run(solver, problem.u)
+
+
+def test_bad_inputs_give_clear_errors():
+    mesh, _, ft = two_blocks()
+    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    F = _elastic_residual(u, v, ft, 0.0)
+    law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
+    slave, master = ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP)
+    with pytest.raises(ValueError, match=r"facet tag value\(s\) \[99\] not found"):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, ntf.FacetSurface(ft, 99), law)])
+    with pytest.raises(ValueError, match="at least one ContactPair"):
+        ntf.ContactProblem(F, u, [])
+    with pytest.raises(ValueError, match="both the slave and the master"):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(master, master, law)])
+    with pytest.raises(ValueError, match="must be a FacetSurface"):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, ntf.NodeSurface(np.array([0])), law)])
+    with pytest.raises(ValueError, match="outside 0.."):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(ntf.NodeSurface(np.array([10**7])), master, law)])
+    with pytest.raises(NotImplementedError, match="friction"):
+        friction = ntf.SurfaceInteraction(law.law, ntf.Friction(0.3, 100.0))
+        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, master, friction)])
+    cell_tags = dolfinx.mesh.meshtags(mesh, 3, np.array([0], dtype=np.int32), np.array([1], dtype=np.int32))
+    with pytest.raises(ValueError, match="facet tags"):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, ntf.FacetSurface(cell_tags, 1), law)])
+    W = dolfinx.fem.FunctionSpace(mesh, ("Lagrange", 1))
+    w = dolfinx.fem.Function(W)
+    with pytest.raises(ValueError, match="vector displacement"):
+        ntf.ContactProblem(ufl.inner(ufl.grad(w), ufl.grad(ufl.TestFunction(W))) * ufl.dx, w,
+                           [ntf.ContactPair(slave, master, law)])
+    with pytest.raises(ValueError, match="min_increment"):
+        problem = ntf.ContactProblem(F, u, [ntf.ContactPair(slave, master, law)])
+        ntf.StaticStep(lambda t: None, initial_increment=2.0, max_increment=1.0).run(
+            ntf.ContactNewtonSolver(mesh.comm, problem), u)
+
+
+def test_node_based_slave_collects_lateral_area():
+    mesh, ct, ft = two_blocks(upper=((0.25, 0.25, 0.0), (0.5, 0.5, 0.5), (2, 2, 2)))
+    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    F = _elastic_residual(u, v, ft, 0.0)
+    upper_vertices = dolfinx.mesh.compute_incident_entities(mesh, ct.find(UPPER), 3, 0)
+    bottom_vertices = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.isclose(x[2], 0.0))
+    vertices = np.intersect1d(upper_vertices, bottom_vertices)
+    law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
+    nodal = ntf.ContactProblem(F, u, [ntf.ContactPair(ntf.NodeSurface(vertices), ntf.FacetSurface(ft, LOWER_TOP),
+                                                      law)])
+    faces = nodal.states[0].slave.faces.faces
+    # bottom faces (4) plus lateral faces touching the bottom rim (2 per side)
+    assert faces.shape[0] == 4 + 8
+    nodal.begin_increment(1.0)
+    from dolfinx_ntf.spring_areas import spring_areas
+    coords = nodal.current_coordinates()
+    areas = spring_areas(nodal.states[0].slave.faces.face_type, faces, coords, nodal.states[0].slave.nodes)
+    # corner node: a quarter of one bottom face and of two lateral faces
+    assert np.isclose(areas.max(), 0.25 * 0.0625 * 4)  # centre node: four bottom quarter faces
+    assert np.isclose(np.sort(areas)[0], 0.25 * (0.0625 + 2 * 0.0625))
