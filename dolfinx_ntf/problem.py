@@ -126,6 +126,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.pairings = 0
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
+        #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the residual.
+        self.nodal_loads: dolfinx.fem.Function | None = None
+        #: Called as ``callback(problem)`` after every pairing (e.g. to write contact-element files); the springs
+        #: are used in Newton iteration ``max(problem.iteration, 1)`` of the increment.
+        self.pairing_callbacks: list[typing.Callable[[ContactProblem], None]] = []
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
@@ -170,10 +175,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         first = not self._first_pairing_done
         for state in self.states:
             state.overlap[:] = 0.0
-        self.pair(record_overlap=first)
-        self._first_pairing_done = True
         self.iteration = 0
         self.count_changed = False
+        self.pair(record_overlap=first)
+        self._first_pairing_done = True
         self.ensure_matrix()
 
     def pair(self, *, record_overlap: bool = False) -> int:
@@ -184,6 +189,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.pairings += 1
         count = self.num_springs
         logger.info(" Number of contact spring elements=%d", count)
+        for callback in self.pairing_callbacks:
+            callback(self)
         return count
 
     def _pair_one(self, state: PairState, coords: np.ndarray, record_overlap: bool) -> None:
@@ -292,6 +299,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         dolfinx.fem.petsc.apply_lifting(b, [self.a], bcs=[self.bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.assembler.add_to_vector(b, self._blocks)
+        if self.nodal_loads is not None:
+            b.axpy(-1.0, self.nodal_loads.vector)
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
