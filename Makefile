@@ -1,7 +1,7 @@
 # The two commands of the README: `make demo` and `make test`.
 PY := .venv/bin/python
 
-.PHONY: setup demo test test-serial test-mpi benchmark
+.PHONY: setup demo test benchmark
 setup:
 	bash scripts/setup.sh
 
@@ -10,7 +10,7 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest -q tests
-	mpirun --allow-run-as-root --oversubscribe -n 2 $(PY) -m pytest -q -m "not serial" tests
+	mpirun --allow-run-as-root --oversubscribe -n 2 $(PY) -m pytest -q -m mpi tests
 
 benchmark: setup
 	$(PY) benchmarks/contact_phases.py

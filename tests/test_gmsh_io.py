@@ -19,6 +19,8 @@ from dolfinx import fem
 
 from dolfinx_ntf import gmsh_io
 
+pytestmark = pytest.mark.mpi
+
 COMM = MPI.COMM_WORLD
 MESHES = Path(__file__).resolve().parents[1] / "meshes"
 
