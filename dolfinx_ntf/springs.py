@@ -1,0 +1,421 @@
+"""Node-to-face spring elements: residual and consistent tangent (spec §4, §5), vectorized.
+
+A spring joins one slave node p to one master face with nodes x_0..x_{n-1}. Its element node
+order is ``[master 0..n-1, slave]`` and its element dofs are ``3*k + c``. Everything is evaluated
+in the current configuration on the face fixed by the pairing:
+
+- the slave node is projected onto the face (closest point over the closed parametric domain),
+  giving ξ*, q = Σ φ_j x_j, r = x_p − q, m = q_ξ × q_η, n = m/|m| and the clearance g = r·n;
+- the overclosure is d = −(g − gap_shift) and the normal force F_N = ``law.spring_force(d, A)``;
+- the internal forces are f_p = −F_N n on the slave node and f_j = −φ_j f_p on master node j.
+
+The tangent is the exact derivative of these forces with respect to the 3(n+1) nodal positions
+(nodes move with u, so ∂/∂u = ∂/∂x), with the spring area A held constant as in CalculiX. It
+includes the projection derivatives ∂ξ/∂x, ∂n/∂x, ∂g/∂x and the ∂φ_j/∂x terms of the master
+forces. For an interior projection (r ∥ n) the forces are the gradient of the spring energy
+A P(d(x)) with P' = p, so this exact tangent is symmetric up to rounding; ``symmetric=True`` then
+only removes rounding noise.
+
+Clamped projections: when the closest point lies on an edge of the parametric domain (the slave
+node is beside the face) the edge constraint is treated as active and ∂ξ/∂x is the exact
+derivative of the constrained closest point (the parameter along the edge moves, the other is
+fixed); at a corner ∂ξ/∂x = 0. There r is not ∥ n and the exact tangent is unsymmetric. CalculiX
+instead uses the interior-projection formula everywhere (spec §5, "terms omitted"); both coincide
+for interior projections, the normal contact situation.
+
+Friction is not implemented yet. The code is split so that it can be added without a rewrite:
+the kinematics and their derivatives (``_Kinematics``: ∂ξ/∂x, ∂m/∂x, ∂n/∂x, ∂g/∂x) are computed
+once, the slave force and its derivative are formed from them, and ``_element_stiffness`` turns
+*any* slave force f_p and its derivative ∂f_p/∂x into the element matrix (spec §5(e)); a
+tangential force F_T and its derivative (spec §4.2, §5(d)) only have to be added to f_p and
+∂f_p/∂x.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dolfinx_ntf.faces import FaceType
+from dolfinx_ntf.laws import PressureOverclosureLaw
+from dolfinx_ntf.projection import project_points
+
+__all__ = ["SpringEvaluation", "evaluate_springs"]
+
+# A parametric constraint counts as active when the projection lies within this distance of it and
+# its Lagrange multiplier (relative to |q_ξ|² + |q_η|²) exceeds _MULTIPLIER_TOL.
+_BOUNDARY_TOL = 1e-10
+_MULTIPLIER_TOL = 1e-10
+
+# Outward unit normals c (in the (ξ, η) plane) of the domain edges, and the offsets o such that the
+# constraint reads c·ξ <= o.
+_QUAD_CONSTRAINTS = (np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]), np.ones(4))
+_TRIANGLE_CONSTRAINTS = (
+    np.array([[-1.0, 0.0], [0.0, -1.0], [np.sqrt(0.5), np.sqrt(0.5)]]),
+    np.array([0.0, 0.0, np.sqrt(0.5)]),
+)
+
+
+@dataclass
+class SpringEvaluation:
+    """Residual (and tangent) of N springs.
+
+    Attributes:
+        xi: (N, 2) parametric coordinates of the projection point.
+        phi: (N, n) master shape functions at ``xi``.
+        normal: (N, 3) unit master normal n = m/|m| at ``xi`` (out of the master body).
+        gap: (N,) clearance g = r·n (negative = penetration), without the gap shift.
+        overclosure: (N,) d = −(g − gap_shift).
+        normal_force: (N,) F_N (positive = compression).
+        area: (N,) spring area used: the given area, or the CalculiX fallback where it was 0.
+        forces: (N, n+1, 3) internal forces, node order [master 0..n-1, slave].
+        force_per_area: (N, n+1, 3) ``forces / area``, i.e. ∂forces/∂A when F_N = A p(d): the
+            linearized-area option adds ``outer(force_per_area[k], dA/dx_q)`` to block (k, q).
+        stiffness: (N, 3(n+1), 3(n+1)) ∂forces/∂x with dof ``3k + c``, or None if not asked for.
+    """
+
+    xi: np.ndarray
+    phi: np.ndarray
+    normal: np.ndarray
+    gap: np.ndarray
+    overclosure: np.ndarray
+    normal_force: np.ndarray
+    area: np.ndarray
+    forces: np.ndarray
+    force_per_area: np.ndarray
+    stiffness: np.ndarray | None
+
+
+@dataclass
+class _Kinematics:
+    """Projection kinematics of N springs and, optionally, their derivatives.
+
+    Element nodes k = 0..n (slave last). ``weights`` w_k = ∂r/∂x_k at fixed ξ (−φ_j, then +1) and
+    ``dphi`` are the shape-function derivatives, zero for the slave node.
+    """
+
+    xi: np.ndarray  # (N, 2)
+    phi: np.ndarray  # (N, n)
+    weights: np.ndarray  # (N, n+1)
+    dphi: np.ndarray  # (N, n+1, 2)
+    r: np.ndarray  # (N, 3)
+    m: np.ndarray  # (N, 3)
+    m_norm: np.ndarray  # (N,)
+    normal: np.ndarray  # (N, 3)
+    gap: np.ndarray  # (N,)
+    dxi: np.ndarray | None = None  # (N, n+1, 2, 3)  ∂ξ_α/∂x_k
+    dm: np.ndarray | None = None  # (N, n+1, 3, 3)  ∂m_i/∂x_kc
+    dnormal: np.ndarray | None = None  # (N, n+1, 3, 3)  ∂n_i/∂x_kc
+    dgap: np.ndarray | None = None  # (N, n+1, 3)  ∂g/∂x_kc
+
+
+def evaluate_springs(
+    face_type: FaceType,
+    master_coords: np.ndarray,
+    slave_coords: np.ndarray,
+    areas: np.ndarray,
+    law: PressureOverclosureLaw,
+    *,
+    gap_shift: float | np.ndarray = 0.0,
+    xi0: np.ndarray | None = None,
+    tangent: bool = True,
+    symmetric: bool = False,
+    area_fallback: bool = True,
+) -> SpringEvaluation:
+    """Evaluate internal forces and tangent of N node-to-face springs (spec §4, §5).
+
+    Args:
+        face_type: Type of all master faces.
+        master_coords: (N, n, 3) current coordinates of the master face nodes (CalculiX order).
+        slave_coords: (N, 3) current coordinates of the slave nodes.
+        areas: (N,) spring areas A_p (held constant in the tangent).
+        law: Pressure-overclosure law; ``law.spring_force(d, A)`` gives F_N and dF_N/dd.
+        gap_shift: Scalar or (N,) shift g0(1 − τ) subtracted from the clearance (spec §3.6).
+        xi0: Optional (N, 2) start points for the projection (e.g. the previous ξ).
+        tangent: Compute the stiffness matrix.
+        symmetric: Return (K + Kᵀ)/2, as CalculiX does without friction, instead of the exact
+            tangent (which is unsymmetric only for projections clamped to the face boundary).
+        area_fallback: Where A_p = 0 (a slave node without slave face), use CalculiX's fallback
+            A_p = |m|/2 for a 3-node master face and 4|m| otherwise, m at the projection point
+            (spec §2.2). If False, such springs carry no force.
+
+    Returns:
+        The evaluation; ``stiffness`` is None if ``tangent`` is False.
+
+    Raises:
+        ValueError: On arrays of wrong shape or non-finite values, negative areas, degenerate master
+            faces (m = 0) or a singular projection (slave node at a centre of curvature).
+    """
+    master, slave, area, shift = _check_input(
+        face_type, master_coords, slave_coords, areas, gap_shift
+    )
+    xi = project_points(face_type, master, slave, xi0=xi0)
+    kin = _kinematics(face_type, master, slave, np.asarray(xi, dtype=float), derivatives=tangent)
+
+    if area_fallback:
+        zero = area == 0.0
+        if np.any(zero):
+            factor = 0.5 if face_type.num_nodes == 3 else 4.0
+            area = np.where(zero, factor * kin.m_norm, area)
+
+    overclosure = -(kin.gap - shift)
+    force, dforce = law.spring_force(overclosure, area)
+    force = np.asarray(force, dtype=float) * np.ones_like(area)
+    dforce = np.asarray(dforce, dtype=float) * np.ones_like(area)
+    _check_finite("normal force from the law", force)
+    _check_finite("normal force derivative from the law", dforce)
+
+    slave_force = -force[:, None] * kin.normal  # f_p
+    forces = kin.weights[:, :, None] * slave_force[:, None, :]
+    force_per_area = _force_per_area(forces, force, area, overclosure, kin.weights, kin.normal, law)
+
+    stiffness = None
+    if tangent:
+        # ∂f_p/∂x_k = −∂F_N/∂x_k n − F_N ∂n/∂x_k, with ∂F_N/∂x_k = dF_N/dd · (−∂g/∂x_k).
+        dslave_force = (dforce[:, None] * kin.normal)[:, None, :, None] * kin.dgap[:, :, None, :]
+        dslave_force -= force[:, None, None, None] * kin.dnormal
+        stiffness = _element_stiffness(kin, slave_force, dslave_force)
+        _check_finite("stiffness", stiffness)
+        if symmetric:
+            stiffness = 0.5 * (stiffness + stiffness.transpose(0, 2, 1))
+
+    return SpringEvaluation(
+        xi=kin.xi,
+        phi=kin.phi,
+        normal=kin.normal,
+        gap=kin.gap,
+        overclosure=overclosure,
+        normal_force=force,
+        area=area,
+        forces=forces,
+        force_per_area=force_per_area,
+        stiffness=stiffness,
+    )
+
+
+def _check_input(
+    face_type: FaceType,
+    master_coords: np.ndarray,
+    slave_coords: np.ndarray,
+    areas: np.ndarray,
+    gap_shift: float | np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Validate shapes and values; return float arrays (master, slave, area, gap_shift)."""
+    master = np.asarray(master_coords, dtype=float)
+    n = face_type.num_nodes
+    if master.ndim != 3 or master.shape[1:] != (n, 3):
+        raise ValueError(
+            f"master_coords must have shape (N, {n}, 3) for face type {face_type.name}, "
+            f"got {master.shape}"
+        )
+    num = master.shape[0]
+    slave = np.asarray(slave_coords, dtype=float)
+    if slave.shape != (num, 3):
+        raise ValueError(f"slave_coords must have shape ({num}, 3), got {slave.shape}")
+    area = np.asarray(areas, dtype=float)
+    if area.shape != (num,):
+        raise ValueError(f"areas must have shape ({num},), got {area.shape}")
+    shift = np.asarray(gap_shift, dtype=float)
+    if shift.ndim == 0:
+        shift = np.full(num, float(shift))
+    elif shift.shape != (num,):
+        raise ValueError(f"gap_shift must be a scalar or have shape ({num},), got {shift.shape}")
+    _check_finite("master_coords", master)
+    _check_finite("slave_coords", slave)
+    _check_finite("areas", area)
+    _check_finite("gap_shift", shift)
+    negative = np.flatnonzero(area < 0.0)
+    if negative.size:
+        raise ValueError(
+            f"areas must be >= 0; negative at springs {negative[:10].tolist()} "
+            f"(values {area[negative[:10]].tolist()})"
+        )
+    return master, slave, area, shift
+
+
+def _check_finite(what: str, values: np.ndarray) -> None:
+    """Raise ValueError naming the first springs where ``values`` is not finite."""
+    values = np.asarray(values)
+    with np.errstate(over="ignore", invalid="ignore"):
+        if values.size == 0 or np.isfinite(values.sum()):  # fast path, no temporary array
+            return
+    if np.all(np.isfinite(values)):  # the sum overflowed
+        return
+    bad = np.flatnonzero(~np.all(np.isfinite(values.reshape(values.shape[0], -1)), axis=1))
+    raise ValueError(f"{what} is not finite at springs {bad[:10].tolist()}")
+
+
+def _force_per_area(
+    forces: np.ndarray,
+    force: np.ndarray,
+    area: np.ndarray,
+    overclosure: np.ndarray,
+    weights: np.ndarray,
+    normal: np.ndarray,
+    law: PressureOverclosureLaw,
+) -> np.ndarray:
+    """forces/A, with the limit −p(d) w_k n where A = 0 (needs ``law.pressure``)."""
+    positive = area > 0.0
+    per_area = np.zeros_like(forces)
+    per_area[positive] = forces[positive] / area[positive, None, None]
+    if not np.all(positive):
+        zero = ~positive
+        pressure = np.asarray(law.pressure(overclosure[zero]), dtype=float)
+        per_area[zero] = -(weights[zero, :, None] * (pressure[:, None] * normal[zero])[:, None, :])
+    return per_area
+
+
+def _kinematics(
+    face_type: FaceType,
+    master: np.ndarray,
+    slave: np.ndarray,
+    xi: np.ndarray,
+    *,
+    derivatives: bool,
+) -> _Kinematics:
+    """Projection-point kinematics and (optionally) their exact derivatives w.r.t. the nodes."""
+    num = master.shape[0]
+    phi = face_type.shape_functions(xi)  # (N, n)
+    dphi_master = face_type.shape_derivatives(xi)  # (N, n, 2)
+    q = (phi[:, None, :] @ master)[:, 0]
+    tangents = dphi_master.transpose(0, 2, 1) @ master  # (N, 2, 3): q_ξ, q_η
+    r = slave - q
+    m = np.cross(tangents[:, 0], tangents[:, 1])
+    m_norm = np.linalg.norm(m, axis=1)
+    degenerate = np.flatnonzero(~(m_norm > 0.0))
+    if degenerate.size:
+        raise ValueError(
+            f"degenerate master face (q_xi x q_eta = 0 at the projection point) at springs "
+            f"{degenerate[:10].tolist()}"
+        )
+    normal = m / m_norm[:, None]
+    gap = np.einsum("ni,ni->n", r, normal)
+
+    weights = np.concatenate([-phi, np.ones((num, 1))], axis=1)
+    dphi = np.concatenate([dphi_master, np.zeros((num, 1, 2))], axis=1)
+    kin = _Kinematics(xi, phi, weights, dphi, r, m, m_norm, normal, gap)
+    if not derivatives:
+        return kin
+
+    # Second derivatives q_αβ as (N, 2, 2, 3).
+    d2 = face_type.shape_second_derivatives(xi).transpose(0, 2, 1) @ master  # (N, 3, 3)
+    second = np.stack([np.stack([d2[:, 0], d2[:, 1]], 1), np.stack([d2[:, 1], d2[:, 2]], 1)], 1)
+
+    # Projection derivatives (spec §5(a)). Stationarity r·q_α = 0 gives H δξ = Σ_k b_k δx_k with
+    # H_αβ = q_α·q_β − r·q_αβ and b_kα = w_k q_α + φ_k,α r; δξ = G b_k with G = H⁻¹ inside the
+    # domain, restricted to the free direction on an edge and zero at a corner.
+    hessian = tangents @ tangents.transpose(0, 2, 1) - (second @ r[:, None, :, None])[..., 0]
+    compliance = _projection_compliance(face_type, xi, hessian, r, tangents)
+    rhs = weights[:, :, None, None] * tangents[:, None] + dphi[..., None] * r[:, None, None, :]
+    dxi = compliance[:, None] @ rhs  # (N, n+1, 2, 3)
+
+    # ∂m/∂x_k = φ_k,ξ (δ × q_η) + φ_k,η (q_ξ × δ) + Σ_β (q_ξβ × q_η + q_ξ × q_ηβ) ∂ξ_β/∂x_k.
+    skew_eta = _skew(tangents[:, 1])  # S(a) b = a × b
+    skew_xi = _skew(tangents[:, 0])
+    dm_dxi = np.cross(second[:, 0], tangents[:, 1, None, :]) + np.cross(
+        tangents[:, 0, None, :], second[:, 1]
+    )  # (N, 2[β], 3)
+    dm = (
+        -dphi[:, :, 0, None, None] * skew_eta[:, None]
+        + dphi[:, :, 1, None, None] * skew_xi[:, None]
+        + dm_dxi.transpose(0, 2, 1)[:, None] @ dxi
+    )
+    # ∂n = (I − n⊗n) ∂m / |m|.
+    projector = np.eye(3) - normal[:, :, None] * normal[:, None, :]
+    dnormal = (projector / m_norm[:, None, None])[:, None] @ dm
+    # ∂g = n·∂r + r·∂n with ∂r/∂x_k = w_k I − Σ_β q_β ⊗ ∂ξ_β/∂x_k and n·q_β = 0.
+    dgap = weights[:, :, None] * normal[:, None, :] + (r[:, None, None, :] @ dnormal)[:, :, 0]
+
+    kin.dxi, kin.dm, kin.dnormal, kin.dgap = dxi, dm, dnormal, dgap
+    return kin
+
+
+def _projection_compliance(
+    face_type: FaceType,
+    xi: np.ndarray,
+    hessian: np.ndarray,
+    r: np.ndarray,
+    tangents: np.ndarray,
+) -> np.ndarray:
+    """The (N, 2, 2) map G with δξ = G b: H⁻¹, t⊗t/(t·H t) on an active edge, 0 at a corner.
+
+    An edge constraint c·ξ <= o is active when ξ lies on it and its Lagrange multiplier is
+    positive (the unconstrained closest point is outside the domain). With γ_α = r·q_α, the
+    multiplier is c·γ on an edge; at a corner the two multipliers solve γ = λ_a c_a + λ_b c_b.
+    """
+    normals, offsets = _TRIANGLE_CONSTRAINTS if face_type.is_triangle else _QUAD_CONSTRAINTS
+    grad = np.einsum("ni,nai->na", r, tangents)  # γ_α = r·q_α = −∂(|r|²/2)/∂ξ_α
+    tol = _MULTIPLIER_TOL * np.einsum("nai,nai->n", tangents, tangents)
+    on = [o - xi @ c <= _BOUNDARY_TOL for c, o in zip(normals, offsets)]
+    active = [on_i & (grad @ c > tol) for on_i, c in zip(on, normals)]
+    for a in range(len(normals)):
+        for b in range(a + 1, len(normals)):
+            det = normals[a][0] * normals[b][1] - normals[a][1] * normals[b][0]
+            corner = on[a] & on[b]
+            if abs(det) < 1e-12 or not np.any(corner):
+                continue
+            g = grad[corner]
+            lam_a = (g[:, 0] * normals[b][1] - g[:, 1] * normals[b][0]) / det
+            lam_b = (normals[a][0] * g[:, 1] - normals[a][1] * g[:, 0]) / det
+            active[a][corner] = lam_a > tol[corner]
+            active[b][corner] = lam_b > tol[corner]
+    num_active = np.sum(active, axis=0)
+    edge_normal = np.zeros((len(xi), 2))
+    for c, active_i in zip(normals, active):
+        edge_normal[active_i] = c
+
+    compliance = np.zeros_like(hessian)
+    interior = num_active == 0
+    h = hessian[interior]
+    det = h[:, 0, 0] * h[:, 1, 1] - h[:, 0, 1] * h[:, 1, 0]
+    singular = ~(det > 1e-14 * np.einsum("nii->n", h) ** 2)
+    if np.any(singular):
+        bad = np.flatnonzero(interior)[singular]
+        raise ValueError(
+            "singular projection (slave node at a centre of curvature of its master face) at "
+            f"springs {bad[:10].tolist()}"
+        )
+    inverse = np.empty_like(h)
+    inverse[:, 0, 0] = h[:, 1, 1]
+    inverse[:, 1, 1] = h[:, 0, 0]
+    inverse[:, 0, 1] = -h[:, 0, 1]
+    inverse[:, 1, 0] = -h[:, 1, 0]
+    compliance[interior] = inverse / det[:, None, None]
+
+    edge = num_active == 1
+    if np.any(edge):
+        t = np.stack([-edge_normal[edge, 1], edge_normal[edge, 0]], axis=1)
+        tht = np.einsum("na,nab,nb->n", t, hessian[edge], t)
+        if np.any(~(tht > 0.0)):
+            bad = np.flatnonzero(edge)[~(tht > 0.0)]
+            raise ValueError(f"singular edge projection at springs {bad[:10].tolist()}")
+        compliance[edge] = t[:, :, None] * t[:, None, :] / tht[:, None, None]
+    # Corners (num_active >= 2): ξ is fixed, compliance stays 0.
+    return compliance
+
+
+def _skew(a: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) cross-product matrices S(a) with S(a) b = a × b."""
+    s = np.zeros(a.shape[:-1] + (3, 3))
+    s[..., 0, 1], s[..., 0, 2] = -a[..., 2], a[..., 1]
+    s[..., 1, 0], s[..., 1, 2] = a[..., 2], -a[..., 0]
+    s[..., 2, 0], s[..., 2, 1] = -a[..., 1], a[..., 0]
+    return s
+
+
+def _element_stiffness(
+    kin: _Kinematics, slave_force: np.ndarray, dslave_force: np.ndarray
+) -> np.ndarray:
+    """Element matrix from any slave force f_p and its derivative ∂f_p/∂x_l (spec §5(e)).
+
+    Forces are f_k = w_k f_p (w = −φ_j for master nodes, 1 for the slave), so
+    ∂f_k/∂x_l = w_k ∂f_p/∂x_l + f_p ⊗ Σ_α ∂w_k/∂ξ_α ∂ξ_α/∂x_l with ∂w_k/∂ξ_α = −φ_k,α.
+    """
+    num, nodes = kin.weights.shape
+    # (N, k, i, l, c)
+    blocks = kin.weights[:, :, None, None, None] * dslave_force.transpose(0, 2, 1, 3)[:, None]
+    dxi = kin.dxi.transpose(0, 2, 1, 3).reshape(num, 2, 3 * nodes)
+    dphi_dxi = (kin.dphi @ dxi).reshape(num, nodes, nodes, 3)  # (N, k, l, c)
+    blocks -= slave_force[:, None, :, None, None] * dphi_dxi[:, :, None, :, :]
+    return blocks.reshape(num, 3 * nodes, 3 * nodes)

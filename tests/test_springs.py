@@ -1,0 +1,319 @@
+"""Tests of the spring element residual and tangent (dolfinx_ntf.springs), pure numpy."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf.faces import FACE_TYPES, FaceType, face_points, face_tangents
+from dolfinx_ntf.laws import ExponentialLaw, LinearLaw
+from dolfinx_ntf.springs import evaluate_springs
+
+SIZE = 2.0  # element size of the test faces
+LINEAR = LinearLaw(slope=1.0e3, tension=0.5, c0=1e-3)
+EXPONENTIAL = ExponentialLaw(c0=0.2, p0=3.0)
+
+# (face type, out-of-plane warp of the nodes relative to SIZE)
+CASES = [
+    ("tri3", 0.0),
+    ("quad4", 0.0),
+    ("quad4", 0.15),
+    ("tri6", 0.1),
+    ("quad8", 0.1),
+    ("quad9", 0.1),
+]
+CASE_IDS = [f"{name}-{'warped' if warp else 'flat'}" for name, warp in CASES]
+
+
+def _rotation(rng: np.random.Generator) -> np.ndarray:
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return q if np.linalg.det(q) > 0 else -q
+
+
+def _faces(ft: FaceType, num: int, warp: float, rng: np.random.Generator) -> np.ndarray:
+    """(num, n, 3) randomly distorted, warped, rotated and translated faces of size ~SIZE."""
+    params = ft.node_parameters * (SIZE if ft.is_triangle else SIZE / 2)
+    coords = np.zeros((num, ft.num_nodes, 3))
+    coords[:, :, :2] = params + 0.08 * SIZE * rng.uniform(-1, 1, (num, ft.num_nodes, 2))
+    coords[:, :, 2] = warp * SIZE * rng.uniform(-1, 1, (num, ft.num_nodes))
+    rot = np.stack([_rotation(rng) for _ in range(num)])
+    shift = rng.uniform(-5, 5, (num, 1, 3))
+    return np.einsum("nij,nkj->nki", rot, coords) + shift
+
+
+def _interior_params(ft: FaceType, num: int, rng: np.random.Generator) -> np.ndarray:
+    if ft.is_triangle:
+        bary = rng.dirichlet(np.ones(3), num)
+        bary = 0.15 + 0.55 * bary  # stay away from the edges
+        bary /= bary.sum(axis=1, keepdims=True)
+        return bary[:, 1:]
+    return rng.uniform(-0.6, 0.6, (num, 2))
+
+
+def _unit_normal(ft: FaceType, coords: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    t1, t2 = face_tangents(ft, coords, xi)
+    m = np.cross(t1, t2)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+
+
+def _penetrating(ft: FaceType, warp: float, num: int, seed: int):
+    """Faces and slave nodes below them (d > 0) whose closest point is interior."""
+    rng = np.random.default_rng(seed)
+    coords = _faces(ft, num, warp, rng)
+    xi = _interior_params(ft, num, rng)
+    depth = rng.uniform(0.002, 0.05, num) * SIZE
+    slave = face_points(ft, coords, xi) - depth[:, None] * _unit_normal(ft, coords, xi)
+    areas = rng.uniform(0.5, 2.0, num)
+    return coords, slave, areas, xi, depth
+
+
+def _finite_difference(ft, coords, slave, areas, law, h, **kwargs) -> np.ndarray:
+    """Central finite differences of the forces, (N, 3(n+1), 3(n+1))."""
+    nodes = np.concatenate([coords, slave[:, None, :]], axis=1)
+    num, k = nodes.shape[:2]
+    fd = np.zeros((num, 3 * k, 3 * k))
+    for node in range(k):
+        for c in range(3):
+            values = []
+            for sign in (1.0, -1.0):
+                x = nodes.copy()
+                x[:, node, c] += sign * h
+                ev = evaluate_springs(ft, x[:, :-1], x[:, -1], areas, law, tangent=False, **kwargs)
+                values.append(ev.forces.reshape(num, -1))
+            fd[:, :, 3 * node + c] = (values[0] - values[1]) / (2 * h)
+    return fd
+
+
+def _relative_error(k: np.ndarray, k_ref: np.ndarray) -> np.ndarray:
+    """Per-spring max-norm error relative to the max-norm of the reference."""
+    num = len(k)
+    diff = np.abs(k - k_ref).reshape(num, -1).max(axis=1)
+    return diff / np.abs(k_ref).reshape(num, -1).max(axis=1)
+
+
+@pytest.mark.parametrize("law", [LINEAR, EXPONENTIAL], ids=["linear", "exponential"])
+@pytest.mark.parametrize(("name", "warp"), CASES, ids=CASE_IDS)
+def test_tangent_matches_finite_differences(name: str, warp: float, law) -> None:
+    ft = FACE_TYPES[name]
+    coords, slave, areas, xi, depth = _penetrating(ft, warp, 8, seed=1)
+    ev = evaluate_springs(ft, coords, slave, areas, law)
+    np.testing.assert_allclose(ev.xi, xi, atol=1e-9)
+    np.testing.assert_allclose(ev.overclosure, depth, rtol=1e-9)
+    assert np.all(ev.normal_force > 0)
+    fd = _finite_difference(ft, coords, slave, areas, law, h=1e-7 * SIZE)
+    error = _relative_error(ev.stiffness, fd)
+    assert error.max() <= 1e-6, error
+    # With an interior projection the forces are the gradient of the spring energy A P(d(x))
+    # (P' = p, since ∂g/∂x_p = n and ∂g/∂x_j = −φ_j n): the exact tangent is symmetric.
+    asym = _relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1))
+    assert asym.max() <= 1e-12
+
+
+@pytest.mark.parametrize(("name", "warp"), CASES, ids=CASE_IDS)
+def test_symmetric_option(name: str, warp: float) -> None:
+    ft = FACE_TYPES[name]
+    coords, slave, areas, _, _ = _penetrating(ft, warp, 5, seed=2)
+    full = evaluate_springs(ft, coords, slave, areas, LINEAR).stiffness
+    sym = evaluate_springs(ft, coords, slave, areas, LINEAR, symmetric=True).stiffness
+    np.testing.assert_allclose(sym, 0.5 * (full + full.transpose(0, 2, 1)), rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(sym, sym.transpose(0, 2, 1))
+
+
+@pytest.mark.parametrize(("name", "warp"), CASES, ids=CASE_IDS)
+def test_equilibrium(name: str, warp: float) -> None:
+    ft = FACE_TYPES[name]
+    coords, slave, areas, _, _ = _penetrating(ft, warp, 10, seed=3)
+    ev = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL)
+    scale = np.abs(ev.forces).max()
+    np.testing.assert_allclose(ev.forces.sum(axis=1), 0.0, atol=1e-13 * scale)
+    # Interior projection: r ∥ n, so the moments about the origin balance too.
+    nodes = np.concatenate([coords, slave[:, None, :]], axis=1)
+    moments = np.cross(nodes, ev.forces).sum(axis=1)
+    np.testing.assert_allclose(moments, 0.0, atol=1e-11 * scale * np.abs(nodes).max())
+    # The forces sum to zero for every configuration, so do the rows of K; a rigid translation
+    # changes nothing, so do the columns.
+    k = ev.stiffness.reshape(len(coords), ft.num_nodes + 1, 3, ft.num_nodes + 1, 3)
+    kscale = np.abs(k).max()
+    np.testing.assert_allclose(k.sum(axis=1), 0.0, atol=1e-11 * kscale)
+    np.testing.assert_allclose(k.sum(axis=3), 0.0, atol=1e-11 * kscale)
+    assert ev.forces.shape == (10, ft.num_nodes + 1, 3)
+    assert ev.stiffness.shape == (10, 3 * (ft.num_nodes + 1), 3 * (ft.num_nodes + 1))
+
+
+@pytest.mark.parametrize("name", ["tri3", "quad4", "quad8"])
+def test_slave_above_flat_face(name: str) -> None:
+    """A penetrating slave node of a flat face in z = 0 gets f_p = −A p(d) n, n = e_z."""
+    ft = FACE_TYPES[name]
+    scale = SIZE if ft.is_triangle else SIZE / 2
+    coords = np.zeros((3, ft.num_nodes, 3))
+    coords[:, :, :2] = ft.node_parameters * scale
+    xi = np.array([[0.2, 0.3], [0.1, 0.1], [0.25, 0.5]])
+    depth = np.array([1e-3, 0.0, 0.02])
+    slave = face_points(ft, coords, xi) - depth[:, None] * np.array([0, 0, 1.0])
+    areas = np.array([0.7, 1.0, 1.3])
+    ev = evaluate_springs(ft, coords, slave, areas, LINEAR)
+    np.testing.assert_allclose(ev.xi, xi, atol=1e-12)
+    np.testing.assert_allclose(ev.normal, np.tile([0.0, 0.0, 1.0], (3, 1)), atol=1e-15)
+    np.testing.assert_allclose(ev.gap, -depth, atol=1e-15)
+    expected = areas * LINEAR.pressure(depth)
+    np.testing.assert_allclose(ev.normal_force, expected, rtol=1e-13)
+    np.testing.assert_allclose(ev.forces[:, -1], -expected[:, None] * ev.normal, rtol=1e-13)
+    np.testing.assert_allclose(
+        ev.forces[:, :-1], ev.phi[:, :, None] * expected[:, None, None] * ev.normal[:, None],
+        rtol=1e-12, atol=1e-15,
+    )
+    np.testing.assert_allclose(ev.phi, ft.shape_functions(xi), atol=1e-12)
+    np.testing.assert_allclose(ev.force_per_area, ev.forces / areas[:, None, None], rtol=1e-14)
+    # d = 0 with the linear law still carries the smoothing term: F_N = A K d/2 at d = 0 is 0.
+    assert ev.normal_force[1] == pytest.approx(0.0, abs=1e-14)
+
+
+def test_gap_shift() -> None:
+    ft = FACE_TYPES["quad4"]
+    coords, slave, areas, _, depth = _penetrating(ft, 0.15, 6, seed=4)
+    shift = np.linspace(-0.01, 0.01, 6)
+    ev = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL, gap_shift=shift)
+    np.testing.assert_allclose(ev.gap, -depth, rtol=1e-9)
+    np.testing.assert_allclose(ev.overclosure, depth + shift, rtol=1e-9)
+    f_expected, _ = EXPONENTIAL.spring_force(depth + shift, areas)
+    np.testing.assert_allclose(ev.normal_force, f_expected, rtol=1e-9)
+    # Scalar shift equal to a spring's own gap cancels its overclosure.
+    ev0 = evaluate_springs(ft, coords[:1], slave[:1], areas[:1], LINEAR, gap_shift=-depth[0])
+    assert ev0.overclosure[0] == pytest.approx(0.0, abs=1e-15)
+    # The shift is constant: the tangent still matches finite differences.
+    fd = _finite_difference(ft, coords, slave, areas, EXPONENTIAL, h=1e-7 * SIZE, gap_shift=shift)
+    assert _relative_error(ev.stiffness, fd).max() <= 1e-6
+
+
+def _outside(ft: FaceType, where: str, num: int, seed: int):
+    """Slave nodes beside an edge ("edge") or a corner ("corner"), below the face plane.
+
+    The in-plane offset r_t is chosen so that (r·q_ξ, r·q_η) = Σ λ_i c_i with multipliers
+    λ_i > 0 of the active edges (outward parametric normals c_i): the closest point is then on
+    the boundary at ``xi`` with strictly active constraints.
+    """
+    rng = np.random.default_rng(seed)
+    coords = _faces(ft, num, 0.0, rng)
+    if ft.is_triangle:
+        # Edge 1-2 (η = 0) or corner 2 (ξ = 1, η = 0).
+        xi = np.stack([rng.uniform(0.2, 0.8, num), np.zeros(num)], axis=1)
+        normals = [np.array([0.0, -1.0])]
+        if where == "corner":
+            xi[:] = [1.0, 0.0]
+            normals.append(np.array([1.0, 1.0]))
+    else:
+        # Edge ξ = 1 or corner (1, 1).
+        xi = np.stack([np.ones(num), rng.uniform(-0.5, 0.5, num)], axis=1)
+        normals = [np.array([1.0, 0.0])]
+        if where == "corner":
+            xi[:] = [1.0, 1.0]
+            normals.append(np.array([0.0, 1.0]))
+    jac = np.stack(face_tangents(ft, coords, xi), axis=2)  # (N, 3, 2)
+    grad = sum(rng.uniform(0.02, 0.1, (num, 1)) * c for c in normals) * SIZE**2
+    offset = np.einsum("nia,nab,nb->ni", jac, np.linalg.inv(jac.transpose(0, 2, 1) @ jac), grad)
+    depth = rng.uniform(0.002, 0.05, num) * SIZE
+    n = _unit_normal(ft, coords, xi)
+    slave = face_points(ft, coords, xi) + offset - depth[:, None] * n
+    return coords, slave, rng.uniform(0.5, 2.0, num), xi, depth
+
+
+@pytest.mark.parametrize("where", ["edge", "corner"])
+@pytest.mark.parametrize("name", ["tri3", "quad4", "tri6", "quad8", "quad9"])
+def test_clamped_projection_tangent(name: str, where: str) -> None:
+    """Slave beside the face: the constrained-projection tangent is exact."""
+    ft = FACE_TYPES[name]
+    coords, slave, areas, xi, depth = _outside(ft, where, 6, seed=5)
+    ev = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL)
+    np.testing.assert_allclose(ev.xi, xi, atol=1e-9)
+    np.testing.assert_allclose(ev.overclosure, depth, rtol=1e-8)
+    fd = _finite_difference(ft, coords, slave, areas, EXPONENTIAL, h=1e-7 * SIZE)
+    error = _relative_error(ev.stiffness, fd)
+    assert error.max() <= 1e-6, error
+    # Still in equilibrium (forces), but r is not ∥ n: the moments do not balance and the forces
+    # are no longer the gradient of A P(d), so the exact tangent is unsymmetric.
+    np.testing.assert_allclose(ev.forces.sum(axis=1), 0.0, atol=1e-12 * np.abs(ev.forces).max())
+    nodes = np.concatenate([coords, slave[:, None, :]], axis=1)
+    moments = np.linalg.norm(np.cross(nodes, ev.forces).sum(axis=1), axis=1)
+    assert np.all(moments > 1e-6 * np.abs(ev.forces).max())
+    asym = _relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1))
+    assert asym.min() > 1e-4
+    # A start point does not change the result.
+    ev0 = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL, xi0=ft.clamp(xi + 0.05))
+    np.testing.assert_allclose(ev0.xi, ev.xi, atol=1e-12)
+    scale = np.abs(ev.stiffness).max()
+    np.testing.assert_allclose(ev0.stiffness, ev.stiffness, rtol=1e-9, atol=1e-9 * scale)
+
+
+def test_tangent_flag_and_area_fallback() -> None:
+    ft = FACE_TYPES["quad4"]
+    coords, slave, areas, _, depth = _penetrating(ft, 0.0, 4, seed=6)
+    assert evaluate_springs(ft, coords, slave, areas, LINEAR, tangent=False).stiffness is None
+    areas[1] = 0.0
+    ev = evaluate_springs(ft, coords, slave, areas, LINEAR)
+    t1, t2 = face_tangents(ft, coords[1], ev.xi[1])
+    assert ev.area[1] == pytest.approx(4.0 * np.linalg.norm(np.cross(t1, t2)), rel=1e-13)
+    np.testing.assert_array_equal(ev.area[[0, 2, 3]], areas[[0, 2, 3]])
+    off = evaluate_springs(ft, coords, slave, areas, LINEAR, area_fallback=False)
+    assert off.normal_force[1] == 0.0
+    np.testing.assert_array_equal(off.forces[1], 0.0)
+    expected = -LINEAR.pressure(depth[1]) * off.normal[1]
+    np.testing.assert_allclose(off.force_per_area[1, -1], expected, rtol=1e-9)
+    np.testing.assert_allclose(off.force_per_area[1, :-1], -off.phi[1, :, None] * expected)
+    # tri3: A = |m|/2.
+    tri = FACE_TYPES["tri3"]
+    coords, slave, _, _, _ = _penetrating(tri, 0.0, 1, seed=7)
+    ev = evaluate_springs(tri, coords, slave, np.zeros(1), LINEAR)
+    t1, t2 = face_tangents(tri, coords[0], ev.xi[0])
+    assert ev.area[0] == pytest.approx(0.5 * np.linalg.norm(np.cross(t1, t2)), rel=1e-13)
+
+
+def test_bad_input() -> None:
+    ft = FACE_TYPES["quad4"]
+    coords, slave, areas, _, _ = _penetrating(ft, 0.0, 3, seed=8)
+    with pytest.raises(ValueError, match="master_coords"):
+        evaluate_springs(ft, coords[:, :3], slave, areas, LINEAR)
+    with pytest.raises(ValueError, match="slave_coords"):
+        evaluate_springs(ft, coords, slave[:2], areas, LINEAR)
+    with pytest.raises(ValueError, match="areas"):
+        evaluate_springs(ft, coords, slave, areas[:2], LINEAR)
+    with pytest.raises(ValueError, match="areas must be >= 0"):
+        evaluate_springs(ft, coords, slave, -areas, LINEAR)
+    with pytest.raises(ValueError, match="gap_shift"):
+        evaluate_springs(ft, coords, slave, areas, LINEAR, gap_shift=np.zeros(2))
+    bad = slave.copy()
+    bad[2, 0] = np.nan
+    with pytest.raises(ValueError, match=r"slave_coords is not finite at springs \[2\]"):
+        evaluate_springs(ft, coords, bad, areas, LINEAR)
+    collapsed = coords.copy()
+    collapsed[1] = collapsed[1, 0]
+    with pytest.raises(ValueError, match=r"degenerate.*1"):
+        evaluate_springs(ft, collapsed, slave, areas, LINEAR)
+
+
+def test_empty_batch() -> None:
+    ft = FACE_TYPES["tri6"]
+    ev = evaluate_springs(ft, np.zeros((0, 6, 3)), np.zeros((0, 3)), np.zeros(0), LINEAR)
+    assert ev.forces.shape == (0, 7, 3)
+    assert ev.stiffness.shape == (0, 21, 21)
+
+
+def test_batch_performance() -> None:
+    """10^5 quad4 springs, residual + tangent (time printed, not asserted)."""
+    ft = FACE_TYPES["quad4"]
+    num = 100_000
+    rng = np.random.default_rng(9)
+    params = ft.node_parameters * SIZE / 2
+    coords = np.zeros((num, 4, 3))
+    coords[:, :, :2] = params + 0.05 * rng.uniform(-1, 1, (num, 4, 2))
+    coords[:, :, 2] = 0.05 * rng.uniform(-1, 1, (num, 4))
+    xi = rng.uniform(-0.8, 0.8, (num, 2))
+    slave = face_points(ft, coords, xi) - 0.01 * _unit_normal(ft, coords, xi)
+    start = time.perf_counter()
+    ev = evaluate_springs(ft, coords, slave, np.ones(num), LINEAR)
+    elapsed = time.perf_counter() - start
+    print(f"\nevaluate_springs: {num} quad4 springs, residual + tangent in {elapsed:.2f} s")
+    assert ev.stiffness.shape == (num, 15, 15)
+    assert np.all(ev.normal_force > 0)
