@@ -834,7 +834,9 @@ class _Reader:
     def __init__(self, path: Path) -> None:
         self.path = path
         self.heading: list[str] = []
-        self.node_chunks: list[tuple[list[int], list[tuple[float, float, float]], Location]] = []
+        self.node_ids: list[int] = []
+        self.node_coords: list[tuple[float, float, float]] = []
+        self.node_locs: list[Location] = []
         self.element_rows: dict[str, list[list[int]]] = {t: [] for t in ELEMENT_TYPES}
         self.element_ids: dict[str, list[int]] = {t: [] for t in ELEMENT_TYPES}
         self.element_locs: dict[str, list[Location]] = {t: [] for t in ELEMENT_TYPES}
@@ -1033,7 +1035,7 @@ class _Reader:
         elif key in _UNUSED_INTERACTION:
             self._unused_interaction(card)
         elif key in _IGNORED:
-            self.ignored.append((card.name, card.location.file, card.location.line))
+            self._ignore(card)
         elif key in _UNSUPPORTED_CONSTRAINTS:
             raise DeckError(f"{card.name} is not supported yet (constraint)", card.location)
         elif key in _CANONICAL:
@@ -1050,14 +1052,14 @@ class _Reader:
     def _k_NODE(self, card: _Card) -> None:
         self._check_params(card, allowed={"NSET"})
         ids: list[int] = []
-        coords: list[tuple[float, float, float]] = []
         for fields, _, loc in card.lines:
             if not 1 <= len(fields) <= 4:
                 raise DeckError("*NODE data line: node number, x, y, z", loc)
             ids.append(self._int(fields[0], "node number", loc))
             xyz = [self._optional_float(fields, i, "a coordinate", loc) or 0.0 for i in (1, 2, 3)]
-            coords.append((xyz[0], xyz[1], xyz[2]))
-        self.node_chunks.append((ids, coords, card.location))
+            self.node_coords.append((xyz[0], xyz[1], xyz[2]))
+            self.node_locs.append(loc)
+        self.node_ids.extend(ids)
         if card.params.get("NSET"):
             self._add_set(self.nsets, "node", card.params["NSET"], ids, card.location)
 
@@ -1516,14 +1518,14 @@ class _Reader:
         self._check_params(card, allowed={"OP", "AMPLITUDE"})
         op, amplitude = self._op(card), self._amplitude_param(card)
         for fields, _, loc in card.lines:
-            if len(fields) != 3:
-                raise DeckError("*DLOAD data line: element or element set, P1..P6, pressure", loc)
-            label = fields[1]
-            if not re.fullmatch(r"P[1-6]", label):
+            label = fields[1] if len(fields) > 1 else ""
+            if label and not re.fullmatch(r"P[1-6]", label):
                 raise DeckError(
                     f"*DLOAD load type {label} is not supported yet (only uniform pressure P1..P6)",
                     loc,
                 )
+            if len(fields) != 3:
+                raise DeckError("*DLOAD data line: element or element set, P1..P6, pressure", loc)
             elements = self._elements_of(fields[0], card, loc)
             self.element_refs.append((f"{card.name} face {label}", elements, loc))
             value = self._float(fields[2], "pressure", loc)
@@ -1671,6 +1673,14 @@ class _Reader:
         )
         self.step = None
 
+    def _ignore(self, card: _Card) -> None:
+        """Skip an output keyword, keeping the FREQUENCY it sets for every output (ccx rule)."""
+        if "TIMEPOINTS" in card.params:
+            raise DeckError(f"{card.name}, TIME POINTS is not supported yet", card.location)
+        if "FREQUENCY" in card.params:
+            self._frequency(card)
+        self.ignored.append((card.name, card.location.file, card.location.line))
+
     def _k_RESTART(self, card: _Card) -> None:
         if "READ" in card.params:
             raise DeckError("*RESTART, READ is not supported yet", card.location)
@@ -1726,19 +1736,23 @@ class _Reader:
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:
-        ids = [i for chunk in self.node_chunks for i in chunk[0]]
-        coords = [c for chunk in self.node_chunks for c in chunk[1]]
-        ids_array = np.array(ids, dtype=np.int64)
-        coords_array = np.array(coords, dtype=np.float64).reshape(-1, 3)
+        ids_array = np.array(self.node_ids, dtype=np.int64)
+        coords_array = np.array(self.node_coords, dtype=np.float64).reshape(-1, 3)
         order = np.argsort(ids_array, kind="stable")
         ids_array, coords_array = ids_array[order], coords_array[order]
         duplicate = np.flatnonzero(np.diff(ids_array) == 0)
         if duplicate.size:
             node = int(ids_array[duplicate[0]])
-            locs = [str(loc) for chunk_ids, _, loc in self.node_chunks if node in chunk_ids]
-            raise DeckError(f"node {node} is defined twice (*NODE at {', '.join(locs)})")
+            first, second = order[duplicate[0]], order[duplicate[0] + 1]
+            raise DeckError(
+                f"node {node} is defined twice (first at {self.node_locs[first]})",
+                self.node_locs[second],
+            )
         if np.any(ids_array <= 0):
-            raise DeckError(f"node numbers must be > 0, got {int(ids_array.min())}")
+            bad = int(np.argmin(ids_array))
+            raise DeckError(
+                f"node numbers must be > 0, got {int(ids_array[bad])}", self.node_locs[order[bad]]
+            )
         ids_array.flags.writeable = False
         coords_array.flags.writeable = False
         return ids_array, coords_array
