@@ -97,12 +97,16 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             consistent (unsymmetric) tangent.
         linearize_area: Include the derivative of the spring areas (beyond CalculiX, which holds them constant).
         max_depth: Reject nodes deeper than this below the master face (beyond CalculiX, which has no limit).
+        walk_from_previous_face: Start each node's face search at its current face instead of the nearest
+            centroid (beyond CalculiX): a node stays on its face while within the search tolerance, which stops
+            the face ping-pong of nodes on shared edges during re-pairing.
         form_compiler_params, jit_params: Passed to dolfinx.
     """
 
     def __init__(self, F: ufl.form.Form, u: dolfinx.fem.Function, pairs: typing.Sequence[ContactPair],
                  bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (), J: ufl.form.Form | None = None, *,
                  symmetric: bool = False, linearize_area: bool = False, max_depth: float | None = None,
+                 walk_from_previous_face: bool = False,
                  form_compiler_params: dict | None = None, jit_params: dict | None = None) -> None:
         super().__init__(F, u, list(bcs), J, form_compiler_params=form_compiler_params or {},
                          jit_params=jit_params or {})
@@ -115,6 +119,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.symmetric = symmetric
         self.linearize_area = linearize_area
         self.max_depth = max_depth
+        self.walk_from_previous_face = walk_from_previous_face
         self._reference = reference_coordinates(V)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
@@ -203,7 +208,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         state.master.update(coords)
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
-        face = state.master.locate(points, tolerances, max_depth=self.max_depth)
+        start = None
+        if self.walk_from_previous_face:
+            start = np.full(points.shape[0], -1, dtype=np.int64)
+            start[state.spring_slave] = state.spring_face
+        face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
         found = np.flatnonzero(face >= 0)
         law = state.pair.interaction.law
         ft = state.master_faces.face_type

@@ -62,6 +62,7 @@ class MasterSurface:
         tri_local = np.asarray(face_type.triangles, dtype=np.int64)
         t_per_face = tri_local.shape[0]
         self._triangle_faces = np.repeat(np.arange(faces.shape[0]), t_per_face)
+        self._first_triangle_of_face = np.arange(faces.shape[0]) * t_per_face
         self._triangles = faces[:, tri_local].reshape(-1, 3)
         self._local_triangles = self._local_faces[:, tri_local].reshape(-1, 3)
         tri_edges = np.stack(
@@ -256,6 +257,7 @@ class MasterSurface:
         *,
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
+        start_faces: np.ndarray | None = None,
     ) -> np.ndarray:
         """Master face holding each point, by the triangle walk of spec §3.2.
 
@@ -266,11 +268,19 @@ class MasterSurface:
             max_depth: If given, reject points deeper than this below the accepted triangle's
                 plane (not in ccx, which has no penetration-side limit).
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
+            start_faces: Optional (N,) face to start each walk from (its first sub-triangle), -1 for the
+                nearest centroid. Starting from the previous face keeps a node on it while it stays within the
+                tolerance (not in ccx, whose walk always starts at the nearest centroid).
 
         Returns:
             (N,) face index, or -1 where no face is found.
         """
-        tri = self.locate_triangles(points, tolerances, max_depth=max_depth, max_steps=max_steps)
+        start = None
+        if start_faces is not None:
+            start_faces = np.asarray(start_faces, dtype=np.int64)
+            start = np.where(start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1)
+        tri = self.locate_triangles(points, tolerances, max_depth=max_depth, max_steps=max_steps,
+                                    start=start)
         out = np.full(tri.shape, -1, dtype=np.int64)
         found = tri >= 0
         out[found] = self._triangle_faces[tri[found]]
@@ -283,6 +293,7 @@ class MasterSurface:
         *,
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
+        start: np.ndarray | None = None,
     ) -> np.ndarray:
         """Sub-triangle accepted by the walk for each point (see `locate`); -1 for none.
 
@@ -291,6 +302,7 @@ class MasterSurface:
             tolerances: (N,) or scalar plane tolerance (see `locate`).
             max_depth: Optional penetration-side depth limit (see `locate`).
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
+            start: Optional (N,) start triangle per point; -1 (or None) for the nearest centroid.
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
@@ -304,8 +316,11 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        _, start = self._tree.query(points, k=1)
-        cur = np.asarray(start, dtype=np.int64)
+        _, nearest = self._tree.query(points, k=1)
+        cur = np.asarray(nearest, dtype=np.int64)
+        if start is not None:
+            start = np.asarray(start, dtype=np.int64)
+            cur = np.where(start >= 0, start, cur)
         prev = np.full(n, -1, dtype=np.int64)
         idx = np.arange(n)
         hist = np.full((n, 8), -1, dtype=np.int64)  # visited triangles of the walking points

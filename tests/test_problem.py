@@ -206,3 +206,16 @@ def test_node_based_slave_collects_lateral_area():
     # corner node: a quarter of one bottom face and of two lateral faces
     assert np.isclose(areas.max(), 0.25 * 0.0625 * 4)  # centre node: four bottom quarter faces
     assert np.isclose(np.sort(areas)[0], 0.25 * (0.0625 + 2 * 0.0625))
+
+
+def test_walk_from_previous_face_stops_edge_ping_pong():
+    """Tets: slave nodes on shared master edges flip faces at each re-pairing (ccx behaviour) until iteration 9;
+    starting the walk at the previous face keeps them put, and Newton converges as on hexahedra."""
+    iterations = {}
+    for option in (False, True):
+        problem, pressure, _ = _setup("tetrahedron", walk_from_previous_face=option)
+        _, step = _solve(problem, pressure)
+        iterations[option] = [r.iterations for r in step.results]
+        assert ntf.contact_results(problem)[0].force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)
+    assert max(iterations[True]) <= 5
+    assert max(iterations[False]) > max(iterations[True])
