@@ -9,9 +9,9 @@ from outside the body, then midside nodes), so that ``m = q_ξ × q_η`` points 
 - quad8: serendipity, then midside nodes 5 on 1-2, 6 on 2-3, 7 on 3-4, 8 on 4-1;
 - quad9: biquadratic Lagrange, nodes as quad8 plus node 9 at the centre.
 
-Shape functions are stored as coefficients on the nine monomials ``ξ^a η^b`` (a, b ≤ 2), obtained
-by inverting the nodal Vandermonde matrix of each type's monomial space; derivatives of any order
-are then exact coefficient maps. Face-local node indices are 0-based everywhere.
+Shape functions are stored as coefficients on the nine monomials ``ξ^a η^b`` (a, b ≤ 2),
+obtained by inverting the nodal Vandermonde matrix of each type's monomial space; derivatives
+of any order are then exact coefficient maps. Face-local node indices are 0-based everywhere.
 
 Choice for quad9 (no CalculiX analogue): its master triangulation is a fan of 8 triangles around
 the centre node, ``(corner, midside, centre)`` and ``(midside, corner, centre)``, so the centre node
@@ -44,7 +44,7 @@ _MONOMIAL_INDEX = {(int(a), int(b)): k for k, (a, b) in enumerate(_EXPONENTS)}
 
 
 def _derivative_map(axis: int) -> np.ndarray:
-    """Matrix D (9, 9) with D @ C the coefficients of ∂/∂(ξ or η) of the polynomials C (9, n)."""
+    """Matrix D (9, 9): D @ C holds the coefficients of ∂C/∂ξ (axis 0) or ∂C/∂η (axis 1)."""
     d = np.zeros((9, 9))
     for k, (a, b) in enumerate(_EXPONENTS):
         power = (a, b)[axis]
@@ -67,6 +67,21 @@ def _monomials(xi: np.ndarray) -> np.ndarray:
     xp = (one, x, x * x)
     yp = (one, y, y * y)
     return np.stack([xp[a] * yp[b] for a, b in _EXPONENTS], axis=-1)
+
+
+def _monomial_increments(xi: np.ndarray, dxi: np.ndarray) -> np.ndarray:
+    """Increments of the nine monomials from ``xi`` to ``xi + dxi``, in factored form."""
+    x, y = xi[..., 0], xi[..., 1]
+    dx, dy = dxi[..., 0], dxi[..., 1]
+    zero = np.zeros(np.broadcast(x, dx).shape)
+    one = np.ones_like(zero)
+    x1, y1 = x + dx, y + dy
+    xp, yp = (one, x, x * x), (one, y, y * y)
+    xp1, yp1 = (one, x1, x1 * x1), (one, y1, y1 * y1)
+    dxp = (zero, dx + zero, dx * (2.0 * x + dx))
+    dyp = (zero, dy + zero, dy * (2.0 * y + dy))
+    # Δ(AB) = ΔA·B' + A·ΔB.
+    return np.stack([dxp[a] * yp1[b] + xp[a] * dyp[b] for a, b in _EXPONENTS], axis=-1)
 
 
 def _as_parameters(xi: np.ndarray | list | tuple) -> np.ndarray:
@@ -135,6 +150,15 @@ class FaceType:
             [m @ (_D_XI @ _D_XI @ c), m @ (_D_XI @ _D_ETA @ c), m @ (_D_ETA @ _D_ETA @ c)],
             axis=-1,
         )
+
+    def shape_function_increments(self, xi: np.ndarray, dxi: np.ndarray) -> np.ndarray:
+        """φ(ξ + Δξ) - φ(ξ) for ``xi``, ``dxi`` (..., 2) -> (..., n), without cancellation.
+
+        Accurate relative to |Δξ| even for tiny increments (line searches, projections).
+        """
+        xi = _as_parameters(xi)
+        dxi = _as_parameters(dxi)
+        return _monomial_increments(xi, dxi) @ self._coefficients
 
     def contains(self, xi: np.ndarray, tol: float = 0.0) -> np.ndarray:
         """Whether ``xi`` (..., 2) lies in the closed parametric domain, enlarged by ``tol``."""
@@ -335,7 +359,7 @@ def face_points(face_type: FaceType, face_coords: np.ndarray, xi: np.ndarray) ->
     """Points q(ξ) = Σ_j φ_j(ξ) x_j of faces (..., n, 3) at parameters (..., 2) -> (..., 3)."""
     coords = _check_coords(face_type, face_coords)
     phi = face_type.shape_functions(xi)
-    return np.einsum("...j,...jc->...c", phi, coords)
+    return (phi[..., None, :] @ coords)[..., 0, :]
 
 
 def face_tangents(
@@ -347,5 +371,5 @@ def face_tangents(
     """
     coords = _check_coords(face_type, face_coords)
     dphi = face_type.shape_derivatives(xi)
-    q = np.einsum("...jd,...jc->...dc", dphi, coords)
+    q = np.swapaxes(dphi, -1, -2) @ coords
     return q[..., 0, :], q[..., 1, :]

@@ -145,6 +145,23 @@ def test_derivatives_vs_finite_differences(ft):
         assert np.abs(d2[..., 1]).max() > 0.1
 
 
+@pytest.mark.parametrize("ft", ALL, ids=IDS)
+def test_shape_function_increments(ft):
+    rng = np.random.default_rng(5)
+    xi = _random_inside(ft, 30, rng)
+    dxi = rng.normal(size=(30, 2)) * np.logspace(-12, 0, 30)[:, None]
+    inc = ft.shape_function_increments(xi, dxi)
+    np.testing.assert_allclose(
+        inc, ft.shape_functions(xi + dxi) - ft.shape_functions(xi), atol=1e-14
+    )
+    # Relative accuracy for tiny increments: first-order term dominates.
+    lin = np.einsum("mjd,md->mj", ft.shape_derivatives(xi), dxi)
+    tiny = np.abs(dxi).max(axis=1) < 1e-9
+    size = np.abs(dxi[tiny]).max(axis=1)[:, None]
+    np.testing.assert_allclose(inc[tiny] / size, lin[tiny] / size, atol=1e-8)
+    assert np.any(np.abs(inc[tiny]) > 0)
+
+
 def test_area_weights():
     for ft in ALL:
         assert ft.area_weights.sum() == pytest.approx(1.0, abs=1e-15)
