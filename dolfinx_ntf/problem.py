@@ -95,7 +95,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         J: UFL Jacobian (derived from ``F`` when omitted).
         symmetric: Symmetrize the spring matrices like CalculiX's frictionless contact; default is the
             consistent (unsymmetric) tangent.
-        linearize_area: Include the derivative of the spring areas (beyond CalculiX, which holds them constant).
+        linearize_area: Recompute spring areas at every evaluation and include their derivative in the tangent
+            (beyond CalculiX, which updates them only when pairing and holds them constant in the tangent).
         max_depth: Reject nodes deeper than this below the master face (beyond CalculiX, which has no limit).
         walk_from_previous_face: Start each node's face search at its current face instead of the nearest
             centroid (beyond CalculiX): a node stays on its face while within the search tolerance, which stops
@@ -243,6 +244,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         blocks = []
         for state in self.states:
             nodes = state.element_nodes
+            if self.linearize_area:  # areas follow the deformation between pairings too
+                faces = state.slave.faces
+                areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
+                state.spring_area = areas[state.spring_slave]
             ev = evaluate_springs(state.master_faces.face_type, coords[nodes[:, :-1]], coords[nodes[:, -1]],
                                   state.spring_area, state.pair.interaction.law,
                                   gap_shift=self._gap_shift(state, state.spring_slave), xi0=state.xi,
@@ -254,7 +259,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 blocks.append(self._area_block(state, coords))
         return blocks
 
-    def _area_block(self, state: PairState, coords: np.ndarray) -> SpringBlocks:
+    def _area_block(self, state: PairState, coords: np.ndarray, *, values: bool = True) -> SpringBlocks:
         """Tangent of F_N = A_p p(d) with respect to the nodes of the slave faces around p (dA_p/du)."""
         faces = state.slave.faces
         slave_index, node, gradient = spring_area_gradients(faces.face_type, faces.faces, coords,
@@ -264,29 +269,23 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         spring = spring_of_slave[slave_index]
         keep = spring >= 0
         spring, node, gradient = spring[keep], node[keep], gradient[keep]
-        per_area = state.evaluation.force_per_area.reshape(state.num_springs, -1)[spring]
-        values = per_area[:, :, None] * gradient[:, None, :]
-        return SpringBlocks(state.element_nodes[spring], node[:, None].astype(np.int64), values)
+        block_values = None
+        if values:
+            per_area = state.evaluation.force_per_area.reshape(state.num_springs, -1)[spring]
+            block_values = per_area[:, :, None] * gradient[:, None, :]
+        return SpringBlocks(state.element_nodes[spring], node[:, None].astype(np.int64), block_values)
 
     def ensure_matrix(self) -> PETSc.Mat:
         """The Jacobian matrix, recreated when the current springs need couplings it lacks."""
         blocks = [SpringBlocks(s.element_nodes, s.element_nodes) for s in self.states]
         if self.linearize_area:
-            blocks += [self._area_pattern(s) for s in self.states]
+            coords = self.current_coordinates()
+            blocks += [self._area_block(s, coords, values=False) for s in self.states]
         if self.matrix is None or not self.assembler.has_pattern(blocks):
             if self.matrix is not None:
                 self.matrix.destroy()
             self.matrix = self.assembler.create_matrix(blocks)
         return self.matrix
-
-    def _area_pattern(self, state: PairState) -> SpringBlocks:
-        faces = state.slave.faces.faces
-        nodes = state.slave.nodes[state.spring_slave]
-        touching = np.isin(faces, nodes).any(axis=1)
-        patch = np.unique(faces[touching])
-        # Couple every spring node with every node of the slave faces touching a spring (a superset).
-        elem = np.unique(state.element_nodes)
-        return SpringBlocks(elem[None, :], patch[None, :])
 
     # -- dolfinx callbacks --------------------------------------------------------------------------------
 
