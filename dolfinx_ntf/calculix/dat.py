@@ -201,9 +201,12 @@ def _totals(totals: str) -> str:
 
 def _rows(labels, values, width: int, what: str) -> tuple[np.ndarray, np.ndarray]:
     labels = np.asarray(labels, dtype=np.int64).reshape(-1)
-    values = np.asarray(values, dtype=np.float64).reshape(labels.size, -1)
-    if values.shape[1] != width:
-        raise ValueError(f"{what}: values must have shape ({labels.size}, {width})")
+    values = np.asarray(values, dtype=np.float64)
+    if width == 1 and values.shape == (labels.size,):
+        values = values[:, None]
+    if values.shape != (labels.size, width):
+        shape = f"({labels.size}, {width})" + (f" or ({labels.size},)" if width == 1 else "")
+        raise ValueError(f"{what}: values must have shape {shape}, got {values.shape}")
     return labels, values
 
 
@@ -342,7 +345,10 @@ def read_dat(path: str | Path) -> list[DatBlock]:
         ncols = width.pop() if width else num_labels + (_BLOCKS[name][2] if name in _BLOCKS else 0)
         labels = np.array([[int(t) for t in r[:num_labels]] for r in rows], dtype=np.int64)
         values = np.array(
-            [[_parse_number(t, f"{path}:{current['line']}") for t in r[num_labels:]] for r in rows],
+            [
+                [_parse_number(t, f"{path}:{line}") for t in r[num_labels:]]
+                for r, line in zip(rows, current["lines"])
+            ],
             dtype=np.float64,
         ).reshape(len(rows), ncols - num_labels)
         labels = labels.reshape(len(rows), num_labels)
@@ -360,6 +366,7 @@ def read_dat(path: str | Path) -> list[DatBlock]:
             if current is None:
                 raise ValueError(f"{path}:{number}: data row before any block title")
             current["rows"].append(tokens)
+            current["lines"].append(number)
             continue
         match = _TIME_RE.search(line)
         if match is None:
@@ -371,6 +378,7 @@ def read_dat(path: str | Path) -> list[DatBlock]:
             "time": _parse_number(match.group(1), f"{path}:{number}"),
             "set": set_match.group(1) if set_match else None,
             "rows": [],
+            "lines": [],
             "line": number,
         }
     close()
