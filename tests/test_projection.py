@@ -1,6 +1,5 @@
 """Tests for dolfinx_ntf.projection: closest point of a face over its closed parametric domain."""
 
-import time
 
 import numpy as np
 import pytest
@@ -403,17 +402,13 @@ def test_empty_batch():
     assert project_points(QUAD8, np.zeros((0, 8, 3)), np.zeros((0, 3))).shape == (0, 2)
 
 
-def test_batch_of_ten_thousand_is_fast():
+def test_batch_of_ten_thousand_points():
+    """A large mixed batch stays finite and inside the domain (timing: benchmarks/contact_phases.py)."""
     rng = np.random.default_rng(22)
     num = 10_000
     coords = _distorted_faces(QUAD8, num, 0.05, rng)
     xi_near = _sample_parameters(QUAD8, num, rng, scale=1.3)
     pts = face_points(QUAD8, coords, QUAD8.clamp(xi_near)) + rng.uniform(-0.3, 0.3, (num, 3))
-    project_points(QUAD8, coords[:10], pts[:10])  # warm-up
-    best = np.inf
-    for _ in range(2):
-        t0 = time.perf_counter()
-        xi = project_points(QUAD8, coords, pts)
-        best = min(best, time.perf_counter() - t0)
+    xi = project_points(QUAD8, coords, pts)
     assert np.all(np.isfinite(xi))
-    assert best < 0.5, f"10^4 projections took {best:.3f} s"
+    assert np.all(QUAD8.contains(xi, 1e-14))
