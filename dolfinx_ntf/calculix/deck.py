@@ -666,7 +666,7 @@ _INT_RE = re.compile(r"^[+-]?\d+$")
 
 def _name(text: str) -> str:
     """ccx name normalization: upper case, blanks removed."""
-    return re.sub(r"\s+", "", text).upper()
+    return "".join(text.split()).upper()
 
 
 @dataclass
@@ -699,7 +699,7 @@ def _split_keyword_line(text: str, location: Location) -> _Card:
 
 
 def _data_fields(text: str) -> list[str]:
-    fields = [_name(f) for f in text.split(",")]
+    fields = _name(text).split(",")
     if fields and fields[-1] == "":
         fields.pop()
     return fields
@@ -941,6 +941,8 @@ class _Reader:
 
     @staticmethod
     def _int(token: str, what: str, location: Location) -> int:
+        if token.isascii() and token.isdigit():
+            return int(token)
         if not _INT_RE.match(token):
             raise DeckError(f"bad {what} {token!r}: an integer is required", location)
         return int(token)
@@ -948,7 +950,7 @@ class _Reader:
     @staticmethod
     def _float(token: str, what: str, location: Location) -> float:
         try:
-            value = float(re.sub(r"[dD]", "e", token))
+            value = float(token.replace("D", "E").replace("d", "e"))
         except ValueError:
             raise DeckError(f"bad number {token!r} for {what}", location) from None
         if not np.isfinite(value):
@@ -1759,26 +1761,33 @@ class _Reader:
 
     def _assemble_elements(self) -> dict[str, ElementBlock]:
         blocks: dict[str, ElementBlock] = {}
-        seen: dict[int, Location] = {}
         for name, etype in ELEMENT_TYPES.items():
             if not self.element_ids[name]:
                 continue
             ids = np.array(self.element_ids[name], dtype=np.int64)
             conn = np.array(self.element_rows[name], dtype=np.int64).reshape(-1, etype.num_nodes)
-            for k, element in enumerate(ids.tolist()):
-                if element in seen or element <= 0:
-                    problem = (
-                        "must be > 0" if element <= 0 else f"is defined twice ({seen[element]})"
-                    )
-                    raise DeckError(f"element {element} {problem}", self.element_locs[name][k])
-                seen[element] = self.element_locs[name][k]
-            distinct = np.array([len(set(r)) for r in conn.tolist()])
-            for k in np.flatnonzero(distinct != conn.shape[1]):
-                raise DeckError(f"element {int(ids[k])} repeats a node", self.element_locs[name][k])
+            locations = tuple(self.element_locs[name])
+            bad = np.flatnonzero(ids <= 0)
+            if bad.size:
+                raise DeckError(f"element {int(ids[bad[0]])} must be > 0", locations[bad[0]])
+            ordered = np.sort(conn, axis=1)
+            repeats = np.flatnonzero(np.any(ordered[:, 1:] == ordered[:, :-1], axis=1))
+            if repeats.size:
+                k = repeats[0]
+                raise DeckError(f"element {int(ids[k])} repeats a node", locations[k])
             ids.flags.writeable = False
             conn.flags.writeable = False
-            locations = tuple(self.element_locs[name])
             blocks[name] = ElementBlock(ELEMENT_TYPES[name], ids, conn, locations)
+        all_ids = np.concatenate([b.ids for b in blocks.values()]) if blocks else np.zeros(0, int)
+        all_locs = [loc for b in blocks.values() for loc in b.locations]
+        order = np.argsort(all_ids, kind="stable")
+        twice = np.flatnonzero(np.diff(all_ids[order]) == 0)
+        if twice.size:
+            first, second = order[twice[0]], order[twice[0] + 1]
+            raise DeckError(
+                f"element {int(all_ids[first])} is defined twice (first at {all_locs[first]})",
+                all_locs[second],
+            )
         return blocks
 
     @staticmethod
