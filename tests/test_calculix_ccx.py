@@ -238,3 +238,63 @@ def test_run_ccx_reports_exit_status(tmp_path):
     with pytest.raises(CcxError, match=r"exit status \d+ .*notype\.inp; last output:\n"):
         run_ccx(tmp_path, "notype", timeout=60)
     assert "no TYPE specified" in (tmp_path / "notype.log").read_text()
+
+
+_ORDER_STEPS = """*STEP
+*STATIC
+0.5, 1.0
+*BOUNDARY
+FIX, 1, 3
+TOP, 1, 2
+TOP, 3, 3, -0.001
+*NODE PRINT, NSET=TOP
+U
+*CONTACT PRINT, TOTALS=YES
+CNUM, CELS
+*NODE PRINT, NSET=FIX, TOTALS=ONLY
+RF
+*EL PRINT, ELSET=EALL
+S
+*END STEP
+*STEP
+*STATIC
+1.0, 1.0
+*NODE PRINT, NSET=FIX, TOTALS=YES
+RF, U
+*END STEP
+"""
+
+
+def _expected_names(step) -> list[tuple[str, str | None]]:
+    """Block names and sets ccx writes per output time, from the parsed requests."""
+    names = []
+    for request in step.prints:
+        for key in request.keys:
+            if key == "RF":
+                names += [("RF", request.set)] if request.totals != "ONLY" else []
+                names += [("RF_TOTAL", request.set)] if request.totals != "NO" else []
+            elif key == "CELS":
+                names += [("CELS", None)] if request.totals != "ONLY" else []
+                names += [("CELS_TOTAL", None)] if request.totals != "NO" else []
+            else:
+                names.append((key, request.set))
+    return names
+
+
+@_ccx
+def test_print_order_and_carry_over_match_ccx(tmp_path):
+    """Step.prints (card order, ccx's carry-over between steps) is the order of ccx's blocks."""
+    base = (DATA / "two_cubes.inp").read_text()
+    text = base[: base.index("*STEP")] + _ORDER_STEPS
+    (tmp_path / "order.inp").write_text(text)
+    run_ccx(tmp_path, "order", timeout=120)
+    deck = read_deck(tmp_path / "order.inp")
+    blocks = read_ccx_dat(tmp_path, "order")
+    times = dat_times(blocks)
+    assert times == [0.5, 1.0, 2.0]
+    step_of_time = {0.5: deck.steps[0], 1.0: deck.steps[0], 2.0: deck.steps[1]}
+    for time in times:
+        got = [(b.name, b.set) for b in blocks if b.time == time]
+        assert got == _expected_names(step_of_time[time]), time
+    # step 2 keeps the contact and element prints of step 1 before its new node print
+    assert [p.kind for p in deck.steps[1].prints] == ["CONTACT", "EL", "NODE"]

@@ -462,3 +462,23 @@ def test_face_number_beyond_element_faces(tmp_path):
     (tmp_path / "g.inp").write_text(text)
     with pytest.raises(DeckError, match=r"g\.inp:\d+: face 6 of element 11: C3D4 has faces 1\.\.4"):
         read_deck(tmp_path / "g.inp")
+
+
+def test_calculix_package_is_pure_python_numpy():
+    import ast
+
+    import dolfinx_ntf.calculix as package
+
+    for path in Path(package.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names = [node.module or ""]
+            for name in names:
+                root = name.split(".")[0]
+                assert root not in ("dolfinx", "ufl", "petsc4py", "mpi4py", "dolfinx_ntf"), (
+                    f"{path.name} imports {name}"
+                )
