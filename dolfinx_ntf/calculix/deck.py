@@ -57,6 +57,7 @@ __all__ = [
     "ModelChange",
     "Step",
     "Deck",
+    "FIELD_CONTROL_NAMES",
     "FIELD_CONTROL_DEFAULTS",
     "read_deck",
     "face_nodes",
@@ -382,6 +383,7 @@ FIELD_CONTROL_NAMES: tuple[str, ...] = (
     "C_epsilon",
     "R_l",
 )
+"""Names of the ``*CONTROLS, PARAMETERS=FIELD`` values in data-line order (ccx manual)."""
 
 FIELD_CONTROL_DEFAULTS: dict[str, float | None] = {
     "R_n": 0.005,
