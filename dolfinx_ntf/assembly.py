@@ -40,7 +40,7 @@ class SpringBlocks:
 
 def _unblocked(nodes: np.ndarray, bs: int = 3) -> np.ndarray:
     """(E, a) node indices -> (E, bs a) dof indices, node-major."""
-    return (bs * nodes[:, :, None] + np.arange(bs)).reshape(nodes.shape[0], -1)
+    return (bs * nodes[:, :, None] + np.arange(bs)).reshape(nodes.shape[0], bs * nodes.shape[1])
 
 
 class ContactAssembler:

@@ -254,7 +254,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                                   tangent=tangent, symmetric=self.symmetric)
             state.evaluation = ev
             state.xi = ev.xi
-            blocks.append(SpringBlocks(nodes, nodes, ev.stiffness, ev.forces.reshape(nodes.shape[0], -1)))
+            blocks.append(SpringBlocks(nodes, nodes, ev.stiffness, ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1])))
             if tangent and self.linearize_area:
                 blocks.append(self._area_block(state, coords))
         return blocks
@@ -271,7 +271,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         spring, node, gradient = spring[keep], node[keep], gradient[keep]
         block_values = None
         if values:
-            per_area = state.evaluation.force_per_area.reshape(state.num_springs, -1)[spring]
+            per_area = state.evaluation.force_per_area.reshape(state.num_springs, 3 * state.element_nodes.shape[1])[spring]
             block_values = per_area[:, :, None] * gradient[:, None, :]
         return SpringBlocks(state.element_nodes[spring], node[:, None].astype(np.int64), block_values)
 

@@ -103,13 +103,17 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self._bind_matrix()
             try:
                 n, converged = super().solve(u)
-            except RuntimeError as error:  # PETSc failures inside the loop (e.g. a zero pivot)
+            except (RuntimeError, ValueError) as error:  # PETSc failures, degenerate iterates
                 raise ContactConvergenceError(f"Newton iteration failed: {error}") from error
             iterations += n
             if not converged:
+                hint = ""
+                if self.problem.num_springs == 0:
+                    hint = ("; there are no contact springs, so a body held only by contact is unsupported "
+                            "(close the initial gap, or start with a prescribed displacement)")
                 raise ContactConvergenceError(
                     f"Newton did not converge in {iterations} iterations (residual {self.residual_norms[-1]:.3e}, "
-                    f"tolerance {self.atol:.3e})")
+                    f"tolerance {self.atol:.3e}){hint}")
             if self.problem.count_changed or (iterations < 2 and n > 0):
                 if iterations >= self.max_it:
                     raise ContactConvergenceError(

@@ -256,3 +256,21 @@ def test_global_jacobian_matches_finite_differences(cell, linearize_area):
     contact_rows = np.unique(3 * problem.states[0].element_nodes[:, :, None] + np.arange(3))
     scale = np.abs(Jw.array[contact_rows]).max()
     np.testing.assert_allclose(Jw.array, fd, atol=1e-6 * scale)
+
+
+def test_body_without_springs_fails_with_a_hint():
+    """A punch above the block (open gap, no springs) under a load has no support: a clear error, no NaN."""
+    mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=0.05)
+    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V),
+           _component_bc(V, 0, ft.find(UPPER_TOP)), _component_bc(V, 1, ft.find(UPPER_TOP))]
+    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
+                           ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)))
+    problem = ntf.ContactProblem(_elastic_residual(u, v, ft, pressure), u, [pair], bcs)
+    solver = ntf.ContactNewtonSolver(mesh.comm, problem, max_it=8)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", 10 * t), min_increment=0.5)
+    with pytest.raises(ntf.ContactConvergenceError, match="no contact springs"):
+        step.run(solver, u)
+    assert np.all(np.isfinite(u.x.array))
