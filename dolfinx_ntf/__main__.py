@@ -1,0 +1,84 @@
+"""Command line: ``python -m dolfinx_ntf run JOB [--tight]`` (console script ``dolfinx-ntf``).
+
+Runs the CalculiX deck ``JOB.inp`` like ``ccx -i JOB``: ccx-like progress on the screen, results in
+``JOB.dat``, ``JOB.cel`` and ``JOB.xdmf`` next to the deck. Exit status: 0 done, 1 bad or
+unsupported input (the message names ``file:line``), 2 no convergence (files keep the converged
+increments).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_INPUT, EXIT_NO_CONVERGENCE = 0, 1, 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="dolfinx-ntf",
+        description="Node-to-face contact for dolfinx: run CalculiX node-to-surface contact decks.",
+    )
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    run = commands.add_parser(
+        "run",
+        help="run a CalculiX deck JOB.inp like ccx, writing JOB.dat, JOB.cel and JOB.xdmf",
+        description="Run the CalculiX deck JOB.inp (JOB may have a directory and .inp suffix).",
+    )
+    run.add_argument("job", metavar="JOB", help="job name: reads JOB.inp")
+    run.add_argument(
+        "--tight",
+        action="store_true",
+        help="converge every increment to round-off (largest residual 1e-10 of the average force) "
+        "instead of the deck's *CONTROLS / ccx defaults",
+    )
+    return parser
+
+
+def _job_path(job: str) -> tuple[str, Path]:
+    path = Path(job)
+    name = path.name[:-4] if path.name.lower().endswith(".inp") else path.name
+    return name, path.parent
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the exit status."""
+    try:
+        args = _parser().parse_args(argv)
+    except (
+        SystemExit
+    ) as exit_:  # argparse: --help exits 0, usage errors 2 (reserved for no convergence)
+        return EXIT_OK if exit_.code in (0, None) else EXIT_INPUT
+    logging.getLogger().setLevel(
+        logging.WARNING
+    )  # keep the JIT compiler's INFO lines off the screen
+    from mpi4py import MPI
+
+    from dolfinx_ntf.calculix.job import JobError, run_job
+
+    jobname, directory = _job_path(args.job)
+    try:
+        result = run_job(jobname, directory, comm=MPI.COMM_WORLD, tight=args.tight)
+    except JobError as error:
+        print(
+            f"\n *ERROR: {error}\n Results of the converged increments are kept in "
+            f"{directory / jobname}.dat",
+            file=sys.stderr,
+        )
+        return error.exit_code
+    except (ValueError, NotImplementedError, OSError) as error:  # DeckError is a ValueError
+        print(f" *ERROR: {error}", file=sys.stderr)
+        return EXIT_INPUT
+    print(
+        f" Wrote {result.dat}" + (f", {result.cel}" if result.cel else "") + f" and {result.xdmf} "
+        f"({len(result.increments)} increments, {result.wall_time:.1f} s)"
+    )
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

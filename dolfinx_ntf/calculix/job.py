@@ -1,0 +1,671 @@
+"""Run a CalculiX deck like ``ccx``: read ``JOB.inp``, solve, write ``JOB.dat``/``.cel``/``.xdmf``.
+
+``run_job`` builds the model (``model.py``), runs each ``*STEP`` with
+:class:`~dolfinx_ntf.StaticStep` (``*STATIC`` initial increment, period, minimum, maximum;
+``DIRECT`` = fixed increments) and writes, per converged increment that the output FREQUENCY
+selects:
+
+    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S) and ``*CONTACT PRINT`` (CDIS,
+      CSTR, CELS, CNUM) blocks in ccx 2.20's exact format and order (spec §8.1: contact rows by
+      pair in deck order, slave nodes ascending). RF is the internal force of the bulk elements
+      plus the contact springs at each node, as ccx prints it: the reaction at constrained dofs,
+      the applied load elsewhere.
+    - ``JOB.cel``: every pairing's contact elements when ``CONTACT ELEMENTS`` is requested (spec
+      §8.4).
+    - ``JOB.xdmf``: displacement, contact pressure, clearance and status (every converged
+      increment).
+
+Newton stops like ccx (manual "Convergence criteria"): the largest residual force component must
+fall below ``R_n`` (``*CONTROLS, PARAMETERS=FIELD``, default 0.005) times the average element force,
+averaged over the iterations of the increment (``R_p`` after ``I_P`` iterations), and the last
+correction must be small against the increment's displacement change (``C_n``), see
+``_CcxNewtonSolver``. ``tight=True`` replaces the deck's values by ``TIGHT_CONTROLS`` (``R_n = R_p =
+1e-10``), so that converged solutions are compared.
+
+Steps without contact pairs and without NLGEOM are linear: one increment over the whole step, as in
+ccx.
+"""
+
+from __future__ import annotations
+
+import logging
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import dolfinx.mesh
+
+from dolfinx_ntf.assembly import ContactAssembler
+from dolfinx_ntf.output import ContactWriter, contact_results
+from dolfinx_ntf.problem import ContactProblem
+from dolfinx_ntf.solver import (
+    ContactConvergenceError,
+    ContactNewtonSolver,
+    IncrementResult,
+    StaticStep,
+    log_progress,
+)
+
+from .cel import ContactElementsFile
+from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
+from .deck import Deck, PrintRequest, Step, read_deck
+from .model import INTEGRATION_POINTS, CalculixModel, build_model
+
+__all__ = ["JobError", "ContactRows", "IncrementOutput", "JobResult", "run_job"]
+
+logger = logging.getLogger("dolfinx_ntf")
+
+#: ``*CONTROLS, PARAMETERS=FIELD`` values of ``tight=True`` runs (round-off-level convergence).
+TIGHT_CONTROLS: dict[str, float] = {
+    "R_n": 1e-10,
+    "C_n": 1e-8,
+    "R_p": 1e-10,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-8,
+    "R_l": 1e-12,
+}
+
+
+class JobError(RuntimeError):
+    """A job that stopped early (e.g. no convergence); files keep the converged increments.
+
+    Attributes:
+        exit_code: Exit status for the command line (2: no convergence).
+        result: The :class:`JobResult` of the converged increments.
+    """
+
+    def __init__(
+        self, message: str, *, exit_code: int = 2, result: JobResult | None = None
+    ) -> None:
+        super().__init__(message)
+        self.exit_code = exit_code
+        self.result = result
+
+
+@dataclass(frozen=True, eq=False)
+class ContactRows:
+    """Contact elements of one pair at one increment, slave nodes ascending (the ``.dat`` rows).
+
+    Attributes:
+        pair: ``SLAVE-MASTER`` surface names.
+        nodes: ``(k,)`` ccx slave node numbers.
+        clearance: ``(k,)`` CDIS normal value (negative = penetration).
+        pressure: ``(k,)`` CSTR contact pressure.
+        energy: ``(k,)`` CELS spring energy.
+        master_faces: ``(k, n)`` ccx node numbers of each element's master face, ccx face order.
+    """
+
+    pair: str
+    nodes: np.ndarray
+    clearance: np.ndarray
+    pressure: np.ndarray
+    energy: np.ndarray
+    master_faces: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class IncrementOutput:
+    """Results of one converged increment.
+
+    Attributes:
+        step, increment, attempt: 1-based numbers (increments restart in every step).
+        iterations: Newton iterations of the converged attempt.
+        step_time, time: Step time and total time at the end of the increment.
+        node_ids: ``(n,)`` ccx node numbers of the mesh, ascending.
+        displacement: ``(n, 3)`` displacements of those nodes.
+        contact: Contact rows per pair, pairs in deck order.
+    """
+
+    step: int
+    increment: int
+    attempt: int
+    iterations: int
+    step_time: float
+    time: float
+    node_ids: np.ndarray
+    displacement: np.ndarray
+    contact: list[ContactRows]
+
+    @property
+    def slave_nodes(self) -> set[int]:
+        """ccx numbers of the slave nodes that have a contact element (all pairs)."""
+        return {int(n) for rows in self.contact for n in rows.nodes}
+
+    def displacement_of(self, node_ids) -> np.ndarray:
+        """Displacements ``(k, 3)`` of ccx node numbers."""
+        ids = np.asarray(node_ids, dtype=np.int64)
+        pos = np.searchsorted(self.node_ids, ids)
+        if np.any(pos >= self.node_ids.size) or np.any(
+            self.node_ids[np.minimum(pos, self.node_ids.size - 1)] != ids
+        ):
+            raise ValueError(f"node(s) {ids.tolist()} are not all mesh nodes")
+        return self.displacement[pos]
+
+
+@dataclass(eq=False)
+class JobResult:
+    """What ``run_job`` did.
+
+    Attributes:
+        jobname, directory: The job.
+        model: The dolfinx model of the deck.
+        increments: Every converged increment, in order.
+        dat, cel, xdmf: Files written (``cel`` is None without CONTACT ELEMENTS).
+        completed: True if every step ran to its end.
+        wall_time: Seconds spent in ``run_job``.
+    """
+
+    jobname: str
+    directory: Path
+    model: CalculixModel
+    increments: list[IncrementOutput] = field(default_factory=list)
+    dat: Path | None = None
+    cel: Path | None = None
+    xdmf: Path | None = None
+    completed: bool = False
+    wall_time: float = 0.0
+
+    def increment(self, step: int, increment: int) -> IncrementOutput:
+        """The output of ``increment`` of ``step`` (1-based)."""
+        for out in self.increments:
+            if out.step == step and out.increment == increment:
+                return out
+        raise KeyError(f"no converged increment {increment} in step {step}")
+
+    @property
+    def last(self) -> IncrementOutput:
+        """The last converged increment."""
+        if not self.increments:
+            raise ValueError("no increment converged")
+        return self.increments[-1]
+
+
+# ----------------------------------------------------------------------------- Newton with ccx's cr
+
+
+class _CcxNewtonSolver(ContactNewtonSolver):
+    """ContactNewtonSolver that stops like ccx (manual, "Convergence criteria", mechanical field).
+
+    After Newton update ``i`` (``r`` largest residual force, ``c`` largest correction, ``du``
+    largest displacement change in the increment, ``q`` the average absolute element nodal force of
+    bulk elements and contact springs, ``q~`` its mean over the updates so far): converged when ``r
+    <= c1 q~`` and at least one of ``c <= c2 du``, ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <=
+    R_l q~``, ``q <= eps q~``, ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to ``I_P`` updates,
+    ``(R_p, C_n)`` beyond, and ``(eps, C_eps)`` under zero flux (``q <= eps q~``). Like ccx, never
+    before the second update nor right after a re-pairing that changed the number of springs (so
+    ContactNewtonSolver never has to restart dolfinx's loop, and iteration numbers follow ccx's).
+    dolfinx's loop applies the decision through the absolute tolerance on the residual norm.
+    """
+
+    def __init__(self, comm, problem: ContactProblem, average_force, **options) -> None:
+        super().__init__(comm, problem, **options)
+        self.controls: dict[str, float] = {}
+        self.relaxation_iteration = 9
+        self.increment_start: np.ndarray | None = None
+        self._average_force = average_force
+
+    def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
+        """Solve one increment (see :meth:`ContactNewtonSolver.solve`)."""
+        self._averages: list[float] = []
+        self._largest: list[float] = []
+        self._previous: np.ndarray | None = None
+        return super().solve(u)
+
+    def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        super()._residual(x, b)
+        current = x.array.copy()
+        previous = self._previous
+        if previous is None or np.array_equal(current, previous):
+            # the increment's starting point, or a restart of dolfinx's loop at the same iterate
+            self._previous = current
+            self.atol = 0.0
+            return
+        self._previous = current
+        controls = self.controls
+        average = self._average_force()
+        self._averages.append(average)
+        mean = float(np.mean(self._averages))
+        largest = b.norm(PETSc.NormType.NORM_INFINITY)
+        self._largest.append(largest)
+        iteration = len(self._averages)
+        correction = float(np.abs(current - previous).max(initial=0.0))
+        start = self.increment_start if self.increment_start is not None else previous
+        change = float(np.abs(current - start).max(initial=0.0))
+        if average <= controls["epsilon"] * mean:
+            c1, c2 = controls["epsilon"], controls["C_epsilon"]
+        else:
+            c1 = controls["R_n"] if iteration <= self.relaxation_iteration else controls["R_p"]
+            c2 = controls["C_n"]
+        estimate = np.inf
+        if iteration >= 3 and min(self._largest[-3:-1]) > 0:
+            estimate = largest * correction / min(self._largest[-3:-1])
+        converged = largest <= c1 * mean and (
+            correction <= c2 * change
+            or estimate < c2 * change
+            or largest <= controls["R_l"] * mean
+            or average <= controls["epsilon"] * mean
+            or correction < 1e-8
+        )
+        # ccx: at least two iterations, and none right after a re-pairing that changed the spring
+        # count
+        converged = converged and iteration >= 2 and not self.problem.count_changed
+        norm = self.residual_norms[-1]
+        self.atol = 2.0 * norm + 1e-300 if converged else 0.0
+
+
+# ----------------------------------------------------------------------------- the job
+
+
+@dataclass
+class _Counters:
+    step: int = 1
+    increment: int = 1
+    attempt: int = 0
+
+
+class _Job:
+    """State of one run (the model, problem, solver, writers and counters)."""
+
+    def __init__(
+        self,
+        jobname: str,
+        directory: Path,
+        deck: Deck,
+        model: CalculixModel,
+        comm: MPI.Comm,
+        *,
+        tight: bool,
+        problem_options: dict,
+        petsc_options: dict | None,
+    ) -> None:
+        self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
+        self.result = JobResult(jobname, directory, model)
+        self.result.dat = directory / f"{jobname}.dat"
+        write_dat(self.result.dat, [])
+        self.cel: ContactElementsFile | None = None
+        if any(step.contact_elements for step in deck.steps):
+            self.result.cel = directory / f"{jobname}.cel"
+            self.cel = ContactElementsFile(self.result.cel, deck.num_elements)
+        self.counters = _Counters()
+        self._cel_overflow = False
+        self._pending = None
+
+        self.problem = model.create_problem(model.begin_step(0), **problem_options)
+        self.problem.pairing_callbacks.append(self._on_pairing)
+        V = model.V
+        v = ufl.TestFunction(V)
+        self._internal = dolfinx.fem.form(ufl.inner(model.first_piola, ufl.grad(v)) * model.dx)
+        self._broken = None
+        self._stress = None
+        self.solver = _CcxNewtonSolver(
+            comm, self.problem, self._average_force, petsc_options=petsc_options
+        )
+        self.result.xdmf = directory / f"{jobname}.xdmf"
+        self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
+
+    # -- forces ------------------------------------------------------------------------------------
+
+    def _contact_forces(self) -> np.ndarray:
+        forces = np.zeros((self.model.dof_node.size, 3))
+        for state in self.problem.states:
+            if state.evaluation is not None and state.num_springs:
+                np.add.at(
+                    forces,
+                    state.element_nodes,
+                    state.evaluation.forces.reshape(state.num_springs, -1, 3),
+                )
+        return forces
+
+    def internal_forces(self) -> np.ndarray:
+        """``(num_dofs, 3)`` internal force of bulk elements plus contact springs at every node."""
+        vector = dolfinx.fem.petsc.assemble_vector(self._internal)
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        forces = vector.array.reshape(-1, 3).copy()
+        vector.destroy()
+        return forces + self._contact_forces()
+
+    def _average_force(self) -> float:
+        """ccx's average force: mean absolute element nodal force over elements, nodes and dofs."""
+        if self._broken is None:
+            mesh, V = self.model.mesh, self.model.V
+            family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
+            W = dolfinx.fem.VectorFunctionSpace(mesh, (family, V.ufl_element().degree()))
+            w = ufl.TestFunction(W)
+            self._broken = dolfinx.fem.form(
+                ufl.inner(self.model.first_piola, ufl.grad(w)) * self.model.dx
+            )
+        vector = dolfinx.fem.petsc.assemble_vector(self._broken)
+        total, count = float(np.abs(vector.array).sum()), vector.array.size
+        vector.destroy()
+        for state in self.problem.states:
+            if state.evaluation is not None and state.num_springs:
+                forces = state.evaluation.forces
+                total += float(np.abs(forces).sum())
+                count += forces.size
+        return total / max(count, 1)
+
+    def stresses(self, element_ids: np.ndarray) -> np.ndarray:
+        """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points."""
+        if self._stress is None:
+            points = INTEGRATION_POINTS[self.model.element_type.name]
+            self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
+        expression, q = self._stress
+        cells = self.model.element_cells(element_ids).astype(np.int32)
+        values = expression.eval(cells).reshape(cells.size, q, 3, 3)
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+        return values[:, :, index[0], index[1]]
+
+    # -- contact -----------------------------------------------------------------------------------
+
+    def contact_rows(self) -> list[ContactRows]:
+        """Contact rows of every pair at the current springs, slave nodes ascending."""
+        rows = []
+        dof_node = self.model.dof_node
+        for state, results, pair in zip(
+            self.problem.states, contact_results(self.problem), self.deck.contact_pairs
+        ):
+            nodes = dof_node[results.node]
+            order = np.argsort(nodes, kind="stable")
+            facets = state.master_faces.facets[state.spring_face]
+            faces = self.model.face_nodes_of(pair.master, facets)
+            rows.append(
+                ContactRows(
+                    results.pair,
+                    nodes[order],
+                    results.clearance[order],
+                    results.pressure[order],
+                    results.energy[order],
+                    faces[order],
+                )
+            )
+        return rows
+
+    def _on_pairing(self, problem: ContactProblem) -> None:
+        """Queue this pairing's contact elements for the ``.cel`` file (see :meth:`_flush_pairing`).
+
+        ccx pairs at the start of iterations 1..8 and checks convergence after the update, with that
+        pairing; ContactProblem re-pairs right before each residual evaluation, so the pairing done
+        at the evaluation where Newton stops has no ccx counterpart: a pairing is written once an
+        update follows it.
+        """
+        self._flush_pairing()
+        step = self.deck.steps[self.counters.step - 1]
+        if self.cel is None or not step.contact_elements or self._cel_overflow:
+            return
+        numbers = (
+            self.counters.step,
+            self.counters.increment,
+            self.counters.attempt,
+            max(problem.iteration, 1),
+        )
+        if max(numbers) > 999:
+            logger.warning(
+                " *WARNING: contact element set numbers above 999 (ccx limit): no more .cel output"
+            )
+            self._cel_overflow = True
+            return
+        dof_node = self.model.dof_node
+        elements = []
+        for state, pair in zip(problem.states, self.deck.contact_pairs):
+            slaves = dof_node[state.slave.nodes[state.spring_slave]]
+            order = np.argsort(slaves, kind="stable")
+            faces = self.model.face_nodes_of(
+                pair.master, state.master_faces.facets[state.spring_face]
+            )
+            elements.append((faces[order], slaves[order]))
+        self._pending = (problem.iteration, numbers, elements)
+
+    def _flush_pairing(self, *, drop_iteration: int | None = None) -> None:
+        """Write the queued pairing unless made at evaluation ``drop_iteration`` (Newton's last)."""
+        pending, self._pending = self._pending, None
+        if pending is None or pending[0] == drop_iteration:
+            return
+        _, (step, increment, attempt, iteration), elements = pending
+        for faces, slaves in elements:
+            self.cel.write(
+                faces, slaves, step=step, increment=increment, attempt=attempt, iteration=iteration
+            )
+
+    # -- steps -------------------------------------------------------------------------------------
+
+    def run(self) -> JobResult:
+        """Run every step; raises :class:`JobError` (with the partial result) when one fails."""
+        try:
+            for index, step in enumerate(self.deck.steps):
+                self._run_step(index, step)
+            self.result.completed = True
+            logger.info("\n Job finished\n")
+        except ContactConvergenceError as error:
+            self._flush_pairing()
+            message = (
+                f"step {self.counters.step}, increment {self.counters.increment}, attempt "
+                f"{self.counters.attempt}: no convergence: {error}"
+            )
+            logger.info("\n *ERROR: %s\n", message)
+            raise JobError(message, exit_code=2, result=self.result) from error
+        finally:
+            self.writer.close()
+        return self.result
+
+    def _run_step(self, index: int, step: Step) -> None:
+        model, problem = self.model, self.problem
+        self.counters = _Counters(step=step.number)
+        logger.info("\n STEP %d\n\n Static analysis was selected\n", step.number)
+        if index > 0:
+            bcs = model.begin_step(index)
+            problem.bcs = bcs
+            problem.assembler = ContactAssembler(model.V, problem.a, bcs)
+        controls = step.field_controls()
+        self.solver.controls = {
+            k: float(v)
+            for k, v in (TIGHT_CONTROLS if self.tight else controls).items()
+            if v is not None
+        }
+        timing = [v for line in step.controls.get("TIMEINCREMENTATION", ()) for v in line]
+        self.solver.relaxation_iteration = (
+            int(timing[2]) if len(timing) > 2 and timing[2] is not None else 9
+        )
+
+        static = step.static
+        period = static.period
+        linear = not step.nlgeom and not model.pairs
+        initial = period if linear else static.initial_increment
+        maximum = min(static.maximum if static.maximum is not None else period, period)
+        initial = min(initial, maximum)
+        minimum = (
+            static.minimum
+            if static.minimum is not None and static.minimum > 0
+            else min(initial, 1e-5 * period)
+        )
+        minimum = min(minimum, initial)
+
+        def set_load(t: float) -> None:
+            self._flush_pairing()
+            self.solver.increment_start = model.u.x.array.copy()
+            self.counters.attempt += 1
+            if self.counters.increment > step.max_increments:
+                raise ContactConvergenceError(
+                    f"the step needs more than INC={step.max_increments} increments "
+                    f"({step.location})"
+                )
+            model.set_time(index, t)
+
+        def on_increment(result: IncrementResult) -> None:
+            self._flush_pairing(drop_iteration=problem.iteration)
+            self._converged(index, step, result)
+            self.counters.increment += 1
+            self.counters.attempt = 0
+
+        driver = StaticStep(
+            set_load,
+            period=period,
+            initial_increment=initial,
+            min_increment=minimum,
+            max_increment=maximum,
+            fixed=static.direct or linear,
+            on_increment=on_increment,
+        )
+        driver.run(self.solver, model.u)
+
+    def _converged(self, index: int, step: Step, result: IncrementResult) -> None:
+        model = self.model
+        total = model.total_time(index, result.time)
+        node_ids = model.dof_node
+        order = np.argsort(node_ids)
+        displacement = model.u.x.array.reshape(-1, 3)
+        contact = self.contact_rows()
+        self.result.increments.append(
+            IncrementOutput(
+                step=step.number,
+                increment=result.increment,
+                attempt=result.attempt,
+                iterations=result.iterations,
+                step_time=result.time,
+                time=total,
+                node_ids=node_ids[order],
+                displacement=displacement[order].copy(),
+                contact=contact,
+            )
+        )
+        self.writer.write(total)
+        frequency = step.output_frequency
+        last = result.time_fraction >= 1 - 1e-12
+        if frequency > 0 and (result.increment % frequency == 0 or last):
+            write_dat(self.result.dat, self._blocks(step, total, contact), append=True)
+
+    def _blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
+        blocks: list[DatBlock] = []
+        forces = None
+        displacement = self.model.u.x.array.reshape(-1, 3)
+        for request in step.prints:
+            if request.kind == "NODE":
+                ids = self.deck.nsets[request.set]
+                for key in request.keys:
+                    if key == "RF" and forces is None:
+                        forces = self.internal_forces()
+                    values = self.model.nodal_values(ids, displacement if key == "U" else forces)
+                    blocks += node_print_blocks(
+                        key, request.set, total, ids, values, totals=request.totals
+                    )
+            elif request.kind == "EL":
+                blocks += self._element_blocks(request, total)
+            else:
+                blocks += self._contact_blocks(request, total, contact)
+        return blocks
+
+    def _element_blocks(self, request: PrintRequest, total: float) -> list[DatBlock]:
+        ids = self.deck.elsets[request.set]
+        blocks = []
+        for key in request.keys:
+            if key != "S":
+                raise NotImplementedError(
+                    f"{request.location}: *EL PRINT key {key} is not supported yet"
+                )
+            blocks += el_print_blocks("S", request.set, total, ids, self.stresses(ids))
+        return blocks
+
+    @staticmethod
+    def _contact_blocks(
+        request: PrintRequest, total: float, contact: list[ContactRows]
+    ) -> list[DatBlock]:
+        nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, np.int64)
+        zeros = np.zeros(nodes.size)
+        columns = {
+            "CDIS": lambda: np.column_stack(
+                [np.concatenate([r.clearance for r in contact]) if contact else zeros, zeros, zeros]
+            ),
+            "CSTR": lambda: np.column_stack(
+                [np.concatenate([r.pressure for r in contact]) if contact else zeros, zeros, zeros]
+            ),
+            "CELS": lambda: np.concatenate([r.energy for r in contact]) if contact else zeros,
+            "CNUM": lambda: None,
+        }
+        blocks = []
+        for key in request.keys:
+            if key not in columns:
+                raise NotImplementedError(
+                    f"{request.location}: *CONTACT PRINT key {key} is not supported yet"
+                )
+            blocks += contact_print_blocks(key, total, nodes, columns[key](), totals=request.totals)
+        return blocks
+
+
+def _check_requests(deck: Deck) -> None:
+    """Output keys this runner cannot produce: a clear error before anything runs."""
+    supported = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
+    for step in deck.steps:
+        for request in step.prints:
+            for key in request.keys:
+                if key not in supported[request.kind]:
+                    raise NotImplementedError(
+                        f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
+                    )
+
+
+def run_job(
+    jobname: str,
+    directory: str | Path = ".",
+    *,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    tight: bool = False,
+    progress: bool = True,
+    problem_options: dict | None = None,
+    petsc_options: dict | None = None,
+) -> JobResult:
+    """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
+
+    Args:
+        jobname: Deck name without ``.inp``.
+        directory: Directory of the deck; results are written there.
+        comm: Communicator (one process only for now).
+        tight: Converge every increment to a largest residual of 1e-10 times the average element
+        force
+            (ccx's criterion with ``R_n = R_p = 1e-10``) instead of the deck's controls.
+        progress: Print ccx-like progress (``log_progress``).
+        problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...).
+        petsc_options: Linear solver options (default: MUMPS LU).
+
+    Returns:
+        The :class:`JobResult`.
+
+    Raises:
+        DeckError: bad deck (message starts with ``file:line``).
+        NotImplementedError: a feature that is not supported yet, naming the keyword and line.
+        JobError: the analysis stopped (no convergence); files keep the converged increments and
+            ``error.result`` holds them.
+    """
+    start = _time.perf_counter()
+    if progress:
+        log_progress()
+    directory = Path(directory)
+    path = directory / f"{jobname}.inp"
+    if not path.is_file():
+        raise ValueError(f"deck {path} does not exist")
+    deck = read_deck(path)
+    if not deck.steps:
+        raise ValueError(f"{path}: the deck has no *STEP: nothing to run")
+    for keyword, file, line in deck.ignored:
+        logger.info(" *INFO: %s at %s:%d is ignored (output/control only)", keyword, file, line)
+    _check_requests(deck)
+    model = build_model(deck, comm)
+    job = _Job(
+        jobname,
+        directory,
+        deck,
+        model,
+        comm,
+        tight=tight,
+        problem_options=dict(problem_options or {}),
+        petsc_options=petsc_options,
+    )
+    try:
+        return job.run()
+    finally:
+        job.result.wall_time = _time.perf_counter() - start

@@ -1,0 +1,916 @@
+"""A parsed CalculiX deck as dolfinx objects: mesh, UFL residual, loads per step and contact pairs.
+
+``build_model`` turns a :class:`~dolfinx_ntf.calculix.deck.Deck` into a :class:`CalculixModel`:
+
+    - the mesh of the deck's one element type (C3D4 -> P1 tetrahedra, C3D8 -> Q1 hexahedra,
+      C3D10 -> P2 tetrahedra with P2 geometry) and the maps between ccx node/element numbers and
+      dolfinx block dofs/cells (always through per-cell tables, never by assuming equal numbers);
+    - surfaces: element-face surfaces as facet tags (one ``MeshTags`` per ccx surface, value 1)
+      wrapped in :class:`~dolfinx_ntf.FacetSurface`, ``TYPE=NODE`` surfaces as
+      :class:`~dolfinx_ntf.NodeSurface`;
+    - the bulk residual: small-strain isotropic elasticity, or total-Lagrangian St.Venant-Kirchhoff
+      with ``NLGEOM`` (switched by a Constant when a deck has both kinds of steps), integrated like
+      ccx (C3D8 2x2x2 Gauss, C3D4 one point, C3D10 four points); ``*DLOAD`` pressures on the
+      reference faces, or as follower loads ``p J F^-T N`` with ``NLGEOM``;
+    - the loads and prescribed displacements of every step with ccx's rules (:class:`StepLoads`);
+    - the contact pairs with their pressure-overclosure laws.
+
+Load rules (ccx manual, ``*AMPLITUDE``, ``*BOUNDARY``, ``*CLOAD``, ``*DLOAD``, ``*STATIC``):
+    - Without an amplitude a static step ramps every load linearly from its value at the end of the
+      previous step (0 at the start) to its reference value; with an amplitude the value is the
+      reference times the amplitude at the step time (or total time with ``TIME=TOTAL TIME``).
+    - At the end of a step, references with a step-time amplitude become their actual values and the
+      amplitude is dropped; total-time amplitudes stay.
+    - ``OP=NEW`` on the first card of a kind in a step removes all earlier ones (loads then ramp
+      down to 0, prescribed displacements are released). Within a step, repeated
+      ``*CLOAD``/``*DLOAD`` values on the same dof or face add up and repeated ``*BOUNDARY`` values
+      replace; the amplitude of the last card applies.
+    - A prescribed displacement ramps from the displacement at the start of the step.
+    - Model-definition ``*BOUNDARY`` cards act as if given at the start of step 1.
+
+Serial only for now: ``build_model`` raises ``NotImplementedError`` on more than one process.
+"""
+
+from __future__ import annotations
+
+import typing
+from dataclasses import dataclass, field
+
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+import dolfinx.cpp.mesh
+import dolfinx.fem
+import dolfinx.fem.petsc
+import dolfinx.mesh
+
+from dolfinx_ntf.laws import (
+    ExponentialLaw,
+    LinearLaw,
+    PressureOverclosureLaw,
+    SurfaceInteraction,
+    TabularLaw,
+)
+from dolfinx_ntf.problem import ContactPair, ContactProblem
+from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
+
+from .deck import Deck, ElementType, Step
+
+__all__ = [
+    "CELL_PERMUTATIONS",
+    "INTEGRATION_POINTS",
+    "CalculixModel",
+    "StepLoads",
+    "build_model",
+]
+
+#: dolfinx cell node order as 0-based indices into the ccx element's nodes, by ccx element type.
+#: C3D8: dolfinx hexahedron vertices are in tensor order. C3D10: dolfinx P2 tetrahedron edges are
+#: (v2,v3), (v1,v3), (v1,v2), (v0,v3), (v0,v2), (v0,v1); ccx midside nodes are 5 on 1-2, 6 on 2-3,
+#: 7 on 3-1, 8 on 1-4, 9 on 2-4, 10 on 3-4.
+CELL_PERMUTATIONS: dict[str, np.ndarray] = {
+    "C3D4": np.array([0, 1, 2, 3]),
+    "C3D8": np.array([0, 1, 3, 2, 4, 5, 7, 6]),
+    "C3D10": np.array([0, 1, 2, 3, 9, 8, 5, 7, 6, 4]),
+}
+
+_DOLFINX_CELLS = {
+    "C3D4": ("tetrahedron", 1),
+    "C3D8": ("hexahedron", 1),
+    "C3D10": ("tetrahedron", 2),
+}
+
+#: Volume quadrature degree giving ccx's integration rule (C3D8 2x2x2 Gauss, C3D4 1 point, C3D10 4
+#: points).
+_QUADRATURE_DEGREE = {"C3D4": 1, "C3D8": 2, "C3D10": 2}
+#: Face quadrature degree of pressure loads (2x2 Gauss on quads, 3 points on triangles).
+_FACET_QUADRATURE_DEGREE = 2
+
+_G = 1.0 / np.sqrt(3.0)
+_A10, _B10 = 0.1381966011250105, 0.5854101966249685
+
+#: ccx integration points of each element type in ccx order (``*EL PRINT`` rows), as dolfinx
+#: reference coordinates. C3D8: ccx point (xi, eta, zeta) in [-1, 1]^3, xi fastest, maps to
+#: ((xi+1)/2, (eta+1)/2, (zeta+1)/2); tetrahedra share dolfinx's reference vertices.
+INTEGRATION_POINTS: dict[str, np.ndarray] = {
+    "C3D4": np.array([[0.25, 0.25, 0.25]]),
+    "C3D8": np.array(
+        [
+            [(x + 1) / 2, (y + 1) / 2, (z + 1) / 2]
+            for z in (-_G, _G)
+            for y in (-_G, _G)
+            for x in (-_G, _G)
+        ]
+    ),
+    "C3D10": np.array(
+        [[_A10, _A10, _A10], [_B10, _A10, _A10], [_A10, _B10, _A10], [_A10, _A10, _B10]]
+    ),
+}
+
+
+# ----------------------------------------------------------------------------- load schedules
+
+
+@dataclass(eq=False)
+class _Schedule:
+    """Load history of one step per key: ``ref A(t)`` with an amplitude, else a ramp to ``ref``."""
+
+    start: np.ndarray
+    ref: np.ndarray
+    amplitude: np.ndarray  # amplitude index, -1 for none
+
+
+@dataclass(eq=False)
+class StepLoads:
+    """Loads and prescribed displacements of one step, ready to be evaluated at any step time.
+
+    Attributes:
+        step: The deck step.
+        total_time_start: Total time at the start of the step.
+        cload_dofs: ``(K,)`` unrolled dofs of ``V`` carrying a concentrated force in this step.
+        cload: Force history of those dofs.
+        pressure: History of each pressure group's pressure (see ``CalculixModel.pressures``).
+        bc_dofs: ``(B,)`` unrolled dofs of ``V`` with a prescribed displacement in this step
+        (sorted).
+        bc: Prescribed-value history; ``bc.start`` is filled by :meth:`CalculixModel.begin_step`.
+    """
+
+    step: Step
+    total_time_start: float
+    cload_dofs: np.ndarray
+    cload: _Schedule
+    pressure: _Schedule
+    bc_dofs: np.ndarray
+    bc: _Schedule
+
+    @property
+    def period(self) -> float:
+        """Step time period."""
+        return self.step.static.period
+
+
+@dataclass(eq=False)
+class CalculixModel:
+    """dolfinx objects of a CalculiX deck (see the module docstring).
+
+    Attributes:
+        deck: The parsed deck.
+        element_type: The deck's element type.
+        mesh, V, u: Mesh, vector displacement space (degree of the element) and displacement.
+        node_dof: ``(N,)`` local block dof of each deck node (rows of ``deck.node_ids``), -1 for
+        nodes
+            in no element.
+        dof_node: ccx node number of each local block dof.
+        node_vertex: ``(N,)`` local mesh vertex of each deck node, -1 for midside or unused nodes.
+        element_cell: ``(E,)`` local cell of each element (rows of the deck's element block).
+        cell_element: ccx element number of each local cell.
+        surfaces: dolfinx surface of each ccx surface name.
+        surface_tags: facet tags (value 1) of each element-face surface.
+        surface_faces: per element-face surface, ``(facets, nodes)``: its sorted local facets and
+        their
+            ccx node numbers in ccx face order (for contact-element output).
+        pairs: contact pairs in deck order.
+        mu, lmbda: Lamé parameters per cell (DG0).
+        nlgeom: Constant switching the kinematics (0 small strain, 1 St.Venant-Kirchhoff) when the
+        deck has
+            both kinds of steps, else None (the forms then hold one kind only).
+        dx: Volume measure with ccx's quadrature.
+        first_piola: First Piola-Kirchhoff stress (the small-strain stress when ``nlgeom`` is 0).
+        cauchy: Cauchy stress.
+        residual: Bulk residual ``f_int - f_ext(pressures)`` (without concentrated forces).
+        nodal_loads: Concentrated forces (``*CLOAD``) on ``V``.
+        pressures: One Constant per pressure group; ``pressure_tags`` marks each group's facets
+            with value ``group + 1``.
+        steps: Load schedule of every step.
+        amplitude_names: Amplitude names by index.
+    """
+
+    deck: Deck
+    element_type: ElementType
+    mesh: dolfinx.mesh.Mesh
+    V: dolfinx.fem.FunctionSpace
+    u: dolfinx.fem.Function
+    node_dof: np.ndarray
+    dof_node: np.ndarray
+    node_vertex: np.ndarray
+    element_cell: np.ndarray
+    cell_element: np.ndarray
+    surfaces: dict[str, FacetSurface | NodeSurface]
+    surface_tags: dict[str, dolfinx.mesh.MeshTagsMetaClass]
+    surface_faces: dict[str, tuple[np.ndarray, np.ndarray]]
+    pairs: list[ContactPair]
+    mu: dolfinx.fem.Function
+    lmbda: dolfinx.fem.Function
+    nlgeom: dolfinx.fem.Constant | None
+    dx: ufl.Measure
+    first_piola: typing.Any
+    cauchy: typing.Any
+    residual: typing.Any
+    nodal_loads: dolfinx.fem.Function
+    pressures: list[dolfinx.fem.Constant]
+    pressure_tags: dolfinx.mesh.MeshTagsMetaClass | None
+    steps: list[StepLoads]
+    amplitude_names: list[str]
+    _bc_spaces: list = field(default_factory=list, repr=False)
+
+    # -- numbering ---------------------------------------------------------------------------------
+
+    def node_dofs(self, node_ids: np.ndarray) -> np.ndarray:
+        """Local block dofs of ccx node numbers (any shape); -1 for nodes in no element."""
+        return self.node_dof[self.deck.node_index(node_ids)]
+
+    def element_cells(self, element_ids: np.ndarray) -> np.ndarray:
+        """Local cells of ccx element numbers."""
+        block = self.deck.elements[self.element_type.name]
+        order = np.argsort(block.ids)
+        ids = np.asarray(element_ids, dtype=np.int64)
+        pos = np.minimum(np.searchsorted(block.ids, ids, sorter=order), block.ids.size - 1)
+        rows = order[pos]
+        if np.any(block.ids[rows] != ids):
+            raise ValueError(
+                f"element {int(ids[block.ids[rows] != ids][0])} is not defined in {self.deck.path}"
+            )
+        return self.element_cell[rows]
+
+    def nodal_values(self, node_ids: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Rows of a ``(num_dofs, k)`` per-dof array at ccx nodes (zeros for unused nodes)."""
+        dofs = self.node_dofs(node_ids)
+        out = np.zeros((dofs.size,) + values.shape[1:])
+        out[dofs >= 0] = values[dofs[dofs >= 0]]
+        return out
+
+    def face_nodes_of(self, surface: str, facets: np.ndarray) -> np.ndarray:
+        """ccx node numbers (ccx face order) of local ``facets`` of an element-face surface."""
+        sorted_facets, nodes = self.surface_faces[surface]
+        pos = np.searchsorted(sorted_facets, facets)
+        return nodes[pos]
+
+    # -- steps -------------------------------------------------------------------------------------
+
+    def total_time(self, step_index: int, step_time: float) -> float:
+        """Total time at ``step_time`` of step ``step_index`` (0-based)."""
+        return self.steps[step_index].total_time_start + step_time
+
+    def begin_step(self, step_index: int) -> list[dolfinx.fem.DirichletBCMetaClass]:
+        """Start step ``step_index`` (0-based) from the current ``u``: kinematics and constraints.
+
+        Prescribed displacements ramp from their value in ``u`` now. Returns the step's conditions.
+        """
+        loads = self.steps[step_index]
+        if self.nlgeom is not None:
+            self.nlgeom.value = 1.0 if loads.step.nlgeom else 0.0
+        loads.bc.start = self.u.x.array[loads.bc_dofs].copy()
+        bcs = []
+        for component, (Vi, inverse, g) in enumerate(self._bc_spaces):
+            dofs = loads.bc_dofs[loads.bc_dofs % 3 == component].astype(np.int32)
+            if dofs.size:
+                pair = [dofs, inverse[dofs].astype(np.int32)]
+                bcs.append(dolfinx.fem.dirichletbc(g, pair, self.V.sub(component)))
+        return bcs
+
+    def set_time(self, step_index: int, step_time: float) -> None:
+        """Set concentrated forces, pressures and prescribed displacements at ``step_time``."""
+        loads = self.steps[step_index]
+        total = loads.total_time_start + step_time
+        fraction = step_time / loads.period
+        self.nodal_loads.x.array[:] = 0.0
+        self.nodal_loads.x.array[loads.cload_dofs] = self._evaluate(
+            loads.cload, fraction, step_time, total
+        )
+        for constant, value in zip(
+            self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
+        ):
+            constant.value = value
+        values = self._evaluate(loads.bc, fraction, step_time, total)
+        for component, (_, inverse, g) in enumerate(self._bc_spaces):
+            mask = loads.bc_dofs % 3 == component
+            g.x.array[inverse[loads.bc_dofs[mask]]] = values[mask]
+
+    def _evaluate(
+        self, schedule: _Schedule, fraction: float, step_time: float, total_time: float
+    ) -> np.ndarray:
+        value = schedule.start + (schedule.ref - schedule.start) * fraction
+        for index in np.unique(schedule.amplitude[schedule.amplitude >= 0]):
+            amp = self.deck.amplitudes[self.amplitude_names[index]]
+            t = total_time if amp.total_time else step_time
+            mask = schedule.amplitude == index
+            value[mask] = schedule.ref[mask] * np.interp(t, amp.times, amp.values)
+        return value
+
+    # -- problem -----------------------------------------------------------------------------------
+
+    def create_problem(
+        self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (), **options
+    ) -> ContactProblem:
+        """The :class:`~dolfinx_ntf.ContactProblem` of the deck (bulk only without contact pairs).
+
+        Args:
+            bcs: Initial Dirichlet conditions (usually ``begin_step(0)``).
+            options: Passed to :class:`~dolfinx_ntf.ContactProblem` (``symmetric``,
+            ``jit_params``...).
+        """
+        if self.pairs:
+            problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
+        else:
+            problem = _BulkProblem(self.residual, self.u, bcs, **options)
+        problem.nodal_loads = self.nodal_loads
+        return problem
+
+
+class _BulkProblem(ContactProblem):
+    """A :class:`ContactProblem` without contact pairs (decks without ``*CONTACT PAIR``).
+
+    ``ContactProblem`` insists on at least one pair; with none, every contact step is a no-op, so
+    this sets up the same state without resolving pairs.
+    """
+
+    def __init__(
+        self,
+        F,
+        u,
+        bcs,
+        *,
+        form_compiler_params: dict | None = None,
+        jit_params: dict | None = None,
+        **_options,
+    ) -> None:
+        from dolfinx_ntf.assembly import ContactAssembler
+        from dolfinx_ntf.surfaces import reference_coordinates
+
+        dolfinx.fem.petsc.NonlinearProblem.__init__(
+            self,
+            F,
+            u,
+            list(bcs),
+            None,
+            form_compiler_params=form_compiler_params or {},
+            jit_params=jit_params or {},
+        )
+        self.u = u
+        self.symmetric = False
+        self.linearize_area = False
+        self.max_depth = None
+        self.walk_from_previous_face = False
+        self._reference = reference_coordinates(u.function_space)
+        self.assembler = ContactAssembler(u.function_space, self.a, self.bcs)
+        self.states = []
+        self.small_sliding = True
+        self.time_fraction = 1.0
+        self.static = True
+        self.iteration = 0
+        self.count_changed = False
+        self.pairings = 0
+        self._first_pairing_done = False
+        self.matrix = None
+        self.nodal_loads = None
+        self.pairing_callbacks = []
+
+
+# ----------------------------------------------------------------------------- building
+
+
+def _not_supported(what: str, location) -> NotImplementedError:
+    return NotImplementedError(f"{location}: {what} is not supported yet")
+
+
+def _check_supported(deck: Deck) -> None:
+    """Deck features the solver cannot run yet: a clear error naming the keyword and line."""
+    for pair in deck.contact_pairs:
+        if pair.adjust is not None:
+            raise _not_supported("*CONTACT PAIR, ADJUST", pair.location)
+    for name, interaction in deck.interactions.items():
+        if interaction.friction is not None and any(
+            p.interaction == name for p in deck.contact_pairs
+        ):
+            raise _not_supported(
+                f"*FRICTION (surface interaction {name})", interaction.friction.location
+            )
+    for step in deck.steps:
+        for change in step.friction_changes:
+            raise _not_supported("*CHANGE FRICTION", change.location)
+        for change in step.model_changes:
+            raise _not_supported("*MODEL CHANGE", change.location)
+
+
+def _element_block(deck: Deck):
+    blocks = [b for b in deck.elements.values() if b.ids.size]
+    if not blocks:
+        raise ValueError(f"{deck.path}: the deck has no elements")
+    if len(blocks) > 1:
+        names = ", ".join(f"{b.type.name} (first at {b.locations[0]})" for b in blocks)
+        raise ValueError(
+            f"{deck.path}: the mesh mixes element types {names}; use one element type per deck"
+        )
+    return blocks[0]
+
+
+def _create_mesh(deck: Deck, block, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
+    cell_name, degree = _DOLFINX_CELLS[block.type.name]
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell_name, degree))
+    if comm.rank == 0:
+        cells = deck.node_index(block.connectivity)[:, CELL_PERMUTATIONS[block.type.name]]
+        x = np.asarray(deck.node_coords, dtype=np.float64)
+    else:
+        cells = np.zeros((0, block.type.num_nodes), dtype=np.int64)
+        x = np.zeros((0, 3))
+    return dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), x, domain)
+
+
+def _numbering(deck: Deck, mesh: dolfinx.mesh.Mesh, V: dolfinx.fem.FunctionSpace):
+    """node_dof, dof_node, node_vertex, element_cell, cell_element through per-cell tables."""
+    tdim = mesh.topology.dim
+    num_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
+    geometry_dofs = mesh.geometry.dofmap.array.reshape(num_cells, -1)
+    space_dofs = V.dofmap.list.array.reshape(num_cells, -1)
+    if geometry_dofs.shape != space_dofs.shape:
+        raise RuntimeError("the displacement space and the geometry have different cell layouts")
+    num_geometry = mesh.geometry.x.shape[0]
+    dof_of_geometry = np.full(num_geometry, -1, dtype=np.int64)
+    dof_of_geometry[geometry_dofs.ravel()] = space_dofs.ravel()
+    input_index = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    node_dof = np.full(deck.node_ids.size, -1, dtype=np.int64)
+    node_dof[input_index] = dof_of_geometry
+    num_dofs = V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts
+    dof_node = np.zeros(num_dofs, dtype=np.int64)
+    dof_node[dof_of_geometry] = deck.node_ids[input_index]
+
+    num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
+    vertices = np.arange(num_vertices, dtype=np.int32)
+    vertex_geometry = dolfinx.cpp.mesh.entities_to_geometry(mesh._mesh, 0, vertices, False).ravel()
+    node_vertex = np.full(deck.node_ids.size, -1, dtype=np.int64)
+    node_vertex[input_index[vertex_geometry]] = vertices
+
+    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
+    return node_dof, dof_node, node_vertex, original
+
+
+def _facet_finder(mesh: dolfinx.mesh.Mesh):
+    """A function mapping ``(F, k)`` facet corner vertices to local facet indices (-1 if none)."""
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, 0)
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    f_to_v = mesh.topology.connectivity(tdim - 1, 0)
+    num_facets = (
+        mesh.topology.index_map(tdim - 1).size_local + mesh.topology.index_map(tdim - 1).num_ghosts
+    )
+    width = f_to_v.offsets[1] - f_to_v.offsets[0] if num_facets else 3
+    keys = np.sort(f_to_v.array.reshape(num_facets, width).astype(np.int64), axis=1)
+    order = np.lexsort(keys.T[::-1])
+    sorted_keys = keys[order]
+
+    def find(corners: np.ndarray) -> np.ndarray:
+        query = np.sort(np.asarray(corners, dtype=np.int64), axis=1)
+        if query.shape[1] != width:
+            raise ValueError(f"faces with {query.shape[1]} corners, mesh facets have {width}")
+        lo, hi = (
+            np.zeros(query.shape[0], dtype=np.int64),
+            np.full(query.shape[0], num_facets, dtype=np.int64),
+        )
+        # vectorized lexicographic binary search over the sorted facet keys
+        for _ in range(int(np.ceil(np.log2(num_facets + 1))) + 1):
+            mid = (lo + hi) // 2
+            active = lo < hi
+            cand = sorted_keys[np.minimum(mid, num_facets - 1)]
+            diff = cand - query
+            first = np.argmax(diff != 0, axis=1)
+            sign = diff[np.arange(query.shape[0]), first]
+            less = active & (sign < 0)
+            lo = np.where(less, mid + 1, lo)
+            hi = np.where(active & ~less, mid, hi)
+        pos = np.minimum(lo, num_facets - 1)
+        found = np.all(sorted_keys[pos] == query, axis=1) & (query.min(axis=1) >= 0)
+        return np.where(found, order[pos], -1)
+
+    return find
+
+
+def _exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray) -> np.ndarray:
+    tdim = mesh.topology.dim
+    f_to_c = mesh.topology.connectivity(tdim - 1, tdim)
+    return (f_to_c.offsets[facets + 1] - f_to_c.offsets[facets]) == 1
+
+
+def _element_faces_to_facets(
+    deck: Deck, model_parts: dict, element_ids: np.ndarray, faces: np.ndarray, what: str, location
+) -> tuple[np.ndarray, np.ndarray]:
+    """Local facets and ccx face nodes ``(F, n)`` of element faces (1-based face numbers)."""
+    block, node_vertex, find = model_parts["block"], model_parts["node_vertex"], model_parts["find"]
+    etype = block.type
+    order = np.argsort(block.ids)
+    pos = np.minimum(np.searchsorted(block.ids, element_ids, sorter=order), block.ids.size - 1)
+    rows = order[pos]
+    nodes = block.connectivity[rows[:, None], etype.faces[faces - 1]]
+    corners = node_vertex[deck.node_index(nodes[:, : etype.face_corners])]
+    facets = find(corners)
+    if np.any(facets < 0):
+        bad = int(np.argmax(facets < 0))
+        raise ValueError(
+            f"{location}: {what}: face S{faces[bad]} of element {element_ids[bad]} is not a "
+            "facet of "
+            "the mesh"
+        )
+    return facets, nodes
+
+
+def _surfaces(deck: Deck, mesh, parts: dict):
+    surfaces: dict[str, FacetSurface | NodeSurface] = {}
+    tags: dict[str, dolfinx.mesh.MeshTagsMetaClass] = {}
+    faces: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    node_vertex = parts["node_vertex"]
+    for name, surface in deck.surfaces.items():
+        if surface.type == "NODE":
+            vertices = node_vertex[deck.node_index(surface.nodes)]
+            if np.any(vertices < 0):
+                node = int(surface.nodes[np.argmax(vertices < 0)])
+                raise _not_supported(
+                    f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
+                    "corner (midside or unused node)",
+                    surface.location,
+                )
+            surfaces[name] = NodeSurface(np.unique(vertices).astype(np.int32), name)
+            continue
+        facets, nodes = _element_faces_to_facets(
+            deck, parts, surface.elements, surface.faces, f"*SURFACE {name}", surface.location
+        )
+        facets, first = np.unique(facets, return_index=True)
+        inner = ~_exterior(mesh, facets)
+        if np.any(inner):
+            k = int(np.argmax(inner))
+            raise ValueError(
+                f"{surface.location}: *SURFACE {name}: face S{surface.faces[first[k]]} of element "
+                f"{surface.elements[first[k]]} lies between two elements, not on the boundary"
+            )
+        tag = dolfinx.mesh.meshtags(
+            mesh,
+            mesh.topology.dim - 1,
+            facets.astype(np.int32),
+            np.ones(facets.size, dtype=np.int32),
+        )
+        tag.name = name
+        tags[name] = tag
+        faces[name] = (facets, nodes[first])
+        surfaces[name] = FacetSurface(tag, 1)
+    return surfaces, tags, faces
+
+
+def _law(deck: Deck, interaction_name: str) -> PressureOverclosureLaw:
+    behavior = deck.interactions[interaction_name].behavior
+    kind = behavior.pressure_overclosure
+    if kind == "EXPONENTIAL":
+        c0, p0 = behavior.values
+        return ExponentialLaw(c0=c0, p0=p0)
+    if kind in ("LINEAR", "HARD"):
+        elastic = next((m.elastic for m in deck.materials.values() if m.elastic is not None), None)
+        if elastic is None:
+            raise ValueError(
+                f"{behavior.location}: {kind} contact needs an *ELASTIC material for its defaults"
+            )
+        values = tuple(behavior.values) + (None,) * (3 - len(behavior.values))
+        return LinearLaw.with_ccx_defaults(elastic[0], *values[:3])
+    if kind == "TABULAR":
+        table = behavior.table
+        if table.shape[1] != 2:
+            raise _not_supported(
+                "temperature-dependent *SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=TABULAR",
+                behavior.location,
+            )
+        return TabularLaw(pressures=table[:, 0], overclosures=table[:, 1])
+    raise _not_supported(f"*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE={kind}", behavior.location)
+
+
+def _contact_pairs(deck: Deck, surfaces: dict) -> list[ContactPair]:
+    pairs = []
+    for pair in deck.contact_pairs:
+        law = _law(deck, pair.interaction)
+        pairs.append(
+            ContactPair(
+                surfaces[pair.slave],
+                surfaces[pair.master],
+                SurfaceInteraction(law),
+                small_sliding=pair.small_sliding,
+                name=f"{pair.slave}-{pair.master}",
+            )
+        )
+    return pairs
+
+
+def _lame(deck: Deck, block, mesh, element_cell: np.ndarray):
+    Q = dolfinx.fem.FunctionSpace(mesh, ("DG", 0))
+    mu, lmbda = dolfinx.fem.Function(Q, name="mu"), dolfinx.fem.Function(Q, name="lambda")
+    for section in deck.sections:
+        young, nu = deck.materials[section.material].elastic
+        members = np.unique(deck.elsets[section.elset])
+        members = members[np.isin(members, block.ids)]
+        order = np.argsort(block.ids)
+        rows = order[np.searchsorted(block.ids, members, sorter=order)]
+        cells = element_cell[rows]
+        dofs = Q.dofmap.list.array.reshape(-1, 1)[cells, 0]
+        mu.x.array[dofs] = young / (2 * (1 + nu))
+        lmbda.x.array[dofs] = young * nu / ((1 + nu) * (1 - 2 * nu))
+    return mu, lmbda
+
+
+def _stresses(u, mu, lmbda, nlgeom):
+    """First Piola-Kirchhoff and Cauchy stress; ``nlgeom`` 0 gives small-strain elasticity."""
+    H = ufl.grad(u)
+    Id = ufl.Identity(3)
+    F = Id + nlgeom * H
+    E = ufl.sym(H) + 0.5 * nlgeom * H.T * H
+    S = 2 * mu * E + lmbda * ufl.tr(E) * Id
+    P = F * S
+    return F, P, P * F.T / ufl.det(F)
+
+
+# -- schedules -------------------------------------------------------------------------------------
+
+
+class _ScheduleBuilder:
+    """ccx's reference-value bookkeeping of one load kind over the steps (module docstring)."""
+
+    def __init__(self, size: int, amplitude_total: np.ndarray, add_within_step: bool) -> None:
+        self.ref = np.zeros(size)
+        self.amplitude = np.full(size, -1, dtype=np.int64)
+        self.active = np.zeros(size, dtype=bool)
+        self.end = np.zeros(size)
+        self.amplitude_total = amplitude_total
+        self.add = add_within_step
+        self._touched = np.zeros(size, dtype=bool)
+
+    def begin(self, new: bool) -> None:
+        carried = self.amplitude >= 0
+        step_time = carried & ~self.amplitude_total[np.maximum(self.amplitude, 0)]
+        self.ref[step_time] = self.end[step_time]
+        self.amplitude[step_time] = -1
+        if new:
+            self.ref[:] = 0.0
+            self.amplitude[:] = -1
+            self.active[:] = False
+        self._touched[:] = False
+
+    def card(self, keys: np.ndarray, value: float, amplitude: int) -> None:
+        if self.add:
+            fresh = keys[~self._touched[keys]]
+            self.ref[fresh] = 0.0
+            np.add.at(self.ref, keys, value)
+        else:
+            self.ref[keys] = value
+        self._touched[keys] = True
+        self.active[keys] = True
+        self.amplitude[keys] = amplitude
+
+    def finish(self, evaluate_end: typing.Callable[[_Schedule], np.ndarray]) -> _Schedule:
+        schedule = _Schedule(self.end.copy(), self.ref.copy(), self.amplitude.copy())
+        self.end = evaluate_end(schedule)
+        return schedule
+
+
+def _amplitude_index(deck: Deck, names: list[str], name: str | None) -> int:
+    return -1 if name is None else names.index(name)
+
+
+def _end_values(
+    deck: Deck, names: list[str], schedule: _Schedule, period: float, total_end: float
+) -> np.ndarray:
+    value = schedule.ref.copy()
+    for index in np.unique(schedule.amplitude[schedule.amplitude >= 0]):
+        amp = deck.amplitudes[names[index]]
+        mask = schedule.amplitude == index
+        value[mask] = schedule.ref[mask] * np.interp(
+            total_end if amp.total_time else period, amp.times, amp.values
+        )
+    return value
+
+
+def _step_times(deck: Deck) -> list[float]:
+    starts, total = [], 0.0
+    for step in deck.steps:
+        static = step.static
+        if static.total_time_at_start is not None:
+            total = static.total_time_at_start
+        elif static.time_reset:
+            total -= static.period
+        starts.append(total)
+        total += static.period
+    return starts
+
+
+def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
+    """Per-step schedules of forces, pressures (grouped) and prescribed displacements."""
+    names = list(deck.amplitudes)
+    amp_total = np.array([deck.amplitudes[n].total_time for n in names] + [False], dtype=bool)
+    num_nodes = deck.node_ids.size
+    cload = _ScheduleBuilder(3 * num_nodes, amp_total, add_within_step=True)
+    dload = _ScheduleBuilder(6 * block.ids.size, amp_total, add_within_step=True)
+    bound = _ScheduleBuilder(3 * num_nodes, amp_total, add_within_step=False)
+    order = np.argsort(block.ids)
+    starts = _step_times(deck)
+    raw = []
+    for s, step in enumerate(deck.steps):
+        period = step.static.period
+        total_end = starts[s] + period
+
+        def end(schedule, period=period, total_end=total_end):
+            return _end_values(deck, names, schedule, period, total_end)
+
+        cards = (list(deck.boundaries) if s == 0 else []) + list(step.boundaries)
+        bound.begin(new=bool(step.boundaries) and step.boundary_op == "NEW")
+        for card in cards:
+            keys = (
+                3 * deck.node_index(card.nodes)[:, None]
+                + np.arange(card.first_dof - 1, card.last_dof)
+            ).ravel()
+            bound.card(keys, card.value, _amplitude_index(deck, names, card.amplitude))
+        bc = bound.finish(end)
+        bc_active = bound.active.copy()
+
+        cload.begin(new=step.cload_op == "NEW" and bool(step.cloads))
+        for card in step.cloads:
+            cload.card(
+                3 * deck.node_index(card.nodes) + card.dof - 1,
+                card.value,
+                _amplitude_index(deck, names, card.amplitude),
+            )
+        forces = cload.finish(end)
+
+        dload.begin(new=step.dload_op == "NEW" and bool(step.dloads))
+        for card in step.dloads:
+            rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
+            dload.card(
+                6 * rows + card.face - 1, card.value, _amplitude_index(deck, names, card.amplitude)
+            )
+        pressures = dload.finish(end)
+        raw.append((bc, bc_active, forces, pressures))
+
+    # Pressure groups: faces with the same history in every step share one Constant.
+    used = np.zeros(6 * block.ids.size, dtype=bool)
+    for _, _, _, p in raw:
+        used |= (p.ref != 0) | (p.start != 0)
+    keys = np.flatnonzero(used)
+    history = (
+        np.column_stack(
+            [np.column_stack([p.start[keys], p.ref[keys], p.amplitude[keys]]) for _, _, _, p in raw]
+        )
+        if keys.size
+        else np.zeros((0, 3 * len(raw)))
+    )
+    unique, group = np.unique(history, axis=0, return_inverse=True)
+    group = group.ravel()
+    pressure_tags = None
+    if keys.size:
+        facets, _ = _element_faces_to_facets(
+            deck, parts, block.ids[keys // 6], keys % 6 + 1, "*DLOAD", deck.path
+        )
+        inner = ~_exterior(mesh, facets)
+        if np.any(inner):
+            k = int(np.argmax(inner))
+            raise ValueError(
+                f"{deck.path}: *DLOAD: face P{keys[k] % 6 + 1} of element "
+                f"{block.ids[keys[k] // 6]} "
+                "lies between two elements, not on the boundary"
+            )
+        facets, first = np.unique(facets, return_index=True)
+        pressure_tags = dolfinx.mesh.meshtags(
+            mesh,
+            mesh.topology.dim - 1,
+            facets.astype(np.int32),
+            (group[first] + 1).astype(np.int32),
+        )
+
+    steps = []
+    for s, (step, (bc, bc_active, forces, pressure)) in enumerate(zip(deck.steps, raw)):
+        dofs3 = 3 * np.repeat(node_dof, 3) + np.tile(
+            np.arange(3), num_nodes
+        )  # unrolled dof of each key
+        valid = np.repeat(node_dof >= 0, 3)
+        bc_keys = np.flatnonzero(bc_active & valid)
+        bc_dofs, first = np.unique(dofs3[bc_keys], return_index=True)
+        bc_keys = bc_keys[first]
+        f_keys = np.flatnonzero(((forces.ref != 0) | (forces.start != 0)) & valid)
+        columns = slice(3 * s, 3 * s + 3)
+        group_history = unique[:, columns] if unique.size else np.zeros((0, 3))
+        steps.append(
+            StepLoads(
+                step=step,
+                total_time_start=starts[s],
+                cload_dofs=dofs3[f_keys],
+                cload=_Schedule(forces.start[f_keys], forces.ref[f_keys], forces.amplitude[f_keys]),
+                pressure=_Schedule(
+                    group_history[:, 0].copy(),
+                    group_history[:, 1].copy(),
+                    group_history[:, 2].astype(np.int64),
+                ),
+                bc_dofs=bc_dofs,
+                bc=_Schedule(np.zeros(bc_dofs.size), bc.ref[bc_keys], bc.amplitude[bc_keys]),
+            )
+        )
+    return steps, names, pressure_tags, int(unique.shape[0])
+
+
+def build_model(
+    deck: Deck,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    *,
+    form_compiler_params: dict | None = None,
+    jit_params: dict | None = None,
+) -> CalculixModel:
+    """Build the dolfinx model of a parsed CalculiX deck (collective).
+
+    Args:
+        deck: The deck (``read_deck``).
+        comm: Communicator; only one process is supported for now.
+        form_compiler_params, jit_params: Unused here; kept for symmetry with the problem options.
+
+    Returns:
+        The :class:`CalculixModel`.
+
+    Raises:
+        ValueError: mixed element types, faces that are not boundary facets, bad material data.
+        NotImplementedError: features not supported yet (friction, ADJUST, *MODEL CHANGE, parallel
+        runs...),
+            naming the keyword and ``file:line``.
+    """
+    if comm.size > 1:
+        raise NotImplementedError(
+            "CalculiX decks run on one process only for now (got "
+            f"{comm.size} processes); run without mpirun"
+        )
+    _check_supported(deck)
+    block = _element_block(deck)
+    etype = block.type
+    mesh = _create_mesh(deck, block, comm)
+    degree = _DOLFINX_CELLS[etype.name][1]
+    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
+    u = dolfinx.fem.Function(V, name="displacement")
+    node_dof, dof_node, node_vertex, original = _numbering(deck, mesh, V)
+    element_cell = np.empty(block.ids.size, dtype=np.int64)
+    element_cell[original] = np.arange(original.size)
+    cell_element = block.ids[original]
+
+    parts = {"block": block, "node_vertex": node_vertex, "find": _facet_finder(mesh)}
+    surfaces, surface_tags, surface_faces = _surfaces(deck, mesh, parts)
+    pairs = _contact_pairs(deck, surfaces)
+    mu, lmbda = _lame(deck, block, mesh, element_cell)
+    steps, amplitude_names, pressure_tags, num_groups = _schedules(
+        deck, block, node_dof, parts, mesh
+    )
+
+    kinds = {step.nlgeom for step in deck.steps}
+    nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
+    F, P, sigma = _stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
+    v = ufl.TestFunction(V)
+    dx = ufl.Measure(
+        "dx", domain=mesh, metadata={"quadrature_degree": _QUADRATURE_DEGREE[etype.name]}
+    )
+    residual = ufl.inner(P, ufl.grad(v)) * dx
+    pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
+    if pressures:
+        ds = ufl.Measure(
+            "ds",
+            domain=mesh,
+            subdomain_data=pressure_tags,
+            metadata={"quadrature_degree": _FACET_QUADRATURE_DEGREE},
+        )
+        N = ufl.FacetNormal(mesh)
+        traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
+        for g, p in enumerate(pressures):
+            residual += p * ufl.inner(traction_map, v) * ds(g + 1)
+    nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
+
+    bc_spaces = []
+    num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
+    for component in range(3):
+        Vi, dof_map = V.sub(component).collapse()
+        inverse = np.full(num_unrolled, -1, dtype=np.int64)
+        inverse[np.asarray(dof_map)] = np.arange(len(dof_map))
+        bc_spaces.append((Vi, inverse, dolfinx.fem.Function(Vi)))
+
+    return CalculixModel(
+        deck=deck,
+        element_type=etype,
+        mesh=mesh,
+        V=V,
+        u=u,
+        node_dof=node_dof,
+        dof_node=dof_node,
+        node_vertex=node_vertex,
+        element_cell=element_cell,
+        cell_element=cell_element,
+        surfaces=surfaces,
+        surface_tags=surface_tags,
+        surface_faces=surface_faces,
+        pairs=pairs,
+        mu=mu,
+        lmbda=lmbda,
+        nlgeom=nlgeom,
+        dx=dx,
+        first_piola=P,
+        cauchy=sigma,
+        residual=residual,
+        nodal_loads=nodal_loads,
+        pressures=pressures,
+        pressure_tags=pressure_tags,
+        steps=steps,
+        amplitude_names=amplitude_names,
+        _bc_spaces=bc_spaces,
+    )
