@@ -15,7 +15,7 @@ Cell tag of body ``k``: ``k + 1``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -59,12 +59,14 @@ class Case:
         description: One line for the validation report.
         write: ``write(directory)`` writes ``<directory>/<name>.inp``.
         quirk: Known ccx behaviour that limits the comparison (empty if none).
+        tolerances: Tolerances that differ from the defaults because of ``quirk``.
     """
 
     name: str
     description: str
     write: Callable[[Path], None]
     quirk: str = ""
+    tolerances: dict[str, float] = field(default_factory=dict)
 
 
 def _box(origin, size, divisions) -> tuple[np.ndarray, np.ndarray]:
@@ -169,273 +171,193 @@ def _rollers(ft, bodies) -> list[BoundarySpec]:
     return specs
 
 
-def _pair(
-    ft, slave_body: int, master_body: int, law, *, nodal: bool = False, V=None
-) -> ntf.ContactPair:
+def _pair(ft, slave_body: int, master_body: int, law, *, nodal: bool = False, V=None):
     master = ntf.FacetSurface(ft, facet_tag(master_body, TOP))
     if nodal:
-        mesh = V.mesh
         facets = ft.find(facet_tag(slave_body, BOTTOM))
-        vertices = dolfinx.mesh.compute_incident_entities(mesh, facets, 2, 0)
+        vertices = dolfinx.mesh.compute_incident_entities(V.mesh, facets, 2, 0)
         slave = ntf.NodeSurface(vertices, name=f"bottom{slave_body}")
     else:
         slave = ntf.FacetSurface(ft, facet_tag(slave_body, BOTTOM))
     return ntf.ContactPair(slave, master, ntf.SurfaceInteraction(law))
 
 
-E1, NU1 = 1000.0, 0.3  # lower body
-E2, NU2 = 2000.0, 0.25  # upper bodies
+def _step(increments: int, *, nlgeom: bool = False, **loads) -> StepSpec:
+    return StepSpec(increments=increments, nlgeom=nlgeom, field_controls=TIGHT_FIELD_CONTROLS,
+                    output=_OUTPUT, **loads)  # fmt: skip
+
+
+def _write(directory: Path, name: str, V, ct, ft, pairs, steps, heading: str) -> None:
+    """Write a deck whose bottom body is clamped and every body sits on rollers."""
+    bodies = sorted(set(int(v) for v in ct.values))
+    write_inp(
+        directory / f"{name}.inp",
+        displacement_space=V,
+        materials={b: (E1, NU1) if b == 1 else (E2, NU2) for b in bodies},
+        cell_tags=ct,
+        pairs=pairs,
+        fixed=[
+            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
+            *_rollers(ft, [b - 1 for b in bodies]),
+        ],
+        steps=steps,
+        heading=heading,
+    )
+
+
+E1, NU1 = 1000.0, 0.3  # bottom body
+E2, NU2 = 2000.0, 0.25  # the bodies above
+LINEAR = ntf.LinearLaw(slope=50 * E1, tension=E1 / 70000.0, c0=1e-3)  # ccx's defaults for E1
 
 LOWER = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (4, 4, 2))
+# Punch origins are offset so that no slave node lies on a master edge: such nodes flip between
+# faces at every re-pairing in ccx (spec §3.2), which is not what these decks compare.
 PUNCH = ((0.11, 0.13, 0.0), (0.6, 0.6, 0.4), (3, 3, 2))
+
+
+def _top(ft, body: int) -> ntf.FacetSurface:
+    return ntf.FacetSurface(ft, facet_tag(body, TOP))
 
 
 def _hex_linear_pressure(directory: Path) -> None:
     V, ct, ft = blocks([LOWER, PUNCH])
-    law = ntf.LinearLaw(slope=50 * E1, tension=E1 / 70000.0, c0=1e-3)
-    steps = [
-        StepSpec(
-            pressures=[PressureSpec(ntf.FacetSurface(ft, facet_tag(1, TOP)), 20.0)],
-            increments=3,
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        )
-    ]
-    write_inp(
-        directory / "hex_linear_pressure.inp",
-        displacement_space=V,
-        materials={1: (E1, NU1), 2: (E2, NU2)},
-        cell_tags=ct,
-        pairs=[_pair(ft, 1, 0, law)],
-        fixed=[
-            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
-            *_rollers(ft, [0, 1]),
-        ],
-        steps=steps,
-        heading="C3D8 punch on a block, LINEAR law, pressure, 3 increments",
-    )
+    steps = [_step(3, pressures=[PressureSpec(_top(ft, 1), 20.0)])]
+    _write(directory, "hex_linear_pressure", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D8 punch on a block, LINEAR law, pressure, 3 increments")  # fmt: skip
 
 
 def _tet_exponential_nlgeom(directory: Path) -> None:
     lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (3, 3, 2))
     punch = ((0.11, 0.13, 0.002), (0.6, 0.6, 0.4), (2, 2, 2))  # starts 0.002 above the block
     V, ct, ft = blocks([lower, punch], cell="tetrahedron")
+    ramp = AmplitudeSpec((0.0, 0.5, 1.0), (0.0, 0.3, 1.0), name="RAMP")
+    steps = [_step(4, nlgeom=True, amplitude=ramp,
+                   boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.03, name="PRESS")])]  # fmt: skip
     law = ntf.ExponentialLaw(c0=0.005, p0=1.0)
-    top = ntf.FacetSurface(ft, facet_tag(1, TOP))
-    steps = [
-        StepSpec(
-            boundaries=[BoundarySpec(top, (2,), -0.03, name="PRESS")],
-            increments=4,
-            nlgeom=True,
-            amplitude=AmplitudeSpec((0.0, 0.5, 1.0), (0.0, 0.3, 1.0), name="RAMP"),
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        )
-    ]
-    write_inp(
-        directory / "tet_exponential_nlgeom.inp",
-        displacement_space=V,
-        materials={1: (E1, NU1), 2: (E2, NU2)},
-        cell_tags=ct,
-        pairs=[_pair(ft, 1, 0, law)],
-        fixed=[
-            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
-            *_rollers(ft, [0, 1]),
-        ],
-        steps=steps,
-        heading="C3D4 punch with an initial gap, EXPONENTIAL law, NLGEOM, amplitude, 4 increments",
-    )
+    _write(directory, "tet_exponential_nlgeom", V, ct, ft, [_pair(ft, 1, 0, law)], steps,
+           "C3D4 punch with an initial gap, EXPONENTIAL law, NLGEOM, amplitude, "
+           "4 increments")  # fmt: skip
 
 
 def _hex_tabular_nodal(directory: Path) -> None:
     V, ct, ft = blocks([LOWER, PUNCH])
     law = ntf.TabularLaw(pressures=[0.0, 20.0, 1020.0], overclosures=[0.0, 5e-4, 0.0105])
-    top = ntf.FacetSurface(ft, facet_tag(1, TOP))
-    steps = [
-        StepSpec(
-            boundaries=[BoundarySpec(top, (2,), -0.004, name="PRESS")],
-            increments=2,
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        )
-    ]
-    write_inp(
-        directory / "hex_tabular_nodal.inp",
-        displacement_space=V,
-        materials={1: (E1, NU1), 2: (E2, NU2)},
-        cell_tags=ct,
-        pairs=[_pair(ft, 1, 0, law, nodal=True, V=V)],
-        fixed=[
-            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
-            *_rollers(ft, [0, 1]),
-        ],
-        steps=steps,
-        heading="C3D8 punch, node-based slave (TYPE=NODE), TABULAR law, 2 increments",
-    )
+    steps = [_step(4, boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.004, name="PRESS")])]
+    _write(directory, "hex_tabular_nodal", V, ct, ft, [_pair(ft, 1, 0, law, nodal=True, V=V)],
+           steps, "C3D8 punch, node-based slave (TYPE=NODE), TABULAR law, "
+           "4 increments")  # fmt: skip
 
 
 def _hex_curved_master(directory: Path) -> None:
     lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (5, 5, 2))
-    punch = ((0.13, 0.17, 0.02), (0.7, 0.7, 0.3), (4, 4, 1))  # apex of the bump: z = 0.02
+    punch = ((0.13, 0.17, 0.02), (0.7, 0.7, 0.3), (4, 4, 1))  # on the apex of the bump, z = 0.02
     V, ct, ft = blocks([lower, punch], bump=0.02)
-    law = ntf.LinearLaw(slope=50 * E1, tension=E1 / 70000.0, c0=1e-3)
-    top = ntf.FacetSurface(ft, facet_tag(1, TOP))
-    steps = [
-        StepSpec(
-            boundaries=[BoundarySpec(top, (2,), -0.01, name="PRESS")],
-            increments=4,
-            nlgeom=True,
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        )
-    ]
-    write_inp(
-        directory / "hex_curved_master.inp",
-        displacement_space=V,
-        materials={1: (E1, NU1), 2: (E2, NU2)},
-        cell_tags=ct,
-        pairs=[_pair(ft, 1, 0, law)],
-        fixed=[
-            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
-            *_rollers(ft, [0, 1]),
-        ],
-        steps=steps,
-        heading="C3D8 flat punch on a curved (warped quad) master, LINEAR law, NLGEOM, "
-        "growing contact zone, 4 increments",
-    )
+    steps = [_step(4, nlgeom=True,
+                   boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.01, name="PRESS")])]  # fmt: skip
+    _write(directory, "hex_curved_master", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D8 flat punch pressed onto a curved (warped quad) master, LINEAR law, NLGEOM, "
+           "contact zone growing from 3 to 20 nodes, 4 increments")  # fmt: skip
 
 
 def _hex_two_pairs(directory: Path) -> None:
     middle = ((0.07, 0.09, 0.0), (0.8, 0.8, 0.3), (3, 3, 1))
     upper = ((0.19, 0.23, 0.3), (0.5, 0.5, 0.3), (3, 3, 1))
     V, ct, ft = blocks([LOWER, middle, upper])
-    pairs = [
-        _pair(ft, 1, 0, ntf.LinearLaw(slope=50 * E1, tension=E1 / 70000.0, c0=1e-3)),
-        _pair(ft, 2, 1, ntf.ExponentialLaw(c0=0.002, p0=5.0)),
-    ]
-    load_nodes = ntf.FacetSurface(ft, facet_tag(2, TOP))
-    steps = [
-        StepSpec(
-            point_loads=[PointLoadSpec(load_nodes, 2, -0.3, name="LOAD")],
-            increments=3,
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        )
-    ]
-    write_inp(
-        directory / "hex_two_pairs.inp",
-        displacement_space=V,
-        materials={1: (E1, NU1), 2: (E2, NU2), 3: (E2, NU2)},
-        cell_tags=ct,
-        pairs=pairs,
-        fixed=[
-            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
-            *_rollers(ft, [0, 1, 2]),
-        ],
-        steps=steps,
-        heading="Three stacked C3D8 blocks, two pairs (LINEAR, EXPONENTIAL), point loads, "
-        "3 increments",
-    )
+    pairs = [_pair(ft, 1, 0, LINEAR), _pair(ft, 2, 1, ntf.ExponentialLaw(c0=0.002, p0=5.0))]
+    steps = [_step(3, point_loads=[PointLoadSpec(_top(ft, 2), 2, -0.3, name="LOAD")])]
+    _write(directory, "hex_two_pairs", V, ct, ft, pairs, steps,
+           "Three stacked C3D8 blocks, two pairs (LINEAR, EXPONENTIAL), point loads, "
+           "3 increments")  # fmt: skip
 
 
 def _tet_linear_two_steps(directory: Path) -> None:
     V, ct, ft = blocks([LOWER, PUNCH], cell="tetrahedron")
-    law = ntf.LinearLaw(slope=50 * E1, tension=E1 / 70000.0, c0=1e-3)
-    top = ntf.FacetSurface(ft, facet_tag(1, TOP))
-    steps = [
-        StepSpec(
-            pressures=[PressureSpec(top, 10.0)],
-            increments=2,
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        ),
-        StepSpec(
-            pressures=[PressureSpec(top, 30.0)],
-            increments=2,
-            nlgeom=True,
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        ),
-    ]
-    write_inp(
-        directory / "tet_linear_two_steps.inp",
-        displacement_space=V,
-        materials={1: (E1, NU1), 2: (E2, NU2)},
-        cell_tags=ct,
-        pairs=[_pair(ft, 1, 0, law)],
-        fixed=[
-            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
-            *_rollers(ft, [0, 1]),
-        ],
-        steps=steps,
-        heading="C3D4 punch, LINEAR law, pressure 10 (small strain) then 30 (NLGEOM)",
-    )
+    steps = [_step(2, pressures=[PressureSpec(_top(ft, 1), 10.0)]),
+             _step(2, pressures=[PressureSpec(_top(ft, 1), 30.0)])]  # fmt: skip
+    _write(directory, "tet_linear_two_steps", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D4 punch, LINEAR law, pressure 10 then 30 in a second step, 2 + 2 increments")
 
 
 def _tet10_exponential(directory: Path) -> None:
     lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (2, 2, 1))
     punch = ((0.11, 0.13, 0.0), (0.6, 0.6, 0.4), (2, 2, 1))
     V, ct, ft = blocks([lower, punch], cell="tetrahedron", degree=2)
+    steps = [_step(2, pressures=[PressureSpec(_top(ft, 1), 20.0)])]
     law = ntf.ExponentialLaw(c0=0.002, p0=2.0)
-    top = ntf.FacetSurface(ft, facet_tag(1, TOP))
-    steps = [
-        StepSpec(
-            pressures=[PressureSpec(top, 20.0)],
-            increments=2,
-            field_controls=TIGHT_FIELD_CONTROLS,
-            output=_OUTPUT,
-        )
-    ]
-    write_inp(
-        directory / "tet10_exponential.inp",
-        displacement_space=V,
-        materials={1: (E1, NU1), 2: (E2, NU2)},
-        cell_tags=ct,
-        pairs=[_pair(ft, 1, 0, law)],
-        fixed=[
-            BoundarySpec(ntf.FacetSurface(ft, facet_tag(0, BOTTOM)), name="BASE"),
-            *_rollers(ft, [0, 1]),
-        ],
-        steps=steps,
-        heading="C3D10 punch (6-node faces), EXPONENTIAL law, pressure, 2 increments",
-    )
+    _write(directory, "tet10_exponential", V, ct, ft, [_pair(ft, 1, 0, law)], steps,
+           "C3D10 punch (6-node faces), EXPONENTIAL law, pressure, 2 increments")  # fmt: skip
 
+
+def _tet_nlgeom_pressure(directory: Path) -> None:
+    V, ct, ft = blocks([LOWER, PUNCH], cell="tetrahedron")
+    output = OutputSpec(node_print=("U", "RF"), contact_print=_OUTPUT.contact_print)
+    steps = [StepSpec(increments=2, nlgeom=True, field_controls=TIGHT_FIELD_CONTROLS, output=output,
+                      pressures=[PressureSpec(_top(ft, 1), 30.0)])]  # fmt: skip
+    _write(directory, "tet_nlgeom_pressure", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D4 punch, LINEAR law, NLGEOM with a follower pressure of 30, 2 increments")
+
+
+#: ccx's converged NLGEOM increments are not in equilibrium with the follower pressure on their own
+#: final faces (measured below): the displacements agree to a few 1e-6 only.
+NLGEOM_PRESSURE_QUIRK = (
+    "ccx 2.20 with NLGEOM and *DLOAD: at its converged state the reactions differ from the "
+    "follower pressure integrated over ccx's own final faces by about 1e-6 (relative, measured on "
+    "this deck: -8.0e-7 at t=0.5, +1.1e-6 at t=1), while dolfinx_ntf balances them to 2e-8; "
+    "displacements therefore agree to 2e-6 instead of 1e-6"
+)
 
 CASES: tuple[Case, ...] = (
-    Case(
-        "hex_linear_pressure",
-        "C3D8, LINEAR, face slave, pressure, 3 increments",
-        _hex_linear_pressure,
-    ),
-    Case(
-        "tet_exponential_nlgeom",
-        "C3D4, EXPONENTIAL, initial gap, NLGEOM, amplitude, 4 increments",
-        _tet_exponential_nlgeom,
-    ),
-    Case(
-        "hex_tabular_nodal",
-        "C3D8, TABULAR, node-based slave, prescribed displacement, 2 increments",
-        _hex_tabular_nodal,
-    ),
-    Case(
-        "hex_curved_master",
-        "C3D8, LINEAR, curved master, NLGEOM, growing contact zone, 4 increments",
-        _hex_curved_master,
-    ),
-    Case(
-        "hex_two_pairs",
-        "C3D8, two pairs (LINEAR + EXPONENTIAL), point loads, 3 increments",
-        _hex_two_pairs,
-    ),
-    Case(
-        "tet_linear_two_steps",
-        "C3D4, LINEAR, two steps (small strain, then NLGEOM), 2+2 increments",
-        _tet_linear_two_steps,
-    ),
-    Case(
-        "tet10_exponential",
-        "C3D10, EXPONENTIAL, tri6 faces, pressure, 2 increments",
-        _tet10_exponential,
-    ),
+    Case("hex_linear_pressure", "C3D8, LINEAR, face slave, pressure, 3 increments",
+         _hex_linear_pressure),
+    Case("tet_exponential_nlgeom", "C3D4, EXPONENTIAL, initial gap, NLGEOM, prescribed "
+         "displacement with an amplitude, 4 increments", _tet_exponential_nlgeom),
+    Case("hex_tabular_nodal", "C3D8, TABULAR, node-based slave, prescribed displacement, "
+         "4 increments", _hex_tabular_nodal),
+    Case("hex_curved_master", "C3D8, LINEAR, curved master, NLGEOM, contact zone growing "
+         "3 -> 20 nodes, 4 increments", _hex_curved_master),
+    Case("hex_two_pairs", "C3D8, two pairs (LINEAR + EXPONENTIAL), point loads, 3 increments",
+         _hex_two_pairs),
+    Case("tet_linear_two_steps", "C3D4, LINEAR, two steps (pressure 10, then 30), 2 + 2 "
+         "increments", _tet_linear_two_steps),
+    Case("tet10_exponential", "C3D10, EXPONENTIAL, tri6 faces, pressure, 2 increments",
+         _tet10_exponential),
+    Case("tet_nlgeom_pressure", "C3D4, LINEAR, NLGEOM follower pressure, 2 increments",
+         _tet_nlgeom_pressure, quirk=NLGEOM_PRESSURE_QUIRK, tolerances={"displacement": 3e-6}),
 )
 """Every cross-validation deck."""
+
+
+def pressure_balance(deck_path: Path, dat_path: Path) -> list[tuple[float, float]]:
+    """Equilibrium of a one-step deck with vertical ``*DLOAD`` pressures and a clamped ``BASE``.
+
+    For every time of the ``.dat`` file: ``sum of RF_z over BASE / (p A_z) - 1``, where ``p A_z`` is
+    the pressure (ramped linearly over the step) integrated over the loaded faces in the printed
+    final configuration (C3D4: flat triangles, exact). Rollers carry no vertical force, so a
+    converged follower-load solution gives 0 up to the printed digits.
+    """
+    from dolfinx_ntf.calculix.dat import read_dat
+    from dolfinx_ntf.calculix.deck import read_deck
+
+    deck = read_deck(deck_path)
+    (step,) = deck.steps
+    block = next(iter(deck.elements.values()))
+    order = np.argsort(block.ids)
+    faces, values = [], []
+    for load in step.dloads:  # a handful of cards
+        rows = order[np.searchsorted(block.ids, load.elements, sorter=order)]
+        faces.append(block.connectivity[rows][:, block.type.faces[load.face - 1, :3]])
+        values.append(np.full(load.elements.size, load.value))
+    faces, values = np.concatenate(faces), np.concatenate(values)
+    blocks = read_dat(dat_path)
+    balance = []
+    for u in (b for b in blocks if b.name == "U"):
+        rf = next(b for b in blocks if b.name == "RF" and b.time == u.time)
+        x = deck.node_coords.copy()
+        x[deck.node_index(u.labels)] += u.values
+        corners = x[deck.node_index(faces)]
+        area = 0.5 * np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        fraction = u.time / step.static.period
+        load_z = -np.sum(fraction * values * area[:, 2])  # pressure pushes against the normal
+        base = np.isin(rf.labels, deck.nsets["BASE"])
+        balance.append((u.time, float(-rf.values[base, 2].sum() / load_z - 1.0)))
+    return balance
