@@ -1,9 +1,10 @@
 """Insertion of spring elements into dolfinx's PETSc Jacobian and residual (dolfinx glue).
 
 Contact couples nodes that share no cell, so the bulk form's sparsity pattern lacks those entries. Letting PETSc
-allocate them on the fly costs minutes on large meshes; instead :class:`ContactAssembler` creates matrices whose
-pattern is the bulk pattern plus the needed contact couplings, and when new couplings appear inside one Newton solve
-(the matrix is then bound to the solver) merges a small contact matrix into the Jacobian, which grows its pattern.
+allocate them on the fly costs minutes on large meshes; instead :class:`ContactAssembler` grows the pattern of
+dolfinx's bulk matrix by merging a small contact matrix (``MatAXPY`` with ``DIFFERENT_NONZERO_PATTERN``, done in C):
+once when a matrix is created, and again inside a Newton solve when a re-pairing brings new couplings (the same
+Mat object grows, so the solver bound to it keeps working).
 
 Values are inserted with *global* unblocked indices (``3 * global_node + component``); rows and columns of Dirichlet
 dofs get index -1, which PETSc ignores, so Dirichlet rows stay exactly as dolfinx makes them.
@@ -71,8 +72,6 @@ class ContactAssembler:
             dofs, _ = bc.dof_indices()
             self._global_dof_masked[dofs] = -1
         self._pattern_keys = np.empty(0, dtype=np.int64)
-        self._lgmap = PETSc.LGMap().create(self._global_node.astype(PETSc.IntType), bsize=self._bs,
-                                           comm=self._comm)
         self.matrix_rebuilds = 0
         self.pattern_merges = 0
 
@@ -88,96 +87,85 @@ class ContactAssembler:
         return np.unique(np.concatenate(keys))
 
     def has_pattern(self, blocks: typing.Sequence[SpringBlocks]) -> bool:
-        """Whether the current matrix pattern holds every coupling of ``blocks``."""
+        """Whether the current matrix pattern holds every coupling of ``blocks``.
+
+        Only contact couplings are tracked; couplings the bulk form also has count as missing until merged,
+        which costs one merge at most.
+        """
         keys = self._coupling_keys(blocks)
         return bool(np.all(np.isin(keys, self._pattern_keys, assume_unique=True)))
 
     def create_matrix(self, blocks: typing.Sequence[SpringBlocks] = ()) -> PETSc.Mat:
         """A new matrix with the bulk pattern plus the couplings of ``blocks`` (and of earlier matrices)."""
+        A = dolfinx.fem.petsc.create_matrix(self._form)
+        # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused preallocation.
         sp = dolfinx.fem.create_sparsity_pattern(self._form)
         sp.assemble()
         graph = sp.graph
-        rows = np.repeat(np.arange(graph.num_nodes, dtype=np.int64), np.diff(graph.offsets))
-        bulk = self._global_node[rows] * self._num_global + self._global_node[graph.array]
+        A.setValuesBlockedLocalCSR(graph.offsets.astype(PETSc.IntType), graph.array.astype(PETSc.IntType),
+                                   np.zeros(graph.array.size * self._bs**2))
         keys = np.union1d(self._coupling_keys(blocks), self._pattern_keys)
-        owned_first, owned_last = self._global_node[0], self._global_node[0] + self._num_owned
-        keys = keys[(keys // self._num_global >= owned_first) & (keys // self._num_global < owned_last)]
-        self._pattern_keys = np.union1d(keys, bulk)
-        csr = self._unblocked_pattern(self._pattern_keys, owned_first)
-        n_local, n_global = self._bs * self._num_owned, self._bs * self._num_global
-        A = PETSc.Mat().createAIJ(((n_local, n_global), (n_local, n_global)), bsize=self._bs,
-                                  csr=(csr.indptr.astype(PETSc.IntType), csr.indices.astype(PETSc.IntType)),
-                                  comm=self._comm)
-        A.setLGMap(self._lgmap, self._lgmap)
+        self._pattern_keys = np.empty(0, dtype=np.int64)
+        self._merge(A, keys)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
-        A.assemble()
         self.matrix_rebuilds += 1
         return A
 
-    def _unblocked_pattern(self, keys: np.ndarray, first_row: int) -> scipy.sparse.csr_matrix:
-        """Unblocked CSR (owned rows, global columns) of node couplings ``keys``."""
+    def _merge(self, A: PETSc.Mat, keys: np.ndarray,
+               blocks: typing.Sequence[SpringBlocks] = ()) -> None:
+        """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values, through a separate matrix
+        merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a solver bound to it keeps working)."""
         bs = self._bs
-        rows, cols = keys // self._num_global - first_row, keys % self._num_global
-        block = scipy.sparse.csr_matrix((np.ones(keys.size, dtype=np.int8), (rows, cols)),
+        first = self._global_node[0] if self._num_owned else 0
+        rows = keys // self._num_global
+        owned = (rows >= first) & (rows < first + self._num_owned)
+        if not np.all(owned):
+            raise NotImplementedError("contact couplings of rows owned by another process (MPI) are not "
+                                      "supported yet")
+        block = scipy.sparse.csr_matrix((np.ones(keys.size, dtype=np.int8), (rows - first, keys % self._num_global)),
                                         shape=(self._num_owned, self._num_global))
         pattern = scipy.sparse.kron(block, np.ones((bs, bs), dtype=np.int8), format="csr")
         pattern.sort_indices()
-        return pattern
+        n_local, n_global = bs * self._num_owned, bs * self._num_global
+        C = PETSc.Mat().createAIJ(((n_local, n_global), (n_local, n_global)), bsize=bs,
+                                  csr=(pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType)),
+                                  comm=self._comm)
+        self._set_values(C, blocks)
+        C.assemble()
+        A.assemble()
+        A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        C.destroy()
+        if A.getBlockSize() != bs or A.getLGMap()[0].getBlockSize() != bs:
+            raise RuntimeError("merging the contact pattern lost the matrix block structure")
+        self._pattern_keys = np.union1d(self._pattern_keys, keys)
 
     # -- values --------------------------------------------------------------------------------------------
 
-    def _triplets(self, blocks: typing.Sequence[SpringBlocks]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        rows, cols, vals = [], [], []
+    def _set_values(self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks]) -> None:
         for blk in blocks:
             if blk.values is None or blk.row_nodes.shape[0] == 0:
                 continue
-            r = self._global_dof_masked[_unblocked(blk.row_nodes, self._bs)]
-            c = self._global_dof_masked[_unblocked(blk.col_nodes, self._bs)]
-            rr = np.broadcast_to(r[:, :, None], blk.values.shape)
-            cc = np.broadcast_to(c[:, None, :], blk.values.shape)
-            keep = (rr >= 0) & (cc >= 0)
-            rows.append(rr[keep])
-            cols.append(cc[keep])
-            vals.append(blk.values[keep])
-        if not rows:
-            return (np.empty(0, dtype=np.int64),) * 2 + (np.empty(0),)
-        return np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+            rows = self._global_dof_masked[_unblocked(blk.row_nodes, self._bs)].astype(PETSc.IntType)
+            cols = self._global_dof_masked[_unblocked(blk.col_nodes, self._bs)].astype(PETSc.IntType)
+            A.setValuesRCV(rows, cols, blk.values, addv=PETSc.InsertMode.ADD_VALUES)
 
-    def add_to_matrix(self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks]) -> None:
+    def add_to_matrix(self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks], *,
+                      check_pattern: bool = True) -> None:
         """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings are missing.
 
-        ``A`` is left unassembled when values were set directly; call ``A.assemble()`` afterwards.
+        Args:
+            A: The matrix; call ``A.assemble()`` afterwards.
+            blocks: Element blocks; Dirichlet rows and columns are skipped.
+            check_pattern: Check for missing couplings (skip when the pattern was checked for these springs).
         """
-        rows, cols, vals = self._triplets(blocks)
-        n = self._bs * self._num_global
-        coo = scipy.sparse.coo_matrix((vals, (rows, cols)), shape=(n, n)).tocsr()
-        coo.sum_duplicates()
-        row_ids = np.flatnonzero(np.diff(coo.indptr))
-        indptr = np.concatenate([[0], coo.indptr[row_ids + 1]]).astype(PETSc.IntType)
-        if not self.has_pattern(blocks):
-            self._merge(A, row_ids, indptr, coo, blocks)
-            return
-        A.setValuesIJV(indptr, coo.indices.astype(PETSc.IntType), coo.data, addv=PETSc.InsertMode.ADD_VALUES,
-                       rowmap=row_ids.astype(PETSc.IntType))
-
-    def _merge(self, A: PETSc.Mat, row_ids: np.ndarray, indptr: np.ndarray, coo: scipy.sparse.csr_matrix,
-               blocks: typing.Sequence[SpringBlocks]) -> None:
-        """Add the values through a separate matrix merged with DIFFERENT_NONZERO_PATTERN (pattern grows)."""
-        A.assemble()
-        owned = (row_ids >= self._global_dof[0]) & (row_ids < self._global_dof[0] + self._bs * self._num_owned)
-        if not np.all(owned):
-            raise NotImplementedError("merging contact couplings of rows owned by another process")
-        n_local, n_global = A.getSizes()[0]
-        local = scipy.sparse.csr_matrix((coo.data, coo.indices, coo.indptr), shape=coo.shape)[
-            self._global_dof[0]:self._global_dof[0] + n_local]
-        C = PETSc.Mat().createAIJ(((n_local, n_global), (n_local, n_global)),
-                                  csr=(local.indptr.astype(PETSc.IntType), local.indices.astype(PETSc.IntType),
-                                       local.data), comm=self._comm)
-        C.assemble()
-        A.axpy(1.0, C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        C.destroy()
-        self._pattern_keys = np.union1d(self._pattern_keys, self._coupling_keys(blocks))
-        self.pattern_merges += 1
+        if check_pattern:
+            keys = self._coupling_keys(blocks)
+            missing = ~np.isin(keys, self._pattern_keys, assume_unique=True)
+            if np.any(missing):
+                self._merge(A, keys, blocks)
+                self.pattern_merges += 1
+                return
+        self._set_values(A, blocks)
 
     def add_to_vector(self, b: PETSc.Vec, blocks: typing.Sequence[SpringBlocks]) -> None:
         """Add the blocks' residual contributions to ``b`` (global indices; Dirichlet rows skipped).

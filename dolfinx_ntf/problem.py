@@ -130,6 +130,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.iteration = 0
         self.count_changed = False
         self.pairings = 0
+        self._pattern_checked = False
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the residual.
@@ -193,6 +194,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         for state in self.states:
             self._pair_one(state, coords, record_overlap)
         self.pairings += 1
+        self._pattern_checked = False
         count = self.num_springs
         logger.info(" Number of contact spring elements=%d", count)
         for callback in self.pairing_callbacks:
@@ -218,7 +220,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         law = state.pair.interaction.law
         ft = state.master_faces.face_type
         evaluation = evaluate_springs(ft, coords[state.master_faces.faces[face[found]]], points[found],
-                                      areas[found], law, tangent=False)
+                                      areas[found], law, tangent=False, xi0=self._previous_xi(state, found, face))
         gap = evaluation.gap
         if record_overlap:
             state.overlap[found] = np.minimum(gap, 0.0)
@@ -229,6 +231,19 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         state.spring_face = face[found][create].astype(np.int64)
         state.spring_area = areas[found][create]  # 0 = no slave face: springs.py applies the fallback
         state.xi = evaluation.xi[create]
+
+    @staticmethod
+    def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:
+        """Projection start points: the last projection where a node keeps its face, else the face centre."""
+        xi0 = np.tile(state.master_faces.face_type.center, (found.size, 1))
+        if state.xi is not None and state.num_springs:
+            previous_face = np.full(state.slave.nodes.size, -1, dtype=np.int64)
+            previous_face[state.spring_slave] = state.spring_face
+            previous_xi = np.zeros((state.slave.nodes.size, 2))
+            previous_xi[state.spring_slave] = state.xi
+            same = previous_face[found] == face[found]
+            xi0[same] = previous_xi[found[same]]
+        return xi0
 
     def _gap_shift(self, state: PairState, slave_index: np.ndarray) -> np.ndarray | float:
         """g0 (1 - tau) in static steps, 0 otherwise (spec §3.6)."""
@@ -285,6 +300,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             if self.matrix is not None:
                 self.matrix.destroy()
             self.matrix = self.assembler.create_matrix(blocks)
+        self._pattern_checked = True
         return self.matrix
 
     # -- dolfinx callbacks --------------------------------------------------------------------------------
@@ -317,5 +333,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         dolfinx.fem.petsc.assemble_matrix(A, self.a, self.bcs)
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
         A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
-        self.assembler.add_to_matrix(A, self._blocks)
+        self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
+        self._pattern_checked = True
         A.assemble()
