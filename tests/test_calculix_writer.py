@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
+from mpi4py import MPI
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -27,7 +29,7 @@ from dolfinx_ntf.calculix.writer import (
 )
 from dolfinx_ntf.surfaces import boundary_faces
 
-pytestmark = pytest.mark.serial
+serial = pytest.mark.serial
 
 E1, NU1, E2, NU2 = 1000.0, 0.3, 2000.0, 0.25
 UPPER_BOX = ((0.1, 0.15, 0.0), (0.6, 0.6, 0.5), (3, 3, 2))
@@ -84,6 +86,7 @@ def _ids_of_facets(V, numbering, ft, tag):
     return numbering.node_ids[faces.faces]
 
 
+@serial
 @pytest.mark.parametrize("mirror", [False, True])
 @pytest.mark.parametrize("cell,degree,etype", CASES)
 def test_round_trip_mesh_and_materials(tmp_path, cell, degree, etype, mirror):
@@ -138,6 +141,7 @@ def test_round_trip_mesh_and_materials(tmp_path, cell, degree, etype, mirror):
     assert deck.heading == "writer test\nsecond line"
 
 
+@serial
 @pytest.mark.parametrize("mirror", [False, True])
 @pytest.mark.parametrize("cell,degree,etype", CASES)
 def test_round_trip_contact_loads_steps(tmp_path, cell, degree, etype, mirror):
@@ -213,6 +217,7 @@ def test_round_trip_contact_loads_steps(tmp_path, cell, degree, etype, mirror):
     ]
 
 
+@serial
 def test_node_based_slave_and_laws(tmp_path):
     V, ct, ft = _space("hexahedron", 1)
     numbering, deck = _write_full(tmp_path / "job.inp", V, ct, ft, nodal_slave=True)
@@ -245,6 +250,7 @@ def test_node_based_slave_and_laws(tmp_path):
     assert deck.steps[0].static.direct and deck.steps[0].static.initial_increment == 1.0
 
 
+@serial
 def test_reals_fit_ccx_fields():
     for value in (0.1, -2.7755575615628914e-17, 1 / 3, -1e-300 / 3, 123456789.123456789, 0.0):
         text = _real(value, "x")
@@ -255,6 +261,7 @@ def test_reals_fit_ccx_fields():
         _real(float("nan"), "x")
 
 
+@serial
 def test_bad_input(tmp_path):
     V, ct, ft = _space("hexahedron", 1)
     path = tmp_path / "bad.inp"
@@ -392,6 +399,7 @@ def test_bad_input(tmp_path):
 # ----------------------------------------------------------------------------- with ccx
 
 
+@serial
 @pytest.mark.ccx
 @pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
 @pytest.mark.parametrize("mirror", [False, True])
@@ -433,3 +441,51 @@ def test_ccx_runs_written_deck_pressure_resultant(tmp_path, cell, degree, etype,
     assert rf.values.shape[0] == dolfinx.fem.locate_dofs_topological(Vs, 2, tags.find(1)).size
     total = rf.values.sum(axis=0)
     np.testing.assert_allclose(total, [0.0, 0.0, pressure * 1.0], atol=1e-6)
+
+
+@pytest.mark.mpi
+def test_write_inp_is_collective(tmp_path):
+    """Under MPI every rank passes its local part and rank 0 writes one deck with global numbers."""
+    comm = MPI.COMM_WORLD
+    path = Path(comm.bcast(str(tmp_path), root=0)) / "parallel.inp"
+    V, ct, ft = _space("tetrahedron", 2)
+    mesh = V.mesh
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E1)),
+    )
+    top = ntf.FacetSurface(ft, UPPER_TOP)
+    numbering = write_inp(
+        path,
+        displacement_space=V,
+        materials={LOWER: (E1, NU1), UPPER: (E2, NU2)},
+        cell_tags=ct,
+        pairs=[pair],
+        fixed=[BoundarySpec(ntf.FacetSurface(ft, LOWER_BOTTOM))],
+        steps=[StepSpec(pressures=[PressureSpec(top, 1.0)])],
+    )
+    comm.barrier()
+    deck = read_deck(path)
+    # Every local node (owned and ghost) is in the deck, at its coordinates; sizes are global.
+    X = V.tabulate_dof_coordinates().reshape(-1, 3)
+    np.testing.assert_allclose(deck.node_coords[deck.node_index(numbering.node_ids)], X, atol=1e-14)
+    assert deck.node_ids.size == V.dofmap.index_map.size_global
+    block = deck.elements["C3D10"]
+    assert block.ids.size == mesh.topology.index_map(3).size_global
+    owned = mesh.topology.index_map(3).size_local
+    cell_dofs = V.dofmap.list.array.reshape(-1, 10)[:owned]
+    order = np.argsort(block.ids)
+    rows = order[np.searchsorted(block.ids, numbering.element_ids[:owned], sorter=order)]
+    np.testing.assert_array_equal(
+        np.sort(block.connectivity[rows], axis=1), np.sort(numbering.node_ids[cell_dofs], axis=1)
+    )
+    # Surfaces: one face per tagged facet of the whole mesh, with the facet's nodes.
+    for name, tag in (("SLAVE1", UPPER_BOTTOM), ("MASTER1", LOWER_TOP)):
+        faces = boundary_faces(V, ft.find(tag))
+        mine = faces.facets < mesh.topology.index_map(2).size_local
+        local = np.sort(numbering.node_ids[faces.faces[mine]], axis=1)
+        everything = np.concatenate(comm.allgather(local))
+        got = np.sort(face_nodes(deck, name), axis=1)
+        assert got.shape == everything.shape
+        np.testing.assert_array_equal(np.unique(got, axis=0), np.unique(everything, axis=0))
