@@ -64,7 +64,9 @@ def _write_full(path, V, ct, ft, *, nodal_slave: bool = False):
             nlgeom=True,
             amplitude=AmplitudeSpec((0.0, 1.0), (0.0, 2.0), name="ramp"),
             field_controls=TIGHT_FIELD_CONTROLS,
-            output=OutputSpec(node_print=("U", "RF"), el_print=("S",)),
+            output=OutputSpec(
+                node_print=("U", "RF"), el_print=("S",), contact_elements=True, frequency=2
+            ),
         ),
         StepSpec(period=2.0, increments=None, initial_increment=0.5, max_increment=1.0),
     ]
@@ -210,6 +212,7 @@ def test_round_trip_contact_loads_steps(tmp_path, cell, degree, etype, mirror):
     controls = step1.field_controls()
     for name, value in TIGHT_FIELD_CONTROLS.items():
         assert controls[name] == value
+    assert step1.contact_elements and step1.output_frequency == 2
     assert [(p.kind, p.keys) for p in step1.prints] == [
         ("NODE", ("U", "RF")),
         ("EL", ("S",)),

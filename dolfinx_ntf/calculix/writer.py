@@ -552,6 +552,16 @@ def write_inp(
         ValueError: Unsupported space or law, bad material, missing tags, empty node sets, bad
             steps.
         NotImplementedError: A pair with friction.
+
+    Example:
+        A punch (cell tag 2) pressed on a block (tag 1) in four fixed increments, ccx's
+        tolerances tightened to compare with ``run_job(..., tight=True)``::
+
+            write_inp("job.inp", displacement_space=V, materials={1: (E, nu), 2: (E, nu)},
+                      cell_tags=cell_tags, pairs=[pair],
+                      fixed=[BoundarySpec(FacetSurface(facet_tags, BOTTOM))],
+                      steps=[StepSpec(pressures=[PressureSpec(FacetSurface(facet_tags, TOP), 10.0)],
+                                      increments=4, field_controls=TIGHT_FIELD_CONTROLS)])
     """
     V = displacement_space
     md = _mesh_data(V)
