@@ -162,6 +162,29 @@ def test_surfaces_become_facet_tags_and_vertex_sets():
     np.testing.assert_allclose(vertex_coords[:, 2], 0.5)
 
 
+@pytest.mark.parametrize(
+    "behavior, expected",
+    [
+        ("EXPONENTIAL\n1.0e-3, 0.5", "ExponentialLaw(c0=0.001, p0=0.5)"),
+        ("LINEAR\n1.0e7, 1.0, 1.0e-3", "LinearLaw(slope=10000000.0, tension=1.0, c0=0.001)"),
+        ("LINEAR\n, 2.0", "LinearLaw(slope=10500000.0, tension=2.0, c0=0.001)"),
+        ("HARD", "LinearLaw(slope=10500000.0, tension=3.0, c0=0.001)"),
+        (
+            "TABULAR\n0.0, 0.0\n10.0, 1.0e-3",
+            "TabularLaw(pressures=[0.0, 10.0], overclosures=[0.0, 0.001])",
+        ),
+    ],
+)
+def test_contact_laws_from_surface_behavior(tmp_path, behavior, expected):
+    """ccx defaults from the first *ELASTIC (E = 210000): K = 50 E, sigma_inf = E / 70000."""
+    text = (DATA / "two_cubes.inp").read_text()
+    text = text.replace("LINEAR\n1.0e7, 1.0, 1.0e-3", behavior)
+    (tmp_path / "law.inp").write_text(text)
+    model = build_model(read_deck(tmp_path / "law.inp"), COMM)
+    assert repr(model.pairs[0].interaction.law) == expected
+    assert model.pairs[0].small_sliding is False and model.pairs[0].interaction.friction is None
+
+
 # ----------------------------------------------------------------------------- load rules
 
 
@@ -314,6 +337,11 @@ def test_two_cubes_cli_matches_ccx_output(tmp_path, capsys):
             a.values, b.values, atol=2e-6 * scale, err_msg=f"{b.name} {b.time}"
         )
     assert (tmp_path / "two_cubes.xdmf").is_file() and (tmp_path / "two_cubes.h5").is_file()
+    # without CONTACT ELEMENTS a stale .cel goes, as ccx deletes it at start
+    deck = (tmp_path / "two_cubes.inp").read_text().replace("*NODE FILE, CONTACT ELEMENTS\nU\n", "")
+    (tmp_path / "two_cubes.inp").write_text(deck)
+    result = run_job("two_cubes", tmp_path, comm=COMM, progress=False)
+    assert result.cel is None and not (tmp_path / "two_cubes.cel").exists()
 
 
 def test_contact_blocks_end_to_end(tmp_path):

@@ -299,9 +299,12 @@ class _Job:
         self.result.dat = directory / f"{jobname}.dat"
         write_dat(self.result.dat, [])
         self.cel: ContactElementsFile | None = None
+        cel = directory / f"{jobname}.cel"
         if any(step.contact_elements for step in deck.steps):
-            self.result.cel = directory / f"{jobname}.cel"
-            self.cel = ContactElementsFile(self.result.cel, deck.num_elements)
+            self.result.cel = cel
+            self.cel = ContactElementsFile(cel, deck.num_elements)
+        elif cel.exists():  # ccx deletes the file at program start
+            cel.unlink()
         self.counters = _Counters()
         self._cel_overflow = False
         self._pending = None

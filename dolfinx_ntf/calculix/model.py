@@ -359,50 +359,18 @@ class CcxContactProblem(ContactProblem):
 class _BulkProblem(ContactProblem):
     """A :class:`ContactProblem` without contact pairs (decks without ``*CONTACT PAIR``).
 
-    ``ContactProblem`` insists on at least one pair; with none, every contact step is a no-op, so
-    this sets up the same state without resolving pairs.
+    ``ContactProblem`` insists on at least one pair. This runs its constructor (so every attribute the
+    core sets exists) with one placeholder pair that is never resolved, then drops it: pairing and
+    spring evaluation are then no-ops and only the bulk residual remains.
     """
 
-    def __init__(
-        self,
-        F,
-        u,
-        bcs,
-        *,
-        form_compiler_params: dict | None = None,
-        jit_params: dict | None = None,
-        **_options,
-    ) -> None:
-        from dolfinx_ntf.assembly import ContactAssembler
-        from dolfinx_ntf.surfaces import reference_coordinates
-
-        dolfinx.fem.petsc.NonlinearProblem.__init__(
-            self,
-            F,
-            u,
-            list(bcs),
-            None,
-            form_compiler_params=form_compiler_params or {},
-            jit_params=jit_params or {},
-        )
-        self.u = u
-        self.symmetric = False
-        self.linearize_area = False
-        self.max_depth = None
-        self.walk_from_previous_face = False
-        self._reference = reference_coordinates(u.function_space)
-        self.assembler = ContactAssembler(u.function_space, self.a, self.bcs)
+    def __init__(self, F, u, bcs, **options) -> None:
+        placeholder = ContactPair(slave=None, master=None, interaction=None, small_sliding=True)
+        super().__init__(F, u, [placeholder], bcs, **options)
         self.states = []
-        self.small_sliding = True
-        self.time_fraction = 1.0
-        self.static = True
-        self.iteration = 0
-        self.count_changed = False
-        self.pairings = 0
-        self._first_pairing_done = False
-        self.matrix = None
-        self.nodal_loads = None
-        self.pairing_callbacks = []
+
+    def _resolve(self, index: int, pair: ContactPair):
+        return None
 
 
 # ----------------------------------------------------------------------------- building
