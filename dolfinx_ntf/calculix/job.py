@@ -634,8 +634,7 @@ def run_job(
         directory: Directory of the deck; results are written there.
         comm: Communicator (one process only for now).
         tight: Converge every increment to a largest residual of 1e-10 times the average element
-        force
-            (ccx's criterion with ``R_n = R_p = 1e-10``) instead of the deck's controls.
+            force (ccx's criterion with ``R_n = R_p = 1e-10``) instead of the deck's controls.
         progress: Print ccx-like progress (``log_progress``).
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...).
         petsc_options: Linear solver options (default: MUMPS LU).

@@ -83,8 +83,7 @@ _DOLFINX_CELLS = {
     "C3D10": ("tetrahedron", 2),
 }
 
-#: Volume quadrature degree giving ccx's integration rule (C3D8 2x2x2 Gauss, C3D4 1 point, C3D10 4
-#: points).
+#: Volume quadrature degree of ccx's rules: C3D8 2x2x2 Gauss, C3D4 1 point, C3D10 4 points.
 _QUADRATURE_DEGREE = {"C3D4": 1, "C3D8": 2, "C3D10": 2}
 #: Face quadrature degree of pressure loads (2x2 Gauss on quads, 3 points on triangles).
 _FACET_QUADRATURE_DEGREE = 2
@@ -133,8 +132,7 @@ class StepLoads:
         cload_dofs: ``(K,)`` unrolled dofs of ``V`` carrying a concentrated force in this step.
         cload: Force history of those dofs.
         pressure: History of each pressure group's pressure (see ``CalculixModel.pressures``).
-        bc_dofs: ``(B,)`` unrolled dofs of ``V`` with a prescribed displacement in this step
-        (sorted).
+        bc_dofs: ``(B,)`` sorted unrolled dofs of ``V`` with a prescribed displacement.
         bc: Prescribed-value history; ``bc.start`` is filled by :meth:`CalculixModel.begin_step`.
     """
 
@@ -161,8 +159,7 @@ class CalculixModel:
         element_type: The deck's element type.
         mesh, V, u: Mesh, vector displacement space (degree of the element) and displacement.
         node_dof: ``(N,)`` local block dof of each deck node (rows of ``deck.node_ids``), -1 for
-        nodes
-            in no element.
+            nodes in no element.
         dof_node: ccx node number of each local block dof.
         node_vertex: ``(N,)`` local mesh vertex of each deck node, -1 for midside or unused nodes.
         element_cell: ``(E,)`` local cell of each element (rows of the deck's element block).
@@ -170,13 +167,11 @@ class CalculixModel:
         surfaces: dolfinx surface of each ccx surface name.
         surface_tags: facet tags (value 1) of each element-face surface.
         surface_faces: per element-face surface, ``(facets, nodes)``: its sorted local facets and
-        their
-            ccx node numbers in ccx face order (for contact-element output).
+            their ccx node numbers in ccx face order (for contact-element output).
         pairs: contact pairs in deck order.
         mu, lmbda: Lamé parameters per cell (DG0).
         nlgeom: Constant switching the kinematics (0 small strain, 1 St.Venant-Kirchhoff) when the
-        deck has
-            both kinds of steps, else None (the forms then hold one kind only).
+            deck has both kinds of steps, else None (the forms then hold one kind only).
         dx: Volume measure with ccx's quadrature.
         first_piola: First Piola-Kirchhoff stress (the small-strain stress when ``nlgeom`` is 0).
         cauchy: Cauchy stress.
@@ -309,8 +304,7 @@ class CalculixModel:
 
         Args:
             bcs: Initial Dirichlet conditions (usually ``begin_step(0)``).
-            options: Passed to :class:`~dolfinx_ntf.ContactProblem` (``symmetric``,
-            ``jit_params``...).
+            options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_params``).
         """
         if self.pairs:
             problem = CcxContactProblem(self.residual, self.u, self.pairs, bcs, **options)
@@ -359,9 +353,9 @@ class CcxContactProblem(ContactProblem):
 class _BulkProblem(ContactProblem):
     """A :class:`ContactProblem` without contact pairs (decks without ``*CONTACT PAIR``).
 
-    ``ContactProblem`` insists on at least one pair. This runs its constructor (so every attribute the
-    core sets exists) with one placeholder pair that is never resolved, then drops it: pairing and
-    spring evaluation are then no-ops and only the bulk residual remains.
+    ``ContactProblem`` insists on at least one pair. This runs its constructor (so that every
+    attribute the core sets exists) with one placeholder pair that is never resolved, then drops it:
+    pairing and spring evaluation are then no-ops and only the bulk residual remains.
     """
 
     def __init__(self, F, u, bcs, **options) -> None:
@@ -813,28 +807,20 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
     return steps, names, pressure_tags, int(unique.shape[0])
 
 
-def build_model(
-    deck: Deck,
-    comm: MPI.Comm = MPI.COMM_WORLD,
-    *,
-    form_compiler_params: dict | None = None,
-    jit_params: dict | None = None,
-) -> CalculixModel:
+def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     """Build the dolfinx model of a parsed CalculiX deck (collective).
 
     Args:
         deck: The deck (``read_deck``).
         comm: Communicator; only one process is supported for now.
-        form_compiler_params, jit_params: Unused here; kept for symmetry with the problem options.
 
     Returns:
         The :class:`CalculixModel`.
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
-        NotImplementedError: features not supported yet (friction, ADJUST, *MODEL CHANGE, parallel
-        runs...),
-            naming the keyword and ``file:line``.
+        NotImplementedError: features not supported yet (friction, ADJUST, *MODEL CHANGE,
+            parallel runs...), naming the keyword and ``file:line``.
     """
     if comm.size > 1:
         raise NotImplementedError(
