@@ -67,13 +67,17 @@ class ContactAssembler:
         self._num_global = index_map.size_global
         self._global_node = index_map.local_to_global(np.arange(num_nodes, dtype=np.int32)).astype(np.int64)
         self._global_dof = _unblocked(self._global_node[:, None], self._bs).ravel()
+        self.set_bcs(bcs)
+        self._pattern_keys = np.empty(0, dtype=np.int64)
+        self.matrix_rebuilds = 0
+        self.pattern_merges = 0
+
+    def set_bcs(self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass]) -> None:
+        """Dirichlet conditions whose dofs receive no contact entries."""
         self._global_dof_masked = self._global_dof.copy()
         for bc in bcs:
             dofs, _ = bc.dof_indices()
             self._global_dof_masked[dofs] = -1
-        self._pattern_keys = np.empty(0, dtype=np.int64)
-        self.matrix_rebuilds = 0
-        self.pattern_merges = 0
 
     # -- sparsity ------------------------------------------------------------------------------------------
 

@@ -75,9 +75,9 @@ def _monomial_increments(xi: np.ndarray, dxi: np.ndarray) -> np.ndarray:
     dx, dy = dxi[..., 0], dxi[..., 1]
     zero = np.zeros(np.broadcast(x, dx).shape)
     one = np.ones_like(zero)
-    x1, y1 = x + dx, y + dy
-    xp, yp = (one, x, x * x), (one, y, y * y)
-    xp1, yp1 = (one, x1, x1 * x1), (one, y1, y1 * y1)
+    y1 = y + dy
+    xp = (one, x, x * x)
+    yp1 = (one, y1, y1 * y1)
     dxp = (zero, dx + zero, dx * (2.0 * x + dx))
     dyp = (zero, dy + zero, dy * (2.0 * y + dy))
     # Δ(AB) = ΔA·B' + A·ΔB.

@@ -90,7 +90,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     Args:
         F: The user's UFL residual (any bulk law: small strain, St.Venant-Kirchhoff, neo-Hookean...).
         u: The displacement, a 3D vector Lagrange function (P1 or P2).
-        pairs: Contact pairs.
+        pairs: Contact pairs (none gives a plain nonlinear problem with the same driver and outputs).
         bcs: Dirichlet conditions.
         J: UFL Jacobian (derived from ``F`` when omitted).
         symmetric: Symmetrize the spring matrices like CalculiX's frictionless contact; default is the
@@ -114,8 +114,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         V = u.function_space
         if V.dofmap.index_map_bs != 3 or V.mesh.geometry.dim != 3:
             raise ValueError("ContactProblem needs a 3D vector displacement space (block size 3)")
-        if not pairs:
-            raise ValueError("ContactProblem needs at least one ContactPair")
         self.u = u
         self.symmetric = symmetric
         self.linearize_area = linearize_area
@@ -124,13 +122,14 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._reference = reference_coordinates(V)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
-        self.small_sliding = bool(pairs[-1].small_sliding)
+        self.small_sliding = bool(pairs[-1].small_sliding) if pairs else True
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
         self.static = True
         self.iteration = 0
         self.count_changed = False
         self.pairings = 0
         self._pattern_checked = False
+        self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the residual.
@@ -304,19 +303,20 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return self.matrix
 
     # -- dolfinx callbacks --------------------------------------------------------------------------------
+    #
+    # CalculiX's order (spec §3.1, §6): Newton iteration k >= 2 starts with a re-pairing (k <= 8), assembles and
+    # solves with it, and the convergence check after the update uses that same pairing. dolfinx calls
+    # form -> F -> (convergence check) -> J -> solve, so the re-pairing happens in J, which then re-assembles the
+    # residual vector last given to F (the right-hand side of the coming solve).
 
     def form(self, x: PETSc.Vec) -> None:
-        """Before F and J: update ghosts, re-pair on CalculiX's schedule, evaluate the springs."""
+        """Before F: update ghost values and evaluate the springs of the current pairing."""
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        self.iteration += 1
-        self.count_changed = False
-        if not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION:
-            before = self.num_springs
-            self.count_changed = self.pair() != before
         self._blocks = self.evaluate(tangent=True)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """Assemble the bulk residual plus the spring forces into ``b``."""
+        self._residual_vector = b
         with b.localForm() as b_local:
             b_local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, self.L)
@@ -328,7 +328,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """Assemble the bulk Jacobian plus the spring tangents into ``A``."""
+        """Start Newton iteration ``iteration``: re-pair on schedule (and re-assemble F), assemble the Jacobian."""
+        self.iteration += 1
+        self.count_changed = False
+        if not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION:
+            before = self.num_springs
+            self.count_changed = self.pair() != before
+            self.form(x)
+            if self._residual_vector is not None:
+                self.F(x, self._residual_vector)
         A.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(A, self.a, self.bcs)
         A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
@@ -336,3 +344,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
         self._pattern_checked = True
         A.assemble()
+
+    def set_bcs(self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass]) -> None:
+        """Replace the Dirichlet conditions (e.g. between steps); contact entries skip the new constrained dofs."""
+        self.bcs = list(bcs)
+        self.assembler.set_bcs(self.bcs)

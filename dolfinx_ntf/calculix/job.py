@@ -42,7 +42,6 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
 
-from dolfinx_ntf.assembly import ContactAssembler
 from dolfinx_ntf.output import ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactProblem
 from dolfinx_ntf.solver import (
@@ -198,10 +197,9 @@ class _CcxNewtonSolver(ContactNewtonSolver):
     bulk elements and contact springs, ``q~`` its mean over the updates so far): converged when ``r
     <= c1 q~`` and at least one of ``c <= c2 du``, ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <=
     R_l q~``, ``q <= eps q~``, ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to ``I_P`` updates,
-    ``(R_p, C_n)`` beyond, and ``(eps, C_eps)`` under zero flux (``q <= eps q~``). Like ccx, never
-    before the second update nor right after a re-pairing that changed the number of springs (so
-    ContactNewtonSolver never has to restart dolfinx's loop, and iteration numbers follow ccx's).
-    dolfinx's loop applies the decision through the absolute tolerance on the residual norm.
+    ``(R_p, C_n)`` beyond, and ``(eps, C_eps)`` under zero flux (``q <= eps q~``). The base class adds
+    ccx's other rules (at least two updates, none right after a re-pairing that changed the number of
+    springs).
     """
 
     def __init__(self, comm, problem: ContactProblem, average_force, **options) -> None:
@@ -210,63 +208,41 @@ class _CcxNewtonSolver(ContactNewtonSolver):
         self.relaxation_iteration = 9
         self.increment_start: np.ndarray | None = None
         self._average_force = average_force
-        self._updates = self._checked = 0
-        self._correction = 0.0
-        self.set_update(self._update)
-
-    def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
-        """dolfinx's update ``x -= relaxation dx``; counts updates and keeps ``max |dx|``."""
-        self._updates += 1
-        self._correction = self.relaxation_parameter * dx.norm(PETSc.NormType.NORM_INFINITY)
-        x.axpy(-self.relaxation_parameter, dx)
 
     def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
         """Solve one increment (see :meth:`ContactNewtonSolver.solve`)."""
         self._averages: list[float] = []
         self._largest: list[float] = []
-        self._updates = self._checked = 0
         return super().solve(u)
 
-    def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        super()._residual(x, b)
-        if self._updates == self._checked:  # the increment's start, or a restart of dolfinx's loop
-            self.atol = 0.0
-            return
-        self._checked = self._updates
+    def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
+        """ccx's test after each Newton update (the class docstring); False before the first update."""
+        if self.updates == 0:
+            return False
         controls = self.controls
         average = self._average_force()
         self._averages.append(average)
         mean = float(np.mean(self._averages))
         largest = b.norm(PETSc.NormType.NORM_INFINITY)
         self._largest.append(largest)
-        iteration = self._updates
-        correction = self._correction
+        correction = self.relaxation_parameter * self.last_correction.norm(PETSc.NormType.NORM_INFINITY)
         start = self.increment_start if self.increment_start is not None else x.array
         change = float(np.abs(x.array - start).max(initial=0.0))
         if average <= controls["epsilon"] * mean:
             c1, c2 = controls["epsilon"], controls["C_epsilon"]
         else:
-            c1 = controls["R_n"] if iteration <= self.relaxation_iteration else controls["R_p"]
+            c1 = controls["R_n"] if self.updates <= self.relaxation_iteration else controls["R_p"]
             c2 = controls["C_n"]
         estimate = np.inf
-        if iteration >= 3 and min(self._largest[-3:-1]) > 0:
+        if self.updates >= 3 and min(self._largest[-3:-1]) > 0:
             estimate = largest * correction / min(self._largest[-3:-1])
-        converged = largest <= c1 * mean and (
+        return largest <= c1 * mean and (
             correction <= c2 * change
             or estimate < c2 * change
             or largest <= controls["R_l"] * mean
             or average <= controls["epsilon"] * mean
             or correction < 1e-8
         )
-        # ccx: at least two iterations, and none right after a re-pairing that changed the spring
-        # count
-        converged = converged and iteration >= 2 and not self.problem.count_changed
-        norm = self.residual_norms[-1]
-        if converged:
-            self.atol = 2.0 * norm + 1e-300
-        else:  # the residual part of the test as a norm tolerance, for messages; always below norm
-            equivalent = c1 * mean * norm / largest if largest > 0 else 0.0
-            self.atol = min(equivalent, (1.0 - 1e-9) * norm)
 
 
 # ----------------------------------------------------------------------------- the job
@@ -307,7 +283,6 @@ class _Job:
             cel.unlink()
         self.counters = _Counters()
         self._cel_overflow = False
-        self._pending = None
 
         self.problem = model.create_problem(model.begin_step(0), **problem_options)
         self.problem.pairing_callbacks.append(self._on_pairing)
@@ -400,14 +375,7 @@ class _Job:
         return rows
 
     def _on_pairing(self, problem: ContactProblem) -> None:
-        """Queue this pairing's contact elements for the ``.cel`` file (see :meth:`_flush_pairing`).
-
-        ccx pairs at the start of iterations 1..8 and checks convergence after the update, with that
-        pairing; ContactProblem re-pairs right before each residual evaluation, so the pairing done
-        at the evaluation where Newton stops has no ccx counterpart: a pairing is written once an
-        update follows it.
-        """
-        self._flush_pairing()
+        """Write this pairing's contact elements to the ``.cel`` file (spec §8.4)."""
         step = self.deck.steps[self.counters.step - 1]
         if self.cel is None or not step.contact_elements or self._cel_overflow:
             return
@@ -424,26 +392,15 @@ class _Job:
             self._cel_overflow = True
             return
         dof_node = self.model.dof_node
-        elements = []
         for state, pair in zip(problem.states, self.deck.contact_pairs):
             slaves = dof_node[state.slave.nodes[state.spring_slave]]
             order = np.argsort(slaves, kind="stable")
             faces = self.model.face_nodes_of(
                 pair.master, state.master_faces.facets[state.spring_face]
             )
-            elements.append((faces[order], slaves[order]))
-        self._pending = (problem.iteration, numbers, elements)
-
-    def _flush_pairing(self, *, drop_iteration: int | None = None) -> None:
-        """Write the queued pairing unless made at evaluation ``drop_iteration`` (Newton's last)."""
-        pending, self._pending = self._pending, None
-        if pending is None or pending[0] == drop_iteration:
-            return
-        _, (step, increment, attempt, iteration), elements = pending
-        for faces, slaves in elements:
-            self.cel.write(
-                faces, slaves, step=step, increment=increment, attempt=attempt, iteration=iteration
-            )
+            step_, increment, attempt, iteration = numbers
+            self.cel.write(faces[order], slaves[order], step=step_, increment=increment,
+                           attempt=attempt, iteration=iteration)
 
     # -- steps -------------------------------------------------------------------------------------
 
@@ -455,7 +412,6 @@ class _Job:
             self.result.completed = True
             logger.info("\n Job finished\n")
         except ContactConvergenceError as error:
-            self._flush_pairing()
             message = (
                 f"step {self.counters.step}, increment {self.counters.increment}, attempt "
                 f"{self.counters.attempt}: no convergence: {error}"
@@ -472,8 +428,7 @@ class _Job:
         logger.info("\n STEP %d\n\n Static analysis was selected\n", step.number)
         if index > 0:
             bcs = model.begin_step(index)
-            problem.bcs = bcs
-            problem.assembler = ContactAssembler(model.V, problem.a, bcs)
+            problem.set_bcs(bcs)
         controls = step.field_controls()
         self.solver.controls = {
             k: float(v)
@@ -495,7 +450,6 @@ class _Job:
         minimum = min(max(static.minimum or 0.0, 1e-6 * period), initial)
 
         def set_load(t: float) -> None:
-            self._flush_pairing()
             self.solver.increment_start = model.u.x.array.copy()
             self.counters.attempt += 1
             if self.counters.increment > step.max_increments:
@@ -506,7 +460,6 @@ class _Job:
             model.set_time(index, t)
 
         def on_increment(result: IncrementResult) -> None:
-            self._flush_pairing(drop_iteration=problem.iteration)
             self._converged(index, step, result)
             self.counters.increment += 1
             self.counters.attempt = 0

@@ -39,7 +39,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import ufl
 from mpi4py import MPI
-from petsc4py import PETSc
 
 import dolfinx.cpp.mesh
 import dolfinx.fem
@@ -53,7 +52,7 @@ from dolfinx_ntf.laws import (
     SurfaceInteraction,
     TabularLaw,
 )
-from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION, ContactPair, ContactProblem
+from dolfinx_ntf.problem import ContactPair, ContactProblem
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 
 from .deck import Deck, ElementType, Step
@@ -62,7 +61,6 @@ __all__ = [
     "CELL_PERMUTATIONS",
     "INTEGRATION_POINTS",
     "CalculixModel",
-    "CcxContactProblem",
     "StepLoads",
     "build_model",
 ]
@@ -300,71 +298,15 @@ class CalculixModel:
     def create_problem(
         self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (), **options
     ) -> ContactProblem:
-        """The :class:`CcxContactProblem` of the deck (bulk only without contact pairs).
+        """The :class:`~dolfinx_ntf.ContactProblem` of the deck (bulk only without contact pairs).
 
         Args:
             bcs: Initial Dirichlet conditions (usually ``begin_step(0)``).
             options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_params``).
         """
-        if self.pairs:
-            problem = CcxContactProblem(self.residual, self.u, self.pairs, bcs, **options)
-        else:
-            problem = _BulkProblem(self.residual, self.u, bcs, **options)
+        problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
         return problem
-
-
-class CcxContactProblem(ContactProblem):
-    """:class:`~dolfinx_ntf.ContactProblem` with ccx's order of re-pairing and convergence check.
-
-    ccx starts iterations 2..8 with a re-pairing at the current iterate, assembles and solves with
-    it, and checks convergence on the residual of that same pairing at the new iterate (spec §3.1,
-    §6). dolfinx evaluates the residual (and checks it) before the Jacobian, so here ``form`` only
-    evaluates the springs of the current pairing, and ``J`` (called only when Newton goes on)
-    re-pairs on ccx's schedule, then re-assembles the residual vector for the linear solve and the
-    matrix. A re-pairing that changes the spring count sets ``count_changed`` until the next check,
-    which must refuse convergence (ccx's rule). Without this order, nodes that flip between master
-    faces at every re-pairing (shared edges, spec §3.2) keep the residual from converging until
-    iteration 9.
-    """
-
-    def form(self, x: PETSc.Vec) -> None:
-        """Before F: update ghosts, count the evaluation, evaluate the current pairing's springs."""
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        self.iteration += 1
-        self._blocks = self.evaluate(tangent=True)
-
-    def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """Assemble the residual (see :meth:`ContactProblem.F`); remember ``b`` for :meth:`J`."""
-        self._residual_vector = b
-        super().F(x, b)
-
-    def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """Start Newton iteration ``iteration``: re-pair (iterations 2..8), residual, Jacobian."""
-        self.count_changed = False
-        if not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION:
-            before = self.num_springs
-            self.count_changed = self.pair() != before
-            self._blocks = self.evaluate(tangent=True)
-            super().F(x, self._residual_vector)
-        super().J(x, A)
-
-
-class _BulkProblem(ContactProblem):
-    """A :class:`ContactProblem` without contact pairs (decks without ``*CONTACT PAIR``).
-
-    ``ContactProblem`` insists on at least one pair. This runs its constructor (so that every
-    attribute the core sets exists) with one placeholder pair that is never resolved, then drops it:
-    pairing and spring evaluation are then no-ops and only the bulk residual remains.
-    """
-
-    def __init__(self, F, u, bcs, **options) -> None:
-        placeholder = ContactPair(slave=None, master=None, interaction=None, small_sliding=True)
-        super().__init__(F, u, [placeholder], bcs, **options)
-        self.states = []
-
-    def _resolve(self, index: int, pair: ContactPair):
-        return None
 
 
 # ----------------------------------------------------------------------------- building
