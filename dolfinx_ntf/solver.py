@@ -156,6 +156,10 @@ class StaticStep:
         initial_increment, min_increment, max_increment: Increment sizes.
         fixed: Use ``initial_increment`` throughout (CalculiX DIRECT).
         predictor: Start each increment from ``u_n + dt v_prev`` like CalculiX (after the pairing).
+        cutback_factor: Increment size factor after a failed attempt.
+        growth_factor, growth_iterations: Like CalculiX (D_D = 1.5, I_G = 4), the increment grows by
+            ``growth_factor`` after two consecutive increments that each converged in at most
+            ``growth_iterations`` iterations.
         on_increment: Called with the :class:`IncrementResult` of each converged increment.
     """
 
@@ -166,6 +170,9 @@ class StaticStep:
     max_increment: float | None = None
     fixed: bool = False
     predictor: bool = True
+    cutback_factor: float = 0.5
+    growth_factor: float = 1.5
+    growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
     results: list[IncrementResult] = field(default_factory=list)
 
@@ -176,8 +183,12 @@ class StaticStep:
         if not (0 < self.min_increment <= self.initial_increment <= max_inc):
             raise ValueError(f"StaticStep: need 0 < min_increment ({self.min_increment}) <= initial_increment "
                              f"({self.initial_increment}) <= max_increment ({max_inc})")
+        if not (0 < self.cutback_factor < 1 and self.growth_factor >= 1):
+            raise ValueError(f"StaticStep: need 0 < cutback_factor ({self.cutback_factor}) < 1 <= growth_factor "
+                             f"({self.growth_factor})")
         t, dt = 0.0, self.initial_increment
         increment = 0
+        fast_in_a_row = 0
         velocity = None
         while t < self.period * (1 - 1e-12):
             increment += 1
@@ -201,13 +212,14 @@ class StaticStep:
                 except ContactConvergenceError as error:
                     u.x.array[:] = u_start
                     u.x.scatter_forward()
-                    if self.fixed or dt / 2 < self.min_increment:
+                    if self.fixed or dt * self.cutback_factor < self.min_increment:
                         raise ContactConvergenceError(
                             f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) failed after {attempt} "
-                            f"attempt(s); increment size {dt:.3e} cannot be halved below the minimum "
+                            f"attempt(s); increment size {dt:.3e} cannot be cut back below the minimum "
                             f"{self.min_increment:.3e}: {error}") from error
-                    logger.info(" %s; cutting back to %.6e", error, dt / 2)
-                    dt /= 2
+                    dt *= self.cutback_factor
+                    fast_in_a_row = 0
+                    logger.info(" %s; cutting back to %.6e", error, dt)
             velocity = (u.x.array - u_start) / dt
             t = t_new
             result = IncrementResult(increment, attempt, t, t / self.period, iterations, problem.num_springs,
@@ -218,8 +230,9 @@ class StaticStep:
                         time.perf_counter() - start)
             if self.on_increment is not None:
                 self.on_increment(result)
-            if not self.fixed and iterations <= 5:
-                dt = min(1.5 * dt, max_inc)
+            fast_in_a_row = fast_in_a_row + 1 if iterations <= self.growth_iterations else 0
+            if not self.fixed and fast_in_a_row >= 2:
+                dt = min(self.growth_factor * dt, max_inc)
         return self.results
 
 
