@@ -1,10 +1,14 @@
-"""CalculiX interoperability: deck reader, ``.dat``/``.cel`` writers and readers, ccx runner.
+"""CalculiX interoperability: run ccx decks with dolfinx_ntf, write decks, read and write ccx results.
 
-Pure Python/numpy (no dolfinx import), so decks and ccx results can be handled anywhere:
+File formats (pure Python/numpy, no dolfinx):
     - ``deck``: ``read_deck`` parses the node-to-face subset of a ``.inp`` deck into a ``Deck``;
     - ``dat``: ccx 2.20 ``.dat`` blocks, written byte for byte as ccx does, and read back;
     - ``cel``: the CONTACT ELEMENTS file ``jobname.cel``;
-    - ``ccx``: ``run_ccx`` and helpers to read its results.
+    - ``ccx``: ``run_ccx`` and helpers to read its results; ``compare``: ccx results against a job's.
+dolfinx glue:
+    - ``model``: ``build_model`` turns a ``Deck`` into a mesh, UFL forms, loads and contact pairs;
+    - ``job``: ``run_job`` runs a deck like ``ccx JOB`` (also ``python -m dolfinx_ntf run JOB``);
+    - ``writer``: ``write_inp`` exports a problem built in Python as an equivalent ccx deck.
 """
 
 from .ccx import CcxError, dat_block, dat_times, read_ccx_dat, read_sta, run_ccx
@@ -18,6 +22,7 @@ from .dat import (
     read_dat,
     write_dat,
 )
+from .compare import compare_job
 from .deck import (
     ELEMENT_TYPES,
     Deck,
@@ -29,8 +34,17 @@ from .deck import (
     read_deck,
     surface_nodes,
 )
+from .job import JobError, JobResult, run_job
+from .model import build_model
+from .writer import write_inp
 
 __all__ = [
+    "JobError",
+    "JobResult",
+    "build_model",
+    "compare_job",
+    "run_job",
+    "write_inp",
     "CcxError",
     "ContactElementsFile",
     "DatBlock",
