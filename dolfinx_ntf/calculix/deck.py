@@ -942,6 +942,16 @@ class _Reader:
             raise DeckError(f"{card.name} needs a data line", card.location)
 
     @staticmethod
+    def _new_name(card: _Card, defined: dict, what: str) -> str:
+        """The NAME parameter of ``card``, which must not name an already defined ``what``."""
+        name = card.params["NAME"] or ""
+        if name in defined:
+            raise DeckError(
+                f"{what} {name} is defined twice (first at {defined[name].location})", card.location
+            )
+        return name
+
+    @staticmethod
     def _int(token: str, what: str, location: Location) -> int:
         if token.isascii() and token.isdigit():
             return int(token)
@@ -1156,15 +1166,10 @@ class _Reader:
 
     def _k_SURFACE(self, card: _Card) -> None:
         self._check_params(card, allowed={"NAME", "TYPE"}, required={"NAME"})
-        name = card.params["NAME"] or ""
         stype = card.params.get("TYPE") or "ELEMENT"
         if stype not in ("ELEMENT", "NODE"):
             raise DeckError(f"*SURFACE TYPE={stype}: use TYPE=ELEMENT or TYPE=NODE", card.location)
-        if name in self.surfaces:
-            raise DeckError(
-                f"surface {name} is defined twice (first at {self.surfaces[name].location})",
-                card.location,
-            )
+        name = self._new_name(card, self.surfaces, "surface")
         elements: list[np.ndarray] = []
         faces: list[np.ndarray] = []
         nodes: list[np.ndarray] = []
@@ -1197,12 +1202,7 @@ class _Reader:
     def _k_MATERIAL(self, card: _Card) -> None:
         self._check_params(card, allowed={"NAME"}, required={"NAME"})
         self._no_data(card)
-        name = card.params["NAME"] or ""
-        if name in self.materials:
-            raise DeckError(
-                f"material {name} is defined twice (first at {self.materials[name].location})",
-                card.location,
-            )
+        name = self._new_name(card, self.materials, "material")
         self.context = self.materials[name] = _MaterialBuilder(name, card.location)
 
     def _material(self, card: _Card) -> _MaterialBuilder:
@@ -1259,13 +1259,7 @@ class _Reader:
     def _k_SURFACEINTERACTION(self, card: _Card) -> None:
         self._check_params(card, allowed={"NAME"}, required={"NAME"})
         self._no_data(card)
-        name = card.params["NAME"] or ""
-        if name in self.interactions:
-            raise DeckError(
-                f"surface interaction {name} is defined twice (first at "
-                f"{self.interactions[name].location})",
-                card.location,
-            )
+        name = self._new_name(card, self.interactions, "surface interaction")
         self.context = self.interactions[name] = _InteractionBuilder(name, card.location)
 
     def _interaction(self, card: _Card) -> _InteractionBuilder:
