@@ -111,20 +111,7 @@ def boundary_faces(V: dolfinx.fem.FunctionSpace, facets: np.ndarray, *, what: st
     if tdim != 3:
         raise ValueError(f"{what}: only 3D meshes are supported, got a {tdim}D mesh")
     facets = np.asarray(facets, dtype=np.int32)
-    mesh.topology.create_connectivity(tdim - 1, tdim)
-    mesh.topology.create_connectivity(tdim, tdim - 1)
-    f_to_c = mesh.topology.connectivity(tdim - 1, tdim)
-    c_to_f = mesh.topology.connectivity(tdim, tdim - 1)
-    num_cells_of_facet = f_to_c.offsets[facets + 1] - f_to_c.offsets[facets]
-    interior = np.flatnonzero(num_cells_of_facet != 1)
-    if interior.size:
-        x = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, facets[interior[:1]])[0]
-        raise ValueError(
-            f"{what}: {interior.size} facet(s) lie between two cells, not on the boundary "
-            f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))")
-    cells = f_to_c.array[f_to_c.offsets[facets]]
-    cell_facets = c_to_f.array.reshape(-1, c_to_f.offsets[1] - c_to_f.offsets[0])
-    local_facet = np.argmax(cell_facets[cells] == facets[:, None], axis=1)
+    cells, local_facet = _facet_cells(mesh, facets, what)
 
     cell_nodes, closure = _cell_arrays(V)
     closure_nodes = cell_nodes[cells[:, None], closure[local_facet]]
@@ -147,6 +134,31 @@ def boundary_faces(V: dolfinx.fem.FunctionSpace, facets: np.ndarray, *, what: st
     if face_type.num_nodes > num_corners:
         faces = np.hstack([corners, _midside_nodes(X, corners, closure_nodes[:, num_corners:])])
     return SurfaceFaces(face_type, np.ascontiguousarray(faces, dtype=np.int32), facets)
+
+
+def _facet_cells(
+    mesh: dolfinx.mesh.Mesh, facets: np.ndarray, what: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """The cell of each boundary facet and the facet's local index in it.
+
+    Raises a ValueError naming ``what`` if a facet lies between two cells.
+    """
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    mesh.topology.create_connectivity(tdim, tdim - 1)
+    f_to_c = mesh.topology.connectivity(tdim - 1, tdim)
+    c_to_f = mesh.topology.connectivity(tdim, tdim - 1)
+    num_cells_of_facet = f_to_c.offsets[facets + 1] - f_to_c.offsets[facets]
+    interior = np.flatnonzero(num_cells_of_facet != 1)
+    if interior.size:
+        x = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, facets[interior[:1]])[0]
+        raise ValueError(
+            f"{what}: {interior.size} facet(s) lie between two cells, not on the boundary "
+            f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))")
+    cells = f_to_c.array[f_to_c.offsets[facets]]
+    cell_facets = c_to_f.array.reshape(-1, c_to_f.offsets[1] - c_to_f.offsets[0])
+    local_facet = np.argmax(cell_facets[cells] == facets[:, None], axis=1)
+    return cells, local_facet
 
 
 def _midside_nodes(X: np.ndarray, corners: np.ndarray, others: np.ndarray) -> np.ndarray:

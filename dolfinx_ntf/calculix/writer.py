@@ -37,7 +37,7 @@ import dolfinx.mesh
 
 from dolfinx_ntf.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.problem import ContactPair
-from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, resolve_slave
+from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
 
 from .deck import ELEMENT_TYPES, FIELD_CONTROL_NAMES
 
@@ -400,25 +400,10 @@ def _facet_faces(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Element ids and ccx face numbers (1-based) of the facets of ``surface`` in owned cells."""
     mesh = V.mesh
-    tdim = 3
     facets = _tagged_facets(mesh.comm, surface, what)
-    mesh.topology.create_connectivity(tdim - 1, tdim)
-    mesh.topology.create_connectivity(tdim, tdim - 1)
-    f_to_c = mesh.topology.connectivity(tdim - 1, tdim)
-    c_to_f = mesh.topology.connectivity(tdim, tdim - 1)
-    count = f_to_c.offsets[facets + 1] - f_to_c.offsets[facets]
-    interior = np.flatnonzero(count != 1)
-    if interior.size:
-        x = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, facets[interior[:1]])[0]
-        raise ValueError(
-            f"{what}: {interior.size} facet(s) lie between two cells, not on the boundary "
-            f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
-        )
-    cells = f_to_c.array[f_to_c.offsets[facets]]
+    cells, local_facet = _facet_cells(mesh, facets, what)
     owned = cells < md.num_owned_cells
-    facets, cells = facets[owned], cells[owned]
-    cell_facets = c_to_f.array.reshape(-1, c_to_f.offsets[1] - c_to_f.offsets[0])
-    local_facet = np.argmax(cell_facets[cells] == facets[:, None], axis=1)
+    cells, local_facet = cells[owned], local_facet[owned]
     faces = md.face_of_facet[md.mirrored[cells].astype(np.int64), local_facet]
     return md.element_ids[cells], faces
 
