@@ -232,6 +232,15 @@ def _name(text: str, what: str) -> str:
     return name
 
 
+def _check_type(value: object, cls: type, what: str) -> None:
+    """Raise a ValueError naming ``what`` unless ``value`` is a ``cls``."""
+    if not isinstance(value, cls):
+        article = "an" if cls.__name__[0] in "AEIOU" else "a"
+        raise ValueError(
+            f"write_inp: {what} must be {article} {cls.__name__}, got {type(value).__name__}"
+        )
+
+
 # ----------------------------------------------------------------------------- mesh
 
 
@@ -654,8 +663,7 @@ def _material_groups(
 
 def _write_pair(out: _Out, V, md: _Mesh, k: int, pair: ContactPair) -> None:
     what = f"contact pair {k}" + (f" ({pair.name})" if getattr(pair, "name", "") else "")
-    if not isinstance(pair, ContactPair):
-        raise ValueError(f"write_inp: {what} must be a ContactPair, got {type(pair).__name__}")
+    _check_type(pair, ContactPair, what)
     if pair.interaction.friction is not None:
         raise NotImplementedError(f"write_inp: {what}: friction is not supported yet")
     if not pair.active:
@@ -722,8 +730,7 @@ def _boundary_card(
     out: _Out, V, md: _Mesh, boundary: BoundarySpec, what: str, default: str
 ) -> list[str]:
     """Write the node set of a boundary; returns its ``*BOUNDARY`` data lines."""
-    if not isinstance(boundary, BoundarySpec):
-        raise ValueError(f"write_inp: {what} must be a BoundarySpec, got {type(boundary).__name__}")
+    _check_type(boundary, BoundarySpec, what)
     ranges = _components(boundary.components, f"write_inp: {what}")
     value = _real(boundary.value, f"write_inp: {what} value")
     name = out.nset(
@@ -736,8 +743,7 @@ def _step_sets(
     out: _Out, V, md: _Mesh, s: int, step: StepSpec
 ) -> tuple[list[str], list[str], list[str]]:
     """Write the node sets of a step; return its ``*BOUNDARY``, ``*CLOAD`` and ``*DLOAD`` lines."""
-    if not isinstance(step, StepSpec):
-        raise ValueError(f"write_inp: step {s} must be a StepSpec, got {type(step).__name__}")
+    _check_type(step, StepSpec, f"step {s}")
     boundaries = [
         line
         for i, b in enumerate(step.boundaries, start=1)
@@ -746,10 +752,7 @@ def _step_sets(
     cloads = []
     for i, load in enumerate(step.point_loads, start=1):
         what = f"step {s} point load {i}"
-        if not isinstance(load, PointLoadSpec):
-            raise ValueError(
-                f"write_inp: {what} must be a PointLoadSpec, got {type(load).__name__}"
-            )
+        _check_type(load, PointLoadSpec, what)
         if load.component not in (0, 1, 2):
             raise ValueError(
                 f"write_inp: {what}: component must be 0, 1 or 2, got {load.component!r}"
@@ -762,10 +765,7 @@ def _step_sets(
     dloads = []
     for i, pressure in enumerate(step.pressures, start=1):
         what = f"step {s} pressure {i}"
-        if not isinstance(pressure, PressureSpec):
-            raise ValueError(
-                f"write_inp: {what} must be a PressureSpec, got {type(pressure).__name__}"
-            )
+        _check_type(pressure, PressureSpec, what)
         value = _real(pressure.value, f"write_inp: {what} value")
         elements, faces = _facet_faces(V, md, pressure.surface, f"write_inp: {what}")
         elements, faces = out.gather(elements), out.gather(faces)
@@ -848,10 +848,7 @@ def _write_step(
 
 
 def _write_output(out: _Out, s: int, output: OutputSpec) -> None:
-    if not isinstance(output, OutputSpec):
-        raise ValueError(
-            f"write_inp: step {s} output must be an OutputSpec, got {type(output).__name__}"
-        )
+    _check_type(output, OutputSpec, f"step {s} output")
     frequency = int(output.frequency)
     if frequency < 1:
         raise ValueError(
