@@ -345,6 +345,20 @@ def face_type_from_num_nodes(n: int) -> FaceType:
         ) from None
 
 
+def _face_coords_array(
+    face_type: FaceType, face_coords: np.ndarray, what: str = "face_coords", rows: str = "F"
+) -> np.ndarray:
+    """``face_coords`` as a float array of shape (rows, n, 3), else a ValueError naming ``what``."""
+    coords = np.asarray(face_coords, dtype=float)
+    n = face_type.num_nodes
+    if coords.ndim != 3 or coords.shape[1:] != (n, 3):
+        raise ValueError(
+            f"{what} must have shape ({rows}, {n}, 3) for {face_type.name} faces, "
+            f"got {coords.shape}"
+        )
+    return coords
+
+
 def _check_coords(face_type: FaceType, face_coords: np.ndarray) -> np.ndarray:
     coords = np.asarray(face_coords, dtype=float)
     if coords.ndim < 2 or coords.shape[-2:] != (face_type.num_nodes, 3):

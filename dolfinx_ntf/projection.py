@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dolfinx_ntf.faces import FaceType
+from dolfinx_ntf.faces import FaceType, _face_coords_array
 
 __all__ = ["project_points"]
 
@@ -140,13 +140,8 @@ def _rows(mask: np.ndarray) -> str:
 def _validate(
     face_type: FaceType, face_coords: np.ndarray, points: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    coords = np.asarray(face_coords, dtype=float)
+    coords = _face_coords_array(face_type, face_coords, rows="N")
     pts = np.asarray(points, dtype=float)
-    n = face_type.num_nodes
-    if coords.ndim != 3 or coords.shape[1:] != (n, 3):
-        raise ValueError(
-            f"face_coords must have shape (N, {n}, 3) for {face_type.name}, got {coords.shape}"
-        )
     if pts.shape != (coords.shape[0], 3):
         raise ValueError(f"points must have shape ({coords.shape[0]}, 3), got {pts.shape}")
     if not np.all(np.isfinite(coords)):

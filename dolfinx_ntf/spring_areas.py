@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from dolfinx_ntf.faces import FaceType
+from dolfinx_ntf.faces import FaceType, _face_coords_array
 
 __all__ = [
     "face_areas",
@@ -27,13 +27,7 @@ __all__ = [
 
 def _check_face_coords(face_type: FaceType, face_coords: npt.ArrayLike) -> np.ndarray:
     """Return ``face_coords`` as a finite float array of shape (F, n, 3)."""
-    coords = np.asarray(face_coords, dtype=float)
-    n = face_type.num_nodes
-    if coords.ndim != 3 or coords.shape[1:] != (n, 3):
-        raise ValueError(
-            f"face_coords must have shape (F, {n}, 3) for {face_type.name} faces, "
-            f"got {coords.shape}"
-        )
+    coords = _face_coords_array(face_type, face_coords)
     bad = ~np.isfinite(coords)
     if bad.any():
         face = int(np.argwhere(bad)[0][0])

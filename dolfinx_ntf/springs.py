@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dolfinx_ntf.faces import FaceType
+from dolfinx_ntf.faces import FaceType, _face_coords_array
 from dolfinx_ntf.laws import PressureOverclosureLaw
 from dolfinx_ntf.projection import project_points
 
@@ -202,13 +202,7 @@ def _check_input(
     gap_shift: float | np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Validate shapes and values; return float arrays (master, slave, area, gap_shift)."""
-    master = np.asarray(master_coords, dtype=float)
-    n = face_type.num_nodes
-    if master.ndim != 3 or master.shape[1:] != (n, 3):
-        raise ValueError(
-            f"master_coords must have shape (N, {n}, 3) for face type {face_type.name}, "
-            f"got {master.shape}"
-        )
+    master = _face_coords_array(face_type, master_coords, "master_coords", rows="N")
     num = master.shape[0]
     slave = np.asarray(slave_coords, dtype=float)
     if slave.shape != (num, 3):
