@@ -71,6 +71,12 @@ def _kkt(ft, coords, pts, xi, act_tol=1e-13):
     return res / scale, lam_min / scale
 
 
+def _assert_kkt(ft, coords, pts, xi):
+    """The KKT conditions of the closest-point problem hold to round-off at ``xi``."""
+    res, lam_min = _kkt(ft, coords, pts, xi)
+    assert res.max() < 1e-11 and lam_min.min() > -1e-12
+
+
 def _brute_force(ft: FaceType, coords: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Global minimizer: dense parameter grid, then a bounded/constrained local refinement."""
     m = 161
@@ -182,9 +188,7 @@ def test_kkt_for_arbitrary_points(ft):
     assert xi.shape == (num, 2)
     assert np.all(np.isfinite(xi))
     assert np.all(ft.contains(xi))
-    res, lam_min = _kkt(ft, coords, pts, xi)
-    assert res.max() < 1e-11
-    assert lam_min.min() > -1e-12
+    _assert_kkt(ft, coords, pts, xi)
     # A sizeable share of the minima lies on the boundary, so edges and corners are exercised.
     a, b = _constraints(ft)
     on_boundary = np.any(np.abs(xi @ a.T - b) <= 1e-13, axis=1)
@@ -207,8 +211,7 @@ def test_matches_brute_force_outside(ft):
     f, f_ref = _sq_dist(ft, coords, pts, xi), _sq_dist(ft, coords, pts, ref)
     assert np.all(f <= f_ref * (1 + 1e-12) + 1e-14)
     np.testing.assert_allclose(xi, ref, atol=1e-6)
-    res, lam_min = _kkt(ft, coords, pts, xi)
-    assert res.max() < 1e-11 and lam_min.min() > -1e-12
+    _assert_kkt(ft, coords, pts, xi)
 
 
 @pytest.mark.parametrize("ft", ALL, ids=IDS)
@@ -233,8 +236,7 @@ def test_far_points(ft):
     np.testing.assert_allclose(xi, ref, atol=1e-4)
     f, f_ref = _sq_dist(ft, coords, pts, xi), _sq_dist(ft, coords, pts, ref)
     assert np.all(f <= f_ref * (1 + 1e-14))
-    res, lam_min = _kkt(ft, coords, pts, xi)
-    assert res.max() < 1e-11 and lam_min.min() > -1e-12
+    _assert_kkt(ft, coords, pts, xi)
 
 
 def test_exact_edge_and_corner_cases():
@@ -258,8 +260,7 @@ def test_warped_quad():
     xi = project_points(QUAD4, coords, pts)
     ref = _brute_force(QUAD4, coords, pts)
     np.testing.assert_allclose(xi, ref, atol=1e-6)
-    res, lam_min = _kkt(QUAD4, coords, pts, xi)
-    assert res.max() < 1e-11 and lam_min.min() > -1e-12
+    _assert_kkt(QUAD4, coords, pts, xi)
 
 
 @pytest.mark.parametrize("ft", [TRI6, QUAD8, QUAD9], ids=["tri6", "quad8", "quad9"])
@@ -276,8 +277,7 @@ def test_curved_quadratic_faces(ft):
     xi = project_points(ft, coords, pts)
     ref = _brute_force(ft, coords, pts)
     np.testing.assert_allclose(xi, ref, atol=1e-6)
-    res, lam_min = _kkt(ft, coords, pts, xi)
-    assert res.max() < 1e-11 and lam_min.min() > -1e-12
+    _assert_kkt(ft, coords, pts, xi)
 
 
 @pytest.mark.parametrize("ft", [QUAD4, TRI6, QUAD8, QUAD9], ids=["quad4", "tri6", "quad8", "quad9"])
@@ -304,8 +304,7 @@ def test_point_beyond_centre_of_curvature_leaves_the_centre(ft):
     f_centre = _sq_dist(ft, coords, pt, ft.center[None])
     assert f[0] < f_centre[0] - 1e-3
     assert f[0] == pytest.approx(f_ref[0], rel=1e-9)
-    res, lam_min = _kkt(ft, coords, pt, xi)
-    assert res.max() < 1e-11 and lam_min.min() > -1e-12
+    _assert_kkt(ft, coords, pt, xi)
 
 
 @pytest.mark.parametrize("ft", ALL, ids=IDS)
