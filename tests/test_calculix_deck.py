@@ -433,35 +433,34 @@ def test_node_index_unknown_node():
         deck.element_location([3])
 
 
+def _features_variant(tmp_path: Path, name: str, old: str, new: str) -> Path:
+    """features.inp with ``old`` replaced by ``new``, written with its include files."""
+    (tmp_path / "include").mkdir(exist_ok=True)
+    for include in ("mesh.inp", "tets.inp"):
+        (tmp_path / "include" / include).write_text((DATA / "include" / include).read_text())
+    path = tmp_path / name
+    path.write_text((DATA / "features.inp").read_text().replace(old, new))
+    return path
+
+
 def test_mixed_face_sizes_rejected(tmp_path):
-    text = (DATA / "features.inp").read_text().replace(
-        "*Surface, name=Slave Faces\n10, s1", "*Surface, name=Slave Faces\n10, s1\n1, S1"
-    )
-    (tmp_path / "include").mkdir()
-    for name in ("mesh.inp", "tets.inp"):
-        (tmp_path / "include" / name).write_text((DATA / "include" / name).read_text())
-    (tmp_path / "mixed.inp").write_text(text)
-    deck = read_deck(tmp_path / "mixed.inp")
+    slave = "*Surface, name=Slave Faces\n10, s1"
+    deck = read_deck(_features_variant(tmp_path, "mixed.inp", slave, slave + "\n1, S1"))
     with pytest.raises(ValueError, match=r"mixes faces with \[4, 6\] nodes"):
         face_nodes(deck, "SLAVEFACES")
 
 
 def test_face_number_beyond_element_faces(tmp_path):
-    for name in ("mesh.inp", "tets.inp"):
-        (tmp_path / "include").mkdir(exist_ok=True)
-        (tmp_path / "include" / name).write_text((DATA / "include" / name).read_text())
-    text = (DATA / "features.inp").read_text().replace("10, p1, 2.0", "10, P5, 2.0")
-    (tmp_path / "f.inp").write_text(text)
+    path = _features_variant(tmp_path, "f.inp", "10, p1, 2.0", "10, P5, 2.0")
     with pytest.raises(DeckError) as info:
-        read_deck(tmp_path / "f.inp")
+        read_deck(path)
     line = _line_of(tmp_path / "f.inp", "10, P5, 2.0")
     assert str(info.value) == (
         f"{tmp_path / 'f.inp'}:{line}: face 5 of element 10: C3D10 has faces 1..4"
     )
-    text = (DATA / "features.inp").read_text().replace("10, s1", "11, S6")
-    (tmp_path / "g.inp").write_text(text)
+    path = _features_variant(tmp_path, "g.inp", "10, s1", "11, S6")
     with pytest.raises(DeckError, match=r"g\.inp:\d+: face 6 of element 11: C3D4 has faces 1\.\.4"):
-        read_deck(tmp_path / "g.inp")
+        read_deck(path)
 
 
 def test_calculix_file_formats_are_pure_python_numpy():
