@@ -257,15 +257,18 @@ def blocks():
     return "\n".join(lines) + "\n"
 
 
-TWO_CUBES = """*NODE, NSET=NALL
-1, 0.0, 0.0, 0.0
+# The unit cube in ccx node order: one C3D8 with nodes 1..8.
+UNIT_CUBE_NODES = """1, 0.0, 0.0, 0.0
 2, 1.0, 0.0, 0.0
 3, 1.0, 1.0, 0.0
 4, 0.0, 1.0, 0.0
 5, 0.0, 0.0, 1.0
 6, 1.0, 0.0, 1.0
 7, 1.0, 1.0, 1.0
-8, 0.0, 1.0, 1.0
+8, 0.0, 1.0, 1.0"""
+
+TWO_CUBES = f"""*NODE, NSET=NALL
+{UNIT_CUBE_NODES}
 11, 0.25, 0.25, 1.0
 12, 0.75, 0.25, 1.0
 13, 0.75, 0.75, 1.0
@@ -333,15 +336,8 @@ TOP, 3, 3, -0.002
 *END STEP
 """
 
-MIXED = """*NODE
-1, 0.0, 0.0, 0.0
-2, 1.0, 0.0, 0.0
-3, 1.0, 1.0, 0.0
-4, 0.0, 1.0, 0.0
-5, 0.0, 0.0, 1.0
-6, 1.0, 0.0, 1.0
-7, 1.0, 1.0, 1.0
-8, 0.0, 1.0, 1.0
+MIXED = f"""*NODE
+{UNIT_CUBE_NODES}
 9, 0.5, 0.5, 2.0
 *ELEMENT, TYPE=C3D8, ELSET=EALL
 1, 1, 2, 3, 4, 5, 6, 7, 8
@@ -358,15 +354,8 @@ MIXED = """*NODE
 *END STEP
 """
 
-BRICK = """*NODE, NSET=NALL
-1, 0.0, 0.0, 0.0
-2, 1.0, 0.0, 0.0
-3, 1.0, 1.0, 0.0
-4, 0.0, 1.0, 0.0
-5, 0.0, 0.0, 1.0
-6, 1.0, 0.0, 1.0
-7, 1.0, 1.0, 1.0
-8, 0.0, 1.0, 1.0
+BRICK = f"""*NODE, NSET=NALL
+{UNIT_CUBE_NODES}
 *ELEMENT, TYPE=C3D8, ELSET=EALL
 1, 1, 2, 3, 4, 5, 6, 7, 8
 *NSET, NSET=BOTTOM
