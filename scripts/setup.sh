@@ -2,6 +2,7 @@
 # Make a bare Debian 12 machine ready for dolfinx_ntf; idempotent and fast when everything is there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+root=$(pwd)
 
 packages=(python3-dolfinx-real python3-gmsh python3-venv python3-pip python3-pytest python3-scipy
           python3-matplotlib libopenblas0-pthread openmpi-bin calculix-ccx)
@@ -21,6 +22,7 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import dolfinx" 2>/dev/nu
   rm -rf .venv
   /usr/bin/python3 -m venv --system-site-packages .venv
 fi
-if ! .venv/bin/python -c "import dolfinx_ntf" 2>/dev/null; then
+# Checked from another directory: the repository root itself would make the import succeed.
+if ! (cd / && "$root/.venv/bin/python" -c "import dolfinx_ntf") 2>/dev/null; then
   .venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
 fi
