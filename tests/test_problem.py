@@ -271,3 +271,21 @@ def test_body_without_springs_fails_with_a_hint():
     with pytest.raises(ntf.ContactConvergenceError, match="no contact springs"):
         step.run(solver, u)
     assert np.all(np.isfinite(u.x.array))
+
+
+def test_initial_overlap_is_ramped_in_the_first_increment_only():
+    """Spec §3.6: in increment 1 of step 1 only the fraction tau of an initial overlap is active; g0 is reset at
+    every later increment start, so from increment 2 on the whole overlap acts."""
+    overlap = 0.01
+    mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=-overlap)
+    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
+                           ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)))
+    problem = ntf.ContactProblem(_elastic_residual(u, v, ft, 0.0), u, [pair])
+    problem.begin_increment(0.25)
+    problem.evaluate(tangent=False)
+    np.testing.assert_allclose(ntf.contact_results(problem)[0].clearance, -0.25 * overlap, rtol=1e-12)
+    problem.begin_increment(0.5)
+    problem.evaluate(tangent=False)
+    np.testing.assert_allclose(ntf.contact_results(problem)[0].clearance, -overlap, rtol=1e-12)
