@@ -1,0 +1,335 @@
+"""Hertz contact: an elastic sphere pressed onto an elastic block, compared with Hertz's solution.
+
+A steel hemisphere of radius R = 25 mm touches a steel block at one point; a force on the sphere's flat
+top pushes it down. Hertz's theory (two elastic half-spaces, frictionless, small strain) gives the
+contact radius, the peak pressure and the pressure distribution::
+
+    1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2,   a = (3 F R / (4 E*))^(1/3),
+    p0 = 3 F / (2 pi a^2),                   p(r) = p0 sqrt(1 - r^2/a^2)  for r < a.
+
+Only a quarter of the model is meshed (``meshes/hertz.py``): the planes x = 0 and y = 0 are symmetry
+planes of both bodies, so the quarter carries F/4. The sphere's curved surface is the slave (its nodes
+get the springs), the block top the master. The load makes a/R = 0.15, so the contact radius spans
+about ten elements of the default mesh (four of the coarse one), and the block (13a wide, 10a deep)
+stands in for a half-space.
+
+The demo prints the errors of the computed total force, contact radius and peak pressure against
+Hertz, and saves ``output/hertz_pressure.png`` (nodal pressure against radius beside the analytical
+curve) and ``output/hertz_sphere.xdmf``.
+
+What limits the accuracy:
+
+* the mesh: linear tetrahedra and nodal pressures F_N/A_p from lumped spring areas resolve the
+  elliptical pressure profile only to about the element size; the pressure edge at r = a falls
+  between two nodes, so the last node with positive pressure brackets a to one element (the fit of
+  the Hertz profile does better);
+* the penalty: the springs let the bodies overlap by p/K (K = 50 E, CalculiX's default), which
+  adds a compliance of relative size p0/(K a^2/R), about 0.2 % here (it grows as R shrinks: the
+  default K is tuned to millimetres);
+* the faceted master and the small-strain bulk evaluated with contact in the current configuration
+  (a few tenths of a percent at p0/E* = 0.1); the finite block and hemisphere (Hertz assumes
+  half-spaces: a/R = 0.15 is already a visible departure from a << R).
+
+Run it with::
+
+    .venv/bin/python demos/hertz_sphere.py            # ~27k dofs
+    .venv/bin/python demos/hertz_sphere.py --coarse   # ~3k dofs (tests)
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import sys
+import time
+import typing
+from pathlib import Path
+
+import numpy as np
+import scipy.optimize
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import dolfinx.mesh
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf.gmsh_io import mesh_from_gmsh
+
+__all__ = ["main", "hertz"]
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# Units: mm, N, MPa.
+RADIUS = 25.0
+E_SPHERE, NU_SPHERE = 210_000.0, 0.3
+E_BLOCK, NU_BLOCK = 210_000.0, 0.3
+#: Downward displacement of the sphere's top [mm]: gives a/R = 0.15.
+DISPLACEMENT = 0.6
+import os
+PRED = bool(int(os.environ.get("PRED", "1")))
+AMP = float(os.environ.get("AMP", "2"))
+INC = float(os.environ.get("INC", "0.125"))
+
+
+def hertz(force: float, radius: float = RADIUS) -> tuple[float, float, float]:
+    """Hertz's contact radius, peak pressure and effective modulus E* for a sphere on a half-space.
+
+    Args:
+        force: Total normal force F (the whole sphere, not the quarter).
+        radius: Sphere radius R.
+
+    Returns:
+        ``(a, p0, E*)``.
+    """
+    e_star = 1.0 / ((1 - NU_SPHERE**2) / E_SPHERE + (1 - NU_BLOCK**2) / E_BLOCK)
+    a = (3 * force * radius / (4 * e_star)) ** (1 / 3)
+    return a, 3 * force / (2 * math.pi * a**2), e_star
+
+
+def _load_meshes(name: str) -> typing.Any:
+    """Import ``meshes/<name>.py`` by path (``meshes/`` is a folder of scripts, not a package)."""
+    path = ROOT / "meshes" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"_dolfinx_ntf_meshes_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _sigma(u: ufl.core.expr.Expr, E: float, nu: float) -> ufl.core.expr.Expr:
+    """Small-strain isotropic linear elastic stress."""
+    mu, lmbda = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+    eps = ufl.sym(ufl.grad(u))
+    return 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
+
+
+def _component_bc(V: dolfinx.fem.FunctionSpace, component: int,
+                  facets: np.ndarray) -> dolfinx.fem.DirichletBCMetaClass:
+    """u[component] = 0 on the given facets."""
+    Vc, _ = V.sub(component).collapse()
+    dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, facets)
+    return dolfinx.fem.dirichletbc(dolfinx.fem.Function(Vc), dofs, V.sub(component))
+
+
+def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
+    parser.add_argument("--output", type=Path, default=Path("output"),
+                        help="output folder (default: output/)")
+    parser.add_argument("--cell-type", choices=("tetrahedron", "hexahedron"), default="tetrahedron")
+    parser.add_argument("--displacement", type=float, default=DISPLACEMENT,
+                        help=f"downward displacement of the sphere top [mm] (default {DISPLACEMENT})")
+    parser.add_argument("--ccx-pairing", action="store_true",
+                        help="start the face search at the nearest centroid like CalculiX")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    return parser.parse_args(argv)
+
+
+def main(argv: typing.Sequence[str] | None = None) -> dict:
+    """Run the demo; returns a summary (Hertz values, computed values, relative errors, timings)."""
+    args = _parse(argv)
+    comm = MPI.COMM_WORLD
+    start = time.perf_counter()
+
+    # --- Mesh ------------------------------------------------------------------------------------
+    # Quarter hemisphere on a quarter block, refined around the contact point; sizes are multiples
+    # of R (meshes/hertz.py).
+    geometry = _load_meshes("hertz")
+    sizes = {key: value * RADIUS for key, value in geometry.COARSE.items()} if args.coarse else {}
+    mesh, cell_tags, facet_tags = mesh_from_gmsh(geometry.build_hertz, comm, radius=RADIUS,
+                                         cell_type=args.cell_type, **sizes)
+
+    # --- Bulk problem ----------------------------------------------------------------------------
+    # Small-strain elasticity (Hertz's theory is linear too). The force on the quarter, F/4, is a
+    # uniform pressure on the sphere's flat top, a quarter disc of area pi R^2/4.
+    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
+    dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
+    F = (ufl.inner(_sigma(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
+         + ufl.inner(_sigma(u, E_SPHERE, NU_SPHERE), ufl.grad(v)) * dx(geometry.SPHERE))
+
+    # Block bottom clamped, symmetry planes of both bodies: u_x = 0 on x = 0, u_y = 0 on y = 0. The
+    # sphere's flat top moves down by DISPLACEMENT (scaled by the step time).
+    bottom = dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM))
+    Vz, _ = V.sub(2).collapse()
+    top_uz = dolfinx.fem.Function(Vz)
+    top = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2, facet_tags.find(geometry.SPHERE_TOP))
+    bcs = [dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), bottom, V),
+           _component_bc(V, 0, facet_tags.find(geometry.SYMMETRY_X)),
+           _component_bc(V, 1, facet_tags.find(geometry.SYMMETRY_Y)),
+           dolfinx.fem.dirichletbc(top_uz, top, V.sub(2))]
+
+    # --- Contact -----------------------------------------------------------------------------------
+    # LINEAR law with CalculiX's defaults (K = 50 E). The search starts at each node's current face
+    # (beyond CalculiX): nodes pressed into the corners of the faceted master do not hop between
+    # faces at every re-pairing.
+    law = ntf.LinearLaw.with_ccx_defaults(youngs_modulus=E_BLOCK)
+    pair = ntf.ContactPair(slave=ntf.FacetSurface(facet_tags, geometry.SPHERE_CONTACT),
+                           master=ntf.FacetSurface(facet_tags, geometry.BLOCK_TOP),
+                           interaction=ntf.SurfaceInteraction(law), name="hertz")
+    problem = ntf.ContactProblem(F, u, [pair], bcs, walk_from_previous_face=not args.ccx_pairing)
+    solver = ntf.ContactNewtonSolver(comm, problem)
+    if not args.quiet:
+        ntf.log_progress()
+
+    # --- Static step ---------------------------------------------------------------------------------
+    # The contact starts at a single node, so the first increment is small; automatic incrementation
+    # grows the following ones.
+    args.output.mkdir(parents=True, exist_ok=True)
+    xdmf = args.output / "hertz_sphere.xdmf"
+    iterations: list[int] = []
+    with ntf.ContactWriter(problem, str(xdmf)) as writer:
+
+        def record(result: ntf.IncrementResult) -> None:
+            iterations.append(result.iterations)
+            writer.write(result.time)
+
+        def set_load(t: float) -> None:
+            top_uz.x.array[:] = -t**AMP * args.displacement
+
+        step = ntf.StaticStep(set_load, initial_increment=INC, max_increment=INC, on_increment=record, predictor=PRED)
+        solve_start = time.perf_counter()
+        step.run(solver, u)
+        solve_time = time.perf_counter() - solve_start
+
+    # --- Compare with Hertz ----------------------------------------------------------------------------
+    # Every slave node takes part, with zero pressure where it has no spring; radii are measured in
+    # the reference configuration, like Hertz's (linear) theory does.
+    # The total force is the contact force of the quarter times 4; it must equal the reaction at
+    # the sphere's top (the internal forces of the bulk on the prescribed dofs) to the solver
+    # tolerance. Hertz's radius and pressure follow from it.
+    res = ntf.contact_results(problem)[0]
+    force = 4 * comm.allreduce(float(res.force[:, 2].sum()), op=MPI.SUM)
+    reaction = 4 * _reaction(F, top[0])
+    a_hertz, p0_hertz, _ = hertz(force)
+    slave_nodes = problem.states[0].slave.nodes
+    reference = V.tabulate_dof_coordinates()[slave_nodes]
+    pressure = np.zeros(slave_nodes.size)
+    closed = np.zeros(slave_nodes.size, dtype=bool)
+    spring = np.searchsorted(slave_nodes, res.node)
+    pressure[spring] = res.pressure
+    closed[spring] = res.clearance < 0
+    r_all = np.concatenate(comm.allgather(np.hypot(reference[:, 0], reference[:, 1])))
+    p_all = np.concatenate(comm.allgather(pressure))
+    closed = np.concatenate(comm.allgather(closed))
+    a_fit, p0_fit = _fit_hertz_profile(r_all, p_all, a_hertz, p0_hertz)
+    r_closed, r_open = r_all[closed].max(), _first_open_radius(r_all, closed)
+    p_max = float(p_all.max())
+    summary = {
+        "dofs": V.dofmap.index_map.size_global * V.dofmap.index_map_bs,
+        "increments": len(iterations),
+        "iterations": iterations,
+        "springs": problem.num_springs,
+        "displacement": args.displacement,
+        "force": force,
+        "reaction": reaction,
+        "equilibrium_error": abs(reaction / force - 1),
+        "fit_force": 2 / 3 * math.pi * a_fit**2 * p0_fit,
+        "a_hertz": a_hertz,
+        "a_fit": a_fit,
+        "a_last_closed": r_closed,
+        "a_first_open": r_open,
+        "p0_hertz": p0_hertz,
+        "p0_fit": p0_fit,
+        "p_max": p_max,
+        "solve_time": solve_time,
+        "xdmf": str(xdmf),
+    }
+    summary["fit_force_error"] = summary["fit_force"] / force - 1
+    summary["a_error"] = a_fit / a_hertz - 1
+    summary["p0_error"] = p0_fit / p0_hertz - 1
+    summary["p_max_error"] = p_max / p0_hertz - 1
+    if comm.rank == 0:
+        summary["png"] = str(_plot(args.output / "hertz_pressure.png", r_all, p_all, summary))
+    summary["time"] = time.perf_counter() - start
+    if comm.rank == 0:
+        _print_report(summary)
+    return summary
+
+
+def _reaction(F: ufl.form.Form, dofs: np.ndarray) -> float:
+    """Sum of the bulk residual (internal forces) over ``dofs`` of this process's owned dofs."""
+    b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(F))
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    owned = dofs[dofs < b.getLocalSize()]
+    total = MPI.COMM_WORLD.allreduce(float(-b.array[owned].sum()), op=MPI.SUM)
+    b.destroy()
+    return total
+
+
+def _fit_hertz_profile(r: np.ndarray, p: np.ndarray, a0: float, p0: float) -> tuple[float, float]:
+    """Least-squares fit of ``p0 sqrt(1 - r^2/a^2)`` (zero beyond a) to the nodal pressures.
+
+    Nodes out to 1.5 a0 take part, so the fitted radius is pinned from both sides by nodes with and
+    without pressure.
+    """
+    near = r < 1.5 * a0
+    r, p = r[near], p[near]
+
+    def residual(params: np.ndarray) -> np.ndarray:
+        a, peak = params
+        return peak * np.sqrt(np.clip(1 - (r / a) ** 2, 0, None)) - p
+
+    fit = scipy.optimize.least_squares(residual, x0=[a0, p0], x_scale=[a0, p0])
+    return float(fit.x[0]), float(fit.x[1])
+
+
+def _first_open_radius(r: np.ndarray, closed: np.ndarray) -> float:
+    """Smallest radius of an open slave node beyond the closed region (nan if none)."""
+    outside = ~closed & (r > r[closed].max())
+    return float(r[outside].min()) if outside.any() else math.nan
+
+
+def _plot(path: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
+    """Nodal contact pressure against radius beside Hertz's profile and the fitted one."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    a, p0 = summary["a_hertz"], summary["p0_hertz"]
+    rr = np.linspace(0, 1.5 * a, 400)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    near = r < 1.5 * a
+    ax.plot(r[near], p[near], "o", ms=3, label="dolfinx_ntf nodal pressure F_N/A")
+    ax.plot(rr, p0 * np.sqrt(np.clip(1 - (rr / a) ** 2, 0, None)), "k-", label="Hertz")
+    ax.plot(rr, summary["p0_fit"] * np.sqrt(np.clip(1 - (rr / summary["a_fit"]) ** 2, 0, None)), "r--",
+            label=f"fit: a {summary['a_error']:+.1%}, p0 {summary['p0_error']:+.1%}")
+    ax.set_xlabel("radius r [mm]")
+    ax.set_ylabel("contact pressure [MPa]")
+    ax.set_title(f"Hertz: sphere R = {RADIUS:g} mm on a block, F = {summary['force'] / 1e3:.1f} kN, "
+                 f"{summary['dofs']} dofs")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _print_report(s: dict) -> None:
+    print()
+    print(f"Hertz sphere: {s['dofs']} dofs, {s['increments']} increments (Newton iterations "
+          f"{s['iterations']}), {s['springs']} springs, solve {s['solve_time']:.1f} s, "
+          f"total {s['time']:.1f} s")
+    print(f"Total contact force F = 4 sum F_z = {s['force']:.6g} N at a displacement of "
+          f"{s['displacement']:g} mm; reaction at the sphere top {s['reaction']:.6g} N "
+          f"(relative difference {s['equilibrium_error']:.1e})")
+    print(f"{'quantity':<34} {'computed':>12} {'Hertz':>12} {'error':>9}")
+    rows = [("force of the fitted profile [N]", s["fit_force"], s["force"], s["fit_force_error"]),
+            ("contact radius, fit [mm]", s["a_fit"], s["a_hertz"], s["a_error"]),
+            ("peak pressure, fit [MPa]", s["p0_fit"], s["p0_hertz"], s["p0_error"]),
+            ("peak nodal pressure [MPa]", s["p_max"], s["p0_hertz"], s["p_max_error"])]
+    for name, computed, exact, error in rows:
+        print(f"{name:<34} {computed:>12.6g} {exact:>12.6g} {error:>+9.2%}")
+    print(f"last closed node at r = {s['a_last_closed']:.4g} mm, first open one at r = "
+          f"{s['a_first_open']:.4g} mm (Hertz a = {s['a_hertz']:.4g} mm)")
+    print(f"Results: {s['xdmf']}, {s.get('png')}")
+
+
+if __name__ == "__main__":
+    main()
+    sys.exit(0)
