@@ -53,6 +53,7 @@ import dolfinx.mesh
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf.assembly import SpringBlocks
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION, SEARCH_TOLERANCE
 from dolfinx_ntf.spring_areas import spring_areas
 
@@ -146,14 +147,6 @@ def build_plates(slave_nodes: int, *, layers: int = 1, master_ratio: float = 0.7
     return PlateMesh(mesh, tags, np.flatnonzero(upper).astype(np.int32))
 
 
-def _component_bc(V: dolfinx.fem.FunctionSpace, component: int,
-                  facets: np.ndarray) -> dolfinx.fem.DirichletBCMetaClass:
-    """Zero displacement of one component on the facets."""
-    Vc, _ = V.sub(component).collapse()
-    dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, facets)
-    return dolfinx.fem.dirichletbc(dolfinx.fem.Function(Vc), dofs, V.sub(component))
-
-
 def _rigid_body_modes(V: dolfinx.fem.FunctionSpace) -> PETSc.NullSpace:
     """Orthonormal rigid-body modes of V (serial), the near-nullspace GAMG needs for elasticity."""
     x = V.tabulate_dof_coordinates()
@@ -184,9 +177,7 @@ def build_problem(plates: PlateMesh, solver: str, *, options_prefix: str = "benc
     mesh, ft = plates.mesh, plates.facet_tags
     V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    mu, lmbda = E / 2 / (1 + NU), E * NU / (1 + NU) / (1 - 2 * NU)
-    eps = ufl.sym(ufl.grad(u))
-    sigma = 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
+    sigma = small_strain_stress(u, E, NU)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
     pressure = dolfinx.fem.Constant(mesh, 1.0)
     F = (ufl.inner(sigma, ufl.grad(v)) * ufl.dx
@@ -194,7 +185,7 @@ def build_problem(plates: PlateMesh, solver: str, *, options_prefix: str = "benc
     clamp = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
     top = ft.find(UPPER_TOP)
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3), clamp, V),
-           _component_bc(V, 0, top), _component_bc(V, 1, top)]
+           component_bc(V, 0, top), component_bc(V, 1, top)]
     interaction = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, SLAVE), ntf.FacetSurface(ft, MASTER), interaction)
     problem = ntf.ContactProblem(F, u, [pair], bcs)

@@ -57,6 +57,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 
 import dolfinx_ntf as ntf
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 
 __all__ = ["main", "hertz"]
@@ -99,21 +100,6 @@ def _load_meshes(name: str) -> typing.Any:
     return module
 
 
-def _sigma(u: ufl.core.expr.Expr, E: float, nu: float) -> ufl.core.expr.Expr:
-    """Small-strain isotropic linear elastic stress."""
-    mu, lmbda = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
-    eps = ufl.sym(ufl.grad(u))
-    return 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
-
-
-def _component_bc(V: dolfinx.fem.FunctionSpace, component: int,
-                  facets: np.ndarray) -> dolfinx.fem.DirichletBCMetaClass:
-    """u[component] = 0 on the given facets."""
-    Vc, _ = V.sub(component).collapse()
-    dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, facets)
-    return dolfinx.fem.dirichletbc(dolfinx.fem.Function(Vc), dofs, V.sub(component))
-
-
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
@@ -148,8 +134,8 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
     u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
-    F = (ufl.inner(_sigma(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
-         + ufl.inner(_sigma(u, E_SPHERE, NU_SPHERE), ufl.grad(v)) * dx(geometry.SPHERE))
+    F = (ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
+         + ufl.inner(small_strain_stress(u, E_SPHERE, NU_SPHERE), ufl.grad(v)) * dx(geometry.SPHERE))
 
     # Block bottom clamped, symmetry planes of both bodies: u_x = 0 on x = 0, u_y = 0 on y = 0. The
     # sphere's flat top moves down by DISPLACEMENT (scaled by the step time).
@@ -158,8 +144,8 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     top_uz = dolfinx.fem.Function(Vz)
     top = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2, facet_tags.find(geometry.SPHERE_TOP))
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), bottom, V),
-           _component_bc(V, 0, facet_tags.find(geometry.SYMMETRY_X)),
-           _component_bc(V, 1, facet_tags.find(geometry.SYMMETRY_Y)),
+           component_bc(V, 0, facet_tags.find(geometry.SYMMETRY_X)),
+           component_bc(V, 1, facet_tags.find(geometry.SYMMETRY_Y)),
            dolfinx.fem.dirichletbc(top_uz, top, V.sub(2))]
 
     # --- Contact -----------------------------------------------------------------------------------

@@ -37,6 +37,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 import dolfinx_ntf as ntf
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 
 __all__ = ["main"]
@@ -61,21 +62,6 @@ def _load_meshes(name: str) -> typing.Any:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
-
-
-def _sigma(u: ufl.core.expr.Expr, E: float, nu: float) -> ufl.core.expr.Expr:
-    """Small-strain isotropic linear elastic stress."""
-    mu, lmbda = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
-    eps = ufl.sym(ufl.grad(u))
-    return 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
-
-
-def _component_bc(V: dolfinx.fem.FunctionSpace, component: int,
-                  facets: np.ndarray) -> dolfinx.fem.DirichletBCMetaClass:
-    """u[component] = 0 on the given facets."""
-    Vc, _ = V.sub(component).collapse()
-    dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, facets)
-    return dolfinx.fem.dirichletbc(dolfinx.fem.Function(Vc), dofs, V.sub(component))
 
 
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
@@ -119,8 +105,8 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
-    F = (ufl.inner(_sigma(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
-         + ufl.inner(_sigma(u, E_PUNCH, NU_PUNCH), ufl.grad(v)) * dx(geometry.PUNCH)
+    F = (ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
+         + ufl.inner(small_strain_stress(u, E_PUNCH, NU_PUNCH), ufl.grad(v)) * dx(geometry.PUNCH)
          + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(geometry.PUNCH_TOP))
 
     # Block bottom clamped. The punch is held vertically by the contact only; its in-plane rigid
@@ -128,8 +114,8 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType),
                                    dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM)),
                                    V),
-           _component_bc(V, 0, facet_tags.find(geometry.PUNCH_TOP)),
-           _component_bc(V, 1, facet_tags.find(geometry.PUNCH_TOP))]
+           component_bc(V, 0, facet_tags.find(geometry.PUNCH_TOP)),
+           component_bc(V, 1, facet_tags.find(geometry.PUNCH_TOP))]
 
     # --- Contact -----------------------------------------------------------------------------------
     # LINEAR law with CalculiX's defaults from the block's Young's modulus: slope K = 50 E, tension

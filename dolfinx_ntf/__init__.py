@@ -4,6 +4,7 @@ Pure-numpy layers (laws, faces, projection, spring areas, search, springs) sit b
 assembly), the problem and solver, and the outside world (output, CalculiX interop). See ``docs/architecture.md``.
 """
 
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import ExponentialLaw, Friction, LinearLaw, SurfaceInteraction, TabularLaw
 from dolfinx_ntf.output import ContactResults, ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactPair, ContactProblem
@@ -29,4 +30,6 @@ __all__ = [
     "ContactWriter",
     "contact_results",
     "log_progress",
+    "small_strain_stress",
+    "component_bc",
 ]

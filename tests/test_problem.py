@@ -9,6 +9,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 import dolfinx_ntf as ntf
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from conftest import UPPER, LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
 
 pytestmark = pytest.mark.serial
@@ -18,17 +19,9 @@ E, NU = 1000.0, 0.3
 
 def _elastic_residual(u, v, facet_tags, pressure):
     mesh = u.function_space.mesh
-    mu, lmbda = E / 2 / (1 + NU), E * NU / (1 + NU) / (1 - 2 * NU)
-    eps = ufl.sym(ufl.grad(u))
-    sigma = 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
+    sigma = small_strain_stress(u, E, NU)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
     return ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(UPPER_TOP)
-
-
-def _component_bc(V, component, facets):
-    Vc, _ = V.sub(component).collapse()
-    dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, facets)
-    return dolfinx.fem.dirichletbc(dolfinx.fem.Function(Vc), dofs, V.sub(component))
 
 
 def _setup(cell="hexahedron", upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), *, rollers=False,
@@ -42,10 +35,10 @@ def _setup(cell="hexahedron", upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)
     if rollers:  # symmetry planes x = 0 and y = 0 for both bodies, bottom on rollers: uniform stress exact
         x0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
         y0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[1], 0.0))
-        bcs = [_component_bc(V, 0, x0), _component_bc(V, 1, y0), _component_bc(V, 2, ft.find(LOWER_BOTTOM))]
+        bcs = [component_bc(V, 0, x0), component_bc(V, 1, y0), component_bc(V, 2, ft.find(LOWER_BOTTOM))]
     else:
         bcs = [dolfinx.fem.dirichletbc(np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V),
-               _component_bc(V, 0, ft.find(UPPER_TOP)), _component_bc(V, 1, ft.find(UPPER_TOP))]
+               component_bc(V, 0, ft.find(UPPER_TOP)), component_bc(V, 1, ft.find(UPPER_TOP))]
     law = law or ntf.LinearLaw.with_ccx_defaults(E)
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
                            ntf.SurfaceInteraction(law))
@@ -262,7 +255,7 @@ def test_body_without_springs_fails_with_a_hint():
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V),
-           _component_bc(V, 0, ft.find(UPPER_TOP)), _component_bc(V, 1, ft.find(UPPER_TOP))]
+           component_bc(V, 0, ft.find(UPPER_TOP)), component_bc(V, 1, ft.find(UPPER_TOP))]
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
                            ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)))
     problem = ntf.ContactProblem(_elastic_residual(u, v, ft, pressure), u, [pair], bcs)
