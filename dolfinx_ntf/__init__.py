@@ -8,8 +8,13 @@ from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import ExponentialLaw, Friction, LinearLaw, SurfaceInteraction, TabularLaw
 from dolfinx_ntf.output import ContactResults, ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactPair, ContactProblem
-from dolfinx_ntf.solver import (ContactConvergenceError, ContactNewtonSolver, IncrementResult, StaticStep,
-                                 log_progress)
+from dolfinx_ntf.solver import (
+    ContactConvergenceError,
+    ContactNewtonSolver,
+    IncrementResult,
+    StaticStep,
+    log_progress,
+)
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 
 __all__ = [

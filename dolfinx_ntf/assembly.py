@@ -47,8 +47,12 @@ def _unblocked(nodes: np.ndarray, bs: int = 3) -> np.ndarray:
 class ContactAssembler:
     """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one displacement space."""
 
-    def __init__(self, V: dolfinx.fem.FunctionSpace, jacobian_form: dolfinx.fem.FormMetaClass,
-                 bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = ()) -> None:
+    def __init__(
+        self,
+        V: dolfinx.fem.FunctionSpace,
+        jacobian_form: dolfinx.fem.FormMetaClass,
+        bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (),
+    ) -> None:
         """Prepare global numbering and the Dirichlet mask.
 
         Args:
@@ -58,14 +62,18 @@ class ContactAssembler:
         """
         self._bs = V.dofmap.index_map_bs
         if self._bs != 3:
-            raise ValueError(f"contact needs a 3D vector displacement space, got block size {self._bs}")
+            raise ValueError(
+                f"contact needs a 3D vector displacement space, got block size {self._bs}"
+            )
         self._form = jacobian_form
         index_map = V.dofmap.index_map
         self._comm = V.mesh.comm
         num_nodes = index_map.size_local + index_map.num_ghosts
         self._num_owned = index_map.size_local
         self._num_global = index_map.size_global
-        self._global_node = index_map.local_to_global(np.arange(num_nodes, dtype=np.int32)).astype(np.int64)
+        self._global_node = index_map.local_to_global(np.arange(num_nodes, dtype=np.int32)).astype(
+            np.int64
+        )
         self._global_dof = _unblocked(self._global_node[:, None], self._bs).ravel()
         self.set_bcs(bcs)
         self._pattern_keys = np.empty(0, dtype=np.int64)
@@ -106,8 +114,11 @@ class ContactAssembler:
         sp = dolfinx.fem.create_sparsity_pattern(self._form)
         sp.assemble()
         graph = sp.graph
-        A.setValuesBlockedLocalCSR(graph.offsets.astype(PETSc.IntType), graph.array.astype(PETSc.IntType),
-                                   np.zeros(graph.array.size * self._bs**2))
+        A.setValuesBlockedLocalCSR(
+            graph.offsets.astype(PETSc.IntType),
+            graph.array.astype(PETSc.IntType),
+            np.zeros(graph.array.size * self._bs**2),
+        )
         keys = np.union1d(self._coupling_keys(blocks), self._pattern_keys)
         self._pattern_keys = np.empty(0, dtype=np.int64)
         self._merge(A, keys)
@@ -115,8 +126,9 @@ class ContactAssembler:
         self.matrix_rebuilds += 1
         return A
 
-    def _merge(self, A: PETSc.Mat, keys: np.ndarray,
-               blocks: typing.Sequence[SpringBlocks] = ()) -> None:
+    def _merge(
+        self, A: PETSc.Mat, keys: np.ndarray, blocks: typing.Sequence[SpringBlocks] = ()
+    ) -> None:
         """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values, through a separate matrix
         merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a solver bound to it keeps working)."""
         bs = self._bs
@@ -124,16 +136,22 @@ class ContactAssembler:
         rows = keys // self._num_global
         owned = (rows >= first) & (rows < first + self._num_owned)
         if not np.all(owned):
-            raise NotImplementedError("contact couplings of rows owned by another process (MPI) are not "
-                                      "supported yet")
-        block = scipy.sparse.csr_matrix((np.ones(keys.size, dtype=np.int8), (rows - first, keys % self._num_global)),
-                                        shape=(self._num_owned, self._num_global))
+            raise NotImplementedError(
+                "contact couplings of rows owned by another process (MPI) are not supported yet"
+            )
+        block = scipy.sparse.csr_matrix(
+            (np.ones(keys.size, dtype=np.int8), (rows - first, keys % self._num_global)),
+            shape=(self._num_owned, self._num_global),
+        )
         pattern = scipy.sparse.kron(block, np.ones((bs, bs), dtype=np.int8), format="csr")
         pattern.sort_indices()
         n_local, n_global = bs * self._num_owned, bs * self._num_global
-        C = PETSc.Mat().createAIJ(((n_local, n_global), (n_local, n_global)), bsize=bs,
-                                  csr=(pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType)),
-                                  comm=self._comm)
+        C = PETSc.Mat().createAIJ(
+            ((n_local, n_global), (n_local, n_global)),
+            bsize=bs,
+            csr=(pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType)),
+            comm=self._comm,
+        )
         self._set_values(C, blocks)
         C.assemble()
         A.assemble()
@@ -149,12 +167,17 @@ class ContactAssembler:
         for blk in blocks:
             if blk.values is None or blk.row_nodes.shape[0] == 0:
                 continue
-            rows = self._global_dof_masked[_unblocked(blk.row_nodes, self._bs)].astype(PETSc.IntType)
-            cols = self._global_dof_masked[_unblocked(blk.col_nodes, self._bs)].astype(PETSc.IntType)
+            rows = self._global_dof_masked[_unblocked(blk.row_nodes, self._bs)].astype(
+                PETSc.IntType
+            )
+            cols = self._global_dof_masked[_unblocked(blk.col_nodes, self._bs)].astype(
+                PETSc.IntType
+            )
             A.setValuesRCV(rows, cols, blk.values, addv=PETSc.InsertMode.ADD_VALUES)
 
-    def add_to_matrix(self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks], *,
-                      check_pattern: bool = True) -> None:
+    def add_to_matrix(
+        self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks], *, check_pattern: bool = True
+    ) -> None:
         """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings are missing.
 
         Args:
@@ -181,7 +204,10 @@ class ContactAssembler:
                 continue
             rows = self._global_dof_masked[_unblocked(blk.row_nodes, self._bs)].ravel()
             keep = rows >= 0
-            b.setValues(rows[keep].astype(PETSc.IntType), blk.vector.ravel()[keep],
-                        addv=PETSc.InsertMode.ADD_VALUES)
+            b.setValues(
+                rows[keep].astype(PETSc.IntType),
+                blk.vector.ravel()[keep],
+                addv=PETSc.InsertMode.ADD_VALUES,
+            )
         b.assemblyBegin()
         b.assemblyEnd()

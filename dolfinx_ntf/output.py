@@ -43,10 +43,17 @@ def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactRe
     if ev is None or ev.xi.shape[0] != nodes.size:
         raise RuntimeError("contact results requested before the springs were evaluated")
     return ContactResults(
-        pair=state.pair.name or f"pair {index + 1}", node=nodes, position=coords[nodes],
-        area=ev.area, clearance=-ev.overclosure, pressure=ev.normal_force / ev.area,
-        normal_force=ev.normal_force, energy=law.energy(ev.overclosure, ev.area),
-        force=-ev.forces[:, -1, :], normal=ev.normal)
+        pair=state.pair.name or f"pair {index + 1}",
+        node=nodes,
+        position=coords[nodes],
+        area=ev.area,
+        clearance=-ev.overclosure,
+        pressure=ev.normal_force / ev.area,
+        normal_force=ev.normal_force,
+        energy=law.energy(ev.overclosure, ev.area),
+        force=-ev.forces[:, -1, :],
+        normal=ev.normal,
+    )
 
 
 def contact_results(problem: ContactProblem) -> list[ContactResults]:

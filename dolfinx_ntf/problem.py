@@ -23,8 +23,15 @@ from dolfinx_ntf.laws import SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
 from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
-from dolfinx_ntf.surfaces import (FacetSurface, NodeSurface, SlaveSurface, SurfaceFaces, reference_coordinates,
-                                  resolve_master, resolve_slave)
+from dolfinx_ntf.surfaces import (
+    FacetSurface,
+    NodeSurface,
+    SlaveSurface,
+    SurfaceFaces,
+    reference_coordinates,
+    resolve_master,
+    resolve_slave,
+)
 
 __all__ = ["ContactPair", "PairState", "ContactProblem"]
 
@@ -66,7 +73,9 @@ class PairState:
     master_faces: SurfaceFaces
     master: MasterSurface
     overlap: np.ndarray  # (S,) initial overlap g0 per slave node (spec §3.6)
-    spring_slave: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))  # index into slave.nodes
+    spring_slave: np.ndarray = field(
+        default_factory=lambda: np.empty(0, dtype=np.int64)
+    )  # index into slave.nodes
     spring_face: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
     spring_area: np.ndarray = field(default_factory=lambda: np.empty(0))
     xi: np.ndarray | None = None
@@ -104,13 +113,29 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         form_compiler_params, jit_params: Passed to dolfinx.
     """
 
-    def __init__(self, F: ufl.form.Form, u: dolfinx.fem.Function, pairs: typing.Sequence[ContactPair],
-                 bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (), J: ufl.form.Form | None = None, *,
-                 symmetric: bool = False, linearize_area: bool = False, max_depth: float | None = None,
-                 walk_from_previous_face: bool = False,
-                 form_compiler_params: dict | None = None, jit_params: dict | None = None) -> None:
-        super().__init__(F, u, list(bcs), J, form_compiler_params=form_compiler_params or {},
-                         jit_params=jit_params or {})
+    def __init__(
+        self,
+        F: ufl.form.Form,
+        u: dolfinx.fem.Function,
+        pairs: typing.Sequence[ContactPair],
+        bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (),
+        J: ufl.form.Form | None = None,
+        *,
+        symmetric: bool = False,
+        linearize_area: bool = False,
+        max_depth: float | None = None,
+        walk_from_previous_face: bool = False,
+        form_compiler_params: dict | None = None,
+        jit_params: dict | None = None,
+    ) -> None:
+        super().__init__(
+            F,
+            u,
+            list(bcs),
+            J,
+            form_compiler_params=form_compiler_params or {},
+            jit_params=jit_params or {},
+        )
         V = u.function_space
         if V.dofmap.index_map_bs != 3 or V.mesh.geometry.dim != 3:
             raise ValueError("ContactProblem needs a 3D vector displacement space (block size 3)")
@@ -141,19 +166,27 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
         if pair.interaction.friction is not None:
-            raise NotImplementedError(f"{name}: friction is not supported yet (frictionless contact only)")
+            raise NotImplementedError(
+                f"{name}: friction is not supported yet (frictionless contact only)"
+            )
         V = self.u.function_space
         slave = resolve_slave(V, pair.slave, what=f"{name} slave")
         master_faces = resolve_master(V, pair.master, what=f"{name} master")
         if master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
-        master = MasterSurface(master_faces.face_type, master_faces.faces, name=f"{name} master",
-                               coords=self._reference)
+        master = MasterSurface(
+            master_faces.face_type,
+            master_faces.faces,
+            name=f"{name} master",
+            coords=self._reference,
+        )
         both = np.intersect1d(slave.nodes, master_faces.nodes)
         if both.size:
             x = self._reference[both[0]]
-            raise ValueError(f"{name}: {both.size} node(s) belong to both the slave and the master surface "
-                             f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))")
+            raise ValueError(
+                f"{name}: {both.size} node(s) belong to both the slave and the master surface "
+                f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
+            )
         return PairState(pair, slave, master_faces, master, np.zeros(slave.nodes.size))
 
     # -- state --------------------------------------------------------------------------------------------
@@ -203,7 +236,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def _pair_one(self, state: PairState, coords: np.ndarray, record_overlap: bool) -> None:
         empty = np.empty(0, dtype=np.int64)
         if not state.pair.active:
-            state.spring_slave, state.spring_face, state.spring_area, state.xi = empty, empty, np.empty(0), None
+            state.spring_slave, state.spring_face, state.spring_area, state.xi = (
+                empty,
+                empty,
+                np.empty(0),
+                None,
+            )
             return
         slave_faces = state.slave.faces
         areas = spring_areas(slave_faces.face_type, slave_faces.faces, coords, state.slave.nodes)
@@ -218,8 +256,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         found = np.flatnonzero(face >= 0)
         law = state.pair.interaction.law
         ft = state.master_faces.face_type
-        evaluation = evaluate_springs(ft, coords[state.master_faces.faces[face[found]]], points[found],
-                                      areas[found], law, tangent=False, xi0=self._previous_xi(state, found, face))
+        evaluation = evaluate_springs(
+            ft,
+            coords[state.master_faces.faces[face[found]]],
+            points[found],
+            areas[found],
+            law,
+            tangent=False,
+            xi0=self._previous_xi(state, found, face),
+        )
         gap = evaluation.gap
         if record_overlap:
             state.overlap[found] = np.minimum(gap, 0.0)
@@ -228,7 +273,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         create = gap - shift <= cutoff
         state.spring_slave = found[create]
         state.spring_face = face[found][create].astype(np.int64)
-        state.spring_area = areas[found][create]  # 0 = no slave face: springs.py applies the fallback
+        state.spring_area = areas[found][
+            create
+        ]  # 0 = no slave face: springs.py applies the fallback
         state.xi = evaluation.xi[create]
 
     @staticmethod
@@ -262,22 +309,39 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 faces = state.slave.faces
                 areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
                 state.spring_area = areas[state.spring_slave]
-            ev = evaluate_springs(state.master_faces.face_type, coords[nodes[:, :-1]], coords[nodes[:, -1]],
-                                  state.spring_area, state.pair.interaction.law,
-                                  gap_shift=self._gap_shift(state, state.spring_slave), xi0=state.xi,
-                                  tangent=tangent, symmetric=self.symmetric)
+            ev = evaluate_springs(
+                state.master_faces.face_type,
+                coords[nodes[:, :-1]],
+                coords[nodes[:, -1]],
+                state.spring_area,
+                state.pair.interaction.law,
+                gap_shift=self._gap_shift(state, state.spring_slave),
+                xi0=state.xi,
+                tangent=tangent,
+                symmetric=self.symmetric,
+            )
             state.evaluation = ev
             state.xi = ev.xi
-            blocks.append(SpringBlocks(nodes, nodes, ev.stiffness, ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1])))
+            blocks.append(
+                SpringBlocks(
+                    nodes,
+                    nodes,
+                    ev.stiffness,
+                    ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1]),
+                )
+            )
             if tangent and self.linearize_area:
                 blocks.append(self._area_block(state, coords))
         return blocks
 
-    def _area_block(self, state: PairState, coords: np.ndarray, *, values: bool = True) -> SpringBlocks:
+    def _area_block(
+        self, state: PairState, coords: np.ndarray, *, values: bool = True
+    ) -> SpringBlocks:
         """Tangent of F_N = A_p p(d) with respect to the nodes of the slave faces around p (dA_p/du)."""
         faces = state.slave.faces
-        slave_index, node, gradient = spring_area_gradients(faces.face_type, faces.faces, coords,
-                                                            state.slave.nodes)
+        slave_index, node, gradient = spring_area_gradients(
+            faces.face_type, faces.faces, coords, state.slave.nodes
+        )
         spring_of_slave = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
         spring = spring_of_slave[slave_index]
@@ -285,9 +349,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         spring, node, gradient = spring[keep], node[keep], gradient[keep]
         block_values = None
         if values:
-            per_area = state.evaluation.force_per_area.reshape(state.num_springs, 3 * state.element_nodes.shape[1])[spring]
+            per_area = state.evaluation.force_per_area.reshape(
+                state.num_springs, 3 * state.element_nodes.shape[1]
+            )[spring]
             block_values = per_area[:, :, None] * gradient[:, None, :]
-        return SpringBlocks(state.element_nodes[spring], node[:, None].astype(np.int64), block_values)
+        return SpringBlocks(
+            state.element_nodes[spring], node[:, None].astype(np.int64), block_values
+        )
 
     def ensure_matrix(self) -> PETSc.Mat:
         """The Jacobian matrix, recreated when the current springs need couplings it lacks."""

@@ -21,12 +21,23 @@ import dolfinx.nls.petsc
 
 from dolfinx_ntf.problem import ContactProblem
 
-__all__ = ["ContactConvergenceError", "ContactNewtonSolver", "IncrementResult", "StaticStep", "LoadControl", "log_progress"]
+__all__ = [
+    "ContactConvergenceError",
+    "ContactNewtonSolver",
+    "IncrementResult",
+    "StaticStep",
+    "LoadControl",
+    "log_progress",
+]
 
 logger = logging.getLogger("dolfinx_ntf")
 
 #: Default linear solver: sparse direct LU by MUMPS.
-DEFAULT_PETSC_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+DEFAULT_PETSC_OPTIONS = {
+    "ksp_type": "preonly",
+    "pc_type": "lu",
+    "pc_factor_mat_solver_type": "mumps",
+}
 
 
 class ContactConvergenceError(RuntimeError):
@@ -48,9 +59,18 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         max_it: Maximum Newton iterations per increment.
     """
 
-    def __init__(self, comm, problem: ContactProblem, *, petsc_options: dict | None = None,
-                 options_prefix: str = "ntf_", relative_tolerance: float = 1e-10, atol: float = 1e-12,
-                 max_it: int = 30, min_iterations: int = 2) -> None:
+    def __init__(
+        self,
+        comm,
+        problem: ContactProblem,
+        *,
+        petsc_options: dict | None = None,
+        options_prefix: str = "ntf_",
+        relative_tolerance: float = 1e-10,
+        atol: float = 1e-12,
+        max_it: int = 30,
+        min_iterations: int = 2,
+    ) -> None:
         super().__init__(comm, problem)
         self.problem = problem
         self._A.destroy()
@@ -71,7 +91,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         ksp = self.krylov_solver
         ksp.setOptionsPrefix(options_prefix)
         opts = PETSc.Options()
-        for key, value in (DEFAULT_PETSC_OPTIONS if petsc_options is None else petsc_options).items():
+        for key, value in (
+            DEFAULT_PETSC_OPTIONS if petsc_options is None else petsc_options
+        ).items():
             opts[f"{options_prefix}{key}"] = value
         ksp.setFromOptions()
 
@@ -86,17 +108,22 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
 
         Override for other criteria (the CalculiX job runner uses ccx's force-based test).
         """
-        return norm <= max(self.absolute_tolerance, self.relative_tolerance * self.residual_norms[0])
+        return norm <= max(
+            self.absolute_tolerance, self.relative_tolerance * self.residual_norms[0]
+        )
 
     def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         self.problem.F(x, b)
         norm = b.norm()
         if not np.isfinite(norm):
             raise ContactConvergenceError(
-                f"residual is not finite (norm {norm}) at iteration {self.problem.iteration}")
+                f"residual is not finite (norm {norm}) at iteration {self.problem.iteration}"
+            )
         self.residual_norms.append(norm)
         converged = self.is_converged(x, b, norm)  # always called: criteria may keep a history
-        converged = converged and self.updates >= self.min_iterations and not self.problem.count_changed
+        converged = (
+            converged and self.updates >= self.min_iterations and not self.problem.count_changed
+        )
         self.atol = 2.0 * norm + 1e-300 if converged else (1.0 - 1e-9) * norm
 
     def _bind_matrix(self) -> None:
@@ -121,11 +148,14 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         if not converged:
             hint = ""
             if self.problem.num_springs == 0 and self.problem.states:
-                hint = ("; there are no contact springs, so a body held only by contact is unsupported "
-                        "(close the initial gap, or start with a prescribed displacement)")
+                hint = (
+                    "; there are no contact springs, so a body held only by contact is unsupported "
+                    "(close the initial gap, or start with a prescribed displacement)"
+                )
             raise ContactConvergenceError(
                 f"Newton did not converge in {iterations} iterations (residual {self.residual_norms[-1]:.3e}, "
-                f"first {self.residual_norms[0]:.3e}){hint}")
+                f"first {self.residual_norms[0]:.3e}){hint}"
+            )
         return iterations, True
 
 
@@ -181,11 +211,15 @@ class StaticStep:
         problem = solver.problem
         max_inc = self.period if self.max_increment is None else self.max_increment
         if not (0 < self.min_increment <= self.initial_increment <= max_inc):
-            raise ValueError(f"StaticStep: need 0 < min_increment ({self.min_increment}) <= initial_increment "
-                             f"({self.initial_increment}) <= max_increment ({max_inc})")
+            raise ValueError(
+                f"StaticStep: need 0 < min_increment ({self.min_increment}) <= initial_increment "
+                f"({self.initial_increment}) <= max_increment ({max_inc})"
+            )
         if not (0 < self.cutback_factor < 1 and self.growth_factor >= 1):
-            raise ValueError(f"StaticStep: need 0 < cutback_factor ({self.cutback_factor}) < 1 <= growth_factor "
-                             f"({self.growth_factor})")
+            raise ValueError(
+                f"StaticStep: need 0 < cutback_factor ({self.cutback_factor}) < 1 <= growth_factor "
+                f"({self.growth_factor})"
+            )
         t, dt = 0.0, self.initial_increment
         increment = 0
         fast_in_a_row = 0
@@ -198,8 +232,13 @@ class StaticStep:
                 attempt += 1
                 dt = min(dt, self.period - t)
                 t_new = t + dt
-                logger.info(" increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
-                            increment, attempt, dt, t_new)
+                logger.info(
+                    " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
+                    increment,
+                    attempt,
+                    dt,
+                    t_new,
+                )
                 self.set_load(t_new)
                 start = time.perf_counter()
                 try:
@@ -216,18 +255,33 @@ class StaticStep:
                         raise ContactConvergenceError(
                             f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) failed after {attempt} "
                             f"attempt(s); increment size {dt:.3e} cannot be cut back below the minimum "
-                            f"{self.min_increment:.3e}: {error}") from error
+                            f"{self.min_increment:.3e}: {error}"
+                        ) from error
                     dt *= self.cutback_factor
                     fast_in_a_row = 0
                     logger.info(" %s; cutting back to %.6e", error, dt)
             velocity = (u.x.array - u_start) / dt
             t = t_new
-            result = IncrementResult(increment, attempt, t, t / self.period, iterations, problem.num_springs,
-                                     solver.residual_norms[-1])
+            result = IncrementResult(
+                increment,
+                attempt,
+                t,
+                t / self.period,
+                iterations,
+                problem.num_springs,
+                solver.residual_norms[-1],
+            )
             self.results.append(result)
-            logger.info(" increment %d converged: time %.6g, %d iterations, %d contact elements, residual %.3e "
-                        "(%.2f s)", increment, t, iterations, result.springs, result.residual,
-                        time.perf_counter() - start)
+            logger.info(
+                " increment %d converged: time %.6g, %d iterations, %d contact elements, residual %.3e "
+                "(%.2f s)",
+                increment,
+                t,
+                iterations,
+                result.springs,
+                result.residual,
+                time.perf_counter() - start,
+            )
             if self.on_increment is not None:
                 self.on_increment(result)
             fast_in_a_row = fast_in_a_row + 1 if iterations <= self.growth_iterations else 0

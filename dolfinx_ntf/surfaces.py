@@ -53,8 +53,12 @@ class NodeSurface:
     name: str = "nodes"
 
     @classmethod
-    def from_marker(cls, mesh: dolfinx.mesh.Mesh, marker: typing.Callable[[np.ndarray], np.ndarray],
-                    name: str = "nodes") -> NodeSurface:
+    def from_marker(
+        cls,
+        mesh: dolfinx.mesh.Mesh,
+        marker: typing.Callable[[np.ndarray], np.ndarray],
+        name: str = "nodes",
+    ) -> NodeSurface:
         """The vertices where ``marker(x)`` is true (``x`` of shape (3, num_points))."""
         return cls(dolfinx.mesh.locate_entities(mesh, 0, marker), name)
 
@@ -94,11 +98,15 @@ def _cell_arrays(V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
     cell_nodes = V.dofmap.list.array.reshape(num_cells, -1)
     layout = V.dofmap.dof_layout
     num_facets_per_cell = dolfinx.cpp.mesh.cell_num_entities(mesh.topology.cell_type, tdim - 1)
-    closure = np.array([layout.entity_closure_dofs(tdim - 1, i) for i in range(num_facets_per_cell)])
+    closure = np.array(
+        [layout.entity_closure_dofs(tdim - 1, i) for i in range(num_facets_per_cell)]
+    )
     return cell_nodes, closure
 
 
-def boundary_faces(V: dolfinx.fem.FunctionSpace, facets: np.ndarray, *, what: str = "surface") -> SurfaceFaces:
+def boundary_faces(
+    V: dolfinx.fem.FunctionSpace, facets: np.ndarray, *, what: str = "surface"
+) -> SurfaceFaces:
     """Faces of boundary facets as nodes of ``V`` in CalculiX order, oriented out of their cell.
 
     Args:
@@ -124,8 +132,11 @@ def boundary_faces(V: dolfinx.fem.FunctionSpace, facets: np.ndarray, *, what: st
 
     # Orient the corner cycle so that its normal points away from the cell centre.
     xc = X[corners]
-    normal = np.cross(xc[:, 2] - xc[:, 0], xc[:, -1] - xc[:, 1]) if num_corners == 4 else \
-        np.cross(xc[:, 1] - xc[:, 0], xc[:, 2] - xc[:, 0])
+    normal = (
+        np.cross(xc[:, 2] - xc[:, 0], xc[:, -1] - xc[:, 1])
+        if num_corners == 4
+        else np.cross(xc[:, 1] - xc[:, 0], xc[:, 2] - xc[:, 0])
+    )
     outward = np.einsum("fi,fi->f", normal, xc.mean(axis=1) - X[cell_nodes[cells]].mean(axis=1))
     flip = outward < 0
     corners[flip, 1:] = corners[flip, 1:][:, ::-1]
@@ -154,7 +165,8 @@ def _facet_cells(
         x = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, facets[interior[:1]])[0]
         raise ValueError(
             f"{what}: {interior.size} facet(s) lie between two cells, not on the boundary "
-            f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))")
+            f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
+        )
     cells = f_to_c.array[f_to_c.offsets[facets]]
     cell_facets = c_to_f.array.reshape(-1, c_to_f.offsets[1] - c_to_f.offsets[0])
     local_facet = np.argmax(cell_facets[cells] == facets[:, None], axis=1)
@@ -169,7 +181,9 @@ def _midside_nodes(X: np.ndarray, corners: np.ndarray, others: np.ndarray) -> np
     """
     num_corners = corners.shape[1]
     midpoints = 0.5 * (X[corners] + X[np.roll(corners, -1, axis=1)])  # (F, c, 3)
-    distance = np.linalg.norm(midpoints[:, :, None, :] - X[others][:, None, :, :], axis=-1)  # (F, c, m)
+    distance = np.linalg.norm(
+        midpoints[:, :, None, :] - X[others][:, None, :, :], axis=-1
+    )  # (F, c, m)
     choice = np.argmin(distance[:, :, :num_corners], axis=2)
     edge_nodes = np.take_along_axis(others, choice, axis=1)
     if np.any(np.sort(choice, axis=1) != np.arange(num_corners)):
@@ -180,27 +194,36 @@ def _midside_nodes(X: np.ndarray, corners: np.ndarray, others: np.ndarray) -> np
 def _tagged_facets(surface: FacetSurface, what: str) -> np.ndarray:
     tags = surface.tags
     if tags.dim != tags.mesh.topology.dim - 1:
-        raise ValueError(f"{what}: MeshTags of dimension {tags.dim} given, facet tags "
-                         f"(dimension {tags.mesh.topology.dim - 1}) needed")
+        raise ValueError(
+            f"{what}: MeshTags of dimension {tags.dim} given, facet tags "
+            f"(dimension {tags.mesh.topology.dim - 1}) needed"
+        )
     values = surface.value_list()
     facets = tags.indices[np.isin(tags.values, values)]
     missing = [v for v in values if not np.any(tags.values == v)]
     if missing:
-        raise ValueError(f"{what}: facet tag value(s) {missing} not found in the facet tags "
-                         f"(values present: {sorted(set(tags.values.tolist()))})")
+        raise ValueError(
+            f"{what}: facet tag value(s) {missing} not found in the facet tags "
+            f"(values present: {sorted(set(tags.values.tolist()))})"
+        )
     return facets
 
 
-def resolve_master(V: dolfinx.fem.FunctionSpace, surface: FacetSurface, what: str = "master") -> SurfaceFaces:
+def resolve_master(
+    V: dolfinx.fem.FunctionSpace, surface: FacetSurface, what: str = "master"
+) -> SurfaceFaces:
     """Master faces of a facet surface."""
     if not isinstance(surface, FacetSurface):
-        raise ValueError(f"{what}: the master surface must be a FacetSurface (face-based), "
-                         f"got {type(surface).__name__}")
+        raise ValueError(
+            f"{what}: the master surface must be a FacetSurface (face-based), "
+            f"got {type(surface).__name__}"
+        )
     return boundary_faces(V, _tagged_facets(surface, what), what=what)
 
 
-def resolve_slave(V: dolfinx.fem.FunctionSpace, surface: FacetSurface | NodeSurface,
-                  what: str = "slave") -> SlaveSurface:
+def resolve_slave(
+    V: dolfinx.fem.FunctionSpace, surface: FacetSurface | NodeSurface, what: str = "slave"
+) -> SlaveSurface:
     """Slave nodes and area faces (spec §2.1).
 
     Face-based: the listed faces; slave nodes are all their nodes. Node-based: the slave faces are all exterior faces
@@ -210,19 +233,23 @@ def resolve_slave(V: dolfinx.fem.FunctionSpace, surface: FacetSurface | NodeSurf
         faces = boundary_faces(V, _tagged_facets(surface, what), what=what)
         return SlaveSurface(faces.nodes, faces)
     if not isinstance(surface, NodeSurface):
-        raise ValueError(f"{what}: expected a FacetSurface or NodeSurface, got {type(surface).__name__}")
+        raise ValueError(
+            f"{what}: expected a FacetSurface or NodeSurface, got {type(surface).__name__}"
+        )
     vertices = np.asarray(surface.vertices, dtype=np.int32)
     if vertices.size == 0:
         raise ValueError(f"{what}: node surface '{surface.name}' has no vertices")
     mesh = V.mesh
     num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
     if vertices.min() < 0 or vertices.max() >= num_vertices:
-        raise ValueError(f"{what}: node surface '{surface.name}' names vertex indices outside 0..{num_vertices - 1}")
+        raise ValueError(
+            f"{what}: node surface '{surface.name}' names vertex indices outside 0..{num_vertices - 1}"
+        )
     nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(tdim - 1, tdim)
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     all_faces = boundary_faces(V, exterior, what=what)
-    touching = np.isin(all_faces.faces[:, :all_faces.face_type.num_corners], nodes).any(axis=1)
+    touching = np.isin(all_faces.faces[:, : all_faces.face_type.num_corners], nodes).any(axis=1)
     faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
     return SlaveSurface(nodes, faces)

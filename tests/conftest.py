@@ -32,9 +32,18 @@ def _box_grid(origin, size, divisions):
 
     i, j, k = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
     i, j, k = i.ravel(), j.ravel(), k.ravel()
-    hexes = np.column_stack([node(i, j, k), node(i + 1, j, k), node(i, j + 1, k), node(i + 1, j + 1, k),
-                             node(i, j, k + 1), node(i + 1, j, k + 1), node(i, j + 1, k + 1),
-                             node(i + 1, j + 1, k + 1)])
+    hexes = np.column_stack(
+        [
+            node(i, j, k),
+            node(i + 1, j, k),
+            node(i, j + 1, k),
+            node(i + 1, j + 1, k),
+            node(i, j, k + 1),
+            node(i + 1, j, k + 1),
+            node(i, j + 1, k + 1),
+            node(i + 1, j + 1, k + 1),
+        ]
+    )
     return points, hexes
 
 
@@ -44,8 +53,14 @@ def _hexes_to_tets(hexes):
     return np.vstack([hexes[:, p] for p in paths])
 
 
-def two_blocks(comm=MPI.COMM_WORLD, *, lower=((0, 0, -1), (1, 1, 1), (4, 4, 2)),
-               upper=((0, 0, 0), (1, 1, 1), (4, 4, 2)), gap=0.0, cell="hexahedron"):
+def two_blocks(
+    comm=MPI.COMM_WORLD,
+    *,
+    lower=((0, 0, -1), (1, 1, 1), (4, 4, 2)),
+    upper=((0, 0, 0), (1, 1, 1), (4, 4, 2)),
+    gap=0.0,
+    cell="hexahedron",
+):
     """Two boxes (origin, size, divisions) stacked along z; the upper one shifted up by ``gap``.
 
     Returns the mesh, cell tags (LOWER, UPPER) and facet tags: LOWER_BOTTOM, LOWER_TOP (master), UPPER_BOTTOM
@@ -68,10 +83,13 @@ def two_blocks(comm=MPI.COMM_WORLD, *, lower=((0, 0, -1), (1, 1, 1), (4, 4, 2)),
 
     tdim = 3
     midpoints = dolfinx.mesh.compute_midpoints(
-        mesh, tdim, np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32))
+        mesh, tdim, np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+    )
     upper_cells = midpoints[:, 2] > o1[2] + s1[2] + 0.5 * gap
     cell_values = np.where(upper_cells, UPPER, LOWER).astype(np.int32)
-    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, np.arange(cell_values.size, dtype=np.int32), cell_values)
+    cell_tags = dolfinx.mesh.meshtags(
+        mesh, tdim, np.arange(cell_values.size, dtype=np.int32), cell_values
+    )
 
     mesh.topology.create_connectivity(tdim - 1, tdim)
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)

@@ -21,35 +21,60 @@ def _elastic_residual(u, v, facet_tags, pressure):
     mesh = u.function_space.mesh
     sigma = small_strain_stress(u, E, NU)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
-    return ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(UPPER_TOP)
+    return ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
+        ufl.FacetNormal(mesh), v
+    ) * ds(UPPER_TOP)
 
 
-def _setup(cell="hexahedron", upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), *, rollers=False,
-           law=None, **problem_options):
+def _setup(
+    cell="hexahedron",
+    upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)),
+    *,
+    rollers=False,
+    law=None,
+    **problem_options,
+):
     """Upper block pressed on a lower block by a pressure on its top."""
     mesh, _, ft = two_blocks(cell=cell, upper=upper)
     V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     F = _elastic_residual(u, v, ft, pressure)
-    if rollers:  # symmetry planes x = 0 and y = 0 for both bodies, bottom on rollers: uniform stress exact
+    if (
+        rollers
+    ):  # symmetry planes x = 0 and y = 0 for both bodies, bottom on rollers: uniform stress exact
         x0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
         y0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[1], 0.0))
-        bcs = [component_bc(V, 0, x0), component_bc(V, 1, y0), component_bc(V, 2, ft.find(LOWER_BOTTOM))]
+        bcs = [
+            component_bc(V, 0, x0),
+            component_bc(V, 1, y0),
+            component_bc(V, 2, ft.find(LOWER_BOTTOM)),
+        ]
     else:
-        bcs = [dolfinx.fem.dirichletbc(np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V),
-               component_bc(V, 0, ft.find(UPPER_TOP)), component_bc(V, 1, ft.find(UPPER_TOP))]
+        bcs = [
+            dolfinx.fem.dirichletbc(
+                np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
+            ),
+            component_bc(V, 0, ft.find(UPPER_TOP)),
+            component_bc(V, 1, ft.find(UPPER_TOP)),
+        ]
     law = law or ntf.LinearLaw.with_ccx_defaults(E)
-    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
-                           ntf.SurfaceInteraction(law))
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(law),
+    )
     problem = ntf.ContactProblem(F, u, [pair], bcs, **problem_options)
     return problem, pressure, ft
 
 
 def _solve(problem, pressure, load=10.0, increments=2):
     solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
-    step = ntf.StaticStep(lambda t: setattr(pressure, "value", load * t), initial_increment=1.0 / increments,
-                          fixed=True)
+    step = ntf.StaticStep(
+        lambda t: setattr(pressure, "value", load * t),
+        initial_increment=1.0 / increments,
+        fixed=True,
+    )
     step.run(solver, problem.u)
     return solver, step
 
@@ -161,18 +186,24 @@ def test_bad_inputs_give_clear_errors():
     with pytest.raises(NotImplementedError, match="friction"):
         friction = ntf.SurfaceInteraction(law.law, ntf.Friction(0.3, 100.0))
         ntf.ContactProblem(F, u, [ntf.ContactPair(slave, master, friction)])
-    cell_tags = dolfinx.mesh.meshtags(mesh, 3, np.array([0], dtype=np.int32), np.array([1], dtype=np.int32))
+    cell_tags = dolfinx.mesh.meshtags(
+        mesh, 3, np.array([0], dtype=np.int32), np.array([1], dtype=np.int32)
+    )
     with pytest.raises(ValueError, match="facet tags"):
         ntf.ContactProblem(F, u, [ntf.ContactPair(slave, ntf.FacetSurface(cell_tags, 1), law)])
     W = dolfinx.fem.FunctionSpace(mesh, ("Lagrange", 1))
     w = dolfinx.fem.Function(W)
     with pytest.raises(ValueError, match="vector displacement"):
-        ntf.ContactProblem(ufl.inner(ufl.grad(w), ufl.grad(ufl.TestFunction(W))) * ufl.dx, w,
-                           [ntf.ContactPair(slave, master, law)])
+        ntf.ContactProblem(
+            ufl.inner(ufl.grad(w), ufl.grad(ufl.TestFunction(W))) * ufl.dx,
+            w,
+            [ntf.ContactPair(slave, master, law)],
+        )
     with pytest.raises(ValueError, match="min_increment"):
         problem = ntf.ContactProblem(F, u, [ntf.ContactPair(slave, master, law)])
         ntf.StaticStep(lambda t: None, initial_increment=2.0, max_increment=1.0).run(
-            ntf.ContactNewtonSolver(mesh.comm, problem), u)
+            ntf.ContactNewtonSolver(mesh.comm, problem), u
+        )
 
 
 def test_node_based_slave_collects_lateral_area():
@@ -184,15 +215,19 @@ def test_node_based_slave_collects_lateral_area():
     bottom_vertices = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.isclose(x[2], 0.0))
     vertices = np.intersect1d(upper_vertices, bottom_vertices)
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
-    nodal = ntf.ContactProblem(F, u, [ntf.ContactPair(ntf.NodeSurface(vertices), ntf.FacetSurface(ft, LOWER_TOP),
-                                                      law)])
+    nodal = ntf.ContactProblem(
+        F, u, [ntf.ContactPair(ntf.NodeSurface(vertices), ntf.FacetSurface(ft, LOWER_TOP), law)]
+    )
     faces = nodal.states[0].slave.faces.faces
     # bottom faces (4) plus lateral faces touching the bottom rim (2 per side)
     assert faces.shape[0] == 4 + 8
     nodal.begin_increment(1.0)
     from dolfinx_ntf.spring_areas import spring_areas
+
     coords = nodal.current_coordinates()
-    areas = spring_areas(nodal.states[0].slave.faces.face_type, faces, coords, nodal.states[0].slave.nodes)
+    areas = spring_areas(
+        nodal.states[0].slave.faces.face_type, faces, coords, nodal.states[0].slave.nodes
+    )
     # corner node: a quarter of one bottom face and of two lateral faces
     assert np.isclose(areas.max(), 0.25 * 0.0625 * 4)  # centre node: four bottom quarter faces
     assert np.isclose(np.sort(areas)[0], 0.25 * (0.0625 + 2 * 0.0625))
@@ -254,10 +289,18 @@ def test_body_without_springs_fails_with_a_hint():
     V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V),
-           component_bc(V, 0, ft.find(UPPER_TOP)), component_bc(V, 1, ft.find(UPPER_TOP))]
-    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
-                           ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)))
+    bcs = [
+        dolfinx.fem.dirichletbc(
+            np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
+        ),
+        component_bc(V, 0, ft.find(UPPER_TOP)),
+        component_bc(V, 1, ft.find(UPPER_TOP)),
+    ]
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)),
+    )
     problem = ntf.ContactProblem(_elastic_residual(u, v, ft, pressure), u, [pair], bcs)
     solver = ntf.ContactNewtonSolver(mesh.comm, problem, max_it=8)
     step = ntf.StaticStep(lambda t: setattr(pressure, "value", 10 * t), min_increment=0.5)
@@ -273,12 +316,17 @@ def test_initial_overlap_is_ramped_in_the_first_increment_only():
     mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=-overlap)
     V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP),
-                           ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)))
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)),
+    )
     problem = ntf.ContactProblem(_elastic_residual(u, v, ft, 0.0), u, [pair])
     problem.begin_increment(0.25)
     problem.evaluate(tangent=False)
-    np.testing.assert_allclose(ntf.contact_results(problem)[0].clearance, -0.25 * overlap, rtol=1e-12)
+    np.testing.assert_allclose(
+        ntf.contact_results(problem)[0].clearance, -0.25 * overlap, rtol=1e-12
+    )
     problem.begin_increment(0.5)
     problem.evaluate(tangent=False)
     np.testing.assert_allclose(ntf.contact_results(problem)[0].clearance, -overlap, rtol=1e-12)
