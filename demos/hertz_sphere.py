@@ -1,17 +1,17 @@
 """Hertz contact: an elastic sphere pressed onto an elastic block, compared with Hertz's solution.
 
-A steel hemisphere of radius R = 25 mm touches a steel block at one point; a force on the sphere's flat
-top pushes it down. Hertz's theory (two elastic half-spaces, frictionless, small strain) gives the
-contact radius, the peak pressure and the pressure distribution::
+A steel hemisphere of radius R = 25 mm touches a steel block at one point; a force on the sphere's
+flat top pushes it down. Hertz's theory (two elastic half-spaces, frictionless, small strain) gives
+the contact radius, the peak pressure and the pressure distribution::
 
     1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2,   a = (3 F R / (4 E*))^(1/3),
     p0 = 3 F / (2 pi a^2),                   p(r) = p0 sqrt(1 - r^2/a^2)  for r < a.
 
 Only a quarter of the model is meshed (``meshes/hertz.py``): the planes x = 0 and y = 0 are symmetry
-planes of both bodies, so the quarter carries F/4. The sphere's curved surface is the slave (its nodes
-get the springs), the block top the master. The load makes a/R = 0.15, so the contact radius spans
-about ten elements of the default mesh (four of the coarse one), and the block (13a wide, 10a deep)
-stands in for a half-space.
+planes of both bodies, so the quarter carries F/4. The sphere's curved surface is the slave (its
+nodes get the springs), the block top the master. The load makes a/R = 0.15, so the contact radius
+spans about ten elements of the default mesh (four of the coarse one), and the block (13a wide, 10a
+deep) stands in for a half-space.
 
 The demo prints the errors of the computed total force, contact radius and peak pressure against
 Hertz, and saves ``output/hertz_pressure.png`` (nodal pressure against radius beside the analytical
@@ -107,7 +107,8 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
                         help="output folder (default: output/)")
     parser.add_argument("--cell-type", choices=("tetrahedron", "hexahedron"), default="tetrahedron")
     parser.add_argument("--displacement", type=float, default=DISPLACEMENT,
-                        help=f"downward displacement of the sphere top [mm] (default {DISPLACEMENT})")
+                        help=f"downward displacement of the sphere top [mm] "
+                             f"(default {DISPLACEMENT})")
     parser.add_argument("--ccx-pairing", action="store_true",
                         help="start the face search at the nearest centroid like CalculiX")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -135,20 +136,22 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
     F = (ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
-         + ufl.inner(small_strain_stress(u, E_SPHERE, NU_SPHERE), ufl.grad(v)) * dx(geometry.SPHERE))
+         + ufl.inner(small_strain_stress(u, E_SPHERE, NU_SPHERE), ufl.grad(v))
+         * dx(geometry.SPHERE))
 
     # Block bottom clamped, symmetry planes of both bodies: u_x = 0 on x = 0, u_y = 0 on y = 0. The
     # sphere's flat top moves down by DISPLACEMENT (scaled by the step time).
     bottom = dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM))
     Vz, _ = V.sub(2).collapse()
     top_uz = dolfinx.fem.Function(Vz)
-    top = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2, facet_tags.find(geometry.SPHERE_TOP))
+    top = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2,
+                                              facet_tags.find(geometry.SPHERE_TOP))
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), bottom, V),
            component_bc(V, 0, facet_tags.find(geometry.SYMMETRY_X)),
            component_bc(V, 1, facet_tags.find(geometry.SYMMETRY_Y)),
            dolfinx.fem.dirichletbc(top_uz, top, V.sub(2))]
 
-    # --- Contact -----------------------------------------------------------------------------------
+    # --- Contact ----------------------------------------------------------------------------------
     # LINEAR law with CalculiX's defaults (K = 50 E). The search starts at each node's current face
     # (beyond CalculiX): nodes pressed into the corners of the faceted master do not hop between
     # faces at every re-pairing.
@@ -161,7 +164,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     if not args.quiet:
         ntf.log_progress()
 
-    # --- Static step ---------------------------------------------------------------------------------
+    # --- Static step ------------------------------------------------------------------------------
     # The contact starts at a single node, so the first increment is small; automatic incrementation
     # grows the following ones.
     args.output.mkdir(parents=True, exist_ok=True)
@@ -176,12 +179,13 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
         def set_load(t: float) -> None:
             top_uz.x.array[:] = -t**AMP * args.displacement
 
-        step = ntf.StaticStep(set_load, initial_increment=INC, max_increment=INC, on_increment=record, predictor=PRED)
+        step = ntf.StaticStep(set_load, initial_increment=INC, max_increment=INC,
+                              on_increment=record, predictor=PRED)
         solve_start = time.perf_counter()
         step.run(solver, u)
         solve_time = time.perf_counter() - solve_start
 
-    # --- Compare with Hertz ----------------------------------------------------------------------------
+    # --- Compare with Hertz -----------------------------------------------------------------------
     # Every slave node takes part, with zero pressure where it has no spring; radii are measured in
     # the reference configuration, like Hertz's (linear) theory does.
     # The total force is the contact force of the quarter times 4; it must equal the reaction at
@@ -282,12 +286,12 @@ def _plot(path: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
     near = r < 1.5 * a
     ax.plot(r[near], p[near], "o", ms=3, label="dolfinx_ntf nodal pressure F_N/A")
     ax.plot(rr, p0 * np.sqrt(np.clip(1 - (rr / a) ** 2, 0, None)), "k-", label="Hertz")
-    ax.plot(rr, summary["p0_fit"] * np.sqrt(np.clip(1 - (rr / summary["a_fit"]) ** 2, 0, None)), "r--",
-            label=f"fit: a {summary['a_error']:+.1%}, p0 {summary['p0_error']:+.1%}")
+    ax.plot(rr, summary["p0_fit"] * np.sqrt(np.clip(1 - (rr / summary["a_fit"]) ** 2, 0, None)),
+            "r--", label=f"fit: a {summary['a_error']:+.1%}, p0 {summary['p0_error']:+.1%}")
     ax.set_xlabel("radius r [mm]")
     ax.set_ylabel("contact pressure [MPa]")
-    ax.set_title(f"Hertz: sphere R = {RADIUS:g} mm on a block, F = {summary['force'] / 1e3:.1f} kN, "
-                 f"{summary['dofs']} dofs")
+    ax.set_title(f"Hertz: sphere R = {RADIUS:g} mm on a block, "
+                 f"F = {summary['force'] / 1e3:.1f} kN, {summary['dofs']} dofs")
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()

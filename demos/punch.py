@@ -58,7 +58,8 @@ TOLERANCE = 1e-8
 
 def _load_meshes(name: str) -> typing.Any:
     """Import ``meshes/<name>.py`` by path (``meshes/`` is a folder of scripts, not a package)."""
-    spec = importlib.util.spec_from_file_location(f"_dolfinx_ntf_meshes_{name}", ROOT / "meshes" / f"{name}.py")
+    spec = importlib.util.spec_from_file_location(f"_dolfinx_ntf_meshes_{name}",
+                                                  ROOT / "meshes" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -67,12 +68,14 @@ def _load_meshes(name: str) -> typing.Any:
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
-    parser.add_argument("--output", type=Path, default=Path("output"), help="output folder (default: output/)")
+    parser.add_argument("--output", type=Path, default=Path("output"),
+                        help="output folder (default: output/)")
     parser.add_argument("--cell-type", choices=("hexahedron", "tetrahedron"), default="hexahedron")
     parser.add_argument("--increments", type=int, default=4,
                         help="initial (and largest) number of increments of the step (default 4)")
     parser.add_argument("--ccx-pairing", action="store_true",
-                        help="start the face search at the nearest centroid like CalculiX (slower Newton)")
+                        help="start the face search at the nearest centroid like CalculiX "
+                             "(slower Newton)")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
 
@@ -91,10 +94,12 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # tags name the block bottom (clamped), the block top (master), the punch bottom (slave) and the
     # punch top (loaded). Hexahedra give 4-node master faces and 5-node springs.
     geometry = _load_meshes("punch")
-    sizes = dict(geometry.COARSE) if args.coarse else {"mesh_size_block": 0.05, "mesh_size_punch": 0.04}
+    sizes = (dict(geometry.COARSE) if args.coarse
+             else {"mesh_size_block": 0.05, "mesh_size_punch": 0.04})
     sizes = {key: value * SCALE for key, value in sizes.items()}
     mesh, cell_tags, facet_tags = mesh_from_gmsh(geometry.build_punch, comm, block_size=BLOCK_SIZE,
-                                                 punch_size=PUNCH_SIZE, cell_type=args.cell_type, **sizes)
+                                                 punch_size=PUNCH_SIZE, cell_type=args.cell_type,
+                                                 **sizes)
 
     # --- Bulk problem in UFL ---------------------------------------------------------------------
     # Small-strain elasticity with one material per body. The pressure on the punch top is a
@@ -112,12 +117,13 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # Block bottom clamped. The punch is held vertically by the contact only; its in-plane rigid
     # motions (two translations, rotation about z) are removed by u_x = u_y = 0 on its top face.
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType),
-                                   dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM)),
+                                   dolfinx.fem.locate_dofs_topological(
+                                       V, 2, facet_tags.find(geometry.BLOCK_BOTTOM)),
                                    V),
            component_bc(V, 0, facet_tags.find(geometry.PUNCH_TOP)),
            component_bc(V, 1, facet_tags.find(geometry.PUNCH_TOP))]
 
-    # --- Contact -----------------------------------------------------------------------------------
+    # --- Contact ----------------------------------------------------------------------------------
     # LINEAR law with CalculiX's defaults from the block's Young's modulus: slope K = 50 E, tension
     # E/70000, pairing cutoff 1e-3 sqrt(A). In mm, K h is ~250 E for 5 mm elements: the penetration
     # p/K is ~1e-5 mm, a thousandth of the punch's displacement.
@@ -125,19 +131,19 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     pair = ntf.ContactPair(slave=ntf.FacetSurface(facet_tags, geometry.PUNCH_BOTTOM),
                            master=ntf.FacetSurface(facet_tags, geometry.BLOCK_TOP),
                            interaction=ntf.SurfaceInteraction(law), name="punch")
-    # CalculiX starts each node's face search at the nearest face centroid. The punch centre node sits
-    # right above a block vertex, at the bottom of the dish the punch presses into the block: all four
-    # faces around the vertex hold its projection, rounding decides, and the node hops between two of
-    # them at every re-pairing, each hop tilting its force a little. With the strict tolerance used
-    # here (residual 1e-10 of the first one) Newton then waits for the pairing to freeze at iteration
-    # 9. Starting the search at the node's current face (beyond CalculiX) keeps it put: 3-4 iterations.
-    # ``--ccx-pairing`` shows CalculiX's behaviour.
+    # CalculiX starts each node's face search at the nearest face centroid. The punch centre node
+    # sits right above a block vertex, at the bottom of the dish the punch presses into the block:
+    # all four faces around the vertex hold its projection, rounding decides, and the node hops
+    # between two of them at every re-pairing, each hop tilting its force a little. With the strict
+    # tolerance used here (residual 1e-10 of the first one) Newton then waits for the pairing to
+    # freeze at iteration 9. Starting the search at the node's current face (beyond CalculiX) keeps
+    # it put: 3-4 iterations. ``--ccx-pairing`` shows CalculiX's behaviour.
     problem = ntf.ContactProblem(F, u, [pair], bcs, walk_from_previous_face=not args.ccx_pairing)
     solver = ntf.ContactNewtonSolver(comm, problem)
     if not args.quiet:
         ntf.log_progress()
 
-    # --- Static step ---------------------------------------------------------------------------------
+    # --- Static step ------------------------------------------------------------------------------
     # Automatic incrementation: start with 1/increments of the load, never more (max_increment),
     # halve on divergence. After each converged increment, record the forces and write the XDMF.
     top_area = PUNCH_SIZE[0] * PUNCH_SIZE[1]
@@ -147,18 +153,19 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     with ntf.ContactWriter(problem, str(xdmf)) as writer:
 
         def record(result: ntf.IncrementResult) -> None:
-            rows.append({"increment": result.increment, "time": result.time, "iterations": result.iterations,
-                         "springs": result.springs, **_forces(problem, comm, PRESSURE * result.time * top_area)})
+            rows.append({"increment": result.increment, "time": result.time,
+                         "iterations": result.iterations, "springs": result.springs,
+                         **_forces(problem, comm, PRESSURE * result.time * top_area)})
             writer.write(result.time)
 
         step = ntf.StaticStep(lambda t: setattr(pressure, "value", PRESSURE * t),
-                              initial_increment=1.0 / args.increments, max_increment=1.0 / args.increments,
-                              on_increment=record)
+                              initial_increment=1.0 / args.increments,
+                              max_increment=1.0 / args.increments, on_increment=record)
         solve_start = time.perf_counter()
         step.run(solver, u)
         solve_time = time.perf_counter() - solve_start
 
-    # --- Check and report ------------------------------------------------------------------------------
+    # --- Check and report -------------------------------------------------------------------------
     final = rows[-1]
     passed = all(r["vertical_error"] <= TOLERANCE and r["normal_error"] <= TOLERANCE for r in rows)
     summary = {
@@ -187,10 +194,10 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
 def _forces(problem: ntf.ContactProblem, comm: MPI.Comm, load: float) -> dict:
     """Contact force balance of the current (converged) state.
 
-    ``vertical`` is Σ F_z over the slave nodes (force of the block on the punch); ``pressure_area`` is
-    Σ p A = Σ F_N, larger than the vertical force by the tilt of the master normals in the deformed
-    block; ``normal_z`` weights each spring by its normal's z component, Σ p A n_z, which must equal
-    the load exactly.
+    ``vertical`` is Σ F_z over the slave nodes (force of the block on the punch); ``pressure_area``
+    is Σ p A = Σ F_N, larger than the vertical force by the tilt of the master normals in the
+    deformed block; ``normal_z`` weights each spring by its normal's z component, Σ p A n_z, which
+    must equal the load exactly.
     """
     res = ntf.contact_results(problem)[0]
     vertical = comm.allreduce(float(res.force[:, 2].sum()), op=MPI.SUM)
@@ -199,8 +206,9 @@ def _forces(problem: ntf.ContactProblem, comm: MPI.Comm, load: float) -> dict:
     closed = res.clearance < 0
     max_pressure = comm.allreduce(float(res.pressure.max(initial=0.0)), op=MPI.MAX)
     penetration = comm.allreduce(float(-res.clearance[closed].min(initial=0.0)), op=MPI.MAX)
-    return {"load": load, "vertical": vertical, "pressure_area": pressure_area, "normal_z": normal_z,
-            "vertical_error": abs(vertical - load) / load, "normal_error": abs(normal_z - load) / load,
+    return {"load": load, "vertical": vertical, "pressure_area": pressure_area,
+            "normal_z": normal_z, "vertical_error": abs(vertical - load) / load,
+            "normal_error": abs(normal_z - load) / load,
             "closed": comm.allreduce(int(closed.sum()), op=MPI.SUM), "max_pressure": max_pressure,
             "max_penetration": penetration}
 
@@ -210,16 +218,20 @@ def _print_table(rows: list[dict], summary: dict) -> None:
     print(f"Flat punch: {summary['dofs']} dofs, {summary['increments']} increments, "
           f"solve {summary['solve_time']:.1f} s, total {summary['time']:.1f} s")
     print(f"{'inc':>3} {'time':>6} {'iter':>4} {'springs':>7} {'closed':>6} {'load [N]':>12} "
-          f"{'sum F_z [N]':>14} {'rel.err':>8} {'sum p*A [N]':>14} {'max p':>8} {'max pen. [mm]':>13}")
+          f"{'sum F_z [N]':>14} {'rel.err':>8} {'sum p*A [N]':>14} {'max p':>8} "
+          f"{'max pen. [mm]':>13}")
     for r in rows:
-        print(f"{r['increment']:>3} {r['time']:>6.3f} {r['iterations']:>4} {r['springs']:>7} {r['closed']:>6} "
-              f"{r['load']:>12.6g} {r['vertical']:>14.8g} {r['vertical_error']:>8.1e} {r['pressure_area']:>14.8g} "
+        print(f"{r['increment']:>3} {r['time']:>6.3f} {r['iterations']:>4} {r['springs']:>7} "
+              f"{r['closed']:>6} {r['load']:>12.6g} {r['vertical']:>14.8g} "
+              f"{r['vertical_error']:>8.1e} {r['pressure_area']:>14.8g} "
               f"{r['max_pressure']:>8.4g} {r['max_penetration']:>13.3e}")
-    print(f"Mean pressure under the punch {summary['mean_pressure']:.4g} MPa, peak {summary['max_pressure']:.4g} "
-          f"MPa (corner singularity). Sum p*A exceeds the load by {summary['pressure_area_deviation']:.2e} "
+    print(f"Mean pressure under the punch {summary['mean_pressure']:.4g} MPa, "
+          f"peak {summary['max_pressure']:.4g} MPa (corner singularity). "
+          f"Sum p*A exceeds the load by {summary['pressure_area_deviation']:.2e} "
           f"(tilted master normals); sum p*A*n_z matches it to {summary['normal_error']:.1e}.")
     verdict = "PASSED" if summary["passed"] else "FAILED"
-    print(f"Equilibrium check (relative tolerance {TOLERANCE:.0e}): {verdict}. Results: {summary['xdmf']}")
+    print(f"Equilibrium check (relative tolerance {TOLERANCE:.0e}): {verdict}. "
+          f"Results: {summary['xdmf']}")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 """Node-to-face penalty contact for dolfinx, reproducing CalculiX 2.20 node-to-surface contact.
 
-Pure-numpy layers (laws, faces, projection, spring areas, search, springs) sit below the dolfinx glue (surfaces,
-assembly), the problem and solver, and the outside world (output, CalculiX interop). See ``docs/architecture.md``.
+Pure-numpy layers (laws, faces, projection, spring areas, search, springs) sit below the dolfinx
+glue (surfaces, assembly), the problem and solver, and the outside world (output, CalculiX interop).
+See ``docs/architecture.md``.
 """
 
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress

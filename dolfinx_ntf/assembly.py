@@ -1,13 +1,15 @@
 """Insertion of spring elements into dolfinx's PETSc Jacobian and residual (dolfinx glue).
 
-Contact couples nodes that share no cell, so the bulk form's sparsity pattern lacks those entries. Letting PETSc
-allocate them on the fly costs minutes on large meshes; instead :class:`ContactAssembler` grows the pattern of
-dolfinx's bulk matrix by merging a small contact matrix (``MatAXPY`` with ``DIFFERENT_NONZERO_PATTERN``, done in C):
-once when a matrix is created, and again inside a Newton solve when a re-pairing brings new couplings (the same
-Mat object grows, so the solver bound to it keeps working).
+Contact couples nodes that share no cell, so the bulk form's sparsity pattern lacks those entries.
+Letting PETSc allocate them on the fly costs minutes on large meshes; instead
+:class:`ContactAssembler` grows the pattern of dolfinx's bulk matrix by merging a small contact
+matrix (``MatAXPY`` with ``DIFFERENT_NONZERO_PATTERN``, done in C): once when a matrix is created,
+and again inside a Newton solve when a re-pairing brings new couplings (the same Mat object grows,
+so the solver bound to it keeps working).
 
-Values are inserted with *global* unblocked indices (``3 * global_node + component``); rows and columns of Dirichlet
-dofs get index -1, which PETSc ignores, so Dirichlet rows stay exactly as dolfinx makes them.
+Values are inserted with *global* unblocked indices (``3 * global_node + component``); rows and
+columns of Dirichlet dofs get index -1, which PETSc ignores, so Dirichlet rows stay exactly as
+dolfinx makes them.
 """
 
 from __future__ import annotations
@@ -29,8 +31,9 @@ __all__ = ["SpringBlocks", "ContactAssembler"]
 class SpringBlocks:
     """Dense element blocks to add: ``values[e]`` couples ``row_nodes[e]`` with ``col_nodes[e]``.
 
-    Nodes are local block dofs; ``values`` has shape (E, 3 a, 3 b) for ``row_nodes`` (E, a) and ``col_nodes``
-    (E, b). ``vector`` (E, 3 a) is the residual contribution of the rows (only for square element blocks).
+    Nodes are local block dofs; ``values`` has shape (E, 3 a, 3 b) for ``row_nodes`` (E, a) and
+    ``col_nodes`` (E, b). ``vector`` (E, 3 a) is the residual contribution of the rows (only for
+    square element blocks).
     """
 
     row_nodes: np.ndarray
@@ -45,7 +48,8 @@ def _unblocked(nodes: np.ndarray, bs: int = 3) -> np.ndarray:
 
 
 class ContactAssembler:
-    """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one displacement space."""
+    """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one displacement
+    space."""
 
     def __init__(
         self,
@@ -57,7 +61,8 @@ class ContactAssembler:
 
         Args:
             V: The vector displacement space (block size 3).
-            jacobian_form: The compiled bulk Jacobian form; its sparsity pattern is the base of every matrix.
+            jacobian_form: The compiled bulk Jacobian form; its sparsity pattern is the base of
+                every matrix.
             bcs: Dirichlet conditions on ``V``; their dofs receive no contact entries.
         """
         self._bs = V.dofmap.index_map_bs
@@ -87,7 +92,7 @@ class ContactAssembler:
             dofs, _ = bc.dof_indices()
             self._global_dof_masked[dofs] = -1
 
-    # -- sparsity ------------------------------------------------------------------------------------------
+    # -- sparsity ----------------------------------------------------------------------------------
 
     def _coupling_keys(self, blocks: typing.Sequence[SpringBlocks]) -> np.ndarray:
         """Sorted unique global node couplings (row * N + col) of the blocks."""
@@ -101,16 +106,18 @@ class ContactAssembler:
     def has_pattern(self, blocks: typing.Sequence[SpringBlocks]) -> bool:
         """Whether the current matrix pattern holds every coupling of ``blocks``.
 
-        Only contact couplings are tracked; couplings the bulk form also has count as missing until merged,
-        which costs one merge at most.
+        Only contact couplings are tracked; couplings the bulk form also has count as missing until
+        merged, which costs one merge at most.
         """
         keys = self._coupling_keys(blocks)
         return bool(np.all(np.isin(keys, self._pattern_keys, assume_unique=True)))
 
     def create_matrix(self, blocks: typing.Sequence[SpringBlocks] = ()) -> PETSc.Mat:
-        """A new matrix with the bulk pattern plus the couplings of ``blocks`` (and of earlier matrices)."""
+        """A new matrix with the bulk pattern plus the couplings of ``blocks`` (and of earlier
+        matrices)."""
         A = dolfinx.fem.petsc.create_matrix(self._form)
-        # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused preallocation.
+        # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
+        # preallocation.
         sp = dolfinx.fem.create_sparsity_pattern(self._form)
         sp.assemble()
         graph = sp.graph
@@ -129,8 +136,9 @@ class ContactAssembler:
     def _merge(
         self, A: PETSc.Mat, keys: np.ndarray, blocks: typing.Sequence[SpringBlocks] = ()
     ) -> None:
-        """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values, through a separate matrix
-        merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a solver bound to it keeps working)."""
+        """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values, through a
+        separate matrix merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a solver bound to
+        it keeps working)."""
         bs = self._bs
         first = self._global_node[0] if self._num_owned else 0
         rows = keys // self._num_global
@@ -161,7 +169,7 @@ class ContactAssembler:
             raise RuntimeError("merging the contact pattern lost the matrix block structure")
         self._pattern_keys = np.union1d(self._pattern_keys, keys)
 
-    # -- values --------------------------------------------------------------------------------------------
+    # -- values ------------------------------------------------------------------------------------
 
     def _set_values(self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks]) -> None:
         for blk in blocks:
@@ -178,12 +186,14 @@ class ContactAssembler:
     def add_to_matrix(
         self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks], *, check_pattern: bool = True
     ) -> None:
-        """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings are missing.
+        """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings are
+        missing.
 
         Args:
             A: The matrix; call ``A.assemble()`` afterwards.
             blocks: Element blocks; Dirichlet rows and columns are skipped.
-            check_pattern: Check for missing couplings (skip when the pattern was checked for these springs).
+            check_pattern: Check for missing couplings (skip when the pattern was checked for these
+                springs).
         """
         if check_pattern:
             keys = self._coupling_keys(blocks)
@@ -197,7 +207,8 @@ class ContactAssembler:
     def add_to_vector(self, b: PETSc.Vec, blocks: typing.Sequence[SpringBlocks]) -> None:
         """Add the blocks' residual contributions to ``b`` (global indices; Dirichlet rows skipped).
 
-        Call before dolfinx's ``set_bc``; ends with a vector assembly so off-process rows reach their owners.
+        Call before dolfinx's ``set_bc``; ends with a vector assembly so off-process rows reach
+        their owners.
         """
         for blk in blocks:
             if blk.vector is None or blk.row_nodes.shape[0] == 0:

@@ -1,4 +1,5 @@
-"""Small UFL and boundary-condition helpers for the bulk elasticity around contact (demos, tests, scripts)."""
+"""Small UFL and boundary-condition helpers for the bulk elasticity around contact (demos, tests,
+scripts)."""
 
 from __future__ import annotations
 

@@ -348,8 +348,8 @@ class TabularLaw(PressureOverclosureLaw):
           all points are kept.
         - Temperature-dependent tables are not supported.
         - Energy (spec §8.1): ``A`` times the trapezoidal integral of ``p`` from ``d_1`` to ``d``.
-          Beyond ``d_N`` (strictly) ccx adds ``(p_N - d_N) p_N`` to the full-table integral instead of
-          ``(d - d_N) p_N``; this quirk is reproduced. Below ``d_1`` we return
+          Beyond ``d_N`` (strictly) ccx adds ``(p_N - d_N) p_N`` to the full-table integral instead
+          of ``(d - d_N) p_N``; this quirk is reproduced. Below ``d_1`` we return
           ``A p_1 (d - d_1)`` (the integral of the constant extrapolation; not verified against
           ccx).
     """

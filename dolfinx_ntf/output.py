@@ -18,10 +18,12 @@ __all__ = ["ContactResults", "contact_results", "ContactWriter"]
 
 @dataclass(frozen=True)
 class ContactResults:
-    """Per-spring results of one pair, in spring order (slave nodes ascending, like CalculiX's elements).
+    """Per-spring results of one pair, in spring order (slave nodes ascending, like CalculiX's
+    elements).
 
-    ``clearance`` is g_eff (negative = penetration), ``pressure`` = F_N / A_p (compression positive),
-    ``energy`` the spring energy of spec §8.1, ``force`` the contact force on the slave node (3-vector).
+    ``clearance`` is g_eff (negative = penetration), ``pressure`` = F_N / A_p (compression
+    positive), ``energy`` the spring energy of spec §8.1, ``force`` the contact force on the slave
+    node (3-vector).
     """
 
     pair: str
@@ -63,9 +65,11 @@ def contact_results(problem: ContactProblem) -> list[ContactResults]:
 
 
 class ContactWriter:
-    """Writes displacement, contact pressure, clearance and status (1 closed, 0 open or no spring) to XDMF.
+    """Writes displacement, contact pressure, clearance and status (1 closed, 0 open or no spring)
+    to XDMF.
 
-    XDMF keeps vertex values only, so use a P1 displacement space (P2 midside values are dropped by dolfinx).
+    XDMF keeps vertex values only, so use a P1 displacement space (P2 midside values are dropped by
+    dolfinx).
     """
 
     def __init__(self, problem: ContactProblem, path: str, comm: MPI.Comm | None = None) -> None:

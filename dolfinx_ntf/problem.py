@@ -1,8 +1,10 @@
-"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual and Jacobian.
+"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual and
+Jacobian.
 
-:class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides assembling the
-user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule (spec §3.1) and add the spring
-elements (spec §4, §5). The step driver in ``solver.py`` tells it when an increment starts.
+:class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides
+assembling the user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule
+(spec §3.1) and add the spring elements (spec §4, §5). The step driver in ``solver.py`` tells it
+when an increment starts.
 """
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ __all__ = ["ContactPair", "PairState", "ContactProblem"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
-#: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION (spec §3.1, ccx: iit <= 8).
+#: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION
+#: (spec §3.1, ccx: iit <= 8).
 LAST_REPAIRING_ITERATION = 8
 #: Relative walk tolerance of the triangle search (spec §3.2).
 SEARCH_TOLERANCE = 1e-3
@@ -48,10 +51,12 @@ class ContactPair:
     """One node-to-face contact pair (CalculiX ``*CONTACT PAIR, TYPE=NODE TO SURFACE``).
 
     Args:
-        slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave surface.
+        slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
+            surface.
         master: Face-based master surface.
         interaction: Pressure-overclosure law (and, later, friction).
-        small_sliding: Pair only at increment starts. As in CalculiX, the flag of the *last* pair decides for all.
+        small_sliding: Pair only at increment starts. As in CalculiX, the flag of the *last* pair
+            decides for all.
         name: Label used in messages and output.
         active: Inactive pairs generate no springs (``*MODEL CHANGE``).
     """
@@ -97,19 +102,23 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     """Nonlinear problem ``F(u) + f_contact(u) = 0`` with node-to-face penalty springs.
 
     Args:
-        F: The user's UFL residual (any bulk law: small strain, St.Venant-Kirchhoff, neo-Hookean...).
+        F: The user's UFL residual (any bulk law: small strain, St.Venant-Kirchhoff,
+            neo-Hookean...).
         u: The displacement, a 3D vector Lagrange function (P1 or P2).
-        pairs: Contact pairs (none gives a plain nonlinear problem with the same driver and outputs).
+        pairs: Contact pairs (none gives a plain nonlinear problem with the same driver and
+            outputs).
         bcs: Dirichlet conditions.
         J: UFL Jacobian (derived from ``F`` when omitted).
-        symmetric: Symmetrize the spring matrices like CalculiX's frictionless contact; default is the
-            consistent (unsymmetric) tangent.
-        linearize_area: Recompute spring areas at every evaluation and include their derivative in the tangent
-            (beyond CalculiX, which updates them only when pairing and holds them constant in the tangent).
-        max_depth: Reject nodes deeper than this below the master face (beyond CalculiX, which has no limit).
-        walk_from_previous_face: Start each node's face search at its current face instead of the nearest
-            centroid (beyond CalculiX): a node stays on its face while within the search tolerance, which stops
-            the face ping-pong of nodes on shared edges during re-pairing.
+        symmetric: Symmetrize the spring matrices like CalculiX's frictionless contact; default is
+            the consistent (unsymmetric) tangent.
+        linearize_area: Recompute spring areas at every evaluation and include their derivative in
+            the tangent (beyond CalculiX, which updates them only when pairing and holds them
+            constant in the tangent).
+        max_depth: Reject nodes deeper than this below the master face (beyond CalculiX, which has
+            no limit).
+        walk_from_previous_face: Start each node's face search at its current face instead of the
+            nearest centroid (beyond CalculiX): a node stays on its face while within the search
+            tolerance, which stops the face ping-pong of nodes on shared edges during re-pairing.
         form_compiler_params, jit_params: Passed to dolfinx.
     """
 
@@ -157,10 +166,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
-        #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the residual.
+        #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the
+        #: residual.
         self.nodal_loads: dolfinx.fem.Function | None = None
-        #: Called as ``callback(problem)`` after every pairing (e.g. to write contact-element files); the springs
-        #: are used in Newton iteration ``max(problem.iteration, 1)`` of the increment.
+        #: Called as ``callback(problem)`` after every pairing (e.g. to write contact-element
+        #: files); the springs are used in Newton iteration ``max(problem.iteration, 1)`` of the
+        #: increment.
         self.pairing_callbacks: list[typing.Callable[[ContactProblem], None]] = []
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
@@ -189,7 +200,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             )
         return PairState(pair, slave, master_faces, master, np.zeros(slave.nodes.size))
 
-    # -- state --------------------------------------------------------------------------------------------
+    # -- state -------------------------------------------------------------------------------------
 
     @property
     def num_springs(self) -> int:
@@ -200,7 +211,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """Node coordinates X + u (local nodes with ghosts)."""
         return self._reference + self.u.x.array.reshape(-1, 3)
 
-    # -- pairing ------------------------------------------------------------------------------------------
+    # -- pairing -----------------------------------------------------------------------------------
 
     def begin_increment(self, time_fraction: float, *, static: bool = True) -> None:
         """Increment-start pairing at the last converged displacement (spec §3.1, §3.6).
@@ -221,7 +232,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.ensure_matrix()
 
     def pair(self, *, record_overlap: bool = False) -> int:
-        """Pair every slave node with a master face at the current displacement; returns the spring count."""
+        """Pair every slave node with a master face at the current displacement; returns the spring
+        count."""
         coords = self.current_coordinates()
         for state in self.states:
             self._pair_one(state, coords, record_overlap)
@@ -280,7 +292,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     @staticmethod
     def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:
-        """Projection start points: the last projection where a node keeps its face, else the face centre."""
+        """Projection start points: the last projection where a node keeps its face, else the face
+        centre."""
         xi0 = np.tile(state.master_faces.face_type.center, (found.size, 1))
         if state.xi is not None and state.num_springs:
             previous_face = np.full(state.slave.nodes.size, -1, dtype=np.int64)
@@ -297,7 +310,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             return 0.0
         return state.overlap[slave_index] * (1.0 - self.time_fraction)
 
-    # -- springs ------------------------------------------------------------------------------------------
+    # -- springs -----------------------------------------------------------------------------------
 
     def evaluate(self, *, tangent: bool = True) -> list[SpringBlocks]:
         """Evaluate every spring at the current displacement; returns the blocks to assemble."""
@@ -337,7 +350,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def _area_block(
         self, state: PairState, coords: np.ndarray, *, values: bool = True
     ) -> SpringBlocks:
-        """Tangent of F_N = A_p p(d) with respect to the nodes of the slave faces around p (dA_p/du)."""
+        """Tangent of F_N = A_p p(d) with respect to the nodes of the slave faces around p
+        (dA_p/du)."""
         faces = state.slave.faces
         slave_index, node, gradient = spring_area_gradients(
             faces.face_type, faces.faces, coords, state.slave.nodes
@@ -370,12 +384,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._pattern_checked = True
         return self.matrix
 
-    # -- dolfinx callbacks --------------------------------------------------------------------------------
+    # -- dolfinx callbacks -------------------------------------------------------------------------
     #
-    # CalculiX's order (spec §3.1, §6): Newton iteration k >= 2 starts with a re-pairing (k <= 8), assembles and
-    # solves with it, and the convergence check after the update uses that same pairing. dolfinx calls
-    # form -> F -> (convergence check) -> J -> solve, so the re-pairing happens in J, which then re-assembles the
-    # residual vector last given to F (the right-hand side of the coming solve).
+    # CalculiX's order (spec §3.1, §6): Newton iteration k >= 2 starts with a re-pairing (k <= 8),
+    # assembles and solves with it, and the convergence check after the update uses that same
+    # pairing. dolfinx calls form -> F -> (convergence check) -> J -> solve, so the re-pairing
+    # happens in J, which then re-assembles the residual vector last given to F (the right-hand side
+    # of the coming solve).
 
     def form(self, x: PETSc.Vec) -> None:
         """Before F: update ghost values and evaluate the springs of the current pairing."""
@@ -396,7 +411,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """Start Newton iteration ``iteration``: re-pair on schedule (and re-assemble F), assemble the Jacobian."""
+        """Start Newton iteration ``iteration``: re-pair on schedule (and re-assemble F), assemble
+        the Jacobian."""
         self.iteration += 1
         self.count_changed = False
         if not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION:
@@ -414,6 +430,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         A.assemble()
 
     def set_bcs(self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass]) -> None:
-        """Replace the Dirichlet conditions (e.g. between steps); contact entries skip the new constrained dofs."""
+        """Replace the Dirichlet conditions (e.g. between steps); contact entries skip the new
+        constrained dofs."""
         self.bcs = list(bcs)
         self.assembler.set_bcs(self.bcs)

@@ -268,9 +268,10 @@ class MasterSurface:
             max_depth: If given, reject points deeper than this below the accepted triangle's
                 plane (not in ccx, which has no penetration-side limit).
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
-            start_faces: Optional (N,) face to start each walk from (its first sub-triangle), -1 for the
-                nearest centroid. Starting from the previous face keeps a node on it while it stays within the
-                tolerance (not in ccx, whose walk always starts at the nearest centroid).
+            start_faces: Optional (N,) face to start each walk from (its first sub-triangle), -1 for
+                the nearest centroid. Starting from the previous face keeps a node on it while it
+                stays within the tolerance (not in ccx, whose walk always starts at the nearest
+                centroid).
 
         Returns:
             (N,) face index, or -1 where no face is found.
@@ -278,7 +279,9 @@ class MasterSurface:
         start = None
         if start_faces is not None:
             start_faces = np.asarray(start_faces, dtype=np.int64)
-            start = np.where(start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1)
+            start = np.where(
+                start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1
+            )
         tri = self.locate_triangles(points, tolerances, max_depth=max_depth, max_steps=max_steps,
                                     start=start)
         out = np.full(tri.shape, -1, dtype=np.int64)

@@ -1,9 +1,10 @@
 """Newton solver with CalculiX's contact convergence rules, and a static step driver with cutbacks.
 
-dolfinx 0.5.2's C++ Newton loop has no convergence hook: it compares the residual norm with ``atol`` right after
-calling the residual callback. :class:`ContactNewtonSolver` decides convergence in that callback
-(:meth:`ContactNewtonSolver.is_converged` plus CalculiX's rules: at least two Newton updates, none right after a
-re-pairing that changed the number of springs) and sets ``atol`` just above or below the norm accordingly.
+dolfinx 0.5.2's C++ Newton loop has no convergence hook: it compares the residual norm with ``atol``
+right after calling the residual callback. :class:`ContactNewtonSolver` decides convergence in that
+callback (:meth:`ContactNewtonSolver.is_converged` plus CalculiX's rules: at least two Newton
+updates, none right after a re-pairing that changed the number of springs) and sets ``atol`` just
+above or below the norm accordingly.
 """
 
 from __future__ import annotations
@@ -53,8 +54,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         petsc_options: PETSc options of the linear solver, set under ``options_prefix``
             (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`).
         options_prefix: Prefix of the Krylov solver's options.
-        relative_tolerance: Converged when the residual norm falls below this fraction of the first residual
-            norm of the increment (or below ``atol``).
+        relative_tolerance: Converged when the residual norm falls below this fraction of the first
+            residual norm of the increment (or below ``atol``).
         atol: Absolute residual tolerance.
         max_it: Maximum Newton iterations per increment.
     """
@@ -104,7 +105,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         x.axpy(-self.relaxation_parameter, dx)
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """Residual test: the norm is below ``atol`` or ``relative_tolerance`` times the increment's first norm.
+        """Residual test: the norm is below ``atol`` or ``relative_tolerance`` times the increment's
+        first norm.
 
         Override for other criteria (the CalculiX job runner uses ccx's force-based test).
         """
@@ -133,10 +135,12 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self.setJ(self.problem.J, A)
 
     def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
-        """Solve one increment from the current ``u`` (after :meth:`ContactProblem.begin_increment`).
+        """Solve one increment from the current ``u`` (after
+        :meth:`ContactProblem.begin_increment`).
 
         Returns:
-            The number of Newton iterations and True; a failure raises :class:`ContactConvergenceError`.
+            The number of Newton iterations and True; a failure raises
+            :class:`ContactConvergenceError`.
         """
         self.residual_norms = []
         self.updates = 0
@@ -153,7 +157,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
                     "(close the initial gap, or start with a prescribed displacement)"
                 )
             raise ContactConvergenceError(
-                f"Newton did not converge in {iterations} iterations (residual {self.residual_norms[-1]:.3e}, "
+                f"Newton did not converge in {iterations} iterations "
+                f"(residual {self.residual_norms[-1]:.3e}, "
                 f"first {self.residual_norms[0]:.3e}){hint}"
             )
         return iterations, True
@@ -180,8 +185,8 @@ class StaticStep:
     """A static step of ``period`` with automatic incrementation (CalculiX ``*STATIC``).
 
     Args:
-        set_load: Called with the step time at the end of each increment (before the pairing); scales loads
-            and prescribed displacements, e.g. ``lambda t: traction.value = t * p``.
+        set_load: Called with the step time at the end of each increment (before the pairing);
+            scales loads and prescribed displacements, e.g. ``lambda t: traction.value = t * p``.
         period: Step time.
         initial_increment, min_increment, max_increment: Increment sizes.
         fixed: Use ``initial_increment`` throughout (CalculiX DIRECT).
@@ -253,8 +258,9 @@ class StaticStep:
                     u.x.scatter_forward()
                     if self.fixed or dt * self.cutback_factor < self.min_increment:
                         raise ContactConvergenceError(
-                            f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) failed after {attempt} "
-                            f"attempt(s); increment size {dt:.3e} cannot be cut back below the minimum "
+                            f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
+                            f"failed after {attempt} attempt(s); increment size {dt:.3e} "
+                            f"cannot be cut back below the minimum "
                             f"{self.min_increment:.3e}: {error}"
                         ) from error
                     dt *= self.cutback_factor
@@ -273,8 +279,8 @@ class StaticStep:
             )
             self.results.append(result)
             logger.info(
-                " increment %d converged: time %.6g, %d iterations, %d contact elements, residual %.3e "
-                "(%.2f s)",
+                " increment %d converged: time %.6g, %d iterations, %d contact elements, "
+                "residual %.3e (%.2f s)",
                 increment,
                 t,
                 iterations,
@@ -291,7 +297,8 @@ class StaticStep:
 
 
 def log_progress(level: int = logging.INFO) -> None:
-    """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings, convergence) on rank 0."""
+    """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings, convergence)
+    on rank 0."""
     from mpi4py import MPI
 
     if getattr(log_progress, "_handler", None) is None and MPI.COMM_WORLD.rank == 0:

@@ -1,12 +1,14 @@
 """Contact surfaces of a dolfinx mesh as faces of displacement nodes (dolfinx glue).
 
-A *node* here is a block dof of the vector displacement space ``V`` (P1 or P2): the spring elements move with the
-displacement dofs, so surfaces are expressed in ``V``'s local block numbering (owned and ghost). Faces come out in
-CalculiX order: corners counter-clockwise seen from outside the body, then midside nodes (see ``faces.py``).
+A *node* here is a block dof of the vector displacement space ``V`` (P1 or P2): the spring elements
+move with the displacement dofs, so surfaces are expressed in ``V``'s local block numbering (owned
+and ghost). Faces come out in CalculiX order: corners counter-clockwise seen from outside the body,
+then midside nodes (see ``faces.py``).
 
-Users name surfaces with :class:`FacetSurface` (facet-tag values, the face-based surfaces of CalculiX) or
-:class:`NodeSurface` (a vertex set, CalculiX's ``*SURFACE, TYPE=NODE``); :func:`resolve_master` and
-:func:`resolve_slave` turn them into numbering-level data for the pure-numpy layers.
+Users name surfaces with :class:`FacetSurface` (facet-tag values, the face-based surfaces of
+CalculiX) or :class:`NodeSurface` (a vertex set, CalculiX's ``*SURFACE, TYPE=NODE``);
+:func:`resolve_master` and :func:`resolve_slave` turn them into numbering-level data for the
+pure-numpy layers.
 """
 
 from __future__ import annotations
@@ -176,8 +178,9 @@ def _facet_cells(
 def _midside_nodes(X: np.ndarray, corners: np.ndarray, others: np.ndarray) -> np.ndarray:
     """Midside nodes in CalculiX order (edge c0-c1, c1-c2, ...), then any centre node.
 
-    The closure order of edge dofs is dolfinx's, so each edge's node is found as the candidate nearest the edge
-    midpoint in the reference configuration (exact for straight edges, robust for curved ones).
+    The closure order of edge dofs is dolfinx's, so each edge's node is found as the candidate
+    nearest the edge midpoint in the reference configuration (exact for straight edges, robust for
+    curved ones).
     """
     num_corners = corners.shape[1]
     midpoints = 0.5 * (X[corners] + X[np.roll(corners, -1, axis=1)])  # (F, c, 3)
@@ -226,8 +229,8 @@ def resolve_slave(
 ) -> SlaveSurface:
     """Slave nodes and area faces (spec §2.1).
 
-    Face-based: the listed faces; slave nodes are all their nodes. Node-based: the slave faces are all exterior faces
-    of the mesh with at least one corner among the slave nodes.
+    Face-based: the listed faces; slave nodes are all their nodes. Node-based: the slave faces are
+    all exterior faces of the mesh with at least one corner among the slave nodes.
     """
     if isinstance(surface, FacetSurface):
         faces = boundary_faces(V, _tagged_facets(surface, what), what=what)
@@ -243,7 +246,8 @@ def resolve_slave(
     num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
     if vertices.min() < 0 or vertices.max() >= num_vertices:
         raise ValueError(
-            f"{what}: node surface '{surface.name}' names vertex indices outside 0..{num_vertices - 1}"
+            f"{what}: node surface '{surface.name}' names vertex indices outside "
+            f"0..{num_vertices - 1}"
         )
     nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
     tdim = mesh.topology.dim

@@ -48,7 +48,8 @@ def _box_grid(origin, size, divisions):
 
 
 def _hexes_to_tets(hexes):
-    # Six tetrahedra around the 0-7 diagonal (dolfinx tensor order of hex vertices); conforming across cells.
+    # Six tetrahedra around the 0-7 diagonal (dolfinx tensor order of hex vertices); conforming
+    # across cells.
     paths = [(0, 1, 3, 7), (0, 1, 5, 7), (0, 4, 5, 7), (0, 2, 3, 7), (0, 2, 6, 7), (0, 4, 6, 7)]
     return np.vstack([hexes[:, p] for p in paths])
 
@@ -63,8 +64,8 @@ def two_blocks(
 ):
     """Two boxes (origin, size, divisions) stacked along z; the upper one shifted up by ``gap``.
 
-    Returns the mesh, cell tags (LOWER, UPPER) and facet tags: LOWER_BOTTOM, LOWER_TOP (master), UPPER_BOTTOM
-    (slave), UPPER_TOP.
+    Returns the mesh, cell tags (LOWER, UPPER) and facet tags: LOWER_BOTTOM, LOWER_TOP (master),
+    UPPER_BOTTOM (slave), UPPER_TOP.
     """
     (o1, s1, n1), (o2, s2, n2) = lower, upper
     p1, c1 = _box_grid(o1, s1, n1)

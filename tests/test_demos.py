@@ -30,7 +30,8 @@ def test_punch_demo_balances_the_load(tmp_path):
 
 def test_hertz_demo_is_close_to_hertz(tmp_path):
     summary = _demo("hertz_sphere").main(["--coarse", "--output", str(tmp_path)])
-    # Measured on the coarse mesh: force of the fitted profile -2.4 %, radius -3.6 %, peak pressure +5.1 %.
+    # Measured on the coarse mesh: force of the fitted profile -2.4 %, radius -3.6 %, peak pressure
+    # +5.1 %.
     assert summary["equilibrium_error"] < 1e-8
     assert abs(summary["fit_force_error"]) < 0.06
     assert abs(summary["a_error"]) < 0.08

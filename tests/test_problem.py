@@ -1,4 +1,5 @@
-"""Full contact solves on two-block meshes: assembly, equilibrium, patch test, Newton convergence, bad input."""
+"""Full contact solves on two-block meshes: assembly, equilibrium, patch test, Newton convergence,
+bad input."""
 
 import numpy as np
 import pytest
@@ -88,7 +89,8 @@ def test_equilibrium_contact_force_equals_load(cell):
     punch_area = 0.6 * 0.6
     vertical = res.force[:, 2].sum()  # force of the master on the slave nodes
     assert vertical == pytest.approx(load * punch_area, rel=1e-10)
-    # Σ p·A over the slave nodes carries the load (normals are vertical up to the master's small rotation).
+    # Σ p·A over the slave nodes carries the load (normals are vertical up to the master's small
+    # rotation).
     assert np.sum(res.pressure * res.area) == pytest.approx(load * punch_area, rel=1e-4)
     assert np.all(res.clearance < 0)
 
@@ -100,7 +102,8 @@ def test_patch_test_uniform_pressure(cell):
     _solve(problem, pressure, load=10.0)
     res = ntf.contact_results(problem)[0]
     assert res.node.size == 25
-    # Uniform to 1e-8; its value is the load over the *current* area (spring areas follow the deformation).
+    # Uniform to 1e-8; its value is the load over the *current* area (spring areas follow the
+    # deformation).
     np.testing.assert_allclose(res.pressure, res.pressure.mean(), rtol=1e-8)
     assert np.sum(res.pressure * res.area) == pytest.approx(10.0, rel=1e-10)
     assert res.pressure.mean() == pytest.approx(10.0, rel=1e-2)
@@ -234,8 +237,9 @@ def test_node_based_slave_collects_lateral_area():
 
 
 def test_walk_from_previous_face_stops_edge_ping_pong():
-    """Tets: slave nodes on shared master edges flip faces at each re-pairing (ccx behaviour) until iteration 9;
-    starting the walk at the previous face keeps them put, and Newton converges as on hexahedra."""
+    """Tets: slave nodes on shared master edges flip faces at each re-pairing (ccx behaviour) until
+    iteration 9; starting the walk at the previous face keeps them put, and Newton converges as on
+    hexahedra."""
     iterations = {}
     for option in (False, True):
         problem, pressure, _ = _setup("tetrahedron", walk_from_previous_face=option)
@@ -249,8 +253,8 @@ def test_walk_from_previous_face_stops_edge_ping_pong():
 @pytest.mark.parametrize("cell", ["hexahedron", "tetrahedron"])
 @pytest.mark.parametrize("linearize_area", [False, True])
 def test_global_jacobian_matches_finite_differences(cell, linearize_area):
-    """The assembled Jacobian is the exact derivative of the assembled residual for a fixed pairing: areas held
-    at their pairing values (ccx), or recomputed and linearized (linearize_area)."""
+    """The assembled Jacobian is the exact derivative of the assembled residual for a fixed pairing:
+    areas held at their pairing values (ccx), or recomputed and linearized (linearize_area)."""
     problem, pressure, _ = _setup(cell, linearize_area=linearize_area)
     _solve(problem, pressure, increments=1)
     problem.iteration = 100  # past the re-pairing schedule: the pairing stays fixed
@@ -284,7 +288,8 @@ def test_global_jacobian_matches_finite_differences(cell, linearize_area):
 
 
 def test_body_without_springs_fails_with_a_hint():
-    """A punch above the block (open gap, no springs) under a load has no support: a clear error, no NaN."""
+    """A punch above the block (open gap, no springs) under a load has no support: a clear error,
+    no NaN."""
     mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=0.05)
     V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
@@ -310,8 +315,8 @@ def test_body_without_springs_fails_with_a_hint():
 
 
 def test_initial_overlap_is_ramped_in_the_first_increment_only():
-    """Spec §3.6: in increment 1 of step 1 only the fraction tau of an initial overlap is active; g0 is reset at
-    every later increment start, so from increment 2 on the whole overlap acts."""
+    """Spec §3.6: in increment 1 of step 1 only the fraction tau of an initial overlap is active; g0
+    is reset at every later increment start, so from increment 2 on the whole overlap acts."""
     overlap = 0.01
     mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=-overlap)
     V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))

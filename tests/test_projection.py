@@ -402,7 +402,8 @@ def test_empty_batch():
 
 
 def test_batch_of_ten_thousand_points():
-    """A large mixed batch stays finite and inside the domain (timing: benchmarks/contact_phases.py)."""
+    """A large mixed batch stays finite and inside the domain
+    (timing: benchmarks/contact_phases.py)."""
     rng = np.random.default_rng(22)
     num = 10_000
     coords = _distorted_faces(QUAD8, num, 0.05, rng)

@@ -1,10 +1,12 @@
-"""CalculiX interoperability: run ccx decks with dolfinx_ntf, write decks, read and write ccx results.
+"""CalculiX interoperability: run ccx decks with dolfinx_ntf, write decks, read and write ccx
+results.
 
 File formats (pure Python/numpy, no dolfinx):
     - ``deck``: ``read_deck`` parses the node-to-face subset of a ``.inp`` deck into a ``Deck``;
     - ``dat``: ccx 2.20 ``.dat`` blocks, written byte for byte as ccx does, and read back;
     - ``cel``: the CONTACT ELEMENTS file ``jobname.cel``;
-    - ``ccx``: ``run_ccx`` and helpers to read its results; ``compare``: ccx results against a job's.
+    - ``ccx``: ``run_ccx`` and helpers to read its results; ``compare``: ccx results against a
+      job's.
 dolfinx glue:
     - ``model``: ``build_model`` turns a ``Deck`` into a mesh, UFL forms, loads and contact pairs;
     - ``job``: ``run_job`` runs a deck like ``ccx JOB`` (also ``python -m dolfinx_ntf run JOB``);

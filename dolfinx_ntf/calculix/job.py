@@ -197,9 +197,9 @@ class _CcxNewtonSolver(ContactNewtonSolver):
     bulk elements and contact springs, ``q~`` its mean over the updates so far): converged when ``r
     <= c1 q~`` and at least one of ``c <= c2 du``, ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <=
     R_l q~``, ``q <= eps q~``, ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to ``I_P`` updates,
-    ``(R_p, C_n)`` beyond, and ``(eps, C_eps)`` under zero flux (``q <= eps q~``). The base class adds
-    ccx's other rules (at least two updates, none right after a re-pairing that changed the number of
-    springs).
+    ``(R_p, C_n)`` beyond, and ``(eps, C_eps)`` under zero flux (``q <= eps q~``). The base class
+    adds ccx's other rules (at least two updates, none right after a re-pairing that changed the
+    number of springs).
     """
 
     def __init__(self, comm, problem: ContactProblem, average_force, **options) -> None:
@@ -216,7 +216,8 @@ class _CcxNewtonSolver(ContactNewtonSolver):
         return super().solve(u)
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """ccx's test after each Newton update (the class docstring); False before the first update."""
+        """ccx's test after each Newton update (the class docstring); False before the first
+        update."""
         if self.updates == 0:
             return False
         controls = self.controls
@@ -225,7 +226,9 @@ class _CcxNewtonSolver(ContactNewtonSolver):
         mean = float(np.mean(self._averages))
         largest = b.norm(PETSc.NormType.NORM_INFINITY)
         self._largest.append(largest)
-        correction = self.relaxation_parameter * self.last_correction.norm(PETSc.NormType.NORM_INFINITY)
+        correction = self.relaxation_parameter * self.last_correction.norm(
+            PETSc.NormType.NORM_INFINITY
+        )
         start = self.increment_start if self.increment_start is not None else x.array
         change = float(np.abs(x.array - start).max(initial=0.0))
         if average <= controls["epsilon"] * mean:

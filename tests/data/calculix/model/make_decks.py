@@ -131,7 +131,8 @@ def cube(etype, *, nlgeom=False, pressure=10.0, young=1000.0, nu=0.3, curved=Fal
         ids, xyz, conn = quadratic(conn, ids, xyz, np.random.default_rng(3), on_boundary)
     top = faces_where(etype, conn, ids, xyz, lambda x: np.isclose(x[:, 2], 1.0))
     lines = [
-        f"*HEADING\nUnit cube, {etype}{' curved' if curved else ''}, uniaxial, on rollers (make_decks.py)",
+        f"*HEADING\nUnit cube, {etype}{' curved' if curved else ''}, uniaxial, on rollers "
+        "(make_decks.py)",
         "*NODE, NSET=NALL",
     ] + node_lines(ids, xyz)
     lines += [f"*ELEMENT, TYPE={etype}, ELSET=EALL"] + element_lines(1, conn)
