@@ -51,6 +51,7 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
 from dolfinx_ntf.assembly import SpringBlocks
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
@@ -75,7 +76,7 @@ class PlateMesh(typing.NamedTuple):
     """The two-plate mesh: facet tags and the local cells of the upper (slave) plate."""
 
     mesh: dolfinx.mesh.Mesh
-    facet_tags: dolfinx.mesh.MeshTagsMetaClass
+    facet_tags: compat.MeshTags
     upper_cells: np.ndarray
 
 
@@ -123,7 +124,7 @@ def build_plates(slave_nodes: int, *, layers: int = 1, master_ratio: float = 0.7
     points, cells = np.vstack([p1, p2]), np.vstack([c1, c2 + p1.shape[0]])
     if comm.rank != 0:
         points, cells = np.empty((0, 3)), np.empty((0, 8), dtype=np.int64)
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", "hexahedron", 1))
+    domain = compat.coordinate_element("hexahedron", 1)
     mesh = dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
 
     tdim = 3
@@ -175,7 +176,7 @@ def build_problem(plates: PlateMesh, solver: str, *, options_prefix: str = "benc
     if solver not in SOLVERS:
         raise ValueError(f"solver = {solver!r}: expected one of {sorted(SOLVERS)}")
     mesh, ft = plates.mesh, plates.facet_tags
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     sigma = small_strain_stress(u, E, NU)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
@@ -236,7 +237,7 @@ def _time_search(problem: ntf.ContactProblem, repeat: int, out: dict[str, typing
 def _time_newton(problem: ntf.ContactProblem, newton: ntf.ContactNewtonSolver, b: PETSc.Vec,
                  repeat: int, out: dict[str, typing.Any]) -> None:
     """One Newton iteration without re-pairing: form, F, J, linear solve (u is not updated)."""
-    x, A = problem.u.vector, problem.matrix
+    x, A = compat.petsc_vector(problem.u), problem.matrix
     ksp = newton.krylov_solver
     dx = A.createVecRight()
     parts: dict[str, list[float]] = {"form": [], "F": [], "J": [], "solve": []}
@@ -284,7 +285,7 @@ def run_size(slave_nodes: int, *, repeat: int, solver: str, layers: int = 1,
 
     # Insertion into an assembled Jacobian (as left by problem.J) and into a residual vector.
     blocks = problem.evaluate(tangent=True)
-    x, A = problem.u.vector, problem.matrix
+    x, A = compat.petsc_vector(problem.u), problem.matrix
     problem.iteration = LAST_REPAIRING_ITERATION
     problem.form(x)
     problem.J(x, A)

@@ -45,6 +45,7 @@ from mpi4py import MPI
 import dolfinx
 import dolfinx.fem
 
+from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import Comparison, compare_job
@@ -148,7 +149,7 @@ def hertz_deck(directory: Path) -> None:
     hz = _load_meshes("hertz")
     sizes = {key: value * RADIUS for key, value in hz.COARSE.items()}
     mesh, _, ft = mesh_from_gmsh(hz.build_hertz, MPI.COMM_SELF, radius=RADIUS, **sizes)
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     law = ntf.LinearLaw.with_ccx_defaults(E_STEEL)
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, hz.SPHERE_CONTACT),

@@ -56,6 +56,7 @@ from petsc4py import PETSc
 import dolfinx.fem
 import dolfinx.fem.petsc
 
+from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
@@ -142,7 +143,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
 
     # --- Bulk problem ----------------------------------------------------------------------------
     # Small-strain elasticity (Hertz's theory is linear too), one material per body.
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
     F = (ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)

@@ -38,6 +38,7 @@ from petsc4py import PETSc
 
 import dolfinx.fem
 
+from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
@@ -110,7 +111,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # Small-strain elasticity with one material per body. The pressure on the punch top is a
     # Constant that the step scales with the step time; ``n`` is the outward normal, so ``p n·v``
     # in the residual R = f_int - f_ext is a pressure pushing into the punch.
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)

@@ -24,6 +24,8 @@ from petsc4py import PETSc
 import dolfinx.fem
 import dolfinx.fem.petsc
 
+from dolfinx_ntf import compat
+
 __all__ = ["SpringBlocks", "ContactAssembler"]
 
 
@@ -54,8 +56,8 @@ class ContactAssembler:
     def __init__(
         self,
         V: dolfinx.fem.FunctionSpace,
-        jacobian_form: dolfinx.fem.FormMetaClass,
-        bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (),
+        jacobian_form: compat.Form,
+        bcs: typing.Sequence[compat.DirichletBC] = (),
     ) -> None:
         """Prepare global numbering and the Dirichlet mask.
 
@@ -85,7 +87,7 @@ class ContactAssembler:
         self.matrix_rebuilds = 0
         self.pattern_merges = 0
 
-    def set_bcs(self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass]) -> None:
+    def set_bcs(self, bcs: typing.Sequence[compat.DirichletBC]) -> None:
         """Dirichlet conditions whose dofs receive no contact entries."""
         self._global_dof_masked = self._global_dof.copy()
         for bc in bcs:
@@ -118,13 +120,11 @@ class ContactAssembler:
         A = dolfinx.fem.petsc.create_matrix(self._form)
         # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
         # preallocation.
-        sp = dolfinx.fem.create_sparsity_pattern(self._form)
-        sp.assemble()
-        graph = sp.graph
+        offsets, columns = compat.sparsity_graph(self._form)
         A.setValuesBlockedLocalCSR(
-            graph.offsets.astype(PETSc.IntType),
-            graph.array.astype(PETSc.IntType),
-            np.zeros(graph.array.size * self._bs**2),
+            offsets.astype(PETSc.IntType),
+            columns.astype(PETSc.IntType),
+            np.zeros(columns.size * self._bs**2),
         )
         keys = np.union1d(self._coupling_keys(blocks), self._pattern_keys)
         self._pattern_keys = np.empty(0, dtype=np.int64)

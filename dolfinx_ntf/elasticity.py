@@ -8,6 +8,8 @@ import ufl
 
 import dolfinx.fem
 
+from dolfinx_ntf import compat
+
 __all__ = ["lame_parameters", "small_strain_stress", "component_bc"]
 
 
@@ -34,7 +36,7 @@ def small_strain_stress(
 
 def component_bc(
     V: dolfinx.fem.FunctionSpace, component: int, facets: np.ndarray
-) -> dolfinx.fem.DirichletBCMetaClass:
+) -> compat.DirichletBC:
     """Zero displacement component ``component`` on the given facets (rollers, symmetry planes)."""
     Vc, _ = V.sub(component).collapse()
     dofs = dolfinx.fem.locate_dofs_topological(

@@ -27,13 +27,13 @@ from mpi4py import MPI
 
 import gmsh
 import numpy as np
-from dolfinx import cpp as _cpp
 from dolfinx.io import gmshio as _gmshio
 from dolfinx.mesh import Mesh
 
+from dolfinx_ntf.compat import MeshTags
+
 __all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh"]
 
-MeshTags = _cpp.mesh.MeshTags_int32
 _model_counter = itertools.count()
 
 

@@ -73,12 +73,12 @@ def _check_array(owner: str, name: str, values: npt.ArrayLike, *, nonnegative: b
     bad = ~np.isfinite(array)
     if bad.any():
         index = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"{owner}: {name} must be finite, got {array[index]!r} at index {index}")
+        raise ValueError(f"{owner}: {name} must be finite, got {float(array[index])!r} at index {index}")
     if nonnegative:
         negative = array < 0.0
         if negative.any():
             index = tuple(int(i) for i in np.argwhere(negative)[0])
-            raise ValueError(f"{owner}: {name} must be >= 0, got {array[index]!r} at index {index}")
+            raise ValueError(f"{owner}: {name} must be >= 0, got {float(array[index])!r} at index {index}")
     return array
 
 

@@ -20,6 +20,7 @@ from petsc4py import PETSc
 import dolfinx.fem
 import dolfinx.fem.petsc
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.laws import SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
@@ -119,7 +120,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         walk_from_previous_face: Start each node's face search at its current face instead of the
             nearest centroid (beyond CalculiX): a node stays on its face while within the search
             tolerance, which stops the face ping-pong of nodes on shared edges during re-pairing.
-        form_compiler_params, jit_params: Passed to dolfinx.
+        form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
     def __init__(
@@ -127,23 +128,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         F: ufl.form.Form,
         u: dolfinx.fem.Function,
         pairs: typing.Sequence[ContactPair],
-        bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (),
+        bcs: typing.Sequence[compat.DirichletBC] = (),
         J: ufl.form.Form | None = None,
         *,
         symmetric: bool = False,
         linearize_area: bool = False,
         max_depth: float | None = None,
         walk_from_previous_face: bool = False,
-        form_compiler_params: dict | None = None,
-        jit_params: dict | None = None,
+        form_compiler_options: dict | None = None,
+        jit_options: dict | None = None,
     ) -> None:
         super().__init__(
             F,
             u,
             list(bcs),
             J,
-            form_compiler_params=form_compiler_params or {},
-            jit_params=jit_params or {},
+            **compat.jit_keywords(form_compiler_options, jit_options),
         )
         V = u.function_space
         if V.dofmap.index_map_bs != 3 or V.mesh.geometry.dim != 3:
@@ -403,11 +403,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         with b.localForm() as b_local:
             b_local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, self.L)
-        dolfinx.fem.petsc.apply_lifting(b, [self.a], bcs=[self.bcs], x0=[x], scale=-1.0)
+        dolfinx.fem.petsc.apply_lifting(b, [self.a], [self.bcs], [x], -1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.assembler.add_to_vector(b, self._blocks)
         if self.nodal_loads is not None:
-            b.axpy(-1.0, self.nodal_loads.vector)
+            b.axpy(-1.0, compat.petsc_vector(self.nodal_loads))
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
@@ -429,7 +429,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._pattern_checked = True
         A.assemble()
 
-    def set_bcs(self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass]) -> None:
+    def set_bcs(self, bcs: typing.Sequence[compat.DirichletBC]) -> None:
         """Replace the Dirichlet conditions (e.g. between steps); contact entries skip the new
         constrained dofs."""
         self.bcs = list(bcs)

@@ -76,7 +76,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.problem = problem
         self._A.destroy()
         self._A = problem.ensure_matrix()
-        self.setJ(problem.J, self._A)
+        self.setJ(self._jacobian, self._A)
         self.setF(self._residual, self._b)
         self.set_update(self._update)
         self.convergence_criterion = "residual"
@@ -97,6 +97,19 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         ).items():
             opts[f"{options_prefix}{key}"] = value
         ksp.setFromOptions()
+
+    def _jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """The problem's Jacobian; a factorization is started afresh when the pattern grew.
+
+        PETSc 3.22 does not see the pattern change of ``MatAXPY(..., DIFFERENT_NONZERO_PATTERN)``
+        and would reuse the old symbolic factorization (MUMPS then reports a zero pivot).
+        """
+        merges = self.problem.assembler.pattern_merges
+        self.problem.J(x, A)
+        if self.problem.assembler.pattern_merges != merges:
+            ksp = self.krylov_solver
+            ksp.getPC().reset()
+            ksp.setOperators(A, A)
 
     def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
         """dolfinx's update ``x -= relaxation dx``, counted."""
@@ -132,7 +145,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         A = self.problem.ensure_matrix()
         if A is not self._A:
             self._A = A
-            self.setJ(self.problem.J, A)
+            self.setJ(self._jacobian, A)
 
     def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
         """Solve one increment from the current ``u`` (after

@@ -21,6 +21,7 @@ import numpy as np
 import dolfinx.fem
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.faces import FaceType, face_type_from_num_nodes
 
 __all__ = [
@@ -39,7 +40,7 @@ __all__ = [
 class FacetSurface:
     """A face-based surface: the facets of ``tags`` whose value is in ``values``."""
 
-    tags: dolfinx.mesh.MeshTagsMetaClass
+    tags: compat.MeshTags
     values: typing.Sequence[int] | int
 
     def value_list(self) -> list[int]:
@@ -97,7 +98,7 @@ def _cell_arrays(V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
     mesh = V.mesh
     tdim = mesh.topology.dim
     num_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
-    cell_nodes = V.dofmap.list.array.reshape(num_cells, -1)
+    cell_nodes = compat.cell_dofs(V)
     layout = V.dofmap.dof_layout
     num_facets_per_cell = dolfinx.cpp.mesh.cell_num_entities(mesh.topology.cell_type, tdim - 1)
     closure = np.array(
@@ -194,12 +195,12 @@ def _midside_nodes(X: np.ndarray, corners: np.ndarray, others: np.ndarray) -> np
     return np.hstack([edge_nodes, others[:, num_corners:]])
 
 
-def _tagged_facets(surface: FacetSurface, what: str) -> np.ndarray:
+def _tagged_facets(surface: FacetSurface, tdim: int, what: str) -> np.ndarray:
     tags = surface.tags
-    if tags.dim != tags.mesh.topology.dim - 1:
+    if tags.dim != tdim - 1:
         raise ValueError(
             f"{what}: MeshTags of dimension {tags.dim} given, facet tags "
-            f"(dimension {tags.mesh.topology.dim - 1}) needed"
+            f"(dimension {tdim - 1}) needed"
         )
     values = surface.value_list()
     facets = tags.indices[np.isin(tags.values, values)]
@@ -221,7 +222,7 @@ def resolve_master(
             f"{what}: the master surface must be a FacetSurface (face-based), "
             f"got {type(surface).__name__}"
         )
-    return boundary_faces(V, _tagged_facets(surface, what), what=what)
+    return boundary_faces(V, _tagged_facets(surface, V.mesh.topology.dim, what), what=what)
 
 
 def resolve_slave(
@@ -233,7 +234,7 @@ def resolve_slave(
     all exterior faces of the mesh with at least one corner among the slave nodes.
     """
     if isinstance(surface, FacetSurface):
-        faces = boundary_faces(V, _tagged_facets(surface, what), what=what)
+        faces = boundary_faces(V, _tagged_facets(surface, V.mesh.topology.dim, what), what=what)
         return SlaveSurface(faces.nodes, faces)
     if not isinstance(surface, NodeSurface):
         raise ValueError(
@@ -249,8 +250,9 @@ def resolve_slave(
             f"{what}: node surface '{surface.name}' names vertex indices outside "
             f"0..{num_vertices - 1}"
         )
-    nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
     tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(0, tdim)
+    nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
     mesh.topology.create_connectivity(tdim - 1, tdim)
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     all_faces = boundary_faces(V, exterior, what=what)

@@ -9,6 +9,8 @@ from mpi4py import MPI
 
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
+
 LOWER, UPPER = 1, 2
 LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP = 11, 12, 13, 14
 
@@ -79,7 +81,7 @@ def two_blocks(
         marker = np.tile(marker, 6)
     if comm.rank != 0:
         points, cells = np.empty((0, 3)), np.empty((0, cells.shape[1]), dtype=np.int64)
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
+    domain = compat.coordinate_element(cell, 1)
     mesh = dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
 
     tdim = 3

@@ -19,6 +19,7 @@ from mpi4py import MPI
 
 import dolfinx.fem
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.__main__ import main
 from dolfinx_ntf.calculix.cel import read_cel
 from dolfinx_ntf.calculix.dat import read_dat
@@ -64,7 +65,7 @@ def _cell_input_nodes(model):
     """Deck node rows of each cell's geometry nodes, in dolfinx order."""
     mesh = model.mesh
     num_cells = mesh.topology.index_map(3).size_local
-    dofmap = mesh.geometry.dofmap.array.reshape(num_cells, -1)
+    dofmap = compat.geometry_dofs(mesh)[:num_cells]
     return np.asarray(mesh.geometry.input_global_indices)[dofmap]
 
 
@@ -81,7 +82,7 @@ def test_mesh_volume_and_positive_jacobians(cube):
     points = np.vstack([np.array(corners, float), INTEGRATION_POINTS[etype]])
     expression = dolfinx.fem.Expression(ufl.JacobianDeterminant(mesh), points)
     cells = np.arange(mesh.topology.index_map(3).size_local, dtype=np.int32)
-    det = expression.eval(cells)
+    det = compat.evaluate_expression(expression, mesh, cells)
     assert det.shape == (cells.size, points.shape[0])
     assert np.all(det > 0)
 
@@ -125,7 +126,7 @@ def test_c3d10_midside_permutation_is_geometric():
     deck = read_deck(MODEL / "cube_c3d10_curved.inp")
     model = build_model(deck, COMM)
     num_cells = model.mesh.topology.index_map(3).size_local
-    dofmap = model.mesh.geometry.dofmap.array.reshape(num_cells, -1)
+    dofmap = compat.geometry_dofs(model.mesh)[:num_cells]
     assert _midside_mismatch(model, deck, dofmap) < 1e-14
     # the check can fail: ccx's own order read as dolfinx's puts nodes on the wrong edges
     inverse = np.argsort(CELL_PERMUTATIONS["C3D10"])
@@ -141,9 +142,7 @@ def test_surfaces_become_facet_tags_and_vertex_sets():
     assert facets.size == 1
     facet_vertices = model.mesh.topology.connectivity(2, 0).links(facets[0])
     x = model.mesh.geometry.x
-    vertex_geometry = dolfinx.cpp.mesh.entities_to_geometry(
-        model.mesh._mesh, 0, facet_vertices, False
-    )
+    vertex_geometry = compat.entities_to_geometry(model.mesh, 0, facet_vertices)
     np.testing.assert_allclose(np.sort(x[vertex_geometry.ravel(), 2]), [1.0] * 4)
     np.testing.assert_array_equal(model.face_nodes_of("MASTER", facets), [[5, 6, 7, 8]])
     np.testing.assert_array_equal(model.face_nodes_of("SLAVE", model.surface_faces["SLAVE"][0]),
@@ -221,7 +220,7 @@ def test_load_schedule_follows_ccx_rules():
     assert force(5, 0) == pytest.approx(2.0)  # amplitude dropped, value at the end of step 1 kept
     assert groups["P2"].value == pytest.approx(15.0)  # OP=NEW: 30 ramps down to 0
     assert groups["P4"].value == pytest.approx(25.0)
-    g = [bc.value.x.array for bc in bcs]
+    g = [compat.boundary_values(bc).x.array for bc in bcs]
     assert np.any(
         np.isclose(np.concatenate(g), 0.5 * (0.02 + 0.01))
     )  # node 6 x: ramp from u to 0.01

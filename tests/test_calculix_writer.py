@@ -13,6 +13,7 @@ from mpi4py import MPI
 import dolfinx.fem
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
 from conftest import LOWER, LOWER_BOTTOM, LOWER_TOP, UPPER, UPPER_BOTTOM, UPPER_TOP, two_blocks
 from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
@@ -42,13 +43,13 @@ def _space(cell: str, degree: int, mirror: bool = False):
     mesh, ct, ft = two_blocks(cell=cell, upper=UPPER_BOX, lower=((0, 0, -1), (1, 1, 1), (2, 2, 2)))
     if mirror:
         mesh.geometry.x[:, 0] = 1.0 - mesh.geometry.x[:, 0]
-    return dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", degree)), ct, ft
+    return compat.vector_space(mesh, "Lagrange", degree), ct, ft
 
 
 def _write_full(path, V, ct, ft, *, nodal_slave: bool = False):
     law = ntf.TabularLaw(pressures=[0.0, 10.0, 50.0], overclosures=[0.0, 1e-3, 2e-3])
     if nodal_slave:
-        vertices = dolfinx.mesh.compute_incident_entities(V.mesh, ft.find(UPPER_BOTTOM), 2, 0)
+        vertices = compat.incident_entities(V.mesh, ft.find(UPPER_BOTTOM), 2, 0)
         slave = ntf.NodeSurface(vertices)
     else:
         slave = ntf.FacetSurface(ft, UPPER_BOTTOM)
@@ -107,7 +108,7 @@ def test_round_trip_mesh_and_materials(tmp_path, cell, degree, etype, mirror):
     # Elements: same node sets as the dolfinx cells.
     block = deck.elements[etype]
     num_cells = V.mesh.topology.index_map(3).size_local
-    cell_dofs = V.dofmap.list.array.reshape(num_cells, -1)
+    cell_dofs = compat.cell_dofs(V)
     order = np.argsort(block.ids)
     np.testing.assert_array_equal(block.ids[order], numbering.element_ids)
     np.testing.assert_array_equal(
@@ -276,9 +277,9 @@ def test_bad_input(tmp_path):
     mesh = V.mesh
     write = functools.partial(write_inp, path, displacement_space=V, materials=(E1, NU1))
     with pytest.raises(ValueError, match="no ccx element for degree-2 Lagrange on hexahedron"):
-        write(displacement_space=dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 2)))
+        write(displacement_space=compat.vector_space(mesh, "Lagrange", 2))
     with pytest.raises(ValueError, match="3D vector displacement space"):
-        write(displacement_space=dolfinx.fem.FunctionSpace(mesh, ("Lagrange", 1)))
+        write(displacement_space=compat.scalar_space(mesh, "Lagrange", 1))
     with pytest.raises(ValueError, match="materials per cell tag need cell_tags"):
         write(materials={1: (E1, NU1)})
     with pytest.raises(ValueError, match=r"has tag 2, and materials are given for tags \[1\] only"):
@@ -342,7 +343,7 @@ def test_ccx_runs_written_deck_pressure_resultant(tmp_path, cell, degree, etype,
     # The lower block alone: fixed bottom, pressure on its top (area 1).
     lower_cells = ct.indices[ct.values == LOWER]
     sub, cell_map, _, _ = dolfinx.mesh.create_submesh(mesh, 3, lower_cells)
-    Vs = dolfinx.fem.VectorFunctionSpace(sub, ("Lagrange", degree))
+    Vs = compat.vector_space(sub, "Lagrange", degree)
     sub.topology.create_connectivity(2, 3)
     exterior = dolfinx.mesh.exterior_facet_indices(sub.topology)
     z = dolfinx.mesh.compute_midpoints(sub, 2, exterior)[:, 2]
@@ -404,7 +405,7 @@ def test_write_inp_is_collective(tmp_path):
     block = deck.elements["C3D10"]
     assert block.ids.size == mesh.topology.index_map(3).size_global
     owned = mesh.topology.index_map(3).size_local
-    cell_dofs = V.dofmap.list.array.reshape(-1, 10)[:owned]
+    cell_dofs = compat.cell_dofs(V)[:owned]
     order = np.argsort(block.ids)
     rows = order[np.searchsorted(block.ids, numbering.element_ids[:owned], sorter=order)]
     np.testing.assert_array_equal(

@@ -17,6 +17,7 @@ import gmsh
 from dolfinx import cpp as _cpp
 from dolfinx import fem
 
+from dolfinx_ntf import compat
 from dolfinx_ntf import gmsh_io
 
 pytestmark = pytest.mark.mpi
@@ -38,12 +39,12 @@ hertz = _load("hertz")
 
 def _cell_volumes(mesh, cell_tags):
     """Global volume per cell tag, from the assembled DG0 vector of cell volumes."""
-    V = fem.FunctionSpace(mesh, ("DG", 0))
+    V = compat.scalar_space(mesh, "DG", 0)
     vector = fem.assemble_vector(fem.form(ufl.TestFunction(V) * ufl.dx))
     num_owned = mesh.topology.index_map(3).size_local
     volumes = np.zeros(num_owned)
     cells = np.arange(num_owned, dtype=np.int32)
-    volumes[:] = vector.array[V.dofmap.list.array[cells]]
+    volumes[:] = vector.array[compat.cell_dofs(V)[cells, 0]]
     tag_of = np.full(num_owned, -1)
     owned = cell_tags.indices < num_owned
     tag_of[cell_tags.indices[owned]] = cell_tags.values[owned]
@@ -60,7 +61,7 @@ def _owned_facets(mesh, facet_tags, tag):
 
 def _facet_vertex_coords(mesh, facets):
     """(F, v, 3) vertex coordinates of facets (vertex nodes only, also for P2 geometry)."""
-    nodes = _cpp.mesh.entities_to_geometry(mesh._mesh, 2, facets.astype(np.int32), False)
+    nodes = compat.entities_to_geometry(mesh, 2, facets.astype(np.int32))
     return mesh.geometry.x[nodes]
 
 

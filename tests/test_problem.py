@@ -9,6 +9,7 @@ import ufl
 import dolfinx.fem
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from conftest import UPPER, LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
@@ -37,7 +38,7 @@ def _setup(
 ):
     """Upper block pressed on a lower block by a pressure on its top."""
     mesh, _, ft = two_blocks(cell=cell, upper=upper)
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     F = _elastic_residual(u, v, ft, pressure)
@@ -122,7 +123,7 @@ def test_newton_converges_quadratically():
 def test_assembled_contact_matrix_matches_element_matrices():
     problem, pressure, _ = _setup("hexahedron")
     _solve(problem, pressure, increments=1)
-    x = problem.u.vector
+    x = compat.petsc_vector(problem.u)
     problem.form(x)
     A_full = problem.ensure_matrix()
     problem.J(x, A_full)
@@ -173,7 +174,7 @@ def test_newton_failure_raises():
 
 def test_bad_inputs_give_clear_errors():
     mesh, _, ft = two_blocks()
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     F = _elastic_residual(u, v, ft, 0.0)
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
@@ -194,7 +195,7 @@ def test_bad_inputs_give_clear_errors():
     )
     with pytest.raises(ValueError, match="facet tags"):
         ntf.ContactProblem(F, u, [ntf.ContactPair(slave, ntf.FacetSurface(cell_tags, 1), law)])
-    W = dolfinx.fem.FunctionSpace(mesh, ("Lagrange", 1))
+    W = compat.scalar_space(mesh, "Lagrange", 1)
     w = dolfinx.fem.Function(W)
     with pytest.raises(ValueError, match="vector displacement"):
         ntf.ContactProblem(
@@ -211,10 +212,10 @@ def test_bad_inputs_give_clear_errors():
 
 def test_node_based_slave_collects_lateral_area():
     mesh, ct, ft = two_blocks(upper=((0.25, 0.25, 0.0), (0.5, 0.5, 0.5), (2, 2, 2)))
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     F = _elastic_residual(u, v, ft, 0.0)
-    upper_vertices = dolfinx.mesh.compute_incident_entities(mesh, ct.find(UPPER), 3, 0)
+    upper_vertices = compat.incident_entities(mesh, ct.find(UPPER), 3, 0)
     bottom_vertices = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.isclose(x[2], 0.0))
     vertices = np.intersect1d(upper_vertices, bottom_vertices)
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
@@ -258,7 +259,7 @@ def test_global_jacobian_matches_finite_differences(cell, linearize_area):
     problem, pressure, _ = _setup(cell, linearize_area=linearize_area)
     _solve(problem, pressure, increments=1)
     problem.iteration = 100  # past the re-pairing schedule: the pairing stays fixed
-    x = problem.u.vector
+    x = compat.petsc_vector(problem.u)
     base = x.copy()
     problem.form(x)
     A = problem.ensure_matrix()
@@ -291,7 +292,7 @@ def test_body_without_springs_fails_with_a_hint():
     """A punch above the block (open gap, no springs) under a load has no support: a clear error,
     no NaN."""
     mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=0.05)
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     bcs = [
@@ -319,7 +320,7 @@ def test_initial_overlap_is_ramped_in_the_first_increment_only():
     is reset at every later increment start, so from increment 2 on the whole overlap acts."""
     overlap = 0.01
     mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=-overlap)
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, UPPER_BOTTOM),

@@ -42,6 +42,7 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.output import ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactProblem
 from dolfinx_ntf.solver import (
@@ -326,7 +327,7 @@ class _Job:
         if self._broken is None:
             mesh, V = self.model.mesh, self.model.V
             family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
-            W = dolfinx.fem.VectorFunctionSpace(mesh, (family, V.ufl_element().degree()))
+            W = compat.vector_space(mesh, family, compat.space_degree(V))
             w = ufl.TestFunction(W)
             self._broken = dolfinx.fem.form(
                 ufl.inner(self.model.first_piola, ufl.grad(w)) * self.model.dx
@@ -348,7 +349,7 @@ class _Job:
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
         expression, q = self._stress
         cells = self.model.element_cells(element_ids).astype(np.int32)
-        values = expression.eval(cells).reshape(cells.size, q, 3, 3)
+        values = compat.evaluate_expression(expression, self.model.mesh, cells).reshape(cells.size, q, 3, 3)
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
         return values[:, :, index[0], index[1]]
 

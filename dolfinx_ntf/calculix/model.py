@@ -45,6 +45,7 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.laws import (
     ExponentialLaw,
     LinearLaw,
@@ -192,7 +193,7 @@ class CalculixModel:
     element_cell: np.ndarray
     cell_element: np.ndarray
     surfaces: dict[str, FacetSurface | NodeSurface]
-    surface_tags: dict[str, dolfinx.mesh.MeshTagsMetaClass]
+    surface_tags: dict[str, compat.MeshTags]
     surface_faces: dict[str, tuple[np.ndarray, np.ndarray]]
     pairs: list[ContactPair]
     mu: dolfinx.fem.Function
@@ -204,7 +205,7 @@ class CalculixModel:
     residual: typing.Any
     nodal_loads: dolfinx.fem.Function
     pressures: list[dolfinx.fem.Constant]
-    pressure_tags: dolfinx.mesh.MeshTagsMetaClass | None
+    pressure_tags: compat.MeshTags | None
     steps: list[StepLoads]
     amplitude_names: list[str]
     _bc_spaces: list = field(default_factory=list, repr=False)
@@ -247,7 +248,7 @@ class CalculixModel:
         """Total time at ``step_time`` of step ``step_index`` (0-based)."""
         return self.steps[step_index].total_time_start + step_time
 
-    def begin_step(self, step_index: int) -> list[dolfinx.fem.DirichletBCMetaClass]:
+    def begin_step(self, step_index: int) -> list[compat.DirichletBC]:
         """Start step ``step_index`` (0-based) from the current ``u``: kinematics and constraints.
 
         Prescribed displacements ramp from their value in ``u`` now. Returns the step's conditions.
@@ -296,13 +297,13 @@ class CalculixModel:
     # -- problem -----------------------------------------------------------------------------------
 
     def create_problem(
-        self, bcs: typing.Sequence[dolfinx.fem.DirichletBCMetaClass] = (), **options
+        self, bcs: typing.Sequence[compat.DirichletBC] = (), **options
     ) -> ContactProblem:
         """The :class:`~dolfinx_ntf.ContactProblem` of the deck (bulk only without contact pairs).
 
         Args:
             bcs: Initial Dirichlet conditions (usually ``begin_step(0)``).
-            options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_params``).
+            options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_options``).
         """
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
@@ -349,7 +350,7 @@ def _element_block(deck: Deck):
 
 def _create_mesh(deck: Deck, block, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
     cell_name, degree = _DOLFINX_CELLS[block.type.name]
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell_name, degree))
+    domain = compat.coordinate_element(cell_name, degree)
     if comm.rank == 0:
         cells = deck.node_index(block.connectivity)[:, CELL_PERMUTATIONS[block.type.name]]
         x = np.asarray(deck.node_coords, dtype=np.float64)
@@ -363,8 +364,8 @@ def _numbering(deck: Deck, mesh: dolfinx.mesh.Mesh, V: dolfinx.fem.FunctionSpace
     """node_dof, dof_node, node_vertex, element_cell, cell_element through per-cell tables."""
     tdim = mesh.topology.dim
     num_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
-    geometry_dofs = mesh.geometry.dofmap.array.reshape(num_cells, -1)
-    space_dofs = V.dofmap.list.array.reshape(num_cells, -1)
+    geometry_dofs = compat.geometry_dofs(mesh)[:num_cells]
+    space_dofs = compat.cell_dofs(V)[:num_cells]
     if geometry_dofs.shape != space_dofs.shape:
         raise RuntimeError("the displacement space and the geometry have different cell layouts")
     num_geometry = mesh.geometry.x.shape[0]
@@ -379,7 +380,7 @@ def _numbering(deck: Deck, mesh: dolfinx.mesh.Mesh, V: dolfinx.fem.FunctionSpace
 
     num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
     vertices = np.arange(num_vertices, dtype=np.int32)
-    vertex_geometry = dolfinx.cpp.mesh.entities_to_geometry(mesh._mesh, 0, vertices, False).ravel()
+    vertex_geometry = compat.entities_to_geometry(mesh, 0, vertices).ravel()
     node_vertex = np.full(deck.node_ids.size, -1, dtype=np.int64)
     node_vertex[input_index[vertex_geometry]] = vertices
 
@@ -457,7 +458,7 @@ def _element_faces_to_facets(
 
 def _surfaces(deck: Deck, mesh, parts: dict):
     surfaces: dict[str, FacetSurface | NodeSurface] = {}
-    tags: dict[str, dolfinx.mesh.MeshTagsMetaClass] = {}
+    tags: dict[str, compat.MeshTags] = {}
     faces: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     node_vertex = parts["node_vertex"]
     for name, surface in deck.surfaces.items():
@@ -538,7 +539,7 @@ def _contact_pairs(deck: Deck, surfaces: dict) -> list[ContactPair]:
 
 
 def _lame(deck: Deck, block, mesh, element_cell: np.ndarray):
-    Q = dolfinx.fem.FunctionSpace(mesh, ("DG", 0))
+    Q = compat.scalar_space(mesh, "DG", 0)
     mu, lmbda = dolfinx.fem.Function(Q, name="mu"), dolfinx.fem.Function(Q, name="lambda")
     for section in deck.sections:
         young, nu = deck.materials[section.material].elastic
@@ -547,7 +548,7 @@ def _lame(deck: Deck, block, mesh, element_cell: np.ndarray):
         order = np.argsort(block.ids)
         rows = order[np.searchsorted(block.ids, members, sorter=order)]
         cells = element_cell[rows]
-        dofs = Q.dofmap.list.array.reshape(-1, 1)[cells, 0]
+        dofs = compat.cell_dofs(Q)[cells, 0]
         mu.x.array[dofs] = young / (2 * (1 + nu))
         lmbda.x.array[dofs] = young * nu / ((1 + nu) * (1 - 2 * nu))
     return mu, lmbda
@@ -774,7 +775,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     etype = block.type
     mesh = _create_mesh(deck, block, comm)
     degree = _DOLFINX_CELLS[etype.name][1]
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
+    V = compat.vector_space(mesh, "Lagrange", degree)
     u = dolfinx.fem.Function(V, name="displacement")
     node_dof, dof_node, node_vertex, original = _numbering(deck, mesh, V)
     element_cell = np.empty(block.ids.size, dtype=np.int64)

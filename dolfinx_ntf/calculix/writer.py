@@ -35,9 +35,12 @@ import dolfinx.cpp.mesh
 import dolfinx.fem
 import dolfinx.mesh
 
+
+from dolfinx_ntf import compat
 from dolfinx_ntf.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.problem import ContactPair
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
+from dolfinx_ntf import compat
 
 from .deck import ELEMENT_TYPES, FIELD_CONTROL_NAMES
 
@@ -246,13 +249,12 @@ def _check_type(value: object, cls: type, what: str) -> None:
 
 def _element_type(V: dolfinx.fem.FunctionSpace) -> str:
     mesh = V.mesh
-    element = V.ufl_element()
     if V.dofmap.index_map_bs != 3 or mesh.geometry.dim != 3 or mesh.topology.dim != 3:
         raise ValueError(
             "write_inp needs a 3D vector displacement space (block size 3) on a 3D mesh"
         )
-    family = element.family()
-    degree = element.degree()
+    family = compat.space_family(V)
+    degree = compat.space_degree(V)
     if family not in ("Lagrange", "Q", "P", "CG"):
         raise ValueError(
             f"write_inp: displacement space family {family!r} has no ccx element; use Lagrange"
@@ -339,7 +341,7 @@ def _mesh_data(V: dolfinx.fem.FunctionSpace) -> _Mesh:
     cmap = mesh.topology.index_map(tdim)
     num_cells = cmap.size_local + cmap.num_ghosts
     element_ids = cmap.local_to_global(np.arange(num_cells, dtype=np.int32)).astype(np.int64) + 1
-    cell_dofs = V.dofmap.list.array.reshape(num_cells, -1)[: cmap.size_local]
+    cell_dofs = compat.cell_dofs(V)[: cmap.size_local]
     X = V.tabulate_dof_coordinates().reshape(-1, 3)
     orders, vertex_to_corner = _local_node_order(V, etype)
     ncorners = 4 if etype != "C3D8" else 8
@@ -518,7 +520,7 @@ def write_inp(
     *,
     displacement_space: dolfinx.fem.FunctionSpace,
     materials: tuple[float, float] | Mapping[int, tuple[float, float]],
-    cell_tags: dolfinx.mesh.MeshTagsMetaClass | None = None,
+    cell_tags: compat.MeshTags | None = None,
     pairs: Sequence[ContactPair] = (),
     fixed: Sequence[BoundarySpec] = (),
     steps: Sequence[StepSpec] = (StepSpec(),),

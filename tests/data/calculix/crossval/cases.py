@@ -25,6 +25,7 @@ from mpi4py import MPI
 import dolfinx.fem
 import dolfinx.mesh
 
+from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
 from dolfinx_ntf.calculix.writer import (
     TIGHT_FIELD_CONTROLS,
@@ -127,7 +128,7 @@ def blocks(boxes, *, cell: str = "hexahedron", bump: float = 0.0, degree: int = 
     if cell == "tetrahedron":
         cells = np.vstack([cells[:, t] for t in _TETS])
         marker = np.tile(marker, len(_TETS))
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
+    domain = compat.coordinate_element(cell, 1)
     mesh = dolfinx.mesh.create_mesh(MPI.COMM_SELF, cells.astype(np.int64), points, domain)
     # create_mesh reorders cells: find each cell's body from its original index.
     body_of_cell = marker[mesh.topology.original_cell_index]
@@ -158,7 +159,7 @@ def blocks(boxes, *, cell: str = "hexahedron", bump: float = 0.0, degree: int = 
     keep = values > 0
     order = np.argsort(exterior[keep])
     facet_tags = dolfinx.mesh.meshtags(mesh, 2, exterior[keep][order], values[keep][order])
-    V = dolfinx.fem.VectorFunctionSpace(mesh, ("Lagrange", degree))
+    V = compat.vector_space(mesh, "Lagrange", degree)
     return V, cell_tags, facet_tags
 
 
@@ -175,7 +176,7 @@ def _pair(ft, slave_body: int, master_body: int, law, *, nodal: bool = False, V=
     master = ntf.FacetSurface(ft, facet_tag(master_body, TOP))
     if nodal:
         facets = ft.find(facet_tag(slave_body, BOTTOM))
-        vertices = dolfinx.mesh.compute_incident_entities(V.mesh, facets, 2, 0)
+        vertices = compat.incident_entities(V.mesh, facets, 2, 0)
         slave = ntf.NodeSurface(vertices, name=f"bottom{slave_body}")
     else:
         slave = ntf.FacetSurface(ft, facet_tag(slave_body, BOTTOM))

@@ -1,0 +1,198 @@
+"""The one place that knows which dolfinx is installed: 0.5.2 (Debian 12) or 0.9 (Debian 13).
+
+Every other module of dolfinx_ntf, and its demos, tests and benchmarks, call these helpers instead
+of the version-specific dolfinx API, so the code reads the same on both releases. What differs:
+
+=====================================  ===========================================  ==============================
+what                                   dolfinx 0.5.2                                dolfinx 0.9
+=====================================  ===========================================  ==============================
+vector space                           ``VectorFunctionSpace(mesh, ("P", k))``      ``functionspace(mesh, ("P", k, (3,)))``
+coordinate element of ``create_mesh``  ``ufl.Mesh(ufl.VectorElement(...))``         ``basix.ufl.element(..., shape=(3,))``
+C++ mesh object                        ``mesh._mesh``                               ``mesh._cpp_object``
+PETSc vector of a Function             ``u.vector``                                 ``u.x.petsc_vec``
+cell dofmaps                           ``AdjacencyList`` (``.array``)               2D numpy arrays
+form compiler / JIT option names       ``form_compiler_params``, ``jit_params``     ``..._options``
+class names for type hints             ``DirichletBCMetaClass``, ...                ``DirichletBC``, ...
+sparsity graph                         ``AdjacencyList``                            ``(array, offsets)``
+=====================================  ===========================================  ==============================
+
+A user's own UFL code differs the same way (element and space creation); :func:`vector_space`
+and :func:`scalar_space` are public for that reason.
+"""
+
+from __future__ import annotations
+
+import typing
+
+import numpy as np
+import ufl
+from petsc4py import PETSc
+
+import dolfinx
+import dolfinx.cpp
+import dolfinx.fem
+import dolfinx.fem.petsc
+import dolfinx.mesh
+
+__all__ = [
+    "DOLFINX_VERSION",
+    "DirichletBC",
+    "Form",
+    "MeshTags",
+    "cell_dofs",
+    "coordinate_element",
+    "cpp_mesh",
+    "entities_to_geometry",
+    "evaluate_expression",
+    "boundary_values",
+    "incident_entities",
+    "geometry_dofs",
+    "jit_keywords",
+    "petsc_vector",
+    "scalar_space",
+    "sparsity_graph",
+    "space_degree",
+    "space_family",
+    "vector_space",
+]
+
+#: (major, minor) of the installed dolfinx.
+DOLFINX_VERSION: tuple[int, int] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
+_LEGACY = DOLFINX_VERSION < (0, 7)
+
+if _LEGACY:
+    DirichletBC = dolfinx.fem.DirichletBCMetaClass
+    Form = dolfinx.fem.FormMetaClass
+    MeshTags = dolfinx.mesh.MeshTagsMetaClass
+else:
+    DirichletBC = dolfinx.fem.DirichletBC
+    Form = dolfinx.fem.Form
+    MeshTags = dolfinx.mesh.MeshTags
+
+
+def vector_space(
+    mesh: dolfinx.mesh.Mesh, family: str = "Lagrange", degree: int = 1
+) -> dolfinx.fem.FunctionSpace:
+    """A vector-valued space with one component per geometric dimension (e.g. displacements)."""
+    if _LEGACY:
+        return dolfinx.fem.VectorFunctionSpace(mesh, (family, degree))
+    return dolfinx.fem.functionspace(mesh, (family, degree, (mesh.geometry.dim,)))
+
+
+def scalar_space(
+    mesh: dolfinx.mesh.Mesh, family: str = "Lagrange", degree: int = 1
+) -> dolfinx.fem.FunctionSpace:
+    """A scalar space."""
+    if _LEGACY:
+        return dolfinx.fem.FunctionSpace(mesh, (family, degree))
+    return dolfinx.fem.functionspace(mesh, (family, degree))
+
+
+def coordinate_element(cell_name: str, degree: int = 1, gdim: int = 3) -> typing.Any:
+    """The coordinate element that ``dolfinx.mesh.create_mesh`` takes for Lagrange geometry."""
+    if _LEGACY:
+        return ufl.Mesh(ufl.VectorElement("Lagrange", cell_name, degree))
+    import basix.ufl
+
+    return basix.ufl.element("Lagrange", cell_name, degree, shape=(gdim,))
+
+
+def space_degree(V: dolfinx.fem.FunctionSpace) -> int:
+    """Polynomial degree of a (vector) Lagrange space."""
+    element = V.ufl_element()
+    return int(element.degree() if _LEGACY else element.degree)
+
+
+def space_family(V: dolfinx.fem.FunctionSpace) -> str:
+    """Family name of a space's element: 'Lagrange' ('P'), 'Discontinuous Lagrange', ..."""
+    element = V.ufl_element()
+    if _LEGACY:
+        return str(element.family())
+    name = str(element.basix_element.family.name)
+    discontinuous = bool(element.basix_element.discontinuous)
+    return {"P": "Discontinuous Lagrange" if discontinuous else "Lagrange"}.get(name, name)
+
+
+def cpp_mesh(mesh: dolfinx.mesh.Mesh) -> typing.Any:
+    """The C++ mesh object that ``dolfinx.cpp`` functions take."""
+    return mesh._mesh if _LEGACY else mesh._cpp_object
+
+
+def entities_to_geometry(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray) -> np.ndarray:
+    """Geometry nodes of the closure of each entity, shape (num_entities, nodes per entity)."""
+    entities = np.asarray(entities, dtype=np.int32)
+    if entities.size == 0:  # dolfinx 0.9 divides by zero on an empty list
+        per_entity = mesh.geometry.cmap.create_dof_layout().num_entity_closure_dofs(dim)
+        return np.empty((0, per_entity), dtype=np.int32)
+    mesh.topology.create_connectivity(dim, mesh.topology.dim)  # dolfinx 0.9 needs it
+    nodes = dolfinx.cpp.mesh.entities_to_geometry(cpp_mesh(mesh), dim, entities, False)
+    return np.asarray(nodes).reshape(entities.size, -1)
+
+
+def cell_dofs(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Block dofs of every local cell (owned and ghost), shape (num_cells, dofs per cell)."""
+    dofs = V.dofmap.list
+    if _LEGACY:
+        num_cells = dofs.num_nodes
+        return dofs.array.reshape(num_cells, -1)
+    return np.asarray(dofs)
+
+
+def geometry_dofs(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
+    """Geometry nodes of every local cell, shape (num_cells, nodes per cell)."""
+    dofs = mesh.geometry.dofmap
+    if _LEGACY:
+        return dofs.array.reshape(dofs.num_nodes, -1)
+    return np.asarray(dofs)
+
+
+def incident_entities(
+    mesh: dolfinx.mesh.Mesh, entities: np.ndarray, dim: int, incident_dim: int
+) -> np.ndarray:
+    """Entities of dimension ``incident_dim`` incident to ``entities`` of dimension ``dim``."""
+    entities = np.asarray(entities, dtype=np.int32)
+    where = mesh if _LEGACY else mesh.topology
+    return dolfinx.mesh.compute_incident_entities(where, entities, dim, incident_dim)
+
+
+def evaluate_expression(
+    expression: dolfinx.fem.Expression, mesh: dolfinx.mesh.Mesh, cells: np.ndarray
+) -> np.ndarray:
+    """Values of a ``dolfinx.fem.Expression`` at its points in ``cells``."""
+    cells = np.asarray(cells, dtype=np.int32)
+    return expression.eval(cells) if _LEGACY else expression.eval(mesh, cells)
+
+
+def boundary_values(bc: DirichletBC) -> dolfinx.fem.Function:
+    """The Function that holds a Dirichlet condition's prescribed values."""
+    return bc.value if _LEGACY else bc.g
+
+
+def petsc_vector(u: dolfinx.fem.Function) -> PETSc.Vec:
+    """The PETSc vector that wraps a Function's values (ghosted)."""
+    return u.vector if _LEGACY else u.x.petsc_vec
+
+
+def jit_keywords(
+    form_compiler_options: dict | None = None, jit_options: dict | None = None
+) -> dict[str, dict]:
+    """Keyword arguments of ``dolfinx.fem.form`` and ``NonlinearProblem`` for these options."""
+    if _LEGACY:
+        return {
+            "form_compiler_params": form_compiler_options or {},
+            "jit_params": jit_options or {},
+        }
+    return {"form_compiler_options": form_compiler_options, "jit_options": jit_options}
+
+
+def sparsity_graph(a: Form) -> tuple[np.ndarray, np.ndarray]:
+    """CSR ``(offsets, columns)`` of a bilinear form's block sparsity pattern, local rows with
+    local (owned + ghost) block columns."""
+    pattern = dolfinx.fem.create_sparsity_pattern(a)
+    if _LEGACY:
+        pattern.assemble()
+        graph = pattern.graph
+        return np.asarray(graph.offsets), np.asarray(graph.array)
+    pattern.finalize()
+    columns, offsets = pattern.graph
+    return np.asarray(offsets), np.asarray(columns)
