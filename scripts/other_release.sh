@@ -4,13 +4,17 @@
 # machine. The chroot is made with debootstrap from the machine's own Debian mirror and cached under /var/tmp, so a
 # second run only pays for the tests. Needs root.
 #
-#   bash scripts/other_release.sh [make target ...]     (default: test)
+#   bash scripts/other_release.sh [make target ...]     (default: test-here)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
-targets=("${@:-test}")
+targets=("${@:-test-here}")
 
-[ "$(id -u)" = 0 ] || { echo "other_release: needs root (debootstrap, chroot, mount)" >&2; exit 1; }
+if [ "$(id -u)" != 0 ]; then
+  command -v sudo >/dev/null || { echo "other_release: needs root or sudo (debootstrap, chroot, mount)" >&2; exit 1; }
+  exec sudo --preserve-env=CI bash "$0" "$@"
+fi
+start=$SECONDS
 here=$(. /etc/os-release && echo "$VERSION_CODENAME")
 case "$here" in
   bookworm) other=trixie ;;
@@ -42,10 +46,13 @@ cp /etc/resolv.conf "$chroot_dir/etc/resolv.conf" 2>/dev/null || true
 work=$chroot_dir/root/dolfinx_ntf
 rm -rf "$work"
 git clone -q "$root" "$work"
-git diff HEAD | (cd "$work" && git apply --allow-empty 2>/dev/null || git apply)
+patch=$(mktemp)
+git diff --binary HEAD > "$patch"
+[ ! -s "$patch" ] || (cd "$work" && git apply "$patch")
+rm -f "$patch"
 git ls-files --others --exclude-standard -z | xargs -0 -r cp --parents -t "$work"
-if [ -d "$root/../shared" ]; then mkdir -p "$chroot_dir/root/shared" && cp -r "$root/../shared/." "$chroot_dir/root/shared/"; fi
 
 echo "other_release: make ${targets[*]} in Debian $other"
 chroot "$chroot_dir" env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 CI="${CI:-}" \
   bash -c "cd /root/dolfinx_ntf && make ${targets[*]}"
+echo "other_release: make ${targets[*]} in Debian $other done in $((SECONDS - start)) s"
