@@ -207,6 +207,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """Total number of contact spring elements over all pairs."""
         return sum(s.num_springs for s in self.states)
 
+    @property
+    def reference_coordinates(self) -> np.ndarray:
+        """Reference coordinates of the displacement nodes (local, with ghosts), shape (N, 3)."""
+        return self._reference
+
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts)."""
         return self._reference + self.u.x.array.reshape(-1, 3)

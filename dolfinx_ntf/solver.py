@@ -24,6 +24,9 @@ from dolfinx_ntf.problem import ContactProblem
 
 __all__ = [
     "ContactConvergenceError",
+    "ContactDivergenceError",
+    "ContactSolverError",
+    "DIVERGENCE_GROWTH",
     "ContactNewtonSolver",
     "IncrementResult",
     "StaticStep",
@@ -41,8 +44,22 @@ DEFAULT_PETSC_OPTIONS = {
 }
 
 
+#: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
+#: strict comparison, with a margin for iterations that stagnate at round-off level.
+DIVERGENCE_GROWTH = 1.01
+
+
 class ContactConvergenceError(RuntimeError):
-    """A Newton solve or a whole step failed to converge."""
+    """A Newton solve or a whole step failed to converge; a smaller increment may succeed."""
+
+
+class ContactDivergenceError(ContactConvergenceError):
+    """The Newton iterates diverge (growing or non-finite residual, failed linear solve)."""
+
+
+class ContactSolverError(RuntimeError):
+    """A failure that no smaller increment can fix: non-finite input, a linear solver that cannot
+    be set up or factor the first Jacobian. Raised at once by :class:`StaticStep`."""
 
 
 class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
@@ -58,6 +75,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             residual norm of the increment (or below ``atol``).
         atol: Absolute residual tolerance.
         max_it: Maximum Newton iterations per increment.
+        min_iterations: Newton updates needed before convergence can be declared (ccx: 2).
+        divergence_iteration: CalculiX's I_0: from this Newton update on, a residual larger than
+            the two before it means divergence, and the increment is given up at once. Each
+            re-pairing that changes the number of springs defers the check to 4 updates later,
+            as in CalculiX.
     """
 
     def __init__(
@@ -71,6 +93,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         atol: float = 1e-12,
         max_it: int = 30,
         min_iterations: int = 2,
+        divergence_iteration: int = 4,
     ) -> None:
         super().__init__(comm, problem)
         self.problem = problem
@@ -83,6 +106,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.relative_tolerance = relative_tolerance
         self.absolute_tolerance = atol
         self.min_iterations = min_iterations
+        self.divergence_iteration = divergence_iteration
+        self._first_check = divergence_iteration
+        self.first_solve = True
         self.rtol = 0.0
         self.max_it = max_it
         self.error_on_nonconvergence = False
@@ -112,7 +138,10 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             ksp.setOperators(A, A)
 
     def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
-        """dolfinx's update ``x -= relaxation dx``, counted."""
+        """dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
+        reason = self.krylov_solver.getConvergedReason()
+        if reason < 0 or not np.isfinite(dx.norm()):
+            self._linear_solve_failed(f"the linear solver failed ({_ksp_reason(reason)})")
         self.updates += 1
         self.last_correction = dx
         x.axpy(-self.relaxation_parameter, dx)
@@ -127,12 +156,41 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self.absolute_tolerance, self.relative_tolerance * self.residual_norms[0]
         )
 
+    def _linear_solve_failed(self, what: str) -> None:
+        """Non-retryable at the very first Newton iteration of a solver, divergence later."""
+        if self.first_solve and self.updates == 0:
+            options = self.krylov_solver.getOptionsPrefix()
+            hint = (
+                f"check the PETSc options under the prefix '{options}' (petsc_options) and that "
+                "the residual form is built on the unknown Function u"
+            )
+            raise ContactSolverError(
+                f"{what} at the first Newton iteration: {hint}{_no_support_hint(self.problem)}"
+            )
+        raise ContactDivergenceError(
+            f"{what} at Newton iteration {self.updates + 1}{_no_support_hint(self.problem)}"
+        )
+
     def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         self.problem.F(x, b)
         norm = b.norm()
         if not np.isfinite(norm):
-            raise ContactConvergenceError(
-                f"residual is not finite (norm {norm}) at iteration {self.problem.iteration}"
+            if self.updates == 0:
+                raise ContactSolverError(_non_finite_input(self.problem, x))
+            raise ContactDivergenceError(
+                f"residual is not finite (norm {norm}) after {self.updates} Newton updates"
+            )
+        if self.problem.count_changed:
+            self._first_check = max(self._first_check, self.updates + 4)
+        norms = self.residual_norms
+        if (
+            self.updates >= self._first_check
+            and len(norms) >= 2
+            and norm > DIVERGENCE_GROWTH * max(norms[-1], norms[-2])
+        ):
+            raise ContactDivergenceError(
+                f"residual grows: {norms[-2]:.3e}, {norms[-1]:.3e}, {norm:.3e} after "
+                f"{self.updates} Newton updates{_no_support_hint(self.problem)}"
             )
         self.residual_norms.append(norm)
         converged = self.is_converged(x, b, norm)  # always called: criteria may keep a history
@@ -157,22 +215,27 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         """
         self.residual_norms = []
         self.updates = 0
+        self._first_check = self.divergence_iteration
         self._bind_matrix()
         try:
             iterations, converged = super().solve(u)
+        except (ContactConvergenceError, ContactSolverError):
+            raise
+        except PETSc.Error as error:
+            self._linear_solve_failed(f"PETSc failed ({error})")
         except (RuntimeError, ValueError) as error:  # PETSc failures, degenerate iterates
-            raise ContactConvergenceError(f"Newton iteration failed: {error}") from error
+            if self.first_solve and self.updates == 0:
+                raise ContactSolverError(
+                    f"the first Newton iteration failed: {error}"
+                ) from error
+            raise ContactDivergenceError(f"Newton iteration failed: {error}") from error
+        finally:
+            self.first_solve = False
         if not converged:
-            hint = ""
-            if self.problem.num_springs == 0 and self.problem.states:
-                hint = (
-                    "; there are no contact springs, so a body held only by contact is unsupported "
-                    "(close the initial gap, or start with a prescribed displacement)"
-                )
             raise ContactConvergenceError(
                 f"Newton did not converge in {iterations} iterations "
                 f"(residual {self.residual_norms[-1]:.3e}, "
-                f"first {self.residual_norms[0]:.3e}){hint}"
+                f"first {self.residual_norms[0]:.3e}){_no_support_hint(self.problem)}"
             )
         return iterations, True
 
@@ -204,7 +267,10 @@ class StaticStep:
         initial_increment, min_increment, max_increment: Increment sizes.
         fixed: Use ``initial_increment`` throughout (CalculiX DIRECT).
         predictor: Start each increment from ``u_n + dt v_prev`` like CalculiX (after the pairing).
-        cutback_factor: Increment size factor after a failed attempt.
+        cutback_factor: Increment size factor after an attempt that did not converge in
+            ``max_it`` iterations (CalculiX's D_C = 0.5).
+        divergence_cutback_factor: Increment size factor after an attempt that diverged
+            (CalculiX's D_F = 0.25).
         growth_factor, growth_iterations: Like CalculiX (D_D = 1.5, I_G = 4), the increment grows by
             ``growth_factor`` after two consecutive increments that each converged in at most
             ``growth_iterations`` iterations.
@@ -219,6 +285,7 @@ class StaticStep:
     fixed: bool = False
     predictor: bool = True
     cutback_factor: float = 0.5
+    divergence_cutback_factor: float = 0.25
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
@@ -233,10 +300,12 @@ class StaticStep:
                 f"StaticStep: need 0 < min_increment ({self.min_increment}) <= initial_increment "
                 f"({self.initial_increment}) <= max_increment ({max_inc})"
             )
-        if not (0 < self.cutback_factor < 1 and self.growth_factor >= 1):
+        factors = (self.cutback_factor, self.divergence_cutback_factor)
+        if not (all(0 < f < 1 for f in factors) and self.growth_factor >= 1):
             raise ValueError(
-                f"StaticStep: need 0 < cutback_factor ({self.cutback_factor}) < 1 <= growth_factor "
-                f"({self.growth_factor})"
+                f"StaticStep: need 0 < cutback_factor ({self.cutback_factor}), "
+                f"divergence_cutback_factor ({self.divergence_cutback_factor}) < 1 <= "
+                f"growth_factor ({self.growth_factor})"
             )
         t, dt = 0.0, self.initial_increment
         increment = 0
@@ -246,6 +315,7 @@ class StaticStep:
             increment += 1
             attempt = 0
             u_start = u.x.array.copy()
+            first_failure: ContactConvergenceError | None = None
             while True:
                 attempt += 1
                 dt = min(dt, self.period - t)
@@ -269,14 +339,23 @@ class StaticStep:
                 except ContactConvergenceError as error:
                     u.x.array[:] = u_start
                     u.x.scatter_forward()
-                    if self.fixed or dt * self.cutback_factor < self.min_increment:
+                    first_failure = first_failure or error
+                    factor = (
+                        self.divergence_cutback_factor
+                        if isinstance(error, ContactDivergenceError)
+                        else self.cutback_factor
+                    )
+                    if self.fixed or dt * factor < self.min_increment:
+                        why = "fixed increments" if self.fixed else (
+                            f"increment size {dt:.3e} cannot be cut back below the minimum "
+                            f"{self.min_increment:.3e}"
+                        )
+                        first = "" if first_failure is error else f"; first attempt: {first_failure}"
                         raise ContactConvergenceError(
                             f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
-                            f"failed after {attempt} attempt(s); increment size {dt:.3e} "
-                            f"cannot be cut back below the minimum "
-                            f"{self.min_increment:.3e}: {error}"
+                            f"failed after {attempt} attempt(s) ({why}): {error}{first}"
                         ) from error
-                    dt *= self.cutback_factor
+                    dt *= factor
                     fast_in_a_row = 0
                     logger.info(" %s; cutting back to %.6e", error, dt)
             velocity = (u.x.array - u_start) / dt
@@ -321,3 +400,44 @@ def log_progress(level: int = logging.INFO) -> None:
         log_progress._handler = handler
     logger.setLevel(level)
     logger.propagate = False
+
+
+def _ksp_reason(reason: int) -> str:
+    """Name of a PETSc KSP converged/diverged reason."""
+    names = {
+        value: name
+        for name, value in vars(PETSc.KSP.ConvergedReason).items()
+        if isinstance(value, int) and not name.startswith("_")
+    }
+    name = names.get(reason, "unknown")
+    if reason == PETSc.KSP.ConvergedReason.DIVERGED_PC_FAILED:
+        name += ", e.g. a zero pivot: singular Jacobian"
+    return f"KSP reason {reason}: {name}"
+
+
+def _non_finite_input(problem: ContactProblem, x: PETSc.Vec) -> str:
+    """Message for a residual that is not finite before any Newton update."""
+    values = problem.u.x.array
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        node = bad[0] // 3
+        position = problem.reference_coordinates[node]
+        return (
+            f"the displacement has {bad.size} non-finite value(s) at the start of the increment "
+            f"(first at node {node}, reference position ({position[0]:.6g}, {position[1]:.6g}, "
+            f"{position[2]:.6g})): check the initial values and prescribed displacements"
+        )
+    return (
+        "the residual is not finite at the start of the increment although the displacement is: "
+        "check the loads, constants and material parameters of the residual form"
+    )
+
+
+def _no_support_hint(problem: ContactProblem) -> str:
+    """Why a body may float: contact pairs but no springs."""
+    if problem.num_springs == 0 and problem.states:
+        return (
+            "; there are no contact springs, so a body held only by contact has no support "
+            "(close the initial gap, or start with a prescribed displacement)"
+        )
+    return ""
