@@ -11,7 +11,9 @@ from dolfinx_ntf.output import ContactResults, ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactPair, ContactProblem
 from dolfinx_ntf.solver import (
     ContactConvergenceError,
+    ContactDivergenceError,
     ContactNewtonSolver,
+    ContactSolverError,
     IncrementResult,
     StaticStep,
     log_progress,
@@ -30,6 +32,8 @@ __all__ = [
     "ContactProblem",
     "ContactNewtonSolver",
     "ContactConvergenceError",
+    "ContactDivergenceError",
+    "ContactSolverError",
     "StaticStep",
     "IncrementResult",
     "ContactResults",

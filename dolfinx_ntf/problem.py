@@ -405,6 +405,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """Assemble the bulk residual plus the spring forces into ``b``."""
         self._residual_vector = b
+        self.assemble_residual(x, b)
+
+    def assemble_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """The residual at ``x`` with the springs last evaluated by :meth:`form` into ``b``."""
         with b.localForm() as b_local:
             b_local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, self.L)

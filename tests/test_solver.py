@@ -1,0 +1,113 @@
+"""The Newton solver and step driver on failure: non-retryable errors raise at once with their
+cause, a diverging attempt is given up early, and the line search leaves converging solves alone."""
+
+import numpy as np
+import pytest
+import ufl
+
+import dolfinx.fem
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.elasticity import component_bc
+from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from test_problem import E, _elastic_residual, _setup
+
+pytestmark = pytest.mark.serial
+
+
+def _step(pressure, load=10.0, **options):
+    return ntf.StaticStep(lambda t: setattr(pressure, "value", load * t), **options)
+
+
+def test_nan_displacement_raises_at_once_naming_the_node():
+    problem, pressure, _ = _setup("hexahedron")
+    problem.u.x.array[7] = np.nan
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    with pytest.raises(ntf.ContactSolverError, match=r"non-finite value\(s\).*first at node 2"):
+        _step(pressure).run(solver, problem.u)
+    assert solver.updates == 0
+
+
+def test_nan_load_raises_at_once():
+    problem, pressure, _ = _setup("hexahedron")
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    with pytest.raises(ntf.ContactSolverError, match="loads, constants and material"):
+        _step(pressure, load=np.nan).run(solver, problem.u)
+
+
+def test_unknown_linear_solver_names_the_options():
+    problem, pressure, _ = _setup("hexahedron")
+    options = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "nosuch"}
+    solver = ntf.ContactNewtonSolver(
+        problem.u.function_space.mesh.comm, problem, petsc_options=options, options_prefix="bad_"
+    )
+    with pytest.raises(ntf.ContactSolverError, match="prefix 'bad_'"):
+        _step(pressure).run(solver, problem.u)
+
+
+def test_residual_not_built_on_u_raises_at_once():
+    problem, pressure, ft = _setup("hexahedron")
+    V = problem.u.function_space
+    other = dolfinx.fem.Function(V)  # the residual reads `other`, the solver updates `u`
+    F = _elastic_residual(other, ufl.TestFunction(V), ft, pressure)
+    broken = ntf.ContactProblem(F, problem.u, [problem.states[0].pair], problem.bcs)
+    solver = ntf.ContactNewtonSolver(V.mesh.comm, broken)
+    with pytest.raises(ntf.ContactSolverError, match="first Newton iteration"):
+        _step(pressure).run(solver, broken.u)
+
+
+def test_diverging_attempt_is_given_up_early():
+    """A punch above the block under a load has no support: each attempt diverges and is given
+    up after a few updates, not after max_it, and the message says why."""
+    mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=0.05)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    bcs = [
+        dolfinx.fem.dirichletbc(
+            np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
+        ),
+        component_bc(V, 0, ft.find(UPPER_TOP)),
+        component_bc(V, 1, ft.find(UPPER_TOP)),
+    ]
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)),
+    )
+    problem = ntf.ContactProblem(_elastic_residual(u, v, ft, pressure), u, [pair], bcs)
+    solver = ntf.ContactNewtonSolver(mesh.comm, problem, max_it=30)
+    step = _step(pressure, min_increment=0.3)
+    with pytest.raises(ntf.ContactConvergenceError, match="residual grows.*no contact springs"):
+        step.run(solver, u)
+    assert solver.updates <= solver.max_it // 2
+
+
+def test_line_search_leaves_a_converging_solve_alone():
+    problem, pressure, _ = _setup("hexahedron")
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    _step(pressure, initial_increment=0.5, fixed=True).run(solver, problem.u)
+    assert solver.step_lengths and all(s == 1.0 for s in solver.step_lengths)
+
+
+def test_line_search_halves_an_overshooting_step():
+    """In contact, twice the Newton correction overshoots to about the mirror residual; half of
+    it is the Newton step, which the line search takes, leaving x unchanged."""
+    problem, pressure, _ = _setup("hexahedron")
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    _step(pressure, load=5.0, fixed=True).run(solver, problem.u)
+    pressure.value = 6.0
+    problem.begin_increment(1.0)
+    x = compat.petsc_vector(problem.u)
+    problem.form(x)
+    problem.F(x, solver.b)
+    A = problem.ensure_matrix()
+    problem.J(x, A)
+    dx = x.duplicate()
+    solver.krylov_solver.setOperators(A)
+    solver.krylov_solver.solve(solver.b, dx)
+    dx.scale(2.0)
+    before = x.array.copy()
+    assert solver._line_search(dx, x) == 0.5
+    np.testing.assert_array_equal(x.array, before)
