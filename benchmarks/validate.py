@@ -38,18 +38,18 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-import scipy.optimize
 from mpi4py import MPI
+from petsc4py import PETSc
 
 import gmsh
-from petsc4py import PETSc
+import numpy as np
+import scipy.optimize
 
 import dolfinx
 import dolfinx.fem
 
-from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.ccx import CcxError, read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import Comparison, compare_job
 from dolfinx_ntf.calculix.dat import read_dat
@@ -65,15 +65,15 @@ from dolfinx_ntf.calculix.writer import (
 )
 from dolfinx_ntf.faces import face_type_from_num_nodes
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
-from dolfinx_ntf.solver import ContactConvergenceError
 from dolfinx_ntf.laws import PressureOverclosureLaw
+from dolfinx_ntf.solver import ContactConvergenceError
 from dolfinx_ntf.spring_areas import spring_areas
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))
 import cases  # noqa: E402
 
-__all__ = ["Run", "run_case", "hertz_deck", "patch_deck", "hertz_results", "patch_results", "main"]
+__all__ = ["Run", "hertz_deck", "hertz_results", "main", "patch_deck", "patch_results", "run_case"]
 
 COMMAND = ".venv/bin/python benchmarks/validate.py"
 
@@ -420,9 +420,11 @@ def _environment() -> str:
     except (OSError, IndexError):
         ccx = "ccx (version unknown)"
     with open("/etc/os-release") as release:
-        os_name = dict(
-            line.rstrip("\n").split("=", 1) for line in release if "=" in line
-        ).get("PRETTY_NAME", "unknown OS").strip('"')
+        os_name = (
+            dict(line.rstrip("\n").split("=", 1) for line in release if "=" in line)
+            .get("PRETTY_NAME", "unknown OS")
+            .strip('"')
+        )
     return (
         f"{ccx}, dolfinx {dolfinx.__version__}, PETSc {PETSc.Sys.getVersion()}, "
         f"gmsh {gmsh.__version__}, {os_name}, {datetime.date.today().isoformat()}"
@@ -443,8 +445,11 @@ def _release_comparison(lines: list[str], other_path: Path, other_text: str) -> 
     """A section comparing this report's tables with another release's report."""
     ours, theirs = _table_rows(lines), _table_rows(other_text.splitlines())
     environment = next(
-        (line.split("do not edit by hand (", 1)[1].rstrip(").") for line in other_text.splitlines()
-         if "do not edit by hand (" in line),
+        (
+            line.split("do not edit by hand (", 1)[1].rstrip(").")
+            for line in other_text.splitlines()
+            if "do not edit by hand (" in line
+        ),
         "unknown",
     )
     same = [name for name in ours if theirs.get(name) == ours[name]]

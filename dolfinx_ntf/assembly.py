@@ -17,16 +17,17 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
+from petsc4py import PETSc
+
 import numpy as np
 import scipy.sparse
-from petsc4py import PETSc
 
 import dolfinx.fem
 import dolfinx.fem.petsc
 
 from dolfinx_ntf import compat
 
-__all__ = ["SpringBlocks", "ContactAssembler"]
+__all__ = ["ContactAssembler", "SpringBlocks"]
 
 
 @dataclass(frozen=True)
@@ -51,7 +52,8 @@ def _unblocked(nodes: np.ndarray, bs: int = 3) -> np.ndarray:
 
 class ContactAssembler:
     """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one displacement
-    space."""
+    space.
+    """
 
     def __init__(
         self,
@@ -116,7 +118,8 @@ class ContactAssembler:
 
     def create_matrix(self, blocks: typing.Sequence[SpringBlocks] = ()) -> PETSc.Mat:
         """A new matrix with the bulk pattern plus the couplings of ``blocks`` (and of earlier
-        matrices)."""
+        matrices).
+        """
         A = dolfinx.fem.petsc.create_matrix(self._form)
         # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
         # preallocation.
@@ -138,7 +141,8 @@ class ContactAssembler:
     ) -> None:
         """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values, through a
         separate matrix merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a solver bound to
-        it keeps working)."""
+        it keeps working).
+        """
         bs = self._bs
         first = self._global_node[0] if self._num_owned else 0
         rows = keys // self._num_global

@@ -24,35 +24,36 @@ from __future__ import annotations
 
 import typing
 
-import numpy as np
-import ufl
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx
 import dolfinx.cpp
 import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
+import ufl
 
 __all__ = [
     "DOLFINX_VERSION",
     "DirichletBC",
     "Form",
     "MeshTags",
+    "boundary_values",
     "cell_dofs",
     "coordinate_element",
     "cpp_mesh",
     "entities_to_geometry",
     "evaluate_expression",
-    "boundary_values",
-    "incident_entities",
     "geometry_dofs",
+    "incident_entities",
     "jit_keywords",
     "petsc_vector",
     "scalar_space",
-    "sparsity_graph",
     "space_degree",
     "space_family",
+    "sparsity_graph",
     "vector_space",
 ]
 
@@ -187,7 +188,8 @@ def jit_keywords(
 
 def sparsity_graph(a: Form) -> tuple[np.ndarray, np.ndarray]:
     """CSR ``(offsets, columns)`` of a bilinear form's block sparsity pattern, local rows with
-    local (owned + ghost) block columns."""
+    local (owned + ghost) block columns.
+    """
     pattern = dolfinx.fem.create_sparsity_pattern(a)
     if _LEGACY:
         pattern.assemble()

@@ -5,15 +5,16 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
-import numpy as np
 from mpi4py import MPI
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.io
 
 from dolfinx_ntf.problem import ContactProblem, PairState
 
-__all__ = ["ContactResults", "contact_results", "ContactWriter"]
+__all__ = ["ContactResults", "ContactWriter", "contact_results"]
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,9 @@ import time
 import typing
 from dataclasses import dataclass, field
 
-import numpy as np
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.nls.petsc
@@ -23,14 +24,14 @@ import dolfinx.nls.petsc
 from dolfinx_ntf.problem import ContactProblem
 
 __all__ = [
+    "DIVERGENCE_GROWTH",
     "ContactConvergenceError",
     "ContactDivergenceError",
-    "ContactSolverError",
-    "DIVERGENCE_GROWTH",
     "ContactNewtonSolver",
+    "ContactSolverError",
     "IncrementResult",
-    "StaticStep",
     "LoadControl",
+    "StaticStep",
     "log_progress",
 ]
 
@@ -59,7 +60,8 @@ class ContactDivergenceError(ContactConvergenceError):
 
 class ContactSolverError(RuntimeError):
     """A failure that no smaller increment can fix: non-finite input, a linear solver that cannot
-    be set up or factor the first Jacobian. Raised at once by :class:`StaticStep`."""
+    be set up or factor the first Jacobian. Raised at once by :class:`StaticStep`.
+    """
 
 
 class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
@@ -157,7 +159,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             ksp.setOperators(A, A)
 
     def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
-        """dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
+        """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
         reason = self.krylov_solver.getConvergedReason()
         if reason < 0 or not np.isfinite(dx.norm()):
             self._linear_solve_failed(f"the linear solver failed ({_ksp_reason(reason)})")
@@ -383,11 +385,17 @@ class StaticStep:
                         else self.cutback_factor
                     )
                     if self.fixed or dt * factor < self.min_increment:
-                        why = "fixed increments" if self.fixed else (
-                            f"increment size {dt:.3e} cannot be cut back below the minimum "
-                            f"{self.min_increment:.3e}"
+                        why = (
+                            "fixed increments"
+                            if self.fixed
+                            else (
+                                f"increment size {dt:.3e} cannot be cut back below the minimum "
+                                f"{self.min_increment:.3e}"
+                            )
                         )
-                        first = "" if first_failure is error else f"; first attempt: {first_failure}"
+                        first = (
+                            "" if first_failure is error else f"; first attempt: {first_failure}"
+                        )
                         raise ContactConvergenceError(
                             f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
                             f"failed after {attempt} attempt(s) ({why}): {error}{first}"
@@ -427,7 +435,8 @@ class StaticStep:
 
 def log_progress(level: int = logging.INFO) -> None:
     """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings, convergence)
-    on rank 0."""
+    on rank 0.
+    """
     from mpi4py import MPI
 
     if getattr(log_progress, "_handler", None) is None and MPI.COMM_WORLD.rank == 0:

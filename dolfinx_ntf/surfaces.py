@@ -27,12 +27,12 @@ from dolfinx_ntf.faces import FaceType, face_type_from_num_nodes
 __all__ = [
     "FacetSurface",
     "NodeSurface",
-    "SurfaceFaces",
     "SlaveSurface",
-    "resolve_master",
-    "resolve_slave",
+    "SurfaceFaces",
     "boundary_faces",
     "reference_coordinates",
+    "resolve_master",
+    "resolve_slave",
 ]
 
 

@@ -12,17 +12,18 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-import ufl
 from mpi4py import MPI
 
+import numpy as np
+
 import dolfinx.fem
+import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 
 sys.path.insert(0, str(Path(__file__).parent))
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks  # noqa: E402
+from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
 
 DATA = Path(__file__).parent / "data" / "cross_version"
 CASES = {
@@ -60,7 +61,9 @@ def solve(case: str) -> dict[str, np.ndarray]:
         else ntf.ExponentialLaw(c0=1e-3, p0=5.0)
     )
     pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), ntf.SurfaceInteraction(law)
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(law),
     )
     problem = ntf.ContactProblem(F, u, [pair], bcs)
     solver = ntf.ContactNewtonSolver(mesh.comm, problem, relative_tolerance=1e-13)

@@ -6,16 +6,17 @@ import functools
 import shutil
 from pathlib import Path
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
-from mpi4py import MPI
+from conftest import LOWER, LOWER_BOTTOM, LOWER_TOP, UPPER, UPPER_BOTTOM, UPPER_TOP, two_blocks
 
 import dolfinx.fem
 import dolfinx.mesh
 
-from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
-from conftest import LOWER, LOWER_BOTTOM, LOWER_TOP, UPPER, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
 from dolfinx_ntf.calculix.deck import ELEMENT_TYPES, face_nodes, read_deck
 from dolfinx_ntf.calculix.writer import (

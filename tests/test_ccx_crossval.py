@@ -26,9 +26,10 @@ import shutil
 import sys
 from pathlib import Path
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
-from mpi4py import MPI
 
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import (
@@ -42,7 +43,7 @@ from dolfinx_ntf.calculix.deck import node_surface_faces, read_deck
 from dolfinx_ntf.calculix.job import run_job
 
 sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "crossval"))
-import cases  # noqa: E402
+import cases
 
 pytestmark = pytest.mark.serial
 

@@ -6,7 +6,6 @@ the cases on the installed version and compares with all stored files to 1e-10.
 
 import numpy as np
 import pytest
-
 from cross_version_case import CASES, reference_path, solve
 
 pytestmark = pytest.mark.serial
@@ -31,4 +30,6 @@ def test_results_match_stored_results_of_each_version(case, version):
     for key in ("displacement", "pressure", "clearance"):
         scale = np.abs(current[key]).max()
         assert scale > 0
-        np.testing.assert_allclose(stored[f"{name}/{key}"], current[key], rtol=0, atol=1e-10 * scale)
+        np.testing.assert_allclose(
+            stored[f"{name}/{key}"], current[key], rtol=0, atol=1e-10 * scale
+        )

@@ -4,15 +4,15 @@ bad input."""
 import numpy as np
 import pytest
 import scipy.sparse
-import ufl
+from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER, UPPER_BOTTOM, UPPER_TOP, two_blocks
 
 import dolfinx.fem
 import dolfinx.mesh
+import ufl
 
-from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
-from conftest import UPPER, LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
 
 pytestmark = pytest.mark.serial
 
@@ -168,7 +168,10 @@ def test_newton_failure_raises():
     problem, pressure, _ = _setup("hexahedron")
     solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem, max_it=1)
     step = ntf.StaticStep(lambda t: setattr(pressure, "value", 10 * t), fixed=True)
-    with pytest.raises(ntf.ContactConvergenceError, match=r"failed after 1 attempt\(s\) \(fixed increments\): Newton did not converge"):
+    with pytest.raises(
+        ntf.ContactConvergenceError,
+        match=r"failed after 1 attempt\(s\) \(fixed increments\): Newton did not converge",
+    ):
         step.run(solver, problem.u)
 
 

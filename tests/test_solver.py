@@ -3,15 +3,15 @@ cause, a diverging attempt is given up early, and the line search leaves converg
 
 import numpy as np
 import pytest
-import ufl
+from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from test_problem import E, _elastic_residual, _setup
 
 import dolfinx.fem
+import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.elasticity import component_bc
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
-from test_problem import E, _elastic_residual, _setup
 
 pytestmark = pytest.mark.serial
 

@@ -33,14 +33,15 @@ import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
+import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.output import ContactWriter, contact_results
@@ -58,7 +59,7 @@ from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blo
 from .deck import Deck, PrintRequest, Step, read_deck
 from .model import INTEGRATION_POINTS, CalculixModel, build_model
 
-__all__ = ["JobError", "ContactRows", "IncrementOutput", "JobResult", "run_job"]
+__all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
@@ -135,7 +136,7 @@ class IncrementOutput:
 
     @property
     def slave_nodes(self) -> set[int]:
-        """ccx numbers of the slave nodes that have a contact element (all pairs)."""
+        """Ccx numbers of the slave nodes that have a contact element (all pairs)."""
         return {int(n) for rows in self.contact for n in rows.nodes}
 
     def displacement_of(self, node_ids) -> np.ndarray:
@@ -217,8 +218,9 @@ class _CcxNewtonSolver(ContactNewtonSolver):
         return super().solve(u)
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """ccx's test after each Newton update (the class docstring); False before the first
-        update."""
+        """Ccx's test after each Newton update (the class docstring); False before the first
+        update.
+        """
         if self.updates == 0:
             return False
         controls = self.controls
@@ -323,7 +325,7 @@ class _Job:
         return forces + self._contact_forces()
 
     def _average_force(self) -> float:
-        """ccx's average force: mean absolute element nodal force over elements, nodes and dofs."""
+        """Ccx's average force: mean absolute element nodal force over elements, nodes and dofs."""
         if self._broken is None:
             mesh, V = self.model.mesh, self.model.V
             family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
@@ -349,7 +351,9 @@ class _Job:
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
         expression, q = self._stress
         cells = self.model.element_cells(element_ids).astype(np.int32)
-        values = compat.evaluate_expression(expression, self.model.mesh, cells).reshape(cells.size, q, 3, 3)
+        values = compat.evaluate_expression(expression, self.model.mesh, cells).reshape(
+            cells.size, q, 3, 3
+        )
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
         return values[:, :, index[0], index[1]]
 
@@ -403,8 +407,14 @@ class _Job:
                 pair.master, state.master_faces.facets[state.spring_face]
             )
             step_, increment, attempt, iteration = numbers
-            self.cel.write(faces[order], slaves[order], step=step_, increment=increment,
-                           attempt=attempt, iteration=iteration)
+            self.cel.write(
+                faces[order],
+                slaves[order],
+                step=step_,
+                increment=increment,
+                attempt=attempt,
+                iteration=iteration,
+            )
 
     # -- steps -------------------------------------------------------------------------------------
 

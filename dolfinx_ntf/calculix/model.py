@@ -36,14 +36,15 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass, field
 
-import numpy as np
-import ufl
 from mpi4py import MPI
+
+import numpy as np
 
 import dolfinx.cpp.mesh
 import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
+import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.laws import (
@@ -237,7 +238,7 @@ class CalculixModel:
         return out
 
     def face_nodes_of(self, surface: str, facets: np.ndarray) -> np.ndarray:
-        """ccx node numbers (ccx face order) of local ``facets`` of an element-face surface."""
+        """Ccx node numbers (ccx face order) of local ``facets`` of an element-face surface."""
         sorted_facets, nodes = self.surface_faces[surface]
         pos = np.searchsorted(sorted_facets, facets)
         return nodes[pos]

@@ -35,25 +35,23 @@ import dolfinx.cpp.mesh
 import dolfinx.fem
 import dolfinx.mesh
 
-
 from dolfinx_ntf import compat
 from dolfinx_ntf.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.problem import ContactPair
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
-from dolfinx_ntf import compat
 
 from .deck import ELEMENT_TYPES, FIELD_CONTROL_NAMES
 
 __all__ = [
-    "NodeTarget",
-    "BoundarySpec",
-    "PressureSpec",
-    "PointLoadSpec",
-    "AmplitudeSpec",
-    "OutputSpec",
-    "StepSpec",
-    "InpNumbering",
     "TIGHT_FIELD_CONTROLS",
+    "AmplitudeSpec",
+    "BoundarySpec",
+    "InpNumbering",
+    "NodeTarget",
+    "OutputSpec",
+    "PointLoadSpec",
+    "PressureSpec",
+    "StepSpec",
     "write_inp",
 ]
 
