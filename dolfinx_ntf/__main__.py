@@ -36,6 +36,12 @@ def _parser() -> argparse.ArgumentParser:
         help="converge every increment to round-off (largest residual 1e-10 of the average force) "
         "instead of the deck's *CONTROLS / ccx defaults",
     )
+    run.add_argument(
+        "--stable-pairing",
+        action="store_true",
+        help="beyond ccx: a slave node keeps its master face while that face holds it within the "
+        "search tolerance (no face ping-pong at re-pairings); default: ccx's search",
+    )
     return parser
 
 
@@ -62,7 +68,13 @@ def main(argv: list[str] | None = None) -> int:
 
     jobname, directory = _job_path(args.job)
     try:
-        result = run_job(jobname, directory, comm=MPI.COMM_WORLD, tight=args.tight)
+        result = run_job(
+            jobname,
+            directory,
+            comm=MPI.COMM_WORLD,
+            tight=args.tight,
+            problem_options={"walk_from_previous_face": args.stable_pairing},
+        )
     except JobError as error:
         print(
             f"\n *ERROR: {error}\n Results of the converged increments are kept in "

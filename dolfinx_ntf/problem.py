@@ -87,6 +87,7 @@ class PairState:
     spring_area: np.ndarray = field(default_factory=lambda: np.empty(0))
     xi: np.ndarray | None = None
     evaluation: SpringEvaluation | None = None
+    face_changes: int = 0  # slave nodes paired before and after the last pairing, on another face
 
     @property
     def num_springs(self) -> int:
@@ -119,8 +120,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         max_depth: Reject nodes deeper than this below the master face (beyond CalculiX, which has
             no limit).
         walk_from_previous_face: Start each node's face search at its current face instead of the
-            nearest centroid (beyond CalculiX): a node stays on its face while within the search
-            tolerance, which stops the face ping-pong of nodes on shared edges during re-pairing.
+            nearest centroid (beyond CalculiX; default): a node stays on its face while that face
+            holds it within the search tolerance, which stops the face ping-pong of nodes on
+            shared edges during re-pairing. False reproduces CalculiX's search (the deck runner's
+            default).
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
@@ -135,7 +138,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         symmetric: bool = False,
         linearize_area: bool = False,
         max_depth: float | None = None,
-        walk_from_previous_face: bool = False,
+        walk_from_previous_face: bool = True,
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -204,6 +207,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     # -- state -------------------------------------------------------------------------------------
 
     @property
+    def face_changes(self) -> int:
+        """Slave nodes that kept a spring at the last pairing but moved to another master face."""
+        return sum(s.face_changes for s in self.states)
+
+    @property
     def num_springs(self) -> int:
         """Total number of contact spring elements over all pairs."""
         return sum(s.num_springs for s in self.states)
@@ -247,7 +255,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.pairings += 1
         self._pattern_checked = False
         count = self.num_springs
-        logger.info(" Number of contact spring elements=%d", count)
+        if self.iteration >= 1 and self.face_changes:
+            logger.info(
+                " Number of contact spring elements=%d (%d changed face)", count, self.face_changes
+            )
+        else:
+            logger.info(" Number of contact spring elements=%d", count)
         for callback in self.pairing_callbacks:
             callback(self)
         return count
@@ -267,10 +280,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         state.master.update(coords)
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
-        start = None
-        if self.walk_from_previous_face:
-            start = np.full(points.shape[0], -1, dtype=np.int64)
-            start[state.spring_slave] = state.spring_face
+        previous = np.full(points.shape[0], -1, dtype=np.int64)
+        previous[state.spring_slave] = state.spring_face
+        start = previous if self.walk_from_previous_face else None
         face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
         found = np.flatnonzero(face >= 0)
         law = state.pair.interaction.law
@@ -296,6 +308,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             create
         ]  # 0 = no slave face: springs.py applies the fallback
         state.xi = evaluation.xi[create]
+        current = np.full(points.shape[0], -1, dtype=np.int64)
+        current[state.spring_slave] = state.spring_face
+        state.face_changes = int(
+            np.count_nonzero((previous >= 0) & (current >= 0) & (previous != current))
+        )
 
     @staticmethod
     def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:

@@ -20,6 +20,10 @@ __all__ = ["MAX_WALK_STEPS", "MasterSurface"]
 
 MAX_WALK_STEPS = 100
 """A walk taking more steps than this finds no face (spec §3.2)."""
+TIE_DIGITS = 9
+"""Centroid distances equal to this many digits of the surface size are ties."""
+TIE_CANDIDATES = 8
+"""Nearest centroids compared for ties (the most triangles around a node of a regular mesh)."""
 
 
 class MasterSurface:
@@ -202,6 +206,10 @@ class MasterSurface:
         self._plane_normals = sign * p[self._edge_id]  # (T, 3, 3)
         self._plane_points = xs[self._edge_id]  # (T, 3, 3)
         self._tree = cKDTree(self._centroids)
+        self._scale = float(np.ptp(x, axis=0).max()) or 1.0
+        rounded = np.round((self._centroids - x.min(axis=0)) / self._scale, TIE_DIGITS)
+        self._centroid_rank = np.empty(self._centroids.shape[0], dtype=np.int64)
+        self._centroid_rank[np.lexsort(rounded.T[::-1])] = np.arange(self._centroids.shape[0])
         self._updated = True
 
     def _compute_nodal_normals(self, x: np.ndarray) -> np.ndarray:
@@ -320,8 +328,7 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        _, nearest = self._tree.query(points, k=1)
-        cur = np.asarray(nearest, dtype=np.int64)
+        cur = self._nearest_centroids(points)
         if start is not None:
             start = np.asarray(start, dtype=np.int64)
             cur = np.where(start >= 0, start, cur)
@@ -358,6 +365,17 @@ class MasterSurface:
             )
             result[found[depth > max_depth]] = -1
         return result
+
+    def _nearest_centroids(self, points: np.ndarray) -> np.ndarray:
+        """The triangle with the nearest centroid to each point; among centroids equally near
+        (to ``10**-TIE_DIGITS`` of the surface size) the first in (x, y, z) order, so the choice
+        does not depend on the numbering of nodes and faces or on k-d tree internals."""
+        k = min(TIE_CANDIDATES, self._centroids.shape[0])
+        distance, nearest = self._tree.query(points, k=k)
+        distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
+        tied = distance <= distance[:, :1] + 10.0**-TIE_DIGITS * self._scale
+        rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)
+        return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
 
     # ------------------------------------------------------------------ helpers
     def _require_update(self) -> None:

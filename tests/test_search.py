@@ -414,3 +414,29 @@ def test_bad_input():
     with pytest.raises(ValueError, match=r"points\[0\]"):
         s.locate(np.array([[np.nan, 0, 0]]), 0.0)
     assert s.locate(np.zeros((0, 3)), 0.0).shape == (0,)
+
+
+@pytest.mark.parametrize("type_name", ["tri3", "quad4", "tri6"])
+def test_ties_pick_the_same_faces_under_renumbering_and_translation(type_name):
+    """Points exactly above master nodes and edge midpoints are ties between faces; the face a
+    point gets depends on neither the numbering of nodes and faces nor the origin."""
+    faces, uv = _grid_faces(type_name, 4, 4)
+    coords = np.column_stack([uv, np.zeros(len(uv))])
+    grid = np.arange(0.5, 4.0, 0.5)
+    points = np.array([[x, y, 0.05] for x in grid for y in grid])
+
+    def chosen(faces, coords, points):
+        surface = MasterSurface(FACE_TYPES[type_name], faces, coords=coords)
+        face = surface.locate(points, 1e-3)
+        assert np.all(face >= 0)
+        return np.round(coords[faces[face]].mean(axis=1) - coords.min(axis=0), 12)
+
+    reference = chosen(faces, coords, points)
+    rng = np.random.default_rng(3)
+    node_order = rng.permutation(len(coords))
+    new_id = np.empty_like(node_order)
+    new_id[node_order] = np.arange(len(coords))
+    face_order = rng.permutation(len(faces))
+    shift = np.array([12.5, -3.25, 7.0])
+    renumbered = chosen(new_id[faces[face_order]], coords[node_order] + shift, points + shift)
+    np.testing.assert_array_equal(renumbered, reference)

@@ -603,7 +603,8 @@ def run_job(
         tight: Converge every increment to a largest residual of 1e-10 times the average element
             force (ccx's criterion with ``R_n = R_p = 1e-10``) instead of the deck's controls.
         progress: Print ccx-like progress (``log_progress``).
-        problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...).
+        problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
+            the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``).
         petsc_options: Linear solver options (default: MUMPS LU).
 
     Returns:
@@ -636,7 +637,7 @@ def run_job(
         model,
         comm,
         tight=tight,
-        problem_options=dict(problem_options or {}),
+        problem_options={"walk_from_previous_face": False, **(problem_options or {})},
         petsc_options=petsc_options,
     )
     try:
