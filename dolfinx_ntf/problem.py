@@ -19,6 +19,7 @@ import numpy as np
 
 import dolfinx.fem
 import dolfinx.fem.petsc
+import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
@@ -124,6 +125,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             holds it within the search tolerance, which stops the face ping-pong of nodes on
             shared edges during re-pairing. False reproduces CalculiX's search (the deck runner's
             default).
+        element_forces: Linear form in the test function of ``F`` whose element vectors are the
+            element nodal forces averaged by the convergence test
+            (:meth:`average_element_force`); default ``F`` itself (CalculiX uses the internal
+            forces only).
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
@@ -139,6 +144,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         linearize_area: bool = False,
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
+        element_forces: ufl.Form | None = None,
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -158,6 +164,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.max_depth = max_depth
         self.walk_from_previous_face = walk_from_previous_face
         self._reference = reference_coordinates(V)
+        self._element_forces = _broken(
+            F if element_forces is None else element_forces,
+            V,
+            compat.jit_keywords(form_compiler_options, jit_options),
+        )
+        self._element_force_vector = dolfinx.fem.petsc.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
         self.small_sliding = bool(pairs[-1].small_sliding) if pairs else True
@@ -205,6 +217,24 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return PairState(pair, slave, master_faces, master, np.zeros(slave.nodes.size))
 
     # -- state -------------------------------------------------------------------------------------
+
+    def average_element_force(self) -> float:
+        """CalculiX's average force: the mean absolute element nodal force over the elements,
+        their nodes and the three directions, contact springs included (collective)."""
+        vector = self._element_force_vector
+        with vector.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(vector, self._element_forces)
+        values = vector.array_r  # owned entries: broken dofs belong to one cell each
+        total, count = float(np.abs(values).sum()), values.size
+        for state in self.states:
+            if state.evaluation is not None and state.num_springs:
+                forces = state.evaluation.forces
+                total += float(np.abs(forces).sum())
+                count += forces.size
+        comm = self.u.function_space.mesh.comm
+        total, count = comm.allreduce(total), comm.allreduce(count)
+        return total / max(count, 1)
 
     @property
     def face_changes(self) -> int:
@@ -466,3 +496,18 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """
         self.bcs = list(bcs)
         self.assembler.set_bcs(self.bcs)
+
+
+def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict) -> compat.Form:
+    """``form`` with its test function replaced by one of the discontinuous space of the same
+    degree: its assembled vector holds every element's nodal forces separately."""
+    arguments = form.arguments()
+    if len(arguments) != 1:
+        raise ValueError(
+            f"element_forces: a linear form in the test function is needed, got a form with "
+            f"{len(arguments)} arguments"
+        )
+    mesh = V.mesh
+    family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
+    W = compat.vector_space(mesh, family, compat.space_degree(V))
+    return dolfinx.fem.form(ufl.replace(form, {arguments[0]: ufl.TestFunction(W)}), **options)

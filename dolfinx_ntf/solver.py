@@ -14,6 +14,7 @@ import time
 import typing
 from dataclasses import dataclass, field
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -25,6 +26,8 @@ from dolfinx_ntf.problem import ContactProblem
 
 __all__ = [
     "DIVERGENCE_GROWTH",
+    "CCX_FIELD_CONTROLS",
+    "TIGHT_FIELD_CONTROLS",
     "ContactConvergenceError",
     "ContactDivergenceError",
     "ContactNewtonSolver",
@@ -36,6 +39,26 @@ __all__ = [
 ]
 
 logger = logging.getLogger("dolfinx_ntf")
+
+#: CalculiX's defaults of ``*CONTROLS, PARAMETERS=FIELD`` (mechanical field).
+CCX_FIELD_CONTROLS: dict[str, float] = {
+    "R_n": 0.005,
+    "C_n": 0.01,
+    "R_p": 0.02,
+    "R_l": 1e-8,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-3,
+}
+#: Field controls that converge to round-off level: the default of :class:`ContactNewtonSolver`
+#: and of ``dolfinx-ntf run --tight``.
+TIGHT_FIELD_CONTROLS: dict[str, float] = {
+    "R_n": 1e-10,
+    "C_n": 1e-8,
+    "R_p": 1e-10,
+    "R_l": 1e-12,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-8,
+}
 
 #: Default linear solver: sparse direct LU by MUMPS.
 DEFAULT_PETSC_OPTIONS = {
@@ -73,9 +96,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         petsc_options: PETSc options of the linear solver, set under ``options_prefix``
             (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`).
         options_prefix: Prefix of the Krylov solver's options.
-        relative_tolerance: Converged when the residual norm falls below this fraction of the first
-            residual norm of the increment (or below ``atol``).
-        atol: Absolute residual tolerance.
+        controls: CalculiX's ``*CONTROLS, PARAMETERS=FIELD`` values of the force-scaled
+            convergence test (:meth:`is_converged`): ``R_n``, ``C_n``, ``R_p``, ``R_l``,
+            ``epsilon``, ``C_epsilon``; default :data:`TIGHT_FIELD_CONTROLS` (round-off level,
+            never below it), :data:`CCX_FIELD_CONTROLS` are ccx's defaults.
+        relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
         max_it: Maximum Newton iterations per increment.
         min_iterations: Newton updates needed before convergence can be declared (ccx: 2).
         divergence_iteration: CalculiX's I_0: from this Newton update on, a residual larger than
@@ -101,8 +126,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         *,
         petsc_options: dict | None = None,
         options_prefix: str = "ntf_",
-        relative_tolerance: float = 1e-10,
-        atol: float = 1e-12,
+        controls: typing.Mapping[str, float] | None = None,
+        relaxation_iteration: int = 9,
         max_it: int = 30,
         min_iterations: int = 2,
         divergence_iteration: int = 4,
@@ -118,8 +143,16 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.setF(self._residual, self._b)
         self.set_update(self._update)
         self.convergence_criterion = "residual"
-        self.relative_tolerance = relative_tolerance
-        self.absolute_tolerance = atol
+        self.controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
+        missing = set(TIGHT_FIELD_CONTROLS) - set(self.controls)
+        if missing:
+            raise ValueError(f"ContactNewtonSolver: controls lack {sorted(missing)}")
+        self.relaxation_iteration = relaxation_iteration
+        #: Displacement at the start of the increment (before the predictor); set by the step
+        #: driver, else the displacement when :meth:`solve` starts.
+        self.increment_start: np.ndarray | None = None
+        self._averages: list[float] = []
+        self._largest: list[float] = []
         self.min_iterations = min_iterations
         self.divergence_iteration = divergence_iteration
         self._first_check = divergence_iteration
@@ -191,13 +224,48 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         return best_step
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """Residual test: the norm is below ``atol`` or ``relative_tolerance`` times the increment's
-        first norm.
+        """CalculiX's force-scaled test of the mechanical field, after each Newton update.
 
-        Override for other criteria (the CalculiX job runner uses ccx's force-based test).
+        With ``r`` the largest residual force, ``c`` the largest correction, ``du`` the largest
+        displacement change in the increment, ``q`` the average absolute element nodal force
+        (:meth:`ContactProblem.average_element_force`) and ``q~`` its mean over the updates so
+        far: converged when ``r <= c1 q~`` and at least one of ``c <= c2 du``,
+        ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <= R_l q~``, ``q <= epsilon q~``,
+        ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to ``relaxation_iteration`` updates,
+        ``(R_p, C_n)`` beyond, and ``(epsilon, C_epsilon)`` under zero flux. Scaled by forces,
+        the test never asks for less than round-off. The caller adds CalculiX's other rules (at
+        least ``min_iterations`` updates, none right after a re-pairing that changed the number
+        of springs). Override for other criteria.
         """
-        return norm <= max(
-            self.absolute_tolerance, self.relative_tolerance * self.residual_norms[0]
+        if self.updates == 0:
+            return False
+        controls = self.controls
+        average = self.problem.average_element_force()
+        self._averages.append(average)
+        mean = float(np.mean(self._averages))
+        largest = b.norm(PETSc.NormType.NORM_INFINITY)
+        self._largest.append(largest)
+        correction = self.relaxation_parameter * self.last_correction.norm(
+            PETSc.NormType.NORM_INFINITY
+        )
+        correction *= self.step_lengths[-1]
+        start = self.increment_start if self.increment_start is not None else self._solve_start
+        change = float(np.abs(x.array - start[: x.array.size]).max(initial=0.0))
+        change = self.problem.u.function_space.mesh.comm.allreduce(change, op=MPI.MAX)
+        if average <= controls["epsilon"] * mean:
+            c1, c2 = controls["epsilon"], controls["C_epsilon"]
+        else:
+            c1 = controls["R_n"] if self.updates <= self.relaxation_iteration else controls["R_p"]
+            c2 = controls["C_n"]
+        estimate = np.inf
+        if self.updates >= 3 and min(self._largest[-3:-1]) > 0:
+            estimate = largest * correction / min(self._largest[-3:-1])
+        return largest <= c1 * mean and (
+            correction <= c2 * change
+            or estimate < c2 * change
+            or largest <= controls["R_l"] * mean
+            or average <= controls["epsilon"] * mean
+            or correction < 1e-8
         )
 
     def _linear_solve_failed(self, what: str) -> None:
@@ -259,6 +327,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         """
         self.residual_norms = []
         self.step_lengths = []
+        self._averages, self._largest = [], []
+        self._solve_start = u.x.array.copy()
         self.updates = 0
         self._first_check = self.divergence_iteration
         self._bind_matrix()
@@ -354,6 +424,7 @@ class StaticStep:
             increment += 1
             attempt = 0
             u_start = u.x.array.copy()
+            solver.increment_start = u_start
             first_failure: ContactConvergenceError | None = None
             while True:
                 attempt += 1

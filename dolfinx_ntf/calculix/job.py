@@ -19,8 +19,8 @@ Newton stops like ccx (manual "Convergence criteria"): the largest residual forc
 fall below ``R_n`` (``*CONTROLS, PARAMETERS=FIELD``, default 0.005) times the average element force,
 averaged over the iterations of the increment (``R_p`` after ``I_P`` iterations), and the last
 correction must be small against the increment's displacement change (``C_n``), see
-``_CcxNewtonSolver``. ``tight=True`` replaces the deck's values by ``TIGHT_CONTROLS`` (``R_n = R_p =
-1e-10``), so that converged solutions are compared.
+:meth:`ContactNewtonSolver.is_converged`. ``tight=True`` replaces the deck's values by
+``TIGHT_FIELD_CONTROLS`` (``R_n = R_p = 1e-10``), so that converged solutions are compared.
 
 Steps without contact pairs and without NLGEOM are linear: one increment over the whole step, as in
 ccx.
@@ -47,6 +47,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.output import ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactProblem
 from dolfinx_ntf.solver import (
+    TIGHT_FIELD_CONTROLS,
     ContactConvergenceError,
     ContactNewtonSolver,
     IncrementResult,
@@ -62,16 +63,6 @@ from .model import INTEGRATION_POINTS, CalculixModel, build_model
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
 logger = logging.getLogger("dolfinx_ntf")
-
-#: ``*CONTROLS, PARAMETERS=FIELD`` values of ``tight=True`` runs (round-off-level convergence).
-TIGHT_CONTROLS: dict[str, float] = {
-    "R_n": 1e-10,
-    "C_n": 1e-8,
-    "R_p": 1e-10,
-    "epsilon": 1e-5,
-    "C_epsilon": 1e-8,
-    "R_l": 1e-12,
-}
 
 
 class JobError(RuntimeError):
@@ -188,69 +179,6 @@ class JobResult:
         return self.increments[-1]
 
 
-# ----------------------------------------------------------------------------- Newton with ccx's cr
-
-
-class _CcxNewtonSolver(ContactNewtonSolver):
-    """ContactNewtonSolver that stops like ccx (manual, "Convergence criteria", mechanical field).
-
-    After Newton update ``i`` (``r`` largest residual force, ``c`` largest correction, ``du``
-    largest displacement change in the increment, ``q`` the average absolute element nodal force of
-    bulk elements and contact springs, ``q~`` its mean over the updates so far): converged when ``r
-    <= c1 q~`` and at least one of ``c <= c2 du``, ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <=
-    R_l q~``, ``q <= eps q~``, ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to ``I_P`` updates,
-    ``(R_p, C_n)`` beyond, and ``(eps, C_eps)`` under zero flux (``q <= eps q~``). The base class
-    adds ccx's other rules (at least two updates, none right after a re-pairing that changed the
-    number of springs).
-    """
-
-    def __init__(self, comm, problem: ContactProblem, average_force, **options) -> None:
-        super().__init__(comm, problem, **options)
-        self.controls: dict[str, float] = {}
-        self.relaxation_iteration = 9
-        self.increment_start: np.ndarray | None = None
-        self._average_force = average_force
-
-    def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
-        """Solve one increment (see :meth:`ContactNewtonSolver.solve`)."""
-        self._averages: list[float] = []
-        self._largest: list[float] = []
-        return super().solve(u)
-
-    def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """Ccx's test after each Newton update (the class docstring); False before the first
-        update.
-        """
-        if self.updates == 0:
-            return False
-        controls = self.controls
-        average = self._average_force()
-        self._averages.append(average)
-        mean = float(np.mean(self._averages))
-        largest = b.norm(PETSc.NormType.NORM_INFINITY)
-        self._largest.append(largest)
-        correction = self.relaxation_parameter * self.last_correction.norm(
-            PETSc.NormType.NORM_INFINITY
-        )
-        start = self.increment_start if self.increment_start is not None else x.array
-        change = float(np.abs(x.array - start).max(initial=0.0))
-        if average <= controls["epsilon"] * mean:
-            c1, c2 = controls["epsilon"], controls["C_epsilon"]
-        else:
-            c1 = controls["R_n"] if self.updates <= self.relaxation_iteration else controls["R_p"]
-            c2 = controls["C_n"]
-        estimate = np.inf
-        if self.updates >= 3 and min(self._largest[-3:-1]) > 0:
-            estimate = largest * correction / min(self._largest[-3:-1])
-        return largest <= c1 * mean and (
-            correction <= c2 * change
-            or estimate < c2 * change
-            or largest <= controls["R_l"] * mean
-            or average <= controls["epsilon"] * mean
-            or correction < 1e-8
-        )
-
-
 # ----------------------------------------------------------------------------- the job
 
 
@@ -290,16 +218,15 @@ class _Job:
         self.counters = _Counters()
         self._cel_overflow = False
 
-        self.problem = model.create_problem(model.begin_step(0), **problem_options)
-        self.problem.pairing_callbacks.append(self._on_pairing)
-        V = model.V
-        v = ufl.TestFunction(V)
-        self._internal = dolfinx.fem.form(ufl.inner(model.first_piola, ufl.grad(v)) * model.dx)
-        self._broken = None
-        self._stress = None
-        self.solver = _CcxNewtonSolver(
-            comm, self.problem, self._average_force, petsc_options=petsc_options
+        v = ufl.TestFunction(model.V)
+        internal = ufl.inner(model.first_piola, ufl.grad(v)) * model.dx
+        self.problem = model.create_problem(
+            model.begin_step(0), element_forces=internal, **problem_options
         )
+        self.problem.pairing_callbacks.append(self._on_pairing)
+        self._internal = dolfinx.fem.form(internal)
+        self._stress = None
+        self.solver = ContactNewtonSolver(comm, self.problem, petsc_options=petsc_options)
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
 
@@ -323,26 +250,6 @@ class _Job:
         forces = vector.array.reshape(-1, 3).copy()
         vector.destroy()
         return forces + self._contact_forces()
-
-    def _average_force(self) -> float:
-        """Ccx's average force: mean absolute element nodal force over elements, nodes and dofs."""
-        if self._broken is None:
-            mesh, V = self.model.mesh, self.model.V
-            family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
-            W = compat.vector_space(mesh, family, compat.space_degree(V))
-            w = ufl.TestFunction(W)
-            self._broken = dolfinx.fem.form(
-                ufl.inner(self.model.first_piola, ufl.grad(w)) * self.model.dx
-            )
-        vector = dolfinx.fem.petsc.assemble_vector(self._broken)
-        total, count = float(np.abs(vector.array).sum()), vector.array.size
-        vector.destroy()
-        for state in self.problem.states:
-            if state.evaluation is not None and state.num_springs:
-                forces = state.evaluation.forces
-                total += float(np.abs(forces).sum())
-                count += forces.size
-        return total / max(count, 1)
 
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points."""
@@ -446,7 +353,7 @@ class _Job:
         controls = step.field_controls()
         self.solver.controls = {
             k: float(v)
-            for k, v in (TIGHT_CONTROLS if self.tight else controls).items()
+            for k, v in (TIGHT_FIELD_CONTROLS if self.tight else controls).items()
             if v is not None
         }
         timing = [v for line in step.controls.get("TIMEINCREMENTATION", ()) for v in line]

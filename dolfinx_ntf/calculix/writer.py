@@ -36,6 +36,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
 from dolfinx_ntf.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.problem import ContactPair
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
@@ -58,21 +59,13 @@ __all__ = [
 NodeTarget = typing.Union[FacetSurface, NodeSurface, np.ndarray, Sequence[int]]
 """Nodes of a constraint or load: facets, vertices, or local block dofs of the space."""
 
-TIGHT_FIELD_CONTROLS: dict[str, float] = {
-    "R_n": 1e-10,
-    "C_n": 1e-8,
-    "R_p": 1e-10,
-    "C_epsilon": 1e-8,
-    "R_l": 1e-12,
-}
-"""``*CONTROLS, PARAMETERS=FIELD`` values that make ccx converge to round-off level.
-
-ccx's defaults stop Newton when the largest residual is 0.5 % of the average nodal force
-(R_n = 0.005, after I_P = 9 iterations R_p = 0.02), which leaves displacements off by up to 1e-5
-and contact stresses by up to 1e-4 of the converged answer (measured on the cross-validation
-decks). With these values ccx needs zero or one more iteration per increment, and tightening further
-(all criteria 1e-14) no longer changes a printed digit of the ``.dat`` file.
-"""
+# TIGHT_FIELD_CONTROLS (from dolfinx_ntf.solver): ``*CONTROLS, PARAMETERS=FIELD`` values that
+# make ccx converge to round-off level. ccx's defaults stop Newton when the largest residual is
+# 0.5 % of the average nodal force (R_n = 0.005, after I_P = 9 iterations R_p = 0.02), which leaves
+# displacements off by up to 1e-5 and contact stresses by up to 1e-4 of the converged answer
+# (measured on the cross-validation decks). With these values ccx needs zero or one more iteration
+# per increment, and tightening further (all criteria 1e-14) no longer changes a printed digit of
+# the ``.dat`` file.
 
 
 @dataclass(frozen=True)
