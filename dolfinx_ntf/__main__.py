@@ -42,6 +42,18 @@ def _parser() -> argparse.ArgumentParser:
         help="beyond ccx: a slave node keeps its master face while that face holds it within the "
         "search tolerance (no face ping-pong at re-pairings); default: ccx's search",
     )
+    run.add_argument(
+        "--no-predictor",
+        action="store_true",
+        help="beyond ccx: start each increment from the last converged displacement instead of "
+        "ccx's extrapolation (more robust on growing contact zones)",
+    )
+    run.add_argument(
+        "--pair-after-predictor",
+        action="store_true",
+        help="beyond ccx: pair again after the predictor has moved the nodes, so that nodes it "
+        "pushes into the master start the increment with a spring; default: ccx's schedule",
+    )
     return parser
 
 
@@ -74,6 +86,8 @@ def main(argv: list[str] | None = None) -> int:
             comm=MPI.COMM_WORLD,
             tight=args.tight,
             problem_options={"walk_from_previous_face": args.stable_pairing},
+            predictor=not args.no_predictor,
+            pair_after_predictor=args.pair_after_predictor,
         )
     except JobError as error:
         print(

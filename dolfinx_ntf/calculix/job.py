@@ -203,8 +203,12 @@ class _Job:
         tight: bool,
         problem_options: dict,
         petsc_options: dict | None,
+        predictor: bool = True,
+        pair_after_predictor: bool = False,
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
+        self.predictor = predictor
+        self.pair_after_predictor = pair_after_predictor
         self.result = JobResult(jobname, directory, model)
         self.result.dat = directory / f"{jobname}.dat"
         write_dat(self.result.dat, [])
@@ -393,6 +397,8 @@ class _Job:
             max_increment=maximum,
             fixed=static.direct or linear,
             on_increment=on_increment,
+            predictor=self.predictor,
+            pair_after_predictor=self.pair_after_predictor,
         )
         driver.run(self.solver, model.u)
 
@@ -500,6 +506,8 @@ def run_job(
     progress: bool = True,
     problem_options: dict | None = None,
     petsc_options: dict | None = None,
+    predictor: bool = True,
+    pair_after_predictor: bool = False,
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -513,6 +521,9 @@ def run_job(
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
             the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``).
         petsc_options: Linear solver options (default: MUMPS LU).
+        predictor: ccx's predictor ``u_n + dt v_prev`` (see :class:`~dolfinx_ntf.StaticStep`).
+        pair_after_predictor: Pair again once the predictor has moved the nodes (beyond ccx, see
+            :class:`~dolfinx_ntf.StaticStep`).
 
     Returns:
         The :class:`JobResult`.
@@ -546,6 +557,8 @@ def run_job(
         tight=tight,
         problem_options={"walk_from_previous_face": False, **(problem_options or {})},
         petsc_options=petsc_options,
+        predictor=predictor,
+        pair_after_predictor=pair_after_predictor,
     )
     try:
         return job.run()
