@@ -177,6 +177,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.static = True
         self.iteration = 0
         self.count_changed = False
+        #: Re-pair at the start of the next Newton iteration even outside the schedule.
+        self.repair_next_iteration = False
         self.pairings = 0
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
@@ -271,6 +273,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             state.overlap[:] = 0.0
         self.iteration = 0
         self.count_changed = False
+        self.repair_next_iteration = False
         self.pair(record_overlap=first)
         self._first_pairing_done = True
         self.ensure_matrix()
@@ -305,44 +308,73 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 None,
             )
             return
-        slave_faces = state.slave.faces
-        areas = spring_areas(slave_faces.face_type, slave_faces.faces, coords, state.slave.nodes)
-        state.master.update(coords)
-        points = coords[state.slave.nodes]
-        tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
-        previous = np.full(points.shape[0], -1, dtype=np.int64)
+        previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         previous[state.spring_slave] = state.spring_face
-        start = previous if self.walk_from_previous_face else None
-        face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
-        found = np.flatnonzero(face >= 0)
-        law = state.pair.interaction.law
-        ft = state.master_faces.face_type
-        evaluation = evaluate_springs(
-            ft,
-            coords[state.master_faces.faces[face[found]]],
-            points[found],
-            areas[found],
-            law,
-            tangent=False,
-            xi0=self._previous_xi(state, found, face),
-        )
+        found, face, areas, evaluation = self._search(state, coords, previous)
         gap = evaluation.gap
         if record_overlap:
             state.overlap[found] = np.minimum(gap, 0.0)
-        shift = self._gap_shift(state, found)
-        cutoff = law.cutoff(areas[found])
-        create = gap - shift <= cutoff
+        create = self._creates_spring(state, found, gap, areas)
         state.spring_slave = found[create]
         state.spring_face = face[found][create].astype(np.int64)
         state.spring_area = areas[found][
             create
         ]  # 0 = no slave face: springs.py applies the fallback
         state.xi = evaluation.xi[create]
-        current = np.full(points.shape[0], -1, dtype=np.int64)
+        current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         current[state.spring_slave] = state.spring_face
         state.face_changes = int(
             np.count_nonzero((previous >= 0) & (current >= 0) & (previous != current))
         )
+
+    def _search(
+        self, state: PairState, coords: np.ndarray, previous: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, SpringEvaluation]:
+        """Master face of every slave node at ``coords`` (``previous``: current face or -1).
+
+        Returns the slave indices with a face, the face of every slave node (-1: none), the spring
+        areas of all slave nodes, and the springs' kinematics (no tangent) of the found nodes.
+        """
+        slave_faces = state.slave.faces
+        areas = spring_areas(slave_faces.face_type, slave_faces.faces, coords, state.slave.nodes)
+        state.master.update(coords)
+        points = coords[state.slave.nodes]
+        tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
+        start = previous if self.walk_from_previous_face else None
+        face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
+        found = np.flatnonzero(face >= 0)
+        evaluation = evaluate_springs(
+            state.master_faces.face_type,
+            coords[state.master_faces.faces[face[found]]],
+            points[found],
+            areas[found],
+            state.pair.interaction.law,
+            tangent=False,
+            xi0=self._previous_xi(state, found, face),
+        )
+        return found, face, areas, evaluation
+
+    def _creates_spring(
+        self, state: PairState, found: np.ndarray, gap: np.ndarray, areas: np.ndarray
+    ) -> np.ndarray:
+        """Which of the found slave nodes get a spring: effective gap within the law's cutoff."""
+        cutoff = state.pair.interaction.law.cutoff(areas[found])
+        return gap - self._gap_shift(state, found) <= cutoff
+
+    def unpaired_contacts(self) -> int:
+        """Slave nodes that a pairing at the current displacement would give a spring but that
+        have none (e.g. nodes that penetrated after the pairing froze); collective."""
+        coords = self.current_coordinates()
+        count = 0
+        for state in self.states:
+            if not state.pair.active:
+                continue
+            current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
+            current[state.spring_slave] = state.spring_face
+            found, _, areas, evaluation = self._search(state, coords, current)
+            create = self._creates_spring(state, found, evaluation.gap, areas)
+            count += int(np.count_nonzero(create & (current[found] < 0)))
+        return self.u.function_space.mesh.comm.allreduce(count)
 
     @staticmethod
     def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:
@@ -476,7 +508,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """
         self.iteration += 1
         self.count_changed = False
-        if not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION:
+        scheduled = not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION
+        if scheduled or self.repair_next_iteration:
+            self.repair_next_iteration = False
             before = self.num_springs
             self.count_changed = self.pair() != before
             self.form(x)

@@ -60,6 +60,9 @@ TIGHT_FIELD_CONTROLS: dict[str, float] = {
     "C_epsilon": 1e-8,
 }
 
+#: Pairings a solve may add to CalculiX's schedule for slave nodes that penetrate without a spring.
+MAX_EXTRA_PAIRINGS = 3
+
 #: Default linear solver: sparse direct LU by MUMPS.
 DEFAULT_PETSC_OPTIONS = {
     "ksp_type": "preonly",
@@ -113,6 +116,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             full step; it breaks the cycles of Newton iterates around projections clamped to a
             face edge, and stops runaway iterates after a re-pairing.
         max_line_search_halvings: Smallest step of the line search is 2 to the minus this.
+        check_unpaired: Before declaring convergence, search for slave nodes that penetrate
+            without a spring (CalculiX freezes the pairing after iteration 8, so such nodes can
+            remain): if any, pair again and iterate on, at most ``MAX_EXTRA_PAIRINGS`` times per
+            increment, then give the increment up (beyond CalculiX; the deck runner reports
+            their number instead).
         line_search_from: First Newton update that is line-searched. The first correction of an
             increment is taken in full: from an unloaded contact it overshoots the residual of
             the LINEAR law (slope K/2 at zero overclosure, K beyond) and is corrected in one
@@ -134,6 +142,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         line_search: bool = True,
         max_line_search_halvings: int = 4,
         line_search_from: int = 2,
+        check_unpaired: bool = True,
     ) -> None:
         super().__init__(comm, problem)
         self.problem = problem
@@ -160,6 +169,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.line_search = line_search
         self.max_line_search_halvings = max_line_search_halvings
         self.line_search_from = line_search_from
+        self.check_unpaired = check_unpaired
+        self.extra_pairings = 0
         self.step_lengths: list[float] = []
         self._trial_residual = self._b.duplicate()
         self._line_search_start = self._b.duplicate()
@@ -309,7 +320,24 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         converged = (
             converged and self.updates >= self.min_iterations and not self.problem.count_changed
         )
+        if converged and self.check_unpaired:
+            converged = self._all_contacts_paired()
         self.atol = 2.0 * norm + 1e-300 if converged else (1.0 - 1e-9) * norm
+
+    def _all_contacts_paired(self) -> bool:
+        """False (and a re-pairing next iteration) when slave nodes penetrate without a spring."""
+        unpaired = self.problem.unpaired_contacts()
+        if unpaired == 0:
+            return True
+        if self.extra_pairings >= MAX_EXTRA_PAIRINGS:
+            raise ContactConvergenceError(
+                f"{unpaired} slave node(s) still penetrate the master without a spring after "
+                f"{MAX_EXTRA_PAIRINGS} extra pairings"
+            )
+        self.extra_pairings += 1
+        self.problem.repair_next_iteration = True
+        logger.info(" %d slave node(s) penetrate without a spring: pairing again", unpaired)
+        return False
 
     def _bind_matrix(self) -> None:
         A = self.problem.ensure_matrix()
@@ -328,6 +356,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.residual_norms = []
         self.step_lengths = []
         self._averages, self._largest = [], []
+        self.extra_pairings = 0
         self._solve_start = u.x.array.copy()
         self.updates = 0
         self._first_check = self.divergence_iteration

@@ -230,7 +230,9 @@ class _Job:
         self.problem.pairing_callbacks.append(self._on_pairing)
         self._internal = dolfinx.fem.form(internal)
         self._stress = None
-        self.solver = ContactNewtonSolver(comm, self.problem, petsc_options=petsc_options)
+        self.solver = ContactNewtonSolver(
+            comm, self.problem, petsc_options=petsc_options, check_unpaired=False
+        )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
 
@@ -404,6 +406,13 @@ class _Job:
 
     def _converged(self, index: int, step: Step, result: IncrementResult) -> None:
         model = self.model
+        unpaired = self.problem.unpaired_contacts() if self.problem.states else 0
+        if unpaired:
+            logger.info(
+                " *WARNING: %d slave node(s) penetrate the master without a contact element "
+                "(the pairing is frozen after iteration 8, as in ccx)",
+                unpaired,
+            )
         total = model.total_time(index, result.time)
         node_ids = model.dof_node
         order = np.argsort(node_ids)
