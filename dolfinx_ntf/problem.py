@@ -88,6 +88,7 @@ class PairState:
     spring_area: np.ndarray = field(default_factory=lambda: np.empty(0))
     xi: np.ndarray | None = None
     evaluation: SpringEvaluation | None = None
+    found_face: np.ndarray | None = None  # face of every slave node at the last pairing, -1: none
     face_changes: int = 0  # slave nodes paired before and after the last pairing, on another face
 
     @property
@@ -311,6 +312,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         previous[state.spring_slave] = state.spring_face
         found, face, areas, evaluation = self._search(state, coords, previous)
+        state.found_face = face
         gap = evaluation.gap
         if record_overlap:
             state.overlap[found] = np.minimum(gap, 0.0)
@@ -468,9 +470,26 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.matrix is None or not self.assembler.has_pattern(blocks):
             if self.matrix is not None:
                 self.matrix.destroy()
-            self.matrix = self.assembler.create_matrix(blocks)
+            self.matrix = self.assembler.create_matrix(blocks + self._reserved_blocks())
         self._pattern_checked = True
         return self.matrix
+
+    def _reserved_blocks(self) -> list[SpringBlocks]:
+        """Couplings a new matrix reserves beyond the current springs: every slave node that the
+        last pairing located, with the faces around its face, so that nodes moving to a
+        neighbouring face or coming into contact need no new pattern (and no new symbolic
+        factorization)."""
+        blocks = []
+        for state in self.states:
+            if state.found_face is None:
+                continue
+            located = np.flatnonzero(state.found_face >= 0)
+            which, patch = state.master.face_patches(state.found_face[located])
+            nodes = np.hstack(
+                [state.master_faces.faces[patch], state.slave.nodes[located[which]][:, None]]
+            )
+            blocks.append(SpringBlocks(nodes, nodes))
+        return blocks
 
     # -- dolfinx callbacks -------------------------------------------------------------------------
     #

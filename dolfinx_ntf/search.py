@@ -12,6 +12,7 @@ Pure numpy/scipy; nodes are integer ids indexing rows of a coordinate array.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse
 from scipy.spatial import cKDTree
 
 from dolfinx_ntf.faces import FaceType
@@ -86,6 +87,17 @@ class MasterSurface:
         self._edge_id = edge_id.reshape(-1, 3)
         self._edge_sign = sign.reshape(-1, 3).astype(float)
 
+        incidence = scipy.sparse.csr_matrix(
+            (
+                np.ones(corners.size, dtype=np.int8),
+                (np.repeat(np.arange(faces.shape[0]), nc), self._local_faces[:, :nc].ravel()),
+            ),
+            shape=(faces.shape[0], self._nodes.size),
+        )
+        patches = (incidence @ incidence.T).tocsr()
+        patches.sort_indices()
+        self._patch_offsets, self._patch_faces = patches.indptr.astype(np.int64), patches.indices
+
         self._updated = False
         if ref is not None:
             self.update(ref)
@@ -130,6 +142,19 @@ class MasterSurface:
     def triangle_neighbours(self) -> np.ndarray:
         """(T, 3) triangle across edges (0,1), (1,2), (2,0) of each triangle, -1 for none."""
         return self._neighbours
+
+    def face_patches(self, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The faces sharing a corner with each of ``faces`` (itself included), flattened.
+
+        Returns:
+            ``(which, patch)``: ``patch[k]`` touches ``faces[which[k]]``.
+        """
+        faces = np.asarray(faces, dtype=np.int64)
+        starts = self._patch_offsets[faces]
+        counts = self._patch_offsets[faces + 1] - starts
+        which = np.repeat(np.arange(faces.size), counts)
+        position = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+        return which, self._patch_faces[np.repeat(starts, counts) + position].astype(np.int64)
 
     @property
     def nodal_normals(self) -> np.ndarray:

@@ -62,6 +62,8 @@ TIGHT_FIELD_CONTROLS: dict[str, float] = {
 
 #: Pairings a solve may add to CalculiX's schedule for slave nodes that penetrate without a spring.
 MAX_EXTRA_PAIRINGS = 3
+#: Newton iterations each extra pairing adds to ``max_it`` (the set changes: Newton starts over).
+ITERATIONS_PER_EXTRA_PAIRING = 10
 
 #: Default linear solver: sparse direct LU by MUMPS.
 DEFAULT_PETSC_OPTIONS = {
@@ -336,6 +338,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             )
         self.extra_pairings += 1
         self.problem.repair_next_iteration = True
+        self._first_check = max(self._first_check, self.updates + 5)  # as after a count change
+        self.max_it += ITERATIONS_PER_EXTRA_PAIRING
         logger.info(" %d slave node(s) penetrate without a spring: pairing again", unpaired)
         return False
 
@@ -357,6 +361,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.step_lengths = []
         self._averages, self._largest = [], []
         self.extra_pairings = 0
+        max_it = self.max_it
         self._solve_start = u.x.array.copy()
         self.updates = 0
         self._first_check = self.divergence_iteration
@@ -369,6 +374,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self._linear_solve_failed(f"the Newton iteration failed ({error})")
         finally:
             self.first_solve = False
+            self.max_it = max_it
         if not converged:
             raise ContactConvergenceError(
                 f"Newton did not converge in {iterations} iterations "
