@@ -65,6 +65,14 @@ MAX_EXTRA_PAIRINGS = 3
 #: Newton iterations each extra pairing adds to ``max_it`` (the set changes: Newton starts over).
 ITERATIONS_PER_EXTRA_PAIRING = 10
 
+#: Default linear solver of symmetric Jacobians (``ContactProblem(symmetric=True)`` with a
+#: symmetric bulk form): sparse direct Cholesky (LDL^T) by MUMPS, about half the work of LU.
+CHOLESKY_PETSC_OPTIONS = {
+    "ksp_type": "preonly",
+    "pc_type": "cholesky",
+    "pc_factor_mat_solver_type": "mumps",
+}
+
 #: Default linear solver: sparse direct LU by MUMPS.
 DEFAULT_PETSC_OPTIONS = {
     "ksp_type": "preonly",
@@ -99,7 +107,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         comm: MPI communicator.
         problem: The contact problem.
         petsc_options: PETSc options of the linear solver, set under ``options_prefix``
-            (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`).
+            (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`; MUMPS Cholesky,
+            :data:`CHOLESKY_PETSC_OPTIONS`, when the problem is ``symmetric`` and its first
+            Jacobian is symmetric).
         options_prefix: Prefix of the Krylov solver's options.
         controls: CalculiX's ``*CONTROLS, PARAMETERS=FIELD`` values of the force-scaled
             convergence test (:meth:`is_converged`): ``R_n``, ``C_n``, ``R_p``, ``R_l``,
@@ -184,9 +194,12 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.residual_norms: list[float] = []
         ksp = self.krylov_solver
         ksp.setOptionsPrefix(options_prefix)
+        self._check_symmetry = petsc_options is None and problem.symmetric
         opts = PETSc.Options()
         for key, value in (
-            DEFAULT_PETSC_OPTIONS if petsc_options is None else petsc_options
+            (CHOLESKY_PETSC_OPTIONS if self._check_symmetry else DEFAULT_PETSC_OPTIONS)
+            if petsc_options is None
+            else petsc_options
         ).items():
             opts[f"{options_prefix}{key}"] = value
         ksp.setFromOptions()
@@ -199,8 +212,13 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         """
         merges = self.problem.assembler.pattern_merges
         self.problem.J(x, A)
+        ksp = self.krylov_solver
+        if self._check_symmetry:  # the default Cholesky solver needs a symmetric bulk Jacobian too
+            self._check_symmetry = False
+            if not A.isSymmetric(1e-10 * A.norm(PETSc.NormType.NORM_INFINITY)):
+                logger.info(" the Jacobian is not symmetric: LU instead of Cholesky")
+                ksp.getPC().setType("lu")
         if self.problem.assembler.pattern_merges != merges:
-            ksp = self.krylov_solver
             ksp.getPC().reset()
             ksp.setOperators(A, A)
 
