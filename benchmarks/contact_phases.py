@@ -65,8 +65,14 @@ E, NU = 1000.0, 0.3
 #: PETSc options: MUMPS LU (the library default) or CG with smoothed-aggregation AMG.
 SOLVERS: dict[str, dict[str, typing.Any]] = {
     "mumps": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
-    "gamg": {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-8, "ksp_max_it": 1000,
-             "mg_levels_ksp_type": "chebyshev", "mg_levels_pc_type": "jacobi"},
+    "gamg": {
+        "ksp_type": "cg",
+        "pc_type": "gamg",
+        "ksp_rtol": 1e-8,
+        "ksp_max_it": 1000,
+        "mg_levels_ksp_type": "chebyshev",
+        "mg_levels_pc_type": "jacobi",
+    },
 }
 #: Result keys that depend on the linear solver (no scaling exponent across solvers).
 _SOLVER_KEYS = ("newton", "newton_solve")
@@ -80,8 +86,9 @@ class PlateMesh(typing.NamedTuple):
     upper_cells: np.ndarray
 
 
-def _box(origin: typing.Sequence[float], size: typing.Sequence[float],
-         divisions: typing.Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+def _box(
+    origin: typing.Sequence[float], size: typing.Sequence[float], divisions: typing.Sequence[int]
+) -> tuple[np.ndarray, np.ndarray]:
     """Points and hexahedra (dolfinx tensor vertex order) of a structured box."""
     axes = [np.linspace(o, o + s, n + 1) for o, s, n in zip(origin, size, divisions)]
     z, y, x = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
@@ -93,13 +100,22 @@ def _box(origin: typing.Sequence[float], size: typing.Sequence[float],
     def node(di: int, dj: int, dk: int) -> np.ndarray:
         return ((k + dk) * (ny + 1) + j + dj) * (nx + 1) + i + di
 
-    corners = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0),
-               (0, 0, 1), (1, 0, 1), (0, 1, 1), (1, 1, 1)]
+    corners = [
+        (0, 0, 0),
+        (1, 0, 0),
+        (0, 1, 0),
+        (1, 1, 0),
+        (0, 0, 1),
+        (1, 0, 1),
+        (0, 1, 1),
+        (1, 1, 1),
+    ]
     return points, np.column_stack([node(*c) for c in corners])
 
 
-def build_plates(slave_nodes: int, *, layers: int = 1, master_ratio: float = 0.7,
-                 comm: MPI.Comm = MPI.COMM_WORLD) -> PlateMesh:
+def build_plates(
+    slave_nodes: int, *, layers: int = 1, master_ratio: float = 0.7, comm: MPI.Comm = MPI.COMM_WORLD
+) -> PlateMesh:
     """Two touching plates; the upper plate's bottom face has about ``slave_nodes`` nodes.
 
     Args:
@@ -119,8 +135,9 @@ def build_plates(slave_nodes: int, *, layers: int = 1, master_ratio: float = 0.7
     inset = 0.01  # the slave plate lies inside the master's edges
     hs, hm = (1.0 - 2 * inset) / n, 1.0 / m
     p1, c1 = _box((0.0, 0.0, -layers * hm), (1.0, 1.0, layers * hm), (m, m, layers))
-    p2, c2 = _box((inset, inset, 0.0), (1.0 - 2 * inset, 1.0 - 2 * inset, layers * hs),
-                  (n, n, layers))
+    p2, c2 = _box(
+        (inset, inset, 0.0), (1.0 - 2 * inset, 1.0 - 2 * inset, layers * hs), (n, n, layers)
+    )
     points, cells = np.vstack([p1, p2]), np.vstack([c1, c2 + p1.shape[0]])
     if comm.rank != 0:
         points, cells = np.empty((0, 3)), np.empty((0, 8), dtype=np.int64)
@@ -162,9 +179,9 @@ def _rigid_body_modes(V: dolfinx.fem.FunctionSpace) -> PETSc.NullSpace:
     return PETSc.NullSpace().create(vectors=vectors, comm=V.mesh.comm)
 
 
-def build_problem(plates: PlateMesh, solver: str, *, options_prefix: str = "bench_",
-                  penetration: float = 1e-4
-                  ) -> tuple[ntf.ContactProblem, ntf.ContactNewtonSolver]:
+def build_problem(
+    plates: PlateMesh, solver: str, *, options_prefix: str = "bench_", penetration: float = 1e-4
+) -> tuple[ntf.ContactProblem, ntf.ContactNewtonSolver]:
     """The contact problem on the plates, paired at a uniform penetration, and its Newton solver.
 
     Args:
@@ -181,12 +198,16 @@ def build_problem(plates: PlateMesh, solver: str, *, options_prefix: str = "benc
     sigma = small_strain_stress(u, E, NU)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
     pressure = dolfinx.fem.Constant(mesh, 1.0)
-    F = (ufl.inner(sigma, ufl.grad(v)) * ufl.dx
-         + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(UPPER_TOP))
+    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
+        ufl.FacetNormal(mesh), v
+    ) * ds(UPPER_TOP)
     clamp = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
     top = ft.find(UPPER_TOP)
-    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), clamp, V),
-           component_bc(V, 0, top), component_bc(V, 1, top)]
+    bcs = [
+        dolfinx.fem.dirichletbc(np.zeros(3), clamp, V),
+        component_bc(V, 0, top),
+        component_bc(V, 1, top),
+    ]
     interaction = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, SLAVE), ntf.FacetSurface(ft, MASTER), interaction)
     problem = ntf.ContactProblem(F, u, [pair], bcs)
@@ -200,8 +221,9 @@ def build_problem(plates: PlateMesh, solver: str, *, options_prefix: str = "benc
     u.x.scatter_forward()
     problem.begin_increment(1.0)
 
-    newton = ntf.ContactNewtonSolver(mesh.comm, problem, petsc_options=SOLVERS[solver],
-                                     options_prefix=options_prefix)
+    newton = ntf.ContactNewtonSolver(
+        mesh.comm, problem, petsc_options=SOLVERS[solver], options_prefix=options_prefix
+    )
     if solver == "gamg":
         problem.matrix.setNearNullSpace(_rigid_body_modes(V))
     return problem, newton
@@ -234,8 +256,13 @@ def _time_search(problem: ntf.ContactProblem, repeat: int, out: dict[str, typing
     out["gap"] = max(out["search"] - out["areas"] - out["update"] - out["locate"], 0.0)
 
 
-def _time_newton(problem: ntf.ContactProblem, newton: ntf.ContactNewtonSolver, b: PETSc.Vec,
-                 repeat: int, out: dict[str, typing.Any]) -> None:
+def _time_newton(
+    problem: ntf.ContactProblem,
+    newton: ntf.ContactNewtonSolver,
+    b: PETSc.Vec,
+    repeat: int,
+    out: dict[str, typing.Any],
+) -> None:
     """One Newton iteration without re-pairing: form, F, J, linear solve (u is not updated)."""
     x, A = compat.petsc_vector(problem.u), problem.matrix
     ksp = newton.krylov_solver
@@ -265,9 +292,15 @@ def _time_newton(problem: ntf.ContactProblem, newton: ntf.ContactNewtonSolver, b
     out["ksp_iterations"] = ksp.getIterationNumber()
 
 
-def run_size(slave_nodes: int, *, repeat: int, solver: str, layers: int = 1,
-             master_ratio: float = 0.7,
-             log: typing.Callable[[str], None] = print) -> dict[str, typing.Any]:
+def run_size(
+    slave_nodes: int,
+    *,
+    repeat: int,
+    solver: str,
+    layers: int = 1,
+    master_ratio: float = 0.7,
+    log: typing.Callable[[str], None] = print,
+) -> dict[str, typing.Any]:
     """Build the plates for one size and time every phase; returns median times (s) and counts."""
     t0 = time.perf_counter()
     plates = build_plates(slave_nodes, layers=layers, master_ratio=master_ratio)
@@ -275,10 +308,16 @@ def run_size(slave_nodes: int, *, repeat: int, solver: str, layers: int = 1,
     setup = time.perf_counter() - t0
     state = problem.states[0]
     dofs = 3 * problem.u.function_space.dofmap.index_map.size_global
-    out: dict[str, typing.Any] = {"slave_nodes": int(state.slave.nodes.size), "dofs": dofs,
-                                  "solver": solver, "setup": setup}
-    log(f"  {out['slave_nodes']} slave nodes, {state.master_faces.faces.shape[0]} master faces, "
-        f"{dofs} dofs, {problem.num_springs} springs; set-up {setup:.1f} s")
+    out: dict[str, typing.Any] = {
+        "slave_nodes": int(state.slave.nodes.size),
+        "dofs": dofs,
+        "solver": solver,
+        "setup": setup,
+    }
+    log(
+        f"  {out['slave_nodes']} slave nodes, {state.master_faces.faces.shape[0]} master faces, "
+        f"{dofs} dofs, {problem.num_springs} springs; set-up {setup:.1f} s"
+    )
 
     _time_search(problem, repeat, out)
     out["evaluate"] = _timed(lambda: problem.evaluate(tangent=True), repeat)
@@ -305,7 +344,8 @@ def run_size(slave_nodes: int, *, repeat: int, solver: str, layers: int = 1,
     pattern_blocks = [SpringBlocks(s.element_nodes, s.element_nodes) for s in problem.states]
     out["pattern"] = _timed(lambda: assembler.create_matrix(pattern_blocks).destroy(), repeat)
     out["pattern_bulk"] = _timed(
-        lambda: dolfinx.fem.petsc.create_matrix(problem.a).destroy(), repeat)
+        lambda: dolfinx.fem.petsc.create_matrix(problem.a).destroy(), repeat
+    )
 
     _time_newton(problem, newton, b, repeat, out)
     return out
@@ -314,8 +354,10 @@ def run_size(slave_nodes: int, *, repeat: int, solver: str, layers: int = 1,
 def _format_table(header: typing.Sequence[str], rows: typing.Sequence[typing.Sequence[str]]) -> str:
     """A Markdown table with right-aligned columns."""
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
-    lines = ["| " + " | ".join(h.rjust(w) for h, w in zip(header, widths)) + " |",
-             "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
+    lines = [
+        "| " + " | ".join(h.rjust(w) for h, w in zip(header, widths)) + " |",
+        "|" + "|".join("-" * (w + 2) for w in widths) + "|",
+    ]
     lines += ["| " + " | ".join(c.rjust(w) for c, w in zip(r, widths)) + " |" for r in rows]
     return "\n".join(lines)
 
@@ -342,51 +384,122 @@ def _exponents(results: typing.Sequence[dict], keys: typing.Sequence[str]) -> li
 def report(results: typing.Sequence[dict], repeat: int) -> str:
     """The main table, the breakdown and the scaling exponents as text."""
     main_keys = ["search", "evaluate", "insert", "pattern", "newton"]
-    header = ["slave nodes", "springs", "search (s)", "spring eval (s)", "insertion (s)",
-              "pattern build (s)", "Newton iteration (s)", "dofs", "solver"]
+    header = [
+        "slave nodes",
+        "springs",
+        "search (s)",
+        "spring eval (s)",
+        "insertion (s)",
+        "pattern build (s)",
+        "Newton iteration (s)",
+        "dofs",
+        "solver",
+    ]
     rows = []
     for r in results:
         solver = r["solver"] + (f" ({r['ksp_iterations']} its)" if r["solver"] == "gamg" else "")
-        rows.append([str(r["slave_nodes"]), str(r["springs"])] + [_s(r[k]) for k in main_keys]
-                    + [str(r["dofs"]), solver])
+        rows.append(
+            [str(r["slave_nodes"]), str(r["springs"])]
+            + [_s(r[k]) for k in main_keys]
+            + [str(r["dofs"]), solver]
+        )
     text = [f"Median of {repeat} runs (s).", _format_table(header, rows), ""]
 
-    parts = ["areas", "update", "locate", "gap", "insert_mat", "has_pattern", "insert_vec",
-             "pattern_bulk", "newton_form", "newton_F", "newton_J", "newton_solve", "first_solve"]
-    header = ["slave nodes", "areas", "master update", "locate", "gap+cutoff",
-              "add_to_matrix+assemble", "(has_pattern)", "add_to_vector",
-              "dolfinx bulk create_matrix", "form", "F", "J", "solve", "first solve"]
+    parts = [
+        "areas",
+        "update",
+        "locate",
+        "gap",
+        "insert_mat",
+        "has_pattern",
+        "insert_vec",
+        "pattern_bulk",
+        "newton_form",
+        "newton_F",
+        "newton_J",
+        "newton_solve",
+        "first_solve",
+    ]
+    header = [
+        "slave nodes",
+        "areas",
+        "master update",
+        "locate",
+        "gap+cutoff",
+        "add_to_matrix+assemble",
+        "(has_pattern)",
+        "add_to_vector",
+        "dolfinx bulk create_matrix",
+        "form",
+        "F",
+        "J",
+        "solve",
+        "first solve",
+    ]
     rows = [[str(r["slave_nodes"])] + [_s(r[k]) for k in parts] for r in results]
-    text += ["Breakdown (s): search = areas + master update + locate + gap+cutoff (the projection "
-             "in pair);",
-             "Newton iteration = form + F + J + solve; J includes add_to_matrix; 'first solve' "
-             "includes MUMPS's analysis or GAMG's set-up.",
-             _format_table(header, rows), ""]
+    text += [
+        "Breakdown (s): search = areas + master update + locate + gap+cutoff (the projection "
+        "in pair);",
+        "Newton iteration = form + F + J + solve; J includes add_to_matrix; 'first solve' "
+        "includes MUMPS's analysis or GAMG's set-up.",
+        _format_table(header, rows),
+        "",
+    ]
     if len(results) > 1:
-        keys = main_keys + ["locate", "insert_mat", "has_pattern", "newton_F", "newton_J",
-                            "newton_solve"]
-        text += ["Scaling exponents between sizes (time ~ slave_nodes^k; 1 = linear; '-' where "
-                 "the solver differs):",
-                 _format_table(["sizes"] + keys, _exponents(results, keys))]
+        keys = main_keys + [
+            "locate",
+            "insert_mat",
+            "has_pattern",
+            "newton_F",
+            "newton_J",
+            "newton_solve",
+        ]
+        text += [
+            "Scaling exponents between sizes (time ~ slave_nodes^k; 1 = linear; '-' where "
+            "the solver differs):",
+            _format_table(["sizes"] + keys, _exponents(results, keys)),
+        ]
     return "\n".join(text)
 
 
 def main(argv: typing.Sequence[str] | None = None) -> int:
     """Command line entry point."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--sizes", type=float, nargs="+", default=[1e3, 1e4, 1e5],
-                        help="target numbers of slave nodes (default: 1e3 1e4 1e5)")
-    parser.add_argument("--repeat", type=int, default=3,
-                        help="timed repetitions per phase; the median is reported (default 3)")
-    parser.add_argument("--solver", choices=sorted(SOLVERS), default="mumps",
-                        help="linear solver of the Newton iteration (default: mumps)")
-    parser.add_argument("--direct-max-dofs", type=int, default=400_000,
-                        help="with --solver mumps, sizes with more dofs use cg+gamg instead "
-                             "(default 400000; 0 = never switch)")
-    parser.add_argument("--layers", type=int, default=1,
-                        help="cell layers through each plate (default 1)")
-    parser.add_argument("--master-ratio", type=float, default=0.7,
-                        help="master divisions relative to the slave's (default 0.7)")
+    parser.add_argument(
+        "--sizes",
+        type=float,
+        nargs="+",
+        default=[1e3, 1e4, 1e5],
+        help="target numbers of slave nodes (default: 1e3 1e4 1e5)",
+    )
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=3,
+        help="timed repetitions per phase; the median is reported (default 3)",
+    )
+    parser.add_argument(
+        "--solver",
+        choices=sorted(SOLVERS),
+        default="mumps",
+        help="linear solver of the Newton iteration (default: mumps)",
+    )
+    parser.add_argument(
+        "--direct-max-dofs",
+        type=int,
+        default=400_000,
+        help="with --solver mumps, sizes with more dofs use cg+gamg instead "
+        "(default 400000; 0 = never switch)",
+    )
+    parser.add_argument(
+        "--layers", type=int, default=1, help="cell layers through each plate (default 1)"
+    )
+    parser.add_argument(
+        "--master-ratio",
+        type=float,
+        default=0.7,
+        help="master divisions relative to the slave's (default 0.7)",
+    )
     args = parser.parse_args(argv)
     if MPI.COMM_WORLD.size != 1:
         parser.error("contact_phases.py runs in serial only")
@@ -404,17 +517,28 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
         solver = args.solver
         if solver == "mumps" and args.direct_max_dofs and dofs > args.direct_max_dofs:
             solver = "gamg"
-            print(f"{target} slave nodes: about {dofs} dofs > --direct-max-dofs "
-                  f"{args.direct_max_dofs}: the Newton iteration uses cg+gamg instead of MUMPS")
+            print(
+                f"{target} slave nodes: about {dofs} dofs > --direct-max-dofs "
+                f"{args.direct_max_dofs}: the Newton iteration uses cg+gamg instead of MUMPS"
+            )
         print(f"{target} slave nodes ({solver}) ...", flush=True)
-        results.append(run_size(target, repeat=args.repeat, solver=solver, layers=args.layers,
-                                master_ratio=args.master_ratio))
+        results.append(
+            run_size(
+                target,
+                repeat=args.repeat,
+                solver=solver,
+                layers=args.layers,
+                master_ratio=args.master_ratio,
+            )
+        )
     print()
     print(report(results, args.repeat))
     version = ".".join(map(str, PETSc.Sys.getVersion()))
-    print(f"\nTotal {time.perf_counter() - start:.0f} s; layers {args.layers}, master ratio "
-          f"{args.master_ratio}, PETSc {version}, serial; 1-min load average {load:.1f} at start, "
-          f"{os.getloadavg()[0]:.1f} at end (other processes on the machine inflate the times).")
+    print(
+        f"\nTotal {time.perf_counter() - start:.0f} s; layers {args.layers}, master ratio "
+        f"{args.master_ratio}, PETSc {version}, serial; 1-min load average {load:.1f} at start, "
+        f"{os.getloadavg()[0]:.1f} at end (other processes on the machine inflate the times)."
+    )
     return 0
 
 

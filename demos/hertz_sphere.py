@@ -107,19 +107,31 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     """Command-line options."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
-    parser.add_argument("--output", type=Path, default=Path("output"),
-                        help="output folder (default: output/)")
+    parser.add_argument(
+        "--output", type=Path, default=Path("output"), help="output folder (default: output/)"
+    )
     parser.add_argument("--cell-type", choices=("tetrahedron", "hexahedron"), default="tetrahedron")
-    parser.add_argument("--displacement", type=float, default=DISPLACEMENT,
-                        help=f"downward displacement of the sphere top [mm] "
-                             f"(default {DISPLACEMENT})")
-    parser.add_argument("--penalty", type=float, default=PENALTY,
-                        help=f"penalty slope K of the LINEAR law in units of E per mm "
-                             f"(default {PENALTY:g}; CalculiX's default is 50)")
-    parser.add_argument("--increments", type=int, default=8,
-                        help="number of increments (default 8)")
-    parser.add_argument("--ccx-pairing", action="store_true",
-                        help="start the face search at the nearest centroid like CalculiX")
+    parser.add_argument(
+        "--displacement",
+        type=float,
+        default=DISPLACEMENT,
+        help=f"downward displacement of the sphere top [mm] (default {DISPLACEMENT})",
+    )
+    parser.add_argument(
+        "--penalty",
+        type=float,
+        default=PENALTY,
+        help=f"penalty slope K of the LINEAR law in units of E per mm "
+        f"(default {PENALTY:g}; CalculiX's default is 50)",
+    )
+    parser.add_argument(
+        "--increments", type=int, default=8, help="number of increments (default 8)"
+    )
+    parser.add_argument(
+        "--ccx-pairing",
+        action="store_true",
+        help="start the face search at the nearest centroid like CalculiX",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
 
@@ -128,8 +140,9 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     """Run the demo; returns a summary (Hertz values, computed values, relative errors, timings)."""
     args = _parse(argv)
     if args.increments < 1 or not args.penalty > 0:
-        raise ValueError(f"need --increments >= 1 and --penalty > 0, got {args.increments} and "
-                         f"{args.penalty}")
+        raise ValueError(
+            f"need --increments >= 1 and --penalty > 0, got {args.increments} and {args.penalty}"
+        )
     comm = MPI.COMM_WORLD
     start = time.perf_counter()
 
@@ -138,17 +151,18 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # of R (meshes/hertz.py).
     geometry = _load_meshes("hertz")
     sizes = {key: value * RADIUS for key, value in geometry.COARSE.items()} if args.coarse else {}
-    mesh, cell_tags, facet_tags = mesh_from_gmsh(geometry.build_hertz, comm, radius=RADIUS,
-                                                 cell_type=args.cell_type, **sizes)
+    mesh, cell_tags, facet_tags = mesh_from_gmsh(
+        geometry.build_hertz, comm, radius=RADIUS, cell_type=args.cell_type, **sizes
+    )
 
     # --- Bulk problem ----------------------------------------------------------------------------
     # Small-strain elasticity (Hertz's theory is linear too), one material per body.
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
-    F = (ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
-         + ufl.inner(small_strain_stress(u, E_SPHERE, NU_SPHERE), ufl.grad(v))
-         * dx(geometry.SPHERE))
+    F = ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(
+        geometry.BLOCK
+    ) + ufl.inner(small_strain_stress(u, E_SPHERE, NU_SPHERE), ufl.grad(v)) * dx(geometry.SPHERE)
 
     # Block bottom clamped, symmetry planes of both bodies: u_x = 0 on x = 0, u_y = 0 on y = 0. The
     # sphere's flat top moves down (u_x, u_y free). A prescribed displacement rather than a force:
@@ -157,12 +171,15 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     bottom = dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM))
     Vz, _ = V.sub(2).collapse()
     top_uz = dolfinx.fem.Function(Vz)
-    top = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2,
-                                              facet_tags.find(geometry.SPHERE_TOP))
-    bcs = [dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), bottom, V),
-           component_bc(V, 0, facet_tags.find(geometry.SYMMETRY_X)),
-           component_bc(V, 1, facet_tags.find(geometry.SYMMETRY_Y)),
-           dolfinx.fem.dirichletbc(top_uz, top, V.sub(2))]
+    top = dolfinx.fem.locate_dofs_topological(
+        (V.sub(2), Vz), 2, facet_tags.find(geometry.SPHERE_TOP)
+    )
+    bcs = [
+        dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), bottom, V),
+        component_bc(V, 0, facet_tags.find(geometry.SYMMETRY_X)),
+        component_bc(V, 1, facet_tags.find(geometry.SYMMETRY_Y)),
+        dolfinx.fem.dirichletbc(top_uz, top, V.sub(2)),
+    ]
 
     # --- Contact ----------------------------------------------------------------------------------
     # LINEAR law with K = 10 E instead of CalculiX's default 50 E (both within CalculiX's advice of
@@ -172,9 +189,12 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # The search starts at each node's current face (beyond CalculiX): nodes pressed into the
     # corners of the faceted master do not hop between faces at every re-pairing.
     law = ntf.LinearLaw.with_ccx_defaults(youngs_modulus=E_BLOCK, slope=args.penalty * E_BLOCK)
-    pair = ntf.ContactPair(slave=ntf.FacetSurface(facet_tags, geometry.SPHERE_CONTACT),
-                           master=ntf.FacetSurface(facet_tags, geometry.BLOCK_TOP),
-                           interaction=ntf.SurfaceInteraction(law), name="hertz")
+    pair = ntf.ContactPair(
+        slave=ntf.FacetSurface(facet_tags, geometry.SPHERE_CONTACT),
+        master=ntf.FacetSurface(facet_tags, geometry.BLOCK_TOP),
+        interaction=ntf.SurfaceInteraction(law),
+        name="hertz",
+    )
     problem = ntf.ContactProblem(F, u, [pair], bcs, walk_from_previous_face=not args.ccx_pairing)
     solver = ntf.ContactNewtonSolver(comm, problem)
     if not args.quiet:
@@ -195,8 +215,12 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
         def set_load(t: float) -> None:
             top_uz.x.array[:] = -(t**2) * args.displacement
 
-        step = ntf.StaticStep(set_load, initial_increment=1.0 / args.increments,
-                              max_increment=1.0 / args.increments, on_increment=record)
+        step = ntf.StaticStep(
+            set_load,
+            initial_increment=1.0 / args.increments,
+            max_increment=1.0 / args.increments,
+            on_increment=record,
+        )
         solve_start = time.perf_counter()
         step.run(solver, u)
         solve_time = time.perf_counter() - solve_start
@@ -288,8 +312,14 @@ def _unpaired_penetrations(problem: ntf.ContactProblem) -> tuple[int, float]:
     face = state.master.locate(points, 0.05 * np.sqrt(areas))
     found = np.flatnonzero(face >= 0)
     faces = state.master_faces.faces[face[found]]
-    gap = evaluate_springs(state.master_faces.face_type, coords[faces], points[found], areas[found],
-                           state.pair.interaction.law, tangent=False).gap
+    gap = evaluate_springs(
+        state.master_faces.face_type,
+        coords[faces],
+        points[found],
+        areas[found],
+        state.pair.interaction.law,
+        tangent=False,
+    ).gap
     paired = np.zeros(slave.nodes.size, dtype=bool)
     paired[state.spring_slave] = True
     depth = -gap[~paired[found] & (gap < -1e-8 * RADIUS)]
@@ -334,12 +364,18 @@ def _plot(path: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
     near = r < 1.5 * a
     ax.plot(r[near], p[near], "o", ms=3, label="dolfinx_ntf nodal pressure F_N/A")
     ax.plot(rr, p0 * np.sqrt(np.clip(1 - (rr / a) ** 2, 0, None)), "k-", label="Hertz")
-    ax.plot(rr, summary["p0_fit"] * np.sqrt(np.clip(1 - (rr / summary["a_fit"]) ** 2, 0, None)),
-            "r--", label=f"fit: a {summary['a_error']:+.1%}, p0 {summary['p0_error']:+.1%}")
+    ax.plot(
+        rr,
+        summary["p0_fit"] * np.sqrt(np.clip(1 - (rr / summary["a_fit"]) ** 2, 0, None)),
+        "r--",
+        label=f"fit: a {summary['a_error']:+.1%}, p0 {summary['p0_error']:+.1%}",
+    )
     ax.set_xlabel("radius r [mm]")
     ax.set_ylabel("contact pressure [MPa]")
-    ax.set_title(f"Hertz: sphere R = {RADIUS:g} mm on a block, "
-                 f"F = {summary['force'] / 1e3:.1f} kN, {summary['dofs']} dofs")
+    ax.set_title(
+        f"Hertz: sphere R = {RADIUS:g} mm on a block, "
+        f"F = {summary['force'] / 1e3:.1f} kN, {summary['dofs']} dofs"
+    )
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -351,27 +387,39 @@ def _plot(path: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
 def _print_report(s: dict) -> None:
     """Final report: computed values against Hertz's, then the checks."""
     print()
-    print(f"Hertz sphere: {s['dofs']} dofs, {s['increments']} increments (Newton iterations "
-          f"{s['iterations']}), {s['springs']} springs, solve {s['solve_time']:.1f} s, "
-          f"total {s['time']:.1f} s")
-    print(f"Total contact force F = 4 sum F_z = {s['force']:.6g} N at a displacement of "
-          f"{s['displacement']:g} mm; reaction at the sphere top {s['reaction']:.6g} N "
-          f"(relative difference {s['equilibrium_error']:.1e})")
+    print(
+        f"Hertz sphere: {s['dofs']} dofs, {s['increments']} increments (Newton iterations "
+        f"{s['iterations']}), {s['springs']} springs, solve {s['solve_time']:.1f} s, "
+        f"total {s['time']:.1f} s"
+    )
+    print(
+        f"Total contact force F = 4 sum F_z = {s['force']:.6g} N at a displacement of "
+        f"{s['displacement']:g} mm; reaction at the sphere top {s['reaction']:.6g} N "
+        f"(relative difference {s['equilibrium_error']:.1e})"
+    )
     print(f"{'quantity':<34} {'computed':>12} {'Hertz':>12} {'error':>9}")
-    rows = [("force of the fitted profile [N]", s["fit_force"], s["force"], s["fit_force_error"]),
-            ("contact radius, fit [mm]", s["a_fit"], s["a_hertz"], s["a_error"]),
-            ("peak pressure, fit [MPa]", s["p0_fit"], s["p0_hertz"], s["p0_error"]),
-            ("peak nodal pressure [MPa]", s["p_max"], s["p0_hertz"], s["p_max_error"])]
+    rows = [
+        ("force of the fitted profile [N]", s["fit_force"], s["force"], s["fit_force_error"]),
+        ("contact radius, fit [mm]", s["a_fit"], s["a_hertz"], s["a_error"]),
+        ("peak pressure, fit [MPa]", s["p0_fit"], s["p0_hertz"], s["p0_error"]),
+        ("peak nodal pressure [MPa]", s["p_max"], s["p0_hertz"], s["p_max_error"]),
+    ]
     for name, computed, exact, error in rows:
         print(f"{name:<34} {computed:>12.6g} {exact:>12.6g} {error:>+9.2%}")
-    print(f"last closed node at r = {s['a_last_closed']:.4g} mm, first open one at r = "
-          f"{s['a_first_open']:.4g} mm (Hertz a = {s['a_hertz']:.4g} mm)")
+    print(
+        f"last closed node at r = {s['a_last_closed']:.4g} mm, first open one at r = "
+        f"{s['a_first_open']:.4g} mm (Hertz a = {s['a_hertz']:.4g} mm)"
+    )
     if s["unpaired_penetrations"]:
-        print(f"WARNING: {s['unpaired_penetrations']} slave node(s) penetrate the master without a "
-              f"spring (deepest {s['unpaired_depth']:.3e} mm)")
+        print(
+            f"WARNING: {s['unpaired_penetrations']} slave node(s) penetrate the master without a "
+            f"spring (deepest {s['unpaired_depth']:.3e} mm)"
+        )
     verdict = "PASSED" if s["passed"] else "FAILED"
-    print(f"Checks (equilibrium to {TOLERANCE:.0e}, no unpaired penetration): {verdict}. "
-          f"Results: {s['xdmf']}, {s.get('png')}")
+    print(
+        f"Checks (equilibrium to {TOLERANCE:.0e}, no unpaired penetration): {verdict}. "
+        f"Results: {s['xdmf']}, {s.get('png')}"
+    )
 
 
 if __name__ == "__main__":

@@ -63,8 +63,9 @@ PRESSURE_AREA_TOLERANCE = 1e-5
 
 def _load_meshes(name: str) -> typing.Any:
     """Import ``meshes/<name>.py`` by path (``meshes/`` is a folder of scripts, not a package)."""
-    spec = importlib.util.spec_from_file_location(f"_dolfinx_ntf_meshes_{name}",
-                                                  ROOT / "meshes" / f"{name}.py")
+    spec = importlib.util.spec_from_file_location(
+        f"_dolfinx_ntf_meshes_{name}", ROOT / "meshes" / f"{name}.py"
+    )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -74,14 +75,21 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     """Command-line options."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
-    parser.add_argument("--output", type=Path, default=Path("output"),
-                        help="output folder (default: output/)")
+    parser.add_argument(
+        "--output", type=Path, default=Path("output"), help="output folder (default: output/)"
+    )
     parser.add_argument("--cell-type", choices=("hexahedron", "tetrahedron"), default="hexahedron")
-    parser.add_argument("--increments", type=int, default=4,
-                        help="initial (and largest) number of increments of the step (default 4)")
-    parser.add_argument("--ccx-pairing", action="store_true",
-                        help="start the face search at the nearest centroid like CalculiX "
-                             "(slower Newton)")
+    parser.add_argument(
+        "--increments",
+        type=int,
+        default=4,
+        help="initial (and largest) number of increments of the step (default 4)",
+    )
+    parser.add_argument(
+        "--ccx-pairing",
+        action="store_true",
+        help="start the face search at the nearest centroid like CalculiX (slower Newton)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
 
@@ -100,12 +108,18 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # tags name the block bottom (clamped), the block top (master), the punch bottom (slave) and the
     # punch top (loaded). Hexahedra give 4-node master faces and 5-node springs.
     geometry = _load_meshes("punch")
-    sizes = (dict(geometry.COARSE) if args.coarse
-             else {"mesh_size_block": 0.05, "mesh_size_punch": 0.04})
+    sizes = (
+        dict(geometry.COARSE) if args.coarse else {"mesh_size_block": 0.05, "mesh_size_punch": 0.04}
+    )
     sizes = {key: value * SCALE for key, value in sizes.items()}
-    mesh, cell_tags, facet_tags = mesh_from_gmsh(geometry.build_punch, comm, block_size=BLOCK_SIZE,
-                                                 punch_size=PUNCH_SIZE, cell_type=args.cell_type,
-                                                 **sizes)
+    mesh, cell_tags, facet_tags = mesh_from_gmsh(
+        geometry.build_punch,
+        comm,
+        block_size=BLOCK_SIZE,
+        punch_size=PUNCH_SIZE,
+        cell_type=args.cell_type,
+        **sizes,
+    )
 
     # --- Bulk problem in UFL ---------------------------------------------------------------------
     # Small-strain elasticity with one material per body. The pressure on the punch top is a
@@ -116,27 +130,35 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
-    F = (ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
-         + ufl.inner(small_strain_stress(u, E_PUNCH, NU_PUNCH), ufl.grad(v)) * dx(geometry.PUNCH)
-         + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(geometry.PUNCH_TOP))
+    F = (
+        ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
+        + ufl.inner(small_strain_stress(u, E_PUNCH, NU_PUNCH), ufl.grad(v)) * dx(geometry.PUNCH)
+        + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(geometry.PUNCH_TOP)
+    )
 
     # Block bottom clamped. The punch is held vertically by the contact only; its in-plane rigid
     # motions (two translations, rotation about z) are removed by u_x = u_y = 0 on its top face.
-    bcs = [dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType),
-                                   dolfinx.fem.locate_dofs_topological(
-                                       V, 2, facet_tags.find(geometry.BLOCK_BOTTOM)),
-                                   V),
-           component_bc(V, 0, facet_tags.find(geometry.PUNCH_TOP)),
-           component_bc(V, 1, facet_tags.find(geometry.PUNCH_TOP))]
+    bcs = [
+        dolfinx.fem.dirichletbc(
+            np.zeros(3, dtype=PETSc.ScalarType),
+            dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM)),
+            V,
+        ),
+        component_bc(V, 0, facet_tags.find(geometry.PUNCH_TOP)),
+        component_bc(V, 1, facet_tags.find(geometry.PUNCH_TOP)),
+    ]
 
     # --- Contact ----------------------------------------------------------------------------------
     # LINEAR law with CalculiX's defaults from the block's Young's modulus: slope K = 50 E, tension
     # E/70000, pairing cutoff 1e-3 sqrt(A). In mm, K h is ~250 E for 5 mm elements: the penetration
     # p/K is ~1e-5 mm, a thousandth of the punch's displacement.
     law = ntf.LinearLaw.with_ccx_defaults(youngs_modulus=E_BLOCK)
-    pair = ntf.ContactPair(slave=ntf.FacetSurface(facet_tags, geometry.PUNCH_BOTTOM),
-                           master=ntf.FacetSurface(facet_tags, geometry.BLOCK_TOP),
-                           interaction=ntf.SurfaceInteraction(law), name="punch")
+    pair = ntf.ContactPair(
+        slave=ntf.FacetSurface(facet_tags, geometry.PUNCH_BOTTOM),
+        master=ntf.FacetSurface(facet_tags, geometry.BLOCK_TOP),
+        interaction=ntf.SurfaceInteraction(law),
+        name="punch",
+    )
     # CalculiX starts each node's face search at the nearest face centroid. The punch centre node
     # sits right above a block vertex, at the bottom of the dish the punch presses into the block:
     # all four faces around the vertex hold its projection, rounding decides, and the node hops
@@ -159,23 +181,35 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     with ntf.ContactWriter(problem, str(xdmf)) as writer:
 
         def record(result: ntf.IncrementResult) -> None:
-            rows.append({"increment": result.increment, "time": result.time,
-                         "iterations": result.iterations, "springs": result.springs,
-                         **_forces(problem, comm, PRESSURE * result.time * top_area)})
+            rows.append(
+                {
+                    "increment": result.increment,
+                    "time": result.time,
+                    "iterations": result.iterations,
+                    "springs": result.springs,
+                    **_forces(problem, comm, PRESSURE * result.time * top_area),
+                }
+            )
             writer.write(result.time)
 
-        step = ntf.StaticStep(lambda t: setattr(pressure, "value", PRESSURE * t),
-                              initial_increment=1.0 / args.increments,
-                              max_increment=1.0 / args.increments, on_increment=record)
+        step = ntf.StaticStep(
+            lambda t: setattr(pressure, "value", PRESSURE * t),
+            initial_increment=1.0 / args.increments,
+            max_increment=1.0 / args.increments,
+            on_increment=record,
+        )
         solve_start = time.perf_counter()
         step.run(solver, u)
         solve_time = time.perf_counter() - solve_start
 
     # --- Check and report -------------------------------------------------------------------------
     final = rows[-1]
-    passed = all(r["vertical_error"] <= TOLERANCE and r["normal_error"] <= TOLERANCE
-                 and abs(r["pressure_area"] / r["load"] - 1) <= PRESSURE_AREA_TOLERANCE
-                 for r in rows)
+    passed = all(
+        r["vertical_error"] <= TOLERANCE
+        and r["normal_error"] <= TOLERANCE
+        and abs(r["pressure_area"] / r["load"] - 1) <= PRESSURE_AREA_TOLERANCE
+        for r in rows
+    )
     summary = {
         "dofs": V.dofmap.index_map.size_global * V.dofmap.index_map_bs,
         "increments": len(rows),
@@ -217,37 +251,53 @@ def _forces(problem: ntf.ContactProblem, comm: MPI.Comm, load: float) -> dict:
     closed = res.clearance < 0
     max_pressure = comm.allreduce(float(res.pressure.max(initial=0.0)), op=MPI.MAX)
     penetration = comm.allreduce(float(-res.clearance[closed].min(initial=0.0)), op=MPI.MAX)
-    return {"load": load, "vertical": vertical, "pressure_area": pressure_area,
-            "normal_z": normal_z, "contact_area": area,
-            "vertical_error": abs(vertical - load) / load,
-            "normal_error": abs(normal_z - load) / load,
-            "closed": comm.allreduce(int(closed.sum()), op=MPI.SUM), "max_pressure": max_pressure,
-            "max_penetration": penetration}
+    return {
+        "load": load,
+        "vertical": vertical,
+        "pressure_area": pressure_area,
+        "normal_z": normal_z,
+        "contact_area": area,
+        "vertical_error": abs(vertical - load) / load,
+        "normal_error": abs(normal_z - load) / load,
+        "closed": comm.allreduce(int(closed.sum()), op=MPI.SUM),
+        "max_pressure": max_pressure,
+        "max_penetration": penetration,
+    }
 
 
 def _print_table(rows: list[dict], summary: dict) -> None:
     """Final table: one row per increment, then the checks."""
     print()
-    print(f"Flat punch: {summary['dofs']} dofs, {summary['increments']} increments, "
-          f"solve {summary['solve_time']:.1f} s, total {summary['time']:.1f} s")
-    print(f"{'inc':>3} {'time':>6} {'iter':>4} {'springs':>7} {'closed':>6} {'load [N]':>12} "
-          f"{'sum F_z [N]':>14} {'rel.err':>8} {'sum p*A [N]':>14} {'max p':>8} "
-          f"{'max pen. [mm]':>13}")
+    print(
+        f"Flat punch: {summary['dofs']} dofs, {summary['increments']} increments, "
+        f"solve {summary['solve_time']:.1f} s, total {summary['time']:.1f} s"
+    )
+    print(
+        f"{'inc':>3} {'time':>6} {'iter':>4} {'springs':>7} {'closed':>6} {'load [N]':>12} "
+        f"{'sum F_z [N]':>14} {'rel.err':>8} {'sum p*A [N]':>14} {'max p':>8} "
+        f"{'max pen. [mm]':>13}"
+    )
     for r in rows:
-        print(f"{r['increment']:>3} {r['time']:>6.3f} {r['iterations']:>4} {r['springs']:>7} "
-              f"{r['closed']:>6} {r['load']:>12.6g} {r['vertical']:>14.8g} "
-              f"{r['vertical_error']:>8.1e} {r['pressure_area']:>14.8g} "
-              f"{r['max_pressure']:>8.4g} {r['max_penetration']:>13.3e}")
-    print(f"Contact area {summary['contact_area']:.6g} mm^2 (punch bottom "
-          f"{PUNCH_SIZE[0] * PUNCH_SIZE[1]:g} mm^2). "
-          f"Mean pressure under the punch {summary['mean_pressure']:.4g} MPa, "
-          f"peak {summary['max_pressure']:.4g} MPa (corner singularity). "
-          f"Sum p*A exceeds the load by {summary['pressure_area_deviation']:.2e} "
-          f"(tilted master normals); sum p*A*n_z matches it to {summary['normal_error']:.1e}.")
+        print(
+            f"{r['increment']:>3} {r['time']:>6.3f} {r['iterations']:>4} {r['springs']:>7} "
+            f"{r['closed']:>6} {r['load']:>12.6g} {r['vertical']:>14.8g} "
+            f"{r['vertical_error']:>8.1e} {r['pressure_area']:>14.8g} "
+            f"{r['max_pressure']:>8.4g} {r['max_penetration']:>13.3e}"
+        )
+    print(
+        f"Contact area {summary['contact_area']:.6g} mm^2 (punch bottom "
+        f"{PUNCH_SIZE[0] * PUNCH_SIZE[1]:g} mm^2). "
+        f"Mean pressure under the punch {summary['mean_pressure']:.4g} MPa, "
+        f"peak {summary['max_pressure']:.4g} MPa (corner singularity). "
+        f"Sum p*A exceeds the load by {summary['pressure_area_deviation']:.2e} "
+        f"(tilted master normals); sum p*A*n_z matches it to {summary['normal_error']:.1e}."
+    )
     verdict = "PASSED" if summary["passed"] else "FAILED"
-    print(f"Equilibrium check (sum F_z and sum p*A*n_z to {TOLERANCE:.0e}, sum p*A to "
-          f"{PRESSURE_AREA_TOLERANCE:.0e}): {verdict}. "
-          f"Results: {summary['xdmf']}")
+    print(
+        f"Equilibrium check (sum F_z and sum p*A*n_z to {TOLERANCE:.0e}, sum p*A to "
+        f"{PRESSURE_AREA_TOLERANCE:.0e}): {verdict}. "
+        f"Results: {summary['xdmf']}"
+    )
 
 
 if __name__ == "__main__":

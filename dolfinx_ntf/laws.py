@@ -73,12 +73,16 @@ def _check_array(owner: str, name: str, values: npt.ArrayLike, *, nonnegative: b
     bad = ~np.isfinite(array)
     if bad.any():
         index = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"{owner}: {name} must be finite, got {float(array[index])!r} at index {index}")
+        raise ValueError(
+            f"{owner}: {name} must be finite, got {float(array[index])!r} at index {index}"
+        )
     if nonnegative:
         negative = array < 0.0
         if negative.any():
             index = tuple(int(i) for i in np.argwhere(negative)[0])
-            raise ValueError(f"{owner}: {name} must be >= 0, got {float(array[index])!r} at index {index}")
+            raise ValueError(
+                f"{owner}: {name} must be >= 0, got {float(array[index])!r} at index {index}"
+            )
     return array
 
 
@@ -118,9 +122,7 @@ class PressureOverclosureLaw(abc.ABC):
     def pressure_derivative(self, d: npt.ArrayLike) -> np.ndarray:
         """Derivative ``dp/dd`` at overclosures ``d``."""
 
-    def spring_force(
-        self, d: npt.ArrayLike, area: npt.ArrayLike
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def spring_force(self, d: npt.ArrayLike, area: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Normal spring force ``F_N = A p(d)`` and ``dF_N/dd`` (spec §4 step 2).
 
         Args:
@@ -194,9 +196,7 @@ class ExponentialLaw(PressureOverclosureLaw):
         """Uncapped ``beta p(d)``."""
         return self.beta * self.pressure(d)
 
-    def spring_force(
-        self, d: npt.ArrayLike, area: npt.ArrayLike
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def spring_force(self, d: npt.ArrayLike, area: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """``F_N = A p(d)`` with ccx's ``exp(23)`` cap, and ``dF_N/dd`` as ccx computes it.
 
         See the class docstring for the cap. Zero area or ``p0 < 1e-30`` gives zero force.

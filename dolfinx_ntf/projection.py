@@ -238,8 +238,10 @@ def _qp_step(
         return d_free, exact
 
     def quad_form(ha, hb, hc, u, w):
-        return ha * u[..., 0] * w[..., 0] + hb * (u[..., 0] * w[..., 1] + u[..., 1] * w[..., 0]) + (
-            hc * u[..., 1] * w[..., 1]
+        return (
+            ha * u[..., 0] * w[..., 0]
+            + hb * (u[..., 0] * w[..., 1] + u[..., 1] * w[..., 0])
+            + (hc * u[..., 1] * w[..., 1])
         )
 
     best = d_free.copy()
@@ -260,9 +262,7 @@ def _qp_step(
         curv = quad_form(a, b, c, edge, edge)
         on_convex_edge = (offset <= 1e-14) & (curv > _PD_MIN * np.abs(sa + sc) * ee)
         t_true = -(ge + quad_form(a, b, c, d0, edge)) / np.where(on_convex_edge, curv, 1.0)
-        d = np.where(
-            on_convex_edge[:, None], d0 + np.clip(t_true, 0.0, 1.0)[:, None] * edge, d
-        )
+        d = np.where(on_convex_edge[:, None], d0 + np.clip(t_true, 0.0, 1.0)[:, None] * edge, d)
         best[better] = d[better]
         best_val[better] = val[better]
         exact = np.where(better, on_convex_edge | ~shifted, exact)
@@ -321,11 +321,7 @@ def _newton(
         snorm = np.max(np.abs(new - x), axis=1)
         xi[active] = new
         iterations[active] += 1
-        done = (
-            failed
-            | (snorm <= tol)
-            | ((snorm <= _STAGNATION) & (snorm >= 0.5 * prev[active]))
-        )
+        done = failed | (snorm <= tol) | ((snorm <= _STAGNATION) & (snorm >= 0.5 * prev[active]))
         prev[active] = snorm
         active = active[~done]
     return xi, iterations

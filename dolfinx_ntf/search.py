@@ -282,8 +282,9 @@ class MasterSurface:
             start = np.where(
                 start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1
             )
-        tri = self.locate_triangles(points, tolerances, max_depth=max_depth, max_steps=max_steps,
-                                    start=start)
+        tri = self.locate_triangles(
+            points, tolerances, max_depth=max_depth, max_steps=max_steps, start=start
+        )
         out = np.full(tri.shape, -1, dtype=np.int64)
         found = tri >= 0
         out[found] = self._triangle_faces[tri[found]]
@@ -413,9 +414,7 @@ def _check_faces(face_type: FaceType, faces: np.ndarray, name: str) -> np.ndarra
     dup = np.any(srt[:, 1:] == srt[:, :-1], axis=1)
     if np.any(dup):
         f = int(np.flatnonzero(dup)[0])
-        raise ValueError(
-            f"Master surface '{name}': face {f} repeats a node: {arr[f].tolist()}"
-        )
+        raise ValueError(f"Master surface '{name}': face {f} repeats a node: {arr[f].tolist()}")
     return arr
 
 
@@ -480,6 +479,4 @@ def _describe(edge: np.ndarray, coords: np.ndarray | None) -> str:
     ids = [int(v) for v in edge]
     if coords is None or coords.ndim != 2 or coords.shape[0] <= max(ids):
         return f"(nodes {ids[0]}, {ids[1]})"
-    return (
-        f"(nodes {ids[0]} at {coords[ids[0]].tolist()}, {ids[1]} at {coords[ids[1]].tolist()})"
-    )
+    return f"(nodes {ids[0]} at {coords[ids[0]].tolist()}, {ids[1]} at {coords[ids[1]].tolist()})"

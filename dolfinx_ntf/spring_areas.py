@@ -180,9 +180,7 @@ def spring_area_gradients(
     # every (face, slave a, node b) triple: w_a ∂|f|/∂x_b
     rows = np.repeat(index[face_of, local_of], n)
     cols = faces_arr[face_of].reshape(-1)
-    values = (
-        face_type.area_weights[local_of][:, None, None] * grads[face_of]
-    ).reshape(-1, 3)
+    values = (face_type.area_weights[local_of][:, None, None] * grads[face_of]).reshape(-1, 3)
     num_nodes = coords_arr.shape[0]
     keys = rows * num_nodes + cols
     unique_keys, inverse = np.unique(keys, return_inverse=True)

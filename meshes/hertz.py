@@ -128,8 +128,15 @@ def build_hertz(
 
     _new_model(name, hexahedra=cell_type == "hexahedron")
     occ = gmsh.model.occ
-    sphere = occ.addSphere(0.0, 0.0, r, r, angle1=-0.5 * math.pi, angle2=0.0,
-                           angle3=0.5 * math.pi if quarter else 2.0 * math.pi)
+    sphere = occ.addSphere(
+        0.0,
+        0.0,
+        r,
+        r,
+        angle1=-0.5 * math.pi,
+        angle2=0.0,
+        angle3=0.5 * math.pi if quarter else 2.0 * math.pi,
+    )
     if quarter:
         block = occ.addBox(0.0, 0.0, -lz, lx, ly, lz)
     else:
@@ -235,8 +242,9 @@ def _tag_groups(block: int, sphere: int, r: float, lz: float, quarter: bool) -> 
 def main(argv: Sequence[str] | None = None) -> None:
     """Write a Hertz contact mesh to a .msh file."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("-o", "--output", type=Path,
-                        default=Path(__file__).resolve().parent / "hertz.msh")
+    parser.add_argument(
+        "-o", "--output", type=Path, default=Path(__file__).resolve().parent / "hertz.msh"
+    )
     parser.add_argument("--cell-type", choices=_CELL_TYPES, default="tetrahedron")
     parser.add_argument("--order", type=int, choices=(1, 2), default=1)
     parser.add_argument("--radius", type=float, default=1.0)
@@ -254,8 +262,13 @@ def main(argv: Sequence[str] | None = None) -> None:
     gmsh.initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 1)
-        build_hertz(radius=args.radius, quarter=not args.full, cell_type=args.cell_type,
-                    order=args.order, **sizes)
+        build_hertz(
+            radius=args.radius,
+            quarter=not args.full,
+            cell_type=args.cell_type,
+            order=args.order,
+            **sizes,
+        )
         gmsh.option.setNumber("Mesh.Binary", 0)
         gmsh.write(str(args.output))
         print(f"wrote {args.output}: {len(gmsh.model.mesh.getNodes()[0])} nodes")

@@ -161,8 +161,9 @@ def build_patch_test(
         raise ValueError(f"punch_height must be a positive number, got {punch_height!r}")
     _check_common(cell_type, order, gap)
     nx, ny = _division_pair(divisions, "divisions")
-    mx, my = _division_pair(divisions if punch_divisions is None else punch_divisions,
-                            "punch_divisions")
+    mx, my = _division_pair(
+        divisions if punch_divisions is None else punch_divisions, "punch_divisions"
+    )
     for value, what in ((block_layers, "block_layers"), (punch_layers, "punch_layers")):
         if int(value) != value or value < 1:
             raise ValueError(f"{what} must be a positive integer, got {value!r}")
@@ -289,8 +290,9 @@ def _generate(order: int) -> None:
 def main(argv: Sequence[str] | None = None) -> None:
     """Write a punch (or patch-test) mesh to a .msh file."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("-o", "--output", type=Path,
-                        default=Path(__file__).resolve().parent / "punch.msh")
+    parser.add_argument(
+        "-o", "--output", type=Path, default=Path(__file__).resolve().parent / "punch.msh"
+    )
     parser.add_argument("--cell-type", choices=_CELL_TYPES, default="hexahedron")
     parser.add_argument("--order", type=int, choices=(1, 2), default=1)
     parser.add_argument("--gap", type=float, default=0.0)
@@ -305,11 +307,15 @@ def main(argv: Sequence[str] | None = None) -> None:
     try:
         gmsh.option.setNumber("General.Terminal", 1)
         if args.patch:
-            build_patch_test(divisions=args.divisions, gap=args.gap, cell_type=args.cell_type,
-                             order=args.order)
+            build_patch_test(
+                divisions=args.divisions, gap=args.gap, cell_type=args.cell_type, order=args.order
+            )
         else:
-            sizes = dict(COARSE) if args.coarse else {
-                "mesh_size_block": args.block_size, "mesh_size_punch": args.punch_size}
+            sizes = (
+                dict(COARSE)
+                if args.coarse
+                else {"mesh_size_block": args.block_size, "mesh_size_punch": args.punch_size}
+            )
             build_punch(gap=args.gap, cell_type=args.cell_type, order=args.order, **sizes)
         gmsh.option.setNumber("Mesh.Binary", 0)
         gmsh.write(str(args.output))

@@ -58,9 +58,7 @@ def test_arrays_are_read_only():
 
 
 def test_node_layout():
-    np.testing.assert_array_equal(
-        QUAD4.node_parameters, [[-1, -1], [1, -1], [1, 1], [-1, 1]]
-    )
+    np.testing.assert_array_equal(QUAD4.node_parameters, [[-1, -1], [1, -1], [1, 1], [-1, 1]])
     np.testing.assert_array_equal(TRI3.node_parameters, [[0, 0], [1, 0], [0, 1]])
     np.testing.assert_array_equal(TRI6.node_parameters[3:], [[0.5, 0], [0.5, 0.5], [0, 0.5]])
     np.testing.assert_array_equal(QUAD8.node_parameters[4:], [[0, -1], [1, 0], [0, 1], [-1, 0]])

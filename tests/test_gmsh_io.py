@@ -98,16 +98,21 @@ def _check_separate_bodies(mesh, cell_tags, a, b):
 @pytest.mark.parametrize("cell_type", ["hexahedron", "tetrahedron"])
 def test_punch_coarse(cell_type):
     gap = 0.01
-    mesh, ct, ft = gmsh_io.mesh_from_gmsh(punch.build_punch, COMM, cell_type=cell_type, gap=gap,
-                                          **punch.COARSE)
+    mesh, ct, ft = gmsh_io.mesh_from_gmsh(
+        punch.build_punch, COMM, cell_type=cell_type, gap=gap, **punch.COARSE
+    )
     assert mesh.topology.cell_name() == cell_type
     volumes = _cell_volumes(mesh, ct)
     assert volumes.keys() == {punch.BLOCK, punch.PUNCH}
     assert math.isclose(volumes[punch.BLOCK], 1.0 * 1.0 * 0.5, rel_tol=1e-12)
     assert math.isclose(volumes[punch.PUNCH], 0.4 * 0.4 * 0.3, rel_tol=1e-12)
     stats = _facet_stats(mesh, ft)
-    expected = {punch.BLOCK_BOTTOM: 1.0, punch.BLOCK_TOP: 1.0, punch.PUNCH_BOTTOM: 0.16,
-                punch.PUNCH_TOP: 0.16}
+    expected = {
+        punch.BLOCK_BOTTOM: 1.0,
+        punch.BLOCK_TOP: 1.0,
+        punch.PUNCH_BOTTOM: 0.16,
+        punch.PUNCH_TOP: 0.16,
+    }
     assert stats.keys() == expected.keys()
     for tag, area in expected.items():
         assert stats[tag][0] > 0
@@ -121,12 +126,19 @@ def test_punch_coarse(cell_type):
     _check_separate_bodies(mesh, ct, punch.BLOCK, punch.PUNCH)
 
 
-@pytest.mark.parametrize("cell_type,order", [("hexahedron", 1), ("tetrahedron", 1),
-                                             ("hexahedron", 2)])
+@pytest.mark.parametrize(
+    "cell_type,order", [("hexahedron", 1), ("tetrahedron", 1), ("hexahedron", 2)]
+)
 def test_patch_test_meshes_match(cell_type, order):
-    mesh, ct, ft = gmsh_io.mesh_from_gmsh(punch.build_patch_test, COMM, cell_type=cell_type,
-                                          order=order, divisions=(3, 4), block_layers=2,
-                                          punch_layers=1)
+    mesh, ct, ft = gmsh_io.mesh_from_gmsh(
+        punch.build_patch_test,
+        COMM,
+        cell_type=cell_type,
+        order=order,
+        divisions=(3, 4),
+        block_layers=2,
+        punch_layers=1,
+    )
     volumes = _cell_volumes(mesh, ct)
     assert math.isclose(volumes[punch.BLOCK], 0.5, rel_tol=1e-12)
     assert math.isclose(volumes[punch.PUNCH], 0.25, rel_tol=1e-12)
@@ -144,8 +156,9 @@ def test_patch_test_meshes_match(cell_type, order):
 
 
 def test_patch_test_different_divisions():
-    mesh, ct, ft = gmsh_io.mesh_from_gmsh(punch.build_patch_test, COMM, divisions=4,
-                                          punch_divisions=3)
+    mesh, ct, ft = gmsh_io.mesh_from_gmsh(
+        punch.build_patch_test, COMM, divisions=4, punch_divisions=3
+    )
     stats = _facet_stats(mesh, ft)
     assert stats[punch.BLOCK_TOP][0] == 16 and stats[punch.PUNCH_BOTTOM][0] == 9
     assert math.isclose(stats[punch.PUNCH_BOTTOM][1], 1.0)
@@ -160,9 +173,14 @@ def test_hertz_coarse_quarter():
     assert math.isclose(volumes[hertz.SPHERE], math.pi / 6, rel_tol=2e-2)  # quarter hemisphere
     assert volumes[hertz.SPHERE] < math.pi / 6  # flat facets cut into the sphere
     stats = _facet_stats(mesh, ft)
-    expected = {hertz.BLOCK_BOTTOM: 4.0, hertz.BLOCK_TOP: 4.0, hertz.SPHERE_CONTACT: math.pi / 2,
-                hertz.SPHERE_TOP: math.pi / 4, hertz.SYMMETRY_X: 3.0 + math.pi / 4,
-                hertz.SYMMETRY_Y: 3.0 + math.pi / 4}
+    expected = {
+        hertz.BLOCK_BOTTOM: 4.0,
+        hertz.BLOCK_TOP: 4.0,
+        hertz.SPHERE_CONTACT: math.pi / 2,
+        hertz.SPHERE_TOP: math.pi / 4,
+        hertz.SYMMETRY_X: 3.0 + math.pi / 4,
+        hertz.SYMMETRY_Y: 3.0 + math.pi / 4,
+    }
     assert stats.keys() == expected.keys()
     for tag, area in expected.items():
         assert stats[tag][0] > 0
@@ -197,8 +215,15 @@ def test_hertz_hexahedra_and_quadratic_geometry():
     # Curved P2 geometry: the sphere volume is much closer than with flat tetrahedra.
     errors = []
     for order in (1, 2):
-        mesh, ct, _ = gmsh_io.mesh_from_gmsh(hertz.build_hertz, COMM, order=order, quarter=False,
-                                             size_fine=0.15, size_coarse=0.8, refine_radius=0.2)
+        mesh, ct, _ = gmsh_io.mesh_from_gmsh(
+            hertz.build_hertz,
+            COMM,
+            order=order,
+            quarter=False,
+            size_fine=0.15,
+            size_coarse=0.8,
+            refine_radius=0.2,
+        )
         errors.append(abs(_cell_volumes(mesh, ct)[hertz.SPHERE] / (2 * math.pi / 3) - 1))
     assert errors[1] < 0.1 * errors[0]
 
@@ -211,8 +236,11 @@ def test_read_msh_roundtrip_and_model_to_mesh(tmp_path):
             gmsh.write(path)
             gmsh.model.remove()
     mesh, ct, ft = gmsh_io.read_msh(path, COMM)
-    from_file = (_cell_volumes(mesh, ct), _facet_stats(mesh, ft),
-                 mesh.topology.index_map(3).size_global)
+    from_file = (
+        _cell_volumes(mesh, ct),
+        _facet_stats(mesh, ft),
+        mesh.topology.index_map(3).size_global,
+    )
 
     # The same model straight from gmsh, in a session opened by the caller: left open afterwards.
     if COMM.rank == 0:
@@ -226,8 +254,11 @@ def test_read_msh_roundtrip_and_model_to_mesh(tmp_path):
     finally:
         if COMM.rank == 0:
             gmsh.finalize()
-    direct = (_cell_volumes(mesh, ct), _facet_stats(mesh, ft),
-              mesh.topology.index_map(3).size_global)
+    direct = (
+        _cell_volumes(mesh, ct),
+        _facet_stats(mesh, ft),
+        mesh.topology.index_map(3).size_global,
+    )
     assert from_file[2] == direct[2] > 0
     assert from_file[0] == pytest.approx(direct[0], rel=1e-12)
     for tag, (count, area) in direct[1].items():

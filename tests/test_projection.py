@@ -1,6 +1,5 @@
 """Tests for dolfinx_ntf.projection: closest point of a face over its closed parametric domain."""
 
-
 import numpy as np
 import pytest
 from scipy.optimize import minimize
@@ -100,8 +99,13 @@ def _brute_force(ft: FaceType, coords: np.ndarray, pts: np.ndarray) -> np.ndarra
         bounds = [(0, 1), (0, 1)] if ft.is_triangle else [(-1, 1), (-1, 1)]
         cons = [{"type": "ineq", "fun": lambda x: 1 - x[0] - x[1], "jac": lambda x: -a[2]}]
         res = minimize(
-            fun, start, jac=True, method="SLSQP", bounds=bounds,
-            constraints=cons if ft.is_triangle else (), options={"ftol": 1e-15, "maxiter": 200},
+            fun,
+            start,
+            jac=True,
+            method="SLSQP",
+            bounds=bounds,
+            constraints=cons if ft.is_triangle else (),
+            options={"ftol": 1e-15, "maxiter": 200},
         )
         out[i] = ft.clamp(res.x)
     return out

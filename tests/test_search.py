@@ -1,6 +1,5 @@
 """Tests of the master triangulation, bounding planes and triangle walk (spec §2.3, §3.2)."""
 
-
 import numpy as np
 import pytest
 
@@ -270,9 +269,7 @@ def test_prisms_tile_space(type_name, seed):
     interior = np.all((xy > 0.3) & (xy < [5.7, 4.7]), axis=1)
     assert interior.sum() > 800
     np.testing.assert_array_equal(tri[interior], expected[interior])
-    np.testing.assert_array_equal(
-        faces[interior], surface.triangle_faces[expected[interior]]
-    )
+    np.testing.assert_array_equal(faces[interior], surface.triangle_faces[expected[interior]])
     # Near the rim the fixed plane order can step onto a rim plane (no neighbour) before the
     # plane leading to the holding prism: ccx then finds nothing. Otherwise results agree.
     found = tri >= 0

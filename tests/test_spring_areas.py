@@ -154,8 +154,8 @@ def test_quadratic_weights(ft, corner, mid, centre):
     area = face_areas(ft, coords[None])[0]
     faces = np.arange(ft.num_nodes)[None]
     areas = spring_areas(ft, faces, coords, np.arange(ft.num_nodes))
-    np.testing.assert_allclose(areas[:ft.num_corners], corner * area, rtol=1e-14)
-    np.testing.assert_allclose(areas[ft.num_corners:8 if ft is QUAD9 else None], mid * area)
+    np.testing.assert_allclose(areas[: ft.num_corners], corner * area, rtol=1e-14)
+    np.testing.assert_allclose(areas[ft.num_corners : 8 if ft is QUAD9 else None], mid * area)
     if centre is not None:
         assert areas[8] == pytest.approx(centre * area)
     assert areas.sum() == pytest.approx(area, rel=1e-14)

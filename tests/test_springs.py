@@ -161,8 +161,10 @@ def test_slave_above_flat_face(name: str) -> None:
     np.testing.assert_allclose(ev.normal_force, expected, rtol=1e-13)
     np.testing.assert_allclose(ev.forces[:, -1], -expected[:, None] * ev.normal, rtol=1e-13)
     np.testing.assert_allclose(
-        ev.forces[:, :-1], ev.phi[:, :, None] * expected[:, None, None] * ev.normal[:, None],
-        rtol=1e-12, atol=1e-15,
+        ev.forces[:, :-1],
+        ev.phi[:, :, None] * expected[:, None, None] * ev.normal[:, None],
+        rtol=1e-12,
+        atol=1e-15,
     )
     np.testing.assert_allclose(ev.phi, ft.shape_functions(xi), atol=1e-12)
     np.testing.assert_allclose(ev.force_per_area, ev.forces / areas[:, None, None], rtol=1e-14)

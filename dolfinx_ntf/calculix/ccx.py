@@ -98,8 +98,10 @@ def run_ccx(
             check=False,
         )
     except subprocess.TimeoutExpired as exc:
-        output = exc.stdout if isinstance(exc.stdout, str) else (exc.stdout or b"").decode(
-            errors="replace"
+        output = (
+            exc.stdout
+            if isinstance(exc.stdout, str)
+            else (exc.stdout or b"").decode(errors="replace")
         )
         raise CcxError(
             f"ccx timed out after {timeout} s on {deck}; last output:\n{_tail(output)}"
@@ -187,8 +189,13 @@ def read_sta(path: str | Path) -> list[StaIncrement]:
         try:
             rows.append(
                 StaIncrement(
-                    int(fields[0]), int(fields[1]), int(fields[2]), int(fields[3]),
-                    float(fields[4]), float(fields[5]), float(fields[6]),
+                    int(fields[0]),
+                    int(fields[1]),
+                    int(fields[2]),
+                    int(fields[3]),
+                    float(fields[4]),
+                    float(fields[5]),
+                    float(fields[6]),
                 )  # fmt: skip
             )
         except ValueError:

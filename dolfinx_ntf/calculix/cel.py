@@ -58,9 +58,7 @@ def format_contact_elements(
     faces = np.asarray(master_faces, dtype=np.int64)
     slaves = np.asarray(slave_nodes, dtype=np.int64).reshape(-1)
     if faces.ndim != 2 or faces.shape[0] != slaves.size:
-        raise ValueError(
-            f"master_faces must have shape ({slaves.size}, n), got {faces.shape}"
-        )
+        raise ValueError(f"master_faces must have shape ({slaves.size}, n), got {faces.shape}")
     if slaves.size == 0:
         return ""
     n = faces.shape[1]

@@ -539,11 +539,17 @@ class Deck:
         names = list(self.elements)
         ids = [b.ids for b in self.elements.values()]
         all_ids = np.concatenate(ids) if ids else np.zeros(0, np.int64)
-        type_index = np.concatenate(
-            [np.full(b.ids.size, k, np.int64) for k, b in enumerate(self.elements.values())]
-        ) if ids else np.zeros(0, np.int64)
-        row = np.concatenate([np.arange(b.ids.size) for b in self.elements.values()]) if ids else (
-            np.zeros(0, np.int64)
+        type_index = (
+            np.concatenate(
+                [np.full(b.ids.size, k, np.int64) for k, b in enumerate(self.elements.values())]
+            )
+            if ids
+            else np.zeros(0, np.int64)
+        )
+        row = (
+            np.concatenate([np.arange(b.ids.size) for b in self.elements.values()])
+            if ids
+            else (np.zeros(0, np.int64))
         )
         order = np.argsort(all_ids, kind="stable")
         return all_ids[order], type_index[order], row[order], names
@@ -868,9 +874,9 @@ class _Reader:
 
     # -- input ----------------------------------------------------------------------------------
 
-    def _lines(self, path: Path, include_loc: Location | None, stack: tuple[Path, ...]) -> Iterator[
-        tuple[str, Location]
-    ]:
+    def _lines(
+        self, path: Path, include_loc: Location | None, stack: tuple[Path, ...]
+    ) -> Iterator[tuple[str, Location]]:
         resolved = path.resolve()
         if resolved in stack:
             raise DeckError(f"*INCLUDE of {path} is recursive", include_loc)
@@ -1305,9 +1311,7 @@ class _Reader:
         elif law == "TIED":
             raise DeckError(f"{what} is for face-to-face contact: not supported", card.location)
         else:
-            raise DeckError(
-                f"{what}: use EXPONENTIAL, LINEAR, TABULAR or HARD", card.location
-            )
+            raise DeckError(f"{what}: use EXPONENTIAL, LINEAR, TABULAR or HARD", card.location)
         if interaction.behavior is not None:
             raise DeckError(
                 f"surface interaction {interaction.name} has two *SURFACE BEHAVIOR cards",
@@ -1440,8 +1444,16 @@ class _Reader:
                 raise DeckError(f"*BOUNDARY: last dof {last} < first dof {first}", loc)
             value = self._optional_float(fields, 3, "prescribed value", loc) or 0.0
             target_list.append(
-                Boundary(_frozen_array(nodes, np.int64), first, last, value, amplitude, op,
-                         fields[0], loc)  # fmt: skip
+                Boundary(
+                    _frozen_array(nodes, np.int64),
+                    first,
+                    last,
+                    value,
+                    amplitude,
+                    op,
+                    fields[0],
+                    loc,
+                )  # fmt: skip
             )
 
     # -- steps ----------------------------------------------------------------------------------

@@ -349,7 +349,9 @@ class _Job:
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
         expression, q = self._stress
         cells = self.model.element_cells(element_ids).astype(np.int32)
-        values = compat.evaluate_expression(expression, self.model.mesh, cells).reshape(cells.size, q, 3, 3)
+        values = compat.evaluate_expression(expression, self.model.mesh, cells).reshape(
+            cells.size, q, 3, 3
+        )
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
         return values[:, :, index[0], index[1]]
 
@@ -403,8 +405,14 @@ class _Job:
                 pair.master, state.master_faces.facets[state.spring_face]
             )
             step_, increment, attempt, iteration = numbers
-            self.cel.write(faces[order], slaves[order], step=step_, increment=increment,
-                           attempt=attempt, iteration=iteration)
+            self.cel.write(
+                faces[order],
+                slaves[order],
+                step=step_,
+                increment=increment,
+                attempt=attempt,
+                iteration=iteration,
+            )
 
     # -- steps -------------------------------------------------------------------------------------
 

@@ -275,8 +275,16 @@ def _tet_linear_two_steps(directory: Path) -> None:
     V, ct, ft = blocks([LOWER, PUNCH], cell="tetrahedron")
     steps = [_step(2, pressures=[PressureSpec(_top(ft, 1), 10.0)]),
              _step(2, pressures=[PressureSpec(_top(ft, 1), 30.0)])]  # fmt: skip
-    _write(directory, "tet_linear_two_steps", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
-           "C3D4 punch, LINEAR law, pressure 10 then 30 in a second step, 2 + 2 increments")
+    _write(
+        directory,
+        "tet_linear_two_steps",
+        V,
+        ct,
+        ft,
+        [_pair(ft, 1, 0, LINEAR)],
+        steps,
+        "C3D4 punch, LINEAR law, pressure 10 then 30 in a second step, 2 + 2 increments",
+    )
 
 
 def _tet10_exponential(directory: Path) -> None:
@@ -294,8 +302,16 @@ def _tet_nlgeom_pressure(directory: Path) -> None:
     output = OutputSpec(node_print=("U", "RF"), contact_print=_OUTPUT.contact_print)
     steps = [StepSpec(increments=2, nlgeom=True, field_controls=TIGHT_FIELD_CONTROLS, output=output,
                       pressures=[PressureSpec(_top(ft, 1), 30.0)])]  # fmt: skip
-    _write(directory, "tet_nlgeom_pressure", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
-           "C3D4 punch, LINEAR law, NLGEOM with a follower pressure of 30, 2 increments")
+    _write(
+        directory,
+        "tet_nlgeom_pressure",
+        V,
+        ct,
+        ft,
+        [_pair(ft, 1, 0, LINEAR)],
+        steps,
+        "C3D4 punch, LINEAR law, NLGEOM with a follower pressure of 30, 2 increments",
+    )
 
 
 #: ccx's converged NLGEOM increments are not in equilibrium with the follower pressure on their own
@@ -308,22 +324,49 @@ NLGEOM_PRESSURE_QUIRK = (
 )
 
 CASES: tuple[Case, ...] = (
-    Case("hex_linear_pressure", "C3D8, LINEAR, face slave, pressure, 3 increments",
-         _hex_linear_pressure),
-    Case("tet_exponential_nlgeom", "C3D4, EXPONENTIAL, initial gap, NLGEOM, prescribed "
-         "displacement with an amplitude, 4 increments", _tet_exponential_nlgeom),
-    Case("hex_tabular_nodal", "C3D8, TABULAR, node-based slave, prescribed displacement, "
-         "4 increments", _hex_tabular_nodal),
-    Case("hex_curved_master", "C3D8, LINEAR, curved master, NLGEOM, contact zone growing "
-         "3 -> 20 nodes, 4 increments", _hex_curved_master),
-    Case("hex_two_pairs", "C3D8, two pairs (LINEAR + EXPONENTIAL), point loads, 3 increments",
-         _hex_two_pairs),
-    Case("tet_linear_two_steps", "C3D4, LINEAR, two steps (pressure 10, then 30), 2 + 2 "
-         "increments", _tet_linear_two_steps),
-    Case("tet10_exponential", "C3D10, EXPONENTIAL, tri6 faces, pressure, 2 increments",
-         _tet10_exponential),
-    Case("tet_nlgeom_pressure", "C3D4, LINEAR, NLGEOM follower pressure, 2 increments",
-         _tet_nlgeom_pressure, quirk=NLGEOM_PRESSURE_QUIRK, tolerances={"displacement": 3e-6}),
+    Case(
+        "hex_linear_pressure",
+        "C3D8, LINEAR, face slave, pressure, 3 increments",
+        _hex_linear_pressure,
+    ),
+    Case(
+        "tet_exponential_nlgeom",
+        "C3D4, EXPONENTIAL, initial gap, NLGEOM, prescribed "
+        "displacement with an amplitude, 4 increments",
+        _tet_exponential_nlgeom,
+    ),
+    Case(
+        "hex_tabular_nodal",
+        "C3D8, TABULAR, node-based slave, prescribed displacement, 4 increments",
+        _hex_tabular_nodal,
+    ),
+    Case(
+        "hex_curved_master",
+        "C3D8, LINEAR, curved master, NLGEOM, contact zone growing 3 -> 20 nodes, 4 increments",
+        _hex_curved_master,
+    ),
+    Case(
+        "hex_two_pairs",
+        "C3D8, two pairs (LINEAR + EXPONENTIAL), point loads, 3 increments",
+        _hex_two_pairs,
+    ),
+    Case(
+        "tet_linear_two_steps",
+        "C3D4, LINEAR, two steps (pressure 10, then 30), 2 + 2 increments",
+        _tet_linear_two_steps,
+    ),
+    Case(
+        "tet10_exponential",
+        "C3D10, EXPONENTIAL, tri6 faces, pressure, 2 increments",
+        _tet10_exponential,
+    ),
+    Case(
+        "tet_nlgeom_pressure",
+        "C3D4, LINEAR, NLGEOM follower pressure, 2 increments",
+        _tet_nlgeom_pressure,
+        quirk=NLGEOM_PRESSURE_QUIRK,
+        tolerances={"displacement": 3e-6},
+    ),
 )
 """Every cross-validation deck."""
 
