@@ -35,6 +35,7 @@ Serial only. Run::
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import os
 import statistics
@@ -42,23 +43,24 @@ import sys
 import time
 import typing
 
-import numpy as np
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
+import ufl
 
-from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.assembly import SpringBlocks
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION, SEARCH_TOLERANCE
 from dolfinx_ntf.spring_areas import spring_areas
 
-__all__ = ["SOLVERS", "PlateMesh", "build_plates", "build_problem", "run_size", "report", "main"]
+__all__ = ["SOLVERS", "PlateMesh", "build_plates", "build_problem", "main", "report", "run_size"]
 
 LOWER_BOTTOM, MASTER, SLAVE, UPPER_TOP = 11, 12, 13, 14
 E, NU = 1000.0, 0.3
@@ -370,7 +372,7 @@ def _s(t: float) -> str:
 def _exponents(results: typing.Sequence[dict], keys: typing.Sequence[str]) -> list[list[str]]:
     """Local scaling exponents log(t2/t1)/log(n2/n1) between successive sizes (1 = linear)."""
     rows = []
-    for r1, r2 in zip(results, results[1:]):
+    for r1, r2 in itertools.pairwise(results):
         ratio = math.log(r2["slave_nodes"] / r1["slave_nodes"])
         same_solver = r1["solver"] == r2["solver"]
         row = [f"{r1['slave_nodes']} -> {r2['slave_nodes']}"]
@@ -446,7 +448,8 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         "",
     ]
     if len(results) > 1:
-        keys = main_keys + [
+        keys = [
+            *main_keys,
             "locate",
             "insert_mat",
             "has_pattern",
@@ -457,7 +460,7 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         text += [
             "Scaling exponents between sizes (time ~ slave_nodes^k; 1 = linear; '-' where "
             "the solver differs):",
-            _format_table(["sizes"] + keys, _exponents(results, keys)),
+            _format_table(["sizes", *keys], _exponents(results, keys)),
         ]
     return "\n".join(text)
 
@@ -512,7 +515,7 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
     start = time.perf_counter()
     load = os.getloadavg()[0]
     for size in args.sizes:
-        target = int(round(size))
+        target = round(size)
         dofs = int(3 * (args.layers + 1) * target * (1 + args.master_ratio**2))  # both plates
         solver = args.solver
         if solver == "mumps" and args.direct_max_dofs and dofs > args.direct_max_dofs:

@@ -25,7 +25,7 @@ Serial. Needs ``ccx`` on the PATH. Run from the repository root (about 2 minutes
 from __future__ import annotations
 
 import argparse
-import datetime
+import datetime as dt
 import importlib.util
 import logging
 import math
@@ -38,15 +38,16 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mpi4py import MPI
+
 import numpy as np
 import scipy.optimize
-from mpi4py import MPI
 
 import dolfinx
 import dolfinx.fem
 
-from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import Comparison, compare_job
 from dolfinx_ntf.calculix.dat import read_dat
@@ -69,7 +70,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))
 import cases  # noqa: E402
 
-__all__ = ["Run", "run_case", "hertz_deck", "patch_deck", "hertz_results", "patch_results", "main"]
+__all__ = ["Run", "hertz_deck", "hertz_results", "main", "patch_deck", "patch_results", "run_case"]
 
 COMMAND = ".venv/bin/python benchmarks/validate.py"
 
@@ -194,7 +195,7 @@ def patch_deck(directory: Path, cell: str, matching: bool = True) -> None:
     """
     lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (4, 4, 2))
     upper = ((0.0, 0.0, 0.0), (1.0, 1.0, 0.4), (4, 4, 2) if matching else (3, 5, 2))
-    V, ct, ft = cases.blocks([lower, upper], cell=cell)
+    V, _ct, ft = cases.blocks([lower, upper], cell=cell)
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, cases.facet_tag(1, cases.BOTTOM)),
         ntf.FacetSurface(ft, cases.facet_tag(0, cases.TOP)),
@@ -415,7 +416,7 @@ def _environment() -> str:
         ccx = "ccx " + banner.split("Version", 1)[1].split()[0]
     except (OSError, IndexError):
         ccx = "ccx (version unknown)"
-    return f"{ccx}, dolfinx {dolfinx.__version__}, {datetime.date.today().isoformat()}"
+    return f"{ccx}, dolfinx {dolfinx.__version__}, {dt.date.today().isoformat()}"
 
 
 def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any]) -> None:

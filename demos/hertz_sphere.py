@@ -47,23 +47,24 @@ import time
 import typing
 from pathlib import Path
 
-import numpy as np
-import scipy.optimize
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
+import numpy as np
+import scipy.optimize
+
 import dolfinx.fem
 import dolfinx.fem.petsc
+import ufl
 
-from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 from dolfinx_ntf.spring_areas import spring_areas
 from dolfinx_ntf.springs import evaluate_springs
 
-__all__ = ["main", "hertz"]
+__all__ = ["hertz", "main"]
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -353,9 +354,9 @@ def _first_open_radius(r: np.ndarray, closed: np.ndarray) -> float:
 
 def _plot(path: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
     """Nodal contact pressure against radius beside Hertz's profile and the fitted one."""
-    import matplotlib
+    import matplotlib as mpl
 
-    matplotlib.use("Agg")
+    mpl.use("Agg")
     import matplotlib.pyplot as plt
 
     a, p0 = summary["a_hertz"], summary["p0_hertz"]

@@ -31,15 +31,16 @@ import time
 import typing
 from pathlib import Path
 
-import numpy as np
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-import dolfinx.fem
+import numpy as np
 
-from dolfinx_ntf import compat
+import dolfinx.fem
+import ufl
+
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 

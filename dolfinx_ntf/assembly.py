@@ -17,16 +17,17 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
+from petsc4py import PETSc
+
 import numpy as np
 import scipy.sparse
-from petsc4py import PETSc
 
 import dolfinx.fem
 import dolfinx.fem.petsc
 
 from dolfinx_ntf import compat
 
-__all__ = ["SpringBlocks", "ContactAssembler"]
+__all__ = ["ContactAssembler", "SpringBlocks"]
 
 
 @dataclass(frozen=True)
@@ -50,8 +51,7 @@ def _unblocked(nodes: np.ndarray, bs: int = 3) -> np.ndarray:
 
 
 class ContactAssembler:
-    """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one displacement
-    space."""
+    """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one space."""
 
     def __init__(
         self,
@@ -115,8 +115,7 @@ class ContactAssembler:
         return bool(np.all(np.isin(keys, self._pattern_keys, assume_unique=True)))
 
     def create_matrix(self, blocks: typing.Sequence[SpringBlocks] = ()) -> PETSc.Mat:
-        """A new matrix with the bulk pattern plus the couplings of ``blocks`` (and of earlier
-        matrices)."""
+        """A new matrix with the bulk pattern plus the couplings of ``blocks`` and earlier ones."""
         A = dolfinx.fem.petsc.create_matrix(self._form)
         # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
         # preallocation.
@@ -136,9 +135,11 @@ class ContactAssembler:
     def _merge(
         self, A: PETSc.Mat, keys: np.ndarray, blocks: typing.Sequence[SpringBlocks] = ()
     ) -> None:
-        """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values, through a
-        separate matrix merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a solver bound to
-        it keeps working)."""
+        """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values.
+
+        Through a separate matrix merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a
+        solver bound to it keeps working).
+        """
         bs = self._bs
         first = self._global_node[0] if self._num_owned else 0
         rows = keys // self._num_global
@@ -186,8 +187,7 @@ class ContactAssembler:
     def add_to_matrix(
         self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks], *, check_pattern: bool = True
     ) -> None:
-        """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings are
-        missing.
+        """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings miss.
 
         Args:
             A: The matrix; call ``A.assemble()`` afterwards.

@@ -24,35 +24,36 @@ from __future__ import annotations
 
 import typing
 
-import numpy as np
-import ufl
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx
 import dolfinx.cpp
 import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
+import ufl
 
 __all__ = [
     "DOLFINX_VERSION",
     "DirichletBC",
     "Form",
     "MeshTags",
+    "boundary_values",
     "cell_dofs",
     "coordinate_element",
     "cpp_mesh",
     "entities_to_geometry",
     "evaluate_expression",
-    "boundary_values",
-    "incident_entities",
     "geometry_dofs",
+    "incident_entities",
     "jit_keywords",
     "petsc_vector",
     "scalar_space",
-    "sparsity_graph",
     "space_degree",
     "space_family",
+    "sparsity_graph",
     "vector_space",
 ]
 

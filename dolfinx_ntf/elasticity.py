@@ -1,16 +1,18 @@
-"""Small UFL and boundary-condition helpers for the bulk elasticity around contact (demos, tests,
-scripts)."""
+"""Small UFL and boundary-condition helpers for the bulk elasticity around contact.
+
+Used by the demos, tests and scripts.
+"""
 
 from __future__ import annotations
 
 import numpy as np
-import ufl
 
 import dolfinx.fem
+import ufl
 
 from dolfinx_ntf import compat
 
-__all__ = ["lame_parameters", "small_strain_stress", "component_bc"]
+__all__ = ["component_bc", "lame_parameters", "small_strain_stress"]
 
 
 def lame_parameters(youngs_modulus: float, poisson_ratio: float) -> tuple[float, float]:

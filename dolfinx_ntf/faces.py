@@ -26,16 +26,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
-    "FaceType",
     "FACE_TYPES",
-    "TRI3",
     "QUAD4",
-    "TRI6",
     "QUAD8",
     "QUAD9",
-    "face_type_from_num_nodes",
+    "TRI3",
+    "TRI6",
+    "FaceType",
     "face_points",
     "face_tangents",
+    "face_type_from_num_nodes",
 ]
 
 # Monomial basis ξ^a η^b shared by all face types; row k of a coefficient matrix multiplies it.

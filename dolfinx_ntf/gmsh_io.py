@@ -27,6 +27,7 @@ from mpi4py import MPI
 
 import gmsh
 import numpy as np
+
 from dolfinx.io import gmshio as _gmshio
 from dolfinx.mesh import Mesh
 

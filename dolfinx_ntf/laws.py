@@ -26,16 +26,16 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
-    "PressureOverclosureLaw",
-    "ExponentialLaw",
-    "LinearLaw",
-    "TabularLaw",
-    "Friction",
-    "SurfaceInteraction",
     "EXPONENTIAL_FORCE_CAP_EXPONENT",
-    "ZERO_AREA_CUTOFF",
     "TABULAR_C0",
     "TABULAR_MIN_INCREMENT",
+    "ZERO_AREA_CUTOFF",
+    "ExponentialLaw",
+    "Friction",
+    "LinearLaw",
+    "PressureOverclosureLaw",
+    "SurfaceInteraction",
+    "TabularLaw",
 ]
 
 EXPONENTIAL_FORCE_CAP_EXPONENT: float = 23.0

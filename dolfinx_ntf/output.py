@@ -5,21 +5,21 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
-import numpy as np
 from mpi4py import MPI
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.io
 
 from dolfinx_ntf.problem import ContactProblem, PairState
 
-__all__ = ["ContactResults", "contact_results", "ContactWriter"]
+__all__ = ["ContactResults", "ContactWriter", "contact_results"]
 
 
 @dataclass(frozen=True)
 class ContactResults:
-    """Per-spring results of one pair, in spring order (slave nodes ascending, like CalculiX's
-    elements).
+    """Per-spring results of one pair, in spring order (slave nodes ascending, like ccx's).
 
     ``clearance`` is g_eff (negative = penetration), ``pressure`` = F_N / A_p (compression
     positive), ``energy`` the spring energy of spec §8.1, ``force`` the contact force on the slave
@@ -65,8 +65,7 @@ def contact_results(problem: ContactProblem) -> list[ContactResults]:
 
 
 class ContactWriter:
-    """Writes displacement, contact pressure, clearance and status (1 closed, 0 open or no spring)
-    to XDMF.
+    """Writes displacement, contact pressure, clearance and status to XDMF.
 
     XDMF keeps vertex values only, so use a P1 displacement space (P2 midside values are dropped by
     dolfinx).

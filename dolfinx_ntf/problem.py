@@ -1,5 +1,4 @@
-"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual and
-Jacobian.
+"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual.
 
 :class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides
 assembling the user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule
@@ -13,12 +12,13 @@ import logging
 import typing
 from dataclasses import dataclass, field
 
-import numpy as np
-import ufl
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.fem.petsc
+import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
@@ -36,7 +36,7 @@ from dolfinx_ntf.surfaces import (
     resolve_slave,
 )
 
-__all__ = ["ContactPair", "PairState", "ContactProblem"]
+__all__ = ["ContactPair", "ContactProblem", "PairState"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
@@ -232,8 +232,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.ensure_matrix()
 
     def pair(self, *, record_overlap: bool = False) -> int:
-        """Pair every slave node with a master face at the current displacement; returns the spring
-        count."""
+        """Pair every slave node with a master face at the current displacement.
+
+        Returns:
+            The number of springs.
+        """
         coords = self.current_coordinates()
         for state in self.states:
             self._pair_one(state, coords, record_overlap)
@@ -292,8 +295,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     @staticmethod
     def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:
-        """Projection start points: the last projection where a node keeps its face, else the face
-        centre."""
+        """Projection start points: the last one where a node keeps its face, else the centre."""
         xi0 = np.tile(state.master_faces.face_type.center, (found.size, 1))
         if state.xi is not None and state.num_springs:
             previous_face = np.full(state.slave.nodes.size, -1, dtype=np.int64)
@@ -350,8 +352,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def _area_block(
         self, state: PairState, coords: np.ndarray, *, values: bool = True
     ) -> SpringBlocks:
-        """Tangent of F_N = A_p p(d) with respect to the nodes of the slave faces around p
-        (dA_p/du)."""
+        """Tangent of F_N = A_p p(d) with respect to the slave-face nodes around p (dA_p/du)."""
         faces = state.slave.faces
         slave_index, node, gradient = spring_area_gradients(
             faces.face_type, faces.faces, coords, state.slave.nodes
@@ -411,8 +412,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """Start Newton iteration ``iteration``: re-pair on schedule (and re-assemble F), assemble
-        the Jacobian."""
+        """Start Newton iteration ``iteration``: re-pair on schedule, assemble the Jacobian.
+
+        A re-pairing re-assembles the residual vector too.
+        """
         self.iteration += 1
         self.count_changed = False
         if not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION:
@@ -430,7 +433,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         A.assemble()
 
     def set_bcs(self, bcs: typing.Sequence[compat.DirichletBC]) -> None:
-        """Replace the Dirichlet conditions (e.g. between steps); contact entries skip the new
-        constrained dofs."""
+        """Replace the Dirichlet conditions (e.g. between steps).
+
+        Contact entries skip the new constrained dofs.
+        """
         self.bcs = list(bcs)
         self.assembler.set_bcs(self.bcs)

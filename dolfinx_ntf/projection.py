@@ -341,7 +341,7 @@ def _probe(
     """
     xi = xi.copy()
     moved = np.zeros(xi.shape[0], dtype=bool)
-    r, phi, jac, hess = _residual(face_type, nodes, pts, xi)
+    r, _phi, jac, hess = _residual(face_type, nodes, pts, xi)
     _, _, _, _, lam, v, scale = _hessian(r, jac, hess, size2)
     idx = np.flatnonzero(lam < -_NEG_CURVATURE * scale)
     if idx.size == 0:

@@ -14,8 +14,9 @@ import time
 import typing
 from dataclasses import dataclass, field
 
-import numpy as np
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.nls.petsc
@@ -26,8 +27,8 @@ __all__ = [
     "ContactConvergenceError",
     "ContactNewtonSolver",
     "IncrementResult",
-    "StaticStep",
     "LoadControl",
+    "StaticStep",
     "log_progress",
 ]
 
@@ -118,8 +119,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         x.axpy(-self.relaxation_parameter, dx)
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """Residual test: the norm is below ``atol`` or ``relative_tolerance`` times the increment's
-        first norm.
+        """Residual test: norm below ``atol`` or ``relative_tolerance`` times the first norm.
 
         Override for other criteria (the CalculiX job runner uses ccx's force-based test).
         """
@@ -148,8 +148,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self.setJ(self._jacobian, A)
 
     def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
-        """Solve one increment from the current ``u`` (after
-        :meth:`ContactProblem.begin_increment`).
+        """Solve one increment from the current ``u`` (after ``begin_increment``).
 
         Returns:
             The number of Newton iterations and True; a failure raises
@@ -310,8 +309,7 @@ class StaticStep:
 
 
 def log_progress(level: int = logging.INFO) -> None:
-    """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings, convergence)
-    on rank 0."""
+    """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings) on rank 0."""
     from mpi4py import MPI
 
     if getattr(log_progress, "_handler", None) is None and MPI.COMM_WORLD.rank == 0:

@@ -18,10 +18,10 @@ import numpy.typing as npt
 from dolfinx_ntf.faces import FaceType, _face_coords_array
 
 __all__ = [
-    "face_areas",
     "face_area_gradients",
-    "spring_areas",
+    "face_areas",
     "spring_area_gradients",
+    "spring_areas",
 ]
 
 

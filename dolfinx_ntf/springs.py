@@ -391,7 +391,7 @@ def _projection_compliance(
 
 def _skew(a: np.ndarray) -> np.ndarray:
     """(N, 3, 3) cross-product matrices S(a) with S(a) b = a × b."""
-    s = np.zeros(a.shape[:-1] + (3, 3))
+    s = np.zeros((*a.shape[:-1], 3, 3))
     s[..., 0, 1], s[..., 0, 2] = -a[..., 2], a[..., 1]
     s[..., 1, 0], s[..., 1, 2] = a[..., 2], -a[..., 0]
     s[..., 2, 0], s[..., 2, 1] = -a[..., 1], a[..., 0]

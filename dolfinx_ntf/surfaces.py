@@ -27,12 +27,12 @@ from dolfinx_ntf.faces import FaceType, face_type_from_num_nodes
 __all__ = [
     "FacetSurface",
     "NodeSurface",
-    "SurfaceFaces",
     "SlaveSurface",
-    "resolve_master",
-    "resolve_slave",
+    "SurfaceFaces",
     "boundary_faces",
     "reference_coordinates",
+    "resolve_master",
+    "resolve_slave",
 ]
 
 
@@ -97,7 +97,6 @@ def _cell_arrays(V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
     """Cell-to-node table of ``V`` and the facet-closure table of the reference cell."""
     mesh = V.mesh
     tdim = mesh.topology.dim
-    num_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
     cell_nodes = compat.cell_dofs(V)
     layout = V.dofmap.dof_layout
     num_facets_per_cell = dolfinx.cpp.mesh.cell_num_entities(mesh.topology.cell_type, tdim - 1)

@@ -29,15 +29,15 @@ import gmsh
 
 __all__ = [
     "BLOCK",
-    "SPHERE",
     "BLOCK_BOTTOM",
     "BLOCK_TOP",
+    "COARSE",
+    "PHYSICAL_NAMES",
+    "SPHERE",
     "SPHERE_CONTACT",
     "SPHERE_TOP",
     "SYMMETRY_X",
     "SYMMETRY_Y",
-    "PHYSICAL_NAMES",
-    "COARSE",
     "build_hertz",
     "main",
 ]

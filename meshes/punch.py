@@ -25,15 +25,15 @@ import gmsh
 
 __all__ = [
     "BLOCK",
-    "PUNCH",
     "BLOCK_BOTTOM",
     "BLOCK_TOP",
+    "COARSE",
+    "PHYSICAL_NAMES",
+    "PUNCH",
     "PUNCH_BOTTOM",
     "PUNCH_TOP",
-    "PHYSICAL_NAMES",
-    "COARSE",
-    "build_punch",
     "build_patch_test",
+    "build_punch",
     "main",
 ]
 

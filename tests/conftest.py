@@ -2,10 +2,10 @@
 
 import gc
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
-import ufl
-from mpi4py import MPI
 
 import dolfinx.mesh
 

@@ -11,13 +11,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
 import scipy.optimize
-import ufl
-from mpi4py import MPI
 
 import dolfinx.fem
+import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.__main__ import main

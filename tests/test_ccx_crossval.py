@@ -26,9 +26,10 @@ import shutil
 import sys
 from pathlib import Path
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
-from mpi4py import MPI
 
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import (
@@ -42,7 +43,7 @@ from dolfinx_ntf.calculix.deck import node_surface_faces, read_deck
 from dolfinx_ntf.calculix.job import run_job
 
 sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "crossval"))
-import cases  # noqa: E402
+import cases
 
 pytestmark = pytest.mark.serial
 
@@ -214,5 +215,5 @@ def test_ccx_increments_reads_dat_blocks(tmp_path: Path):
     np.testing.assert_allclose(first.energy, [1e-3, 2e-3])
     assert first.time == 0.5 and first.iterations is None
     write_dat(tmp_path / "bad.dat", [b for b in blocks if b.name != "CSTR"])
-    with pytest.raises(ValueError, match="no CSTR block at time 0.5"):
+    with pytest.raises(ValueError, match=r"no CSTR block at time 0\.5"):
         ccx_increments(tmp_path / "bad.dat")

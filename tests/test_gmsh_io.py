@@ -8,17 +8,16 @@ import importlib.util
 import math
 from pathlib import Path
 
-import numpy as np
-import pytest
-import ufl
 from mpi4py import MPI
 
 import gmsh
-from dolfinx import cpp as _cpp
+import numpy as np
+import pytest
+
+import ufl
 from dolfinx import fem
 
-from dolfinx_ntf import compat
-from dolfinx_ntf import gmsh_io
+from dolfinx_ntf import compat, gmsh_io
 
 pytestmark = pytest.mark.mpi
 
@@ -156,7 +155,7 @@ def test_patch_test_meshes_match(cell_type, order):
 
 
 def test_patch_test_different_divisions():
-    mesh, ct, ft = gmsh_io.mesh_from_gmsh(
+    mesh, _ct, ft = gmsh_io.mesh_from_gmsh(
         punch.build_patch_test, COMM, divisions=4, punch_divisions=3
     )
     stats = _facet_stats(mesh, ft)
@@ -205,7 +204,9 @@ def test_hertz_coarse_quarter():
 
 def test_hertz_hexahedra_and_quadratic_geometry():
     coarse = {"size_fine": 0.1, "size_coarse": 0.6, "refine_radius": 0.2}
-    mesh, ct, ft = gmsh_io.mesh_from_gmsh(hertz.build_hertz, COMM, cell_type="hexahedron", **coarse)
+    mesh, ct, _ft = gmsh_io.mesh_from_gmsh(
+        hertz.build_hertz, COMM, cell_type="hexahedron", **coarse
+    )
     assert mesh.topology.cell_name() == "hexahedron"
     volumes = _cell_volumes(mesh, ct)
     assert math.isclose(volumes[hertz.BLOCK], 6.0, rel_tol=1e-12)
@@ -267,7 +268,7 @@ def test_read_msh_roundtrip_and_model_to_mesh(tmp_path):
 
 
 def test_read_msh_errors(tmp_path):
-    with pytest.raises(FileNotFoundError, match="no_such.msh"):
+    with pytest.raises(FileNotFoundError, match=r"no_such\.msh"):
         gmsh_io.read_msh(tmp_path / "no_such.msh", COMM)
 
     garbage = COMM.bcast(str(tmp_path / "garbage.msh"), root=0)

@@ -86,7 +86,7 @@ def _brute_force(ft: FaceType, coords: np.ndarray, pts: np.ndarray) -> np.ndarra
         grid = grid[grid.sum(axis=1) <= 1 + 1e-12]
     phi = ft.shape_functions(grid)  # (G, n)
     out = np.empty((len(pts), 2))
-    a, b = _constraints(ft)
+    a, _b = _constraints(ft)
     for i in range(len(pts)):
         q = phi @ coords[i]
         start = grid[np.argmin(np.sum((q - pts[i]) ** 2, axis=1))]

@@ -1,5 +1,4 @@
-"""CalculiX interoperability: run ccx decks with dolfinx_ntf, write decks, read and write ccx
-results.
+"""CalculiX interoperability: run ccx decks, write decks, read and write ccx results.
 
 File formats (pure Python/numpy, no dolfinx):
     - ``deck``: ``read_deck`` parses the node-to-face subset of a ``.inp`` deck into a ``Deck``;
@@ -15,6 +14,7 @@ dolfinx glue:
 
 from .ccx import CcxError, dat_block, dat_times, read_ccx_dat, read_sta, run_ccx
 from .cel import ContactElementsFile, format_contact_elements, read_cel
+from .compare import compare_job
 from .dat import (
     DatBlock,
     contact_print_blocks,
@@ -24,7 +24,6 @@ from .dat import (
     read_dat,
     write_dat,
 )
-from .compare import compare_job
 from .deck import (
     ELEMENT_TYPES,
     Deck,
@@ -41,19 +40,17 @@ from .model import build_model
 from .writer import write_inp
 
 __all__ = [
-    "JobError",
-    "JobResult",
-    "build_model",
-    "compare_job",
-    "run_job",
-    "write_inp",
+    "ELEMENT_TYPES",
     "CcxError",
     "ContactElementsFile",
     "DatBlock",
     "Deck",
     "DeckError",
-    "ELEMENT_TYPES",
+    "JobError",
+    "JobResult",
     "Step",
+    "build_model",
+    "compare_job",
     "contact_print_blocks",
     "dat_block",
     "dat_times",
@@ -70,6 +67,8 @@ __all__ = [
     "read_deck",
     "read_sta",
     "run_ccx",
+    "run_job",
     "surface_nodes",
     "write_dat",
+    "write_inp",
 ]

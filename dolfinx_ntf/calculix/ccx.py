@@ -20,11 +20,11 @@ __all__ = [
     "CcxError",
     "StaIncrement",
     "ccx_executable",
-    "run_ccx",
+    "dat_block",
+    "dat_times",
     "read_ccx_dat",
     "read_sta",
-    "dat_times",
-    "dat_block",
+    "run_ccx",
 ]
 
 _TAIL_LINES = 30
@@ -196,7 +196,7 @@ def read_sta(path: str | Path) -> list[StaIncrement]:
                     float(fields[4]),
                     float(fields[5]),
                     float(fields[6]),
-                )  # fmt: skip
+                )
             )
         except ValueError:
             continue

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ContactElementsFile", "format_contact_elements", "read_cel", "CelElement"]
+__all__ = ["CelElement", "ContactElementsFile", "format_contact_elements", "read_cel"]
 
 
 def _set_name(step: int, increment: int, attempt: int, iteration: int) -> str:
@@ -53,7 +53,10 @@ def format_contact_elements(
         master_faces: ``(N, n)`` node numbers of each element's master face, ccx face order
             (n = 3, 4, 6, 8 or 9).
         slave_nodes: ``(N,)`` slave node number of each element.
-        step, increment, attempt, iteration: 1-based numbers of the set name.
+        step: 1-based step number of the set name.
+        increment: 1-based increment number of the set name.
+        attempt: 1-based attempt number of the set name.
+        iteration: 1-based iteration number of the set name.
     """
     faces = np.asarray(master_faces, dtype=np.int64)
     slaves = np.asarray(slave_nodes, dtype=np.int64).reshape(-1)

@@ -28,14 +28,14 @@ import numpy as np
 from .dat import DatBlock, read_dat
 
 __all__ = [
-    "IncrementResults",
-    "IncrementComparison",
     "Comparison",
+    "IncrementComparison",
+    "IncrementResults",
     "ccx_increments",
-    "job_increments",
     "compare_increment",
     "compare_increments",
     "compare_job",
+    "job_increments",
 ]
 
 #: Relative tolerance when matching increment times (ccx prints times with 7 significant digits).

@@ -32,17 +32,17 @@ from pathlib import Path
 import numpy as np
 
 __all__ = [
-    "DatBlock",
     "BLOCK_NAMES",
+    "DatBlock",
+    "blocks_named",
+    "contact_print_blocks",
+    "el_print_blocks",
+    "format_block",
     "format_e13",
     "format_time",
-    "format_block",
     "node_print_blocks",
-    "el_print_blocks",
-    "contact_print_blocks",
-    "write_dat",
     "read_dat",
-    "blocks_named",
+    "write_dat",
 ]
 
 

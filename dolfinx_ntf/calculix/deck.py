@@ -26,44 +26,43 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
 __all__ = [
-    "DeckError",
-    "Location",
-    "ElementType",
     "ELEMENT_TYPES",
-    "ElementBlock",
-    "Surface",
-    "Material",
-    "SolidSection",
-    "SurfaceBehavior",
-    "Friction",
-    "SurfaceInteraction",
-    "ContactPair",
+    "FIELD_CONTROL_DEFAULTS",
+    "FIELD_CONTROL_NAMES",
     "Amplitude",
     "Boundary",
     "CLoad",
+    "ContactPair",
     "DLoad",
-    "Static",
-    "PrintRequest",
-    "FileRequest",
-    "FrictionChange",
-    "ModelChange",
-    "Step",
     "Deck",
-    "FIELD_CONTROL_NAMES",
-    "FIELD_CONTROL_DEFAULTS",
-    "read_deck",
-    "face_nodes",
-    "surface_nodes",
-    "node_surface_faces",
+    "DeckError",
+    "ElementBlock",
+    "ElementType",
+    "FileRequest",
+    "Friction",
+    "FrictionChange",
+    "Location",
+    "Material",
+    "ModelChange",
+    "PrintRequest",
+    "SolidSection",
+    "Static",
+    "Step",
+    "Surface",
+    "SurfaceBehavior",
+    "SurfaceInteraction",
     "external_faces",
+    "face_nodes",
+    "node_surface_faces",
+    "read_deck",
+    "surface_nodes",
 ]
 
 
@@ -1453,7 +1452,7 @@ class _Reader:
                     op,
                     fields[0],
                     loc,
-                )  # fmt: skip
+                )
             )
 
     # -- steps ----------------------------------------------------------------------------------

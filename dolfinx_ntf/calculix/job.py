@@ -33,14 +33,15 @@ import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.fem.petsc
 import dolfinx.mesh
+import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.output import ContactWriter, contact_results
@@ -58,7 +59,7 @@ from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blo
 from .deck import Deck, PrintRequest, Step, read_deck
 from .model import INTEGRATION_POINTS, CalculixModel, build_model
 
-__all__ = ["JobError", "ContactRows", "IncrementOutput", "JobResult", "run_job"]
+__all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
@@ -217,8 +218,7 @@ class _CcxNewtonSolver(ContactNewtonSolver):
         return super().solve(u)
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """ccx's test after each Newton update (the class docstring); False before the first
-        update."""
+        """ccx's test after each Newton update (the class docstring); False before the first one."""
         if self.updates == 0:
             return False
         controls = self.controls

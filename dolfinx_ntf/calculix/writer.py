@@ -24,7 +24,6 @@ Numbering and conventions shared by the whole module:
 from __future__ import annotations
 
 import math
-import typing
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,29 +34,27 @@ import dolfinx.cpp.mesh
 import dolfinx.fem
 import dolfinx.mesh
 
-
 from dolfinx_ntf import compat
 from dolfinx_ntf.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.problem import ContactPair
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
-from dolfinx_ntf import compat
 
 from .deck import ELEMENT_TYPES, FIELD_CONTROL_NAMES
 
 __all__ = [
-    "NodeTarget",
-    "BoundarySpec",
-    "PressureSpec",
-    "PointLoadSpec",
-    "AmplitudeSpec",
-    "OutputSpec",
-    "StepSpec",
-    "InpNumbering",
     "TIGHT_FIELD_CONTROLS",
+    "AmplitudeSpec",
+    "BoundarySpec",
+    "InpNumbering",
+    "NodeTarget",
+    "OutputSpec",
+    "PointLoadSpec",
+    "PressureSpec",
+    "StepSpec",
     "write_inp",
 ]
 
-NodeTarget = typing.Union[FacetSurface, NodeSurface, np.ndarray, Sequence[int]]
+NodeTarget = FacetSurface | NodeSurface | np.ndarray | Sequence[int]
 """Nodes of a constraint or load: facets, vertices, or local block dofs of the space."""
 
 TIGHT_FIELD_CONTROLS: dict[str, float] = {

@@ -18,15 +18,15 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-import ufl
 from mpi4py import MPI
+
+import numpy as np
 
 import dolfinx.fem
 import dolfinx.mesh
 
-from dolfinx_ntf import compat
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.writer import (
     TIGHT_FIELD_CONTROLS,
     AmplitudeSpec,
@@ -38,7 +38,7 @@ from dolfinx_ntf.calculix.writer import (
     write_inp,
 )
 
-__all__ = ["BOTTOM", "TOP", "XMIN", "YMIN", "Case", "CASES", "blocks", "facet_tag"]
+__all__ = ["BOTTOM", "CASES", "TOP", "XMIN", "YMIN", "Case", "blocks", "facet_tag"]
 
 BOTTOM, TOP, XMIN, YMIN = 1, 2, 3, 4
 
