@@ -1,14 +1,18 @@
-# The two commands of the README: `make demo` and `make test`.
+# The two commands of the README: `make demo` and `make test` (which starts with `make lint`).
 PY := .venv/bin/python
 
-.PHONY: setup demo test benchmark
+.PHONY: setup demo lint test benchmark
 setup:
 	bash scripts/setup.sh
 
 demo: setup
 	$(PY) demos/punch.py
 
-test: setup
+lint: setup
+	.venv/bin/ruff format --check .
+	.venv/bin/ruff check .
+
+test: lint
 	$(PY) -m pytest -q tests
 	mpirun --allow-run-as-root --oversubscribe -n 2 $(PY) -m pytest -q -m mpi tests
 

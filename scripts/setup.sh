@@ -65,3 +65,9 @@ fi
 if ! (cd / && "$root/.venv/bin/python" -c "import dolfinx_ntf") 2>/dev/null; then
   .venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
 fi
+# The formatter and linter of `make lint` (a static binary wheel from PyPI, the same on Debian 12 and 13); pinned so
+# that both releases format alike.
+ruff_version=0.17.6
+if [ "$(.venv/bin/ruff --version 2>/dev/null)" != "ruff $ruff_version" ]; then
+  .venv/bin/python -m pip install -q "ruff==$ruff_version"
+fi
