@@ -6,7 +6,7 @@ with dolfinx, solved by ``ccx`` and by ``run_job(..., tight=True)``:
 - the cross-validation decks of ``tests/data/calculix/crossval/cases.py`` (the ones the test suite
   runs), compared increment by increment with ``dolfinx_ntf.calculix.compare``;
 - Hertz: a quarter hemisphere (R = 25 mm, steel) pressed 0.6 mm into a steel block
-  (``meshes/hertz.py``, coarse mesh); both codes' contact radius and peak pressure against
+  (``dolfinx_ntf.meshes.hertz``, coarse mesh); both codes' contact radius and peak pressure against
   ``a = (3FR/4E*)^(1/3)`` and ``p0 = 3F/(2 pi a^2)`` with F from the reactions;
 - the contact patch test: a block pressed onto a larger block through non-matching flat faces by a
   uniform pressure, on rollers; the contact pressure must be uniform and equal to the load over the
@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import importlib.util
 import logging
 import math
 import shutil
@@ -64,6 +63,7 @@ from dolfinx_ntf.calculix.writer import (
 from dolfinx_ntf.faces import face_type_from_num_nodes
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 from dolfinx_ntf.laws import PressureOverclosureLaw
+from dolfinx_ntf.meshes import hertz as hz
 from dolfinx_ntf.spring_areas import spring_areas
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -137,17 +137,8 @@ def run_case(
 # ----------------------------------------------------------------------------- analytical decks
 
 
-def _load_meshes(name: str) -> typing.Any:
-    path = ROOT / "meshes" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"_validate_meshes_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def hertz_deck(directory: Path) -> None:
     """Quarter hemisphere on a block (coarse mesh), sphere top pushed down, automatic increments."""
-    hz = _load_meshes("hertz")
     sizes = {key: value * RADIUS for key, value in hz.COARSE.items()}
     mesh, _, ft = mesh_from_gmsh(hz.build_hertz, MPI.COMM_SELF, radius=RADIUS, **sizes)
     V = compat.vector_space(mesh, "Lagrange", 1)
@@ -536,7 +527,8 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
             "",
             f"Quarter hemisphere, R = {RADIUS:g} mm, E = {E_STEEL:g} MPa, nu = {NU_STEEL:g} for "
             f"both bodies (E* = E / (2 (1 - nu^2))), top pushed down {INDENTATION:g} mm, LINEAR "
-            "law with ccx's defaults (K = 50 E), coarse mesh of `meshes/hertz.py` (C3D4). F is "
+            "law with ccx's defaults (K = 50 E), coarse mesh of `dolfinx_ntf.meshes.hertz` (C3D4). "
+            "F is "
             "four times the base reaction; a = (3FR/4E*)^(1/3) and p0 = 3F/(2 pi a^2) are "
             "Hertz's values for that F; the computed radius and peak come from a least-squares "
             "fit of p0 sqrt(1 - r^2/a^2) to the nodal pressures (reference radii); p_max is the "

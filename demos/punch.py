@@ -25,7 +25,6 @@ Run it with::
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
 import time
 import typing
@@ -43,12 +42,11 @@ import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
+from dolfinx_ntf.meshes import punch as geometry
 
 __all__ = ["main"]
 
-ROOT = Path(__file__).resolve().parents[1]
-
-# Units: mm, N, MPa. The geometry is the default of ``meshes/punch.py`` scaled by 100 (mm).
+# Units: mm, N, MPa. The geometry is the default of ``dolfinx_ntf.meshes.punch`` scaled by 100 (mm).
 SCALE = 100.0
 BLOCK_SIZE = (1.0 * SCALE, 1.0 * SCALE, 0.5 * SCALE)
 PUNCH_SIZE = (0.4 * SCALE, 0.4 * SCALE, 0.3 * SCALE)
@@ -60,16 +58,6 @@ PRESSURE = 100.0  # MPa on the punch top: 160 kN in all
 TOLERANCE = 1e-8
 #: Bound on the relative excess of sum p A over the load (tilted normals: about 1e-6 measured).
 PRESSURE_AREA_TOLERANCE = 1e-5
-
-
-def _load_meshes(name: str) -> typing.Any:
-    """Import ``meshes/<name>.py`` by path (``meshes/`` is a folder of scripts, not a package)."""
-    spec = importlib.util.spec_from_file_location(
-        f"_dolfinx_ntf_meshes_{name}", ROOT / "meshes" / f"{name}.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
@@ -105,10 +93,9 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     start = time.perf_counter()
 
     # --- Mesh ------------------------------------------------------------------------------------
-    # The gmsh builder of meshes/punch.py makes two separate bodies with physical groups; the facet
-    # tags name the block bottom (clamped), the block top (master), the punch bottom (slave) and the
-    # punch top (loaded). Hexahedra give 4-node master faces and 5-node springs.
-    geometry = _load_meshes("punch")
+    # The gmsh builder of dolfinx_ntf.meshes.punch makes two separate bodies with physical groups;
+    # the facet tags name the block bottom (clamped), the block top (master), the punch bottom
+    # (slave) and the punch top (loaded). Hexahedra give 4-node master faces and 5-node springs.
     sizes = (
         dict(geometry.COARSE) if args.coarse else {"mesh_size_block": 0.05, "mesh_size_punch": 0.04}
     )

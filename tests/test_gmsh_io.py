@@ -1,10 +1,9 @@
-"""gmsh models of meshes/ through dolfinx_ntf.gmsh_io: tags, volumes, areas, separate bodies.
+"""gmsh models of dolfinx_ntf.meshes through gmsh_io: tags, volumes, areas, separate bodies.
 
 Runs in serial and under ``mpirun -n 2``: every quantity is reduced over the communicator, and gmsh
 only runs on rank 0.
 """
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -18,22 +17,11 @@ import ufl
 from dolfinx import fem
 
 from dolfinx_ntf import compat, gmsh_io
+from dolfinx_ntf.meshes import hertz, punch
 
 pytestmark = pytest.mark.mpi
 
 COMM = MPI.COMM_WORLD
-MESHES = Path(__file__).resolve().parents[1] / "meshes"
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(f"_meshes_{name}", MESHES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-punch = _load("punch")
-hertz = _load("hertz")
 
 
 def _cell_volumes(mesh, cell_tags):
