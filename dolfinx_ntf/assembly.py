@@ -204,16 +204,29 @@ class ContactAssembler:
                 return
         self._set_values(A, blocks)
 
-    def add_to_vector(self, b: PETSc.Vec, blocks: typing.Sequence[SpringBlocks]) -> None:
-        """Add the blocks' residual contributions to ``b`` (global indices; Dirichlet rows skipped).
+    def add_to_vector(
+        self,
+        b: PETSc.Vec,
+        blocks: typing.Sequence[SpringBlocks],
+        *,
+        dirichlet_rows: bool = False,
+    ) -> None:
+        """Add the blocks' residual contributions to ``b`` (global indices).
 
         Call before dolfinx's ``set_bc``; ends with a vector assembly so off-process rows reach
         their owners.
+
+        Args:
+            b: The vector.
+            blocks: Element blocks.
+            dirichlet_rows: Add to the rows of Dirichlet dofs too (reaction forces); by default
+                they are skipped.
         """
+        numbering = self._global_dof if dirichlet_rows else self._global_dof_masked
         for blk in blocks:
             if blk.vector is None or blk.row_nodes.shape[0] == 0:
                 continue
-            rows = self._global_dof_masked[_unblocked(blk.row_nodes, self._bs)].ravel()
+            rows = numbering[_unblocked(blk.row_nodes, self._bs)].ravel()
             keep = rows >= 0
             b.setValues(
                 rows[keep].astype(PETSc.IntType),

@@ -282,7 +282,9 @@ class LinearLaw(PressureOverclosureLaw):
         """Create the law as ccx reads ``*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR|HARD``.
 
         Missing or non-positive values get ccx's defaults (spec §1): ``K = 50 E``,
-        ``sigma_inf = E/70000``, ``c0 = 1e-3``.
+        ``sigma_inf = E/70000``, ``c0 = 1e-3``. Zero asks for the default as in a deck; a
+        negative value is replaced too, as ccx does, but with a ``UserWarning`` naming it (ccx
+        replaces it silently).
 
         Args:
             youngs_modulus: ``E``, the first constant of material no. 1 (``> 0``).
@@ -294,14 +296,20 @@ class LinearLaw(PressureOverclosureLaw):
         e = _check_scalar(owner, "youngs_modulus", youngs_modulus)
         if e <= 0.0:
             raise ValueError(f"{owner}: youngs_modulus must be > 0, got {e!r}")
-        k = None if slope is None else _check_scalar(owner, "slope", slope)
-        s = None if tension is None else _check_scalar(owner, "tension", tension)
-        c = None if c0 is None else _check_scalar(owner, "c0", c0)
-        return cls(
-            slope=50.0 * e if k is None or k <= 0.0 else k,
-            tension=e / 70000.0 if s is None or s <= 0.0 else s,
-            c0=1e-3 if c is None or c <= 0.0 else c,
-        )
+        defaults = {"slope": 50.0 * e, "tension": e / 70000.0, "c0": 1e-3}
+        rules = {"slope": "50 E", "tension": "E/70000", "c0": "1e-3"}
+        values = {}
+        for name, value in (("slope", slope), ("tension", tension), ("c0", c0)):
+            given = None if value is None else _check_scalar(owner, name, value)
+            if given is not None and given < 0.0:
+                warnings.warn(
+                    f"{owner}: {name} = {given!r} is negative; using ccx's default "
+                    f"{rules[name]} = {defaults[name]!r} instead (pass None to ask for it)",
+                    UserWarning,
+                    stacklevel=2,
+                )
+            values[name] = defaults[name] if given is None or given <= 0.0 else given
+        return cls(**values)
 
     def __repr__(self) -> str:
         """Constructor-like representation."""

@@ -20,9 +20,9 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 import ufl
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, validation
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
-from dolfinx_ntf.laws import SurfaceInteraction
+from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
 from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
@@ -68,6 +68,30 @@ class ContactPair:
     small_sliding: bool = False
     name: str = ""
     active: bool = True
+
+    def __post_init__(self) -> None:
+        """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
+        owner = (
+            f"ContactPair {self.name!r}"
+            if isinstance(self.name, str) and self.name
+            else ("ContactPair")
+        )
+        validation.check_type(self.slave, (FacetSurface, NodeSurface), f"{owner}: slave")
+        if isinstance(self.master, NodeSurface):
+            raise ValueError(
+                f"{owner}: the master surface must be a FacetSurface (face-based), got a "
+                "NodeSurface; only the slave surface may be node-based"
+            )
+        validation.check_type(self.master, FacetSurface, f"{owner}: master")
+        validation.check_type(
+            self.interaction,
+            SurfaceInteraction,
+            f"{owner}: interaction",
+            "wrap the law: SurfaceInteraction(law)"
+            if isinstance(self.interaction, PressureOverclosureLaw)
+            else "",
+        )
+        validation.check_type(self.name, str, f"{owner}: name")
 
 
 @dataclass
@@ -138,16 +162,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
+        pairs, bcs = validation.check_problem(F, u, pairs, bcs, J, ContactPair, max_depth)
         super().__init__(
             F,
             u,
-            list(bcs),
+            bcs,
             J,
             **compat.jit_keywords(form_compiler_options, jit_options),
         )
         V = u.function_space
-        if V.dofmap.index_map_bs != 3 or V.mesh.geometry.dim != 3:
-            raise ValueError("ContactProblem needs a 3D vector displacement space (block size 3)")
         self.u = u
         self.symmetric = symmetric
         self.linearize_area = linearize_area
@@ -156,6 +179,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._reference = reference_coordinates(V)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
+        validation.check_distinct_pairs(V.mesh.comm, self._surfaces(), self._reference)
         self.small_sliding = bool(pairs[-1].small_sliding) if pairs else True
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
         self.static = True
@@ -207,6 +231,21 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """Total number of contact spring elements over all pairs."""
         return sum(s.num_springs for s in self.states)
 
+    def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
+        """(name, slave nodes, master facets) of every pair, for checks and messages."""
+        return [
+            (s.pair.name or f"pair {i + 1}", s.slave.nodes, s.master_faces.facets)
+            for i, s in enumerate(self.states)
+        ]
+
+    def _check_finite(self) -> None:
+        """A non-finite displacement at a contact node: a ValueError naming node and position."""
+        surfaces = []
+        for (name, slave, _), state in zip(self._surfaces(), self.states):
+            surfaces += [(f"{name} slave", slave), (f"{name} master", state.master_faces.nodes)]
+        comm = self.u.function_space.mesh.comm
+        validation.check_finite_contact_nodes(comm, self.u, self._reference, surfaces)
+
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts)."""
         return self._reference + self.u.x.array.reshape(-1, 3)
@@ -220,6 +259,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             time_fraction: Relative step time at the end of the increment (tau of the overlap ramp).
             static: Static step (the initial overlap is ramped) or not.
         """
+        self._check_finite()
         self.time_fraction = float(time_fraction)
         self.static = static
         first = not self._first_pairing_done
@@ -431,6 +471,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
         self._pattern_checked = True
         A.assemble()
+
+    def destroy(self) -> None:
+        """Destroy the PETSc matrix the problem owns (the Jacobian). Collective.
+
+        The solver's vectors belong to :class:`~dolfinx_ntf.ContactNewtonSolver` (its own
+        ``destroy``). Using the problem afterwards creates a new matrix.
+        """
+        if self.matrix is not None:
+            self.matrix.destroy()
+            self.matrix = None
+
+    def __enter__(self) -> ContactProblem:
+        return self
+
+    def __exit__(self, *args: object) -> None:
+        self.destroy()
 
     def set_bcs(self, bcs: typing.Sequence[compat.DirichletBC]) -> None:
         """Replace the Dirichlet conditions (e.g. between steps).

@@ -12,7 +12,7 @@ from __future__ import annotations
 import logging
 import time
 import typing
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from petsc4py import PETSc
 
@@ -21,6 +21,8 @@ import numpy as np
 import dolfinx.fem
 import dolfinx.nls.petsc
 
+from dolfinx_ntf import validation
+from dolfinx_ntf.logs import log_progress, newton_logger, quiet_dolfinx
 from dolfinx_ntf.problem import ContactProblem
 
 __all__ = [
@@ -52,9 +54,12 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
     Args:
         comm: MPI communicator.
         problem: The contact problem.
-        petsc_options: PETSc options of the linear solver, set under ``options_prefix``
-            (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`).
-        options_prefix: Prefix of the Krylov solver's options.
+        petsc_options: PETSc options of the linear solver (default: MUMPS LU, see
+            :data:`DEFAULT_PETSC_OPTIONS`). They are set under ``options_prefix``, read once, and
+            removed from PETSc's global options database again; unknown solver names are a
+            ``ValueError`` naming the option.
+        options_prefix: Prefix of the Krylov solver's options (command-line options such as
+            ``-ntf_ksp_view`` still apply).
         relative_tolerance: Converged when the residual norm falls below this fraction of the first
             residual norm of the increment (or below ``atol``).
         atol: Absolute residual tolerance.
@@ -73,6 +78,18 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         max_it: int = 30,
         min_iterations: int = 2,
     ) -> None:
+        options = validation.check_solver(
+            comm,
+            problem,
+            ContactProblem,
+            DEFAULT_PETSC_OPTIONS if petsc_options is None else petsc_options,
+            options_prefix,
+            relative_tolerance=relative_tolerance,
+            atol=atol,
+            max_it=max_it,
+            min_iterations=min_iterations,
+        )
+        validation.check_linear_solver(comm, options, "ContactNewtonSolver")
         super().__init__(comm, problem)
         self.problem = problem
         self._A.destroy()
@@ -93,11 +110,26 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         ksp = self.krylov_solver
         ksp.setOptionsPrefix(options_prefix)
         opts = PETSc.Options()
-        for key, value in (
-            DEFAULT_PETSC_OPTIONS if petsc_options is None else petsc_options
-        ).items():
+        for key, value in options.items():
             opts[f"{options_prefix}{key}"] = value
-        ksp.setFromOptions()
+        try:
+            ksp.setFromOptions()
+        finally:
+            for key in options:
+                opts.delValue(f"{options_prefix}{key}")
+
+    def destroy(self) -> None:
+        """Destroy the PETSc vector the solver owns (the residual). Collective.
+
+        The Jacobian belongs to the problem (:meth:`ContactProblem.destroy`).
+        """
+        self._b.destroy()
+
+    def __enter__(self) -> ContactNewtonSolver:
+        return self
+
+    def __exit__(self, *args: object) -> None:
+        self.destroy()
 
     def _jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """The problem's Jacobian; a factorization is started afresh when the pattern grew.
@@ -140,6 +172,19 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             converged and self.updates >= self.min_iterations and not self.problem.count_changed
         )
         self.atol = 2.0 * norm + 1e-300 if converged else (1.0 - 1e-9) * norm
+        if newton_logger.isEnabledFor(logging.INFO):
+            self._log_iteration(norm, converged)
+
+    def _log_iteration(self, norm: float, converged: bool) -> None:
+        """One progress line: residual and correction norms, spring count."""
+        line = f" iteration {self.updates}: residual {norm:.3e}"
+        if self.updates:
+            first = self.residual_norms[0]
+            ratio = norm / first if first > 0 else 0.0
+            correction = self.relaxation_parameter * self.last_correction.norm()
+            line += f" ({ratio:.1e} of the first), correction {correction:.3e}"
+        line += f", {self.problem.num_springs} contact elements"
+        newton_logger.info(line + (", converged" if converged else ""))
 
     def _bind_matrix(self) -> None:
         A = self.problem.ensure_matrix()
@@ -154,12 +199,21 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             The number of Newton iterations and True; a failure raises
             :class:`ContactConvergenceError`.
         """
+        if u is not self.problem.u:
+            raise ValueError(
+                "ContactNewtonSolver.solve: u must be the Function the ContactProblem was built on"
+            )
         self.residual_norms = []
         self.updates = 0
         self._bind_matrix()
         try:
-            iterations, converged = super().solve(u)
-        except (RuntimeError, ValueError) as error:  # PETSc failures, degenerate iterates
+            with quiet_dolfinx():  # non-convergence is reported below, with the residuals
+                iterations, converged = super().solve(u)
+        except PETSc.Error as error:
+            raise ContactConvergenceError(
+                f"Newton iteration failed: {validation.describe_petsc_error(error)}"
+            ) from error
+        except (RuntimeError, ValueError) as error:  # degenerate iterates
             raise ContactConvergenceError(f"Newton iteration failed: {error}") from error
         if not converged:
             hint = ""
@@ -196,6 +250,9 @@ class IncrementResult:
 class StaticStep:
     """A static step of ``period`` with automatic incrementation (CalculiX ``*STATIC``).
 
+    The step holds configuration only: :meth:`run` returns the results of that run, and the same
+    step can run again (e.g. another load case on a fresh problem).
+
     Args:
         set_load: Called with the step time at the end of each increment (before the pairing);
             scales loads and prescribed displacements, e.g. ``lambda t: traction.value = t * p``.
@@ -221,22 +278,34 @@ class StaticStep:
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
-    results: list[IncrementResult] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        """Check the configuration (``TypeError``/``ValueError`` naming the field)."""
+        validation.check_step(self)
 
     def run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
-        """Run the step; raises :class:`ContactConvergenceError` when cutbacks are exhausted."""
+        """Run the step from the current ``u``.
+
+        Args:
+            solver: The solver of the problem.
+            u: The problem's displacement (the Function the problem was built on).
+
+        Returns:
+            The result of every converged increment of this run.
+
+        Raises:
+            ContactConvergenceError: When an increment fails and cutbacks are exhausted.
+        """
+        validation.check_step(self)
+        validation.check_type(solver, ContactNewtonSolver, "StaticStep.run: solver")
+        if u is not solver.problem.u:
+            raise ValueError(
+                "StaticStep.run: u must be the Function the ContactProblem was built on "
+                f"(got {validation.describe(u)})"
+            )
         problem = solver.problem
         max_inc = self.period if self.max_increment is None else self.max_increment
-        if not (0 < self.min_increment <= self.initial_increment <= max_inc):
-            raise ValueError(
-                f"StaticStep: need 0 < min_increment ({self.min_increment}) <= initial_increment "
-                f"({self.initial_increment}) <= max_increment ({max_inc})"
-            )
-        if not (0 < self.cutback_factor < 1 and self.growth_factor >= 1):
-            raise ValueError(
-                f"StaticStep: need 0 < cutback_factor ({self.cutback_factor}) < 1 <= growth_factor "
-                f"({self.growth_factor})"
-            )
+        results: list[IncrementResult] = []
         t, dt = 0.0, self.initial_increment
         increment = 0
         fast_in_a_row = 0
@@ -289,7 +358,7 @@ class StaticStep:
                 problem.num_springs,
                 solver.residual_norms[-1],
             )
-            self.results.append(result)
+            results.append(result)
             logger.info(
                 " increment %d converged: time %.6g, %d iterations, %d contact elements, "
                 "residual %.3e (%.2f s)",
@@ -305,17 +374,4 @@ class StaticStep:
             fast_in_a_row = fast_in_a_row + 1 if iterations <= self.growth_iterations else 0
             if not self.fixed and fast_in_a_row >= 2:
                 dt = min(self.growth_factor * dt, max_inc)
-        return self.results
-
-
-def log_progress(level: int = logging.INFO) -> None:
-    """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings) on rank 0."""
-    from mpi4py import MPI
-
-    if getattr(log_progress, "_handler", None) is None and MPI.COMM_WORLD.rank == 0:
-        handler = logging.StreamHandler()
-        handler.setFormatter(logging.Formatter("%(message)s"))
-        logger.addHandler(handler)
-        log_progress._handler = handler
-    logger.setLevel(level)
-    logger.propagate = False
+        return results

@@ -79,8 +79,8 @@ def _solve(problem, pressure, load=10.0, increments=2):
         initial_increment=1.0 / increments,
         fixed=True,
     )
-    step.run(solver, problem.u)
-    return solver, step
+    results = step.run(solver, problem.u)
+    return solver, results
 
 
 @pytest.mark.parametrize("cell", ["hexahedron", "tetrahedron"])
@@ -246,8 +246,8 @@ def test_walk_from_previous_face_stops_edge_ping_pong():
     iterations = {}
     for option in (False, True):
         problem, pressure, _ = _setup("tetrahedron", walk_from_previous_face=option)
-        _, step = _solve(problem, pressure)
-        iterations[option] = [r.iterations for r in step.results]
+        _, results = _solve(problem, pressure)
+        iterations[option] = [r.iterations for r in results]
         assert ntf.contact_results(problem)[0].force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)
     assert max(iterations[True]) <= 5
     assert max(iterations[False]) > max(iterations[True])
