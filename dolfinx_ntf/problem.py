@@ -2,8 +2,8 @@
 
 :class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides
 assembling the user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule
-(spec §3.1) and add the spring elements (spec §4, §5). The step driver in ``solver.py`` tells it
-when an increment starts.
+(docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The step driver in
+``solver.py`` tells it when an increment starts.
 """
 
 from __future__ import annotations
@@ -41,9 +41,9 @@ __all__ = ["ContactPair", "ContactProblem", "PairState"]
 logger = logging.getLogger("dolfinx_ntf")
 
 #: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION
-#: (spec §3.1, ccx: iit <= 8).
+#: (docs/method.md §3.1, ccx: iit <= 8).
 LAST_REPAIRING_ITERATION = 8
-#: Relative walk tolerance of the triangle search (spec §3.2).
+#: Relative walk tolerance of the triangle search (docs/method.md §3.2).
 SEARCH_TOLERANCE = 1e-3
 
 
@@ -102,7 +102,7 @@ class PairState:
     slave: SlaveSurface
     master_faces: SurfaceFaces
     master: MasterSurface
-    overlap: np.ndarray  # (S,) initial overlap g0 per slave node (spec §3.6)
+    overlap: np.ndarray  # (S,) initial overlap g0 per slave node (docs/method.md §3.5)
     spring_slave: np.ndarray = field(
         default_factory=lambda: np.empty(0, dtype=np.int64)
     )  # index into slave.nodes
@@ -253,7 +253,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     # -- pairing -----------------------------------------------------------------------------------
 
     def begin_increment(self, time_fraction: float, *, static: bool = True) -> None:
-        """Increment-start pairing at the last converged displacement (spec §3.1, §3.6).
+        """Increment-start pairing at the last converged displacement (docs/method.md §3.1, §3.5).
 
         Args:
             time_fraction: Relative step time at the end of the increment (tau of the overlap ramp).
@@ -347,7 +347,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return xi0
 
     def _gap_shift(self, state: PairState, slave_index: np.ndarray) -> np.ndarray | float:
-        """g0 (1 - tau) in static steps, 0 otherwise (spec §3.6)."""
+        """g0 (1 - tau) in static steps, 0 otherwise (docs/method.md §3.5)."""
         if not self.static:
             return 0.0
         return state.overlap[slave_index] * (1.0 - self.time_fraction)
@@ -427,9 +427,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     # -- dolfinx callbacks -------------------------------------------------------------------------
     #
-    # CalculiX's order (spec §3.1, §6): Newton iteration k >= 2 starts with a re-pairing (k <= 8),
-    # assembles and solves with it, and the convergence check after the update uses that same
-    # pairing. dolfinx calls form -> F -> (convergence check) -> J -> solve, so the re-pairing
+    # CalculiX's order (docs/method.md §3.1, §7.1): Newton iteration k >= 2 starts with a re-pairing
+    # (k <= 8), assembles and solves with it, and the convergence check after the update uses that
+    # same pairing. dolfinx calls form -> F -> (convergence check) -> J -> solve, so the re-pairing
     # happens in J, which then re-assembles the residual vector last given to F (the right-hand side
     # of the coming solve).
 

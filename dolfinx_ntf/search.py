@@ -1,4 +1,6 @@
-"""Master triangulation, nodal normals, bounding planes and the triangle walk (spec §2.3, §3.2).
+"""Master triangulation, nodal normals, bounding planes and the triangle walk.
+
+The method is described in docs/method.md §2.3 and §3.2.
 
 Each master face is split into the sub-triangles of its `FaceType`. At every pairing the surface is
 updated in the current configuration: averaged nodal normals, one bounding plane per triangle edge
@@ -19,11 +21,11 @@ from dolfinx_ntf.faces import FaceType
 __all__ = ["MAX_WALK_STEPS", "MasterSurface"]
 
 MAX_WALK_STEPS = 100
-"""A walk taking more steps than this finds no face (spec §3.2)."""
+"""A walk taking more steps than this finds no face (docs/method.md §3.2)."""
 
 
 class MasterSurface:
-    """Triangulated master surface with the search prisms of spec §2.3.
+    """Triangulated master surface with the search prisms of docs/method.md §2.3.
 
     Args:
         face_type: Type of all faces of the surface.
@@ -259,7 +261,7 @@ class MasterSurface:
         max_steps: int = MAX_WALK_STEPS,
         start_faces: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Master face holding each point, by the triangle walk of spec §3.2.
+        """Master face holding each point, by the triangle walk of docs/method.md §3.2.
 
         Args:
             points: (N, 3) current slave positions.
@@ -310,7 +312,7 @@ class MasterSurface:
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
-            (spec §1).
+            (ccx's ADJUST, not supported yet).
         """
         self._require_update()
         points, tol = self._check_points(points, tolerances, max_depth)
@@ -455,7 +457,7 @@ def _group_edges(
         raise ValueError(
             f"Master surface '{name}': edge {_describe(edges[members[0]], coords)} is shared by "
             f"{counts[g]} {items} ({items} {sorted((members // per_item).tolist())}); a master "
-            "edge may border at most two faces (spec §2.3)"
+            "edge may border at most two faces (docs/method.md §2.3)"
         )
     group = np.cumsum(new) - 1
     edge_id = np.empty(edges.shape[0], dtype=np.int64)

@@ -129,7 +129,7 @@ class SurfaceFaces:
 
 @dataclass(frozen=True)
 class SlaveSurface:
-    """Slave nodes and the faces that give them spring area (spec §2.1)."""
+    """Slave nodes and the faces that give them spring area (docs/method.md §2.1)."""
 
     nodes: np.ndarray  # (S,) sorted local block dofs
     faces: SurfaceFaces
@@ -278,7 +278,7 @@ def resolve_master(
 def resolve_slave(
     V: dolfinx.fem.FunctionSpace, surface: FacetSurface | NodeSurface, what: str = "slave"
 ) -> SlaveSurface:
-    """Slave nodes and area faces (spec §2.1).
+    """Slave nodes and area faces (docs/method.md §2.1).
 
     Face-based: the listed faces; slave nodes are all their nodes. Node-based: the slave faces are
     all exterior faces of the mesh with at least one corner among the slave nodes.

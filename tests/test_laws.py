@@ -233,7 +233,7 @@ def test_tabular_nudge_and_errors():
         TabularLaw(pressures=[0.0, 1.0], overclosures=[0.0, np.inf])
     with pytest.raises(ValueError, match="1-D"):
         TabularLaw(pressures=[[0.0, 1.0]], overclosures=[[0.0, 1.0]])
-    # negative pressures are accepted (spec is silent)
+    # negative pressures are accepted (CalculiX says nothing about them)
     assert TabularLaw(pressures=[-1.0, 1.0], overclosures=[0.0, 1.0]).pressure(0.5) == 0.0
     with pytest.raises(ValueError):
         law.overclosures[0] = 5.0  # read-only

@@ -318,8 +318,9 @@ def test_body_without_springs_fails_with_a_hint():
 
 
 def test_initial_overlap_is_ramped_in_the_first_increment_only():
-    """Spec §3.6: in increment 1 of step 1 only the fraction tau of an initial overlap is active; g0
-    is reset at every later increment start, so from increment 2 on the whole overlap acts."""
+    """docs/method.md §3.5: in increment 1 of step 1 only the fraction tau of an initial overlap is
+    active; g0 is reset at every later increment start, so from increment 2 on the whole overlap
+    acts."""
     overlap = 0.01
     mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=-overlap)
     V = compat.vector_space(mesh, "Lagrange", 1)

@@ -1,4 +1,4 @@
-"""Tests of the master triangulation, bounding planes and triangle walk (spec §2.3, §3.2)."""
+"""Master triangulation, bounding planes and triangle walk (docs/method.md §2.3, §3.2)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The CONTACT ELEMENTS file ``jobname.cel`` of CalculiX 2.20 (spec §8.4).
+"""The CONTACT ELEMENTS file ``jobname.cel`` of CalculiX 2.20 (docs/method.md §8.5).
 
 With ``CONTACT ELEMENTS`` on a ``*NODE FILE``/``*EL FILE``/``*CONTACT FILE``/... card, ccx writes
 every contact element of every pairing (every Newton iteration that re-pairs) as a cgx-readable
