@@ -189,7 +189,7 @@ def build_problem(
     Args:
         plates: Mesh and tags from :func:`build_plates`.
         solver: Key of :data:`SOLVERS`.
-        options_prefix: PETSc prefix of the Krylov solver (one per problem: options are global).
+        options_prefix: PETSc prefix of the Krylov solver.
         penetration: Downward displacement of the upper plate, relative to the slave cell size.
     """
     if solver not in SOLVERS:
