@@ -206,7 +206,7 @@ def check_positive(value: object, what: str, *, allow_none: bool = False) -> Non
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{what} must be a positive number, got {describe(value)}")
     if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"{what} must be a finite number > 0, got {value!r}")
+        raise ValueError(f"{what} must be a finite number > 0, got {float(value):g}")
 
 
 def check_problem(
@@ -312,7 +312,7 @@ def vertex_indices(vertices: object, owner: str) -> np.ndarray:
         if fractional.size:
             i = int(fractional[0])
             raise ValueError(
-                f"{owner}: vertices must be integer vertex indices, but entry {i} is {values[i]!r} "
+                f"{owner}: vertices must be integer vertex indices, but entry {i} is {values[i]:g} "
                 f"({fractional.size} non-integer entries)"
             )
         array = values.astype(np.int64)
@@ -387,10 +387,10 @@ def check_solver(
         )
     for name, value in (("relative_tolerance", relative_tolerance), ("atol", atol)):
         if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value >= 0:
-            raise ValueError(f"{owner}: {name} must be a number >= 0, got {value!r}")
+            raise ValueError(f"{owner}: {name} must be a number >= 0, got {value}")
     for name, value, least in (("max_it", max_it, 1), ("min_iterations", min_iterations, 0)):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
-            raise ValueError(f"{owner}: {name} must be an integer >= {least}, got {value!r}")
+            raise ValueError(f"{owner}: {name} must be an integer >= {least}, got {value}")
     return check_petsc_options(petsc_options, owner)
 
 

@@ -195,7 +195,4 @@ def test_jit_compiler_lines_go_to_the_library_logger(tmp_path, capfd):
         logs.jit_logger.removeHandler(handler)
         logs.jit_logger.setLevel(saved)
     assert "INFO:root" not in capfd.readouterr().err
-    # Debian 12's setuptools logs the compiler command lines (Debian 13's prints none).
-    assert all("root" not in r for r in records)
-    if records:
-        assert any("gcc" in r or "build_ext" in r for r in records)
+    assert any("gcc" in r or "build_ext" in r for r in records)
