@@ -125,6 +125,12 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         """
         self._b.destroy()
 
+    def __del__(self) -> None:
+        # dolfinx 0.9's NewtonSolver.__del__ destroys its matrix, which here is the problem's.
+        b = getattr(self, "_b", None)
+        if b is not None:
+            b.destroy()
+
     def __enter__(self) -> ContactNewtonSolver:
         return self
 

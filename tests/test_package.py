@@ -1,6 +1,7 @@
 """The package as a FEniCSx user meets it: version, exports, user-defined laws, a step that holds
 configuration only, PETSc options and objects cleaned up, progress lines and quiet libraries."""
 
+import gc
 import importlib.metadata
 import logging
 
@@ -124,6 +125,19 @@ def test_owned_petsc_objects_are_destroyed():
         matrix, vector = problem.matrix, solver.b
     assert problem.matrix is None
     assert matrix.handle == 0 and vector.handle == 0  # PETSc objects freed
+
+
+def test_the_jacobian_belongs_to_the_problem():
+    """A solver that goes away frees its residual vector, not the problem's Jacobian."""
+    problem, pressure = _problem()
+    comm = problem.u.function_space.mesh.comm
+    solver = ntf.ContactNewtonSolver(comm, problem)
+    del solver
+    gc.collect()
+    assert problem.matrix is not None and problem.matrix.handle != 0
+    solver = ntf.ContactNewtonSolver(comm, problem)
+    ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t)).run(solver, problem.u)
+    assert ntf.contact_force(problem)[2] == pytest.approx(LOAD * 0.36, rel=1e-10)
 
 
 @pytest.fixture
