@@ -25,7 +25,14 @@ from mpi4py import MPI
 
 import dolfinx.log
 
-__all__ = ["jit_logger", "log_progress", "logger", "newton_logger", "quiet_dolfinx"]
+__all__ = [
+    "jit_logger",
+    "log_progress",
+    "logger",
+    "newton_logger",
+    "quiet_dolfinx",
+    "route_compiler_lines",
+]
 
 #: Increments, attempts, pairings and convergence (``INFO``).
 logger = logging.getLogger("dolfinx_ntf")

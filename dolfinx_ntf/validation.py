@@ -39,17 +39,23 @@ from dolfinx_ntf import compat
 __all__ = [
     "check_bcs",
     "check_displacement",
+    "check_distinct_pairs",
     "check_finite_contact_nodes",
     "check_linear_solver",
     "check_petsc_options",
+    "check_positive",
+    "check_problem",
     "check_residual",
     "check_sequence",
+    "check_solver",
+    "check_step",
     "check_type",
     "check_writable",
     "describe",
     "describe_petsc_error",
     "raise_collectively",
     "vertex_indices",
+    "warn",
 ]
 
 #: Continuous Lagrange family names as dolfinx 0.5.2 (tetrahedra: Lagrange, hexahedra: Q) and 0.9
