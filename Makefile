@@ -1,17 +1,25 @@
 # The two commands of the README: `make demo` and `make test`.
-# `make test` runs the suite on this machine's Debian, then (as root) on the other supported Debian release in a
-# chroot made and cached by scripts/other_release.sh; `make test-here` runs this machine's half only.
+# `make test` checks formatting and lint (ruff), runs the suite on this machine's Debian, then (as root)
+# on the other supported Debian release in a chroot made and cached by scripts/other_release.sh;
+# `make test-here` runs this machine's suite only.
 PY := .venv/bin/python
 MPIRUN := mpirun --allow-run-as-root --oversubscribe -n 2
+RUFF_VERSION := 0.17.6
 
-.PHONY: setup demo test test-here test-other benchmark
+.PHONY: setup demo lint test test-here test-other benchmark benchmark-ccx
 setup:
 	bash scripts/setup.sh
 
 demo: setup
 	$(PY) demos/punch.py
 
-test: test-here test-other
+lint: setup
+	@[ "$$(.venv/bin/ruff --version 2>/dev/null)" = "ruff $(RUFF_VERSION)" ] || \
+		$(PY) -m pip install -q "ruff==$(RUFF_VERSION)"
+	.venv/bin/ruff format --check .
+	.venv/bin/ruff check .
+
+test: lint test-here test-other
 
 test-here: setup
 	@echo "== dolfinx_ntf tests on $$(. /etc/os-release && echo "$$PRETTY_NAME"), dolfinx $$($(PY) -c 'import dolfinx; print(dolfinx.__version__)')"

@@ -35,6 +35,7 @@ Serial only. Run::
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import os
 import statistics
@@ -188,7 +189,7 @@ def build_problem(
     Args:
         plates: Mesh and tags from :func:`build_plates`.
         solver: Key of :data:`SOLVERS`.
-        options_prefix: PETSc prefix of the Krylov solver (one per problem: options are global).
+        options_prefix: PETSc prefix of the Krylov solver.
         penetration: Downward displacement of the upper plate, relative to the slave cell size.
     """
     if solver not in SOLVERS:
@@ -371,7 +372,7 @@ def _s(t: float) -> str:
 def _exponents(results: typing.Sequence[dict], keys: typing.Sequence[str]) -> list[list[str]]:
     """Local scaling exponents log(t2/t1)/log(n2/n1) between successive sizes (1 = linear)."""
     rows = []
-    for r1, r2 in zip(results, results[1:]):
+    for r1, r2 in itertools.pairwise(results):
         ratio = math.log(r2["slave_nodes"] / r1["slave_nodes"])
         same_solver = r1["solver"] == r2["solver"]
         row = [f"{r1['slave_nodes']} -> {r2['slave_nodes']}"]
@@ -447,7 +448,8 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         "",
     ]
     if len(results) > 1:
-        keys = main_keys + [
+        keys = [
+            *main_keys,
             "locate",
             "insert_mat",
             "has_pattern",
@@ -458,7 +460,7 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         text += [
             "Scaling exponents between sizes (time ~ slave_nodes^k; 1 = linear; '-' where "
             "the solver differs):",
-            _format_table(["sizes"] + keys, _exponents(results, keys)),
+            _format_table(["sizes", *keys], _exponents(results, keys)),
         ]
     return "\n".join(text)
 
@@ -513,7 +515,7 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
     start = time.perf_counter()
     load = os.getloadavg()[0]
     for size in args.sizes:
-        target = int(round(size))
+        target = round(size)
         dofs = int(3 * (args.layers + 1) * target * (1 + args.master_ratio**2))  # both plates
         solver = args.solver
         if solver == "mumps" and args.direct_max_dofs and dofs > args.direct_max_dofs:

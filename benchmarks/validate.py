@@ -6,7 +6,7 @@ with dolfinx, solved by ``ccx`` and by ``run_job(..., tight=True)``:
 - the cross-validation decks of ``tests/data/calculix/crossval/cases.py`` (the ones the test suite
   runs), compared increment by increment with ``dolfinx_ntf.calculix.compare``;
 - Hertz: a quarter hemisphere (R = 25 mm, steel) pressed 0.6 mm into a steel block
-  (``meshes/hertz.py``, coarse mesh); both codes' contact radius and peak pressure against
+  (``dolfinx_ntf.meshes.hertz``, coarse mesh); both codes' contact radius and peak pressure against
   ``a = (3FR/4E*)^(1/3)`` and ``p0 = 3F/(2 pi a^2)`` with F from the reactions;
 - the contact patch test: a block pressed onto a larger block through non-matching flat faces by a
   uniform pressure, on rollers; the contact pressure must be uniform and equal to the load over the
@@ -25,8 +25,7 @@ Serial. Needs ``ccx`` on the PATH. Run from the repository root (about 2 minutes
 from __future__ import annotations
 
 import argparse
-import datetime
-import importlib.util
+import datetime as dt
 import logging
 import math
 import shutil
@@ -66,6 +65,7 @@ from dolfinx_ntf.calculix.writer import (
 from dolfinx_ntf.faces import face_type_from_num_nodes
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 from dolfinx_ntf.laws import PressureOverclosureLaw
+from dolfinx_ntf.meshes import hertz as hz
 from dolfinx_ntf.solver import ContactConvergenceError
 from dolfinx_ntf.spring_areas import spring_areas
 
@@ -140,17 +140,8 @@ def run_case(
 # ----------------------------------------------------------------------------- analytical decks
 
 
-def _load_meshes(name: str) -> typing.Any:
-    path = ROOT / "meshes" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"_validate_meshes_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def hertz_deck(directory: Path) -> None:
     """Quarter hemisphere on a block (coarse mesh), sphere top pushed down, automatic increments."""
-    hz = _load_meshes("hertz")
     sizes = {key: value * RADIUS for key, value in hz.COARSE.items()}
     mesh, _, ft = mesh_from_gmsh(hz.build_hertz, MPI.COMM_SELF, radius=RADIUS, **sizes)
     V = compat.vector_space(mesh, "Lagrange", 1)
@@ -194,11 +185,11 @@ def patch_deck(directory: Path, cell: str, matching: bool = True) -> None:
     over the current contact area, and matching interface nodes stay matched. ``matching``: the
     slave face's grid is the master's (4 x 4 cells); otherwise 3 x 5 cells (no slave node on a
     master edge or triangle diagonal except at the corners: nodes there flip faces at every ccx
-    re-pairing, spec §3.2).
+    re-pairing, docs/method.md §3.2).
     """
     lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (4, 4, 2))
     upper = ((0.0, 0.0, 0.0), (1.0, 1.0, 0.4), (4, 4, 2) if matching else (3, 5, 2))
-    V, ct, ft = cases.blocks([lower, upper], cell=cell)
+    V, _ct, ft = cases.blocks([lower, upper], cell=cell)
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, cases.facet_tag(1, cases.BOTTOM)),
         ntf.FacetSurface(ft, cases.facet_tag(0, cases.TOP)),
@@ -280,9 +271,9 @@ def hertz_results(deck: Deck, dat: Path) -> dict[str, float]:
 def patch_results(deck: Deck, dat: Path) -> dict[str, float]:
     """Uniformity of the contact pressure, its value and the resultant of a patch-test run.
 
-    The spring areas ``A_i`` are recomputed from the printed final configuration (spec §2.2); their
-    sum is the current area of the slave face, so the exact pressure is the load (``p`` times the
-    reference area 1, small strain) over that sum.
+    The spring areas ``A_i`` are recomputed from the printed final configuration (docs/method.md
+    §2.2); their sum is the current area of the slave face, so the exact pressure is the load (``p``
+    times the reference area 1, small strain) over that sum.
     """
     blocks = read_dat(dat)
     end = max(b.time for b in blocks)
@@ -322,8 +313,8 @@ def spring_area_lag(deck: Deck, dat: Path) -> float:
 
     ``A_used`` is the spring area behind the printed energy, ``CELS / e(d)`` with ``e`` the law's
     energy per unit area at the printed overclosure ``d = -CDIS``; ``A(final)`` is the spring area
-    (spec §2.2) of the printed final configuration of the increment. Springs with less than 1e-3 of
-    the largest energy are skipped (their energy has few printed digits).
+    (docs/method.md §2.2) of the printed final configuration of the increment. Springs with less
+    than 1e-3 of the largest energy are skipped (their energy has few printed digits).
     """
     blocks = read_dat(dat)
     pair_of = {}
@@ -427,7 +418,7 @@ def _environment() -> str:
         )
     return (
         f"{ccx}, dolfinx {dolfinx.__version__}, PETSc {PETSc.Sys.getVersion()}, "
-        f"gmsh {gmsh.__version__}, {os_name}, {datetime.date.today().isoformat()}"
+        f"gmsh {gmsh.__version__}, {os_name}, {dt.date.today().isoformat()}"
     )
 
 
@@ -543,21 +534,21 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
         "1. **Printed digits.** ccx writes 7 significant digits: displacements cannot agree better "
         "than about 5e-7 of the largest one.",
         "2. **Spring areas of an earlier iterate (ccx).** Both codes re-pair (and recompute the "
-        "spring areas, spec §2.2, §3.1) at the start of Newton iterations 2-8 and check "
+        "spring areas, docs/method.md §2.2, §3.1) at the start of Newton iterations 2-8 and check "
         "convergence after the solve, so an increment ends with the areas of the iterate before "
-        "its last correction. ccx accepts that last correction even when it is large (up to "
-        "0.3 % of the increment's displacement in these decks, the CORR. column of its `.cvg` "
-        "file, tightened controls notwithstanding); `run_job(tight=True)` goes on until it is "
-        "negligible. The areas each code used can be read back from its output (CELS / e(d) with "
-        "d = -CDIS); below, their largest relative difference from the spring areas of the "
-        "printed final configuration of each increment (about 1e-6 is the printing noise of this "
-        "estimate). A node-based slave (`hex_tabular_nodal`) collects area from the lateral "
-        "faces of the rim (spec §2.1), whose areas change with the vertical strain, so the lag "
+        "its last correction. ccx accepts that last correction even when it is large (up to 0.3 % "
+        "of the increment's displacement in these decks, the CORR. column of its `.cvg` file, "
+        "tightened controls notwithstanding); `run_job(tight=True)` goes on until it is "
+        "negligible. The areas each code used can be read back from its output (CELS / e(d) with d "
+        "= -CDIS); below, their largest relative difference from the spring areas of the printed "
+        "final configuration of each increment (about 1e-6 is the printing noise of this "
+        "estimate). A node-based slave (`hex_tabular_nodal`) collects area from the lateral faces "
+        "of the rim (docs/method.md §2.1), whose areas change with the vertical strain, so the lag "
         "shows most there; it is largest in first increments, where the last correction is "
         "largest, and it shrinks with smaller increments (the deck uses 4; with 2 the pressure "
         "differs by 1.0e-5). Increments that need more than 8 iterations keep the areas of "
-        "iteration 8 in both codes, by design (Hertz: 5e-2), so there the two codes agree only "
-        "if their iterates 8 do.",
+        "iteration 8 in both codes, by design (Hertz: 5e-2), so there the two codes agree only if "
+        "their iterates 8 do.",
         "",
         "| deck | ccx: max abs(A_used/A_final - 1) | dolfinx_ntf |",
         "|---|---|---|",
@@ -587,13 +578,13 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
         ]
     out += [
         "4. **Frozen contact sets.** Both codes pair at iterations 2-8 only and then keep the "
-        "contact elements (spec §3.1, §D), so an increment can converge with different contact "
-        "elements depending on the Newton path: the Hertz run at t = 0.4 above. Decks with fixed "
-        "increments give both codes the same path in practice; all cross-validation decks have "
-        "the same contact elements in every increment.",
-        "5. **Slave nodes on master edges** flip faces at every re-pairing in ccx (spec §3.2) and "
-        "can stall its Newton iterations; the cross-validation decks place slave nodes at least "
-        "0.009 away from master edges.",
+        "contact elements (docs/method.md §3.1, §9), so an increment can converge with different "
+        "contact elements depending on the Newton path: the Hertz run at t = 0.4 above. Decks with "
+        "fixed increments give both codes the same path in practice; all cross-validation decks "
+        "have the same contact elements in every increment.",
+        "5. **Slave nodes on master edges** flip faces at every re-pairing in ccx (docs/method.md "
+        "§3.2) and can stall its Newton iterations; the cross-validation decks place slave nodes "
+        "at least 0.009 away from master edges.",
         "",
     ]
     if "hertz_values" in extra:
@@ -603,7 +594,8 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
             "",
             f"Quarter hemisphere, R = {RADIUS:g} mm, E = {E_STEEL:g} MPa, nu = {NU_STEEL:g} for "
             f"both bodies (E* = E / (2 (1 - nu^2))), top pushed down {INDENTATION:g} mm, LINEAR "
-            "law with ccx's defaults (K = 50 E), coarse mesh of `meshes/hertz.py` (C3D4). F is "
+            "law with ccx's defaults (K = 50 E), coarse mesh of `dolfinx_ntf.meshes.hertz` (C3D4). "
+            "F is "
             "four times the base reaction; a = (3FR/4E*)^(1/3) and p0 = 3F/(2 pi a^2) are "
             "Hertz's values for that F; the computed radius and peak come from a least-squares "
             "fit of p0 sqrt(1 - r^2/a^2) to the nodal pressures (reference radii); p_max is the "

@@ -8,11 +8,11 @@ distribution::
     1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2,   a = (3 F R / (4 E*))^(1/3),
     p0 = 3 F / (2 pi a^2),                   p(r) = p0 sqrt(1 - r^2/a^2)  for r < a.
 
-Only a quarter of the model is meshed (``meshes/hertz.py``): the planes x = 0 and y = 0 are symmetry
-planes of both bodies, so the total force is 4 times the quarter's. The sphere's curved surface is
-the slave (its nodes get the springs), the block top the master. The displacement (0.55 mm) makes
-a/R = 0.155, so the contact radius spans about eleven elements of the default mesh (four of the
-coarse one), and the block (13a wide, 10a deep) stands in for a half-space.
+Only a quarter of the model is meshed (``dolfinx_ntf.meshes.hertz``): the planes x = 0 and y = 0 are
+symmetry planes of both bodies, so the total force is 4 times the quarter's. The sphere's curved
+surface is the slave (its nodes get the springs), the block top the master. The displacement (0.55
+mm) makes a/R = 0.155, so the contact radius spans about eleven elements of the default mesh (four
+of the coarse one), and the block (13a wide, 10a deep) stands in for a half-space.
 
 The demo takes the total force from the contact springs (checked against the reaction at the
 sphere's top), evaluates Hertz's a and p0 for it, and compares them with the computed contact radius
@@ -40,7 +40,6 @@ Run it with::
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import math
 import sys
 import time
@@ -61,12 +60,11 @@ import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.gmsh_io import mesh_from_gmsh
+from dolfinx_ntf.meshes import hertz as geometry
 from dolfinx_ntf.spring_areas import spring_areas
 from dolfinx_ntf.springs import evaluate_springs
 
 __all__ = ["hertz", "main"]
-
-ROOT = Path(__file__).resolve().parents[1]
 
 # Units: mm, N, MPa.
 RADIUS = 25.0
@@ -93,15 +91,6 @@ def hertz(force: float, radius: float = RADIUS) -> tuple[float, float, float]:
     e_star = 1.0 / ((1 - NU_SPHERE**2) / E_SPHERE + (1 - NU_BLOCK**2) / E_BLOCK)
     a = (3 * force * radius / (4 * e_star)) ** (1 / 3)
     return a, 3 * force / (2 * math.pi * a**2), e_star
-
-
-def _load_meshes(name: str) -> typing.Any:
-    """Import ``meshes/<name>.py`` by path (``meshes/`` is a folder of scripts, not a package)."""
-    path = ROOT / "meshes" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"_dolfinx_ntf_meshes_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
@@ -149,8 +138,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
 
     # --- Mesh ------------------------------------------------------------------------------------
     # Quarter hemisphere on a quarter block, refined around the contact point; sizes are multiples
-    # of R (meshes/hertz.py).
-    geometry = _load_meshes("hertz")
+    # of R (dolfinx_ntf.meshes.hertz).
     sizes = {key: value * RADIUS for key, value in geometry.COARSE.items()} if args.coarse else {}
     mesh, cell_tags, facet_tags = mesh_from_gmsh(
         geometry.build_hertz, comm, radius=RADIUS, cell_type=args.cell_type, **sizes
@@ -175,11 +163,12 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     top = dolfinx.fem.locate_dofs_topological(
         (V.sub(2), Vz), 2, facet_tags.find(geometry.SPHERE_TOP)
     )
+    top_bc = dolfinx.fem.dirichletbc(top_uz, top, V.sub(2))
     bcs = [
         dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), bottom, V),
         component_bc(V, 0, facet_tags.find(geometry.SYMMETRY_X)),
         component_bc(V, 1, facet_tags.find(geometry.SYMMETRY_Y)),
-        dolfinx.fem.dirichletbc(top_uz, top, V.sub(2)),
+        top_bc,
     ]
 
     # --- Contact ----------------------------------------------------------------------------------
@@ -207,7 +196,8 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     args.output.mkdir(parents=True, exist_ok=True)
     xdmf = args.output / "hertz_sphere.xdmf"
     iterations: list[int] = []
-    with ntf.ContactWriter(problem, str(xdmf)) as writer:
+    with ntf.ContactWriter(problem, xdmf) as writer:
+        writer.write(0.0)
 
         def record(result: ntf.IncrementResult) -> None:
             iterations.append(result.iterations)
@@ -230,19 +220,15 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # Every slave node takes part, with zero pressure where it has no spring; radii are measured in
     # the reference configuration, like Hertz's (linear) theory does.
     # The total force is the contact force of the quarter times 4; it must equal the reaction at
-    # the sphere's top (the internal forces of the bulk on the prescribed dofs) to the solver
+    # the sphere's top (the support pushes the sphere down: a negative z reaction) to the solver
     # tolerance. Hertz's radius and pressure follow from it.
-    res = ntf.contact_results(problem)[0]
-    force = 4 * comm.allreduce(float(res.force[:, 2].sum()), op=MPI.SUM)
-    reaction = 4 * _reaction(F, top[0])
+    force = 4 * float(ntf.contact_force(problem)[2])
+    reaction = -4 * float(ntf.reaction(problem, dofs=top_bc)[2])
     a_hertz, p0_hertz, _ = hertz(force)
     slave_nodes = problem.states[0].slave.nodes
     reference = V.tabulate_dof_coordinates()[slave_nodes]
-    pressure = np.zeros(slave_nodes.size)
-    closed = np.zeros(slave_nodes.size, dtype=bool)
-    spring = np.searchsorted(slave_nodes, res.node)
-    pressure[spring] = res.pressure
-    closed[spring] = res.clearance < 0
+    pressure, _, status = ntf.ContactFields(problem).at_nodes(slave_nodes)
+    closed = status > 0
     r_all = np.concatenate(comm.allgather(np.hypot(reference[:, 0], reference[:, 1])))
     p_all = np.concatenate(comm.allgather(pressure))
     closed = np.concatenate(comm.allgather(closed))
@@ -286,16 +272,6 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     if comm.rank == 0:
         _print_report(summary)
     return summary
-
-
-def _reaction(F: ufl.form.Form, dofs: np.ndarray) -> float:
-    """Sum of the bulk residual (internal forces) over ``dofs`` of this process's owned dofs."""
-    b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(F))
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    owned = dofs[dofs < b.getLocalSize()]
-    total = MPI.COMM_WORLD.allreduce(float(-b.array[owned].sum()), op=MPI.SUM)
-    b.destroy()
-    return total
 
 
 def _unpaired_penetrations(problem: ntf.ContactProblem) -> tuple[int, float]:
@@ -354,9 +330,9 @@ def _first_open_radius(r: np.ndarray, closed: np.ndarray) -> float:
 
 def _plot(path: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
     """Nodal contact pressure against radius beside Hertz's profile and the fitted one."""
-    import matplotlib
+    import matplotlib as mpl
 
-    matplotlib.use("Agg")
+    mpl.use("Agg")
     import matplotlib.pyplot as plt
 
     a, p0 = summary["a_hertz"], summary["p0_hertz"]

@@ -1,13 +1,26 @@
 """Node-to-face penalty contact for dolfinx, reproducing CalculiX 2.20 node-to-surface contact.
 
 Pure-numpy layers (laws, faces, projection, spring areas, search, springs) sit below the dolfinx
-glue (surfaces, assembly), the problem and solver, and the outside world (output, CalculiX interop).
-See ``docs/architecture.md``.
+glue (surfaces, assembly), the problem and solver, and the outside world (output, post-processing,
+CalculiX interop). The method is described in ``docs/method.md``, the code in
+``docs/architecture.md``.
 """
 
+__version__ = "0.1.0"
+
+from dolfinx_ntf import logs as _logs
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
-from dolfinx_ntf.laws import ExponentialLaw, Friction, LinearLaw, SurfaceInteraction, TabularLaw
-from dolfinx_ntf.output import ContactResults, ContactWriter, contact_results
+from dolfinx_ntf.laws import (
+    ExponentialLaw,
+    Friction,
+    LinearLaw,
+    PressureOverclosureLaw,
+    SurfaceInteraction,
+    TabularLaw,
+)
+from dolfinx_ntf.logs import log_progress
+from dolfinx_ntf.output import ContactFields, ContactResults, ContactWriter, contact_results
+from dolfinx_ntf.postprocess import contact_area, contact_force, reaction
 from dolfinx_ntf.problem import ContactPair, ContactProblem
 from dolfinx_ntf.solver import (
     ContactConvergenceError,
@@ -16,13 +29,15 @@ from dolfinx_ntf.solver import (
     ContactSolverError,
     IncrementResult,
     StaticStep,
-    log_progress,
 )
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
+
+_logs.route_compiler_lines()
 
 __all__ = [
     "ContactConvergenceError",
     "ContactDivergenceError",
+    "ContactFields",
     "ContactNewtonSolver",
     "ContactPair",
     "ContactProblem",
@@ -35,11 +50,16 @@ __all__ = [
     "IncrementResult",
     "LinearLaw",
     "NodeSurface",
+    "PressureOverclosureLaw",
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",
+    "__version__",
     "component_bc",
+    "contact_area",
+    "contact_force",
     "contact_results",
     "log_progress",
+    "reaction",
     "small_strain_stress",
 ]

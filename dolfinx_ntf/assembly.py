@@ -51,9 +51,7 @@ def _unblocked(nodes: np.ndarray, bs: int = 3) -> np.ndarray:
 
 
 class ContactAssembler:
-    """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one displacement
-    space.
-    """
+    """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one space."""
 
     def __init__(
         self,
@@ -117,9 +115,7 @@ class ContactAssembler:
         return bool(np.all(np.isin(keys, self._pattern_keys, assume_unique=True)))
 
     def create_matrix(self, blocks: typing.Sequence[SpringBlocks] = ()) -> PETSc.Mat:
-        """A new matrix with the bulk pattern plus the couplings of ``blocks`` (and of earlier
-        matrices).
-        """
+        """A new matrix with the bulk pattern plus the couplings of ``blocks`` and earlier ones."""
         A = dolfinx.fem.petsc.create_matrix(self._form)
         # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
         # preallocation.
@@ -139,9 +135,10 @@ class ContactAssembler:
     def _merge(
         self, A: PETSc.Mat, keys: np.ndarray, blocks: typing.Sequence[SpringBlocks] = ()
     ) -> None:
-        """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values, through a
-        separate matrix merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a solver bound to
-        it keeps working).
+        """Grow ``A``'s pattern by node couplings ``keys`` and add the blocks' values.
+
+        Through a separate matrix merged with DIFFERENT_NONZERO_PATTERN (same Mat object, so a
+        solver bound to it keeps working).
         """
         bs = self._bs
         first = self._global_node[0] if self._num_owned else 0
@@ -190,8 +187,7 @@ class ContactAssembler:
     def add_to_matrix(
         self, A: PETSc.Mat, blocks: typing.Sequence[SpringBlocks], *, check_pattern: bool = True
     ) -> None:
-        """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings are
-        missing.
+        """Add the blocks to an assembled-or-flushed ``A``; grows its pattern if couplings miss.
 
         Args:
             A: The matrix; call ``A.assemble()`` afterwards.
@@ -208,16 +204,29 @@ class ContactAssembler:
                 return
         self._set_values(A, blocks)
 
-    def add_to_vector(self, b: PETSc.Vec, blocks: typing.Sequence[SpringBlocks]) -> None:
-        """Add the blocks' residual contributions to ``b`` (global indices; Dirichlet rows skipped).
+    def add_to_vector(
+        self,
+        b: PETSc.Vec,
+        blocks: typing.Sequence[SpringBlocks],
+        *,
+        dirichlet_rows: bool = False,
+    ) -> None:
+        """Add the blocks' residual contributions to ``b`` (global indices).
 
         Call before dolfinx's ``set_bc``; ends with a vector assembly so off-process rows reach
         their owners.
+
+        Args:
+            b: The vector.
+            blocks: Element blocks.
+            dirichlet_rows: Add to the rows of Dirichlet dofs too (reaction forces); by default
+                they are skipped.
         """
+        numbering = self._global_dof if dirichlet_rows else self._global_dof_masked
         for blk in blocks:
             if blk.vector is None or blk.row_nodes.shape[0] == 0:
                 continue
-            rows = self._global_dof_masked[_unblocked(blk.row_nodes, self._bs)].ravel()
+            rows = numbering[_unblocked(blk.row_nodes, self._bs)].ravel()
             keep = rows >= 0
             b.setValues(
                 rows[keep].astype(PETSc.IntType),

@@ -1,5 +1,6 @@
-"""Small UFL and boundary-condition helpers for the bulk elasticity around contact (demos, tests,
-scripts).
+"""Small UFL and boundary-condition helpers for the bulk elasticity around contact.
+
+Used by the demos, tests and scripts.
 """
 
 from __future__ import annotations

@@ -108,9 +108,9 @@ class FaceType:
         num_corners: Number of corner nodes (3 or 4); corners come first.
         is_triangle: Whether the parametric domain is the unit triangle (else ``[-1, 1]^2``).
         node_parameters: (n, 2) parametric coordinates of the nodes.
-        area_weights: (n,) ccx spring-area weights w (spec §2.2), summing to 1.
-        triangles: (t, 3) face-local node triples of the master triangulation (spec §2.3), each
-            oriented like the face.
+        area_weights: (n,) ccx spring-area weights w (docs/method.md §2.2), summing to 1.
+        triangles: (t, 3) face-local node triples of the master triangulation (docs/method.md
+            §2.3), each oriented like the face.
         quadrature_points: (q, 2) points of the face-area rule.
         quadrature_weights: (q,) weights of the face-area rule; they sum to the area of the
             parametric domain (1/2 or 4), so ``|f| = Σ_q w_q |q_ξ × q_η|(ξ_q)``.

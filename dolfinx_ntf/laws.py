@@ -1,16 +1,17 @@
 """Pressure-overclosure laws and surface interactions of CalculiX node-to-surface contact.
 
-The laws map the overclosure ``d`` (``d > 0`` is penetration, spec §3.4) to a contact pressure
-``p(d)`` (positive is compression) and give everything a spring element needs: the spring force
-``F_N = A p(d)`` and its derivative, the pairing cutoff (spec §3.4) and the spring energy printed by
-``*CONTACT PRINT, CELS`` (spec §8.1). They reproduce CalculiX 2.20 (spec §1 ``*SURFACE BEHAVIOR``,
-``*FRICTION``, §4.1), including its quirks, which are listed in each class docstring.
+The laws map the overclosure ``d`` (``d > 0`` is penetration, docs/method.md §3.4) to a contact
+pressure ``p(d)`` (positive is compression) and give everything a spring element needs: the spring
+force ``F_N = A p(d)`` and its derivative, the pairing cutoff (docs/method.md §3.4) and the spring
+energy printed by ``*CONTACT PRINT, CELS`` (docs/method.md §8.3). They reproduce CalculiX 2.20
+(docs/method.md §4: ``*SURFACE BEHAVIOR``, ``*FRICTION``), including its quirks, which are listed in
+each class docstring.
 
 Shared rules:
     - Every method is vectorized: ``d`` and ``area`` are array-like and broadcast against each
       other; the result is a float ``np.ndarray`` of the broadcast shape.
-    - ``area`` is the spring area ``A_p`` of spec §2.2 and must be ``>= 0``; ``d`` must be finite.
-      Bad input raises ``ValueError`` naming the law, the argument and the first bad entry.
+    - ``area`` is the spring area ``A_p`` of docs/method.md §2.2 and must be ``>= 0``; ``d`` must be
+      finite. Bad input raises ``ValueError`` naming the law, the argument and the first bad entry.
     - Pure numpy: no dolfinx import.
 """
 
@@ -39,16 +40,16 @@ __all__ = [
 ]
 
 EXPONENTIAL_FORCE_CAP_EXPONENT: float = 23.0
-"""ccx caps the exponential spring force at ``exp(23)`` (absolute force units), spec §4.1."""
+"""ccx caps the exponential spring force at ``exp(23)`` (absolute force, docs/method.md §4.1)."""
 
 ZERO_AREA_CUTOFF: float = 1e-10
-"""Cutoff clearance of LINEAR/TABULAR laws for a node with zero spring area (spec §3.4)."""
+"""Cutoff clearance of LINEAR/TABULAR laws for a node without spring area (docs/method.md §3.4)."""
 
 TABULAR_C0: float = 1e-3
-"""Fixed cutoff coefficient of the TABULAR law (spec §1): ``c_cut = 1e-3 sqrt(A)``."""
+"""Fixed cutoff coefficient of the TABULAR law (docs/method.md §4.3): ``c_cut = 1e-3 sqrt(A)``."""
 
 TABULAR_MIN_INCREMENT: float = 1e-10
-"""ccx forces successive tabular overclosures to increase by at least this much (spec §1)."""
+"""ccx makes successive tabular overclosures increase by at least this (docs/method.md §4.3)."""
 
 _P0_ZERO: float = 1e-30
 _TENSION_MIN: float = 1e-30
@@ -87,7 +88,7 @@ def _check_array(owner: str, name: str, values: npt.ArrayLike, *, nonnegative: b
 
 
 class PressureOverclosureLaw(abc.ABC):
-    """Base class of the ``*SURFACE BEHAVIOR`` pressure-overclosure laws (spec §4.1).
+    """Base class of the ``*SURFACE BEHAVIOR`` pressure-overclosure laws (docs/method.md §4).
 
     Subclasses implement :meth:`pressure`, :meth:`pressure_derivative`, :meth:`cutoff` and
     :meth:`energy`; :meth:`spring_force` defaults to ``F_N = A p(d)``.
@@ -123,11 +124,12 @@ class PressureOverclosureLaw(abc.ABC):
         """Derivative ``dp/dd`` at overclosures ``d``."""
 
     def spring_force(self, d: npt.ArrayLike, area: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-        """Normal spring force ``F_N = A p(d)`` and ``dF_N/dd`` (spec §4 step 2).
+        """Normal spring force ``F_N = A p(d)`` and ``dF_N/dd`` (docs/method.md §5).
 
         Args:
             d: Overclosures ``d = -g_eff``.
-            area: Spring areas ``A_p`` (``>= 0``), constant in the linearization (spec §5c).
+            area: Spring areas ``A_p`` (``>= 0``), constant in the linearization
+                (docs/method.md §6.3).
 
         Returns:
             ``(F_N, dF_N/dd)``, both of the broadcast shape.
@@ -137,11 +139,11 @@ class PressureOverclosureLaw(abc.ABC):
 
     @abc.abstractmethod
     def cutoff(self, area: npt.ArrayLike) -> np.ndarray:
-        """Clearance ``c_cut`` of spec §3.4: a spring is created iff ``g_eff <= c_cut``."""
+        """Cutoff ``c_cut``: a spring is created iff ``g_eff <= c_cut`` (docs/method.md §3.4)."""
 
     @abc.abstractmethod
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """Static spring energy of ``*CONTACT PRINT, CELS`` (spec §8.1), friction excluded."""
+        """Spring energy of ``*CONTACT PRINT, CELS`` without friction (docs/method.md §8.3)."""
 
 
 class ExponentialLaw(PressureOverclosureLaw):
@@ -225,18 +227,18 @@ class ExponentialLaw(PressureOverclosureLaw):
         return force, dforce
 
     def cutoff(self, area: npt.ArrayLike) -> np.ndarray:
-        """``c0``, independent of the area (spec §3.4)."""
+        """``c0``, independent of the area (docs/method.md §3.4)."""
         a_arr = _check_array("ExponentialLaw", "area", area, nonnegative=True)
         return np.full(a_arr.shape, self.c0)
 
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """``F_N/beta`` with the capped force (spec §8.1)."""
+        """``F_N/beta`` with the capped force (docs/method.md §8.3)."""
         force, _ = self.spring_force(d, area)
         return force / self.beta
 
 
 class LinearLaw(PressureOverclosureLaw):
-    """``PRESSURE-OVERCLOSURE=LINEAR`` (and ``HARD``), static form (spec §4.1).
+    """``PRESSURE-OVERCLOSURE=LINEAR`` (and ``HARD``), static form (docs/method.md §4.2).
 
     ``p(d) = K d [1/2 + atan(d/eps)/pi]`` with ``eps = pi sigma_inf/K``: a smoothed penalty spring
     of slope ``K`` in penetration that tends to the tension ``-sigma_inf`` for ``d -> -inf``.
@@ -281,8 +283,10 @@ class LinearLaw(PressureOverclosureLaw):
     ) -> LinearLaw:
         """Create the law as ccx reads ``*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR|HARD``.
 
-        Missing or non-positive values get ccx's defaults (spec §1): ``K = 50 E``,
-        ``sigma_inf = E/70000``, ``c0 = 1e-3``.
+        Missing or non-positive values get ccx's defaults (docs/method.md §4.2): ``K = 50 E``,
+        ``sigma_inf = E/70000``, ``c0 = 1e-3``. Zero asks for the default as in a deck; a
+        negative value is replaced too, as ccx does, but with a ``UserWarning`` naming it (ccx
+        replaces it silently).
 
         Args:
             youngs_modulus: ``E``, the first constant of material no. 1 (``> 0``).
@@ -294,14 +298,20 @@ class LinearLaw(PressureOverclosureLaw):
         e = _check_scalar(owner, "youngs_modulus", youngs_modulus)
         if e <= 0.0:
             raise ValueError(f"{owner}: youngs_modulus must be > 0, got {e!r}")
-        k = None if slope is None else _check_scalar(owner, "slope", slope)
-        s = None if tension is None else _check_scalar(owner, "tension", tension)
-        c = None if c0 is None else _check_scalar(owner, "c0", c0)
-        return cls(
-            slope=50.0 * e if k is None or k <= 0.0 else k,
-            tension=e / 70000.0 if s is None or s <= 0.0 else s,
-            c0=1e-3 if c is None or c <= 0.0 else c,
-        )
+        defaults = {"slope": 50.0 * e, "tension": e / 70000.0, "c0": 1e-3}
+        rules = {"slope": "50 E", "tension": "E/70000", "c0": "1e-3"}
+        values = {}
+        for name, value in (("slope", slope), ("tension", tension), ("c0", c0)):
+            given = None if value is None else _check_scalar(owner, name, value)
+            if given is not None and given < 0.0:
+                warnings.warn(
+                    f"{owner}: {name} = {given!r} is negative; using ccx's default "
+                    f"{rules[name]} = {defaults[name]!r} instead (pass None to ask for it)",
+                    UserWarning,
+                    stacklevel=2,
+                )
+            values[name] = defaults[name] if given is None or given <= 0.0 else given
+        return cls(**values)
 
     def __repr__(self) -> str:
         """Constructor-like representation."""
@@ -320,12 +330,12 @@ class LinearLaw(PressureOverclosureLaw):
         return self.slope * (0.5 + (np.arctan(x) + rational) / math.pi)
 
     def cutoff(self, area: npt.ArrayLike) -> np.ndarray:
-        """``c0 sqrt(A)``, or ``1e-10`` where ``A == 0`` (spec §3.4)."""
+        """``c0 sqrt(A)``, or ``1e-10`` where ``A == 0`` (docs/method.md §3.4)."""
         a_arr = _check_array("LinearLaw", "area", area, nonnegative=True)
         return np.where(a_arr > 0.0, self.c0 * np.sqrt(a_arr), ZERO_AREA_CUTOFF)
 
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """Ccx 2.20's static approximation ``F_N d/2`` (spec §8.1)."""
+        """ccx 2.20's static approximation ``F_N d/2`` (docs/method.md §8.3)."""
         d_b, a_b = self._d_area(d, area)
         force, _ = self.spring_force(d_b, a_b)
         return 0.5 * force * d_b
@@ -342,14 +352,15 @@ class TabularLaw(PressureOverclosureLaw):
     Choices and ccx quirks:
         - Overclosures must not decrease (``ValueError`` naming the index). Successive values
           closer than ``1e-10`` (including equal ones) are pushed apart to exactly ``1e-10`` as
-          ccx does (spec §1); the nudged values are in :attr:`overclosures`.
-        - At least 2 points are required. Negative pressures are allowed (the spec is silent).
-        - ccx resamples tables longer than 200 points to 200; the spec does not give the rule, so
+          ccx does (docs/method.md §4.3); the nudged values are in :attr:`overclosures`.
+        - At least 2 points are required. Negative pressures are allowed (CalculiX says nothing
+          about them).
+        - ccx resamples tables longer than 200 points to 200; its rule is not documented, so
           all points are kept.
         - Temperature-dependent tables are not supported.
-        - Energy (spec §8.1): ``A`` times the trapezoidal integral of ``p`` from ``d_1`` to ``d``.
-          Beyond ``d_N`` (strictly) ccx adds ``(p_N - d_N) p_N`` to the full-table integral instead
-          of ``(d - d_N) p_N``; this quirk is reproduced. Below ``d_1`` we return
+        - Energy (docs/method.md §8.3): ``A`` times the trapezoidal integral of ``p`` from ``d_1``
+          to ``d``. Beyond ``d_N`` (strictly) ccx adds ``(p_N - d_N) p_N`` to the full-table
+          integral instead of ``(d - d_N) p_N``; this quirk is reproduced. Below ``d_1`` we return
           ``A p_1 (d - d_1)`` (the integral of the constant extrapolation; not verified against
           ccx).
     """
@@ -422,7 +433,7 @@ class TabularLaw(PressureOverclosureLaw):
         return np.where(inside, self._slopes[np.clip(k, 0, self._slopes.size - 1)], 0.0)
 
     def cutoff(self, area: npt.ArrayLike) -> np.ndarray:
-        """``1e-3 sqrt(A)``, or ``1e-10`` where ``A == 0`` (spec §3.4)."""
+        """``1e-3 sqrt(A)``, or ``1e-10`` where ``A == 0`` (docs/method.md §3.4)."""
         a_arr = _check_array("TabularLaw", "area", area, nonnegative=True)
         return np.where(a_arr > 0.0, TABULAR_C0 * np.sqrt(a_arr), ZERO_AREA_CUTOFF)
 
@@ -444,7 +455,9 @@ class TabularLaw(PressureOverclosureLaw):
 
 @dataclass(frozen=True)
 class Friction:
-    """``*FRICTION`` data: Coulomb coefficient ``mu`` and stick slope ``lambda`` (spec §1, §4.2).
+    """``*FRICTION`` data: Coulomb coefficient ``mu`` and stick slope ``lambda``.
+
+    See docs/method.md §4.5.
 
     Not used by the solver yet.
 

@@ -1,4 +1,14 @@
-"""Contact results per slave node: tables for scripts and dolfinx Functions written to XDMF."""
+"""Contact results per slave node: tables for scripts, dolfinx Functions, and XDMF files.
+
+- :func:`contact_results`: one :class:`ContactResults` table per pair (this process's springs).
+- :class:`ContactFields`: contact pressure, clearance and status as dolfinx Functions on the nodes
+  of the displacement space (for ParaView, for UFL expressions, for interpolation).
+- :class:`ContactWriter`: the displacement and the three fields to an XDMF file, at any time
+  (also before the first solve).
+
+All of them read the springs of the problem's current pairing, evaluated at the current
+displacement (docs/method.md §8).
+"""
 
 from __future__ import annotations
 
@@ -12,19 +22,36 @@ import numpy as np
 import dolfinx.fem
 import dolfinx.io
 
+from dolfinx_ntf import validation
 from dolfinx_ntf.problem import ContactProblem, PairState
 
-__all__ = ["ContactResults", "ContactWriter", "contact_results"]
+__all__ = ["ContactFields", "ContactResults", "ContactWriter", "contact_results"]
 
 
 @dataclass(frozen=True)
 class ContactResults:
-    """Per-spring results of one pair, in spring order (slave nodes ascending, like CalculiX's
-    elements).
+    """Per-spring results of one pair, in spring order (slave nodes ascending, like ccx's).
 
-    ``clearance`` is g_eff (negative = penetration), ``pressure`` = F_N / A_p (compression
-    positive), ``energy`` the spring energy of spec §8.1, ``force`` the contact force on the slave
-    node (3-vector).
+    One row per contact spring of this process; a slave node without a spring (open beyond the
+    cutoff, or outside the master) has no row. Units are those of the mesh and the material.
+
+    Attributes:
+        pair: The pair's name (``"pair 1"``, ... when it has none).
+        node: ``(N,)`` slave node of each spring: the index of the node in the displacement space
+            ``V`` (a block dof, this process's local numbering), so that ``u.x.array.reshape(-1,
+            3)[node]`` is its displacement and ``V.tabulate_dof_coordinates()[node]`` its
+            reference position.
+        position: ``(N, 3)`` current position ``X + u`` of the slave node.
+        area: ``(N,)`` spring area ``A_p`` (docs/method.md §2.2).
+        clearance: ``(N,)`` ``g_eff``: positive is an open gap, negative a penetration (ccx's
+            CDIS).
+        pressure: ``(N,)`` ``F_N / A_p``, compression positive (ccx's CSTR); the linear law gives
+            a small tension (negative) inside the cutoff.
+        normal_force: ``(N,)`` ``F_N = A_p p(d)``.
+        energy: ``(N,)`` spring energy (ccx's CELS, docs/method.md §8.3).
+        force: ``(N, 3)`` contact force on the slave node (``F_N n``: the master pushes the slave
+            away along the master normal).
+        normal: ``(N, 3)`` unit normal of the master face at the projection point.
     """
 
     pair: str
@@ -39,12 +66,19 @@ class ContactResults:
     normal: np.ndarray
 
 
+def _evaluated(problem: ContactProblem) -> None:
+    """Evaluate the springs at the current displacement if an evaluation is missing or stale."""
+    for state in problem.states:
+        ev = state.evaluation
+        if ev is None or ev.xi.shape[0] != state.num_springs:
+            problem.evaluate(tangent=False)
+            return
+
+
 def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactResults:
     ev = state.evaluation
     nodes = state.slave.nodes[state.spring_slave]
     law = state.pair.interaction.law
-    if ev is None or ev.xi.shape[0] != nodes.size:
-        raise RuntimeError("contact results requested before the springs were evaluated")
     return ContactResults(
         pair=state.pair.name or f"pair {index + 1}",
         node=nodes,
@@ -60,47 +94,130 @@ def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactRe
 
 
 def contact_results(problem: ContactProblem) -> list[ContactResults]:
-    """Results of every pair at the last evaluation (local springs of this process)."""
+    """Results of every pair at the current pairing (local springs of this process).
+
+    Before the first pairing (e.g. before any solve) every table is empty.
+    """
+    validation.check_type(problem, ContactProblem, "contact_results: problem")
+    _evaluated(problem)
     coords = problem.current_coordinates()
     return [_pair_results(i, s, coords) for i, s in enumerate(problem.states)]
 
 
-class ContactWriter:
-    """Writes displacement, contact pressure, clearance and status (1 closed, 0 open or no spring)
-    to XDMF.
+class ContactFields:
+    """Contact pressure, clearance and status per slave node, as dolfinx Functions.
 
-    XDMF keeps vertex values only, so use a P1 displacement space (P2 midside values are dropped by
-    dolfinx).
+    The Functions live on the scalar Lagrange space of one displacement component (same mesh,
+    degree and nodes as ``u``), so their values sit on the same nodes as ``u``'s:
+
+    - ``pressure`` (name ``contact_pressure``): ``F_N / A_p`` of the node's spring, summed over the
+      pairs the node belongs to; 0 at nodes without a spring.
+    - ``clearance`` (name ``contact_clearance``): ``g_eff`` of the node's spring (negative =
+      penetration); 0 at nodes without a spring (see ``status``).
+    - ``status`` (name ``contact_status``): 1 where the node's spring is closed (``g_eff < 0``),
+      0 where it is open or there is no spring.
+
+    Call :meth:`update` after a solve (the writer does it before writing). Nodal pressures are
+    spring forces over lumped areas: on unstructured linear tetrahedra they scatter by about
+    +-15 % from node to node around a smooth distribution (docs/method.md §10).
+
+    Args:
+        problem: The contact problem.
     """
 
-    def __init__(self, problem: ContactProblem, path: str, comm: MPI.Comm | None = None) -> None:
-        u = problem.u
-        mesh = u.function_space.mesh
+    def __init__(self, problem: ContactProblem) -> None:
+        validation.check_type(problem, ContactProblem, "ContactFields: problem")
         self.problem = problem
-        self._file = dolfinx.io.XDMFFile(comm or mesh.comm, path, "w")
-        self._file.write_mesh(mesh)
-        Q, dofs = u.function_space.sub(0).collapse()
-        self._node_of_q = np.asarray(dofs) // 3
+        Q, dofs = problem.u.function_space.sub(0).collapse()
+        #: The scalar space of the fields.
+        self.space = Q
+        node_of_q = np.asarray(dofs) // 3
         self._q_of_node = np.full(problem.u.x.array.size // 3, -1, dtype=np.int64)
-        self._q_of_node[self._node_of_q] = np.arange(self._node_of_q.size)
+        self._q_of_node[node_of_q] = np.arange(node_of_q.size)
         self.pressure = dolfinx.fem.Function(Q, name="contact_pressure")
         self.clearance = dolfinx.fem.Function(Q, name="contact_clearance")
         self.status = dolfinx.fem.Function(Q, name="contact_status")
+        self.update()
+
+    @property
+    def functions(self) -> tuple[dolfinx.fem.Function, dolfinx.fem.Function, dolfinx.fem.Function]:
+        """``(pressure, clearance, status)``."""
+        return self.pressure, self.clearance, self.status
+
+    def at_nodes(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Values of ``(pressure, clearance, status)`` at nodes of the displacement space.
+
+        Args:
+            nodes: Block dof indices of ``u``'s space (as :attr:`ContactResults.node`).
+        """
+        q = self._q_of_node[np.asarray(nodes, dtype=np.int64)]
+        return tuple(f.x.array[q].copy() for f in self.functions)
 
     def update(self) -> None:
-        """Fill the contact Functions from the problem's current springs."""
-        for f in (self.pressure, self.clearance, self.status):
+        """Fill the Functions from the problem's current springs."""
+        for f in self.functions:
             f.x.array[:] = 0.0
         for res in contact_results(self.problem):
             q = self._q_of_node[res.node]
-            self.pressure.x.array[q] += res.pressure
+            np.add.at(self.pressure.x.array, q, res.pressure)
             self.clearance.x.array[q] = res.clearance
-            self.status.x.array[q] = (res.clearance < 0).astype(float)
+            self.status.x.array[q] = np.maximum(
+                self.status.x.array[q], (res.clearance < 0).astype(float)
+            )
+
+
+class ContactWriter:
+    """Writes the displacement and the :class:`ContactFields` to an XDMF file (for ParaView).
+
+    Each :meth:`write` adds a time step: ``u`` and ``contact_pressure``, ``contact_clearance``,
+    ``contact_status``. The initial state can be written before the first solve (zero fields).
+    XDMF keeps vertex values only, so a P2 displacement loses its midside values in the file.
+
+    Args:
+        problem: The contact problem.
+        path: The ``.xdmf`` file to create (with its ``.h5`` data file beside it); its folder must
+            exist and be writable.
+        comm: Communicator (default: the mesh's).
+    """
+
+    def __init__(
+        self, problem: ContactProblem, path: str | typing.Any, comm: MPI.Comm | None = None
+    ) -> None:
+        validation.check_type(problem, ContactProblem, "ContactWriter: problem")
+        mesh = problem.u.function_space.mesh
+        comm = comm or mesh.comm
+        path = validation.check_writable(path, comm, "ContactWriter")
+        self.problem = problem
+        self.fields = ContactFields(problem)
+        try:
+            self._file = dolfinx.io.XDMFFile(comm, str(path), "w")
+        except RuntimeError as error:
+            raise OSError(f"ContactWriter: cannot create {str(path)!r}: {error}") from error
+        self._file.write_mesh(mesh)
+
+    @property
+    def pressure(self) -> dolfinx.fem.Function:
+        """The contact pressure Function (see :class:`ContactFields`)."""
+        return self.fields.pressure
+
+    @property
+    def clearance(self) -> dolfinx.fem.Function:
+        """The contact clearance Function (see :class:`ContactFields`)."""
+        return self.fields.clearance
+
+    @property
+    def status(self) -> dolfinx.fem.Function:
+        """The contact status Function (see :class:`ContactFields`)."""
+        return self.fields.status
+
+    def update(self) -> None:
+        """Fill the contact Functions from the problem's current springs."""
+        self.fields.update()
 
     def write(self, t: float) -> None:
-        """Write all fields at time ``t``."""
-        self.update()
-        for f in (self.problem.u, self.pressure, self.clearance, self.status):
+        """Write the displacement and the contact fields at time ``t``."""
+        self.fields.update()
+        for f in (self.problem.u, *self.fields.functions):
             self._file.write_function(f, t)
 
     def close(self) -> None:

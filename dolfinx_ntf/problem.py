@@ -1,10 +1,9 @@
-"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual and
-Jacobian.
+"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual.
 
 :class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides
 assembling the user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule
-(spec §3.1) and add the spring elements (spec §4, §5). The step driver in ``solver.py`` tells it
-when an increment starts.
+(docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The step driver in
+``solver.py`` tells it when an increment starts.
 """
 
 from __future__ import annotations
@@ -22,9 +21,9 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, validation
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
-from dolfinx_ntf.laws import SurfaceInteraction
+from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
 from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
@@ -43,9 +42,9 @@ __all__ = ["ContactPair", "ContactProblem", "PairState"]
 logger = logging.getLogger("dolfinx_ntf")
 
 #: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION
-#: (spec §3.1, ccx: iit <= 8).
+#: (docs/method.md §3.1, ccx: iit <= 8).
 LAST_REPAIRING_ITERATION = 8
-#: Relative walk tolerance of the triangle search (spec §3.2).
+#: Relative walk tolerance of the triangle search (docs/method.md §3.2).
 SEARCH_TOLERANCE = 1e-3
 
 
@@ -71,6 +70,30 @@ class ContactPair:
     name: str = ""
     active: bool = True
 
+    def __post_init__(self) -> None:
+        """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
+        owner = (
+            f"ContactPair {self.name!r}"
+            if isinstance(self.name, str) and self.name
+            else ("ContactPair")
+        )
+        validation.check_type(self.slave, (FacetSurface, NodeSurface), f"{owner}: slave")
+        if isinstance(self.master, NodeSurface):
+            raise ValueError(
+                f"{owner}: the master surface must be a FacetSurface (face-based), got a "
+                "NodeSurface; only the slave surface may be node-based"
+            )
+        validation.check_type(self.master, FacetSurface, f"{owner}: master")
+        validation.check_type(
+            self.interaction,
+            SurfaceInteraction,
+            f"{owner}: interaction",
+            "wrap the law: SurfaceInteraction(law)"
+            if isinstance(self.interaction, PressureOverclosureLaw)
+            else "",
+        )
+        validation.check_type(self.name, str, f"{owner}: name")
+
 
 @dataclass
 class PairState:
@@ -80,7 +103,7 @@ class PairState:
     slave: SlaveSurface
     master_faces: SurfaceFaces
     master: MasterSurface
-    overlap: np.ndarray  # (S,) initial overlap g0 per slave node (spec §3.6)
+    overlap: np.ndarray  # (S,) initial overlap g0 per slave node (docs/method.md §3.5)
     spring_slave: np.ndarray = field(
         default_factory=lambda: np.empty(0, dtype=np.int64)
     )  # index into slave.nodes
@@ -149,16 +172,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
+        pairs, bcs = validation.check_problem(F, u, pairs, bcs, J, ContactPair, max_depth)
         super().__init__(
             F,
             u,
-            list(bcs),
+            bcs,
             J,
             **compat.jit_keywords(form_compiler_options, jit_options),
         )
         V = u.function_space
-        if V.dofmap.index_map_bs != 3 or V.mesh.geometry.dim != 3:
-            raise ValueError("ContactProblem needs a 3D vector displacement space (block size 3)")
         self.u = u
         self.symmetric = symmetric
         self.linearize_area = linearize_area
@@ -173,6 +195,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._element_force_vector = dolfinx.fem.petsc.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
+        validation.check_distinct_pairs(V.mesh.comm, self._surfaces(), self._reference)
         self.small_sliding = bool(pairs[-1].small_sliding) if pairs else True
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
         self.static = True
@@ -222,8 +245,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     # -- state -------------------------------------------------------------------------------------
 
     def average_element_force(self) -> float:
-        """CalculiX's average force: the mean absolute element nodal force over the elements,
-        their nodes and the three directions, contact springs included (collective)."""
+        """CalculiX's average force, contact springs included. Collective.
+
+        The mean absolute element nodal force over the elements, their nodes and the directions.
+        """
         vector = self._element_force_vector
         with vector.localForm() as local:
             local.set(0.0)
@@ -254,6 +279,21 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """Reference coordinates of the displacement nodes (local, with ghosts), shape (N, 3)."""
         return self._reference
 
+    def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
+        """(name, slave nodes, master facets) of every pair, for checks and messages."""
+        return [
+            (s.pair.name or f"pair {i + 1}", s.slave.nodes, s.master_faces.facets)
+            for i, s in enumerate(self.states)
+        ]
+
+    def _check_finite(self) -> None:
+        """A non-finite displacement at a contact node: a ValueError naming node and position."""
+        surfaces = []
+        for (name, slave, _), state in zip(self._surfaces(), self.states):
+            surfaces += [(f"{name} slave", slave), (f"{name} master", state.master_faces.nodes)]
+        comm = self.u.function_space.mesh.comm
+        validation.check_finite_contact_nodes(comm, self.u, self._reference, surfaces)
+
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts)."""
         return self._reference + self.u.x.array.reshape(-1, 3)
@@ -261,12 +301,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     # -- pairing -----------------------------------------------------------------------------------
 
     def begin_increment(self, time_fraction: float, *, static: bool = True) -> None:
-        """Increment-start pairing at the last converged displacement (spec §3.1, §3.6).
+        """Increment-start pairing at the last converged displacement (docs/method.md §3.1, §3.5).
 
         Args:
             time_fraction: Relative step time at the end of the increment (tau of the overlap ramp).
             static: Static step (the initial overlap is ramped) or not.
         """
+        self._check_finite()
         self.time_fraction = float(time_fraction)
         self.static = static
         first = not self._first_pairing_done
@@ -280,8 +321,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.ensure_matrix()
 
     def pair(self, *, record_overlap: bool = False) -> int:
-        """Pair every slave node with a master face at the current displacement; returns the spring
-        count.
+        """Pair every slave node with a master face at the current displacement.
+
+        Returns:
+            The number of springs.
         """
         coords = self.current_coordinates()
         for state in self.states:
@@ -364,8 +407,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return gap - self._gap_shift(state, found) <= cutoff
 
     def unpaired_contacts(self) -> int:
-        """Slave nodes that a pairing at the current displacement would give a spring but that
-        have none (e.g. nodes that penetrated after the pairing froze); collective."""
+        """Slave nodes that a pairing now would give a spring but that have none. Collective.
+
+        For example nodes that penetrated after the pairing froze at iteration 8.
+        """
         coords = self.current_coordinates()
         count = 0
         for state in self.states:
@@ -380,9 +425,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     @staticmethod
     def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:
-        """Projection start points: the last projection where a node keeps its face, else the face
-        centre.
-        """
+        """Projection start points: the last one where a node keeps its face, else the centre."""
         xi0 = np.tile(state.master_faces.face_type.center, (found.size, 1))
         if state.xi is not None and state.num_springs:
             previous_face = np.full(state.slave.nodes.size, -1, dtype=np.int64)
@@ -394,7 +437,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return xi0
 
     def _gap_shift(self, state: PairState, slave_index: np.ndarray) -> np.ndarray | float:
-        """g0 (1 - tau) in static steps, 0 otherwise (spec §3.6)."""
+        """g0 (1 - tau) in static steps, 0 otherwise (docs/method.md §3.5)."""
         if not self.static:
             return 0.0
         return state.overlap[slave_index] * (1.0 - self.time_fraction)
@@ -439,9 +482,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def _area_block(
         self, state: PairState, coords: np.ndarray, *, values: bool = True
     ) -> SpringBlocks:
-        """Tangent of F_N = A_p p(d) with respect to the nodes of the slave faces around p
-        (dA_p/du).
-        """
+        """Tangent of F_N = A_p p(d) with respect to the slave-face nodes around p (dA_p/du)."""
         faces = state.slave.faces
         slave_index, node, gradient = spring_area_gradients(
             faces.face_type, faces.faces, coords, state.slave.nodes
@@ -475,10 +516,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return self.matrix
 
     def _reserved_blocks(self) -> list[SpringBlocks]:
-        """Couplings a new matrix reserves beyond the current springs: every slave node that the
-        last pairing located, with the faces around its face, so that nodes moving to a
-        neighbouring face or coming into contact need no new pattern (and no new symbolic
-        factorization)."""
+        """Couplings a new matrix reserves beyond the current springs.
+
+        Every slave node that the last pairing located, with the faces around its face, so that
+        nodes moving to a neighbouring face or coming into contact need no new pattern (and no
+        new symbolic factorization).
+        """
         blocks = []
         for state in self.states:
             if state.found_face is None:
@@ -493,9 +536,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     # -- dolfinx callbacks -------------------------------------------------------------------------
     #
-    # CalculiX's order (spec §3.1, §6): Newton iteration k >= 2 starts with a re-pairing (k <= 8),
-    # assembles and solves with it, and the convergence check after the update uses that same
-    # pairing. dolfinx calls form -> F -> (convergence check) -> J -> solve, so the re-pairing
+    # CalculiX's order (docs/method.md §3.1, §7.1): Newton iteration k >= 2 starts with a re-pairing
+    # (k <= 8), assembles and solves with it, and the convergence check after the update uses that
+    # same pairing. dolfinx calls form -> F -> (convergence check) -> J -> solve, so the re-pairing
     # happens in J, which then re-assembles the residual vector last given to F (the right-hand side
     # of the coming solve).
 
@@ -522,8 +565,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """Start Newton iteration ``iteration``: re-pair on schedule (and re-assemble F), assemble
-        the Jacobian.
+        """Start Newton iteration ``iteration``: re-pair on schedule, assemble the Jacobian.
+
+        A re-pairing re-assembles the residual vector too.
         """
         self.iteration += 1
         self.count_changed = False
@@ -543,17 +587,36 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._pattern_checked = True
         A.assemble()
 
+    def destroy(self) -> None:
+        """Destroy the PETSc matrix the problem owns (the Jacobian). Collective.
+
+        The solver's vectors belong to :class:`~dolfinx_ntf.ContactNewtonSolver` (its own
+        ``destroy``). Using the problem afterwards creates a new matrix.
+        """
+        if self.matrix is not None:
+            self.matrix.destroy()
+            self.matrix = None
+
+    def __enter__(self) -> ContactProblem:
+        return self
+
+    def __exit__(self, *args: object) -> None:
+        self.destroy()
+
     def set_bcs(self, bcs: typing.Sequence[compat.DirichletBC]) -> None:
-        """Replace the Dirichlet conditions (e.g. between steps); contact entries skip the new
-        constrained dofs.
+        """Replace the Dirichlet conditions (e.g. between steps).
+
+        Contact entries skip the new constrained dofs.
         """
         self.bcs = list(bcs)
         self.assembler.set_bcs(self.bcs)
 
 
 def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict) -> compat.Form:
-    """``form`` with its test function replaced by one of the discontinuous space of the same
-    degree: its assembled vector holds every element's nodal forces separately."""
+    """``form`` with its test function replaced by one of the discontinuous space of its degree.
+
+    The assembled vector then holds every element's nodal forces separately.
+    """
     arguments = form.arguments()
     if len(arguments) != 1:
         raise ValueError(

@@ -1,4 +1,4 @@
-"""Closest point of a face to a point, over the closed parametric domain (spec §3.3).
+"""Closest point of a face to a point, over the closed parametric domain (docs/method.md §3.3).
 
 CalculiX minimizes ``f(ξ) = ½|x - q(ξ)|²`` by a compass search started at the face centre, to
 about 1e-8 in parameter space. We find the same kind of local minimum to near machine precision
@@ -341,7 +341,7 @@ def _probe(
     """
     xi = xi.copy()
     moved = np.zeros(xi.shape[0], dtype=bool)
-    r, phi, jac, hess = _residual(face_type, nodes, pts, xi)
+    r, _phi, jac, hess = _residual(face_type, nodes, pts, xi)
     _, _, _, _, lam, v, scale = _hessian(r, jac, hess, size2)
     idx = np.flatnonzero(lam < -_NEG_CURVATURE * scale)
     if idx.size == 0:

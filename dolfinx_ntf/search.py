@@ -1,4 +1,6 @@
-"""Master triangulation, nodal normals, bounding planes and the triangle walk (spec §2.3, §3.2).
+"""Master triangulation, nodal normals, bounding planes and the triangle walk.
+
+The method is described in docs/method.md §2.3 and §3.2.
 
 Each master face is split into the sub-triangles of its `FaceType`. At every pairing the surface is
 updated in the current configuration: averaged nodal normals, one bounding plane per triangle edge
@@ -20,7 +22,7 @@ from dolfinx_ntf.faces import FaceType
 __all__ = ["MAX_WALK_STEPS", "MasterSurface"]
 
 MAX_WALK_STEPS = 100
-"""A walk taking more steps than this finds no face (spec §3.2)."""
+"""A walk taking more steps than this finds no face (docs/method.md §3.2)."""
 TIE_DIGITS = 9
 """Centroid distances equal to this many digits of the surface size are ties."""
 TIE_CANDIDATES = 8
@@ -28,7 +30,7 @@ TIE_CANDIDATES = 8
 
 
 class MasterSurface:
-    """Triangulated master surface with the search prisms of spec §2.3.
+    """Triangulated master surface with the search prisms of docs/method.md §2.3.
 
     Args:
         face_type: Type of all faces of the surface.
@@ -292,7 +294,7 @@ class MasterSurface:
         max_steps: int = MAX_WALK_STEPS,
         start_faces: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Master face holding each point, by the triangle walk of spec §3.2.
+        """Master face holding each point, by the triangle walk of docs/method.md §3.2.
 
         Args:
             points: (N, 3) current slave positions.
@@ -343,7 +345,7 @@ class MasterSurface:
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
-            (spec §1).
+            (ccx's ADJUST, not supported yet).
         """
         self._require_update()
         points, tol = self._check_points(points, tolerances, max_depth)
@@ -392,9 +394,12 @@ class MasterSurface:
         return result
 
     def _nearest_centroids(self, points: np.ndarray) -> np.ndarray:
-        """The triangle with the nearest centroid to each point; among centroids equally near
-        (to ``10**-TIE_DIGITS`` of the surface size) the first in (x, y, z) order, so the choice
-        does not depend on the numbering of nodes and faces or on k-d tree internals."""
+        """The triangle with the nearest centroid to each point, ties broken by position.
+
+        Among centroids equally near (to ``10**-TIE_DIGITS`` of the surface size) the first in
+        (x, y, z) order, so the choice depends neither on the numbering of nodes and faces nor on
+        k-d tree internals.
+        """
         k = min(TIE_CANDIDATES, self._centroids.shape[0])
         distance, nearest = self._tree.query(points, k=k)
         distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
@@ -498,7 +503,7 @@ def _group_edges(
         raise ValueError(
             f"Master surface '{name}': edge {_describe(edges[members[0]], coords)} is shared by "
             f"{counts[g]} {items} ({items} {sorted((members // per_item).tolist())}); a master "
-            "edge may border at most two faces (spec §2.3)"
+            "edge may border at most two faces (docs/method.md §2.3)"
         )
     group = np.cumsum(new) - 1
     edge_id = np.empty(edges.shape[0], dtype=np.int64)

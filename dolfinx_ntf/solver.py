@@ -12,7 +12,7 @@ from __future__ import annotations
 import logging
 import time
 import typing
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -22,11 +22,13 @@ import numpy as np
 import dolfinx.fem
 import dolfinx.nls.petsc
 
+from dolfinx_ntf import validation
+from dolfinx_ntf.logs import log_progress, newton_logger, quiet_dolfinx
 from dolfinx_ntf.problem import ContactProblem
 
 __all__ = [
-    "DIVERGENCE_GROWTH",
     "CCX_FIELD_CONTROLS",
+    "DIVERGENCE_GROWTH",
     "TIGHT_FIELD_CONTROLS",
     "ContactConvergenceError",
     "ContactDivergenceError",
@@ -95,8 +97,9 @@ class ContactDivergenceError(ContactConvergenceError):
 
 
 class ContactSolverError(RuntimeError):
-    """A failure that no smaller increment can fix: non-finite input, a linear solver that cannot
-    be set up or factor the first Jacobian. Raised at once by :class:`StaticStep`.
+    """A failure that no smaller increment can fix; :class:`StaticStep` raises it at once.
+
+    Non-finite input, or a linear solver that cannot factor the first Jacobian.
     """
 
 
@@ -110,7 +113,10 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`; MUMPS Cholesky,
             :data:`CHOLESKY_PETSC_OPTIONS`, when the problem is ``symmetric`` and its first
             Jacobian is symmetric).
-        options_prefix: Prefix of the Krylov solver's options.
+        options_prefix: Prefix of the Krylov solver's options (command-line options such as
+            ``-ntf_ksp_view`` still apply). ``petsc_options`` are set under it, read once, and
+            removed from PETSc's global options database again; unknown solver names are a
+            ``ValueError`` naming the option.
         controls: CalculiX's ``*CONTROLS, PARAMETERS=FIELD`` values of the force-scaled
             convergence test (:meth:`is_converged`): ``R_n``, ``C_n``, ``R_p``, ``R_l``,
             ``epsilon``, ``C_epsilon``; default :data:`TIGHT_FIELD_CONTROLS` (round-off level,
@@ -156,6 +162,22 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         line_search_from: int = 2,
         check_unpaired: bool = True,
     ) -> None:
+        symmetric = petsc_options is None and getattr(problem, "symmetric", False)
+        controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
+        options = validation.check_solver(
+            comm,
+            problem,
+            ContactProblem,
+            (CHOLESKY_PETSC_OPTIONS if symmetric else DEFAULT_PETSC_OPTIONS)
+            if petsc_options is None
+            else petsc_options,
+            options_prefix,
+            controls=controls,
+            required_controls=TIGHT_FIELD_CONTROLS,
+            max_it=max_it,
+            min_iterations=min_iterations,
+        )
+        validation.check_linear_solver(comm, options, "ContactNewtonSolver")
         super().__init__(comm, problem)
         self.problem = problem
         self._A.destroy()
@@ -164,10 +186,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.setF(self._residual, self._b)
         self.set_update(self._update)
         self.convergence_criterion = "residual"
-        self.controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
-        missing = set(TIGHT_FIELD_CONTROLS) - set(self.controls)
-        if missing:
-            raise ValueError(f"ContactNewtonSolver: controls lack {sorted(missing)}")
+        self.controls = controls
         self.relaxation_iteration = relaxation_iteration
         #: Displacement at the start of the increment (before the predictor); set by the step
         #: driver, else the displacement when :meth:`solve` starts.
@@ -194,15 +213,34 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.residual_norms: list[float] = []
         ksp = self.krylov_solver
         ksp.setOptionsPrefix(options_prefix)
-        self._check_symmetry = petsc_options is None and problem.symmetric
+        self._check_symmetry = symmetric
         opts = PETSc.Options()
-        for key, value in (
-            (CHOLESKY_PETSC_OPTIONS if self._check_symmetry else DEFAULT_PETSC_OPTIONS)
-            if petsc_options is None
-            else petsc_options
-        ).items():
+        for key, value in options.items():
             opts[f"{options_prefix}{key}"] = value
-        ksp.setFromOptions()
+        try:
+            ksp.setFromOptions()
+        finally:
+            for key in options:
+                opts.delValue(f"{options_prefix}{key}")
+
+    def destroy(self) -> None:
+        """Destroy the PETSc vector the solver owns (the residual). Collective.
+
+        The Jacobian belongs to the problem (:meth:`ContactProblem.destroy`).
+        """
+        self._b.destroy()
+
+    def __del__(self) -> None:
+        # dolfinx 0.9's NewtonSolver.__del__ destroys its matrix, which here is the problem's.
+        b = getattr(self, "_b", None)
+        if b is not None:
+            b.destroy()
+
+    def __enter__(self) -> ContactNewtonSolver:
+        return self
+
+    def __exit__(self, *args: object) -> None:
+        self.destroy()
 
     def _jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """The problem's Jacobian; a factorization is started afresh when the pattern grew.
@@ -343,6 +381,19 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         if converged and self.check_unpaired:
             converged = self._all_contacts_paired()
         self.atol = 2.0 * norm + 1e-300 if converged else (1.0 - 1e-9) * norm
+        if newton_logger.isEnabledFor(logging.INFO):
+            self._log_iteration(norm, converged)
+
+    def _log_iteration(self, norm: float, converged: bool) -> None:
+        """One progress line: residual and correction norms, spring count."""
+        line = f" iteration {self.updates}: residual {norm:.3e}"
+        if self.updates:
+            first = self.residual_norms[0]
+            ratio = norm / first if first > 0 else 0.0
+            correction = self.relaxation_parameter * self.last_correction.norm()
+            line += f" ({ratio:.1e} of the first), correction {correction:.3e}"
+        line += f", {self.problem.num_springs} contact elements"
+        newton_logger.info(line + (", converged" if converged else ""))
 
     def _all_contacts_paired(self) -> bool:
         """False (and a re-pairing next iteration) when slave nodes penetrate without a spring."""
@@ -368,13 +419,16 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self.setJ(self._jacobian, A)
 
     def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
-        """Solve one increment from the current ``u`` (after
-        :meth:`ContactProblem.begin_increment`).
+        """Solve one increment from the current ``u`` (after ``begin_increment``).
 
         Returns:
             The number of Newton iterations and True; a failure raises
             :class:`ContactConvergenceError`.
         """
+        if u is not self.problem.u:
+            raise ValueError(
+                "ContactNewtonSolver.solve: u must be the Function the ContactProblem was built on"
+            )
         self.residual_norms = []
         self.step_lengths = []
         self._averages, self._largest = [], []
@@ -385,10 +439,15 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self._first_check = self.divergence_iteration
         self._bind_matrix()
         try:
-            iterations, converged = super().solve(u)
+            with quiet_dolfinx():  # non-convergence is reported below, with the residuals
+                iterations, converged = super().solve(u)
         except (ContactConvergenceError, ContactSolverError):
             raise
-        except (PETSc.Error, RuntimeError, ValueError) as error:  # PETSc, degenerate iterates
+        except PETSc.Error as error:
+            self._linear_solve_failed(
+                f"the Newton iteration failed ({validation.describe_petsc_error(error)})"
+            )
+        except (RuntimeError, ValueError) as error:  # degenerate iterates
             self._linear_solve_failed(f"the Newton iteration failed ({error})")
         finally:
             self.first_solve = False
@@ -421,6 +480,9 @@ class IncrementResult:
 @dataclass
 class StaticStep:
     """A static step of ``period`` with automatic incrementation (CalculiX ``*STATIC``).
+
+    The step holds configuration only: :meth:`run` returns the results of that run, and the same
+    step can run again (e.g. another load case on a fresh problem).
 
     Args:
         set_load: Called with the step time at the end of each increment (before the pairing);
@@ -460,10 +522,31 @@ class StaticStep:
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
-    results: list[IncrementResult] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        """Check the configuration (``TypeError``/``ValueError`` naming the field)."""
+        validation.check_step(self)
 
     def run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
-        """Run the step; raises :class:`ContactConvergenceError` when cutbacks are exhausted."""
+        """Run the step from the current ``u``.
+
+        Args:
+            solver: The solver of the problem.
+            u: The problem's displacement (the Function the problem was built on).
+
+        Returns:
+            The result of every converged increment of this run.
+
+        Raises:
+            ContactConvergenceError: When an increment fails and cutbacks are exhausted.
+        """
+        validation.check_step(self)
+        validation.check_type(solver, ContactNewtonSolver, "StaticStep.run: solver")
+        if u is not solver.problem.u:
+            raise ValueError(
+                "StaticStep.run: u must be the Function the ContactProblem was built on "
+                f"(got {validation.describe(u)})"
+            )
         problem = solver.problem
         max_inc = self.period if self.max_increment is None else self.max_increment
         if not (0 < self.min_increment <= self.initial_increment <= max_inc):
@@ -478,6 +561,7 @@ class StaticStep:
                 f"divergence_cutback_factor ({self.divergence_cutback_factor}) < 1 <= "
                 f"growth_factor ({self.growth_factor})"
             )
+        results: list[IncrementResult] = []
         t, dt = 0.0, self.initial_increment
         increment = 0
         fast_in_a_row = 0
@@ -550,7 +634,7 @@ class StaticStep:
                 problem.num_springs,
                 solver.residual_norms[-1],
             )
-            self.results.append(result)
+            results.append(result)
             logger.info(
                 " increment %d converged: time %.6g, %d iterations, %d contact elements, "
                 "residual %.3e (%.2f s)",
@@ -566,22 +650,7 @@ class StaticStep:
             fast_in_a_row = fast_in_a_row + 1 if iterations <= self.growth_iterations else 0
             if not self.fixed and fast_in_a_row >= 2:
                 dt = min(self.growth_factor * dt, max_inc)
-        return self.results
-
-
-def log_progress(level: int = logging.INFO) -> None:
-    """Print dolfinx_ntf's CalculiX-like progress lines (increments, pairings, convergence)
-    on rank 0.
-    """
-    from mpi4py import MPI
-
-    if getattr(log_progress, "_handler", None) is None and MPI.COMM_WORLD.rank == 0:
-        handler = logging.StreamHandler()
-        handler.setFormatter(logging.Formatter("%(message)s"))
-        logger.addHandler(handler)
-        log_progress._handler = handler
-    logger.setLevel(level)
-    logger.propagate = False
+        return results
 
 
 def _ksp_reason(reason: int) -> str:

@@ -1,4 +1,6 @@
-"""Face areas and the spring areas ``A_p`` of slave nodes (spec §2.2), with their derivatives.
+"""Face areas and the spring areas ``A_p`` of slave nodes, with their derivatives.
+
+The method is described in docs/method.md §2.2.
 
 ``A_p = Σ_{f∋p} w_{p,f} |f|``: every slave face f hands the fraction ``w_{p,f}`` of its area to each
 of its nodes p, with the ccx weights ``FaceType.area_weights`` (tri3 1/3, quad4 1/4, tri6 1/999 and
@@ -6,8 +8,8 @@ of its nodes p, with the ccx weights ``FaceType.area_weights`` (tri3 1/3, quad4 
 quadrature and the coordinates passed in (the current configuration ``X + u``; ccx recomputes the
 areas at every pairing).
 
-ccx treats ``A_p`` as a constant in the tangent (spec §5); the gradients here serve the optional
-``linearize_area`` extension. Pure numpy, vectorized over faces.
+ccx treats ``A_p`` as a constant in the tangent (docs/method.md §6.3); the gradients here serve the
+optional ``linearize_area`` extension. Pure numpy, vectorized over faces.
 """
 
 from __future__ import annotations
@@ -140,7 +142,7 @@ def spring_areas(
     coords: npt.ArrayLike,
     slave_nodes: npt.ArrayLike,
 ) -> np.ndarray:
-    """Spring areas ``A_p = Σ_{f∋p} w_{p,f} |f|`` of the slave nodes (spec §2.2) -> (S,).
+    """Spring areas ``A_p = Σ_{f∋p} w_{p,f} |f|`` of the slave nodes (docs/method.md §2.2) -> (S,).
 
     Args:
         face_type: Type of every slave face.

@@ -1,4 +1,6 @@
-"""Node-to-face spring elements: residual and consistent tangent (spec §4, §5), vectorized.
+"""Node-to-face spring elements: residual and consistent tangent, vectorized.
+
+The method is described in docs/method.md §5 (forces) and §6 (tangent).
 
 A spring joins one slave node p to one master face with nodes x_0..x_{n-1}. Its element node
 order is ``[master 0..n-1, slave]`` and its element dofs are ``3*k + c``. Everything is evaluated
@@ -20,15 +22,15 @@ Clamped projections: when the closest point lies on an edge of the parametric do
 node is beside the face) the edge constraint is treated as active and ∂ξ/∂x is the exact
 derivative of the constrained closest point (the parameter along the edge moves, the other is
 fixed); at a corner ∂ξ/∂x = 0. There r is not ∥ n and the exact tangent is unsymmetric. CalculiX
-instead uses the interior-projection formula everywhere (spec §5, "terms omitted"); both coincide
+instead uses the interior-projection formula everywhere (docs/method.md §6.1); both coincide
 for interior projections, the normal contact situation.
 
 Friction is not implemented yet. The code is split so that it can be added without a rewrite:
 the kinematics and their derivatives (``_Kinematics``: ∂ξ/∂x, ∂m/∂x, ∂n/∂x, ∂g/∂x) are computed
 once, the slave force and its derivative are formed from them, and ``_element_stiffness`` turns
-*any* slave force f_p and its derivative ∂f_p/∂x into the element matrix (spec §5(e)); a
-tangential force F_T and its derivative (spec §4.2, §5(d)) only have to be added to f_p and
-∂f_p/∂x.
+*any* slave force f_p and its derivative ∂f_p/∂x into the element matrix (docs/method.md §6.1); a
+tangential force F_T and its derivative (friction, docs/method.md §4.5) only have to be added to f_p
+and ∂f_p/∂x.
 """
 
 from __future__ import annotations
@@ -123,7 +125,7 @@ def evaluate_springs(
     symmetric: bool = False,
     area_fallback: bool = True,
 ) -> SpringEvaluation:
-    """Evaluate internal forces and tangent of N node-to-face springs (spec §4, §5).
+    """Evaluate internal forces and tangent of N node-to-face springs (docs/method.md §5, §6).
 
     Args:
         face_type: Type of all master faces.
@@ -131,14 +133,15 @@ def evaluate_springs(
         slave_coords: (N, 3) current coordinates of the slave nodes.
         areas: (N,) spring areas A_p (held constant in the tangent).
         law: Pressure-overclosure law; ``law.spring_force(d, A)`` gives F_N and dF_N/dd.
-        gap_shift: Scalar or (N,) shift g0(1 − τ) subtracted from the clearance (spec §3.6).
+        gap_shift: Scalar or (N,) shift g0(1 − τ) subtracted from the clearance (initial
+            overlap, docs/method.md §3.5).
         xi0: Optional (N, 2) start points for the projection (e.g. the previous ξ).
         tangent: Compute the stiffness matrix.
         symmetric: Return (K + Kᵀ)/2, as CalculiX does without friction, instead of the exact
             tangent (which is unsymmetric only for projections clamped to the face boundary).
         area_fallback: Where A_p = 0 (a slave node without slave face), use CalculiX's fallback
             A_p = |m|/2 for a 3-node master face and 4|m| otherwise, m at the projection point
-            (spec §2.2). If False, such springs carry no force.
+            (docs/method.md §2.2). If False, such springs carry no force.
 
     Returns:
         The evaluation; ``stiffness`` is None if ``tangent`` is False.
@@ -296,8 +299,8 @@ def _kinematics(
     d2 = face_type.shape_second_derivatives(xi).transpose(0, 2, 1) @ master  # (N, 3, 3)
     second = np.stack([np.stack([d2[:, 0], d2[:, 1]], 1), np.stack([d2[:, 1], d2[:, 2]], 1)], 1)
 
-    # Projection derivatives (spec §5(a)). Stationarity r·q_α = 0 gives H δξ = Σ_k b_k δx_k with
-    # H_αβ = q_α·q_β − r·q_αβ and b_kα = w_k q_α + φ_k,α r; δξ = G b_k with G = H⁻¹ inside the
+    # Projection derivatives (docs/method.md §6.1). Stationarity r·q_α = 0 gives H δξ = Σ_k b_k δx_k
+    # with H_αβ = q_α·q_β − r·q_αβ and b_kα = w_k q_α + φ_k,α r; δξ = G b_k with G = H⁻¹ inside the
     # domain, restricted to the free direction on an edge and zero at a corner.
     hessian = tangents @ tangents.transpose(0, 2, 1) - (second @ r[:, None, :, None])[..., 0]
     compliance = _projection_compliance(face_type, xi, hessian, r, tangents)
@@ -391,7 +394,7 @@ def _projection_compliance(
 
 def _skew(a: np.ndarray) -> np.ndarray:
     """(N, 3, 3) cross-product matrices S(a) with S(a) b = a × b."""
-    s = np.zeros(a.shape[:-1] + (3, 3))
+    s = np.zeros((*a.shape[:-1], 3, 3))
     s[..., 0, 1], s[..., 0, 2] = -a[..., 2], a[..., 1]
     s[..., 1, 0], s[..., 1, 2] = a[..., 2], -a[..., 0]
     s[..., 2, 0], s[..., 2, 1] = -a[..., 1], a[..., 0]
@@ -401,7 +404,7 @@ def _skew(a: np.ndarray) -> np.ndarray:
 def _element_stiffness(
     kin: _Kinematics, slave_force: np.ndarray, dslave_force: np.ndarray
 ) -> np.ndarray:
-    """Element matrix from any slave force f_p and its derivative ∂f_p/∂x_l (spec §5(e)).
+    """Element matrix from any slave force f_p and its derivative ∂f_p/∂x_l (docs/method.md §6.1).
 
     Forces are f_k = w_k f_p (w = −φ_j for master nodes, 1 for the slave), so
     ∂f_k/∂x_l = w_k ∂f_p/∂x_l + f_p ⊗ Σ_α ∂w_k/∂ξ_α ∂ξ_α/∂x_l with ∂w_k/∂ξ_α = −φ_k,α.

@@ -16,12 +16,14 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass, field
 
+from mpi4py import MPI
+
 import numpy as np
 
 import dolfinx.fem
 import dolfinx.mesh
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, validation
 from dolfinx_ntf.faces import FaceType, face_type_from_num_nodes
 
 __all__ = [
@@ -38,22 +40,67 @@ __all__ = [
 
 @dataclass(frozen=True)
 class FacetSurface:
-    """A face-based surface: the facets of ``tags`` whose value is in ``values``."""
+    """A face-based surface: the facets of ``tags`` whose value is in ``values``.
+
+    Args:
+        tags: Facet tags of the mesh (e.g. from :func:`dolfinx_ntf.gmsh_io.mesh_from_gmsh`).
+        values: One tag value or several; each must occur in ``tags`` (on some process).
+    """
 
     tags: compat.MeshTags
     values: typing.Sequence[int] | int
 
+    def __post_init__(self) -> None:
+        """Check the tags and values (a ``TypeError`` or ``ValueError`` naming the value)."""
+        # dolfinx 0.5.2's gmshio returns C++ MeshTags objects: check what is used, not the class.
+        if not all(hasattr(self.tags, name) for name in ("dim", "indices", "values")):
+            raise TypeError(
+                "FacetSurface: tags must be the facet MeshTags of the mesh, got "
+                f"{validation.describe(self.tags)}"
+            )
+        self.value_list()
+
     def value_list(self) -> list[int]:
         """The tag values as a list."""
-        return [int(self.values)] if np.isscalar(self.values) else [int(v) for v in self.values]
+        values = [self.values] if np.isscalar(self.values) else self.values
+        if isinstance(values, (str, bytes)) or not isinstance(values, typing.Iterable):
+            raise TypeError(
+                f"FacetSurface: values must be an int or a list of ints, got "
+                f"{validation.describe(self.values)}"
+            )
+        values = list(values)
+        if not values:
+            raise ValueError(
+                "FacetSurface: values is empty; give the facet tag value(s) of the surface"
+            )
+        for i, value in enumerate(values):
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+                raise TypeError(
+                    f"FacetSurface: values must be integer tag values, but entry {i} is "
+                    f"{validation.describe(value)}"
+                )
+        return [int(v) for v in values]
 
 
 @dataclass(frozen=True)
 class NodeSurface:
-    """A node-based slave surface (CalculiX ``*SURFACE, TYPE=NODE``): local mesh vertex indices."""
+    """A node-based slave surface (CalculiX ``*SURFACE, TYPE=NODE``): local mesh vertex indices.
+
+    Args:
+        vertices: Indices of mesh vertices (this process's local numbering, as
+            ``dolfinx.mesh.locate_entities(mesh, 0, marker)`` returns them). They must lie on the
+            boundary of the mesh; non-integer, negative or out-of-range indices are errors.
+        name: Label used in messages.
+    """
 
     vertices: np.ndarray = field(repr=False)
     name: str = "nodes"
+
+    def __post_init__(self) -> None:
+        """Check the indices and store them as an int32 array."""
+        validation.check_type(self.name, str, "NodeSurface: name")
+        owner = f"NodeSurface '{self.name}'"
+        object.__setattr__(self, "vertices", validation.vertex_indices(self.vertices, owner))
 
     @classmethod
     def from_marker(
@@ -82,7 +129,7 @@ class SurfaceFaces:
 
 @dataclass(frozen=True)
 class SlaveSurface:
-    """Slave nodes and the faces that give them spring area (spec §2.1)."""
+    """Slave nodes and the faces that give them spring area (docs/method.md §2.1)."""
 
     nodes: np.ndarray  # (S,) sorted local block dofs
     faces: SurfaceFaces
@@ -97,7 +144,6 @@ def _cell_arrays(V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
     """Cell-to-node table of ``V`` and the facet-closure table of the reference cell."""
     mesh = V.mesh
     tdim = mesh.topology.dim
-    num_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
     cell_nodes = compat.cell_dofs(V)
     layout = V.dofmap.dof_layout
     num_facets_per_cell = dolfinx.cpp.mesh.cell_num_entities(mesh.topology.cell_type, tdim - 1)
@@ -195,8 +241,10 @@ def _midside_nodes(X: np.ndarray, corners: np.ndarray, others: np.ndarray) -> np
     return np.hstack([edge_nodes, others[:, num_corners:]])
 
 
-def _tagged_facets(surface: FacetSurface, tdim: int, what: str) -> np.ndarray:
+def _tagged_facets(surface: FacetSurface, mesh: dolfinx.mesh.Mesh, what: str) -> np.ndarray:
+    """Local facets of a facet surface; tag values absent on every process are an error."""
     tags = surface.tags
+    tdim = mesh.topology.dim
     if tags.dim != tdim - 1:
         raise ValueError(
             f"{what}: MeshTags of dimension {tags.dim} given, facet tags "
@@ -204,11 +252,13 @@ def _tagged_facets(surface: FacetSurface, tdim: int, what: str) -> np.ndarray:
         )
     values = surface.value_list()
     facets = tags.indices[np.isin(tags.values, values)]
-    missing = [v for v in values if not np.any(tags.values == v)]
+    # A process may hold no facet of a value that others have: decide on the global set.
+    present = set().union(*mesh.comm.allgather(set(np.unique(tags.values).tolist())))
+    missing = [v for v in values if v not in present]
     if missing:
         raise ValueError(
             f"{what}: facet tag value(s) {missing} not found in the facet tags "
-            f"(values present: {sorted(set(tags.values.tolist()))})"
+            f"(values present: {sorted(present)})"
         )
     return facets
 
@@ -222,40 +272,74 @@ def resolve_master(
             f"{what}: the master surface must be a FacetSurface (face-based), "
             f"got {type(surface).__name__}"
         )
-    return boundary_faces(V, _tagged_facets(surface, V.mesh.topology.dim, what), what=what)
+    return boundary_faces(V, _tagged_facets(surface, V.mesh, what), what=what)
 
 
 def resolve_slave(
     V: dolfinx.fem.FunctionSpace, surface: FacetSurface | NodeSurface, what: str = "slave"
 ) -> SlaveSurface:
-    """Slave nodes and area faces (spec §2.1).
+    """Slave nodes and area faces (docs/method.md §2.1).
 
     Face-based: the listed faces; slave nodes are all their nodes. Node-based: the slave faces are
     all exterior faces of the mesh with at least one corner among the slave nodes.
     """
     if isinstance(surface, FacetSurface):
-        faces = boundary_faces(V, _tagged_facets(surface, V.mesh.topology.dim, what), what=what)
+        faces = boundary_faces(V, _tagged_facets(surface, V.mesh, what), what=what)
         return SlaveSurface(faces.nodes, faces)
     if not isinstance(surface, NodeSurface):
-        raise ValueError(
+        raise TypeError(
             f"{what}: expected a FacetSurface or NodeSurface, got {type(surface).__name__}"
         )
-    vertices = np.asarray(surface.vertices, dtype=np.int32)
-    if vertices.size == 0:
-        raise ValueError(f"{what}: node surface '{surface.name}' has no vertices")
+    vertices = surface.vertices
     mesh = V.mesh
+    comm = mesh.comm
+    label = f"{what}: node surface '{surface.name}'"
     num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
-    if vertices.min() < 0 or vertices.max() >= num_vertices:
-        raise ValueError(
-            f"{what}: node surface '{surface.name}' names vertex indices outside "
-            f"0..{num_vertices - 1}"
+    outside = np.flatnonzero(vertices >= num_vertices)
+    validation.raise_collectively(
+        comm,
+        ValueError(
+            f"{label}: vertex index {int(vertices[outside[0]])} (entry {int(outside[0])}) is "
+            f"outside 0..{num_vertices - 1} (the vertices of the mesh on this process)"
         )
+        if outside.size
+        else None,
+    )
+    if comm.allreduce(int(vertices.size), op=MPI.SUM) == 0:
+        raise ValueError(f"{label} has no vertices")
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(0, tdim)
     nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
     mesh.topology.create_connectivity(tdim - 1, tdim)
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     all_faces = boundary_faces(V, exterior, what=what)
-    touching = np.isin(all_faces.faces[:, : all_faces.face_type.num_corners], nodes).any(axis=1)
+    corners = all_faces.faces[:, : all_faces.face_type.num_corners]
+    _check_on_boundary(comm, label, nodes, corners, reference_coordinates(V))
+    touching = np.isin(corners, nodes).any(axis=1)
     faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
     return SlaveSurface(nodes, faces)
+
+
+def _check_on_boundary(
+    comm: MPI.Comm, label: str, nodes: np.ndarray, corners: np.ndarray, X: np.ndarray
+) -> None:
+    """Node-surface vertices inside the mesh: an error if all are, a warning if some are."""
+    interior = nodes[~np.isin(nodes, corners)]
+    num_interior = comm.allreduce(int(interior.size), op=MPI.SUM)
+    if num_interior == 0:
+        return
+    total = comm.allreduce(int(nodes.size), op=MPI.SUM)
+    where = ""
+    if interior.size:
+        x = X[interior[0]]
+        where = f" (first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
+    if num_interior == total:
+        raise ValueError(
+            f"{label}: none of its {total} vertices lies on the boundary of the mesh{where}; "
+            "slave nodes must be on the surface of a body"
+        )
+    if comm.rank == 0:
+        validation.warn(
+            f"{label}: {num_interior} of its {total} vertices are inside the mesh, not on its "
+            f"boundary{where}; they collect no spring area"
+        )

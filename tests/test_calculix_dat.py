@@ -213,7 +213,7 @@ def test_writer_input_errors():
         contact_print_blocks("CELS", 1.0, [1], [0.0], totals="MAYBE")
     with pytest.raises(ValueError, match=r"shape \(1, q, 6\)"):
         el_print_blocks("S", "E", 1.0, [1], np.zeros((1, 8, 3)))
-    with pytest.raises(ValueError, match="unknown .dat block"):
+    with pytest.raises(ValueError, match=r"unknown \.dat block"):
         format_block(DatBlock("XYZ", 1.0, None, np.zeros(0), np.zeros((1, 1))))
     with pytest.raises(ValueError, match="needs a set name"):
         format_block(DatBlock("U", 1.0, None, np.array([1]), np.zeros((1, 3))))

@@ -108,7 +108,6 @@ def test_round_trip_mesh_and_materials(tmp_path, cell, degree, etype, mirror):
 
     # Elements: same node sets as the dolfinx cells.
     block = deck.elements[etype]
-    num_cells = V.mesh.topology.index_map(3).size_local
     cell_dofs = compat.cell_dofs(V)
     order = np.argsort(block.ids)
     np.testing.assert_array_equal(block.ids[order], numbering.element_ids)
@@ -252,7 +251,7 @@ def test_node_based_slave_and_laws(tmp_path):
         ("LINEAR", (50 * E1, E1 / 70000.0, 1e-3)),
     ]
     assert [p.small_sliding for p in deck.contact_pairs] == [False, False, True]
-    assert list(deck.materials.values())[0].elastic == (E1, NU1)
+    assert next(iter(deck.materials.values())).elastic == (E1, NU1)
     assert deck.steps[0].static.direct and deck.steps[0].static.initial_increment == 1.0
 
 
@@ -338,12 +337,12 @@ def test_bad_input(tmp_path):
 @pytest.mark.parametrize("cell,degree,etype", CASES)
 def test_ccx_runs_written_deck_pressure_resultant(tmp_path, cell, degree, etype, mirror):
     """ccx runs the deck; the base reactions balance the top pressure (P face labels right)."""
-    V, ct, ft = _space(cell, degree, mirror)
+    V, ct, _ft = _space(cell, degree, mirror)
     pressure = 3.0
     mesh = V.mesh
     # The lower block alone: fixed bottom, pressure on its top (area 1).
     lower_cells = ct.indices[ct.values == LOWER]
-    sub, cell_map, _, _ = dolfinx.mesh.create_submesh(mesh, 3, lower_cells)
+    sub, _cell_map, _, _ = dolfinx.mesh.create_submesh(mesh, 3, lower_cells)
     Vs = compat.vector_space(sub, "Lagrange", degree)
     sub.topology.create_connectivity(2, 3)
     exterior = dolfinx.mesh.exterior_facet_indices(sub.topology)

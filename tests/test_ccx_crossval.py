@@ -14,9 +14,9 @@ to round-off like ``run_job(..., tight=True)``. Per converged increment the test
 
 ccx prints 7 significant digits, so displacements cannot agree better than about 5e-7 of the
 largest one. The remaining differences are ccx's: its converged increment keeps quantities from
-the iterate before its last Newton correction (the spring areas of the last pairing, spec §3.1 and
-§5; NLGEOM follower pressures), see ``docs/validation.md``. A case whose tolerance had to be
-relaxed says which quirk and why (``Case.quirk``).
+the iterate before its last Newton correction (the spring areas of the last pairing, docs/method.md
+§3.1 and §6.3; NLGEOM follower pressures), see ``docs/validation.md``. A case whose tolerance had to
+be relaxed says which quirk and why (``Case.quirk``).
 """
 
 from __future__ import annotations
@@ -215,5 +215,5 @@ def test_ccx_increments_reads_dat_blocks(tmp_path: Path):
     np.testing.assert_allclose(first.energy, [1e-3, 2e-3])
     assert first.time == 0.5 and first.iterations is None
     write_dat(tmp_path / "bad.dat", [b for b in blocks if b.name != "CSTR"])
-    with pytest.raises(ValueError, match="no CSTR block at time 0.5"):
+    with pytest.raises(ValueError, match=r"no CSTR block at time 0\.5"):
         ccx_increments(tmp_path / "bad.dat")

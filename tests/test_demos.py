@@ -30,6 +30,7 @@ def test_punch_demo_balances_the_load(tmp_path):
     # of the master normals only (measured 2.5e-7).
     assert summary["vertical_error"] < 1e-8
     assert summary["normal_error"] < 1e-8
+    assert summary["reaction_error"] < 1e-8  # the block bottom carries the load (reaction helper)
     assert 0 < summary["pressure_area_deviation"] < 1e-5
     # All 5 x 5 punch-bottom nodes are in contact from the first increment on; the pressure peaks
     # at the punch edges (measured 2.1 times the mean).

@@ -270,8 +270,12 @@ def test_face_points_and_tangents(ft):
         np.testing.assert_allclose(face_points(ft, coords, xj), coords[:, j], atol=1e-13)
     q_xi, q_eta = face_tangents(ft, coords, xi)
     h = 1e-6
-    fd_xi = (face_points(ft, coords, xi + [h, 0]) - face_points(ft, coords, xi - [h, 0])) / (2 * h)
-    fd_eta = (face_points(ft, coords, xi + [0, h]) - face_points(ft, coords, xi - [0, h])) / (2 * h)
+    fd_xi = (
+        face_points(ft, coords, xi + np.array([h, 0])) - face_points(ft, coords, xi - [h, 0])
+    ) / (2 * h)
+    fd_eta = (
+        face_points(ft, coords, xi + np.array([0, h])) - face_points(ft, coords, xi - [0, h])
+    ) / (2 * h)
     np.testing.assert_allclose(q_xi, fd_xi, atol=1e-8)
     np.testing.assert_allclose(q_eta, fd_eta, atol=1e-8)
     with pytest.raises(ValueError, match="face_coords"):

@@ -1,10 +1,9 @@
-"""gmsh models of meshes/ through dolfinx_ntf.gmsh_io: tags, volumes, areas, separate bodies.
+"""gmsh models of dolfinx_ntf.meshes through gmsh_io: tags, volumes, areas, separate bodies.
 
 Runs in serial and under ``mpirun -n 2``: every quantity is reduced over the communicator, and gmsh
 only runs on rank 0.
 """
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -18,22 +17,11 @@ import ufl
 from dolfinx import fem
 
 from dolfinx_ntf import compat, gmsh_io
+from dolfinx_ntf.meshes import hertz, punch
 
 pytestmark = pytest.mark.mpi
 
 COMM = MPI.COMM_WORLD
-MESHES = Path(__file__).resolve().parents[1] / "meshes"
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(f"_meshes_{name}", MESHES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-punch = _load("punch")
-hertz = _load("hertz")
 
 
 def _cell_volumes(mesh, cell_tags):
@@ -155,7 +143,7 @@ def test_patch_test_meshes_match(cell_type, order):
 
 
 def test_patch_test_different_divisions():
-    mesh, ct, ft = gmsh_io.mesh_from_gmsh(
+    mesh, _ct, ft = gmsh_io.mesh_from_gmsh(
         punch.build_patch_test, COMM, divisions=4, punch_divisions=3
     )
     stats = _facet_stats(mesh, ft)
@@ -204,7 +192,9 @@ def test_hertz_coarse_quarter():
 
 def test_hertz_hexahedra_and_quadratic_geometry():
     coarse = {"size_fine": 0.1, "size_coarse": 0.6, "refine_radius": 0.2}
-    mesh, ct, ft = gmsh_io.mesh_from_gmsh(hertz.build_hertz, COMM, cell_type="hexahedron", **coarse)
+    mesh, ct, _ft = gmsh_io.mesh_from_gmsh(
+        hertz.build_hertz, COMM, cell_type="hexahedron", **coarse
+    )
     assert mesh.topology.cell_name() == "hexahedron"
     volumes = _cell_volumes(mesh, ct)
     assert math.isclose(volumes[hertz.BLOCK], 6.0, rel_tol=1e-12)
@@ -266,7 +256,7 @@ def test_read_msh_roundtrip_and_model_to_mesh(tmp_path):
 
 
 def test_read_msh_errors(tmp_path):
-    with pytest.raises(FileNotFoundError, match="no_such.msh"):
+    with pytest.raises(FileNotFoundError, match=r"no_such\.msh"):
         gmsh_io.read_msh(tmp_path / "no_such.msh", COMM)
 
     garbage = COMM.bcast(str(tmp_path / "garbage.msh"), root=0)

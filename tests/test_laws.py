@@ -146,8 +146,14 @@ def test_linear_ccx_defaults():
     assert law.slope == 50.0 * 210000.0
     assert law.tension == pytest.approx(3.0)
     assert law.c0 == 1e-3
-    law = LinearLaw.with_ccx_defaults(210000.0, slope=-1.0, tension=0.0, c0=-2.0)
+    with pytest.warns(UserWarning) as caught:
+        law = LinearLaw.with_ccx_defaults(210000.0, slope=-1.0, tension=0.0, c0=-2.0)
     assert (law.slope, law.tension, law.c0) == (50.0 * 210000.0, 3.0, 1e-3)
+    # Negative values are named (zero asks for the default, as in a deck).
+    assert [str(w.message).split(";")[0] for w in caught] == [
+        "LinearLaw.with_ccx_defaults: slope = -1.0 is negative",
+        "LinearLaw.with_ccx_defaults: c0 = -2.0 is negative",
+    ]
     law = LinearLaw.with_ccx_defaults(210000.0, slope=1e6, tension=7.0, c0=0.01)
     assert (law.slope, law.tension, law.c0) == (1e6, 7.0, 0.01)
 
@@ -227,7 +233,7 @@ def test_tabular_nudge_and_errors():
         TabularLaw(pressures=[0.0, 1.0], overclosures=[0.0, np.inf])
     with pytest.raises(ValueError, match="1-D"):
         TabularLaw(pressures=[[0.0, 1.0]], overclosures=[[0.0, 1.0]])
-    # negative pressures are accepted (spec is silent)
+    # negative pressures are accepted (CalculiX says nothing about them)
     assert TabularLaw(pressures=[-1.0, 1.0], overclosures=[0.0, 1.0]).pressure(0.5) == 0.0
     with pytest.raises(ValueError):
         law.overclosures[0] = 5.0  # read-only

@@ -2,9 +2,9 @@
 search lets nodes on shared edges flip faces at every re-pairing."""
 
 import pytest
+from test_problem import _setup, _solve
 
 import dolfinx_ntf as ntf
-from test_problem import _setup, _solve
 
 pytestmark = pytest.mark.serial
 
@@ -17,9 +17,9 @@ def test_default_search_changes_no_faces_on_a_tie_deck(cell):
         problem, pressure, _ = _setup(cell, walk_from_previous_face=stable)
         counts = []
         problem.pairing_callbacks.append(lambda p, counts=counts: counts.append(p.face_changes))
-        _, step = _solve(problem, pressure)
+        _, results = _solve(problem, pressure)
         changes[stable] = sum(counts)
-        iterations[stable] = [r.iterations for r in step.results]
+        iterations[stable] = [r.iterations for r in results]
     assert changes[True] == 0
     assert all(a <= b for a, b in zip(iterations[True], iterations[False]))
     if cell == "tetrahedron":  # hexahedra have no ping-pong in either mode on this deck

@@ -86,7 +86,7 @@ def _brute_force(ft: FaceType, coords: np.ndarray, pts: np.ndarray) -> np.ndarra
         grid = grid[grid.sum(axis=1) <= 1 + 1e-12]
     phi = ft.shape_functions(grid)  # (G, n)
     out = np.empty((len(pts), 2))
-    a, b = _constraints(ft)
+    a, _b = _constraints(ft)
     for i in range(len(pts)):
         q = phi @ coords[i]
         start = grid[np.argmin(np.sum((q - pts[i]) ** 2, axis=1))]
@@ -112,7 +112,7 @@ def _brute_force(ft: FaceType, coords: np.ndarray, pts: np.ndarray) -> np.ndarra
 
 
 def _compass(ft: FaceType, coords: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """CalculiX-style compass search of spec §3.3 (square domain, folded for triangles)."""
+    """CalculiX's compass search (docs/method.md §3.3; square domain, folded for triangles)."""
     num = len(pts)
     s = np.zeros((num, 2))
 
@@ -313,7 +313,7 @@ def test_point_beyond_centre_of_curvature_leaves_the_centre(ft):
 
 @pytest.mark.parametrize("ft", ALL, ids=IDS)
 def test_agrees_with_ccx_compass_search(ft):
-    # Spec §3.3: the compass search from the centre; near points, mildly distorted faces.
+    # docs/method.md §3.3: the compass search from the centre; near points, mildly distorted faces.
     rng = np.random.default_rng(15)
     num = 300
     coords = _distorted_faces(ft, num, 0.03, rng)

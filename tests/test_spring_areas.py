@@ -1,4 +1,4 @@
-"""Tests of face areas, spring areas (spec §2.2) and their derivatives (pure numpy)."""
+"""Tests of face areas, spring areas (docs/method.md §2.2) and their derivatives (pure numpy)."""
 
 from __future__ import annotations
 

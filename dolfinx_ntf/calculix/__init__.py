@@ -1,5 +1,4 @@
-"""CalculiX interoperability: run ccx decks with dolfinx_ntf, write decks, read and write ccx
-results.
+"""CalculiX interoperability: run ccx decks, write decks, read and write ccx results.
 
 File formats (pure Python/numpy, no dolfinx):
     - ``deck``: ``read_deck`` parses the node-to-face subset of a ``.inp`` deck into a ``Deck``;

@@ -196,7 +196,7 @@ def read_sta(path: str | Path) -> list[StaIncrement]:
                     float(fields[4]),
                     float(fields[5]),
                     float(fields[6]),
-                )  # fmt: skip
+                )
             )
         except ValueError:
             continue

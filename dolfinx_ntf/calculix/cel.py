@@ -1,4 +1,4 @@
-"""The CONTACT ELEMENTS file ``jobname.cel`` of CalculiX 2.20 (spec §8.4).
+"""The CONTACT ELEMENTS file ``jobname.cel`` of CalculiX 2.20 (docs/method.md §8.5).
 
 With ``CONTACT ELEMENTS`` on a ``*NODE FILE``/``*EL FILE``/``*CONTACT FILE``/... card, ccx writes
 every contact element of every pairing (every Newton iteration that re-pairs) as a cgx-readable
@@ -53,7 +53,10 @@ def format_contact_elements(
         master_faces: ``(N, n)`` node numbers of each element's master face, ccx face order
             (n = 3, 4, 6, 8 or 9).
         slave_nodes: ``(N,)`` slave node number of each element.
-        step, increment, attempt, iteration: 1-based numbers of the set name.
+        step: 1-based step number of the set name.
+        increment: 1-based increment number of the set name.
+        attempt: 1-based attempt number of the set name.
+        iteration: 1-based iteration number of the set name.
     """
     faces = np.asarray(master_faces, dtype=np.int64)
     slaves = np.asarray(slave_nodes, dtype=np.int64).reshape(-1)

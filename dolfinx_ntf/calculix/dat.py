@@ -1,4 +1,4 @@
-"""CalculiX 2.20 ``.dat`` blocks: an exact writer and a reader (spec §8.1).
+"""CalculiX 2.20 ``.dat`` blocks: an exact writer and a reader (docs/method.md §8.5).
 
 A ``.dat`` file is a sequence of blocks, each a blank line, a title line, a blank line and one
 row per item (no rows is allowed: ccx then writes the title and the two blank lines only)::
@@ -261,7 +261,7 @@ def el_print_blocks(key: str, set_name: str, time: float, elements, values) -> l
 def contact_print_blocks(
     key: str, time: float, slave_nodes, values=None, *, totals: str = "NO"
 ) -> list[DatBlock]:
-    """Blocks of a ``*CONTACT PRINT`` key for one time (spec §8.1).
+    """Blocks of a ``*CONTACT PRINT`` key for one time (docs/method.md §8.5).
 
     Args:
         key: ``CDIS``, ``CSTR``, ``CELS`` or ``CNUM``.

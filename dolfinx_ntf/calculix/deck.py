@@ -1,4 +1,6 @@
-"""Reader of CalculiX ``.inp`` decks: the subset needed for node-to-face contact (spec §1).
+"""Reader of CalculiX ``.inp`` decks: the subset needed for node-to-face contact.
+
+See docs/method.md §8.5.
 
 ``read_deck`` turns a deck (with its ``*INCLUDE`` files) into a ``Deck`` of frozen dataclasses
 that keeps CalculiX's node and element numbers, so that results can be reported per ccx node. Only
@@ -204,7 +206,9 @@ class SolidSection:
 
 @dataclass(frozen=True, eq=False)
 class SurfaceBehavior:
-    """A ``*SURFACE BEHAVIOR`` as written (ccx defaults are resolved by the law, spec §1).
+    """A ``*SURFACE BEHAVIOR`` as written.
+
+    ccx's defaults are resolved by the law (docs/method.md §4.2).
 
     Attributes:
         pressure_overclosure: ``EXPONENTIAL``, ``LINEAR``, ``TABULAR`` or ``HARD``.
@@ -341,7 +345,7 @@ class FileRequest:
     """A ``*NODE/EL/CONTACT FILE`` or ``*NODE/ELEMENT/CONTACT OUTPUT`` card (``.frd`` output).
 
     ``kind`` is ``NODE``, ``EL`` or ``CONTACT``; ``contact_elements`` is the CONTACT ELEMENTS
-    flag that asks for the ``.cel`` file (spec §8.4).
+    flag that asks for the ``.cel`` file (docs/method.md §8.5).
     """
 
     keyword: str
@@ -494,7 +498,7 @@ class Deck:
         nsets, elsets: members in definition order (duplicates kept).
         surfaces, materials, interactions, amplitudes: by upper-case name.
         sections: ``*SOLID SECTION`` cards.
-        contact_pairs: in deck order (spec §2.1: contact elements follow that order).
+        contact_pairs: in deck order (docs/method.md §2.1: contact elements follow that order).
         boundaries: ``*BOUNDARY`` cards of the model definition (before the first step).
         steps: the steps.
         ignored: ``(keyword, file, line)`` of output/control keywords that were skipped.
@@ -519,7 +523,7 @@ class Deck:
 
     @property
     def num_elements(self) -> int:
-        """Total number of elements (ccx numbers contact elements after them, spec §8.4)."""
+        """Total number of elements (ccx numbers contact elements after them)."""
         return sum(int(b.ids.size) for b in self.elements.values())
 
     def node_index(self, ids) -> np.ndarray:
@@ -626,7 +630,9 @@ def surface_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
 
 
 def external_faces(deck: Deck) -> np.ndarray:
-    """Node numbers ``(F, n)`` of every face that belongs to exactly one element (spec §2.1).
+    """Node numbers ``(F, n)`` of every face that belongs to exactly one element.
+
+    See docs/method.md §2.1.
 
     Faces are in ccx outward order, grouped by element block then element then face number.
 
@@ -650,7 +656,7 @@ def external_faces(deck: Deck) -> np.ndarray:
 
 
 def node_surface_faces(deck: Deck, surface: Surface | str) -> np.ndarray:
-    """Faces ``(F, n)`` that ccx uses as slave faces of a surface (spec §2.1).
+    """Faces ``(F, n)`` that ccx uses as slave faces of a surface (docs/method.md §2.1).
 
     Element-face surface: its faces. Nodal surface (``TYPE=NODE``): every external face of the
     whole mesh with at least one *corner* node in the surface.
@@ -1321,7 +1327,7 @@ class _Reader:
     def _friction_data(self, card: _Card) -> Friction:
         self._check_params(card, allowed=set())
         self._need_data(card)
-        fields, _, loc = card.lines[-1]  # several lines: the last one counts (spec §1)
+        fields, _, loc = card.lines[-1]  # several lines: the last one counts (as in ccx)
         if not 1 <= len(fields) <= 2:
             raise DeckError("*FRICTION data line: mu[, stick slope]", loc)
         mu = self._float(fields[0], "friction coefficient", loc)
@@ -1452,7 +1458,7 @@ class _Reader:
                     op,
                     fields[0],
                     loc,
-                )  # fmt: skip
+                )
             )
 
     # -- steps ----------------------------------------------------------------------------------
@@ -1553,7 +1559,7 @@ class _Reader:
         if totals not in ("YES", "NO", "ONLY"):
             raise DeckError(f"TOTALS={totals}: use YES, NO or ONLY", card.location)
         set_name = None
-        if kind != "CONTACT":  # ccx ignores NSET on *CONTACT PRINT (spec §8.1)
+        if kind != "CONTACT":  # ccx ignores NSET on *CONTACT PRINT (docs/method.md §8.5)
             set_name = card.params[set_param] or ""
             sets = self.nsets if kind == "NODE" else self.elsets
             if set_name not in sets:

@@ -6,12 +6,12 @@
 selects:
 
     - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S) and ``*CONTACT PRINT`` (CDIS,
-      CSTR, CELS, CNUM) blocks in ccx 2.20's exact format and order (spec §8.1: contact rows by
-      pair in deck order, slave nodes ascending). RF is the internal force of the bulk elements
-      plus the contact springs at each node, as ccx prints it: the reaction at constrained dofs,
-      the applied load elsewhere.
-    - ``JOB.cel``: every pairing's contact elements when ``CONTACT ELEMENTS`` is requested (spec
-      §8.4).
+      CSTR, CELS, CNUM) blocks in ccx 2.20's exact format and order (docs/method.md §8.5: contact
+      rows by pair in deck order, slave nodes ascending). RF is the internal force of the bulk
+      elements plus the contact springs at each node, as ccx prints it: the reaction at constrained
+      dofs, the applied load elsewhere.
+    - ``JOB.cel``: every pairing's contact elements when ``CONTACT ELEMENTS`` is requested
+      (docs/method.md §8.5).
     - ``JOB.xdmf``: displacement, contact pressure, clearance and status (every converged
       increment).
 
@@ -296,7 +296,7 @@ class _Job:
         return rows
 
     def _on_pairing(self, problem: ContactProblem) -> None:
-        """Write this pairing's contact elements to the ``.cel`` file (spec §8.4)."""
+        """Write this pairing's contact elements to the ``.cel`` file (docs/method.md §8.5)."""
         step = self.deck.steps[self.counters.step - 1]
         if self.cel is None or not step.contact_elements or self._cel_overflow:
             return

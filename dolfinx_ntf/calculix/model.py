@@ -233,7 +233,7 @@ class CalculixModel:
     def nodal_values(self, node_ids: np.ndarray, values: np.ndarray) -> np.ndarray:
         """Rows of a ``(num_dofs, k)`` per-dof array at ccx nodes (zeros for unused nodes)."""
         dofs = self.node_dofs(node_ids)
-        out = np.zeros((dofs.size,) + values.shape[1:])
+        out = np.zeros((dofs.size, *values.shape[1:]))
         out[dofs >= 0] = values[dofs[dofs >= 0]]
         return out
 

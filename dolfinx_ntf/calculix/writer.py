@@ -24,7 +24,6 @@ Numbering and conventions shared by the whole module:
 from __future__ import annotations
 
 import math
-import typing
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,9 +35,9 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
 from dolfinx_ntf.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.problem import ContactPair
+from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
 
 from .deck import ELEMENT_TYPES, FIELD_CONTROL_NAMES
@@ -56,7 +55,7 @@ __all__ = [
     "write_inp",
 ]
 
-NodeTarget = typing.Union[FacetSurface, NodeSurface, np.ndarray, Sequence[int]]
+NodeTarget = FacetSurface | NodeSurface | np.ndarray | Sequence[int]
 """Nodes of a constraint or load: facets, vertices, or local block dofs of the space."""
 
 # TIGHT_FIELD_CONTROLS (from dolfinx_ntf.solver): ``*CONTROLS, PARAMETERS=FIELD`` values that

@@ -212,7 +212,7 @@ LINEAR = ntf.LinearLaw(slope=50 * E1, tension=E1 / 70000.0, c0=1e-3)  # ccx's de
 
 LOWER = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (4, 4, 2))
 # Punch origins are offset so that no slave node lies on a master edge: such nodes flip between
-# faces at every re-pairing in ccx (spec §3.2), which is not what these decks compare.
+# faces at every re-pairing in ccx (docs/method.md §3.2), which is not what these decks compare.
 PUNCH = ((0.11, 0.13, 0.0), (0.6, 0.6, 0.4), (3, 3, 2))
 
 

@@ -8,10 +8,10 @@ unstructured mesher (`build_punch`) or from split transfinite hexahedra (`build_
 
 The builders only talk to gmsh: call them on one MPI rank, with gmsh initialized.
 
-Run as a script to write ``meshes/punch.msh``::
+Run as a script to write ``punch.msh``::
 
-    python meshes/punch.py --cell-type tetrahedron --block-size 0.1 --punch-size 0.05
-    python meshes/punch.py --patch --divisions 4 -o meshes/patch.msh
+    python -m dolfinx_ntf.meshes.punch --cell-type tetrahedron --block-size 0.1 --punch-size 0.05
+    python -m dolfinx_ntf.meshes.punch --patch --divisions 4 -o patch.msh
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import gmsh
+
+from dolfinx_ntf.gmsh_io import gmsh_session
 
 __all__ = [
     "BLOCK",
@@ -291,7 +293,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     """Write a punch (or patch-test) mesh to a .msh file."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "-o", "--output", type=Path, default=Path(__file__).resolve().parent / "punch.msh"
+        "-o", "--output", type=Path, default=Path("punch.msh"), help="default: punch.msh"
     )
     parser.add_argument("--cell-type", choices=_CELL_TYPES, default="hexahedron")
     parser.add_argument("--order", type=int, choices=(1, 2), default=1)
@@ -303,9 +305,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--divisions", type=int, default=4, help="patch test in-plane divisions")
     args = parser.parse_args(argv)
 
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 1)
+    with gmsh_session(terminal=True):
         if args.patch:
             build_patch_test(
                 divisions=args.divisions, gap=args.gap, cell_type=args.cell_type, order=args.order
@@ -320,8 +320,6 @@ def main(argv: Sequence[str] | None = None) -> None:
         gmsh.option.setNumber("Mesh.Binary", 0)
         gmsh.write(str(args.output))
         print(f"wrote {args.output}: {len(gmsh.model.mesh.getNodes()[0])} nodes")
-    finally:
-        gmsh.finalize()
 
 
 if __name__ == "__main__":

@@ -12,10 +12,10 @@ from the unstructured mesher; hexahedra from splitting each tetrahedron into fou
 subdivision), with the tetrahedral sizes doubled so that hexahedral edges keep the requested sizes.
 
 Builders talk to gmsh only: call them on one MPI rank with gmsh initialized. Run as a script to
-write ``meshes/hertz.msh``::
+write ``hertz.msh``::
 
-    python meshes/hertz.py            # ~27k P1 dofs (tetrahedra; ~32k with --cell-type hexahedron)
-    python meshes/hertz.py --coarse   # ~3.4k P1 dofs (tetrahedra), for tests
+    python -m dolfinx_ntf.meshes.hertz           # ~27k P1 dofs (tetrahedra)
+    python -m dolfinx_ntf.meshes.hertz --coarse  # ~3.4k P1 dofs (tetrahedra), for tests
 """
 
 from __future__ import annotations
@@ -26,6 +26,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import gmsh
+
+from dolfinx_ntf.gmsh_io import gmsh_session
 
 __all__ = [
     "BLOCK",
@@ -243,7 +245,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     """Write a Hertz contact mesh to a .msh file."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "-o", "--output", type=Path, default=Path(__file__).resolve().parent / "hertz.msh"
+        "-o", "--output", type=Path, default=Path("hertz.msh"), help="default: hertz.msh"
     )
     parser.add_argument("--cell-type", choices=_CELL_TYPES, default="tetrahedron")
     parser.add_argument("--order", type=int, choices=(1, 2), default=1)
@@ -259,9 +261,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     for key in ("size_fine", "size_coarse", "refine_radius"):
         if getattr(args, key) is not None:
             sizes[key] = getattr(args, key)
-    gmsh.initialize()
-    try:
-        gmsh.option.setNumber("General.Terminal", 1)
+    with gmsh_session(terminal=True):
         build_hertz(
             radius=args.radius,
             quarter=not args.full,
@@ -272,8 +272,6 @@ def main(argv: Sequence[str] | None = None) -> None:
         gmsh.option.setNumber("Mesh.Binary", 0)
         gmsh.write(str(args.output))
         print(f"wrote {args.output}: {len(gmsh.model.mesh.getNodes()[0])} nodes")
-    finally:
-        gmsh.finalize()
 
 
 if __name__ == "__main__":

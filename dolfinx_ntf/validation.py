@@ -1,0 +1,570 @@
+"""Checks of what users pass to dolfinx_ntf, run where their call enters the library.
+
+Each check names the argument, the value and what is expected, so that a wrong use fails at once
+with a message that says what to do instead, not later inside a Newton iteration with an
+``AttributeError``, an ``IndexError`` or a PETSc error code. The constructors and entry methods
+(:class:`~dolfinx_ntf.FacetSurface`, :class:`~dolfinx_ntf.NodeSurface`,
+:class:`~dolfinx_ntf.ContactPair`, :class:`~dolfinx_ntf.ContactProblem`,
+:class:`~dolfinx_ntf.ContactNewtonSolver`, :class:`~dolfinx_ntf.StaticStep`,
+:class:`~dolfinx_ntf.ContactWriter`, the helpers of ``postprocess.py``) call them once; nothing here
+runs on every Newton evaluation.
+
+Shared rules:
+    - ``TypeError`` for an argument of the wrong kind, ``ValueError`` for a wrong value,
+      ``OSError`` (``FileNotFoundError``, ``PermissionError``) for an output path that cannot be
+      written, ``UserWarning`` where CalculiX's rule replaces a value.
+    - Checks that depend on data distributed over MPI processes are collective: every process
+      raises (the same type and message) or none does, so that no process continues alone into the
+      next collective call and hangs.
+"""
+
+from __future__ import annotations
+
+import numbers
+import os
+import typing
+import warnings
+from pathlib import Path
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+import dolfinx.fem
+import ufl
+
+from dolfinx_ntf import compat
+
+__all__ = [
+    "check_bcs",
+    "check_displacement",
+    "check_distinct_pairs",
+    "check_finite_contact_nodes",
+    "check_linear_solver",
+    "check_petsc_options",
+    "check_positive",
+    "check_problem",
+    "check_residual",
+    "check_sequence",
+    "check_solver",
+    "check_step",
+    "check_type",
+    "check_writable",
+    "describe",
+    "describe_petsc_error",
+    "raise_collectively",
+    "vertex_indices",
+    "warn",
+]
+
+#: Continuous Lagrange family names as dolfinx 0.5.2 (tetrahedra: Lagrange, hexahedra: Q) and 0.9
+#: (Lagrange) report them.
+_LAGRANGE_FAMILIES = ("Lagrange", "P", "Q", "CG")
+
+#: PETSc error codes that users meet through wrong options or a singular system, in words.
+_PETSC_ERRORS = {
+    56: "no support for this operation (often: a linear solver that cannot factor this matrix)",
+    71: "zero pivot in the factorization: the matrix is singular (are all rigid-body motions "
+    "constrained, and does the residual depend on u?)",
+    73: "object in the wrong state",
+    76: "error in an external library (e.g. MUMPS could not factor the matrix: singular system?)",
+    86: "unknown type: a solver or preconditioner name that this PETSc does not have",
+    92: "no factorization package of that name: check pc_factor_mat_solver_type",
+}
+
+
+def describe(value: object) -> str:
+    """Short description of a value for messages: its type and a shortened repr."""
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:57] + "..."
+    return f"{type(value).__name__} {text}"
+
+
+def check_type(value: object, expected: type | tuple[type, ...], what: str, hint: str = "") -> None:
+    """Raise ``TypeError`` naming ``what`` unless ``value`` is an instance of ``expected``.
+
+    Args:
+        value: The argument.
+        expected: Accepted type(s).
+        what: Owner and argument name, e.g. ``"ContactProblem: u"``.
+        hint: What to do instead, appended to the message.
+    """
+    if isinstance(value, expected):
+        return
+    names = (
+        " or ".join(t.__name__ for t in expected)
+        if isinstance(expected, tuple)
+        else expected.__name__
+    )
+    raise TypeError(
+        f"{what} must be a {names}, got {describe(value)}" + (f"; {hint}" if hint else "")
+    )
+
+
+def check_sequence(values: object, item_type: type, what: str, *, single_hint: str = "") -> list:
+    """Return ``values`` as a list after checking it is a sequence of ``item_type``.
+
+    A single ``item_type`` instance where a sequence is expected is a ``TypeError`` that says how
+    to wrap it (``single_hint``); so is any item of another type (the message names its index).
+    """
+    if isinstance(values, item_type):
+        raise TypeError(
+            f"{what} must be a list of {item_type.__name__}, got a single {item_type.__name__}"
+            + (f"; {single_hint}" if single_hint else "")
+        )
+    if isinstance(values, (str, bytes, dict)) or not isinstance(values, typing.Iterable):
+        raise TypeError(f"{what} must be a list of {item_type.__name__}, got {describe(values)}")
+    items = list(values)
+    for i, item in enumerate(items):
+        if not isinstance(item, item_type):
+            raise TypeError(f"{what}[{i}] must be a {item_type.__name__}, got {describe(item)}")
+    return items
+
+
+def raise_collectively(comm: MPI.Comm, error: Exception | None) -> None:
+    """Raise on every process of ``comm`` if ``error`` is set on any of them. Collective.
+
+    A process re-raises its own exception; the others raise the first reported one (same type and
+    message, or a ``RuntimeError`` if that type cannot be rebuilt from its message).
+    """
+    reports = comm.allgather(None if error is None else (type(error), str(error)))
+    first = next((r for r in reports if r is not None), None)
+    if first is None:
+        return
+    if error is not None:
+        raise error
+    kind, message = first
+    try:
+        rebuilt = kind(message)
+    except Exception:
+        rebuilt = RuntimeError(f"{kind.__name__} on another process: {message}")
+    raise rebuilt
+
+
+# -- the displacement, the residual, the boundary conditions ---------------------------------------
+
+
+def check_displacement(u: object, owner: str) -> None:
+    """``u`` must be a Function on a 3D vector continuous Lagrange space of degree 1 or 2."""
+    expected = "a dolfinx.fem.Function on a 3D vector Lagrange space (P1 or P2)"
+    if not isinstance(u, dolfinx.fem.Function):
+        raise TypeError(f"{owner}: u must be {expected}, got {describe(u)}")
+    V = u.function_space
+    mesh = V.mesh
+    if mesh.topology.dim != 3 or mesh.geometry.dim != 3:
+        raise ValueError(
+            f"{owner}: u must be {expected}; its mesh is {mesh.topology.dim}D in "
+            f"{mesh.geometry.dim}D space (contact needs a 3D mesh)"
+        )
+    family, degree = compat.space_family(V), compat.space_degree(V)
+    bs = V.dofmap.index_map_bs
+    space = f"{family} degree {degree}, block size {bs}"
+    if bs != 3:
+        raise ValueError(
+            f"{owner}: u must be {expected} (a 3D vector displacement space, block size 3), "
+            f"got {space}"
+        )
+    if family not in _LAGRANGE_FAMILIES:
+        raise ValueError(
+            f"{owner}: u must be {expected}, got {space}: contact springs sit on nodes shared by "
+            "the faces of neighbouring cells, which a discontinuous or non-Lagrange space lacks"
+        )
+    if degree not in (1, 2):
+        raise ValueError(f"{owner}: u must be {expected}, got {space}")
+
+
+def check_residual(F: object, u: dolfinx.fem.Function, owner: str, J: object = None) -> None:
+    """``F`` must be a UFL residual form (one test function) that depends on ``u``."""
+    if not isinstance(F, ufl.Form):
+        raise TypeError(
+            f"{owner}: F must be a UFL form (the residual, e.g. inner(sigma(u), grad(v)) * dx), "
+            f"got {describe(F)}"
+        )
+    arguments = F.arguments()
+    if len(arguments) != 1:
+        raise ValueError(
+            f"{owner}: F must be a residual form, linear in one test function, got a form with "
+            f"{len(arguments)} arguments"
+        )
+    if u not in F.coefficients():
+        raise ValueError(
+            f"{owner}: F does not depend on u (its coefficients are "
+            f"{[getattr(c, 'name', str(c)) for c in F.coefficients()]}): the Jacobian would be "
+            "zero; build F with the Function u that is passed here"
+        )
+    if J is not None and not isinstance(J, ufl.Form):
+        raise TypeError(f"{owner}: J must be a UFL form or None, got {describe(J)}")
+
+
+def check_bcs(bcs: object, owner: str) -> list:
+    """``bcs`` must be a sequence of Dirichlet conditions; returns it as a list."""
+    return check_sequence(
+        bcs, compat.DirichletBC, f"{owner}: bcs", single_hint="pass [bc] instead of bc"
+    )
+
+
+def check_positive(value: object, what: str, *, allow_none: bool = False) -> None:
+    """``value`` must be a finite real number > 0 (or None if allowed)."""
+    if value is None and allow_none:
+        return
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{what} must be a positive number, got {describe(value)}")
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{what} must be a finite number > 0, got {float(value):g}")
+
+
+def check_problem(
+    F: object,
+    u: object,
+    pairs: object,
+    bcs: object,
+    J: object,
+    pair_type: type,
+    max_depth: object,
+) -> tuple[list, list]:
+    """The arguments of :class:`~dolfinx_ntf.ContactProblem`; returns ``(pairs, bcs)`` as lists."""
+    owner = "ContactProblem"
+    check_displacement(u, owner)
+    check_residual(F, u, owner, J)
+    pairs = check_sequence(
+        pairs, pair_type, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
+    )
+    check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
+    comm = u.function_space.mesh.comm
+    if comm.allreduce(len(pairs), op=MPI.MAX) and comm.size > 1:
+        # Each process would search only its own part of the master surface: slave nodes whose
+        # master face lies on another process would get no spring, silently.
+        raise NotImplementedError(
+            f"{owner}: contact pairs on {comm.size} MPI processes are not supported yet; "
+            "contact runs in serial only (docs/method.md §10)"
+        )
+    return pairs, check_bcs(bcs, owner)
+
+
+def check_distinct_pairs(
+    comm: MPI.Comm,
+    surfaces: typing.Sequence[tuple[str, np.ndarray, np.ndarray]],
+    reference: np.ndarray,
+) -> None:
+    """Two pairs on the same slave nodes and master faces: an error if identical, else a warning.
+
+    A slave node in two pairs that share master faces gets two springs on the same face: double
+    stiffness and, for identical pairs, each pair reporting half the contact pressure. Collective.
+
+    Args:
+        comm: Communicator of the mesh.
+        surfaces: ``(name, slave nodes, master facets)`` of every pair.
+        reference: ``(num_nodes, 3)`` reference coordinates of the nodes.
+    """
+    for i, (name_i, slave_i, master_i) in enumerate(surfaces):
+        for name_j, slave_j, master_j in surfaces[i + 1 :]:
+            same = np.array_equal(slave_i, slave_j) and np.array_equal(
+                np.sort(master_i), np.sort(master_j)
+            )
+            shared = np.intersect1d(slave_i, slave_j)
+            if not np.intersect1d(master_i, master_j).size:
+                shared = shared[:0]
+            if comm.allreduce(bool(same), op=MPI.LAND):
+                raise ValueError(
+                    f"ContactProblem: pairs '{name_i}' and '{name_j}' are the same (identical "
+                    "slave nodes and master faces): every slave node would get two springs and "
+                    "each pair would report half the contact pressure; remove one of them"
+                )
+            count = comm.allreduce(int(shared.size), op=MPI.SUM)
+            if count and comm.rank == 0:
+                where = ""
+                if shared.size:
+                    x = reference[shared[0]]
+                    where = f" (first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
+                warn(
+                    f"ContactProblem: pairs '{name_i}' and '{name_j}' share {count} slave node(s) "
+                    f"and master faces{where}: those nodes can get two springs on the same face "
+                    "(double stiffness and force)"
+                )
+
+
+# -- surfaces --------------------------------------------------------------------------------------
+
+
+def vertex_indices(vertices: object, owner: str) -> np.ndarray:
+    """Vertex indices as an int32 array; non-integer, negative or missing entries are errors.
+
+    Args:
+        vertices: 1-D integer indices (integer-valued floats are accepted).
+        owner: Name of the caller for messages.
+    """
+    array = np.asarray(vertices)
+    if array.dtype == bool:
+        raise TypeError(
+            f"{owner}: vertices must be vertex indices, got a boolean mask; use "
+            "np.flatnonzero(mask)"
+        )
+    if array.ndim != 1:
+        raise ValueError(
+            f"{owner}: vertices must be a 1-D array of indices, got shape {array.shape}"
+        )
+    if array.size == 0:  # a process may hold none of a surface's vertices
+        return np.empty(0, dtype=np.int32)
+    if not np.issubdtype(array.dtype, np.integer):
+        try:
+            values = array.astype(float)
+        except (TypeError, ValueError) as error:
+            raise TypeError(
+                f"{owner}: vertices must be integer vertex indices, got {describe(vertices)}"
+            ) from error
+        fractional = np.flatnonzero(~np.isfinite(values) | (values != np.round(values)))
+        if fractional.size:
+            i = int(fractional[0])
+            raise ValueError(
+                f"{owner}: vertices must be integer vertex indices, but entry {i} is {values[i]:g} "
+                f"({fractional.size} non-integer entries)"
+            )
+        array = values.astype(np.int64)
+    negative = np.flatnonzero(array < 0)
+    if negative.size:
+        i = int(negative[0])
+        raise ValueError(f"{owner}: vertex indices must be >= 0, but entry {i} is {int(array[i])}")
+    if array.max() > np.iinfo(np.int32).max:
+        i = int(np.argmax(array))
+        raise ValueError(f"{owner}: vertex index {int(array[i])} (entry {i}) is too large")
+    return array.astype(np.int32)
+
+
+# -- the state during a solve ----------------------------------------------------------------------
+
+
+def check_finite_contact_nodes(
+    comm: MPI.Comm,
+    u: dolfinx.fem.Function,
+    reference: np.ndarray,
+    surfaces: typing.Sequence[tuple[str, np.ndarray]],
+) -> None:
+    """Raise a ``ValueError`` (collectively) if ``u`` is not finite at a node of a surface.
+
+    Args:
+        comm: Communicator of the mesh.
+        u: The displacement.
+        reference: ``(num_nodes, 3)`` reference coordinates of the nodes.
+        surfaces: ``(name, nodes)`` of the contact surfaces, e.g. ``("pair 1 slave", nodes)``.
+    """
+    values = u.x.array.reshape(-1, 3)
+    error = None
+    for name, nodes in surfaces:
+        bad = nodes[~np.all(np.isfinite(values[nodes]), axis=1)]
+        if bad.size:
+            x, d = reference[bad[0]], values[bad[0]]
+            error = ValueError(
+                f"the displacement u is not finite at {bad.size} node(s) of the {name} surface, "
+                f"first at node {int(bad[0])} (reference position ({x[0]:.6g}, {x[1]:.6g}, "
+                f"{x[2]:.6g}), u = ({d[0]:.6g}, {d[1]:.6g}, {d[2]:.6g})); set u to finite values "
+                "before solving"
+            )
+            break
+    raise_collectively(comm, error)
+
+
+# -- solver and step ------------------------------------------------------------------------------
+
+
+def check_solver(
+    comm: object,
+    problem: object,
+    problem_type: type,
+    petsc_options: object,
+    options_prefix: object,
+    *,
+    controls: object,
+    required_controls: typing.Iterable[str],
+    max_it: object,
+    min_iterations: object,
+) -> dict[str, typing.Any]:
+    """The arguments of :class:`~dolfinx_ntf.ContactNewtonSolver`; returns the PETSc options."""
+    owner = "ContactNewtonSolver"
+    check_type(comm, MPI.Comm, f"{owner}: comm", "pass mesh.comm")
+    check_type(problem, problem_type, f"{owner}: problem")
+    if MPI.Comm.Compare(comm, problem.u.function_space.mesh.comm) == MPI.UNEQUAL:
+        raise ValueError(f"{owner}: comm must be the communicator of the mesh (mesh.comm)")
+    if not isinstance(options_prefix, str) or not options_prefix or " " in options_prefix:
+        raise ValueError(
+            f"{owner}: options_prefix must be a non-empty string without blanks such as 'ntf_', "
+            f"got {options_prefix!r}"
+        )
+    if not isinstance(controls, typing.Mapping):
+        raise TypeError(
+            f"{owner}: controls must be a mapping of names to numbers, got {describe(controls)}"
+        )
+    missing = sorted(set(required_controls) - set(controls))
+    if missing:
+        raise ValueError(f"{owner}: controls lack {missing}")
+    for name, value in controls.items():
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value > 0:
+            raise ValueError(f"{owner}: controls[{name!r}] must be a number > 0, got {value}")
+    for name, value, least in (("max_it", max_it, 1), ("min_iterations", min_iterations, 0)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
+            raise ValueError(f"{owner}: {name} must be an integer >= {least}, got {value}")
+    return check_petsc_options(petsc_options, owner)
+
+
+def check_step(step: typing.Any) -> None:
+    """The configuration of a :class:`~dolfinx_ntf.StaticStep`."""
+    owner = "StaticStep"
+    if not callable(step.set_load):
+        raise TypeError(
+            f"{owner}: set_load must be a function of the step time t, got "
+            f"{describe(step.set_load)}"
+        )
+    if step.on_increment is not None and not callable(step.on_increment):
+        raise TypeError(
+            f"{owner}: on_increment must be a function or None, got {describe(step.on_increment)}"
+        )
+    for name in ("period", "initial_increment", "min_increment", "cutback_factor", "growth_factor"):
+        check_positive(getattr(step, name), f"{owner}: {name}")
+    check_positive(step.max_increment, f"{owner}: max_increment", allow_none=True)
+    max_inc = step.period if step.max_increment is None else step.max_increment
+    if not (step.min_increment <= step.initial_increment <= max_inc):
+        raise ValueError(
+            f"{owner}: need 0 < min_increment ({step.min_increment}) <= initial_increment "
+            f"({step.initial_increment}) <= max_increment ({max_inc})"
+        )
+    if not (step.cutback_factor < 1 <= step.growth_factor):
+        raise ValueError(
+            f"{owner}: need 0 < cutback_factor ({step.cutback_factor}) < 1 <= growth_factor "
+            f"({step.growth_factor})"
+        )
+    if isinstance(step.growth_iterations, bool) or not isinstance(
+        step.growth_iterations, numbers.Integral
+    ):
+        raise TypeError(
+            f"{owner}: growth_iterations must be an integer, got {describe(step.growth_iterations)}"
+        )
+
+
+# -- PETSc -----------------------------------------------------------------------------------------
+
+
+def check_petsc_options(options: object, owner: str) -> dict[str, typing.Any]:
+    """PETSc options as a dict of option names (no leading ``-``) to values."""
+    if not isinstance(options, dict):
+        raise TypeError(
+            f"{owner}: petsc_options must be a dict such as {{'ksp_type': 'preonly', "
+            f"'pc_type': 'lu'}}, got {describe(options)}"
+        )
+    checked = {}
+    for key, value in options.items():
+        if not isinstance(key, str) or not key.strip("-"):
+            raise TypeError(f"{owner}: petsc_options keys must be option names, got {key!r}")
+        if value is not None and not isinstance(value, (str, bool, numbers.Real)):
+            raise TypeError(
+                f"{owner}: petsc_options[{key!r}] must be a string, number, bool or None, got "
+                f"{describe(value)}"
+            )
+        checked[key.lstrip("-")] = value
+    return checked
+
+
+def describe_petsc_error(error: PETSc.Error) -> str:
+    """A PETSc error with its code in words."""
+    code = getattr(error, "ierr", None)
+    meaning = _PETSC_ERRORS.get(code)
+    return f"PETSc error {code}" + (f" ({meaning})" if meaning else "")
+
+
+def _named_type_error(options: dict[str, typing.Any]) -> str | None:
+    """The option whose solver name this PETSc does not know, as a message, or None."""
+    known = {
+        "ksp_type": PETSc.KSP.Type,
+        "pc_type": PETSc.PC.Type,
+        "pc_factor_mat_solver_type": PETSc.Mat.SolverType,
+    }
+    for key, names in known.items():
+        if key not in options:
+            continue
+        values = sorted(
+            {str(v) for k, v in vars(names).items() if not k.startswith("_") and isinstance(v, str)}
+        )
+        if str(options[key]) not in values:
+            return (
+                f"{key} = {options[key]!r} is not a name PETSc knows (known: {', '.join(values)})"
+            )
+    return None
+
+
+def check_linear_solver(comm: MPI.Comm, options: dict[str, typing.Any], owner: str) -> None:
+    """Configure a throw-away KSP from ``options`` and factor a tiny matrix with it. Collective.
+
+    Unknown solver, preconditioner or factorization package names then fail here with a
+    ``ValueError`` naming the option, instead of PETSc error 86 or 92 at the first Newton solve.
+    The options are set under a prefix of their own and removed again.
+    """
+    prefix = "dolfinx_ntf_check_"
+    database = PETSc.Options()
+    for key, value in options.items():
+        database[f"{prefix}{key}"] = value
+    ksp = PETSc.KSP().create(comm)
+    matrix = None
+    try:
+        ksp.setOptionsPrefix(prefix)
+        ksp.setFromOptions()
+        if ksp.getPC().getType() in ("lu", "cholesky", "ilu", "icc"):
+            matrix = PETSc.Mat().createAIJ(((1, None), (1, None)), nnz=1, comm=comm)
+            row = matrix.getOwnershipRange()[0]
+            matrix.setValue(row, row, 1.0)
+            matrix.assemble()
+            ksp.setOperators(matrix)
+            ksp.setUp()
+    except PETSc.Error as error:
+        named = _named_type_error(options)
+        raise ValueError(
+            f"{owner}: PETSc cannot set up the linear solver of petsc_options {options}: "
+            + (named if named else describe_petsc_error(error))
+        ) from None
+    finally:
+        ksp.destroy()
+        if matrix is not None:
+            matrix.destroy()
+        for key in options:
+            database.delValue(f"{prefix}{key}")
+
+
+# -- files -----------------------------------------------------------------------------------------
+
+
+def check_writable(path: str | os.PathLike, comm: MPI.Comm, owner: str) -> Path:
+    """The output file ``path`` must be creatable (its folder exists and is writable). Collective.
+
+    Returns:
+        ``path`` as a Path.
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{owner}: path must be a str or pathlib.Path, got {describe(path)}")
+    path = Path(path)
+    error: OSError | None = None
+    if comm.rank == 0:
+        folder = path.parent
+        if not folder.is_dir():
+            error = FileNotFoundError(
+                f"{owner}: cannot write {str(path)!r}: the folder {str(folder)!r} does not exist"
+            )
+        else:
+            # Try it (permissions, read-only file systems): open for appending, remove if new.
+            for target in (path, path.with_suffix(".h5")):
+                existed = target.exists()
+                try:
+                    with open(target, "a"):
+                        pass
+                    if not existed:
+                        target.unlink()
+                except OSError as failure:
+                    error = type(failure)(
+                        f"{owner}: cannot write {str(target)!r}: {failure.strerror or failure}"
+                    )
+                    break
+    raise_collectively(comm, error)
+    return path
+
+
+def warn(message: str) -> None:
+    """A ``UserWarning`` pointing at the user's call."""
+    warnings.warn(message, UserWarning, stacklevel=3)

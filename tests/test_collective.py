@@ -1,0 +1,86 @@
+"""Wrong uses found on one process fail on every process (no process continues alone into a
+collective call and hangs). Run in serial and by ``make test`` on 2 processes."""
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+from conftest import LOWER_TOP, UPPER, UPPER_BOTTOM, two_blocks
+
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.surfaces import resolve_master, resolve_slave
+from dolfinx_ntf.validation import raise_collectively
+
+pytestmark = pytest.mark.mpi
+
+COMM = MPI.COMM_WORLD
+
+
+def test_an_error_of_one_process_is_raised_on_all():
+    raise_collectively(COMM, None)
+    with pytest.raises(ValueError, match="found on rank 0"):
+        raise_collectively(COMM, ValueError("found on rank 0") if COMM.rank == 0 else None)
+
+
+@pytest.fixture(scope="module")
+def blocks():
+    mesh, cell_tags, ft = two_blocks(COMM)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u = dolfinx.fem.Function(V)
+    F = ufl.inner(ufl.grad(u), ufl.grad(ufl.TestFunction(V))) * ufl.dx
+    return mesh, cell_tags, ft, u, F
+
+
+def test_contact_pairs_are_serial_only(blocks):
+    """In parallel every process would search only its own part of the master: refused on all."""
+    _, _, ft, u, F = blocks
+    law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
+    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
+    if COMM.size == 1:
+        assert ntf.ContactProblem(F, u, [pair]).states[0].num_springs == 0
+    else:
+        with pytest.raises(NotImplementedError, match="serial only"):
+            ntf.ContactProblem(F, u, [pair])
+    ntf.ContactProblem(F, u, [])  # no pairs: a plain nonlinear problem, fine in parallel
+
+
+def test_missing_tag_value_fails_everywhere(blocks):
+    _, _, ft, u, _ = blocks
+    V = u.function_space
+    with pytest.raises(ValueError, match=r"facet tag value\(s\) \[99\] not found"):
+        resolve_master(V, ntf.FacetSurface(ft, 99))
+    # A value present on any process is found, even where this process holds none of its facets.
+    assert COMM.allreduce(resolve_master(V, ntf.FacetSurface(ft, LOWER_TOP)).faces.shape[0]) > 0
+
+
+def test_node_surface_held_by_one_process(blocks):
+    """Vertices located on rank 0 only: the other processes hold an empty NodeSurface, which is
+    fine; vertices out of range on rank 0 only fail on all processes."""
+    mesh, cell_tags, _, u, _ = blocks
+    V = u.function_space
+    bad = np.array([10**7]) if COMM.rank == 0 else np.empty(0, dtype=np.int32)
+    with pytest.raises(ValueError, match=r"vertex index 10000000 \(entry 0\) is outside"):
+        resolve_slave(V, ntf.NodeSurface(bad))
+    with pytest.raises(ValueError, match="has no vertices"):
+        resolve_slave(V, ntf.NodeSurface(np.empty(0, dtype=np.int32)))
+    # The upper block's bottom vertices (the lower block's top has vertices at z = 0 too).
+    upper = compat.incident_entities(mesh, cell_tags.find(UPPER), 3, 0)
+    bottom = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.isclose(x[2], 0.0))
+    mine = np.intersect1d(upper, bottom) if COMM.rank == 0 else np.empty(0, dtype=np.int32)
+    slave = resolve_slave(V, ntf.NodeSurface(mine))
+    assert COMM.allreduce(slave.nodes.size) > 0
+
+
+def test_writer_path_errors_everywhere(blocks, tmp_path_factory):
+    u, F = blocks[3:5]
+    problem = ntf.ContactProblem(F, u, [])
+    folder = COMM.bcast(str(tmp_path_factory.mktemp("out")) if COMM.rank == 0 else None)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        ntf.ContactWriter(problem, f"{folder}/missing/out.xdmf")
+    with ntf.ContactWriter(problem, f"{folder}/ok.xdmf") as writer:
+        writer.write(0.0)
