@@ -36,10 +36,11 @@ def _setup(
     *,
     rollers=False,
     law=None,
+    gap=0.0,
     **problem_options,
 ):
-    """Upper block pressed on a lower block by a pressure on its top."""
-    mesh, _, ft = two_blocks(cell=cell, upper=upper)
+    """Upper block pressed on a lower block by a pressure on its top (``gap`` above it)."""
+    mesh, _, ft = two_blocks(cell=cell, upper=upper, gap=gap)
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
@@ -296,24 +297,9 @@ def test_global_jacobian_matches_finite_differences(cell, linearize_area):
 def test_body_without_springs_fails_with_a_hint():
     """A punch above the block (open gap, no springs) under a load has no support: a clear error,
     no NaN."""
-    mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=0.05)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bcs = [
-        dolfinx.fem.dirichletbc(
-            np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
-        ),
-        component_bc(V, 0, ft.find(UPPER_TOP)),
-        component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM),
-        ntf.FacetSurface(ft, LOWER_TOP),
-        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)),
-    )
-    problem = ntf.ContactProblem(_elastic_residual(u, v, ft, pressure), u, [pair], bcs)
-    solver = ntf.ContactNewtonSolver(mesh.comm, problem, max_it=8)
+    problem, pressure, _ = _setup(gap=0.05)
+    u = problem.u
+    solver = ntf.ContactNewtonSolver(u.function_space.mesh.comm, problem, max_it=8)
     step = ntf.StaticStep(lambda t: setattr(pressure, "value", 10 * t), min_increment=0.5)
     with pytest.raises(ntf.ContactConvergenceError, match="no contact springs"):
         step.run(solver, u)

@@ -3,15 +3,10 @@ cause, a diverging attempt is given up early, and the line search leaves converg
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
-from test_problem import E, _elastic_residual, _setup
-
-import dolfinx.fem
-import ufl
+from test_problem import _setup
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc
 
 pytestmark = pytest.mark.serial
 
@@ -39,24 +34,9 @@ def test_nan_load_raises_at_once():
 def test_diverging_attempt_is_given_up_early():
     """A punch above the block under a load has no support: each attempt diverges and is given
     up after a few updates, not after max_it, and the message says why."""
-    mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)), gap=0.05)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bcs = [
-        dolfinx.fem.dirichletbc(
-            np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
-        ),
-        component_bc(V, 0, ft.find(UPPER_TOP)),
-        component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM),
-        ntf.FacetSurface(ft, LOWER_TOP),
-        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)),
-    )
-    problem = ntf.ContactProblem(_elastic_residual(u, v, ft, pressure), u, [pair], bcs)
-    solver = ntf.ContactNewtonSolver(mesh.comm, problem, max_it=30)
+    problem, pressure, _ = _setup(gap=0.05)
+    u = problem.u
+    solver = ntf.ContactNewtonSolver(u.function_space.mesh.comm, problem, max_it=30)
     step = _step(pressure, min_increment=0.3)
     with pytest.raises(ntf.ContactConvergenceError, match=r"residual grows.*no contact springs"):
         step.run(solver, u)
