@@ -114,7 +114,9 @@ class DeckWarning:
 
     def __str__(self) -> str:
         what = "keyword" if self.parameter is None else f"parameter {self.parameter}"
-        return f" *WARNING reading {self.keyword}: {what} ignored ({self.reason}) at {self.location}"
+        return (
+            f" *WARNING reading {self.keyword}: {what} ignored ({self.reason}) at {self.location}"
+        )
 
 
 @dataclass(frozen=True, eq=False)
