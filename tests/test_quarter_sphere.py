@@ -2,13 +2,14 @@
 CalculiX's default penalty (K = 50 E): ccx converges on such decks, and so must the Python API
 (line search, no predictor, unpaired penetrations paired before convergence)."""
 
-import numpy as np
-import pytest
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
+import numpy as np
+import pytest
+
 import dolfinx.fem
+import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
