@@ -6,8 +6,9 @@ See docs/method.md §8.5.
 that keeps CalculiX's node and element numbers, so that results can be reported per ccx node. Only
 the keywords that a static node-to-surface contact analysis needs are understood; everything else
 is rejected with a ``DeckError`` (a ``ValueError``) naming the keyword and ``file:line``, except
-pure output/control keywords that cannot change the solution, which are listed in
-``Deck.ignored``.
+the keywords and parameters that cannot change the solution (output-only ones, those ccx itself
+ignores): ``LENIENCY`` lists them, the reader skips them with one ``DeckWarning`` each in
+``Deck.warnings`` (skipped keywords are also in ``Deck.ignored``), as ccx warns and goes on.
 
 Conventions shared by the whole module (they follow ccx, manual §"Input deck format"):
     - Keywords, parameters and names are case-insensitive and blanks are not significant: every
@@ -38,6 +39,7 @@ __all__ = [
     "ELEMENT_TYPES",
     "FIELD_CONTROL_DEFAULTS",
     "FIELD_CONTROL_NAMES",
+    "LENIENCY",
     "Amplitude",
     "Boundary",
     "CLoad",
@@ -45,6 +47,7 @@ __all__ = [
     "DLoad",
     "Deck",
     "DeckError",
+    "DeckWarning",
     "ElementBlock",
     "ElementType",
     "FileRequest",
@@ -91,6 +94,29 @@ class DeckError(ValueError):
 
 
 # ----------------------------------------------------------------------------- element types
+
+
+@dataclass(frozen=True)
+class DeckWarning:
+    """A keyword or parameter that was read and skipped because it cannot change the solution.
+
+    Attributes:
+        keyword: the keyword as ccx spells it (``*EL FILE``).
+        parameter: the parameter as written (``POSITION=NODES``), or None for the whole keyword.
+        reason: why skipping it is safe.
+        location: where the card is.
+    """
+
+    keyword: str
+    parameter: str | None
+    reason: str
+    location: Location
+
+    def __str__(self) -> str:
+        what = "keyword" if self.parameter is None else f"parameter {self.parameter}"
+        return (
+            f" *WARNING reading {self.keyword}: {what} ignored ({self.reason}) at {self.location}"
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -502,6 +528,7 @@ class Deck:
         boundaries: ``*BOUNDARY`` cards of the model definition (before the first step).
         steps: the steps.
         ignored: ``(keyword, file, line)`` of output/control keywords that were skipped.
+        warnings: every keyword and parameter skipped by ``LENIENCY``, in deck order.
     """
 
     path: str
@@ -520,6 +547,7 @@ class Deck:
     boundaries: tuple[Boundary, ...]
     steps: tuple[Step, ...]
     ignored: tuple[tuple[str, str, int], ...]
+    warnings: tuple[DeckWarning, ...] = ()
 
     @property
     def num_elements(self) -> int:
@@ -732,7 +760,7 @@ FREQUENCY; FRICTION; GAP; GAP CONDUCTANCE; GAP HEAT GENERATION; GREEN; HEADING; 
 HYPERELASTIC; HYPERFOAM; INCLUDE; INITIAL CONDITIONS; INITIAL STRAIN INCREASE; KINEMATIC;
 MAGNETIC PERMEABILITY; MASS; MASS FLOW; MATERIAL; MEMBRANE SECTION; MODAL DAMPING; MODAL DYNAMIC;
 MODEL CHANGE; MPC; NETWORK MPC; NO ANALYSIS; NODAL THICKNESS; NODE; NODE FILE; NODE OUTPUT;
-NODE PRINT; NORMAL; NSET; OBJECTIVE; ORIENTATION; OUTPUT; PHYSICAL CONSTANTS; PLASTIC;
+NODE PRINT; NORMAL; NSET; OBJECTIVE; ORIENTATION; OUTPUT; PHYSICAL CONSTANTS; PLASTIC; PREPRINT;
 PRE-TENSION SECTION; RADIATE; REFINE MESH; RESTART; RETAINED NODAL DOFS; RIGID BODY;
 SECTION PRINT; SELECT CYCLIC SYMMETRY MODES; SENSITIVITY; SHELL SECTION; SOLID SECTION;
 SPECIFIC GAS CONSTANT; SPECIFIC HEAT; SPRING; STATIC; STEADY STATE DYNAMICS; STEP; SUBMODEL;
@@ -759,8 +787,52 @@ _UNSUPPORTED_CONSTRAINTS = {
     )
 }  # fmt: skip
 
-# Output/control keywords that cannot change the solution: collected in Deck.ignored.
-_IGNORED = {_name(k) for k in ("OUTPUT", "FACE PRINT", "SECTION PRINT", "TIME POINTS")}
+# What the reader does with the keywords and parameters it does not use. ccx 2.20 prints a warning
+# for every keyword and parameter it does not recognize and goes on; here a skipped keyword or
+# parameter must also be one that cannot change the solution, the others are refused:
+#   keyword -> {parameter: (action, reason)}, action "warn" (one DeckWarning, the card is read
+#   without it) or "refuse" (DeckError); parameter "" is the whole keyword, "*" any parameter.
+# Keywords and parameters in neither this table nor a handler are refused as well.
+_OUTPUT_ONLY = "output only: ccx 2.20 ignores it"
+_TIME_POINTS = "ccx cuts the increments to reach the time points"
+_FILE_RULES = {"POSITION": ("warn", _OUTPUT_ONLY), "TIME POINTS": ("refuse", _TIME_POINTS)}
+LENIENCY: dict[str, dict[str, tuple[str, str]]] = {
+    "*HEADING": {"*": ("warn", "ccx ignores *HEADING parameters")},
+    "*NSET": {"FREQUENCY": ("warn", "not a *NSET parameter: ccx ignores it")},
+    "*ELSET": {"FREQUENCY": ("warn", "not a *ELSET parameter: ccx ignores it")},
+    "*NODE FILE": _FILE_RULES,
+    "*EL FILE": _FILE_RULES,
+    "*CONTACT FILE": _FILE_RULES,
+    "*NODE OUTPUT": _FILE_RULES,
+    "*ELEMENT OUTPUT": _FILE_RULES,
+    "*CONTACT OUTPUT": _FILE_RULES,
+    "*NODE PRINT": {"TIME POINTS": ("refuse", _TIME_POINTS)},
+    "*EL PRINT": {"TIME POINTS": ("refuse", _TIME_POINTS)},
+    "*CONTACT PRINT": {"TIME POINTS": ("refuse", _TIME_POINTS)},
+    "*OUTPUT": {"": ("warn", "output database only"), "TIME POINTS": ("refuse", _TIME_POINTS)},
+    "*FACE PRINT": {"": ("warn", "output only"), "TIME POINTS": ("refuse", _TIME_POINTS)},
+    "*SECTION PRINT": {"": ("warn", "output only"), "TIME POINTS": ("refuse", _TIME_POINTS)},
+    "*TIME POINTS": {"": ("warn", "used only by output requests with TIME POINTS")},
+    "*PREPRINT": {"": ("warn", "Abaqus printout control: ccx ignores it")},
+    "*RESTART": {
+        "": ("warn", "restart files are not written"),
+        "READ": ("refuse", "starts from the state of an earlier run"),
+    },
+    "*SOLID SECTION": {"ORIENTATION": ("refuse", "turns the material axes")},
+    "*BOUNDARY": {
+        "FIXED": ("refuse", "holds the displacement of the previous step"),
+        "USER": ("refuse", "values from a user subroutine"),
+        "SUBMODEL": ("refuse", "values from a global model"),
+    },
+    "*STEP": {"AMPLITUDE": ("refuse", "ramps or steps the loads")},
+}
+_LENIENCY = {
+    _name(k[1:]): {_name(p) if p not in ("", "*") else p: (a, r, p) for p, (a, r) in rules.items()}
+    for k, rules in LENIENCY.items()
+}
+
+# Skipped output keywords whose FREQUENCY still sets the frequency of every output (ccx rule).
+_SETS_FREQUENCY = {"OUTPUT", "FACEPRINT", "SECTIONPRINT"}
 
 # Material data a static step does not use.
 _UNUSED_MATERIAL = {_name(k) for k in ("DENSITY", "EXPANSION", "CONDUCTIVITY", "SPECIFIC HEAT")}
@@ -865,6 +937,7 @@ class _Reader:
         self.boundaries: list[Boundary] = []
         self.steps: list[Step] = []
         self.ignored: list[tuple[str, str, int]] = []
+        self.warnings: list[DeckWarning] = []
         self.step: _StepBuilder | None = None
         self.context: _MaterialBuilder | _InteractionBuilder | None = None
         # carried over between steps
@@ -1052,6 +1125,8 @@ class _Reader:
             )
         if key not in _CONTEXT_KEYWORDS:
             self.context = None
+        if self._apply_leniency(card):
+            return
         handler: Callable[[_Card], None] | None = getattr(self, f"_k_{key.replace('-', '_')}", None)
         if handler is not None:
             handler(card)
@@ -1059,14 +1134,35 @@ class _Reader:
             self._unused_material(card)
         elif key in _UNUSED_INTERACTION:
             self._unused_interaction(card)
-        elif key in _IGNORED:
-            self._ignore(card)
         elif key in _UNSUPPORTED_CONSTRAINTS:
             raise DeckError(f"{card.name} is not supported yet (constraint)", card.location)
         elif key in _CANONICAL:
             raise DeckError(f"{card.name} is not supported yet", card.location)
         else:
             raise DeckError(f"unknown keyword *{card.text}", card.location)
+
+    def _apply_leniency(self, card: _Card) -> bool:
+        """Apply ``LENIENCY`` to ``card``: warn or refuse; True if the whole card is skipped."""
+        rules = _LENIENCY.get(card.keyword, {})
+        for key in list(card.params):
+            rule = rules.get(key) or rules.get("*")
+            if rule is None:
+                continue
+            action, reason, spelling = rule
+            if action == "refuse":
+                raise DeckError(
+                    f"{card.name}, {spelling} is not supported yet ({reason})", card.location
+                )
+            raw = card.raw_params[key]
+            written = key if spelling == "*" else spelling
+            self.warnings.append(DeckWarning(
+                card.name, written if raw is None else f"{written}={raw}", reason, card.location
+            ))  # fmt: skip
+            del card.params[key], card.raw_params[key]
+        if "" not in rules:
+            return False
+        self._ignore(card, rules[""][1])
+        return True
 
     # -- model definition -----------------------------------------------------------------------
 
@@ -1258,10 +1354,7 @@ class _Reader:
         )
 
     def _k_SOLIDSECTION(self, card: _Card) -> None:
-        self._check_params(card, allowed={"ELSET", "MATERIAL", "ORIENTATION"},
-                           required={"ELSET", "MATERIAL"})  # fmt: skip
-        if "ORIENTATION" in card.params:
-            raise DeckError("*SOLID SECTION, ORIENTATION is not supported yet", card.location)
+        self._check_params(card, allowed={"ELSET", "MATERIAL"}, required={"ELSET", "MATERIAL"})
         elset = card.params["ELSET"] or ""
         if elset not in self.elsets:
             raise DeckError(f"element set {elset} is not defined (before this line)", card.location)
@@ -1430,10 +1523,7 @@ class _Reader:
         return name
 
     def _k_BOUNDARY(self, card: _Card) -> None:
-        self._check_params(card, allowed={"OP", "AMPLITUDE", "FIXED", "USER", "SUBMODEL"})
-        for key in ("FIXED", "USER", "SUBMODEL"):
-            if key in card.params:
-                raise DeckError(f"*BOUNDARY, {key} is not supported yet", card.location)
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
         op = self._op(card)
         amplitude = self._amplitude_param(card)
         target_list = self.step.boundaries if self.step is not None else self.boundaries
@@ -1466,9 +1556,7 @@ class _Reader:
     def _k_STEP(self, card: _Card) -> None:
         if self.step is not None:
             raise DeckError(f"*STEP inside the step started at {self.step.location}", card.location)
-        self._check_params(card, allowed={"NLGEOM", "INC", "INCF", "AMPLITUDE"})
-        if "AMPLITUDE" in card.params:
-            raise DeckError("*STEP, AMPLITUDE is not supported", card.location)
+        self._check_params(card, allowed={"NLGEOM", "INC", "INCF"})
         self._no_data(card)
         nlgeom = card.params.get("NLGEOM", "NO" if not self.nlgeom else "YES")
         if nlgeom not in (None, "YES", "NO"):
@@ -1550,11 +1638,9 @@ class _Reader:
     def _print_card(self, card: _Card, kind: str) -> None:
         step = self._in_step(card)
         set_param = {"NODE": "NSET", "EL": "ELSET", "CONTACT": "NSET"}[kind]
-        allowed = {set_param, "TOTALS", "FREQUENCY", "FREQUENCYF", "GLOBAL", "TIMEPOINTS"}
+        allowed = {set_param, "TOTALS", "FREQUENCY", "FREQUENCYF", "GLOBAL"}
         required = {set_param} if kind != "CONTACT" else set()
         self._check_params(card, allowed=allowed, required=required)
-        if "TIMEPOINTS" in card.params:
-            raise DeckError(f"{card.name}, TIME POINTS is not supported yet", card.location)
         totals = card.params.get("TOTALS") or "NO"
         if totals not in ("YES", "NO", "ONLY"):
             raise DeckError(f"TOTALS={totals}: use YES, NO or ONLY", card.location)
@@ -1600,9 +1686,7 @@ class _Reader:
         kind = _FILE_KEYWORDS[card.keyword]
         self._check_params(card, allowed={"NSET", "ELSET", "FREQUENCY", "FREQUENCYF", "GLOBAL",
                                           "OUTPUT", "LASTITERATIONS", "CONTACTELEMENTS",
-                                          "TIMEPOINTS", "SECTIONFORCES"})  # fmt: skip
-        if "TIMEPOINTS" in card.params:
-            raise DeckError(f"{card.name}, TIME POINTS is not supported yet", card.location)
+                                          "SECTIONFORCES"})  # fmt: skip
         keys = tuple(k for fields, _, _ in card.lines for k in fields if k != "")
         set_name = card.params.get("NSET") or card.params.get("ELSET")
         frequency = self._frequency(card)
@@ -1688,18 +1772,12 @@ class _Reader:
         )
         self.step = None
 
-    def _ignore(self, card: _Card) -> None:
-        """Skip an output keyword, keeping the FREQUENCY it sets for every output (ccx rule)."""
-        if "TIMEPOINTS" in card.params:
-            raise DeckError(f"{card.name}, TIME POINTS is not supported yet", card.location)
-        if "FREQUENCY" in card.params:
+    def _ignore(self, card: _Card, reason: str) -> None:
+        """Skip a keyword, keeping the FREQUENCY it sets for every output (ccx rule)."""
+        if "FREQUENCY" in card.params and card.keyword in _SETS_FREQUENCY:
             self._frequency(card)
         self.ignored.append((card.name, card.location.file, card.location.line))
-
-    def _k_RESTART(self, card: _Card) -> None:
-        if "READ" in card.params:
-            raise DeckError("*RESTART, READ is not supported yet", card.location)
-        self.ignored.append((card.name, card.location.file, card.location.line))
+        self.warnings.append(DeckWarning(card.name, None, reason, card.location))
 
     # -- final checks and assembly --------------------------------------------------------------
 
@@ -1748,6 +1826,7 @@ class _Reader:
             boundaries=tuple(self.boundaries),
             steps=tuple(self.steps),
             ignored=tuple(self.ignored),
+            warnings=tuple(self.warnings),
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

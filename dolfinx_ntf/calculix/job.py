@@ -553,8 +553,8 @@ def run_job(
     deck = read_deck(path)
     if not deck.steps:
         raise ValueError(f"{path}: the deck has no *STEP: nothing to run")
-    for keyword, file, line in deck.ignored:
-        logger.info(" *INFO: %s at %s:%d is ignored (output/control only)", keyword, file, line)
+    for warning in deck.warnings:
+        logger.warning("%s", warning)
     _check_requests(deck)
     model = build_model(deck, comm)
     job = _Job(
