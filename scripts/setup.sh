@@ -10,7 +10,7 @@ sudo_cmd=""
 [ "$(id -u)" = 0 ] || sudo_cmd="sudo"
 
 packages=(python3-dolfinx-real python3-gmsh python3-venv python3-pip python3-pytest python3-scipy
-          python3-matplotlib libopenblas0-pthread openmpi-bin)
+          python3-matplotlib libopenblas0-pthread openmpi-bin calculix-ccx-test)
 case "$release" in
   bookworm) packages+=(calculix-ccx) ;;
   trixie) packages+=(libarpack2t64 libgfortran5 liblapack3 libgomp1) ;;   # ccx's libraries, see below
