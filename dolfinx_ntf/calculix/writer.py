@@ -334,9 +334,9 @@ class _Mesh:
 def _node_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
     """Coordinates of every block dof (owned and ghost), ``(num_blocks, 3)``.
 
-    Dofs on cell vertices take the mesh's own geometry nodes, and P2 midside dofs of a straight-sided
-    mesh the mean of their edge's two nodes, so that coordinates given exactly (a structured grid,
-    nodes placed above other nodes) reach the deck without the round-off of the
+    Dofs on cell vertices take the mesh's own geometry nodes, and P2 midside dofs of a
+    straight-sided mesh the mean of their edge's two nodes, so that coordinates given exactly (a
+    structured grid, nodes placed above other nodes) reach the deck without the round-off of the
     reference-to-physical map. Other dofs (on a curved mesh) are tabulated.
     """
     X = V.tabulate_dof_coordinates().reshape(-1, 3).copy()
@@ -353,7 +353,8 @@ def _node_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
         for edge in range(dolfinx.cpp.mesh.cell_num_entities(cell_type, 1)):  # 6 or 12 edges
             if len(layout.entity_dofs(1, edge)) == 1:
                 a, b = (int(v) for v in edges.links(edge))
-                X[dofs[:, layout.entity_dofs(1, edge)[0]]] = 0.5 * (x[nodes[:, a]] + x[nodes[:, b]])
+                midside = dofs[:, layout.entity_dofs(1, edge)[0]]
+                X[midside] = 0.5 * (x[nodes[:, a]] + x[nodes[:, b]])
     return X
 
 
