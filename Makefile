@@ -1,7 +1,7 @@
 # The two commands of the README: `make demo` and `make test`.
 PY := .venv/bin/python
 
-.PHONY: setup demo test benchmark
+.PHONY: setup demo test benchmark benchmark-ccx
 setup:
 	bash scripts/setup.sh
 
@@ -14,3 +14,7 @@ test: setup
 
 benchmark: setup
 	$(PY) benchmarks/contact_phases.py
+
+# dolfinx_ntf against ccx 2.20 on the same decks; writes docs/performance.md (about 25 minutes).
+benchmark-ccx: setup
+	$(PY) benchmarks/vs_ccx.py

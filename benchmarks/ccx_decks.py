@@ -1,0 +1,402 @@
+"""CalculiX decks of the ccx benchmark (``benchmarks/vs_ccx.py``), written by ``write_inp``.
+
+Each deck is built as a dolfinx problem (mesh, tags, contact pair, constraints, step: a
+:class:`DeckModel`), so that a Python-API twin can reuse the same objects, and exported with
+:func:`dolfinx_ntf.calculix.write_inp`. Units: mm, N, MPa.
+
+- **Flat punch on hexahedra** (:func:`punch_model`): a 40 x 40 x 30 steel punch centred on a
+  100 x 100 x 50 aluminium block, both structured (``cases.blocks`` of the cross-validation decks),
+  touching at z = 0. The punch grid is finer than the block's and placed so that the slave nodes on
+  every fifth punch grid line (x, y = 30, 50, 70 and more, see :data:`PUNCH_SIZES`) lie exactly
+  above master nodes or edges: the ties of the pairing; the deck is symmetric about x = 50 and
+  y = 50, so the ties persist under load. The block bottom is clamped; the punch top is held in x
+  and y and pushed down by :data:`PUNCH_INDENTATION` in one increment. LINEAR law K = 1e7,
+  sigma_inf = 3.
+    - ``tie_punch``: the 6 x 6 punch (49 slave nodes) on a 10 x 10 block, with ``*CONTROLS,
+      PARAMETERS=FIELD`` R_n = C_n = 1e-9.
+    - ``punch_10``, ``punch_20``, ``punch_30``: the same punch with 10, 20 and 30 divisions (about
+      5k, 29k and 81k dofs) and ccx's default controls. With R_n = C_n = 1e-9 ccx 2.20 stops on
+      these decks ("solution seems to diverge"): its own re-pairings move the slave nodes above
+      master vertices between diagonally opposite faces at every iteration, and its residual stalls
+      at about 1e-7 of the average force (measured on ``punch_20``; ``tie_punch``: 1.5e-6).
+- **Fixed-increment quarter sphere** (:func:`quarter_sphere_model`): the lower half of a steel
+  sphere of radius 10 (C3D4, ``meshes/hertz.py``: size 0.15 within 2.5 of the pole) on a steel
+  block, its flat top pushed down by 0.12 in 4 fixed increments of 0.25 (``*STATIC, DIRECT``),
+  LINEAR law K = 1e7, sigma_inf = 3, ccx's default controls. ccx 2.20 converges every increment;
+  dolfinx_ntf at 926a3d5 diverges in increment 2 (the spring count runs away). The coarse version
+  (size 0.3 at the pole, pushed down 0.14, about 4.5k dofs) runs in seconds and fails the same way
+  (in increment 3), ccx converging. Both indentations sit between the deck where both codes
+  converge and the one where ccx fails too (0.1 and 0.15 on the fine mesh).
+- **Cross-validation decks**: ``tests/data/calculix/crossval/cases.py`` as they are.
+
+Every deck prints U of all nodes and CDIS, CSTR, CELS per increment, so that both codes' results
+can be compared with :mod:`dolfinx_ntf.calculix.compare`; ``tie_punch`` also asks for the ``.cel``
+contact element sets. Serial (``MPI.COMM_SELF``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+import typing
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+import dolfinx.fem
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.calculix.writer import BoundarySpec, OutputSpec, StepSpec, write_inp
+from dolfinx_ntf.gmsh_io import mesh_from_gmsh
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))
+import cases  # noqa: E402
+
+__all__ = [
+    "BenchDeck",
+    "DeckModel",
+    "PunchSpec",
+    "SphereSpec",
+    "DECKS",
+    "PUNCH_SIZES",
+    "TIE_PUNCH",
+    "QUARTER_SPHERE",
+    "QUARTER_SPHERE_COARSE",
+    "punch_model",
+    "quarter_sphere_model",
+    "write_model",
+    "select_decks",
+]
+
+#: LINEAR law of the punch and sphere decks: K = 1e7, sigma_inf = 3 (ccx's defaults for E = 2e5).
+LAW = ntf.LinearLaw(slope=1e7, tension=3.0)
+#: ``*CONTROLS, PARAMETERS=FIELD`` of the tie punch.
+TIE_CONTROLS: dict[str, float] = {"R_n": 1e-9, "C_n": 1e-9}
+STEEL, ALUMINIUM = (210_000.0, 0.3), (70_000.0, 0.33)
+
+BLOCK_BOX = ((0.0, 0.0, -50.0), (100.0, 100.0, 50.0))
+PUNCH_BOX = ((30.0, 30.0, 0.0), (40.0, 40.0, 30.0))
+#: Downward displacement of the punch top [mm].
+PUNCH_INDENTATION = 0.03
+
+_OUTPUT = OutputSpec(node_print=("U",), contact_print=("CDIS", "CSTR", "CELS"))
+
+
+@dataclass(frozen=True)
+class DeckModel:
+    """A contact problem ready for ``write_inp`` (and for a Python-API twin).
+
+    Attributes:
+        V: Vector P1 displacement space (serial mesh).
+        cell_tags, facet_tags: Tags of the bodies and of their surfaces.
+        materials: ``(E, nu)`` per cell tag value.
+        pair: The contact pair (slave, master, law).
+        fixed: Constraints of the model definition.
+        step: The static step (load, incrementation, controls, output).
+        heading: One line describing the deck.
+    """
+
+    V: dolfinx.fem.FunctionSpace
+    cell_tags: compat.MeshTags
+    facet_tags: compat.MeshTags
+    materials: dict[int, tuple[float, float]]
+    pair: ntf.ContactPair
+    fixed: tuple[BoundarySpec, ...]
+    step: StepSpec
+    heading: str
+
+    @property
+    def num_dofs(self) -> int:
+        """Number of displacement dofs."""
+        imap = self.V.dofmap.index_map
+        return 3 * (imap.size_local + imap.num_ghosts)
+
+
+def write_model(model: DeckModel, directory: Path, name: str) -> Path:
+    """Write ``<directory>/<name>.inp`` for ``model``; returns the path."""
+    path = Path(directory) / f"{name}.inp"
+    write_inp(
+        path,
+        displacement_space=model.V,
+        materials=model.materials,
+        cell_tags=model.cell_tags,
+        pairs=[model.pair],
+        fixed=list(model.fixed),
+        steps=[model.step],
+        heading=model.heading,
+    )
+    return path
+
+
+# ----------------------------------------------------------------------------- flat punch
+
+
+@dataclass(frozen=True)
+class PunchSpec:
+    """Divisions of the punch deck: in-plane and vertical, for the punch and for the block."""
+
+    punch: int
+    punch_layers: int
+    block: int
+    block_layers: int
+
+
+#: The 6 x 6 punch (49 slave nodes, spacing 20/3) on a 10 x 10 block (spacing 10): the slave nodes
+#: on x, y = 30, 50, 70 lie on master nodes and edges.
+TIE_PUNCH = PunchSpec(punch=6, punch_layers=4, block=10, block_layers=5)
+#: The punch at three sizes (4.7k, 29k and 81k dofs). The punch spacing is 40/n and the block
+#: spacing 100/n, so every fifth punch grid line lies exactly on a block grid line.
+PUNCH_SIZES: dict[int, PunchSpec] = {
+    10: PunchSpec(punch=10, punch_layers=8, block=10, block_layers=3),
+    20: PunchSpec(punch=20, punch_layers=15, block=20, block_layers=5),
+    30: PunchSpec(punch=30, punch_layers=20, block=30, block_layers=6),
+}
+
+
+def _snap_to_grid(x: np.ndarray, grid: np.ndarray) -> None:
+    """Move x and y coordinates within round-off of a block grid line onto it, in place.
+
+    Punch and block grid lines that coincide in exact arithmetic can differ by an ulp after
+    ``linspace`` (30 + 5 (40/30) against 11 (100/30)); the ties must be exact.
+    """
+    for axis in (0, 1):
+        nearest = grid[np.abs(x[:, axis, None] - grid[None, :]).argmin(axis=1)]
+        close = np.abs(x[:, axis] - nearest) <= 1e-12 * np.abs(grid).max()
+        x[close, axis] = nearest[close]
+
+
+def punch_model(
+    spec: PunchSpec,
+    *,
+    controls: Mapping[str, float] | None = None,
+    contact_elements: bool = False,
+) -> DeckModel:
+    """The structured flat punch deck (module docstring) with the divisions of ``spec``.
+
+    Args:
+        spec: Divisions.
+        controls: ``*CONTROLS, PARAMETERS=FIELD`` values by name (None: ccx's defaults).
+        contact_elements: Ask both codes for the ``.cel`` contact element sets.
+
+    Raises:
+        ValueError: A division that is not a positive integer.
+    """
+    for what in ("punch", "punch_layers", "block", "block_layers"):
+        value = getattr(spec, what)
+        if not isinstance(value, int) or value < 1:
+            raise ValueError(f"PunchSpec.{what} must be a positive integer, got {value!r}")
+    (bo, bs), (po, ps) = BLOCK_BOX, PUNCH_BOX
+    V, ct, ft = cases.blocks(
+        [
+            (bo, bs, (spec.block, spec.block, spec.block_layers)),
+            (po, ps, (spec.punch, spec.punch, spec.punch_layers)),
+        ]
+    )
+    _snap_to_grid(V.mesh.geometry.x, np.linspace(bo[0], bo[0] + bs[0], spec.block + 1))
+    top = ntf.FacetSurface(ft, cases.facet_tag(1, cases.TOP))
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, cases.facet_tag(1, cases.BOTTOM)),
+        ntf.FacetSurface(ft, cases.facet_tag(0, cases.TOP)),
+        ntf.SurfaceInteraction(LAW),
+    )
+    output = OutputSpec(
+        node_print=_OUTPUT.node_print,
+        contact_print=_OUTPUT.contact_print,
+        contact_elements=contact_elements,
+    )
+    step = StepSpec(
+        boundaries=[BoundarySpec(top, (2,), -PUNCH_INDENTATION, name="PRESS")],
+        increments=1,
+        field_controls=None if controls is None else dict(controls),
+        output=output,
+    )
+    fixed = (
+        BoundarySpec(ntf.FacetSurface(ft, cases.facet_tag(0, cases.BOTTOM)), name="BASE"),
+        BoundarySpec(top, (0, 1), name="GUIDE"),
+    )
+    heading = (
+        f"Flat punch {spec.punch} x {spec.punch} x {spec.punch_layers} (C3D8) on a block "
+        f"{spec.block} x {spec.block} x {spec.block_layers}, slave nodes on master nodes and "
+        f"edges, LINEAR K = {LAW.slope:g}, sigma_inf = {LAW.tension:g}, top pushed down "
+        f"{PUNCH_INDENTATION:g} in one increment"
+    )
+    return DeckModel(V, ct, ft, {1: ALUMINIUM, 2: STEEL}, pair, fixed, step, heading)
+
+
+# ----------------------------------------------------------------------------- quarter sphere
+
+
+@dataclass(frozen=True)
+class SphereSpec:
+    """Mesh sizes (``meshes/hertz.py``) and indentation of the quarter sphere deck.
+
+    Attributes:
+        size_fine: Edge length within ``refine_radius`` of the pole.
+        size_coarse: Largest edge length.
+        refine_radius: Radius of the fine zone.
+        indentation: Downward displacement of the sphere's flat top.
+    """
+
+    size_fine: float
+    size_coarse: float
+    refine_radius: float
+    indentation: float
+
+
+SPHERE_RADIUS = 10.0
+SPHERE_INCREMENTS = 4
+#: The benchmark deck (22k dofs).
+QUARTER_SPHERE = SphereSpec(size_fine=0.15, size_coarse=2.5, refine_radius=2.5, indentation=0.12)
+#: The coarse deck for tests (4.5k dofs).
+QUARTER_SPHERE_COARSE = SphereSpec(
+    size_fine=0.3, size_coarse=3.0, refine_radius=2.0, indentation=0.14
+)
+
+
+def _hertz_meshes() -> typing.Any:
+    """``meshes/hertz.py``, imported by path (``meshes/`` is a folder of scripts)."""
+    name = "_ccx_decks_meshes_hertz"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "meshes" / "hertz.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    return sys.modules[name]
+
+
+def quarter_sphere_model(
+    spec: SphereSpec = QUARTER_SPHERE, *, increments: int = SPHERE_INCREMENTS
+) -> DeckModel:
+    """The fixed-increment quarter sphere deck (module docstring).
+
+    Args:
+        spec: Mesh sizes and indentation.
+        increments: Fixed increments of the step (``*STATIC, DIRECT``).
+    """
+    hz = _hertz_meshes()
+    mesh, ct, ft = mesh_from_gmsh(
+        hz.build_hertz,
+        MPI.COMM_SELF,
+        radius=SPHERE_RADIUS,
+        size_fine=spec.size_fine,
+        size_coarse=spec.size_coarse,
+        refine_radius=spec.refine_radius,
+    )
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, hz.SPHERE_CONTACT),
+        ntf.FacetSurface(ft, hz.BLOCK_TOP),
+        ntf.SurfaceInteraction(LAW),
+    )
+    top = ntf.FacetSurface(ft, hz.SPHERE_TOP)
+    step = StepSpec(
+        boundaries=[BoundarySpec(top, (2,), -spec.indentation, name="PRESS")],
+        increments=increments,
+        output=_OUTPUT,
+    )
+    fixed = (
+        BoundarySpec(ntf.FacetSurface(ft, hz.BLOCK_BOTTOM), name="BASE"),
+        BoundarySpec(ntf.FacetSurface(ft, hz.SYMMETRY_X), (0,), name="XSYM"),
+        BoundarySpec(ntf.FacetSurface(ft, hz.SYMMETRY_Y), (1,), name="YSYM"),
+    )
+    heading = (
+        f"Quarter sphere R = {SPHERE_RADIUS:g} (C3D4, size {spec.size_fine:g} at the pole) on a "
+        f"block, top pushed down {spec.indentation:g} in {increments} fixed increments, LINEAR "
+        f"K = {LAW.slope:g}, sigma_inf = {LAW.tension:g}"
+    )
+    return DeckModel(V, ct, ft, {hz.BLOCK: STEEL, hz.SPHERE: STEEL}, pair, fixed, step, heading)
+
+
+# ----------------------------------------------------------------------------- the deck list
+
+
+@dataclass(frozen=True)
+class BenchDeck:
+    """A deck of the benchmark.
+
+    Attributes:
+        name: Job name (``<name>.inp``).
+        description: One line for the report.
+        write: ``write(directory)`` writes ``<directory>/<name>.inp``.
+        quick: Part of the ``--quick`` selection (each code runs it in seconds).
+    """
+
+    name: str
+    description: str
+    write: Callable[[Path], None]
+    quick: bool = False
+
+
+def _model_deck(
+    name: str, description: str, build: Callable[[], DeckModel], quick: bool
+) -> BenchDeck:
+    def write(directory: Path) -> None:
+        write_model(build(), directory, name)
+
+    return BenchDeck(name, description, write, quick)
+
+
+def _punch_decks() -> list[BenchDeck]:
+    decks = [
+        _model_deck(
+            "tie_punch",
+            "C3D8 6 x 6 punch, slave nodes on master nodes/edges, R_n = C_n = 1e-9, 1 increment",
+            lambda: punch_model(TIE_PUNCH, controls=TIE_CONTROLS, contact_elements=True),
+            True,
+        )
+    ]
+    for n, spec in PUNCH_SIZES.items():
+        decks.append(
+            _model_deck(
+                f"punch_{n}",
+                f"C3D8 {n} x {n} punch on a {spec.block} x {spec.block} block, 1 increment",
+                lambda spec=spec: punch_model(spec),
+                n == 10,
+            )
+        )
+    return decks
+
+
+def _sphere_decks() -> list[BenchDeck]:
+    return [
+        _model_deck(
+            "quarter_sphere",
+            "C3D4 quarter sphere, h = 0.15 at the pole, 4 fixed increments",
+            quarter_sphere_model,
+            False,
+        ),
+        _model_deck(
+            "quarter_sphere_coarse",
+            "C3D4 quarter sphere, h = 0.3 at the pole, 4 fixed increments",
+            lambda: quarter_sphere_model(QUARTER_SPHERE_COARSE),
+            True,
+        ),
+    ]
+
+
+DECKS: tuple[BenchDeck, ...] = (
+    *_punch_decks(),
+    *_sphere_decks(),
+    *(BenchDeck(c.name, f"cross-validation: {c.description}", c.write, True) for c in cases.CASES),
+)
+"""Every deck of the benchmark, in report order."""
+
+
+def select_decks(names: Sequence[str] | None = None, *, quick: bool = False) -> list[BenchDeck]:
+    """The decks called ``names`` (all if None), only the quick ones if ``quick``, in order.
+
+    Raises:
+        ValueError: An unknown name (the message lists the known ones).
+    """
+    known = [d.name for d in DECKS]
+    unknown = [n for n in names or () if n not in known]
+    if unknown:
+        raise ValueError(f"unknown deck(s) {unknown}; known: {', '.join(known)}")
+    return [
+        d for d in DECKS if (names is None or d.name in names) and (d.quick or not quick)
+    ]
