@@ -15,6 +15,6 @@ test: setup
 benchmark: setup
 	$(PY) benchmarks/contact_phases.py
 
-# dolfinx_ntf against ccx 2.20 on the same decks; writes docs/performance.md (about 25 minutes).
+# dolfinx_ntf against ccx 2.20 on the same decks; writes docs/performance.md (about 15 minutes).
 benchmark-ccx: setup
 	$(PY) benchmarks/vs_ccx.py

@@ -26,8 +26,8 @@ Both codes run on one thread (``--threads``: ``OMP_NUM_THREADS`` for ccx, and th
 thread counts for dolfinx_ntf's MUMPS). Serial; needs ``ccx`` on the PATH. From the repository
 root::
 
-    .venv/bin/python benchmarks/vs_ccx.py                  # every deck (about 25 minutes)
-    .venv/bin/python benchmarks/vs_ccx.py --quick          # the small decks (about 3 minutes)
+    .venv/bin/python benchmarks/vs_ccx.py                  # every deck (about 15 minutes)
+    .venv/bin/python benchmarks/vs_ccx.py --quick          # the small decks (about 2 minutes)
     .venv/bin/python benchmarks/vs_ccx.py --only tie_punch punch_20 --workdir /tmp/bench
 
 A full run replaces this platform's section of ``docs/performance.md`` (other platforms' sections
@@ -38,6 +38,7 @@ stay); ``--quick`` and ``--only`` runs print their table and write a report only
 from __future__ import annotations
 
 import argparse
+import ctypes
 import datetime
 import json
 import os
@@ -64,6 +65,7 @@ __all__ = ["Measurement", "DeckResult", "parse_progress", "run_deck", "write_rep
 _CONVERGED = re.compile(r"^ increment (\d+) converged: time ([^,]+), (\d+) iterations")
 _ATTEMPT = re.compile(r"^ increment (\d+) attempt (\d+)")
 _ERROR = re.compile(r"^\s*\*ERROR:?\s*(.*)")
+_JOB_TIME = re.compile(r"^ Wrote .*\((\d+) increments?, ([0-9.]+) s\)")
 
 
 @dataclass
@@ -77,6 +79,8 @@ class Measurement:
         peak_rss: Largest resident set size [bytes].
         ok: The run completed (exit status 0, no error).
         error: The failure's message (empty if ``ok``).
+        job_time: dolfinx_ntf's own ``run_job`` time (what it prints at the end; NaN otherwise):
+            the wall time without Python start-up and imports.
     """
 
     code: str
@@ -85,6 +89,7 @@ class Measurement:
     peak_rss: int
     ok: bool
     error: str = ""
+    job_time: float = float("nan")
 
 
 @dataclass
@@ -148,6 +153,11 @@ class DeckResult:
         runs = self.timed(code)
         return statistics.fmean(m.cpu for m in runs) if runs else float("nan")
 
+    def mean_job_time(self) -> float:
+        """Mean ``run_job`` time of dolfinx_ntf's timed runs (NaN without any)."""
+        runs = self.timed("dolfinx_ntf")
+        return statistics.fmean(m.job_time for m in runs) if runs else float("nan")
+
     def peak_memory(self, code: str) -> int:
         """Largest peak RSS over all runs of ``code`` [bytes]."""
         return max((m.peak_rss for m in self.runs if m.code == code), default=0)
@@ -176,8 +186,6 @@ def _measured(record: Path, command: list[str]) -> list[str]:
 
 def _die_with_parent() -> None:
     """Ask Linux to kill this (child) process when its parent, the launcher, dies."""
-    import ctypes
-
     pr_set_pdeathsig = 1
     ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
 
@@ -217,13 +225,16 @@ def _run_ntf(directory: Path, job: str, threads: int, timeout: float) -> Measure
             proc.kill()
             proc.wait()
             return _record("dolfinx_ntf", record, False, f"timed out after {timeout:g} s")
+    lines = log.read_text(errors="replace").splitlines()
     error = ""
     if code != 0:
-        messages = [
-            m.group(1) for m in map(_ERROR.match, log.read_text(errors="replace").splitlines()) if m
-        ]
+        messages = [m.group(1) for m in map(_ERROR.match, lines) if m]
         error = f"exit status {code}: " + (messages[0] if messages else f"see {log}")
-    return _record("dolfinx_ntf", record, code == 0, error)
+    measurement = _record("dolfinx_ntf", record, code == 0, error)
+    times = [float(m.group(2)) for m in map(_JOB_TIME.match, lines) if m]
+    if times:
+        measurement.job_time = times[-1]
+    return measurement
 
 
 def _run_ccx(directory: Path, job: str, threads: int, timeout: float) -> Measurement:
@@ -435,7 +446,8 @@ def table(results: list[DeckResult]) -> list[str]:
         ratio = ntf_wall / ccx_wall if not (r.failure("ccx") or r.failure("dolfinx_ntf")) else None
         same = "-" if r.same_contact is None else ("yes" if r.same_contact else "no")
         if r.common_increments and r.same_contact is not None:
-            same += f" ({r.common_increments} common increments)"
+            plural = "s" if r.common_increments > 1 else ""
+            same += f" ({r.common_increments} common increment{plural})"
         lines.append(
             f"| `{r.name}` | {r.dofs} | {len(r.ccx.iterations)} / {len(r.ntf.iterations)} "
             f"| {_cell(r, 'ccx', _iterations(r.ccx))} "
@@ -450,9 +462,9 @@ def table(results: list[DeckResult]) -> list[str]:
 
 def _details(results: list[DeckResult]) -> list[str]:
     lines = [
-        "| deck | ccx wall [s] per timed run | CPU [s] | dolfinx_ntf wall [s] per timed run "
-        "| CPU [s] |",
-        "|---|---|---|---|---|",
+        "| deck | ccx wall [s] per timed run | mean CPU [s] | dolfinx_ntf wall [s] per timed run "
+        "| mean CPU [s] | of which `run_job` [s] | CPU time ratio |",
+        "|---|---|---|---|---|---|---|",
     ]
     for r in results:
         cells = []
@@ -460,6 +472,9 @@ def _details(results: list[DeckResult]) -> list[str]:
             runs = r.timed(code)
             cells.append(", ".join(_fmt(m.wall) for m in runs) or "-")
             cells.append(_fmt(r.mean_cpu(code)))
+        cells.append(_fmt(r.mean_job_time()))
+        both = not (r.failure("ccx") or r.failure("dolfinx_ntf"))
+        cells.append(_fmt(r.mean_cpu("dolfinx_ntf") / r.mean_cpu("ccx")) if both else "-")
         lines.append(f"| `{r.name}` | " + " | ".join(cells) + " |")
     return lines
 
@@ -480,13 +495,14 @@ def section(results: list[DeckResult], env: dict[str, str], loads: list[float],
     """This platform's section of the report."""
     busy = max(loads, default=0.0) > 1.5
     load_text = (
-        f"1-minute load average sampled before each run: {min(loads, default=0):.2f} to "
+        f"1-minute load average before and after each deck: {min(loads, default=0):.2f} to "
         f"{max(loads, default=0):.2f} (the benchmark itself accounts for about 1)"
     )
     if busy:
         load_text += (
             f"; the machine ({env['cores']} cores) was shared with other work, so wall times are "
-            "those of a loaded machine (compare the CPU times below)"
+            "those of a loaded machine: both codes alternate and share the load, and the CPU "
+            "times below are less affected"
         )
     out = [
         f"## {env['os']}: dolfinx {env['dolfinx']}, PETSc {env['petsc']}",
@@ -511,24 +527,34 @@ _HEADER = [
     f"Generated by `{COMMAND}` (`make benchmark-ccx`); do not edit by hand. Each section is one "
     "machine and Debian release; a full run replaces its own section.",
     "",
-    "Decks (`benchmarks/ccx_decks.py`, written by `write_inp`): `tie_punch`, a 6 x 6 C3D8 punch "
-    "whose slave nodes on x, y = 30, 50, 70 lie exactly above master nodes and edges, LINEAR law "
-    "K = 1e7, sigma_inf = 3, one increment, `*CONTROLS, PARAMETERS=FIELD` R_n = C_n = 1e-9; "
-    "`punch_10`, `punch_20`, `punch_30`, the same punch at 4.7k, 29k and 81k dofs with ccx's "
-    "default controls; `quarter_sphere`, a C3D4 quarter sphere of radius 10 (h = 0.15 at the pole) "
-    "pushed 0.12 into a block in 4 fixed increments (`*STATIC, DIRECT`), and "
-    "`quarter_sphere_coarse` (h = 0.3, pushed 0.14); the cross-validation decks of "
-    "`tests/data/calculix/crossval/cases.py`. Both codes run the same `.inp` file: ccx 2.20 as "
-    "`ccx -i JOB`, dolfinx_ntf as `python -m dolfinx_ntf run JOB` with the deck's controls.",
+    "Decks (`benchmarks/ccx_decks.py`, written by `write_inp`; units mm, N, MPa):",
     "",
-    "Columns: Newton iterations of each converged increment (ccx's `.sta` file, dolfinx_ntf's "
-    "progress lines); mean wall time of the timed runs from process start to exit (dolfinx_ntf's "
-    "includes Python start-up, imports and mesh and form set-up, with the form cache warm); the "
-    "time ratio dolfinx_ntf / ccx; peak resident memory of each process; the largest difference "
-    "of the increments both codes converged, displacements over ccx's largest displacement and "
-    "contact pressures over ccx's largest pressure (`dolfinx_ntf.calculix.compare`), and whether "
-    "the same slave nodes carry contact elements. A failed run shows as **failed** with its "
-    "message below the table.",
+    "- `tie_punch`: a 6 x 6 C3D8 steel punch on a 10 x 10 aluminium block whose slave nodes on "
+    "x, y = 30, 50, 70 lie exactly above master nodes and edges (the deck is symmetric, so they "
+    "stay there), LINEAR law K = 1e7, sigma_inf = 3, top pushed down in one increment, "
+    "`*CONTROLS, PARAMETERS=FIELD` R_n = C_n = 1e-9. ccx 2.20 stops on it (\"solution seems to "
+    "diverge\"): its own re-pairings move the three slave nodes above master vertices on the "
+    "diagonals between diagonally opposite faces at every iteration, and its residual stalls at "
+    "1.5e-6 of the average force.",
+    "- `punch_10`, `punch_20`, `punch_30`: the same punch at 4.7k, 29k and 81k dofs with ccx's "
+    "default controls (with 1e-9 ccx stalls the same way, at 1.4e-7 on `punch_20`).",
+    "- `quarter_sphere`: a C3D4 steel quarter sphere of radius 10 (h = 0.15 at the pole) pushed "
+    "0.12 into a steel block in 4 fixed increments (`*STATIC, DIRECT`), same law, ccx's default "
+    "controls; `quarter_sphere_coarse`: h = 0.3, pushed 0.14.",
+    "- the cross-validation decks of `tests/data/calculix/crossval/cases.py` (controls "
+    "tightened to R_n = 1e-10).",
+    "",
+    "Both codes run the same `.inp` file on one thread: ccx 2.20 as `ccx -i JOB` "
+    "(`dolfinx_ntf.calculix.run_ccx`), dolfinx_ntf as `python -m dolfinx_ntf run JOB` with the "
+    "deck's controls. Columns: Newton iterations of each converged increment (ccx's `.sta` file, "
+    "dolfinx_ntf's progress lines; a failed run lists its converged increments); mean wall time "
+    "of the timed runs from process start to exit (dolfinx_ntf's includes Python start-up, "
+    "imports and form loading, with the form cache warm; the `run_job` column below leaves them "
+    "out); the time ratio dolfinx_ntf / ccx; peak resident memory of each process; "
+    "the largest difference over the increments both codes converged, displacements over ccx's "
+    "largest displacement and contact pressures over ccx's largest pressure "
+    "(`dolfinx_ntf.calculix.compare`), and whether the same slave nodes carry contact elements. "
+    "A failed run shows as **failed**, with its message below the table.",
     "",
 ]
 
