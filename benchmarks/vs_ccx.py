@@ -212,12 +212,15 @@ def _record(code: str, record: Path, ok: bool, error: str) -> Measurement:
 
 
 def _run_ntf(directory: Path, job: str, threads: int, timeout: float) -> Measurement:
-    """``python -m dolfinx_ntf run JOB`` in ``directory``, measured; output in ``ntf.log``."""
+    """``python -m dolfinx_ntf run JOB`` of this checkout in ``directory``, measured; output in
+    ``ntf.log``."""
     log, record = directory / "ntf.log", directory / "ntf.measure.json"
     record.unlink(missing_ok=True)
     command = _measured(record, [sys.executable, "-m", "dolfinx_ntf", "run", job])
+    env = _thread_env(threads)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
     with log.open("w") as out:
-        proc = subprocess.Popen(command, cwd=directory, env=_thread_env(threads), stdout=out,
+        proc = subprocess.Popen(command, cwd=directory, env=env, stdout=out,
                                 stderr=subprocess.STDOUT)  # fmt: skip
         try:
             code = proc.wait(timeout=timeout)
