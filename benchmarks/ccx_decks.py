@@ -16,17 +16,21 @@ Each deck is built as a dolfinx problem (mesh, tags, contact pair, constraints, 
       PARAMETERS=FIELD`` R_n = C_n = 1e-9.
     - ``punch_10``, ``punch_20``, ``punch_30``: the same punch with 10, 20 and 30 divisions (about
       5k, 29k and 81k dofs) and ccx's default controls. With R_n = C_n = 1e-9 ccx 2.20 stops on
-      these decks ("solution seems to diverge"): its own re-pairings move the slave nodes above
-      master vertices between diagonally opposite faces at every iteration, and its residual stalls
-      at about 1e-7 of the average force (measured on ``punch_20``; ``tie_punch``: 1.5e-6).
+      ``tie_punch``, ``punch_10`` and ``punch_20`` ("solution seems to diverge"): its own
+      re-pairings move slave nodes above master vertices between diagonally opposite faces at
+      every iteration, and its residual stalls (at 1.5e-6 of the average force on ``tie_punch``,
+      1.4e-7 on ``punch_20``).
 - **Fixed-increment quarter sphere** (:func:`quarter_sphere_model`): the lower half of a steel
   sphere of radius 10 (C3D4, ``meshes/hertz.py``: size 0.15 within 2.5 of the pole) on a steel
   block, its flat top pushed down by 0.12 in 4 fixed increments of 0.25 (``*STATIC, DIRECT``),
   LINEAR law K = 1e7, sigma_inf = 3, ccx's default controls. ccx 2.20 converges every increment;
   dolfinx_ntf at 926a3d5 diverges in increment 2 (the spring count runs away). The coarse version
   (size 0.3 at the pole, pushed down 0.14, about 4.5k dofs) runs in seconds and fails the same way
-  (in increment 3), ccx converging. Both indentations sit between the deck where both codes
-  converge and the one where ccx fails too (0.1 and 0.15 on the fine mesh).
+  (in increment 3), ccx converging. Whether either code converges here depends on the mesh
+  itself: gmsh 4.13 (Debian 13) meshes the same sizes differently, and on its mesh ccx fails and
+  dolfinx_ntf converges at 0.12 (and both converge at 0.11, both fail at 0.125). The decks
+  therefore read meshes made once with gmsh 4.8 and kept in ``benchmarks/data``
+  (:func:`pin_sphere_mesh`; ``pinned=False`` meshes with this machine's gmsh).
 - **Cross-validation decks**: ``tests/data/calculix/crossval/cases.py`` as they are.
 
 Every deck prints U of all nodes and CDIS, CSTR, CELS per increment, so that both codes' results
@@ -36,6 +40,7 @@ contact element sets. Serial (``MPI.COMM_SELF``).
 
 from __future__ import annotations
 
+import argparse
 import importlib.util
 import sys
 import typing
@@ -47,6 +52,7 @@ import numpy as np
 from mpi4py import MPI
 
 import dolfinx.fem
+import dolfinx.mesh
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
@@ -69,6 +75,8 @@ __all__ = [
     "QUARTER_SPHERE_COARSE",
     "punch_model",
     "quarter_sphere_model",
+    "pin_sphere_mesh",
+    "sphere_facet_tags",
     "write_model",
     "select_decks",
 ]
@@ -236,26 +244,39 @@ class SphereSpec:
     """Mesh sizes (``meshes/hertz.py``) and indentation of the quarter sphere deck.
 
     Attributes:
+        name: Name of the pinned mesh ``benchmarks/data/<name>.npz``.
         size_fine: Edge length within ``refine_radius`` of the pole.
         size_coarse: Largest edge length.
         refine_radius: Radius of the fine zone.
         indentation: Downward displacement of the sphere's flat top.
     """
 
+    name: str
     size_fine: float
     size_coarse: float
     refine_radius: float
     indentation: float
 
+    def mesh_sizes(self) -> dict[str, float]:
+        """Keyword arguments of ``build_hertz`` (besides the radius and block)."""
+        return {"size_fine": self.size_fine, "size_coarse": self.size_coarse,
+                "refine_radius": self.refine_radius}  # fmt: skip
+
 
 SPHERE_RADIUS = 10.0
+#: The block ``[0, 20] x [0, 20] x [-15, 0]`` under the quarter sphere (``build_hertz``'s default).
+SPHERE_BLOCK = (2.0 * SPHERE_RADIUS, 2.0 * SPHERE_RADIUS, 1.5 * SPHERE_RADIUS)
 SPHERE_INCREMENTS = 4
 #: The benchmark deck (22k dofs).
-QUARTER_SPHERE = SphereSpec(size_fine=0.15, size_coarse=2.5, refine_radius=2.5, indentation=0.12)
+QUARTER_SPHERE = SphereSpec(
+    "quarter_sphere", size_fine=0.15, size_coarse=2.5, refine_radius=2.5, indentation=0.12
+)
 #: The coarse deck for tests (4.5k dofs).
 QUARTER_SPHERE_COARSE = SphereSpec(
-    size_fine=0.3, size_coarse=3.0, refine_radius=2.0, indentation=0.14
+    "quarter_sphere_coarse", size_fine=0.3, size_coarse=3.0, refine_radius=2.0, indentation=0.14
 )
+#: Pinned meshes of the sphere decks (see :func:`pin_sphere_mesh`).
+DATA = Path(__file__).resolve().parent / "data"
 
 
 def _hertz_meshes() -> typing.Any:
@@ -269,24 +290,95 @@ def _hertz_meshes() -> typing.Any:
     return sys.modules[name]
 
 
+def _gmsh_sphere(spec: SphereSpec) -> tuple[dolfinx.mesh.Mesh, compat.MeshTags, compat.MeshTags]:
+    """Mesh the quarter sphere and block with gmsh (the result depends on the gmsh version)."""
+    return mesh_from_gmsh(_hertz_meshes().build_hertz, MPI.COMM_SELF, radius=SPHERE_RADIUS,
+                          block_size=SPHERE_BLOCK, **spec.mesh_sizes())  # fmt: skip
+
+
+def sphere_facet_tags(mesh: dolfinx.mesh.Mesh, body_of_cell: np.ndarray) -> compat.MeshTags:
+    """Facet tags of ``meshes/hertz.py`` (quarter model) from the geometry and the body of each
+    cell: the planes of the block and of the sphere's flat top, the rest of the sphere curved."""
+    hz = _hertz_meshes()
+    mesh.topology.create_connectivity(2, 3)
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+    f_to_c = mesh.topology.connectivity(2, 3)
+    body = body_of_cell[f_to_c.array[f_to_c.offsets[exterior]]]
+    mid = dolfinx.mesh.compute_midpoints(mesh, 2, exterior)
+    tolerance = 1e-9 * SPHERE_RADIUS
+
+    def plane(axis: int, value: float) -> np.ndarray:
+        return np.abs(mid[:, axis] - value) <= tolerance
+
+    symmetry_x, symmetry_y = plane(0, 0.0), plane(1, 0.0)
+    block, sphere = body == hz.BLOCK, body == hz.SPHERE
+    values = np.zeros(exterior.size, dtype=np.int32)
+    values[block & plane(2, -SPHERE_BLOCK[2])] = hz.BLOCK_BOTTOM
+    values[block & plane(2, 0.0)] = hz.BLOCK_TOP
+    values[sphere & plane(2, SPHERE_RADIUS)] = hz.SPHERE_TOP
+    values[sphere & ~(symmetry_x | symmetry_y | plane(2, SPHERE_RADIUS))] = hz.SPHERE_CONTACT
+    values[symmetry_x] = hz.SYMMETRY_X
+    values[symmetry_y] = hz.SYMMETRY_Y
+    keep = values > 0
+    order = np.argsort(exterior[keep])
+    return dolfinx.mesh.meshtags(mesh, 2, exterior[keep][order], values[keep][order])
+
+
+def _pinned_sphere(spec: SphereSpec) -> tuple[dolfinx.mesh.Mesh, compat.MeshTags, compat.MeshTags]:
+    """The mesh of ``benchmarks/data/<spec.name>.npz``, with its tags.
+
+    Raises:
+        ValueError: The file is missing or was made for other sizes.
+    """
+    path = DATA / f"{spec.name}.npz"
+    if not path.is_file():
+        raise ValueError(f"pinned mesh {path} is missing: make it with "
+                         "`python benchmarks/ccx_decks.py --pin`")  # fmt: skip
+    data = np.load(path)
+    made_for = {key: float(data[key]) for key in spec.mesh_sizes()}
+    if made_for != spec.mesh_sizes():
+        raise ValueError(f"pinned mesh {path} was made for {made_for}, not {spec.mesh_sizes()}: "
+                         "remake it with `python benchmarks/ccx_decks.py --pin`")  # fmt: skip
+    domain = compat.coordinate_element("tetrahedron", 1)
+    mesh = dolfinx.mesh.create_mesh(MPI.COMM_SELF, data["cells"].astype(np.int64), data["x"],
+                                    domain)  # fmt: skip
+    body_of_cell = data["body"].astype(np.int32)[mesh.topology.original_cell_index]
+    cell_tags = dolfinx.mesh.meshtags(
+        mesh, 3, np.arange(body_of_cell.size, dtype=np.int32), body_of_cell
+    )
+    return mesh, cell_tags, sphere_facet_tags(mesh, body_of_cell)
+
+
+def pin_sphere_mesh(spec: SphereSpec, directory: Path = DATA) -> Path:
+    """Mesh ``spec`` with gmsh and save nodes, cells and bodies to ``<directory>/<name>.npz``.
+
+    gmsh's unstructured mesher gives different meshes in different versions (4.8 on Debian 12,
+    4.13 on Debian 13), and whether a Newton iteration converges on this deck depends on the mesh;
+    the decks read the pinned mesh so that every machine runs the same problem.
+    """
+    mesh, cell_tags, _ = _gmsh_sphere(spec)
+    body = np.zeros(mesh.topology.index_map(3).size_local, dtype=np.int8)
+    body[cell_tags.indices] = cell_tags.values
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"{spec.name}.npz"
+    np.savez_compressed(path, x=mesh.geometry.x, cells=compat.geometry_dofs(mesh).astype(np.int32),
+                        body=body, **spec.mesh_sizes())  # fmt: skip
+    return path
+
+
 def quarter_sphere_model(
-    spec: SphereSpec = QUARTER_SPHERE, *, increments: int = SPHERE_INCREMENTS
+    spec: SphereSpec = QUARTER_SPHERE, *, increments: int = SPHERE_INCREMENTS, pinned: bool = True
 ) -> DeckModel:
     """The fixed-increment quarter sphere deck (module docstring).
 
     Args:
         spec: Mesh sizes and indentation.
         increments: Fixed increments of the step (``*STATIC, DIRECT``).
+        pinned: Use the pinned mesh of ``benchmarks/data`` (the same on every machine) instead of
+            meshing with this machine's gmsh.
     """
     hz = _hertz_meshes()
-    mesh, ct, ft = mesh_from_gmsh(
-        hz.build_hertz,
-        MPI.COMM_SELF,
-        radius=SPHERE_RADIUS,
-        size_fine=spec.size_fine,
-        size_coarse=spec.size_coarse,
-        refine_radius=spec.refine_radius,
-    )
+    mesh, ct, ft = _pinned_sphere(spec) if pinned else _gmsh_sphere(spec)
     V = compat.vector_space(mesh, "Lagrange", 1)
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, hz.SPHERE_CONTACT),
@@ -400,3 +492,24 @@ def select_decks(names: Sequence[str] | None = None, *, quick: bool = False) -> 
     return [
         d for d in DECKS if (names is None or d.name in names) and (d.quick or not quick)
     ]
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Command line: ``--pin`` remakes the pinned sphere meshes, ``--write DIR`` writes decks."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--pin", action="store_true", help="remake benchmarks/data/*.npz (gmsh)")
+    parser.add_argument("--write", type=Path, metavar="DIR", help="write the decks into DIR")
+    parser.add_argument("--only", nargs="+", metavar="DECK", help="decks to write")
+    args = parser.parse_args(argv)
+    if args.pin:
+        for spec in (QUARTER_SPHERE, QUARTER_SPHERE_COARSE):
+            print(f"wrote {pin_sphere_mesh(spec)}")
+    if args.write is not None:
+        args.write.mkdir(parents=True, exist_ok=True)
+        for deck in select_decks(args.only):
+            deck.write(args.write)
+            print(f"wrote {args.write / deck.name}.inp")
+
+
+if __name__ == "__main__":
+    main()

@@ -7,6 +7,7 @@ sphere to the end. The benchmark itself must turn a failing run into a row of it
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 import sys
 from pathlib import Path
@@ -119,6 +120,29 @@ def test_coarse_quarter_sphere_is_a_fixed_increment_deck_ccx_runs(tmp_path):
     rows = read_sta(tmp_path / "quarter_sphere_coarse.sta")
     assert [r.increment for r in rows] == [1, 2, 3, 4]
     assert rows[-1].total_time == pytest.approx(1.0)
+
+
+def test_sphere_facet_tags_reproduce_the_gmsh_groups():
+    """The pinned meshes get their facet tags from the geometry: the same as gmsh's groups."""
+    spec = ccx_decks.QUARTER_SPHERE_COARSE
+    mesh, cell_tags, facet_tags = ccx_decks._gmsh_sphere(spec)
+    body = np.zeros(mesh.topology.index_map(3).size_local, dtype=np.int32)
+    body[cell_tags.indices] = cell_tags.values
+    tags = ccx_decks.sphere_facet_tags(mesh, body)
+    np.testing.assert_array_equal(tags.indices, facet_tags.indices)
+    np.testing.assert_array_equal(tags.values, facet_tags.values)
+    assert len(np.unique(tags.values)) == 6
+
+
+def test_pinned_sphere_mesh_is_checked_against_its_sizes(tmp_path, monkeypatch):
+    model = ccx_decks.quarter_sphere_model(ccx_decks.QUARTER_SPHERE_COARSE)
+    assert 3_000 < model.num_dofs < 6_000
+    other = dataclasses.replace(ccx_decks.QUARTER_SPHERE_COARSE, size_fine=0.25)
+    with pytest.raises(ValueError, match="was made for .*size_fine.: 0.3.*remake it"):
+        ccx_decks.quarter_sphere_model(other)
+    monkeypatch.setattr(ccx_decks, "DATA", tmp_path)
+    with pytest.raises(ValueError, match="quarter_sphere_coarse.npz is missing"):
+        ccx_decks.quarter_sphere_model(ccx_decks.QUARTER_SPHERE_COARSE)
 
 
 def test_progress_lines_give_iterations_and_cutbacks():
