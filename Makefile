@@ -31,3 +31,7 @@ test-other:
 
 benchmark: setup
 	$(PY) benchmarks/contact_phases.py
+
+# dolfinx_ntf against ccx 2.20 on the same decks; writes docs/performance.md (about 15 minutes).
+benchmark-ccx: setup
+	$(PY) benchmarks/vs_ccx.py

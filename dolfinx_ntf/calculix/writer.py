@@ -321,6 +321,33 @@ class _Mesh:
     face_of_facet: np.ndarray  # (2, num facets per cell) ccx face number (1-based) per orientation
 
 
+def _node_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Coordinates of every block dof (owned and ghost), ``(num_blocks, 3)``.
+
+    Dofs on cell vertices take the mesh's own geometry nodes, and P2 midside dofs of a
+    straight-sided mesh the mean of their edge's two nodes, so that coordinates given exactly (a
+    structured grid, nodes placed above other nodes) reach the deck without the round-off of the
+    reference-to-physical map. Other dofs (on a curved mesh) are tabulated.
+    """
+    X = V.tabulate_dof_coordinates().reshape(-1, 3).copy()
+    mesh = V.mesh
+    x = mesh.geometry.x
+    dofs, nodes = compat.cell_dofs(V), compat.geometry_dofs(mesh)
+    layout = V.dofmap.dof_layout
+    cell_type = mesh.topology.cell_type
+    num_vertices = dolfinx.cpp.mesh.cell_num_entities(cell_type, 0)
+    for vertex in range(num_vertices):  # 4 or 8 vertices
+        X[dofs[:, layout.entity_dofs(0, vertex)[0]]] = x[nodes[:, vertex]]
+    if nodes.shape[1] == num_vertices:
+        edges = dolfinx.cpp.mesh.get_entity_vertices(cell_type, 1)
+        for edge in range(dolfinx.cpp.mesh.cell_num_entities(cell_type, 1)):  # 6 or 12 edges
+            if len(layout.entity_dofs(1, edge)) == 1:
+                a, b = (int(v) for v in edges.links(edge))
+                midside = dofs[:, layout.entity_dofs(1, edge)[0]]
+                X[midside] = 0.5 * (x[nodes[:, a]] + x[nodes[:, b]])
+    return X
+
+
 def _mesh_data(V: dolfinx.fem.FunctionSpace) -> _Mesh:
     etype = _element_type(V)
     mesh = V.mesh
@@ -332,7 +359,7 @@ def _mesh_data(V: dolfinx.fem.FunctionSpace) -> _Mesh:
     num_cells = cmap.size_local + cmap.num_ghosts
     element_ids = cmap.local_to_global(np.arange(num_cells, dtype=np.int32)).astype(np.int64) + 1
     cell_dofs = compat.cell_dofs(V)[: cmap.size_local]
-    X = V.tabulate_dof_coordinates().reshape(-1, 3)
+    X = _node_coordinates(V)
     orders, vertex_to_corner = _local_node_order(V, etype)
     ncorners = 4 if etype != "C3D8" else 8
     local = cell_dofs[:, orders[0]]

@@ -1,0 +1,195 @@
+"""The decks and the machinery of ``benchmarks/vs_ccx.py``, on the small decks (seconds, no timing).
+
+The decks must be what the benchmark claims (ties, law, controls, incrementation) and valid ccx
+input: ``read_deck`` reads them and, where ccx is installed, ccx 2.20 runs the coarse quarter
+sphere to the end. The benchmark itself must turn a failing run into a row of its table.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
+from dolfinx_ntf.calculix.deck import read_deck, surface_nodes
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import ccx_decks
+import vs_ccx
+
+pytestmark = pytest.mark.serial
+
+needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
+
+
+def _write(name: str, directory: Path):
+    (deck,) = ccx_decks.select_decks([name])
+    deck.write(directory)
+    return read_deck(directory / f"{name}.inp")
+
+
+def _law(deck) -> tuple:
+    (pair,) = deck.contact_pairs
+    behavior = deck.interactions[pair.interaction].behavior
+    return behavior.pressure_overclosure, behavior.values[:2]
+
+
+def _on_lines(values: np.ndarray, lines: np.ndarray) -> np.ndarray:
+    """Which ``values`` equal one of ``lines`` exactly."""
+    return np.isin(values, lines)
+
+
+def test_tie_punch_slave_nodes_lie_exactly_on_master_nodes_and_edges(tmp_path):
+    deck = _write("tie_punch", tmp_path)
+    assert list(deck.elements) == ["C3D8"]
+    assert _law(deck) == ("LINEAR", (1e7, 3.0))
+    (step,) = deck.steps
+    assert step.static.direct and step.static.initial_increment == step.static.period
+    controls = step.field_controls()
+    assert controls["R_n"] == 1e-9 and controls["C_n"] == 1e-9
+    assert step.contact_elements
+
+    (pair,) = deck.contact_pairs
+    slave = deck.node_coords[deck.node_index(surface_nodes(deck, pair.slave))]
+    master = deck.node_coords[deck.node_index(surface_nodes(deck, pair.master))]
+    assert slave.shape[0] == 49
+    assert np.all(slave[:, 2] == 0.0) and np.all(master[:, 2] == 0.0)
+    # Exact ties: the slave grid lines x, y = 30, 50, 70 are master grid lines, bit for bit.
+    master_lines = np.unique(master[:, 0])
+    on_x, on_y = _on_lines(slave[:, 0], master_lines), _on_lines(slave[:, 1], master_lines)
+    assert np.count_nonzero(on_x & on_y) == 9  # above master nodes
+    assert np.count_nonzero(on_x ^ on_y) == 24  # above master edges
+    assert set(slave[on_x, 0]) == {30.0, 50.0, 70.0}
+
+
+@pytest.mark.parametrize("n", sorted(ccx_decks.PUNCH_SIZES))
+def test_punch_sizes_keep_the_ties(n):
+    model = ccx_decks.punch_model(ccx_decks.PUNCH_SIZES[n])
+    x = model.V.mesh.geometry.x
+    top = x[np.isclose(x[:, 2], 0.0)]
+    inside = (top[:, 0] >= 30.0) & (top[:, 0] <= 70.0) & (top[:, 1] >= 30.0) & (top[:, 1] <= 70.0)
+    # Both bodies have nodes at z = 0; within the punch footprint a master node under a slave
+    # node shows as an exact duplicate (x, y). Every fifth punch grid line is a block grid line.
+    _, counts = np.unique(top[inside][:, :2], axis=0, return_counts=True)
+    assert np.count_nonzero(counts == 2) == (n // 5 + 1) ** 2
+    assert model.step.field_controls is None  # ccx's defaults: ccx 2.20 stalls at 1e-9 here
+
+
+def test_punch_sizes_span_the_benchmark_range():
+    dofs = [ccx_decks.punch_model(s).num_dofs for _, s in sorted(ccx_decks.PUNCH_SIZES.items())]
+    assert dofs == sorted(dofs)
+    assert 25_000 <= dofs[1] <= 35_000  # "about 30k dofs"
+    assert 70_000 <= dofs[2] <= 90_000  # "up to about 80k dofs"
+
+
+def test_bad_punch_divisions():
+    with pytest.raises(ValueError, match=r"PunchSpec.punch_layers must be a positive integer"):
+        ccx_decks.punch_model(
+            ccx_decks.PunchSpec(punch=6, punch_layers=0, block=10, block_layers=5)
+        )
+
+
+def test_unknown_deck_names_are_listed():
+    with pytest.raises(ValueError, match=r"unknown deck.*'nope'.*known: tie_punch"):
+        ccx_decks.select_decks(["nope"])
+    quick = {d.name for d in ccx_decks.select_decks(quick=True)}
+    assert {"tie_punch", "quarter_sphere_coarse"} <= quick
+    assert not {"punch_30", "quarter_sphere"} & quick
+
+
+@pytest.mark.ccx
+def test_coarse_quarter_sphere_is_a_fixed_increment_deck_ccx_runs(tmp_path):
+    deck = _write("quarter_sphere_coarse", tmp_path)
+    assert list(deck.elements) == ["C3D4"]
+    assert _law(deck) == ("LINEAR", (1e7, 3.0))
+    (step,) = deck.steps
+    assert step.static.direct
+    assert (step.static.initial_increment, step.static.period) == (0.25, 1.0)
+    press = [b for b in step.boundaries if b.target == "PRESS"]
+    assert [(b.first_dof, b.last_dof, b.value) for b in press] == [
+        (3, 3, -ccx_decks.QUARTER_SPHERE_COARSE.indentation)
+    ]
+    if shutil.which("ccx") is None:
+        pytest.skip("CalculiX ccx is not installed")
+    run_ccx(tmp_path, "quarter_sphere_coarse", timeout=120)
+    rows = read_sta(tmp_path / "quarter_sphere_coarse.sta")
+    assert [r.increment for r in rows] == [1, 2, 3, 4]
+    assert rows[-1].total_time == pytest.approx(1.0)
+
+
+def test_sphere_facet_tags_reproduce_the_gmsh_groups():
+    """The pinned meshes get their facet tags from the geometry: the same as gmsh's groups."""
+    spec = ccx_decks.QUARTER_SPHERE_COARSE
+    mesh, cell_tags, facet_tags = ccx_decks._gmsh_sphere(spec)
+    body = np.zeros(mesh.topology.index_map(3).size_local, dtype=np.int32)
+    body[cell_tags.indices] = cell_tags.values
+    tags = ccx_decks.sphere_facet_tags(mesh, body)
+    np.testing.assert_array_equal(tags.indices, facet_tags.indices)
+    np.testing.assert_array_equal(tags.values, facet_tags.values)
+    assert len(np.unique(tags.values)) == 6
+
+
+def test_pinned_sphere_mesh_is_checked_against_its_sizes(tmp_path, monkeypatch):
+    model = ccx_decks.quarter_sphere_model(ccx_decks.QUARTER_SPHERE_COARSE)
+    assert 3_000 < model.num_dofs < 6_000
+    other = dataclasses.replace(ccx_decks.QUARTER_SPHERE_COARSE, size_fine=0.25)
+    with pytest.raises(ValueError, match=r"was made for .*size_fine.: 0.3.*remake it"):
+        ccx_decks.quarter_sphere_model(other)
+    monkeypatch.setattr(ccx_decks, "DATA", tmp_path)
+    with pytest.raises(ValueError, match=r"quarter_sphere_coarse.npz is missing"):
+        ccx_decks.quarter_sphere_model(ccx_decks.QUARTER_SPHERE_COARSE)
+
+
+def test_progress_lines_give_iterations_and_cutbacks():
+    lines = [
+        " increment 1 attempt 1",
+        " increment size= 2.500000e-01",
+        " increment 1 converged: time 0.25, 8 iterations, 19 contact elements, residual 1e-10",
+        " increment 2 attempt 1",
+        " Number of contact spring elements=30",
+        " increment 2 attempt 2",
+        " increment 2 converged: time 0.375, 5 iterations, 3 nodes changed face, 20 contact",
+        " *ERROR: step 1, increment 3, attempt 1: no convergence",
+    ]
+    progress = vs_ccx.parse_progress("\n".join(lines))
+    assert progress.iterations == [8, 5]
+    assert progress.attempts == [1, 2]
+
+
+def test_report_keeps_other_platforms_sections(tmp_path):
+    path = tmp_path / "performance.md"
+    vs_ccx.write_report(path, "Debian 12 / dolfinx 0.5.2", ["## twelve", "old"])
+    vs_ccx.write_report(path, "Debian 13 / dolfinx 0.9.0", ["## thirteen"])
+    vs_ccx.write_report(path, "Debian 12 / dolfinx 0.5.2", ["## twelve", "new"])
+    text = path.read_text()
+    assert text.startswith("# Performance: dolfinx_ntf against CalculiX 2.20")
+    assert "## thirteen" in text and "new" in text and "old" not in text
+    assert text.count("## twelve") == 1
+
+
+@pytest.mark.ccx
+@needs_ccx
+def test_a_failing_run_is_a_row_of_the_table(tmp_path):
+    """ccx runs the deck; dolfinx_ntf rejects ADJUST (not supported yet): a row, not a crash."""
+    (source,) = ccx_decks.select_decks(["hex_linear_pressure"])
+
+    def write(directory: Path) -> None:
+        source.write(directory)
+        path = directory / "hex_linear_pressure.inp"
+        path.write_text(path.read_text().replace("TYPE=NODE TO SURFACE", "TYPE=NODE TO SURFACE, "
+                                                 "ADJUST=0.0"))  # fmt: skip
+
+    deck = ccx_decks.BenchDeck("hex_linear_pressure", "ADJUST", write)
+    result = vs_ccx.run_deck(deck, tmp_path, runs=2)
+    assert result.failure("ccx") == ""
+    assert "ADJUST" in result.failure("dolfinx_ntf")
+    assert len(result.timed("ccx")) == 2 and len(result.timed("dolfinx_ntf")) == 1
+    assert result.ccx.iterations and not result.ntf.iterations
+    assert all(m.peak_rss > 0 and m.wall > 0 for m in result.runs)
+    (_, _, row) = vs_ccx.table([result])
+    assert "**failed**" in row and "| - |" in row
