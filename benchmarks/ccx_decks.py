@@ -294,8 +294,8 @@ def _gmsh_sphere(spec: SphereSpec) -> tuple[dolfinx.mesh.Mesh, compat.MeshTags, 
 def sphere_facet_tags(mesh: dolfinx.mesh.Mesh, body_of_cell: np.ndarray) -> compat.MeshTags:
     """Facet tags of ``dolfinx_ntf.meshes.hertz`` (quarter model) from the geometry.
 
-    The body of each cell and the planes of the block and of the sphere's flat top decide; the rest of
-    the sphere is curved.
+    The body of each cell and the planes of the block and of the sphere's flat top decide; the rest
+    of the sphere is curved.
     """
     hz = _hertz_meshes()
     mesh.topology.create_connectivity(2, 3)
