@@ -33,7 +33,7 @@ from dolfinx.mesh import Mesh
 
 from dolfinx_ntf.compat import MeshTags
 
-__all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh"]
+__all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh", "write_msh"]
 
 _model_counter = itertools.count()
 
@@ -294,3 +294,10 @@ def _prepare_model() -> None:
     node_tags, _, _ = gmsh.model.mesh.getNodes()
     if not np.array_equal(np.sort(node_tags), np.arange(1, node_tags.size + 1)):
         gmsh.model.mesh.renumberNodes()
+
+
+def write_msh(path: str | Path) -> None:
+    """Write the current gmsh model to an ASCII ``.msh`` file (on the calling process only)."""
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write(str(path))
+    print(f"wrote {path}: {len(gmsh.model.mesh.getNodes()[0])} nodes")

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import gmsh
 
-from dolfinx_ntf.gmsh_io import gmsh_session
+from dolfinx_ntf.gmsh_io import gmsh_session, write_msh
 
 __all__ = [
     "BLOCK",
@@ -269,9 +269,7 @@ def main(argv: Sequence[str] | None = None) -> None:
             order=args.order,
             **sizes,
         )
-        gmsh.option.setNumber("Mesh.Binary", 0)
-        gmsh.write(str(args.output))
-        print(f"wrote {args.output}: {len(gmsh.model.mesh.getNodes()[0])} nodes")
+        write_msh(args.output)
 
 
 if __name__ == "__main__":

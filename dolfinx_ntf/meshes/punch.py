@@ -23,7 +23,7 @@ from pathlib import Path
 
 import gmsh
 
-from dolfinx_ntf.gmsh_io import gmsh_session
+from dolfinx_ntf.gmsh_io import gmsh_session, write_msh
 
 __all__ = [
     "BLOCK",
@@ -317,9 +317,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                 else {"mesh_size_block": args.block_size, "mesh_size_punch": args.punch_size}
             )
             build_punch(gap=args.gap, cell_type=args.cell_type, order=args.order, **sizes)
-        gmsh.option.setNumber("Mesh.Binary", 0)
-        gmsh.write(str(args.output))
-        print(f"wrote {args.output}: {len(gmsh.model.mesh.getNodes()[0])} nodes")
+        write_msh(args.output)
 
 
 if __name__ == "__main__":
