@@ -1,4 +1,4 @@
-"""Shared fixtures: small two-body meshes built without gmsh, and MPI-safe teardown."""
+"""Shared fixtures: two-body meshes and the punch problem built without gmsh; MPI-safe teardown."""
 
 import gc
 
@@ -7,9 +7,13 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
+import dolfinx.fem
 import dolfinx.mesh
+import ufl
 
+import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 
 LOWER, UPPER = 1, 2
 LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP = 11, 12, 13, 14
@@ -114,3 +118,66 @@ def two_blocks(
     order = np.argsort(exterior[keep])
     facet_tags = dolfinx.mesh.meshtags(mesh, tdim - 1, exterior[keep][order], values[keep][order])
     return mesh, cell_tags, facet_tags
+
+
+YOUNGS_MODULUS, POISSON_RATIO = 1000.0, 0.3
+PUNCH = ((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2))
+
+
+def elastic_residual(u, v, facet_tags, pressure, youngs_modulus=YOUNGS_MODULUS):
+    """Small-strain elasticity with ``pressure`` on the upper block's top."""
+    mesh = u.function_space.mesh
+    sigma = small_strain_stress(u, youngs_modulus, POISSON_RATIO)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    return ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
+        ufl.FacetNormal(mesh), v
+    ) * ds(UPPER_TOP)
+
+
+def punch_problem(
+    cell="hexahedron",
+    upper=PUNCH,
+    *,
+    degree=1,
+    rollers=False,
+    law=None,
+    gap=0.0,
+    name="",
+    comm=MPI.COMM_WORLD,
+    **problem_options,
+):
+    """Upper block (the punch, slave) pressed by a pressure on its top onto a lower block (master).
+
+    The lower block is clamped at its bottom and the punch top moves vertically only; ``rollers``
+    puts both bodies on symmetry planes and the bottom on rollers instead (uniform stress exact).
+
+    Returns:
+        The problem, the pressure Constant (0 until set) and the facet tags.
+    """
+    mesh, _, ft = two_blocks(comm, cell=cell, upper=upper, gap=gap)
+    V = compat.vector_space(mesh, "Lagrange", degree)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    F = elastic_residual(u, v, ft, pressure)
+    if rollers:
+        x0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
+        y0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[1], 0.0))
+        bcs = [
+            component_bc(V, 0, x0),
+            component_bc(V, 1, y0),
+            component_bc(V, 2, ft.find(LOWER_BOTTOM)),
+        ]
+    else:
+        bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+        bcs = [
+            dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
+            component_bc(V, 0, ft.find(UPPER_TOP)),
+            component_bc(V, 1, ft.find(UPPER_TOP)),
+        ]
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(law or ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS)),
+        name=name,
+    )
+    return ntf.ContactProblem(F, u, [pair], bcs, **problem_options), pressure, ft

@@ -16,57 +16,36 @@ from mpi4py import MPI
 
 import numpy as np
 
-import dolfinx.fem
-import ufl
-
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 
 sys.path.insert(0, str(Path(__file__).parent))
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from conftest import punch_problem
 
 DATA = Path(__file__).parent / "data" / "cross_version"
 CASES = {
     "hex_p1_linear": ("hexahedron", 1, "linear"),
     "tet_p2_exponential": ("tetrahedron", 2, "exponential"),
 }
-E, NU, LOAD = 1000.0, 0.3, 10.0
+LOAD = 10.0
 
 
 def solve(case: str) -> dict[str, np.ndarray]:
     """Solve one case; node data sorted by reference coordinates (rounded to 1e-9)."""
     cell, degree, law_name = CASES[case]
+    law = ntf.ExponentialLaw(c0=1e-3, p0=5.0) if law_name == "exponential" else None
     # The punch's nodes lie above no master node, edge or face diagonal: which of two faces holds
     # a node on their shared edge depends on the numbering, which differs between versions.
-    mesh, _, ft = two_blocks(
-        MPI.COMM_SELF, cell=cell, upper=((0.23, 0.17, 0.0), (0.6, 0.6, 0.5), (3, 3, 2))
+    problem, pressure, _ = punch_problem(
+        cell,
+        ((0.23, 0.17, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)),
+        degree=degree,
+        law=law,
+        comm=MPI.COMM_SELF,
     )
-    V = compat.vector_space(mesh, "Lagrange", degree)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
-    sigma = ntf.small_strain_stress(u, E, NU)
-    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
-        ufl.FacetNormal(mesh), v
-    ) * ds(UPPER_TOP)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
-        ntf.component_bc(V, 0, ft.find(UPPER_TOP)),
-        ntf.component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
-    law = (
-        ntf.LinearLaw.with_ccx_defaults(E)
-        if law_name == "linear"
-        else ntf.ExponentialLaw(c0=1e-3, p0=5.0)
-    )
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM),
-        ntf.FacetSurface(ft, LOWER_TOP),
-        ntf.SurfaceInteraction(law),
-    )
-    problem = ntf.ContactProblem(F, u, [pair], bcs)
-    solver = ntf.ContactNewtonSolver(mesh.comm, problem)
+    u = problem.u
+    V = u.function_space
+    solver = ntf.ContactNewtonSolver(V.mesh.comm, problem)
     step = ntf.StaticStep(
         lambda t: setattr(pressure, "value", LOAD * t), initial_increment=0.5, fixed=True
     )

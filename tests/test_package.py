@@ -9,7 +9,7 @@ from petsc4py import PETSc
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from conftest import punch_problem, two_blocks
 
 import dolfinx.fem
 import ufl
@@ -23,27 +23,8 @@ E, LOAD = 1000.0, 10.0
 
 
 def _problem(law=None):
-    mesh, _, ft = two_blocks(upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)))
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
-    F = ufl.inner(ntf.small_strain_stress(u, E, 0.3), ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
-        ufl.FacetNormal(mesh), v
-    ) * ds(UPPER_TOP)
-    bcs = [
-        dolfinx.fem.dirichletbc(
-            np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
-        ),
-        ntf.component_bc(V, 0, ft.find(UPPER_TOP)),
-        ntf.component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM),
-        ntf.FacetSurface(ft, LOWER_TOP),
-        ntf.SurfaceInteraction(law or ntf.LinearLaw.with_ccx_defaults(E)),
-    )
-    return ntf.ContactProblem(F, u, [pair], bcs), pressure
+    problem, pressure, _ = punch_problem(law=law)
+    return problem, pressure
 
 
 def test_version_matches_the_installed_metadata():

@@ -3,13 +3,9 @@ contact fields as Functions, and the writer (also before the first solve)."""
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
-
-import dolfinx.fem
-import ufl
+from conftest import LOWER_BOTTOM, UPPER_TOP, punch_problem
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
 
 pytestmark = pytest.mark.serial
 
@@ -18,30 +14,8 @@ PUNCH_AREA = 0.6 * 0.6
 
 
 def _problem(cell="hexahedron"):
-    """A punch (0.6 x 0.6) pressed by LOAD on a clamped block; returns problem, pressure, bcs."""
-    mesh, _, ft = two_blocks(cell=cell, upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)))
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
-    F = ufl.inner(ntf.small_strain_stress(u, E, 0.3), ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
-        ufl.FacetNormal(mesh), v
-    ) * ds(UPPER_TOP)
-    base = dolfinx.fem.dirichletbc(
-        np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
-    )
-    bcs = [
-        base,
-        ntf.component_bc(V, 0, ft.find(UPPER_TOP)),
-        ntf.component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM),
-        ntf.FacetSurface(ft, LOWER_TOP),
-        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)),
-        name="punch",
-    )
-    return ntf.ContactProblem(F, u, [pair], bcs), pressure, ft
+    """A punch (0.6 x 0.6) pressed by LOAD on a clamped block; returns problem, pressure, tags."""
+    return punch_problem(cell, name="punch")
 
 
 def _solve(problem, pressure):

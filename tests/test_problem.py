@@ -6,7 +6,14 @@ import itertools
 import numpy as np
 import pytest
 import scipy.sparse
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from conftest import (
+    LOWER_TOP,
+    UPPER,
+    UPPER_BOTTOM,
+    elastic_residual,
+    punch_problem,
+    two_blocks,
+)
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -14,63 +21,14 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 
 pytestmark = pytest.mark.serial
 
 E, NU = 1000.0, 0.3
 
 
-def _elastic_residual(u, v, facet_tags, pressure):
-    mesh = u.function_space.mesh
-    sigma = small_strain_stress(u, E, NU)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
-    return ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
-        ufl.FacetNormal(mesh), v
-    ) * ds(UPPER_TOP)
-
-
-def _setup(
-    cell="hexahedron",
-    upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (3, 3, 2)),
-    *,
-    rollers=False,
-    law=None,
-    gap=0.0,
-    **problem_options,
-):
-    """Upper block pressed on a lower block by a pressure on its top (``gap`` above it)."""
-    mesh, _, ft = two_blocks(cell=cell, upper=upper, gap=gap)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    F = _elastic_residual(u, v, ft, pressure)
-    if (
-        rollers
-    ):  # symmetry planes x = 0 and y = 0 for both bodies, bottom on rollers: uniform stress exact
-        x0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
-        y0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[1], 0.0))
-        bcs = [
-            component_bc(V, 0, x0),
-            component_bc(V, 1, y0),
-            component_bc(V, 2, ft.find(LOWER_BOTTOM)),
-        ]
-    else:
-        bcs = [
-            dolfinx.fem.dirichletbc(
-                np.zeros(3), dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM)), V
-            ),
-            component_bc(V, 0, ft.find(UPPER_TOP)),
-            component_bc(V, 1, ft.find(UPPER_TOP)),
-        ]
-    law = law or ntf.LinearLaw.with_ccx_defaults(E)
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM),
-        ntf.FacetSurface(ft, LOWER_TOP),
-        ntf.SurfaceInteraction(law),
-    )
-    problem = ntf.ContactProblem(F, u, [pair], bcs, **problem_options)
-    return problem, pressure, ft
+_elastic_residual = elastic_residual
+_setup = punch_problem
 
 
 def _solve(problem, pressure, load=10.0, increments=2):
