@@ -43,10 +43,10 @@ def _parser() -> argparse.ArgumentParser:
         "search tolerance (no face ping-pong at re-pairings); default: ccx's search",
     )
     run.add_argument(
-        "--no-predictor",
+        "--predictor",
         action="store_true",
-        help="beyond ccx: start each increment from the last converged displacement instead of "
-        "ccx's extrapolation (more robust on growing contact zones)",
+        help="start each increment from ccx's extrapolation u_n + dt v_prev; default: from the "
+        "last converged displacement, which converges more often on growing contact zones",
     )
     run.add_argument(
         "--pair-after-predictor",
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
             comm=MPI.COMM_WORLD,
             tight=args.tight,
             problem_options={"walk_from_previous_face": args.stable_pairing},
-            predictor=not args.no_predictor,
+            predictor=args.predictor,
             pair_after_predictor=args.pair_after_predictor,
         )
     except JobError as error:

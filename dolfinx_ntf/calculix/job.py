@@ -203,7 +203,7 @@ class _Job:
         tight: bool,
         problem_options: dict,
         petsc_options: dict | None,
-        predictor: bool = True,
+        predictor: bool = False,
         pair_after_predictor: bool = False,
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
@@ -515,7 +515,7 @@ def run_job(
     progress: bool = True,
     problem_options: dict | None = None,
     petsc_options: dict | None = None,
-    predictor: bool = True,
+    predictor: bool = False,
     pair_after_predictor: bool = False,
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
@@ -530,7 +530,8 @@ def run_job(
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
             the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``).
         petsc_options: Linear solver options (default: MUMPS LU).
-        predictor: ccx's predictor ``u_n + dt v_prev`` (see :class:`~dolfinx_ntf.StaticStep`).
+        predictor: ccx's predictor ``u_n + dt v_prev`` (off by default, as in the Python API: see
+            :class:`~dolfinx_ntf.StaticStep`).
         pair_after_predictor: Pair again once the predictor has moved the nodes (beyond ccx, see
             :class:`~dolfinx_ntf.StaticStep`).
 
