@@ -9,8 +9,10 @@ CalculiX interop). The method is described in ``docs/method.md``, the code in
 __version__ = "0.1.0"
 
 from dolfinx_ntf import logs as _logs
+from dolfinx_ntf.dynamics import DynamicStep, kinetic_energy
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import (
+    DynamicLinearLaw,
     ExponentialLaw,
     Friction,
     LinearLaw,
@@ -44,6 +46,8 @@ __all__ = [
     "ContactResults",
     "ContactSolverError",
     "ContactWriter",
+    "DynamicLinearLaw",
+    "DynamicStep",
     "ExponentialLaw",
     "FacetSurface",
     "Friction",
@@ -59,6 +63,7 @@ __all__ = [
     "contact_area",
     "contact_force",
     "contact_results",
+    "kinetic_energy",
     "log_progress",
     "reaction",
     "small_strain_stress",

@@ -31,6 +31,7 @@ __all__ = [
     "TABULAR_C0",
     "TABULAR_MIN_INCREMENT",
     "ZERO_AREA_CUTOFF",
+    "DynamicLinearLaw",
     "ExponentialLaw",
     "Friction",
     "LinearLaw",
@@ -243,8 +244,8 @@ class LinearLaw(PressureOverclosureLaw):
     ``p(d) = K d [1/2 + atan(d/eps)/pi]`` with ``eps = pi sigma_inf/K``: a smoothed penalty spring
     of slope ``K`` in penetration that tends to the tension ``-sigma_inf`` for ``d -> -inf``.
     The pairing cutoff is ``c0 sqrt(A)`` (``1e-10`` where ``A == 0``). The energy is ccx 2.20's
-    approximation ``F_N d/2``, not the integral. The ``*DYNAMIC`` variant (no tension) is not
-    implemented.
+    approximation ``F_N d/2``, not the integral. The ``*DYNAMIC`` variant (no tension) is
+    :class:`DynamicLinearLaw` (:meth:`dynamic`).
     """
 
     keyword: ClassVar[str] = "LINEAR"
@@ -317,6 +318,10 @@ class LinearLaw(PressureOverclosureLaw):
         """Constructor-like representation."""
         return f"LinearLaw(slope={self.slope!r}, tension={self.tension!r}, c0={self.c0!r})"
 
+    def dynamic(self) -> DynamicLinearLaw:
+        """The same law as CalculiX applies it in ``*DYNAMIC`` steps (no tension)."""
+        return DynamicLinearLaw(self.slope, self.tension, self.c0)
+
     def pressure(self, d: npt.ArrayLike) -> np.ndarray:
         """``K d [1/2 + atan(d/eps)/pi]``."""
         d_arr = self._d(d)
@@ -339,6 +344,40 @@ class LinearLaw(PressureOverclosureLaw):
         d_b, a_b = self._d_area(d, area)
         force, _ = self.spring_force(d_b, a_b)
         return 0.5 * force * d_b
+
+
+class DynamicLinearLaw(LinearLaw):
+    """The LINEAR law as CalculiX applies it in ``*DYNAMIC`` steps (docs/method.md §4.2, §12.3).
+
+    The static pressure for ``d >= 0`` and **no tension** for ``d < 0``; the derivative is exact
+    (zero in tension; ccx keeps the full formula's [inferred], which changes iterations only). The
+    energy is the exact integral ``A int_0^d p``, so that the spring is conservative and enters
+    an energy balance. ``LinearLaw.dynamic()`` makes one from a static law.
+    """
+
+    def pressure(self, d: npt.ArrayLike) -> np.ndarray:
+        """``K d [1/2 + atan(d/eps)/pi]`` for ``d >= 0``, 0 otherwise."""
+        d_arr = self._d(d)
+        return np.where(d_arr > 0.0, super().pressure(np.maximum(d_arr, 0.0)), 0.0)
+
+    def pressure_derivative(self, d: npt.ArrayLike) -> np.ndarray:
+        """The static slope for ``d > 0``, 0 otherwise."""
+        d_arr = self._d(d)
+        return np.where(d_arr > 0.0, super().pressure_derivative(np.maximum(d_arr, 0.0)), 0.0)
+
+    def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
+        """``A K [d^2/4 + ((d^2 + eps^2) atan(d/eps) - eps d) / (2 pi)]`` for ``d > 0``, else 0."""
+        d_b, a_b = self._d_area(d, area)
+        dp = np.maximum(d_b, 0.0)
+        eps = self.epsilon
+        integral = dp * dp / 4.0 + ((dp * dp + eps * eps) * np.arctan(dp / eps) - eps * dp) / (
+            2.0 * math.pi
+        )
+        return a_b * self.slope * integral
+
+    def __repr__(self) -> str:
+        """Constructor-like representation."""
+        return f"DynamicLinearLaw(slope={self.slope!r}, tension={self.tension!r}, c0={self.c0!r})"
 
 
 class TabularLaw(PressureOverclosureLaw):

@@ -215,6 +215,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         #: files); the springs are used in Newton iteration ``max(problem.iteration, 1)`` of the
         #: increment.
         self.pairing_callbacks: list[typing.Callable[[ContactProblem], None]] = []
+        #: Extra terms added to the residual and the Jacobian after the bulk form and the springs
+        #: (e.g. the inertia of a dynamic step, docs/method.md §12): objects with
+        #: ``add_to_residual(x, b)``, ``add_to_jacobian(x, A)`` and ``force_sum()`` (the sum of
+        #: the absolute values of their nodal forces and how many there are, owned entries, for
+        #: :meth:`average_element_force`).
+        self.extra_terms: list[typing.Any] = []
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
@@ -260,6 +266,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 forces = state.evaluation.forces
                 total += float(np.abs(forces).sum())
                 count += forces.size
+        for term in self.extra_terms:  # e.g. inertia forces: (sum of |force|, count)
+            extra_total, extra_count = term.force_sum()
+            total, count = total + extra_total, count + extra_count
         comm = self.u.function_space.mesh.comm
         total, count = comm.allreduce(total), comm.allreduce(count)
         return total / max(count, 1)
@@ -562,6 +571,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler.add_to_vector(b, self._blocks)
         if self.nodal_loads is not None:
             b.axpy(-1.0, compat.petsc_vector(self.nodal_loads))
+        for term in self.extra_terms:
+            term.add_to_residual(x, b)
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
@@ -586,6 +597,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
         self._pattern_checked = True
         A.assemble()
+        for term in self.extra_terms:
+            term.add_to_jacobian(x, A)
 
     def destroy(self) -> None:
         """Destroy the PETSc matrix the problem owns (the Jacobian). Collective.

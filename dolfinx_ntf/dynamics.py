@@ -1,0 +1,443 @@
+"""Implicit dynamic steps (CalculiX ``*DYNAMIC``): the HHT alpha method with contact springs.
+
+:class:`DynamicStep` integrates ``M a + f(u) = f_ext(t)`` in time with the alpha method of Hilber,
+Hughes and Taylor (docs/method.md §12), ``f`` being everything the :class:`ContactProblem`
+assembles: the user's residual form and the contact springs. The inertia enters the problem's
+residual and Jacobian as an extra term (``ContactProblem.extra_terms``), so the same
+:class:`ContactNewtonSolver` iterates, with the springs in the same Newton loop and on CalculiX's
+pairing schedule.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+import typing
+from dataclasses import dataclass
+
+from petsc4py import PETSc
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import ufl
+
+from dolfinx_ntf import compat, validation
+from dolfinx_ntf.problem import ContactProblem
+from dolfinx_ntf.solver import (
+    ContactConvergenceError,
+    ContactDivergenceError,
+    ContactNewtonSolver,
+    IncrementResult,
+    LoadControl,
+)
+
+__all__ = ["CCX_ALPHA", "DynamicStep", "kinetic_energy", "newmark_parameters"]
+
+logger = logging.getLogger("dolfinx_ntf")
+
+#: CalculiX's default ``ALPHA`` of ``*DYNAMIC``.
+CCX_ALPHA = -0.05
+
+
+def newmark_parameters(alpha: float) -> tuple[float, float]:
+    """Newmark's ``(beta, gamma)`` of the HHT method: ``((1 - alpha)^2/4, 1/2 - alpha)``."""
+    return (1.0 - alpha) ** 2 / 4.0, 0.5 - alpha
+
+
+def kinetic_energy(mass: ufl.Form, velocity: dolfinx.fem.Function) -> float:
+    """``v^T M v / 2`` for the bilinear mass form ``mass`` (``rho inner(w, v) dx``). Collective."""
+    form = dolfinx.fem.form(ufl.action(ufl.action(mass, velocity), velocity))
+    comm = velocity.function_space.mesh.comm
+    return 0.5 * comm.allreduce(dolfinx.fem.assemble_scalar(form))
+
+
+def _no_load(t: float) -> None:
+    """No time-dependent load."""
+
+
+class _Inertia:
+    """The HHT terms added to the problem's residual and Jacobian (docs/method.md §12.1).
+
+    The residual of the problem, ``r(u) = f(u) - f_ext(t_{n+1})``, becomes
+    ``r(u) + (M a(u) - alpha r_n) / (1 + alpha)`` with the Newmark acceleration
+    ``a(u) = (u - u_n - dt v_n - dt^2 (1/2 - beta) a_n) / (beta dt^2)``, and the Jacobian gains
+    ``M / (beta dt^2 (1 + alpha))``.
+    """
+
+    def __init__(self, M: PETSc.Mat, M_bc: PETSc.Mat, alpha: float) -> None:
+        self.M, self.M_bc, self.alpha = M, M_bc, alpha
+        self.beta, self.gamma = newmark_parameters(alpha)
+        self.prediction: PETSc.Vec = M.createVecRight()
+        self.last_residual: PETSc.Vec = M.createVecLeft()  # r_n, zero at constrained dofs
+        self._acceleration = M.createVecRight()
+        self._force = M.createVecLeft()
+        self._momentum_rate = M.createVecLeft()  # M v_n / dt: the force scale of the motion
+        self.dt = 0.0
+        self.enabled = True
+
+    def predict(self, u_n: np.ndarray, v_n: np.ndarray, a_n: np.ndarray, dt: float) -> None:
+        """Set the increment: ``u_n + dt v_n + dt^2 (1/2 - beta) a_n`` (owned values)."""
+        self.dt = dt
+        self.prediction.array[:] = u_n + dt * v_n + dt * dt * (0.5 - self.beta) * a_n
+        self._acceleration.array[:] = v_n / dt
+        self.M.mult(self._acceleration, self._momentum_rate)
+        self._force.zeroEntries()
+
+    def acceleration(self, x: np.ndarray) -> np.ndarray:
+        """Newmark acceleration of the owned displacement values ``x``."""
+        return (x - self.prediction.array_r) / (self.beta * self.dt * self.dt)
+
+    def add_to_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """``b += (M a(x) - alpha r_n) / (1 + alpha)`` (constrained rows are reset afterwards)."""
+        if not self.enabled:
+            return
+        self._acceleration.array[:] = self.acceleration(x.array_r)
+        self.M.mult(self._acceleration, self._force)
+        b.array[:] += (self._force.array_r - self.alpha * self.last_residual.array_r) / (
+            1.0 + self.alpha
+        )
+
+    def force_sum(self) -> tuple[float, int]:
+        """Sum of ``|M a| + |M v_n|/dt`` over the owned dofs, and their number.
+
+        ``M v_n/dt``, the force that stops the motion within the increment, keeps the
+        force-scaled convergence test meaningful in free flight, where ``M a`` and the internal
+        forces vanish.
+        """
+        if not self.enabled:
+            return 0.0, 0
+        values = np.abs(self._force.array_r) + np.abs(self._momentum_rate.array_r)
+        return float(values.sum()), int(values.size)
+
+    def add_to_jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """``A += M / (beta dt^2 (1 + alpha))``, constrained rows and columns left out."""
+        if not self.enabled:
+            return
+        scale = 1.0 / (self.beta * self.dt * self.dt * (1.0 + self.alpha))
+        A.axpy(scale, self.M_bc, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+
+    def destroy(self) -> None:
+        """Destroy the PETSc objects."""
+        for obj in (
+            self.M,
+            self.M_bc,
+            self.prediction,
+            self.last_residual,
+            self._acceleration,
+            self._force,
+            self._momentum_rate,
+        ):
+            obj.destroy()
+
+
+@dataclass
+class DynamicStep:
+    """An implicit dynamic step of ``period`` (CalculiX ``*DYNAMIC``), docs/method.md §12.
+
+    The HHT alpha method with CalculiX's default ``alpha = -0.05`` (Newmark
+    ``beta = (1 - alpha)^2/4``, ``gamma = 1/2 - alpha``); the contact springs are part of the
+    internal force, so they enter at the same time levels as the bulk forces, and the initial
+    overlap acts in full from the first increment (no ramp, docs/method.md §3.5). The step holds
+    configuration only, except that it reads the initial velocity and acceleration from
+    ``velocity``/``acceleration`` and leaves the final ones there.
+
+    Args:
+        mass: Bilinear mass form on the displacement space, e.g.
+            ``rho * ufl.inner(ufl.TrialFunction(V), ufl.TestFunction(V)) * ufl.dx``.
+        set_load: Called with the step time at the end of each increment (and with 0 at the
+            start), like :class:`~dolfinx_ntf.StaticStep`'s; default: no time-dependent load.
+        period: Step time.
+        initial_increment, min_increment, max_increment: Time increment sizes.
+        fixed: Keep ``initial_increment`` (CalculiX ``DIRECT``); a failed increment stops the step.
+        alpha: HHT parameter in ``[-1/3, 0]``: 0 is the trapezoidal rule (no numerical damping),
+            lower values damp high frequencies more.
+        velocity: Initial velocity (a Function on the displacement space), overwritten with the
+            velocity at the end of the step; None: start at rest.
+        acceleration: Where to leave the acceleration (a Function on the displacement space); read
+            as the initial acceleration when ``initial_acceleration`` is False.
+        initial_acceleration: Solve ``M a_0 = f_ext(0) - f(u_0)`` at the start (CalculiX does), with
+            zero acceleration at constrained dofs.
+        cutback_factor, divergence_cutback_factor, growth_factor, growth_iterations: Automatic
+            increments as in :class:`~dolfinx_ntf.StaticStep` (no CalculiX impact rules).
+        on_increment: Called with the :class:`~dolfinx_ntf.IncrementResult` of each converged
+            increment (``velocity``/``acceleration`` then hold that increment's values).
+    """
+
+    mass: ufl.Form
+    set_load: LoadControl = _no_load
+    period: float = 1.0
+    initial_increment: float = 0.01
+    min_increment: float = 1e-8
+    max_increment: float | None = None
+    fixed: bool = False
+    alpha: float = CCX_ALPHA
+    velocity: dolfinx.fem.Function | None = None
+    acceleration: dolfinx.fem.Function | None = None
+    initial_acceleration: bool = True
+    cutback_factor: float = 0.5
+    divergence_cutback_factor: float = 0.25
+    growth_factor: float = 1.5
+    growth_iterations: int = 4
+    on_increment: typing.Callable[[IncrementResult], None] | None = None
+
+    def __post_init__(self) -> None:
+        """Check the configuration (``TypeError``/``ValueError`` naming the field)."""
+        self._check()
+
+    def _check(self) -> None:
+        owner = "DynamicStep"
+        if not isinstance(self.mass, ufl.Form) or len(self.mass.arguments()) != 2:
+            raise TypeError(
+                f"{owner}: mass must be a bilinear UFL form such as "
+                "rho*inner(TrialFunction(V), TestFunction(V))*dx, got "
+                f"{validation.describe(self.mass)}"
+            )
+        for name in ("set_load", "on_increment"):
+            value = getattr(self, name)
+            if value is not None and not callable(value):
+                raise TypeError(
+                    f"{owner}: {name} must be a function, got {validation.describe(value)}"
+                )
+        for name in ("period", "initial_increment", "min_increment", "cutback_factor"):
+            validation.check_positive(getattr(self, name), f"{owner}: {name}")
+        validation.check_positive(self.max_increment, f"{owner}: max_increment", allow_none=True)
+        max_inc = self.period if self.max_increment is None else self.max_increment
+        if not (self.min_increment <= self.initial_increment <= max_inc):
+            raise ValueError(
+                f"{owner}: need 0 < min_increment ({self.min_increment}) <= initial_increment "
+                f"({self.initial_increment}) <= max_increment ({max_inc})"
+            )
+        factors = (self.cutback_factor, self.divergence_cutback_factor)
+        if not (all(0 < f < 1 for f in factors) and self.growth_factor >= 1):
+            raise ValueError(
+                f"{owner}: need 0 < cutback_factor ({self.cutback_factor}), "
+                f"divergence_cutback_factor ({self.divergence_cutback_factor}) < 1 <= "
+                f"growth_factor ({self.growth_factor})"
+            )
+        if not (isinstance(self.alpha, (int, float)) and -1.0 / 3.0 <= self.alpha <= 0.0):
+            raise ValueError(f"{owner}: alpha must be in [-1/3, 0] (ccx), got {self.alpha!r}")
+
+    def run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+        """Run the step from the current ``u`` (and ``velocity``).
+
+        Args:
+            solver: The solver of the problem.
+            u: The problem's displacement (the Function the problem was built on).
+
+        Returns:
+            The result of every converged increment of this run.
+
+        Raises:
+            ContactConvergenceError: When an increment fails and cutbacks are exhausted.
+        """
+        self._check()
+        validation.check_type(solver, ContactNewtonSolver, "DynamicStep.run: solver")
+        problem = solver.problem
+        if u is not problem.u:
+            raise ValueError(
+                "DynamicStep.run: u must be the Function the ContactProblem was built on "
+                f"(got {validation.describe(u)})"
+            )
+        V = u.function_space
+        velocity = self._state_function(self.velocity, V, "velocity")
+        acceleration = self._state_function(self.acceleration, V, "acceleration")
+        mass = dolfinx.fem.form(self.mass)
+        inertia = _Inertia(
+            dolfinx.fem.petsc.assemble_matrix(mass),
+            dolfinx.fem.petsc.assemble_matrix(mass, problem.bcs, 0.0),
+            float(self.alpha),
+        )
+        for matrix in (inertia.M, inertia.M_bc):
+            matrix.assemble()
+        problem.extra_terms.append(inertia)
+        try:
+            return self._integrate(solver, problem, u, velocity, acceleration, mass, inertia)
+        finally:
+            problem.extra_terms.remove(inertia)
+            inertia.destroy()
+
+    @staticmethod
+    def _state_function(
+        given: dolfinx.fem.Function | None, V: dolfinx.fem.FunctionSpace, name: str
+    ) -> dolfinx.fem.Function:
+        if given is None:
+            return dolfinx.fem.Function(V)
+        validation.check_type(given, dolfinx.fem.Function, f"DynamicStep: {name}")
+        index_map = V.dofmap.index_map
+        size = (index_map.size_local + index_map.num_ghosts) * V.dofmap.index_map_bs
+        if given.x.array.size != size:
+            raise ValueError(
+                f"DynamicStep: {name} must be a Function on the displacement space of u"
+            )
+        return given
+
+    def _integrate(
+        self,
+        solver: ContactNewtonSolver,
+        problem: ContactProblem,
+        u: dolfinx.fem.Function,
+        velocity: dolfinx.fem.Function,
+        acceleration: dolfinx.fem.Function,
+        mass: typing.Any,
+        inertia: _Inertia,
+    ) -> list[IncrementResult]:
+        x = compat.petsc_vector(u)
+        owned = x.getLocalSize()
+        self.set_load(0.0)
+        problem.begin_increment(0.0, static=False)
+        _static_residual(problem, inertia, x)
+        if self.initial_acceleration:
+            _initial_acceleration(mass, problem, inertia.last_residual, acceleration)
+        max_inc = self.period if self.max_increment is None else self.max_increment
+        results: list[IncrementResult] = []
+        t, dt = 0.0, self.initial_increment
+        increment, fast_in_a_row = 0, 0
+        while t < self.period * (1 - 1e-12):
+            increment += 1
+            attempt = 0
+            u_start = u.x.array.copy()
+            solver.increment_start = u_start
+            first_failure: ContactConvergenceError | None = None
+            while True:
+                attempt += 1
+                dt = min(dt, self.period - t)
+                t_new = t + dt
+                logger.info(
+                    " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
+                    increment,
+                    attempt,
+                    dt,
+                    t_new,
+                )
+                self.set_load(t_new)
+                start = time.perf_counter()
+                try:
+                    problem.begin_increment(t_new / self.period, static=False)
+                    dolfinx.fem.petsc.set_bc(x, problem.bcs)  # prescribed values at t_{n+1}
+                    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+                    inertia.predict(
+                        u_start[:owned],
+                        velocity.x.array[:owned],
+                        acceleration.x.array[:owned],
+                        dt,
+                    )
+                    iterations, _ = solver.solve(u)
+                    break
+                except ContactConvergenceError as error:
+                    u.x.array[:] = u_start
+                    u.x.scatter_forward()
+                    first_failure = first_failure or error
+                    factor = (
+                        self.divergence_cutback_factor
+                        if isinstance(error, ContactDivergenceError)
+                        else self.cutback_factor
+                    )
+                    if self.fixed or dt * factor < self.min_increment:
+                        why = (
+                            "fixed increments"
+                            if self.fixed
+                            else f"increment size {dt:.3e} cannot be cut back below the "
+                            f"minimum {self.min_increment:.3e}"
+                        )
+                        first = (
+                            "" if first_failure is error else f"; first attempt: {first_failure}"
+                        )
+                        raise ContactConvergenceError(
+                            f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
+                            f"failed after {attempt} attempt(s) ({why}): {error}{first}"
+                        ) from error
+                    dt *= factor
+                    fast_in_a_row = 0
+                    logger.info(" %s; cutting back to %.6e", error, dt)
+            self._advance(u, velocity, acceleration, inertia, owned)
+            _static_residual(problem, inertia, x)
+            t = t_new
+            result = IncrementResult(
+                increment,
+                attempt,
+                t,
+                t / self.period,
+                iterations,
+                problem.num_springs,
+                solver.residual_norms[-1],
+            )
+            results.append(result)
+            logger.info(
+                " increment %d converged: time %.6g, %d iterations, %d contact elements, "
+                "residual %.3e (%.2f s)",
+                increment,
+                t,
+                iterations,
+                result.springs,
+                result.residual,
+                time.perf_counter() - start,
+            )
+            if self.on_increment is not None:
+                self.on_increment(result)
+            fast_in_a_row = fast_in_a_row + 1 if iterations <= self.growth_iterations else 0
+            if not self.fixed and fast_in_a_row >= 2:
+                dt = min(self.growth_factor * dt, max_inc)
+        return results
+
+    @staticmethod
+    def _advance(
+        u: dolfinx.fem.Function,
+        velocity: dolfinx.fem.Function,
+        acceleration: dolfinx.fem.Function,
+        inertia: _Inertia,
+        owned: int,
+    ) -> None:
+        """Newmark update of velocity and acceleration after a converged increment."""
+        a_new = inertia.acceleration(u.x.array[:owned])
+        a_old = acceleration.x.array[:owned]
+        dt, gamma = inertia.dt, inertia.gamma
+        velocity.x.array[:owned] += dt * ((1.0 - gamma) * a_old + gamma * a_new)
+        acceleration.x.array[:owned] = a_new
+        velocity.x.scatter_forward()
+        acceleration.x.scatter_forward()
+
+
+def _static_residual(problem: ContactProblem, inertia: _Inertia, x: PETSc.Vec) -> None:
+    """``r_n = f(u_n) - f_ext(t_n)`` into ``inertia.last_residual``, zero at constrained dofs."""
+    inertia.enabled = False
+    try:
+        residual = x.duplicate()
+        problem.form(x)
+        problem.assemble_residual(x, residual)
+        inertia.last_residual.array[:] = residual.array_r
+        residual.destroy()
+    finally:
+        inertia.enabled = True
+    dolfinx.fem.petsc.set_bc(inertia.last_residual, problem.bcs, None, 0.0)
+    if not math.isfinite(inertia.last_residual.norm()):
+        raise ContactConvergenceError("the residual of the converged state is not finite")
+
+
+def _initial_acceleration(
+    mass: typing.Any,
+    problem: ContactProblem,
+    residual: PETSc.Vec,
+    acceleration: dolfinx.fem.Function,
+) -> None:
+    """Solve ``M a_0 = -r_0`` (zero at constrained dofs) by a direct solver."""
+    M = dolfinx.fem.petsc.assemble_matrix(mass, problem.bcs)
+    M.assemble()
+    ksp = PETSc.KSP().create(problem.u.function_space.mesh.comm)
+    ksp.setOperators(M)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    rhs = residual.copy()
+    rhs.scale(-1.0)
+    a0 = compat.petsc_vector(acceleration)
+    ksp.solve(rhs, a0)
+    if ksp.getConvergedReason() < 0:
+        raise ValueError(
+            "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere?)"
+        )
+    acceleration.x.scatter_forward()
+    for obj in (ksp, M, rhs):
+        obj.destroy()
