@@ -48,11 +48,13 @@ __all__ = [
     "Deck",
     "DeckError",
     "DeckWarning",
+    "Dynamic",
     "ElementBlock",
     "ElementType",
     "FileRequest",
     "Friction",
     "FrictionChange",
+    "InitialVelocity",
     "Location",
     "Material",
     "ModelChange",
@@ -350,6 +352,23 @@ class Static:
     total_time_at_start: float | None = None
 
 
+@dataclass(frozen=True)
+class Dynamic:
+    """``*DYNAMIC`` (implicit) parameters; its data line (increments) is the step's ``static``."""
+
+    alpha: float = -0.05
+
+
+@dataclass(frozen=True, eq=False)
+class InitialVelocity:
+    """``*INITIAL CONDITIONS, TYPE=VELOCITY`` data line: ``value`` along ``dof`` of ``nodes``."""
+
+    nodes: np.ndarray
+    dof: int
+    value: float
+    location: Location
+
+
 @dataclass(frozen=True, eq=False)
 class PrintRequest:
     """A ``*NODE PRINT`` (kind ``NODE``), ``*EL PRINT`` (``EL``) or ``*CONTACT PRINT`` card.
@@ -442,7 +461,7 @@ class Step:
         number: 1-based step number.
         nlgeom: geometrically nonlinear (NLGEOM).
         max_increments: INC parameter (ccx default 100).
-        static: the ``*STATIC`` procedure.
+        static: the ``*STATIC`` procedure, or the increments of the ``*DYNAMIC`` one.
         boundaries, cloads, dloads: the cards of this step, in deck order.
         prints: node, element and contact print requests in the order ccx writes them.
         file_requests: ``.frd``/``.cel`` output requests.
@@ -465,6 +484,7 @@ class Step:
     friction_changes: tuple[FrictionChange, ...]
     model_changes: tuple[ModelChange, ...]
     location: Location
+    dynamic: Dynamic | None = None
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:
@@ -548,6 +568,7 @@ class Deck:
     steps: tuple[Step, ...]
     ignored: tuple[tuple[str, str, int], ...]
     warnings: tuple[DeckWarning, ...] = ()
+    initial_velocities: tuple[InitialVelocity, ...] = ()
 
     @property
     def num_elements(self) -> int:
@@ -850,7 +871,7 @@ _STEP_KEYWORDS = {
     for k in (
         "STATIC", "CLOAD", "DLOAD", "NODE PRINT", "EL PRINT", "CONTACT PRINT", "NODE FILE",
         "EL FILE", "CONTACT FILE", "NODE OUTPUT", "ELEMENT OUTPUT", "CONTACT OUTPUT", "CONTROLS",
-        "CHANGE FRICTION", "MODEL CHANGE", "END STEP",
+        "CHANGE FRICTION", "MODEL CHANGE", "END STEP", "DYNAMIC",
     )
 }  # fmt: skip
 
@@ -860,6 +881,7 @@ _MODEL_KEYWORDS = {
         "NODE", "ELEMENT", "NSET", "ELSET", "SURFACE", "MATERIAL", "ELASTIC", "SOLID SECTION",
         "CONTACT PAIR", "SURFACE INTERACTION", "SURFACE BEHAVIOR", "DENSITY", "EXPANSION",
         "CONDUCTIVITY", "SPECIFIC HEAT", "CONTACT DAMPING", "GAP CONDUCTANCE",
+        "INITIAL CONDITIONS",
     )
 }  # fmt: skip
 
@@ -885,6 +907,7 @@ class _StepBuilder:
     max_increments: int
     location: Location
     static: Static | None = None
+    dynamic: Dynamic | None = None
     boundaries: list[Boundary] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
@@ -935,6 +958,7 @@ class _Reader:
         self.contact_pairs: list[ContactPair] = []
         self.amplitudes: dict[str, Amplitude] = {}
         self.boundaries: list[Boundary] = []
+        self.initial_velocities: list[InitialVelocity] = []
         self.steps: list[Step] = []
         self.ignored: list[tuple[str, str, int]] = []
         self.warnings: list[DeckWarning] = []
@@ -1603,6 +1627,63 @@ class _Reader:
             total_time_at_start=total_at_start,
         )
 
+    def _k_DYNAMIC(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed={"DIRECT", "ALPHA", "SOLVER", "EXPLICIT"})
+        if "EXPLICIT" in card.params:
+            raise DeckError(
+                "*DYNAMIC, EXPLICIT is not supported yet (implicit only)", card.location
+            )
+        if step.static is not None:
+            raise DeckError("a step can have only one *STATIC or *DYNAMIC card", card.location)
+        alpha = -0.05
+        if "ALPHA" in card.params:
+            alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
+            if not -1.0 / 3.0 <= alpha <= 0.0:
+                raise DeckError(f"*DYNAMIC ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        self._need_data(card)
+        fields, _, loc = card.lines[0]
+        if len(card.lines) > 1 or len(fields) > 5:
+            raise DeckError(
+                "*DYNAMIC data line: initial increment, period, minimum, maximum[, CFD increment]",
+                loc,
+            )
+        values = self._floats_line(fields[:4], "*DYNAMIC", loc)
+        values = values + (None,) * (4 - len(values))
+        for name, value in zip(("initial increment", "period"), values[:2]):
+            if value is None or value <= 0.0:
+                raise DeckError(f"*DYNAMIC {name} must be given and > 0, got {value}", loc)
+        step.static = Static(
+            initial_increment=values[0],
+            period=values[1],
+            minimum=values[2],
+            maximum=values[3],
+            direct="DIRECT" in card.params,
+        )
+        step.dynamic = Dynamic(alpha=alpha)
+
+    def _k_INITIALCONDITIONS(self, card: _Card) -> None:
+        self._check_params(card, allowed={"TYPE"}, required={"TYPE"})
+        if card.params["TYPE"] != "VELOCITY":
+            raise DeckError(
+                f"*INITIAL CONDITIONS, TYPE={card.raw_params['TYPE']} is not supported yet "
+                "(only TYPE=VELOCITY)",
+                card.location,
+            )
+        self._need_data(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 3:
+                raise DeckError(
+                    "*INITIAL CONDITIONS, TYPE=VELOCITY data line: node or node set, dof, value",
+                    loc,
+                )
+            nodes = self._nodes_of(fields[0], card, loc)
+            value = self._floats_line(fields[2:3], "*INITIAL CONDITIONS", loc)[0]
+            self.initial_velocities.append(
+                InitialVelocity(_frozen_array(nodes, np.int64), self._dof(fields[1], loc),
+                                float(value or 0.0), loc)
+            )  # fmt: skip
+
     def _k_CLOAD(self, card: _Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"OP", "AMPLITUDE"})
@@ -1747,7 +1828,8 @@ class _Reader:
         self._no_data(card)
         if step.static is None:
             raise DeckError(
-                "the step has no *STATIC procedure (only static steps are supported)", step.location
+                "the step has no *STATIC or *DYNAMIC procedure (the only ones supported)",
+                step.location,
             )
         if step.pending_friction is not None:
             raise DeckError("*CHANGE FRICTION without a following *FRICTION",
@@ -1768,6 +1850,7 @@ class _Reader:
                 friction_changes=tuple(step.friction_changes),
                 model_changes=tuple(step.model_changes),
                 location=step.location,
+                dynamic=step.dynamic,
             )
         )
         self.step = None
@@ -1827,6 +1910,7 @@ class _Reader:
             steps=tuple(self.steps),
             ignored=tuple(self.ignored),
             warnings=tuple(self.warnings),
+            initial_velocities=tuple(self.initial_velocities),
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

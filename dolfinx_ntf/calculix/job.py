@@ -44,6 +44,8 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.dynamics import DynamicStep
+from dolfinx_ntf.laws import LinearLaw, SurfaceInteraction
 from dolfinx_ntf.output import ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactProblem
 from dolfinx_ntf.solver import (
@@ -235,6 +237,9 @@ class _Job:
         )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
+        self._static_interactions = [pair.interaction for pair in model.pairs]
+        self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
+        self.acceleration: dolfinx.fem.Function | None = None
 
     # -- forces ------------------------------------------------------------------------------------
 
@@ -352,7 +357,9 @@ class _Job:
     def _run_step(self, index: int, step: Step) -> None:
         model, problem = self.model, self.problem
         self.counters = _Counters(step=step.number)
-        logger.info("\n STEP %d\n\n Static analysis was selected\n", step.number)
+        kind = "Static" if step.dynamic is None else "Dynamic"
+        logger.info("\n STEP %d\n\n %s analysis was selected\n", step.number, kind)
+        self._set_laws(dynamic=step.dynamic is not None)
         if index > 0:
             bcs = model.begin_step(index)
             problem.set_bcs(bcs)
@@ -367,6 +374,9 @@ class _Job:
             int(timing[2]) if len(timing) > 2 and timing[2] is not None else 9
         )
 
+        if step.dynamic is not None:
+            self._run_dynamic_step(index, step)
+            return
         static = step.static
         period = static.period
         linear = not step.nlgeom and not model.pairs
@@ -401,6 +411,58 @@ class _Job:
             on_increment=on_increment,
             predictor=self.predictor,
             pair_after_predictor=self.pair_after_predictor,
+        )
+        driver.run(self.solver, model.u)
+
+    def _set_laws(self, *, dynamic: bool) -> None:
+        """ccx's LINEAR law has no tension in ``*DYNAMIC`` steps (docs/method.md §12.3)."""
+        for pair, interaction in zip(self.model.pairs, self._static_interactions):
+            law = interaction.law
+            if dynamic and isinstance(law, LinearLaw):
+                pair.interaction = SurfaceInteraction(law.dynamic(), interaction.friction)
+            else:
+                pair.interaction = interaction
+
+    def _run_dynamic_step(self, index: int, step: Step) -> None:
+        """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
+        model = self.model
+        if self.velocity is None:
+            self.velocity = _initial_velocity(self.deck, model)
+            self.acceleration = dolfinx.fem.Function(model.V, name="acceleration")
+        increments = step.static
+        period = increments.period
+        maximum = min(increments.maximum or period, period)
+        initial = min(increments.initial_increment, maximum)
+        # ccx's default minimum: the initial increment or 1e-5 of the period, the smaller
+        minimum = min(increments.minimum or min(initial, 1e-5 * period), initial)
+
+        def set_load(t: float) -> None:
+            if t > 0.0:
+                self.counters.attempt += 1
+                if self.counters.increment > step.max_increments:
+                    raise ContactConvergenceError(
+                        f"the step needs more than INC={step.max_increments} increments "
+                        f"({step.location})"
+                    )
+            model.set_time(index, t)
+
+        def on_increment(result: IncrementResult) -> None:
+            self._converged(index, step, result)
+            self.counters.increment += 1
+            self.counters.attempt = 0
+
+        driver = DynamicStep(
+            _mass_form(self.deck, model),
+            set_load,
+            period=period,
+            initial_increment=initial,
+            min_increment=minimum,
+            max_increment=maximum,
+            fixed=increments.direct,
+            alpha=step.dynamic.alpha,
+            velocity=self.velocity,
+            acceleration=self.acceleration,
+            on_increment=on_increment,
         )
         driver.run(self.solver, model.u)
 
@@ -492,6 +554,36 @@ class _Job:
                 )
             blocks += contact_print_blocks(key, total, nodes, columns[key](), totals=request.totals)
         return blocks
+
+
+def _mass_form(deck: Deck, model: CalculixModel) -> ufl.Form:
+    """``rho inner(w, v) dx`` with the ``*DENSITY`` of each section's material (ccx quadrature)."""
+    Q = compat.scalar_space(model.mesh, "DG", 0)
+    rho = dolfinx.fem.Function(Q, name="density")
+    block_ids = deck.elements[model.element_type.name].ids
+    for section in deck.sections:
+        density = deck.materials[section.material].extra.get("*DENSITY")
+        if not density or len(density) != 1 or density[0][0] is None or density[0][0] <= 0.0:
+            raise ValueError(
+                f"{section.location}: a *DYNAMIC step needs one positive *DENSITY in material "
+                f"{section.material} (temperature-dependent densities are not supported)"
+            )
+        members = np.unique(deck.elsets[section.elset])
+        cells = model.element_cells(members[np.isin(members, block_ids)])
+        rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
+    w, v = ufl.TrialFunction(model.V), ufl.TestFunction(model.V)
+    return rho * ufl.inner(w, v) * ufl.dx(domain=model.mesh)  # consistent mass, exact
+
+
+def _initial_velocity(deck: Deck, model: CalculixModel) -> dolfinx.fem.Function:
+    """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
+    velocity = dolfinx.fem.Function(model.V, name="velocity")
+    values = velocity.x.array.reshape(-1, 3)
+    for condition in deck.initial_velocities:
+        dofs = model.node_dofs(condition.nodes)
+        values[dofs[dofs >= 0], condition.dof - 1] = condition.value
+    velocity.x.scatter_forward()
+    return velocity
 
 
 def _check_requests(deck: Deck) -> None:

@@ -51,8 +51,8 @@ def write_impact_deck(
     *,
     gap: float = 0.01,
     speed: float = 1.0,
-    increment: float = 0.004,
-    period: float = 0.12,
+    increment: float = 5e-4,
+    period: float = 0.08,
     alpha: float | None = None,
     direct: bool = True,
     tight: bool = True,
@@ -113,10 +113,8 @@ def write_impact_deck(
     if tight:
         lines += ["*CONTROLS, PARAMETERS=FIELD", "1e-10, 1e-8, , , 1e-10, 1e-5, 1e-8, 1e-12"]
     lines += [
-        "*NODE PRINT, NSET=NTOP",
+        "*NODE PRINT, NSET=NALL",
         "U",
-        "*NODE PRINT, NSET=NBLOCK",
-        "V",
         "*CONTACT PRINT",
         "CDIS, CSTR, CELS",
         "*END STEP",
