@@ -444,7 +444,7 @@ class _Job:
                         f"the step needs more than INC={step.max_increments} increments "
                         f"({step.location})"
                     )
-            model.set_time(index, t)
+            model.set_time(index, t, ramp=False)  # ccx: full loads from the step start
 
         def on_increment(result: IncrementResult) -> None:
             self._converged(index, step, result)

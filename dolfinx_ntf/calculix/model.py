@@ -266,11 +266,15 @@ class CalculixModel:
                 bcs.append(dolfinx.fem.dirichletbc(g, pair, self.V.sub(component)))
         return bcs
 
-    def set_time(self, step_index: int, step_time: float) -> None:
-        """Set concentrated forces, pressures and prescribed displacements at ``step_time``."""
+    def set_time(self, step_index: int, step_time: float, *, ramp: bool = True) -> None:
+        """Set concentrated forces, pressures and prescribed displacements at ``step_time``.
+
+        Without an amplitude they ramp linearly over the step, or (``ramp=False``, ccx's
+        ``*DYNAMIC``) act in full from its start.
+        """
         loads = self.steps[step_index]
         total = loads.total_time_start + step_time
-        fraction = step_time / loads.period
+        fraction = step_time / loads.period if ramp else 1.0
         self.nodal_loads.x.array[:] = 0.0
         self.nodal_loads.x.array[loads.cload_dofs] = self._evaluate(
             loads.cload, fraction, step_time, total

@@ -56,6 +56,7 @@ def write_impact_deck(
     alpha: float | None = None,
     direct: bool = True,
     tight: bool = True,
+    load: float = 0.0,
 ) -> Path:
     """Write ``directory/name.inp`` and return its path.
 
@@ -66,6 +67,8 @@ def write_impact_deck(
         alpha: ``ALPHA`` parameter (None: ccx's default -0.05).
         direct: Fixed increments (``DIRECT``).
         tight: Field controls at round-off level, so that converged solutions are compared.
+        load: A ``*CLOAD`` along z on every node of the block top (ccx applies it in full from
+            the step start).
     """
     _, base_nodes, base_elements = _box((0, 0, -1), (2, 2, 0), (3, 3, 1), 1, 1)
     first_node = max(base_nodes) + 1
@@ -112,6 +115,8 @@ def write_impact_deck(
     ]
     if tight:
         lines += ["*CONTROLS, PARAMETERS=FIELD", "1e-10, 1e-8, , , 1e-10, 1e-5, 1e-8, 1e-12"]
+    if load:
+        lines += ["*CLOAD", f"NTOP, 3, {load}"]
     lines += [
         "*NODE PRINT, NSET=NALL",
         "U",
