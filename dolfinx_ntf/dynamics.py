@@ -64,7 +64,9 @@ class _Inertia:
     The residual of the problem, ``r(u) = f(u) - f_ext(t_{n+1})``, becomes
     ``r(u) + (M a(u) - alpha r_n) / (1 + alpha)`` with the Newmark acceleration
     ``a(u) = (u - u_n - dt v_n - dt^2 (1/2 - beta) a_n) / (beta dt^2)``, and the Jacobian gains
-    ``M / (beta dt^2 (1 + alpha))``.
+    ``M / (beta dt^2 (1 + alpha))``. In both, the mass matrix is ``M_bc``: ``M`` without the rows
+    and columns of constrained dofs. As in CalculiX, prescribed motion then exerts no inertial
+    force on the free dofs next to it. The complete ``M`` gives the force scale ``M v_n/dt``.
     """
 
     def __init__(self, M: PETSc.Mat, M_bc: PETSc.Mat, alpha: float) -> None:
@@ -91,11 +93,11 @@ class _Inertia:
         return (x - self.prediction.array_r) / (self.beta * self.dt * self.dt)
 
     def add_to_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """``b += (M a(x) - alpha r_n) / (1 + alpha)`` (constrained rows are reset afterwards)."""
+        """``b += (M_bc a(x) - alpha r_n) / (1 + alpha)`` (constrained rows are reset afterwards)."""
         if not self.enabled:
             return
         self._acceleration.array[:] = self.acceleration(x.array_r)
-        self.M.mult(self._acceleration, self._force)
+        self.M_bc.mult(self._acceleration, self._force)
         b.array[:] += (self._force.array_r - self.alpha * self.last_residual.array_r) / (
             1.0 + self.alpha
         )
