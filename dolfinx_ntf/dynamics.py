@@ -93,7 +93,7 @@ class _Inertia:
         return (x - self.prediction.array_r) / (self.beta * self.dt * self.dt)
 
     def add_to_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """``b += (M_bc a(x) - alpha r_n) / (1 + alpha)`` (constrained rows are reset afterwards)."""
+        """``b += (M_bc a(x) - alpha r_n) / (1 + alpha)`` (constrained rows are reset later)."""
         if not self.enabled:
             return
         self._acceleration.array[:] = self.acceleration(x.array_r)
