@@ -21,7 +21,7 @@ def _blocks() -> list[str]:
 
 def test_readme_examples_run(tmp_path, monkeypatch):
     blocks = _blocks()
-    assert len(blocks) == 3
+    assert len(blocks) == 4
     monkeypatch.chdir(tmp_path)  # the writer's file goes here
     # log_progress() of the example: no stream handler on pytest's capture, levels restored after.
     monkeypatch.setattr(logs, "_handler", logging.NullHandler())
@@ -56,6 +56,11 @@ def test_readme_examples_run(tmp_path, monkeypatch):
     assert (tmp_path / "punch.xdmf").read_text().count("Function/contact_pressure/") == 3
     fields = namespace["fields"]
     assert fields.status.x.array.sum() == ntf.contact_results(problem2)[0].node.size
+    # Dynamic step: four fixed increments, the punch lands on the block and is slowed down.
+    assert [r.increment for r in namespace["dynamic_results"]] == [1, 2, 3, 4]
+    assert namespace["problem3"].num_springs > 0
+    punch_velocity = namespace["velocity"].x.array.reshape(-1, 3)[namespace["punch_nodes"], 2]
+    assert -0.5 < punch_velocity.mean() < 0.0
 
 
 def test_cited_method_sections_exist():
