@@ -203,3 +203,30 @@ def test_impact_energy():
     assert velocity.x.array.reshape(-1, 3)[x[:, 2] > 1e-3, 2].mean() > 0.3  # bounced back
     drift = np.abs(energies - energies[0]).max() / energies[0]
     assert drift < 0.01  # measured 0.21 % (0.57 % with alpha = -1/3, 0.09 % with alpha = 0)
+
+
+@pytest.mark.mpi
+def test_dynamic_step_is_the_same_in_parallel():
+    """No contact: the bar's tip motion on any number of ranks equals the single-process one."""
+    tips = []
+    for comm in (MPI.COMM_SELF, MPI.COMM_WORLD):
+        u, F, bcs, mass, clamped = _cantilever(comm)
+        V = u.function_space
+        problem = ntf.ContactProblem(F, u, [], bcs)
+        velocity = dolfinx.fem.Function(V)
+        velocity.x.array.reshape(-1, 3)[:, 2] = 1.0
+        velocity.x.array.reshape(-1, 3)[clamped] = 0.0
+        with ntf.ContactNewtonSolver(comm, problem) as solver:
+            ntf.DynamicStep(mass, period=0.03, initial_increment=0.01, velocity=velocity).run(
+                solver, u
+            )
+        x = V.tabulate_dof_coordinates()
+        owned = V.dofmap.index_map.size_local
+        tip = np.isclose(x[:owned, 0], 2.0)
+        local = u.x.array.reshape(-1, 3)[:owned][tip, 2]
+        values = np.concatenate(comm.allgather(local))
+        tips.append((values.min(), values.max(), comm.allreduce(int(tip.sum()))))
+    (serial_min, serial_max, n1), (parallel_min, parallel_max, n2) = tips
+    assert n1 == n2 == 4 and serial_max > 1e-3
+    assert parallel_min == pytest.approx(serial_min, rel=1e-10)
+    assert parallel_max == pytest.approx(serial_max, rel=1e-10)
