@@ -305,6 +305,8 @@ class _Job:
         step = self.deck.steps[self.counters.step - 1]
         if self.cel is None or not step.contact_elements or self._cel_overflow:
             return
+        if self.counters.attempt == 0:  # the start-of-step pairing of a *DYNAMIC step (no ccx set)
+            return
         numbers = (
             self.counters.step,
             self.counters.increment,
