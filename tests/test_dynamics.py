@@ -230,3 +230,19 @@ def test_dynamic_step_is_the_same_in_parallel():
     assert n1 == n2 == 4 and serial_max > 1e-3
     assert parallel_min == pytest.approx(serial_min, rel=1e-10)
     assert parallel_max == pytest.approx(serial_max, rel=1e-10)
+
+
+@pytest.mark.serial
+def test_dynamic_deck_without_density_is_named(tmp_path):
+    import sys
+    from pathlib import Path
+
+    from dolfinx_ntf.calculix.job import run_job
+
+    sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "dynamic"))
+    from impact_deck import write_impact_deck
+
+    path = write_impact_deck(tmp_path, "nodensity", period=0.001)
+    path.write_text(path.read_text().replace("*DENSITY\n1.0\n", ""))
+    with pytest.raises(ValueError, match=r"needs one positive \*DENSITY in material STEEL"):
+        run_job("nodensity", tmp_path, comm=MPI.COMM_SELF, progress=False)
