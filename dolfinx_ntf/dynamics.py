@@ -155,7 +155,8 @@ class DynamicStep:
         set_load: Called with the step time at the end of each increment (and with 0 at the
             start), like :class:`~dolfinx_ntf.StaticStep`'s; default: no time-dependent load.
         period: Step time.
-        initial_increment, min_increment, max_increment: Time increment sizes.
+        initial_increment, min_increment, max_increment: Time increment sizes; the default
+            minimum is CalculiX's, the initial increment or 1e-5 of the period, the smaller.
         fixed: Keep ``initial_increment`` (CalculiX ``DIRECT``); a failed increment stops the step.
         alpha: HHT parameter in ``[-1/3, 0]``: 0 is the trapezoidal rule (no numerical damping),
             lower values damp high frequencies more.
@@ -175,7 +176,7 @@ class DynamicStep:
     set_load: LoadControl = _no_load
     period: float = 1.0
     initial_increment: float = 0.01
-    min_increment: float = 1e-8
+    min_increment: float | None = None
     max_increment: float | None = None
     fixed: bool = False
     alpha: float = CCX_ALPHA
@@ -206,13 +207,14 @@ class DynamicStep:
                 raise TypeError(
                     f"{owner}: {name} must be a function, got {validation.describe(value)}"
                 )
-        for name in ("period", "initial_increment", "min_increment", "cutback_factor"):
+        for name in ("period", "initial_increment", "cutback_factor"):
             validation.check_positive(getattr(self, name), f"{owner}: {name}")
-        validation.check_positive(self.max_increment, f"{owner}: max_increment", allow_none=True)
+        for name in ("min_increment", "max_increment"):
+            validation.check_positive(getattr(self, name), f"{owner}: {name}", allow_none=True)
         max_inc = self.period if self.max_increment is None else self.max_increment
-        if not (self.min_increment <= self.initial_increment <= max_inc):
+        if not (self._min_increment() <= self.initial_increment <= max_inc):
             raise ValueError(
-                f"{owner}: need 0 < min_increment ({self.min_increment}) <= initial_increment "
+                f"{owner}: need 0 < min_increment ({self._min_increment()}) <= initial_increment "
                 f"({self.initial_increment}) <= max_increment ({max_inc})"
             )
         factors = (self.cutback_factor, self.divergence_cutback_factor)
@@ -224,6 +226,12 @@ class DynamicStep:
             )
         if not (isinstance(self.alpha, (int, float)) and -1.0 / 3.0 <= self.alpha <= 0.0):
             raise ValueError(f"{owner}: alpha must be in [-1/3, 0] (ccx), got {self.alpha!r}")
+
+    def _min_increment(self) -> float:
+        """The minimum increment, CalculiX's default when none is given."""
+        if self.min_increment is not None:
+            return self.min_increment
+        return min(self.initial_increment, 1e-5 * self.period)
 
     def run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
         """Run the step from the current ``u`` (and ``velocity``).
@@ -340,12 +348,12 @@ class DynamicStep:
                         if isinstance(error, ContactDivergenceError)
                         else self.cutback_factor
                     )
-                    if self.fixed or dt * factor < self.min_increment:
+                    if self.fixed or dt * factor < self._min_increment():
                         why = (
                             "fixed increments"
                             if self.fixed
                             else f"increment size {dt:.3e} cannot be cut back below the "
-                            f"minimum {self.min_increment:.3e}"
+                            f"minimum {self._min_increment():.3e}"
                         )
                         first = (
                             "" if first_failure is error else f"; first attempt: {first_failure}"
