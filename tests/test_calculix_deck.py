@@ -301,7 +301,7 @@ BAD_DECKS = [
     ("dynamic alpha", ("*STATIC\n0.5, 1.0", "*DYNAMIC, ALPHA=-0.5\n0.5, 1.0"), "*DYNAMIC",
      r"ALPHA must be in \[-1/3, 0\]"),
     ("initial temperature", ("*STEP", "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 20.\n*STEP"),
-     "*INITIAL CONDITIONS", r"TYPE=TEMPERATURE is not supported yet"),
+     "*INITIAL CONDITIONS", r"not supported yet for TYPE=TEMPERATURE"),
     ("bad coordinate", ("3, 1.0, 1.0, 0.0", "3, 1.0, 1.x0, 0.0"), "3, 1.0, 1.x0",
      r"bad number '1\.X0'"),
     ("bad node number", ("12, 0.75, 0.25, 1.0", "12.5, 0.75, 0.25, 1.0"), "12.5, 0.75",

@@ -1666,8 +1666,8 @@ class _Reader:
         self._check_params(card, allowed={"TYPE"}, required={"TYPE"})
         if card.params["TYPE"] != "VELOCITY":
             raise DeckError(
-                f"*INITIAL CONDITIONS, TYPE={card.raw_params['TYPE']} is not supported yet "
-                "(only TYPE=VELOCITY)",
+                "*INITIAL CONDITIONS is not supported yet for "
+                f"TYPE={card.raw_params['TYPE']} (only TYPE=VELOCITY)",
                 card.location,
             )
         self._need_data(card)
