@@ -22,10 +22,9 @@ The demo prints the energy balance at every increment: kinetic energy ``v^T M v/
 ``int sigma:eps/2``, spring energy (the exact integral of the contact force, ``sum A int p``), and
 the potential of gravity ``-int rho g.u``; the total must stay constant up to the numerical damping
 of the alpha method (1 % bound; measured 0.75 % lost on the coarse mesh, 0.90 % on the default
-one, whose finer mesh carries more high-frequency vibration for the alpha method to damp). It also checks the
-momentum balance of the block (the contact impulse ``int F dt`` against the change of its
-momentum) and saves ``output/impact.png`` (block displacement and contact force against time) and
-``output/impact.xdmf``.
+one). It also checks the momentum balance of the block (the contact impulse ``int F dt`` against
+the change of its momentum) and saves ``output/impact.png`` (block displacement and contact force
+against time) and ``output/impact.xdmf``.
 
 Run it with::
 
