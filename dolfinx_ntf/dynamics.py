@@ -165,7 +165,8 @@ class DynamicStep:
         acceleration: Where to leave the acceleration (a Function on the displacement space); read
             as the initial acceleration when ``initial_acceleration`` is False.
         initial_acceleration: Solve ``M a_0 = f_ext(0) - f(u_0)`` at the start (CalculiX does), with
-            zero acceleration at constrained dofs.
+            zero acceleration at constrained dofs and at ``u_0`` as it is (prescribed values that
+            jump at the start are left out, as in CalculiX).
         cutback_factor, divergence_cutback_factor, growth_factor, growth_iterations: Automatic
             increments as in :class:`~dolfinx_ntf.StaticStep` (no CalculiX impact rules).
         on_increment: Called with the :class:`~dolfinx_ntf.IncrementResult` of each converged
@@ -301,9 +302,10 @@ class DynamicStep:
         owned = x.getLocalSize()
         self.set_load(0.0)
         problem.begin_increment(0.0, static=False)
-        _static_residual(problem, inertia, x)
-        if self.initial_acceleration:
+        if self.initial_acceleration:  # from u_0 as it is, a jump of prescribed values left out
+            _static_residual(problem, inertia, x, start=True)
             _initial_acceleration(mass, problem, inertia.last_residual, acceleration)
+        _static_residual(problem, inertia, x)  # r_0 of the alpha method, with such a jump
         max_inc = self.period if self.max_increment is None else self.max_increment
         results: list[IncrementResult] = []
         t, dt = 0.0, self.initial_increment
@@ -413,10 +415,20 @@ class DynamicStep:
         acceleration.x.scatter_forward()
 
 
-def _static_residual(problem: ContactProblem, inertia: _Inertia, x: PETSc.Vec) -> None:
-    """``r_n = f(u_n) - f_ext(t_n)`` into ``inertia.last_residual``, zero at constrained dofs."""
+def _static_residual(
+    problem: ContactProblem, inertia: _Inertia, x: PETSc.Vec, *, start: bool = False
+) -> None:
+    """``r_n = f(u_n) - f_ext(t_n)`` into ``inertia.last_residual``, zero at constrained dofs.
+
+    ``start``: at the start of the step, at ``u_0`` as it is: prescribed values that differ from
+    ``u_0`` (a jump at the step start) do not enter (no lifting), as in CalculiX (docs/method.md
+    §12.1).
+    """
+    bcs = problem.bcs
     inertia.enabled = False
     try:
+        if start:
+            problem.bcs = []
         residual = x.duplicate()
         problem.form(x)
         problem.assemble_residual(x, residual)
@@ -424,6 +436,7 @@ def _static_residual(problem: ContactProblem, inertia: _Inertia, x: PETSc.Vec) -
         residual.destroy()
     finally:
         inertia.enabled = True
+        problem.bcs = bcs
     dolfinx.fem.petsc.set_bc(inertia.last_residual, problem.bcs, None, 0.0)
     if not math.isfinite(inertia.last_residual.norm()):
         raise ContactConvergenceError("the residual of the converged state is not finite")
