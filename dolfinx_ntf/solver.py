@@ -259,6 +259,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         if self.problem.assembler.pattern_merges != merges:
             ksp.getPC().reset()
             ksp.setOperators(A, A)
+        reduced = self.problem.reduced_matrix  # constraints: solve the reduced system
+        if reduced is not None:
+            if reduced.handle != ksp.getOperators()[0].handle:
+                ksp.getPC().reset()
+            ksp.setOperators(reduced, reduced)
 
     def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
         """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""

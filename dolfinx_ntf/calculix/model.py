@@ -47,6 +47,7 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.constraints import LinearConstraint
 from dolfinx_ntf.laws import (
     ExponentialLaw,
     LinearLaw,
@@ -181,6 +182,7 @@ class CalculixModel:
             with value ``group + 1``.
         steps: Load schedule of every step.
         amplitude_names: Amplitude names by index.
+        constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1).
     """
 
     deck: Deck
@@ -210,6 +212,7 @@ class CalculixModel:
     steps: list[StepLoads]
     amplitude_names: list[str]
     _bc_spaces: list = field(default_factory=list, repr=False)
+    constraints: list[LinearConstraint] = field(default_factory=list)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -306,6 +309,7 @@ class CalculixModel:
             bcs: Initial Dirichlet conditions (usually ``begin_step(0)``).
             options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_options``).
         """
+        options.setdefault("constraints", self.constraints)
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
         return problem
@@ -849,4 +853,24 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         steps=steps,
         amplitude_names=amplitude_names,
         _bc_spaces=bc_spaces,
+        constraints=_constraints(deck, node_dof),
     )
+
+
+def _constraints(deck: Deck, node_dof: np.ndarray) -> list[LinearConstraint]:
+    """``*EQUATION`` cards as constraints on the displacement dofs (ccx dofs 1..3 -> 0..2)."""
+    constraints = []
+    for equation in deck.equations:
+        dofs = node_dof[deck.node_index(equation.nodes)]
+        if np.any(dofs < 0):
+            node = int(equation.nodes[dofs < 0][0])
+            raise ValueError(f"{equation.location}: *EQUATION node {node} belongs to no element")
+        constraints.append(
+            LinearConstraint(
+                dofs,
+                equation.dofs - 1,
+                equation.coefficients,
+                name=f"*EQUATION at {equation.location}",
+            )
+        )
+    return constraints

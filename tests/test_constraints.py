@@ -1,0 +1,188 @@
+"""Linear constraints by elimination (dolfinx_ntf.constraints, *EQUATION; docs/method.md §13.1)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import LOWER_TOP, UPPER_TOP, punch_problem
+
+import dolfinx.fem
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.deck import DeckError, read_deck
+from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.constraints import LinearConstraint, elimination_rows
+
+pytestmark = pytest.mark.serial
+
+CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
+
+# ----------------------------------------------------------------------------- pure numpy
+
+
+def test_first_free_term_is_dependent_and_chains_are_resolved():
+    # u3 = 2 u0 ; u5 = u3 - u1 + 1  ->  u5 = 2 u0 - u1 + 1
+    constraints = [
+        LinearConstraint([1, 0], [0, 0], [1.0, -2.0]),
+        LinearConstraint([1, 1, 0], [2, 0, 1], [2.0, -2.0, 2.0], value=2.0),
+    ]
+    slaves, M, g = elimination_rows(6, constraints)
+    assert slaves.tolist() == [3, 5]
+    np.testing.assert_allclose(M.toarray(), [[2, 0, 0, 0, 0, 0], [2, -1, 0, 0, 0, 0]])
+    np.testing.assert_allclose(g, [0.0, 1.0])
+
+
+def test_prescribed_first_term_passes_dependence_to_the_next():
+    slaves, M, _ = elimination_rows(6, [LinearConstraint([0, 1], [0, 0], [1.0, -1.0])], [0])
+    assert slaves.tolist() == [3]
+    np.testing.assert_allclose(M.toarray()[0], [1, 0, 0, 0, 0, 0])
+
+
+def test_contradictory_or_circular_constraints_are_refused():
+    tie = LinearConstraint([0, 1], [2, 2], [1.0, -1.0], name="tie")
+    with pytest.raises(ValueError, match="tie: every dof of the constraint is prescribed"):
+        elimination_rows(6, [tie], [2, 5])
+    with pytest.raises(ValueError, match="redundant"):
+        elimination_rows(6, [tie, LinearConstraint([1, 0], [2, 2], [1.0, -1.0])], [2])
+    chain = [
+        LinearConstraint([0, 1], [0, 0], [1.0, -1.0]),
+        LinearConstraint([1, 0], [0, 0], [1.0, -1.0]),
+    ]
+    with pytest.raises(ValueError, match=r"redundant|circular"):
+        elimination_rows(6, chain)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"nodes": [0, 1], "components": [0], "coefficients": [1, 1]}, "one entry per term"),
+        ({"nodes": [0], "components": [3], "coefficients": [1]}, "components must be 0, 1 or 2"),
+        ({"nodes": [-1], "components": [0], "coefficients": [1]}, "not a mesh node"),
+        ({"nodes": [0], "components": [0], "coefficients": [np.nan]}, "finite"),
+    ],
+)
+def test_bad_constraint_is_a_clear_error(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        LinearConstraint(**kwargs)
+
+
+# ----------------------------------------------------------------------------- the punch
+
+
+def _solve(problem, pressure, load=10.0):
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    step = ntf.StaticStep(
+        lambda t: setattr(pressure, "value", load * t), initial_increment=0.5, fixed=True
+    )
+    return solver, step.run(solver, problem.u)
+
+
+def _two_nodes():
+    problem, pressure, ft = punch_problem()
+    V = problem.u.function_space
+    x = V.tabulate_dof_coordinates()
+    top = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(UPPER_TOP))
+    low = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_TOP))
+    a = int(top[np.argmin(x[top, 0] + 0.1 * x[top, 1])])  # a punch corner
+    b = int(low[np.argmax(x[low, 0] + 0.1 * x[low, 1])])  # a far corner of the lower block
+    return problem, pressure, a, b
+
+
+def test_tie_gives_equal_displacement_exactly_with_quadratic_newton():
+    free, free_pressure, a, b = _two_nodes()
+    tie = LinearConstraint([a, b], [2, 2], [1.0, -1.0], name="tie")
+    problem, pressure, _ = punch_problem(constraints=[tie])
+    solver, results = _solve(problem, pressure)
+    u = problem.u.x.array.reshape(-1, 3)
+    assert u[a, 2] == u[b, 2]  # exactly
+    assert u[a, 2] < 0
+    norms = np.array(solver.residual_norms) / solver.residual_norms[0]
+    assert norms[-1] < 1e-10 and norms[-2] < 1e-4  # quadratic: ~1e-7 -> ~1e-13
+    # the tie changes the solution: the free punch corner sinks more than the far corner
+    _solve(free, free_pressure)
+    w = free.u.x.array.reshape(-1, 3)
+    assert abs(w[a, 2] - w[b, 2]) > 1e-3
+    assert all(r.iterations <= 5 for r in results)
+
+
+def test_constraint_equilibrium_of_the_eliminated_system():
+    """With u_b,x = u_a,z / 2 the reduced residual vanishes: r_a,z + r_b,x / 2 = 0 for the full
+    residual, and r_b,x = -(force the constraint carries) is not zero."""
+    _, _, a, b = _two_nodes()
+    tie = LinearConstraint([b, a], [0, 2], [1.0, -0.5], value=1e-4)
+    problem, pressure, _ = punch_problem(constraints=[tie])
+    _solve(problem, pressure)
+    u = problem.u.x.array.reshape(-1, 3)
+    assert u[b, 0] - 0.5 * u[a, 2] == pytest.approx(1e-4, abs=1e-15)
+    problem.elimination, elimination = None, problem.elimination  # the unreduced residual
+    x = problem.u.vector if hasattr(problem.u, "vector") else problem.u.x.petsc_vec
+    b_full = x.duplicate()
+    problem.form(x)
+    problem.assemble_residual(x, b_full)
+    r = b_full.array.reshape(-1, 3)
+    problem.elimination = elimination
+    assert abs(r[b, 0]) > 1e-3
+    assert r[a, 2] + 0.5 * r[b, 0] == pytest.approx(0.0, abs=1e-9 * abs(r[b, 0]))
+    b_full.destroy()
+
+
+def test_dependent_dof_with_a_dirichlet_condition_is_refused():
+    problem, _, ft = punch_problem()
+    V = problem.u.function_space
+    # the punch top has Dirichlet conditions on x and y: a tie of two of its x dofs contradicts
+    top = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(UPPER_TOP))
+    tie = LinearConstraint([int(top[0]), int(top[1])], [0, 0], [1.0, -1.0], name="x tie")
+    with pytest.raises(ValueError, match="x tie: every dof of the constraint is prescribed"):
+        punch_problem(constraints=[tie])
+
+
+# ----------------------------------------------------------------------------- ccx decks
+
+
+def test_equation_cards_are_read(tmp_path):
+    deck = tmp_path / "eq.inp"
+    text = (CCX_TESTS / "contact1.inp").read_text() if CCX_TESTS.is_dir() else None
+    if text is None:
+        pytest.skip("needs the package calculix-ccx-test")
+    deck.write_text(text)
+    equations = read_deck(deck).equations
+    assert len(equations) == 6
+    assert equations[0].nodes.tolist() == [4, 3]
+    assert equations[0].dofs.tolist() == [3, 3]
+    assert equations[0].coefficients.tolist() == [1.0, -1.0]
+    deck.write_text(text.replace("4,3,1.,3,3,-1.", "4,3,1.,3,3"))
+    with pytest.raises(DeckError, match=r"eq.inp:\d+: \*EQUATION: 2 terms"):
+        read_deck(deck)
+    deck.write_text(text.replace("4,3,1.,3,3,-1.", "4,3,0.,3,3,-1."))
+    with pytest.raises(DeckError, match="dependent\\) coefficient is zero"):
+        read_deck(deck)
+
+
+@pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
+@pytest.mark.parametrize("name", ["contact1", "contact3", "contact6"])
+def test_ccx_equation_decks_match_ccx(tmp_path, name):
+    """ccx's own *EQUATION contact decks at its default controls against its .dat (ccx 2.20's
+    output shipped with the test suite, also run here when ccx is installed)."""
+    shutil.copy(CCX_TESTS / f"{name}.inp", tmp_path / f"{name}.inp")
+    result = run_job(name, tmp_path, progress=False)
+    assert result.completed
+    ours = read_dat(tmp_path / f"{name}.dat")
+    references = [read_dat(CCX_TESTS / f"{name}.dat.ref")]
+    if shutil.which("ccx"):
+        from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
+
+        ccx_dir = tmp_path / "ccx"
+        ccx_dir.mkdir()
+        shutil.copy(CCX_TESTS / f"{name}.inp", ccx_dir / f"{name}.inp")
+        run_ccx(ccx_dir, name, timeout=120)
+        references.append(read_ccx_dat(ccx_dir, name))
+    for reference in references:
+        assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in reference]
+        for mine, theirs in zip(ours, reference):
+            np.testing.assert_array_equal(mine.labels, theirs.labels)
+            scale = np.abs(theirs.values).max()
+            assert np.abs(mine.values - theirs.values).max() <= 1e-6 * scale, mine.name
