@@ -9,6 +9,7 @@ CalculiX interop). The method is described in ``docs/method.md``, the code in
 __version__ = "0.1.0"
 
 from dolfinx_ntf import logs as _logs
+from dolfinx_ntf.constraints import LinearConstraint
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import (
     ExponentialLaw,
@@ -48,6 +49,7 @@ __all__ = [
     "FacetSurface",
     "Friction",
     "IncrementResult",
+    "LinearConstraint",
     "LinearLaw",
     "NodeSurface",
     "PressureOverclosureLaw",

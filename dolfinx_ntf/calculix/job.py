@@ -14,6 +14,8 @@ selects:
       (docs/method.md §8.5).
     - ``JOB.xdmf``: displacement, contact pressure, clearance and status (every converged
       increment).
+    - ``JOB.frd``: the mesh, and the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S) and ``*CONTACT FILE``
+      (CDIS, CSTR) results in ccx 2.20's ASCII layout (docs/method.md §13.2).
 
 Newton stops like ccx (manual "Convergence criteria"): the largest residual force component must
 fall below ``R_n`` (``*CONTROLS, PARAMETERS=FIELD``, default 0.005) times the average element force,
@@ -58,6 +60,7 @@ from dolfinx_ntf.solver import (
 from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
 from .deck import Deck, PrintRequest, Step, read_deck
+from .frd import FrdBlock, FrdWriter, nodal_extrapolation
 from .model import INTEGRATION_POINTS, CalculixModel, build_model
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
@@ -161,6 +164,7 @@ class JobResult:
     dat: Path | None = None
     cel: Path | None = None
     xdmf: Path | None = None
+    frd: Path | None = None
     completed: bool = False
     wall_time: float = 0.0
 
@@ -235,6 +239,8 @@ class _Job:
         )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
+        self.result.frd = directory / f"{jobname}.frd"
+        self.frd = _frd_writer(self.result.frd, deck, model)
 
     # -- forces ------------------------------------------------------------------------------------
 
@@ -347,6 +353,7 @@ class _Job:
             raise JobError(message, exit_code=2, result=self.result) from error
         finally:
             self.writer.close()
+            self.frd.close()
         return self.result
 
     def _run_step(self, index: int, step: Step) -> None:
@@ -436,6 +443,59 @@ class _Job:
         last = result.time_fraction >= 1 - 1e-12
         if frequency > 0 and (result.increment % frequency == 0 or last):
             write_dat(self.result.dat, self._blocks(step, total, contact), append=True)
+            for block in self._frd_blocks(step, result.increment, total, contact):
+                self.frd.write(block)
+
+    def _frd_blocks(
+        self, step: Step, increment: int, total: float, contact: list[ContactRows]
+    ) -> list[FrdBlock]:
+        """The ``.frd`` blocks of the file requests, in ccx's order: DISP, STRESS, FORC, CONTACT."""
+        keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
+        blocks = []
+
+        def node_block(name: str, request, values: np.ndarray) -> None:
+            ids = self.deck.node_ids
+            if request.set is not None:
+                ids = np.unique(self.deck.nsets[request.set])
+            blocks.append(
+                FrdBlock(name, (), step.number, increment, total, ids,
+                         self.model.nodal_values(ids, values))
+            )  # fmt: skip
+
+        if ("NODE", "U") in keys:
+            node_block("DISP", keys["NODE", "U"], self.model.u.x.array.reshape(-1, 3))
+        if ("EL", "S") in keys:
+            nodes, values = self.nodal_stresses()
+            blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
+        if ("NODE", "RF") in keys:
+            node_block("FORC", keys["NODE", "RF"], self.internal_forces())
+        if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
+            nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
+            values = np.zeros((nodes.size, 6))
+            if contact:
+                values[:, 0] = np.concatenate([r.clearance for r in contact])
+                values[:, 3] = np.concatenate([r.pressure for r in contact])
+            blocks.append(FrdBlock("CONTACT", (), step.number, increment, total, nodes, values))
+        return blocks
+
+    def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
+        """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).
+
+        Integration-point values extrapolated to each element's nodes, averaged over the elements
+        around a node (docs/method.md §13.2).
+        """
+        block = self.deck.elements[self.model.element_type.name]
+        points = INTEGRATION_POINTS[self.model.element_type.name]
+        extrapolate = nodal_extrapolation(self.model.element_type.name, points)
+        at_nodes = np.einsum("nq,eqk->enk", extrapolate, self.stresses(block.ids))
+        index = self.deck.node_index(block.connectivity)
+        total = np.zeros((self.deck.node_ids.size, 6))
+        count = np.zeros(self.deck.node_ids.size)
+        np.add.at(total, index, at_nodes)
+        np.add.at(count, index, 1.0)
+        used = count > 0
+        values = total[used] / count[used, None]
+        return self.deck.node_ids[used], values[:, [0, 1, 2, 3, 5, 4]]
 
     def _blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
         blocks: list[DatBlock] = []
@@ -494,6 +554,28 @@ class _Job:
         return blocks
 
 
+def _frd_writer(path: Path, deck: Deck, model: CalculixModel) -> FrdWriter:
+    """The ``.frd`` file with the deck's mesh (ccx writes it for every job)."""
+    block = deck.elements[model.element_type.name]
+    materials = list(deck.materials)
+    index = dict(zip(materials, range(1, len(materials) + 1)))
+    element_material = np.zeros(block.ids.size, dtype=np.int64)
+    position = {int(e): k for k, e in enumerate(block.ids)}
+    for section in deck.sections:
+        for element in deck.elsets[section.elset]:
+            element_material[position[int(element)]] = index[section.material]
+    return FrdWriter(
+        path,
+        deck.node_ids,
+        deck.node_coords,
+        block.ids,
+        model.element_type.name,
+        block.connectivity,
+        element_material,
+        materials + list(deck.interactions),
+    )
+
+
 def _check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
@@ -503,6 +585,17 @@ def _check_requests(deck: Deck) -> None:
                 if key not in supported[request.kind]:
                     raise NotImplementedError(
                         f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
+                    )
+    written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
+    for step in deck.steps:
+        for request in step.file_requests:
+            for key in request.keys:
+                if key not in written[request.kind]:
+                    logger.warning(
+                        " *WARNING: %s key %s is not written to the .frd file (%s)",
+                        request.keyword,
+                        key,
+                        request.location,
                     )
 
 
