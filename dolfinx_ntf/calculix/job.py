@@ -16,6 +16,8 @@ selects:
       increment).
     - ``JOB.frd``: the mesh, and the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S) and ``*CONTACT FILE``
       (CDIS, CSTR) results in ccx 2.20's ASCII layout (docs/method.md §13.2).
+    - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration, in ccx's format
+      (docs/method.md §13.3).
 
 Newton stops like ccx (manual "Convergence criteria"): the largest residual force component must
 fall below ``R_n`` (``*CONTROLS, PARAMETERS=FIELD``, default 0.005) times the average element force,
@@ -62,6 +64,7 @@ from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blo
 from .deck import Deck, PrintRequest, Step, read_deck
 from .frd import FrdBlock, FrdWriter, nodal_extrapolation
 from .model import INTEGRATION_POINTS, CalculixModel, build_model
+from .progress import CvgFile, StaFile
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -241,6 +244,10 @@ class _Job:
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
         self.result.frd = directory / f"{jobname}.frd"
         self.frd = _frd_writer(self.result.frd, deck, model)
+        self.sta = StaFile(directory / f"{jobname}.sta")
+        self.cvg = CvgFile(directory / f"{jobname}.cvg")
+        self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
+        self._step_time = 0.0
 
     # -- forces ------------------------------------------------------------------------------------
 
@@ -345,6 +352,7 @@ class _Job:
             self.result.completed = True
             logger.info("\n Job finished\n")
         except ContactConvergenceError as error:
+            self._failed_attempt()
             message = (
                 f"step {self.counters.step}, increment {self.counters.increment}, attempt "
                 f"{self.counters.attempt}: no convergence: {error}"
@@ -383,9 +391,15 @@ class _Job:
         # ccx 2.20 raises a missing or smaller minimum to 1e-6 of the period (with a warning)
         minimum = min(max(static.minimum or 0.0, 1e-6 * period), initial)
 
+        self._step_time = 0.0
+
         def set_load(t: float) -> None:
             self.solver.increment_start = model.u.x.array.copy()
+            self._failed_attempt()
             self.counters.attempt += 1
+            c = self.counters
+            start = self._step_time
+            self._attempt = (step.number, c.increment, c.attempt, start, t - start, index)
             if self.counters.increment > step.max_increments:
                 raise ContactConvergenceError(
                     f"the step needs more than INC={step.max_increments} increments "
@@ -394,6 +408,12 @@ class _Job:
             model.set_time(index, t)
 
         def on_increment(result: IncrementResult) -> None:
+            number, increment, attempt, _, size, _ = self._attempt
+            self.sta.row(number, increment, attempt, True, result.iterations,
+                         model.total_time(index, result.time), result.time, size)  # fmt: skip
+            self.cvg.rows(number, increment, attempt, self.solver.history)
+            self._attempt = None
+            self._step_time = result.time
             self._converged(index, step, result)
             self.counters.increment += 1
             self.counters.attempt = 0
@@ -410,6 +430,17 @@ class _Job:
             pair_after_predictor=self.pair_after_predictor,
         )
         driver.run(self.solver, model.u)
+
+    def _failed_attempt(self) -> None:
+        """The ``.sta``/``.cvg`` rows of an attempt that did not converge (times at its start)."""
+        if self._attempt is None:
+            return
+        number, increment, attempt, start, size, index = self._attempt
+        history = self.solver.history
+        self.sta.row(number, increment, attempt, False, len(history),
+                     self.model.total_time(index, start), start, size)  # fmt: skip
+        self.cvg.rows(number, increment, attempt, history)
+        self._attempt = None
 
     def _converged(self, index: int, step: Step, result: IncrementResult) -> None:
         model = self.model
