@@ -28,6 +28,7 @@ from petsc4py import PETSc
 
 import numpy as np
 import scipy.sparse
+import scipy.sparse.csgraph
 
 __all__ = ["ConstraintElimination", "LinearConstraint", "elimination_rows"]
 
@@ -109,58 +110,71 @@ def elimination_rows(
     fixed = np.zeros(num_dofs, dtype=bool)
     if prescribed is not None and len(prescribed):
         fixed[np.asarray(prescribed, dtype=np.int64)] = True
-    dependent = np.full(num_dofs, -1, dtype=np.int64)
-    slaves: list[int] = []
-    rows, cols, vals, offsets = [], [], [], []
-    for c in constraints:
-        dofs = c.dofs
-        if np.any(dofs >= num_dofs):
-            raise ValueError(f"{c.label}: dof {int(dofs.max())} is outside the space")
-        unique, inverse = np.unique(dofs, return_inverse=True)
-        coefficient = np.zeros(unique.size)
-        np.add.at(coefficient, inverse, c.coefficients)
-        first = [int(np.flatnonzero(unique == d)[0]) for d in dict.fromkeys(dofs.tolist())]
-        candidates = [
-            k
-            for k in first
-            if abs(coefficient[k]) > 1e-14 * np.abs(coefficient).max(initial=0.0)
-            and not fixed[unique[k]]
-            and dependent[unique[k]] < 0
-        ]
-        if not candidates:
-            node, comp = divmod(int(dofs[0]), 3)
+    if not constraints:
+        return np.zeros(0, np.int64), scipy.sparse.csr_matrix((0, num_dofs)), np.zeros(0)
+    # all terms at once: constraint index, dof, coefficient; repeated dofs of a constraint summed
+    sizes = np.array([c.nodes.size for c in constraints])
+    owner = np.repeat(np.arange(len(constraints)), sizes)
+    dofs = np.concatenate([c.dofs for c in constraints])
+    coefficients = np.concatenate([c.coefficients for c in constraints])
+    values = np.array([c.value for c in constraints])
+    if dofs.max() >= num_dofs:
+        bad = int(owner[np.argmax(dofs >= num_dofs)])
+        raise ValueError(f"{constraints[bad].label}: dof {int(dofs.max())} is outside the space")
+    keys, first, inverse = np.unique(
+        owner * num_dofs + dofs, return_index=True, return_inverse=True
+    )
+    order = np.argsort(first, kind="stable")  # terms in written order, constraints ascending
+    merged = np.bincount(inverse.ravel(), weights=coefficients)[order]
+    term_owner, term_dof = (keys // num_dofs)[order], (keys % num_dofs)[order]
+    largest = np.zeros(len(constraints))
+    np.maximum.at(largest, term_owner, np.abs(merged))
+    candidate = (np.abs(merged) > 1e-14 * largest[term_owner]) & ~fixed[term_dof]
+    # the dependent dof: the first candidate term (sequentially when two constraints pick one dof)
+    chosen = np.full(len(constraints), -1, dtype=np.int64)
+    where = np.flatnonzero(candidate)
+    owners, start = np.unique(term_owner[where], return_index=True)
+    chosen[owners] = where[start]
+    picked = term_dof[chosen[chosen >= 0]]
+    if chosen.min() < 0 or np.unique(picked).size != picked.size:
+        chosen = _choose_sequentially(term_owner, term_dof, candidate, len(constraints))
+    missing = np.flatnonzero(chosen < 0)
+    if missing.size:
+        c = constraints[int(missing[0])]
+        node, comp = divmod(int(c.dofs[0]), 3)
+        raise ValueError(
+            f"{c.label}: every dof of the constraint is prescribed by a Dirichlet condition "
+            f"or already dependent in another constraint (first term: node {node}, component "
+            f"{comp}): the constraint is redundant or contradicts them"
+        )
+    s = term_dof[chosen]
+    a = merged[chosen]
+    others = np.ones(term_dof.size, dtype=bool)
+    others[chosen] = False
+    M = scipy.sparse.csr_matrix(
+        (-merged[others] / a[term_owner[others]], (term_owner[others], term_dof[others])),
+        shape=(s.size, num_dofs),
+    )
+    g = values / a
+    # chains: a dependent dof on the right-hand side of another constraint is substituted, round
+    # by round (as many rounds as the longest chain); a cycle is refused first
+    chained = M[:, s]
+    chained.eliminate_zeros()
+    if chained.nnz:
+        count, label = scipy.sparse.csgraph.connected_components(chained, connection="strong")
+        sizes = np.bincount(label, minlength=count)
+        if np.any(sizes > 1):
+            cycle = s[sizes[label] > 1]
             raise ValueError(
-                f"{c.label}: every dof of the constraint is prescribed by a Dirichlet condition "
-                f"or already dependent in another constraint (first term: node {node}, component "
-                f"{comp}): the constraint is redundant or contradicts them"
+                "circular constraints: dependent dofs depend on each other (dofs "
+                f"{cycle[:5].tolist()}{' ...' if cycle.size > 5 else ''})"
             )
-        k = candidates[0]
-        s, a = int(unique[k]), coefficient[k]
-        dependent[s] = len(slaves)
-        others = np.arange(unique.size) != k
-        rows += [len(slaves)] * int(others.sum())
-        cols += unique[others].tolist()
-        vals += (-coefficient[others] / a).tolist()
-        offsets.append(c.value / a)
-        slaves.append(s)
-    s = np.asarray(slaves, dtype=np.int64)
-    M = scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(s.size, num_dofs))
-    g = np.asarray(offsets, dtype=float)
-    # chains: substitute dependent columns until none is left (a cycle never ends)
-    for _ in range(s.size + 1):
+    independent = scipy.sparse.diags((~np.isin(np.arange(num_dofs), s)).astype(float))
+    while chained.nnz:
+        M = (M @ independent + chained @ M).tocsr()
+        g = g + chained @ g
         chained = M[:, s]
         chained.eliminate_zeros()
-        if chained.nnz == 0:
-            break
-        independent = np.ones(num_dofs)
-        independent[s] = 0.0
-        M = (M @ scipy.sparse.diags(independent) + chained @ M).tocsr()
-        g = g + chained @ g
-    else:
-        raise ValueError(
-            "circular constraints: dependent dofs depend on each other "
-            f"(dofs {s[np.unique(M[:, s].nonzero()[0])][:5].tolist()} ...)"
-        )
     M.sum_duplicates()
     M.eliminate_zeros()
     return s, M, g
@@ -251,6 +265,20 @@ class ConstraintElimination:
             if obj is not None:
                 obj.destroy()
         self._reduced = None
+
+
+def _choose_sequentially(
+    owner: np.ndarray, dof: np.ndarray, candidate: np.ndarray, count: int
+) -> np.ndarray:
+    """Term index of each constraint's dependent dof: its first candidate not taken before."""
+    chosen = np.full(count, -1, dtype=np.int64)
+    taken: set[int] = set()
+    for term in np.flatnonzero(candidate).tolist():
+        k, d = int(owner[term]), int(dof[term])
+        if chosen[k] < 0 and d not in taken:
+            chosen[k] = term
+            taken.add(d)
+    return chosen
 
 
 def _petsc(matrix: scipy.sparse.csr_matrix, comm) -> PETSc.Mat:

@@ -191,3 +191,31 @@ def test_ccx_equation_decks_match_ccx(tmp_path, name):
             np.testing.assert_array_equal(mine.labels, theirs.labels)
             scale = np.abs(theirs.values).max()
             assert np.abs(mine.values - theirs.values).max() <= 1e-6 * scale, mine.name
+
+
+@pytest.mark.ccx
+@pytest.mark.skipif(
+    shutil.which("ccx") is None or not CCX_TESTS.is_dir(),
+    reason="needs ccx and the package calculix-ccx-test",
+)
+def test_dependent_slave_node_with_load_and_chain_matches_ccx(tmp_path):
+    """contact1 with its slave node 10 dependent (and loaded) and a 3-term equation on it."""
+    from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
+
+    text = (CCX_TESTS / "contact1.inp").read_text()
+    old = "2\n9,3,1.,10,3,-1.\n2\n13,3,1.,10,3,-1.\n2\n14,3,1.,10,3,-1.\n"
+    new = "2\n10,3,1.,9,3,-1.\n2\n13,3,1.,9,3,-1.\n3\n14,3,1.,9,3,-2.,10,3,1.\n"
+    assert old in text
+    text = text.replace(old, new).replace("*STATIC\n", "*STATIC\n0.5, 1.\n")
+    for where in ("ours", "ccx"):
+        (tmp_path / where).mkdir()
+        (tmp_path / where / "dep.inp").write_text(text)
+    result = run_job("dep", tmp_path / "ours", progress=False)
+    run_ccx(tmp_path / "ccx", "dep", timeout=120)
+    u = result.last.displacement_of([9, 10, 14])
+    assert u[1, 2] == u[0, 2] and u[2, 2] == pytest.approx(u[0, 2], abs=1e-18)
+    ours, theirs = read_dat(tmp_path / "ours" / "dep.dat"), read_ccx_dat(tmp_path / "ccx", "dep")
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
+    for mine, reference in zip(ours, theirs):
+        scale = np.abs(reference.values).max()
+        assert np.abs(mine.values - reference.values).max() <= 1e-6 * scale, mine.name
