@@ -219,3 +219,13 @@ def test_dependent_slave_node_with_load_and_chain_matches_ccx(tmp_path):
     for mine, reference in zip(ours, theirs):
         scale = np.abs(reference.values).max()
         assert np.abs(mine.values - reference.values).max() <= 1e-6 * scale, mine.name
+
+
+@pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
+def test_equation_on_a_node_in_no_element_is_refused(tmp_path):
+    text = (CCX_TESTS / "contact1.inp").read_text()
+    text = text.replace("*ELEMENT, TYPE=C3D8", "      99, 0., 0., 2.\n*ELEMENT, TYPE=C3D8", 1)
+    text = text.replace("2\n9,3,1.,10,3,-1.\n", "2\n9,3,1.,99,3,-1.\n", 1)
+    (tmp_path / "ref.inp").write_text(text)
+    with pytest.raises(ValueError, match=r"ref.inp:\d+: \*EQUATION node 99 belongs to no element"):
+        run_job("ref", tmp_path, progress=False)
