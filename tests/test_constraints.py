@@ -229,3 +229,47 @@ def test_equation_on_a_node_in_no_element_is_refused(tmp_path):
     (tmp_path / "ref.inp").write_text(text)
     with pytest.raises(ValueError, match=r"ref.inp:\d+: \*EQUATION node 99 belongs to no element"):
         run_job("ref", tmp_path, progress=False)
+
+
+@pytest.mark.ccx
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
+def test_python_tie_matches_ccx_on_the_exported_deck(tmp_path):
+    """The punch with a tie solved in Python and by ccx on the deck write_inp exports."""
+    from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
+    from dolfinx_ntf.calculix.writer import BoundarySpec, PressureSpec, StepSpec, write_inp
+    from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
+
+    from conftest import LOWER_BOTTOM, POISSON_RATIO, YOUNGS_MODULUS
+
+    _, _, a, b = _two_nodes()
+    tie = LinearConstraint([a, b], [2, 2], [1.0, -1.0], name="tie")
+    problem, pressure, ft = punch_problem(constraints=[tie])
+    _solve(problem, pressure)
+    numbering = write_inp(
+        tmp_path / "tie.inp",
+        displacement_space=problem.u.function_space,
+        materials=(YOUNGS_MODULUS, POISSON_RATIO),
+        pairs=[problem.states[0].pair],
+        fixed=[
+            BoundarySpec(ntf.FacetSurface(ft, LOWER_BOTTOM)),
+            BoundarySpec(ntf.FacetSurface(ft, UPPER_TOP), components=(0, 1)),
+        ],
+        steps=[
+            StepSpec(
+                pressures=[PressureSpec(ntf.FacetSurface(ft, UPPER_TOP), 10.0)],
+                increments=2,
+                field_controls=TIGHT_FIELD_CONTROLS,
+            )
+        ],
+        constraints=[tie],
+    )
+    assert "*EQUATION" in (tmp_path / "tie.inp").read_text()
+    run_ccx(tmp_path, "tie", timeout=120)
+    last = [block for block in read_ccx_dat(tmp_path, "tie") if block.name == "U"][-1]
+    assert last.time == 1.0
+    ours = problem.u.x.array.reshape(-1, 3)
+    rows = np.searchsorted(last.labels, numbering.node_ids, sorter=np.argsort(last.labels))
+    theirs = last.values[np.argsort(last.labels)[rows]]
+    scale = np.abs(theirs).max()
+    assert np.abs(ours - theirs).max() < 1e-6 * scale
+    assert theirs[a, 2] == pytest.approx(theirs[b, 2], abs=1e-7 * scale)
