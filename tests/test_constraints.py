@@ -235,11 +235,11 @@ def test_equation_on_a_node_in_no_element_is_refused(tmp_path):
 @pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
 def test_python_tie_matches_ccx_on_the_exported_deck(tmp_path):
     """The punch with a tie solved in Python and by ccx on the deck write_inp exports."""
+    from conftest import LOWER_BOTTOM, POISSON_RATIO, YOUNGS_MODULUS
+
     from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
     from dolfinx_ntf.calculix.writer import BoundarySpec, PressureSpec, StepSpec, write_inp
     from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
-
-    from conftest import LOWER_BOTTOM, POISSON_RATIO, YOUNGS_MODULUS
 
     _, _, a, b = _two_nodes()
     tie = LinearConstraint([a, b], [2, 2], [1.0, -1.0], name="tie")
