@@ -94,14 +94,27 @@ def elimination_rows(
 ) -> tuple[np.ndarray, scipy.sparse.csr_matrix, np.ndarray]:
     """Dependent dofs ``s`` and their rows: ``u[s] = M @ u + g`` with no dependent column in M.
 
+    See :func:`_elimination` (``g`` from the constraints' values).
+    """
+    s, M, G = _elimination(num_dofs, constraints, prescribed)
+    return s, M, G @ np.array([c.value for c in constraints], dtype=float)
+
+
+def _elimination(
+    num_dofs: int,
+    constraints: typing.Sequence[LinearConstraint],
+    prescribed: np.ndarray | None = None,
+) -> tuple[np.ndarray, scipy.sparse.csr_matrix, scipy.sparse.csr_matrix]:
+    """Dependent dofs ``s`` and their rows: ``u[s] = M @ u + g`` with no dependent column in M.
+
     Args:
         num_dofs: Number of unrolled dofs.
         constraints: The constraints.
         prescribed: Unrolled dofs with a Dirichlet condition (never made dependent).
 
     Returns:
-        ``(s, M, g)``: dependent dofs in constraint order, ``(len(s), num_dofs)`` CSR rows and
-        offsets.
+        ``(s, M, G)``: dependent dofs in constraint order, ``(len(s), num_dofs)`` CSR rows and the
+        ``(len(s), len(constraints))`` map from the constraints' values to the offsets ``g``.
 
     Raises:
         ValueError: a constraint whose every dof is prescribed or dependent already (redundant or
@@ -111,13 +124,13 @@ def elimination_rows(
     if prescribed is not None and len(prescribed):
         fixed[np.asarray(prescribed, dtype=np.int64)] = True
     if not constraints:
-        return np.zeros(0, np.int64), scipy.sparse.csr_matrix((0, num_dofs)), np.zeros(0)
+        empty = scipy.sparse.csr_matrix((0, num_dofs))
+        return np.zeros(0, np.int64), empty, scipy.sparse.csr_matrix((0, 0))
     # all terms at once: constraint index, dof, coefficient; repeated dofs of a constraint summed
     sizes = np.array([c.nodes.size for c in constraints])
     owner = np.repeat(np.arange(len(constraints)), sizes)
     dofs = np.concatenate([c.dofs for c in constraints])
     coefficients = np.concatenate([c.coefficients for c in constraints])
-    values = np.array([c.value for c in constraints])
     if dofs.max() >= num_dofs:
         bad = int(owner[np.argmax(dofs >= num_dofs)])
         raise ValueError(f"{constraints[bad].label}: dof {int(dofs.max())} is outside the space")
@@ -155,7 +168,7 @@ def elimination_rows(
         (-merged[others] / a[term_owner[others]], (term_owner[others], term_dof[others])),
         shape=(s.size, num_dofs),
     )
-    g = values / a
+    G = scipy.sparse.diags(1.0 / a, format="csr")  # one dependent dof per constraint, in order
     # chains: a dependent dof on the right-hand side of another constraint is substituted, round
     # by round (as many rounds as the longest chain); a cycle is refused first
     chained = M[:, s]
@@ -172,12 +185,12 @@ def elimination_rows(
     independent = scipy.sparse.diags((~np.isin(np.arange(num_dofs), s)).astype(float))
     while chained.nnz:
         M = (M @ independent + chained @ M).tocsr()
-        g = g + chained @ g
+        G = (G + chained @ G).tocsr()
         chained = M[:, s]
         chained.eliminate_zeros()
     M.sum_duplicates()
     M.eliminate_zeros()
-    return s, M, g
+    return s, M, G
 
 
 class ConstraintElimination:
@@ -202,7 +215,10 @@ class ConstraintElimination:
                 f"linear constraints run on one process only for now (got {comm.size} processes)"
             )
         self.prescribed = np.unique(np.asarray(prescribed, dtype=np.int64))
-        self.slaves, rows, self.offsets = elimination_rows(num_dofs, constraints, self.prescribed)
+        self.slaves, rows, self._values_to_offsets = _elimination(
+            num_dofs, constraints, self.prescribed
+        )
+        self.offsets = self._values_to_offsets @ np.array([c.value for c in constraints], float)
         n = num_dofs
         identity = np.ones(n)
         identity[self.slaves] = 0.0
@@ -213,8 +229,6 @@ class ConstraintElimination:
         T = (scipy.sparse.diags(identity) + embed @ rows).tocsr()
         self._T = _petsc(T, comm)  # u = T u + g: back-substitution
         self._Tp = _petsc((T + scipy.sparse.diags(1.0 - identity)).tocsr(), comm)  # T'
-        self._g = np.zeros(n)
-        self._g[self.slaves] = self.offsets
         self._work = self._T.createVecLeft()
         self._eliminated = np.union1d(self.slaves, self.prescribed).astype(PETSc.IntType)
         self._reduced: PETSc.Mat | None = None
@@ -224,6 +238,10 @@ class ConstraintElimination:
     def num_constraints(self) -> int:
         """Number of eliminated (dependent) dofs."""
         return int(self.slaves.size)
+
+    def set_values(self, values: np.ndarray) -> None:
+        """New right-hand sides of the constraints (in their order), e.g. prescribed by time."""
+        self.offsets = self._values_to_offsets @ np.asarray(values, dtype=float)
 
     def back_substitute(self, x: PETSc.Vec) -> None:
         """Dependent dofs of ``x`` from the independent ones: ``x = T x + g``."""

@@ -221,14 +221,58 @@ def test_dependent_slave_node_with_load_and_chain_matches_ccx(tmp_path):
         assert np.abs(mine.values - reference.values).max() <= 1e-6 * scale, mine.name
 
 
-@pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
-def test_equation_on_a_node_in_no_element_is_refused(tmp_path):
+def _reference_node_deck(boundary: str) -> str:
+    """contact1 whose upper cube's top is tied in z to node 99, in no element, by *EQUATION."""
     text = (CCX_TESTS / "contact1.inp").read_text()
-    text = text.replace("*ELEMENT, TYPE=C3D8", "      99, 0., 0., 2.\n*ELEMENT, TYPE=C3D8", 1)
-    text = text.replace("2\n9,3,1.,10,3,-1.\n", "2\n9,3,1.,99,3,-1.\n", 1)
-    (tmp_path / "ref.inp").write_text(text)
-    with pytest.raises(ValueError, match=r"ref.inp:\d+: \*EQUATION node 99 belongs to no element"):
+    text = text.replace("*ELEMENT, TYPE=C3D8", "      99, 0.5, 0.5, 1.5\n*ELEMENT, TYPE=C3D8", 1)
+    text = text.replace(
+        "*NSET,NSET=Nfix \n1, \n2, \n5, \n6, \n11, \n12, \n15, \n16, \n",
+        "*NSET,NSET=Nfix \n1, \n2, \n5, \n6, \n*NSET,NSET=Ntop\n11,12,15,16\n",
+    )
+    text = text.replace("Nfix,1,3\n", "Nfix,1,3\nNtop,1,2\n")
+    ties = "".join(f"2\n{n},3,1.,99,3,-1.\n" for n in (11, 12, 15, 16))
+    text = text.replace("*MATERIAL,NAME=EL", ties + "*MATERIAL,NAME=EL")
+    text = text.replace("*CLOAD\n10,3,-1.\n", boundary)
+    return text.replace("*STATIC\n", "*STATIC\n0.5,1.\n")
+
+
+@pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
+def test_free_or_loaded_reference_node_is_refused(tmp_path):
+    (tmp_path / "ref.inp").write_text(_reference_node_deck(""))
+    with pytest.raises(ValueError, match=r"ref.inp:\d+: node 99 belongs to no element and its "
+                       r"direction 3 has no \*BOUNDARY in step 1"):  # fmt: skip
         run_job("ref", tmp_path, progress=False)
+    (tmp_path / "ref.inp").write_text(_reference_node_deck("*CLOAD\n99,3,-1.\n"))
+    with pytest.raises(ValueError, match=r"node 99 belongs to no element and carries a \*CLOAD"):
+        run_job("ref", tmp_path, progress=False)
+
+
+@pytest.mark.ccx
+@pytest.mark.skipif(
+    shutil.which("ccx") is None or not CCX_TESTS.is_dir(),
+    reason="needs ccx and the package calculix-ccx-test",
+)
+def test_prescribed_reference_node_matches_ccx(tmp_path):
+    """Face nodes tied to a reference node whose displacement is prescribed: its value becomes the
+    constraints' right-hand side; ccx prints it as the node's displacement."""
+    from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
+
+    text = _reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n")
+    for where in ("ours", "ccx"):
+        (tmp_path / where).mkdir()
+        (tmp_path / where / "ref.inp").write_text(text)
+    result = run_job("ref", tmp_path / "ours", progress=False)
+    run_ccx(tmp_path / "ccx", "ref", timeout=120)
+    np.testing.assert_array_equal(result.last.displacement_of([11, 12, 15, 16])[:, 2], -1e-6)
+    ours, theirs = read_dat(tmp_path / "ours" / "ref.dat"), read_ccx_dat(tmp_path / "ccx", "ref")
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
+    for mine, reference in zip(ours, theirs):
+        # the first increment to round-off; the second within ccx's default controls (ccx needs
+        # 11 iterations there, we 3)
+        bound = 1e-12 if mine.time == 0.5 else 1e-3
+        scale = np.abs(reference.values).max()
+        assert np.abs(mine.values - reference.values).max() <= bound * scale, mine.name
+    assert read_dat(tmp_path / "ours" / "ref.dat")[0].rows[-1][1:] == (0.0, 0.0, -5e-7)
 
 
 @pytest.mark.ccx

@@ -247,6 +247,8 @@ class _Job:
         self.sta = StaFile(directory / f"{jobname}.sta")
         self.cvg = CvgFile(directory / f"{jobname}.cvg")
         self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
+        #: Prescribed displacement components of nodes in no element (keys, values).
+        self._reference = (np.zeros(0, np.int64), np.zeros(0))
         self._step_time = 0.0
 
     # -- forces ------------------------------------------------------------------------------------
@@ -406,6 +408,10 @@ class _Job:
                     f"({step.location})"
                 )
             model.set_time(index, t)
+            values = model.constraint_values(index, t)  # reference nodes of *EQUATION
+            if values is not None and self.problem.elimination is not None:
+                self.problem.elimination.set_values(values)
+            self._reference = model.reference_displacements(index, t)
 
         def on_increment(result: IncrementResult) -> None:
             number, increment, attempt, _, size, _ = self._attempt
@@ -488,10 +494,10 @@ class _Job:
             ids = self.deck.node_ids
             if request.set is not None:
                 ids = np.unique(self.deck.nsets[request.set])
-            blocks.append(
-                FrdBlock(name, (), step.number, increment, total, ids,
-                         self.model.nodal_values(ids, values))
-            )  # fmt: skip
+            values = self.model.nodal_values(ids, values)
+            if name == "DISP":
+                values = self._with_reference(ids, values)
+            blocks.append(FrdBlock(name, (), step.number, increment, total, ids, values))
 
         if ("NODE", "U") in keys:
             node_block("DISP", keys["NODE", "U"], self.model.u.x.array.reshape(-1, 3))
@@ -508,6 +514,18 @@ class _Job:
                 values[:, 3] = np.concatenate([r.pressure for r in contact])
             blocks.append(FrdBlock("CONTACT", (), step.number, increment, total, nodes, values))
         return blocks
+
+    def _with_reference(self, ids: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """``values (n, 3)`` of nodes ``ids``, reference nodes at their prescribed displacement."""
+        keys, known = self._reference
+        if keys.size == 0:
+            return values
+        wanted = 3 * self.deck.node_index(ids)[:, None] + np.arange(3)
+        pos = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
+        hit = keys[pos] == wanted
+        values = values.copy()
+        values[hit] = known[pos[hit]]
+        return values
 
     def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
         """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).
@@ -539,6 +557,8 @@ class _Job:
                     if key == "RF" and forces is None:
                         forces = self.internal_forces()
                     values = self.model.nodal_values(ids, displacement if key == "U" else forces)
+                    if key == "U":
+                        values = self._with_reference(ids, values)
                     blocks += node_print_blocks(
                         key, request.set, total, ids, values, totals=request.totals
                     )

@@ -135,6 +135,9 @@ class StepLoads:
         pressure: History of each pressure group's pressure (see ``CalculixModel.pressures``).
         bc_dofs: ``(B,)`` sorted unrolled dofs of ``V`` with a prescribed displacement.
         bc: Prescribed-value history; ``bc.start`` is filled by :meth:`CalculixModel.begin_step`.
+        reference_keys: ``(R,)`` keys ``3 node row + component`` of the prescribed components of
+            nodes in no element (reference nodes of ``*EQUATION``); ``reference`` their history,
+            from their value at the end of the previous step.
     """
 
     step: Step
@@ -144,6 +147,8 @@ class StepLoads:
     pressure: _Schedule
     bc_dofs: np.ndarray
     bc: _Schedule
+    reference_keys: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    reference: _Schedule | None = None
 
     @property
     def period(self) -> float:
@@ -183,6 +188,8 @@ class CalculixModel:
         steps: Load schedule of every step.
         amplitude_names: Amplitude names by index.
         constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1).
+        reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
+            in no element, whose prescribed values move to the constraint's right-hand side.
     """
 
     deck: Deck
@@ -213,6 +220,7 @@ class CalculixModel:
     amplitude_names: list[str]
     _bc_spaces: list = field(default_factory=list, repr=False)
     constraints: list[LinearConstraint] = field(default_factory=list)
+    reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -286,6 +294,46 @@ class CalculixModel:
         for component, (_, inverse, g) in enumerate(self._bc_spaces):
             mask = loads.bc_dofs % 3 == component
             g.x.array[inverse[loads.bc_dofs[mask]]] = values[mask]
+
+    def reference_displacements(
+        self, step_index: int, step_time: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Prescribed components of nodes in no element at ``step_time``: keys and values.
+
+        Keys are ``3 node row + component``; ccx prints the values as the nodes' displacement.
+        """
+        loads = self.steps[step_index]
+        if loads.reference is None or loads.reference_keys.size == 0:
+            return np.zeros(0, np.int64), np.zeros(0)
+        total = loads.total_time_start + step_time
+        values = self._evaluate(loads.reference, step_time / loads.period, step_time, total)
+        return loads.reference_keys, values
+
+    def constraint_values(self, step_index: int, step_time: float) -> np.ndarray | None:
+        """Right-hand sides of ``constraints`` at ``step_time``: minus the reference-node terms.
+
+        None without reference nodes. A reference component without a prescribed value in the
+        step is a ``ValueError`` (it would need a dof outside the mesh).
+        """
+        if not self.reference_terms:
+            return None
+        loads = self.steps[step_index]
+        _, known = self.reference_displacements(step_index, step_time)
+        values = np.zeros(len(self.constraints))
+        for k, keys, coefficients in self.reference_terms:
+            given = loads.reference_keys
+            pos = np.minimum(np.searchsorted(given, keys), max(given.size - 1, 0))
+            missing = given[pos] != keys if given.size else np.ones(keys.size, dtype=bool)
+            if np.any(missing):
+                key = int(keys[missing][0])
+                node = int(self.deck.node_ids[key // 3])
+                raise ValueError(
+                    f"{self.constraints[k].name}: node {node} belongs to no element and its "
+                    f"direction {key % 3 + 1} has no *BOUNDARY in step {loads.step.number}: a "
+                    "free reference node is not supported (it needs a dof outside the mesh)"
+                )
+            values[k] = -float(np.dot(coefficients, known[pos]))
+        return values
 
     def _evaluate(
         self, schedule: _Schedule, fraction: float, step_time: float, total_time: float
@@ -750,6 +798,12 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
                 ),
                 bc_dofs=bc_dofs,
                 bc=_Schedule(np.zeros(bc_dofs.size), bc.ref[bc_keys], bc.amplitude[bc_keys]),
+                reference_keys=np.flatnonzero(bc_active & ~valid),
+                reference=_Schedule(
+                    bc.start[bc_active & ~valid],
+                    bc.ref[bc_active & ~valid],
+                    bc.amplitude[bc_active & ~valid],
+                ),
             )
         )
     return steps, names, pressure_tags, int(unique.shape[0])
@@ -816,6 +870,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
+    constraints, reference_terms = _constraints(deck, node_dof)
 
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
@@ -853,24 +908,41 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         steps=steps,
         amplitude_names=amplitude_names,
         _bc_spaces=bc_spaces,
-        constraints=_constraints(deck, node_dof),
+        constraints=constraints,
+        reference_terms=reference_terms,
     )
 
 
-def _constraints(deck: Deck, node_dof: np.ndarray) -> list[LinearConstraint]:
-    """``*EQUATION`` cards as constraints on the displacement dofs (ccx dofs 1..3 -> 0..2)."""
-    constraints = []
+def _constraints(
+    deck: Deck, node_dof: np.ndarray
+) -> tuple[list[LinearConstraint], list[tuple[int, np.ndarray, np.ndarray]]]:
+    """``*EQUATION`` cards as constraints on the displacement dofs (ccx dofs 1..3 -> 0..2).
+
+    Terms on nodes in no element (reference nodes) are returned apart, as ``(constraint, keys
+    3 node row + component, coefficients)``: their prescribed values become right-hand sides.
+    """
+    constraints, reference_terms = [], []
+    loaded = {int(n) for step in deck.steps for card in step.cloads for n in card.nodes}
     for equation in deck.equations:
-        dofs = node_dof[deck.node_index(equation.nodes)]
-        if np.any(dofs < 0):
-            node = int(equation.nodes[dofs < 0][0])
-            raise ValueError(f"{equation.location}: *EQUATION node {node} belongs to no element")
+        rows = deck.node_index(equation.nodes)
+        dofs = node_dof[rows]
+        mesh = dofs >= 0
+        name = f"*EQUATION at {equation.location}"
+        if not np.any(mesh):
+            raise ValueError(f"{equation.location}: *EQUATION: no node of it belongs to an element")
+        for node in equation.nodes[~mesh]:
+            if int(node) in loaded:
+                raise ValueError(
+                    f"{equation.location}: *EQUATION node {int(node)} belongs to no element and "
+                    "carries a *CLOAD: a loaded reference node is not supported (it needs a dof "
+                    "outside the mesh)"
+                )
+        if not np.all(mesh):
+            keys = 3 * rows[~mesh] + equation.dofs[~mesh] - 1
+            reference_terms.append((len(constraints), keys, equation.coefficients[~mesh].copy()))
         constraints.append(
             LinearConstraint(
-                dofs,
-                equation.dofs - 1,
-                equation.coefficients,
-                name=f"*EQUATION at {equation.location}",
+                dofs[mesh], equation.dofs[mesh] - 1, equation.coefficients[mesh], name=name
             )
         )
-    return constraints
+    return constraints, reference_terms
