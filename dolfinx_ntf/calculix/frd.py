@@ -72,7 +72,7 @@ class FrdBlock:
 
     Attributes:
         name: ``DISP``, ``FORC``, ``STRESS``, ``CONTACT`` (or any name ccx writes, when read).
-        components: Component names in column order.
+        components: Component names in column order (read blocks; the writer knows them).
         step, increment: 1-based step and increment numbers (``1PSTEP`` record).
         time: Total time.
         nodes: ``(n,)`` node numbers.

@@ -399,14 +399,14 @@ class _Job:
             self.solver.increment_start = model.u.x.array.copy()
             self._failed_attempt()
             self.counters.attempt += 1
-            c = self.counters
-            start = self._step_time
-            self._attempt = (step.number, c.increment, c.attempt, start, t - start, index)
             if self.counters.increment > step.max_increments:
                 raise ContactConvergenceError(
                     f"the step needs more than INC={step.max_increments} increments "
                     f"({step.location})"
                 )
+            c = self.counters
+            start = self._step_time
+            self._attempt = (step.number, c.increment, c.attempt, start, t - start, index)
             model.set_time(index, t)
             values = model.constraint_values(index, t)  # reference nodes of *EQUATION
             if values is not None and self.problem.elimination is not None:
