@@ -12,6 +12,7 @@ import logging
 import typing
 from dataclasses import dataclass, field
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -230,11 +231,17 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.elimination is not None:
             self.elimination.destroy()
             self.elimination, self.reduced_matrix = None, None
+        V = self.u.function_space
+        comm = V.mesh.comm
+        if comm.size > 1 and comm.allreduce(len(self.constraints), op=MPI.MAX):
+            raise NotImplementedError(
+                f"ContactProblem: linear constraints on {comm.size} MPI processes are not "
+                "supported yet; run on one process"
+            )
         if not self.constraints:
             return
         for c in self.constraints:
             validation.check_type(c, LinearConstraint, "ContactProblem: constraints")
-        V = self.u.function_space
         prescribed = [bc.dof_indices()[0] for bc in self.bcs]
         self.elimination = ConstraintElimination(
             self.u.x.array.size,
