@@ -247,8 +247,7 @@ class _Job:
         self.sta = StaFile(directory / f"{jobname}.sta")
         self.cvg = CvgFile(directory / f"{jobname}.cvg")
         self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
-        #: Prescribed displacement components of nodes in no element (keys, values).
-        self._reference = (np.zeros(0, np.int64), np.zeros(0))
+        self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
         self._step_time = 0.0
 
     # -- forces ------------------------------------------------------------------------------------
@@ -411,7 +410,7 @@ class _Job:
             values = model.constraint_values(index, t)  # reference nodes of *EQUATION
             if values is not None and self.problem.elimination is not None:
                 self.problem.elimination.set_values(values)
-            self._reference = model.reference_displacements(index, t)
+            self._load_time = (index, t)
 
         def on_increment(result: IncrementResult) -> None:
             number, increment, attempt, _, size, _ = self._attempt
@@ -517,7 +516,7 @@ class _Job:
 
     def _with_reference(self, ids: np.ndarray, values: np.ndarray) -> np.ndarray:
         """``values (n, 3)`` of nodes ``ids``, reference nodes at their prescribed displacement."""
-        keys, known = self._reference
+        keys, known = self.model.reference_displacements(*self._load_time)
         if keys.size == 0:
             return values
         wanted = 3 * self.deck.node_index(ids)[:, None] + np.arange(3)
