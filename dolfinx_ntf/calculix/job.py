@@ -511,7 +511,10 @@ class _Job:
             if contact:
                 values[:, 0] = np.concatenate([r.clearance for r in contact])
                 values[:, 3] = np.concatenate([r.pressure for r in contact])
-            blocks.append(FrdBlock("CONTACT", (), step.number, increment, total, nodes, values))
+            # ccx writes the contact elements in reverse order here (ascending in the .dat file)
+            blocks.append(
+                FrdBlock("CONTACT", (), step.number, increment, total, nodes[::-1], values[::-1])
+            )
         return blocks
 
     def _with_reference(self, ids: np.ndarray, values: np.ndarray) -> np.ndarray:
