@@ -6,7 +6,7 @@ PY := .venv/bin/python
 MPIRUN := mpirun --allow-run-as-root --oversubscribe -n 2
 RUFF_VERSION := 0.17.6
 
-.PHONY: setup demo lint test test-here test-other benchmark benchmark-ccx
+.PHONY: setup demo lint test test-here test-other benchmark benchmark-ccx ccx-suite
 setup:
 	bash scripts/setup.sh
 
@@ -35,3 +35,7 @@ benchmark: setup
 # dolfinx_ntf against ccx 2.20 on the same decks; writes docs/performance.md (about 15 minutes).
 benchmark-ccx: setup
 	$(PY) benchmarks/vs_ccx.py
+
+# ccx 2.20 against dolfinx-ntf run on every node-to-surface deck of CalculiX's test suite (a table).
+ccx-suite: setup
+	$(PY) benchmarks/ccx_suite.py

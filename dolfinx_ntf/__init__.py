@@ -10,6 +10,7 @@ __version__ = "0.1.0"
 
 from dolfinx_ntf import logs as _logs
 from dolfinx_ntf.dynamics import DynamicStep, kinetic_energy
+from dolfinx_ntf.constraints import LinearConstraint
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import (
     DynamicLinearLaw,
@@ -52,6 +53,7 @@ __all__ = [
     "FacetSurface",
     "Friction",
     "IncrementResult",
+    "LinearConstraint",
     "LinearLaw",
     "NodeSurface",
     "PressureOverclosureLaw",

@@ -100,7 +100,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f" *ERROR: {error}", file=sys.stderr)
         return EXIT_INPUT
     print(
-        f" Wrote {result.dat}" + (f", {result.cel}" if result.cel else "") + f" and {result.xdmf} "
+        f" Wrote {result.dat}" + (f", {result.cel}" if result.cel else "") + f", {result.frd} "
+        f"(.sta, .cvg) and {result.xdmf} "
         f"({len(result.increments)} increments, {result.wall_time:.1f} s)"
     )
     return EXIT_OK

@@ -12,6 +12,7 @@ import logging
 import typing
 from dataclasses import dataclass, field
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -23,6 +24,7 @@ import ufl
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
+from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
@@ -149,6 +151,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             holds it within the search tolerance, which stops the face ping-pong of nodes on
             shared edges during re-pairing. False reproduces CalculiX's search (the deck runner's
             default).
+        constraints: Linear multi-point constraints (CalculiX ``*EQUATION``), enforced by
+            elimination (docs/method.md §13.1); one process only.
         element_forces: Linear form in the test function of ``F`` whose element vectors are the
             element nodal forces averaged by the convergence test
             (:meth:`average_element_force`); default ``F`` itself (CalculiX uses the internal
@@ -169,6 +173,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
         element_forces: ufl.Form | None = None,
+        constraints: typing.Sequence[LinearConstraint] = (),
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -221,6 +226,35 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         #: the absolute values of their nodal forces and how many there are, owned entries, for
         #: :meth:`average_element_force`).
         self.extra_terms: list[typing.Any] = []
+        self.constraints = list(constraints)
+        self.elimination: ConstraintElimination | None = None
+        #: The reduced Jacobian the linear solver uses when there are constraints.
+        self.reduced_matrix: PETSc.Mat | None = None
+        self._eliminate()
+
+    def _eliminate(self) -> None:
+        """(Re)build the elimination of the constraints for the current Dirichlet conditions."""
+        if self.elimination is not None:
+            self.elimination.destroy()
+            self.elimination, self.reduced_matrix = None, None
+        V = self.u.function_space
+        comm = V.mesh.comm
+        if comm.size > 1 and comm.allreduce(len(self.constraints), op=MPI.MAX):
+            raise NotImplementedError(
+                f"ContactProblem: linear constraints on {comm.size} MPI processes are not "
+                "supported yet; run on one process"
+            )
+        if not self.constraints:
+            return
+        for c in self.constraints:
+            validation.check_type(c, LinearConstraint, "ContactProblem: constraints")
+        prescribed = [bc.dof_indices()[0] for bc in self.bcs]
+        self.elimination = ConstraintElimination(
+            self.u.x.array.size,
+            self.constraints,
+            np.concatenate(prescribed) if prescribed else np.zeros(0, np.int64),
+            V.mesh.comm,
+        )
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
@@ -554,6 +588,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def form(self, x: PETSc.Vec) -> None:
         """Before F: update ghost values and evaluate the springs of the current pairing."""
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        if self.elimination is not None:
+            self.elimination.back_substitute(x)
         self._blocks = self.evaluate(tangent=True)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
@@ -574,6 +610,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         for term in self.extra_terms:
             term.add_to_residual(x, b)
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
+        if self.elimination is not None:
+            self.elimination.reduce_vector(
+                b, lambda r: dolfinx.fem.petsc.set_bc(r, self.bcs, x, -1.0)
+            )
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """Start Newton iteration ``iteration``: re-pair on schedule, assemble the Jacobian.
@@ -599,6 +639,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         A.assemble()
         for term in self.extra_terms:
             term.add_to_jacobian(x, A)
+        if self.elimination is not None:
+            key = (id(A), self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
+            self.reduced_matrix = self.elimination.reduce_matrix(A, key)
 
     def destroy(self) -> None:
         """Destroy the PETSc matrix the problem owns (the Jacobian). Collective.
@@ -609,6 +652,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.matrix is not None:
             self.matrix.destroy()
             self.matrix = None
+        if self.elimination is not None:
+            self.elimination.release()
+            self.reduced_matrix = None
 
     def __enter__(self) -> ContactProblem:
         return self
@@ -623,6 +669,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """
         self.bcs = list(bcs)
         self.assembler.set_bcs(self.bcs)
+        self._eliminate()
 
 
 def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict) -> compat.Form:

@@ -211,6 +211,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.report = False
         self.updates = 0
         self.residual_norms: list[float] = []
+        #: Per Newton update of the current solve: (update, springs, largest residual force,
+        #: mean average force, largest correction, largest displacement change in the increment).
+        self.history: list[tuple[int, int, float, float, float, float]] = []
         ksp = self.krylov_solver
         ksp.setOptionsPrefix(options_prefix)
         self._check_symmetry = symmetric
@@ -259,6 +262,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         if self.problem.assembler.pattern_merges != merges:
             ksp.getPC().reset()
             ksp.setOperators(A, A)
+        reduced = self.problem.reduced_matrix  # constraints: solve the reduced system
+        if reduced is not None:
+            if reduced.handle != ksp.getOperators()[0].handle:
+                ksp.getPC().reset()
+            ksp.setOperators(reduced, reduced)
 
     def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
         """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
@@ -326,6 +334,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         else:
             c1 = controls["R_n"] if self.updates <= self.relaxation_iteration else controls["R_p"]
             c2 = controls["C_n"]
+        self.history.append(
+            (self.updates, self.problem.num_springs, largest, mean, correction, change)
+        )
         estimate = np.inf
         if self.updates >= 3 and min(self._largest[-3:-1]) > 0:
             estimate = largest * correction / min(self._largest[-3:-1])
@@ -431,6 +442,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             )
         self.residual_norms = []
         self.step_lengths = []
+        self.history = []
         self._averages, self._largest = [], []
         self.extra_pairings = 0
         max_it = self.max_it

@@ -286,8 +286,9 @@ def test_external_faces_skip_shared_face(tmp_path):
 BAD_DECKS = [
     ("element type", ("*ELEMENT, TYPE=C3D8, ELSET=EALL", "*ELEMENT, TYPE=C3D20R, ELSET=EALL"),
      "TYPE=C3D20R", r"element type C3D20R is not supported"),
-    ("equation", ("*MATERIAL, NAME=STEEL", "*EQUATION\n2\n5,1,1.,6,1,-1.\n*MATERIAL, NAME=STEEL"),
-     "*EQUATION", r"\*EQUATION is not supported yet"),
+    ("equation", ("*MATERIAL, NAME=STEEL",
+                  "*EQUATION\n2\n5,1,1.,6,1,-1.,7,1,1.\n*MATERIAL, NAME=STEEL"),
+     "5,1,1.,6,1,-1.,7,1,1.\n", r"\*EQUATION: 2 terms \(node, dof, coefficient\) expected"),
     ("tie", ("*STEP", "*TIE, NAME=T1\nSLAVE, MASTER\n*STEP"), "*TIE",
      r"\*TIE is not supported yet"),
     ("rigid body", ("*STEP", "*RIGID BODY, NSET=TOP, REF NODE=1\n*STEP"), "*RIGID BODY",

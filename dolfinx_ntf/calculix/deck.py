@@ -51,6 +51,7 @@ __all__ = [
     "Dynamic",
     "ElementBlock",
     "ElementType",
+    "Equation",
     "FileRequest",
     "Friction",
     "FrictionChange",
@@ -314,6 +315,19 @@ class Boundary:
 
 
 @dataclass(frozen=True, eq=False)
+class Equation:
+    """One ``*EQUATION``: ``sum coefficients[k] u[nodes[k], dofs[k]] = 0``, first term dependent.
+
+    ``dofs`` are 1..3 (docs/method.md §13.1).
+    """
+
+    nodes: np.ndarray
+    dofs: np.ndarray
+    coefficients: np.ndarray
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class CLoad:
     """One ``*CLOAD`` data line: force ``value`` in direction ``dof`` (1..3) on every node."""
 
@@ -549,6 +563,7 @@ class Deck:
         steps: the steps.
         ignored: ``(keyword, file, line)`` of output/control keywords that were skipped.
         warnings: every keyword and parameter skipped by ``LENIENCY``, in deck order.
+        equations: ``*EQUATION`` constraints (model definition), in deck order.
     """
 
     path: str
@@ -569,6 +584,7 @@ class Deck:
     ignored: tuple[tuple[str, str, int], ...]
     warnings: tuple[DeckWarning, ...] = ()
     initial_velocities: tuple[InitialVelocity, ...] = ()
+    equations: tuple[Equation, ...] = ()
 
     @property
     def num_elements(self) -> int:
@@ -801,7 +817,7 @@ _CANONICAL: dict[str, str] = {
 _UNSUPPORTED_CONSTRAINTS = {
     _name(k)
     for k in (
-        "EQUATION", "TIE", "RIGID BODY", "MPC", "NETWORK MPC", "COUPLING", "KINEMATIC",
+        "TIE", "RIGID BODY", "MPC", "NETWORK MPC", "COUPLING", "KINEMATIC",
         "DISTRIBUTING", "DISTRIBUTING COUPLING", "PRE-TENSION SECTION", "CLEARANCE", "GAP",
         "SPRING", "DASHPOT", "MASS", "TRANSFORM", "ORIENTATION", "CHANGE CONTACT TYPE",
         "CHANGE KINEMATIC", "CHANGE TIE", "CYCLIC SYMMETRY MODEL", "RETAINED NODAL DOFS",
@@ -880,7 +896,7 @@ _MODEL_KEYWORDS = {
     for k in (
         "NODE", "ELEMENT", "NSET", "ELSET", "SURFACE", "MATERIAL", "ELASTIC", "SOLID SECTION",
         "CONTACT PAIR", "SURFACE INTERACTION", "SURFACE BEHAVIOR", "DENSITY", "EXPANSION",
-        "CONDUCTIVITY", "SPECIFIC HEAT", "CONTACT DAMPING", "GAP CONDUCTANCE",
+        "CONDUCTIVITY", "SPECIFIC HEAT", "CONTACT DAMPING", "GAP CONDUCTANCE", "EQUATION",
         "INITIAL CONDITIONS",
     )
 }  # fmt: skip
@@ -959,6 +975,7 @@ class _Reader:
         self.amplitudes: dict[str, Amplitude] = {}
         self.boundaries: list[Boundary] = []
         self.initial_velocities: list[InitialVelocity] = []
+        self.equations: list[Equation] = []
         self.steps: list[Step] = []
         self.ignored: list[tuple[str, str, int]] = []
         self.warnings: list[DeckWarning] = []
@@ -1575,6 +1592,49 @@ class _Reader:
                 )
             )
 
+    def _k_EQUATION(self, card: _Card) -> None:
+        """Blocks of a term count line, then that many (node, dof, coefficient) triples."""
+        self._check_params(card, allowed=set())
+        self._need_data(card)
+        lines = iter(card.lines)
+        for fields, _, loc in lines:
+            fields = [f for f in fields if f != ""]
+            if len(fields) != 1:
+                raise DeckError("*EQUATION: a line with the number of terms is expected", loc)
+            count = self._int(fields[0], "number of terms", loc)
+            if count < 1:
+                raise DeckError(f"*EQUATION: number of terms must be >= 1, got {count}", loc)
+            tokens: list[str] = []
+            for more, _, more_loc in lines:
+                more = [f for f in more if f != ""]
+                if len(more) % 3 or len(tokens) + len(more) > 3 * count:
+                    raise DeckError(
+                        f"*EQUATION: {count} terms (node, dof, coefficient) expected; this line "
+                        f"has {len(more)} fields after {len(tokens) // 3} terms",
+                        more_loc,
+                    )
+                tokens += more
+                if len(tokens) == 3 * count:
+                    break
+            if len(tokens) != 3 * count:
+                raise DeckError(f"*EQUATION: {count} terms expected, the card ends before", loc)
+            nodes = []
+            for token in tokens[0::3]:
+                ids = self._nodes_of(token, card, loc)
+                if ids.size != 1:
+                    raise DeckError(
+                        f"*EQUATION: node set {token} has {ids.size} nodes, one is needed", loc
+                    )
+                nodes.append(int(ids[0]))
+            dofs = [self._dof(t, loc) for t in tokens[1::3]]
+            coefficients = [self._float(t, "coefficient", loc) for t in tokens[2::3]]
+            if coefficients[0] == 0.0:
+                raise DeckError("*EQUATION: the first (dependent) coefficient is zero", loc)
+            self.equations.append(Equation(
+                _frozen_array(nodes, np.int64), _frozen_array(dofs, np.int64),
+                _frozen_array(coefficients, np.float64), loc,
+            ))  # fmt: skip
+
     # -- steps ----------------------------------------------------------------------------------
 
     def _k_STEP(self, card: _Card) -> None:
@@ -1911,6 +1971,7 @@ class _Reader:
             ignored=tuple(self.ignored),
             warnings=tuple(self.warnings),
             initial_velocities=tuple(self.initial_velocities),
+            equations=tuple(self.equations),
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

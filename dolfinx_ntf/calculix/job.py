@@ -14,6 +14,10 @@ selects:
       (docs/method.md §8.5).
     - ``JOB.xdmf``: displacement, contact pressure, clearance and status (every converged
       increment).
+    - ``JOB.frd``: the mesh, and the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S) and ``*CONTACT FILE``
+      (CDIS, CSTR) results in ccx 2.20's ASCII layout (docs/method.md §13.2).
+    - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration, in ccx's format
+      (docs/method.md §13.3).
 
 Newton stops like ccx (manual "Convergence criteria"): the largest residual force component must
 fall below ``R_n`` (``*CONTROLS, PARAMETERS=FIELD``, default 0.005) times the average element force,
@@ -60,7 +64,9 @@ from dolfinx_ntf.solver import (
 from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
 from .deck import Deck, PrintRequest, Step, read_deck
+from .frd import FrdBlock, FrdWriter, nodal_extrapolation
 from .model import INTEGRATION_POINTS, CalculixModel, build_model
+from .progress import CvgFile, StaFile
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -163,6 +169,7 @@ class JobResult:
     dat: Path | None = None
     cel: Path | None = None
     xdmf: Path | None = None
+    frd: Path | None = None
     completed: bool = False
     wall_time: float = 0.0
 
@@ -240,6 +247,13 @@ class _Job:
         self._static_interactions = [pair.interaction for pair in model.pairs]
         self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
         self.acceleration: dolfinx.fem.Function | None = None
+        self.result.frd = directory / f"{jobname}.frd"
+        self.frd = _frd_writer(self.result.frd, deck, model)
+        self.sta = StaFile(directory / f"{jobname}.sta")
+        self.cvg = CvgFile(directory / f"{jobname}.cvg")
+        self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
+        self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
+        self._step_time = 0.0
 
     # -- forces ------------------------------------------------------------------------------------
 
@@ -346,6 +360,7 @@ class _Job:
             self.result.completed = True
             logger.info("\n Job finished\n")
         except ContactConvergenceError as error:
+            self._failed_attempt()
             message = (
                 f"step {self.counters.step}, increment {self.counters.increment}, attempt "
                 f"{self.counters.attempt}: no convergence: {error}"
@@ -354,6 +369,7 @@ class _Job:
             raise JobError(message, exit_code=2, result=self.result) from error
         finally:
             self.writer.close()
+            self.frd.close()
         return self.result
 
     def _run_step(self, index: int, step: Step) -> None:
@@ -388,20 +404,14 @@ class _Job:
         # ccx 2.20 raises a missing or smaller minimum to 1e-6 of the period (with a warning)
         minimum = min(max(static.minimum or 0.0, 1e-6 * period), initial)
 
+        self._step_time = 0.0
+
         def set_load(t: float) -> None:
             self.solver.increment_start = model.u.x.array.copy()
-            self.counters.attempt += 1
-            if self.counters.increment > step.max_increments:
-                raise ContactConvergenceError(
-                    f"the step needs more than INC={step.max_increments} increments "
-                    f"({step.location})"
-                )
-            model.set_time(index, t)
+            self._begin_attempt(index, step, t)
 
         def on_increment(result: IncrementResult) -> None:
-            self._converged(index, step, result)
-            self.counters.increment += 1
-            self.counters.attempt = 0
+            self._end_attempt(index, step, result)
 
         driver = StaticStep(
             set_load,
@@ -438,20 +448,16 @@ class _Job:
         # ccx's default minimum: the initial increment or 1e-5 of the period, the smaller
         minimum = min(increments.minimum or min(initial, 1e-5 * period), initial)
 
+        self._step_time = 0.0
+
         def set_load(t: float) -> None:
             if t > 0.0:
-                self.counters.attempt += 1
-                if self.counters.increment > step.max_increments:
-                    raise ContactConvergenceError(
-                        f"the step needs more than INC={step.max_increments} increments "
-                        f"({step.location})"
-                    )
-            model.set_time(index, t, ramp=False)  # ccx: full loads from the step start
+                self._begin_attempt(index, step, t, ramp=False)
+            else:
+                model.set_time(index, t, ramp=False)  # ccx: full loads from the step start
 
         def on_increment(result: IncrementResult) -> None:
-            self._converged(index, step, result)
-            self.counters.increment += 1
-            self.counters.attempt = 0
+            self._end_attempt(index, step, result)
 
         driver = DynamicStep(
             _mass_form(self.deck, model),
@@ -467,6 +473,46 @@ class _Job:
             on_increment=on_increment,
         )
         driver.run(self.solver, model.u)
+
+    def _begin_attempt(self, index: int, step: Step, t: float, *, ramp: bool = True) -> None:
+        """Count an attempt at step time ``t``, set its loads and open its ``.sta`` row."""
+        self._failed_attempt()
+        self.counters.attempt += 1
+        if self.counters.increment > step.max_increments:
+            raise ContactConvergenceError(
+                f"the step needs more than INC={step.max_increments} increments ({step.location})"
+            )
+        c = self.counters
+        start = self._step_time
+        self._attempt = (step.number, c.increment, c.attempt, start, t - start, index)
+        self.model.set_time(index, t, ramp=ramp)
+        values = self.model.constraint_values(index, t)  # reference nodes of *EQUATION
+        if values is not None and self.problem.elimination is not None:
+            self.problem.elimination.set_values(values)
+        self._load_time = (index, t)
+
+    def _end_attempt(self, index: int, step: Step, result: IncrementResult) -> None:
+        """Write the converged attempt's ``.sta``/``.cvg`` rows and its printed results."""
+        number, increment, attempt, _, size, _ = self._attempt
+        self.sta.row(number, increment, attempt, True, result.iterations,
+                     self.model.total_time(index, result.time), result.time, size)  # fmt: skip
+        self.cvg.rows(number, increment, attempt, self.solver.history)
+        self._attempt = None
+        self._step_time = result.time
+        self._converged(index, step, result)
+        self.counters.increment += 1
+        self.counters.attempt = 0
+
+    def _failed_attempt(self) -> None:
+        """The ``.sta``/``.cvg`` rows of an attempt that did not converge (times at its start)."""
+        if self._attempt is None:
+            return
+        number, increment, attempt, start, size, index = self._attempt
+        history = self.solver.history
+        self.sta.row(number, increment, attempt, False, len(history),
+                     self.model.total_time(index, start), start, size)  # fmt: skip
+        self.cvg.rows(number, increment, attempt, history)
+        self._attempt = None
 
     def _converged(self, index: int, step: Step, result: IncrementResult) -> None:
         model = self.model
@@ -500,6 +546,74 @@ class _Job:
         last = result.time_fraction >= 1 - 1e-12
         if frequency > 0 and (result.increment % frequency == 0 or last):
             write_dat(self.result.dat, self._blocks(step, total, contact), append=True)
+            for block in self._frd_blocks(step, result.increment, total, contact):
+                self.frd.write(block)
+
+    def _frd_blocks(
+        self, step: Step, increment: int, total: float, contact: list[ContactRows]
+    ) -> list[FrdBlock]:
+        """The ``.frd`` blocks of the file requests, in ccx's order: DISP, STRESS, FORC, CONTACT."""
+        keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
+        blocks = []
+
+        def node_block(name: str, request, values: np.ndarray) -> None:
+            ids = self.deck.node_ids
+            if request.set is not None:
+                ids = np.unique(self.deck.nsets[request.set])
+            values = self.model.nodal_values(ids, values)
+            if name == "DISP":
+                values = self._with_reference(ids, values)
+            blocks.append(FrdBlock(name, (), step.number, increment, total, ids, values))
+
+        if ("NODE", "U") in keys:
+            node_block("DISP", keys["NODE", "U"], self.model.u.x.array.reshape(-1, 3))
+        if ("EL", "S") in keys:
+            nodes, values = self.nodal_stresses()
+            blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
+        if ("NODE", "RF") in keys:
+            node_block("FORC", keys["NODE", "RF"], self.internal_forces())
+        if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
+            nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
+            values = np.zeros((nodes.size, 6))
+            if contact:
+                values[:, 0] = np.concatenate([r.clearance for r in contact])
+                values[:, 3] = np.concatenate([r.pressure for r in contact])
+            # ccx writes the contact elements in reverse order here (ascending in the .dat file)
+            blocks.append(
+                FrdBlock("CONTACT", (), step.number, increment, total, nodes[::-1], values[::-1])
+            )
+        return blocks
+
+    def _with_reference(self, ids: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """``values (n, 3)`` of nodes ``ids``, reference nodes at their prescribed displacement."""
+        keys, known = self.model.reference_displacements(*self._load_time)
+        if keys.size == 0:
+            return values
+        wanted = 3 * self.deck.node_index(ids)[:, None] + np.arange(3)
+        pos = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
+        hit = keys[pos] == wanted
+        values = values.copy()
+        values[hit] = known[pos[hit]]
+        return values
+
+    def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
+        """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).
+
+        Integration-point values extrapolated to each element's nodes, averaged over the elements
+        around a node (docs/method.md §13.2).
+        """
+        block = self.deck.elements[self.model.element_type.name]
+        points = INTEGRATION_POINTS[self.model.element_type.name]
+        extrapolate = nodal_extrapolation(self.model.element_type.name, points)
+        at_nodes = np.einsum("nq,eqk->enk", extrapolate, self.stresses(block.ids))
+        index = self.deck.node_index(block.connectivity)
+        total = np.zeros((self.deck.node_ids.size, 6))
+        count = np.zeros(self.deck.node_ids.size)
+        np.add.at(total, index, at_nodes)
+        np.add.at(count, index, 1.0)
+        used = count > 0
+        values = total[used] / count[used, None]
+        return self.deck.node_ids[used], values[:, [0, 1, 2, 3, 5, 4]]
 
     def _blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
         blocks: list[DatBlock] = []
@@ -512,6 +626,8 @@ class _Job:
                     if key == "RF" and forces is None:
                         forces = self.internal_forces()
                     values = self.model.nodal_values(ids, displacement if key == "U" else forces)
+                    if key == "U":
+                        values = self._with_reference(ids, values)
                     blocks += node_print_blocks(
                         key, request.set, total, ids, values, totals=request.totals
                     )
@@ -588,6 +704,28 @@ def _initial_velocity(deck: Deck, model: CalculixModel) -> dolfinx.fem.Function:
     return velocity
 
 
+def _frd_writer(path: Path, deck: Deck, model: CalculixModel) -> FrdWriter:
+    """The ``.frd`` file with the deck's mesh (ccx writes it for every job)."""
+    block = deck.elements[model.element_type.name]
+    materials = list(deck.materials)
+    index = dict(zip(materials, range(1, len(materials) + 1)))
+    element_material = np.zeros(block.ids.size, dtype=np.int64)
+    position = {int(e): k for k, e in enumerate(block.ids)}
+    for section in deck.sections:
+        for element in deck.elsets[section.elset]:
+            element_material[position[int(element)]] = index[section.material]
+    return FrdWriter(
+        path,
+        deck.node_ids,
+        deck.node_coords,
+        block.ids,
+        model.element_type.name,
+        block.connectivity,
+        element_material,
+        materials + list(deck.interactions),
+    )
+
+
 def _check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
@@ -597,6 +735,17 @@ def _check_requests(deck: Deck) -> None:
                 if key not in supported[request.kind]:
                     raise NotImplementedError(
                         f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
+                    )
+    written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
+    for step in deck.steps:
+        for request in step.file_requests:
+            for key in request.keys:
+                if key not in written[request.kind]:
+                    logger.warning(
+                        " *WARNING: %s key %s is not written to the .frd file (%s)",
+                        request.keyword,
+                        key,
+                        request.location,
                     )
 
 

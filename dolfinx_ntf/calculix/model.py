@@ -47,6 +47,7 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.constraints import LinearConstraint
 from dolfinx_ntf.laws import (
     ExponentialLaw,
     LinearLaw,
@@ -134,6 +135,10 @@ class StepLoads:
         pressure: History of each pressure group's pressure (see ``CalculixModel.pressures``).
         bc_dofs: ``(B,)`` sorted unrolled dofs of ``V`` with a prescribed displacement.
         bc: Prescribed-value history; ``bc.start`` is filled by :meth:`CalculixModel.begin_step`.
+        reference_keys: ``(R,)`` keys ``3 node row + component`` of the prescribed components of
+            nodes in no element (reference nodes of ``*EQUATION``); ``reference`` their history,
+            from their value at the end of the previous step; ``reference_force_keys`` and
+            ``reference_force`` likewise for their ``*CLOAD`` forces.
     """
 
     step: Step
@@ -143,6 +148,10 @@ class StepLoads:
     pressure: _Schedule
     bc_dofs: np.ndarray
     bc: _Schedule
+    reference_keys: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    reference: _Schedule | None = None
+    reference_force_keys: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    reference_force: _Schedule | None = None
 
     @property
     def period(self) -> float:
@@ -181,6 +190,10 @@ class CalculixModel:
             with value ``group + 1``.
         steps: Load schedule of every step.
         amplitude_names: Amplitude names by index.
+        constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1).
+        reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
+            in no element, whose prescribed values move to the constraint's right-hand side.
+        free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
     """
 
     deck: Deck
@@ -210,6 +223,9 @@ class CalculixModel:
     steps: list[StepLoads]
     amplitude_names: list[str]
     _bc_spaces: list = field(default_factory=list, repr=False)
+    constraints: list[LinearConstraint] = field(default_factory=list)
+    reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
+    free_references: list[FreeReference] = field(default_factory=list)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -279,6 +295,14 @@ class CalculixModel:
         self.nodal_loads.x.array[loads.cload_dofs] = self._evaluate(
             loads.cload, fraction, step_time, total
         )
+        if self.free_references and loads.reference_force_keys.size:
+            forces = self._evaluate(loads.reference_force, fraction, step_time, total)
+            by_key = dict(zip(loads.reference_force_keys.tolist(), forces))
+            for ref in self.free_references:  # virtual work of the force on the reference node
+                if ref.key in by_key:
+                    np.add.at(
+                        self.nodal_loads.x.array, ref.mesh_dofs, by_key[ref.key] * ref.mesh_weights
+                    )
         for constant, value in zip(
             self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
         ):
@@ -287,6 +311,62 @@ class CalculixModel:
         for component, (_, inverse, g) in enumerate(self._bc_spaces):
             mask = loads.bc_dofs % 3 == component
             g.x.array[inverse[loads.bc_dofs[mask]]] = values[mask]
+
+    def reference_displacements(
+        self, step_index: int, step_time: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Prescribed components of nodes in no element at ``step_time``: keys and values.
+
+        Keys are ``3 node row + component``; ccx prints the values as the nodes' displacement.
+        """
+        loads = self.steps[step_index]
+        keys, values = np.zeros(0, np.int64), np.zeros(0)
+        if loads.reference is not None and loads.reference_keys.size:
+            total = loads.total_time_start + step_time
+            keys = loads.reference_keys
+            values = self._evaluate(loads.reference, step_time / loads.period, step_time, total)
+        if not self.free_references:
+            return keys, values
+        known = dict(zip(keys.tolist(), values))
+        free = []
+        for ref in self.free_references:
+            u = float(np.dot(ref.mesh_weights, self.u.x.array[ref.mesh_dofs]))
+            u += sum(
+                w * known.get(int(k), 0.0)
+                for k, w in zip(ref.reference_keys, ref.reference_weights)
+            )
+            free.append((ref.key, u))
+        keys = np.concatenate([keys, np.array([k for k, _ in free], dtype=np.int64)])
+        values = np.concatenate([values, [v for _, v in free]])
+        order = np.argsort(keys)
+        return keys[order], values[order]
+
+    def constraint_values(self, step_index: int, step_time: float) -> np.ndarray | None:
+        """Right-hand sides of ``constraints`` at ``step_time``: minus the reference-node terms.
+
+        None without reference nodes. A reference component without a prescribed value in the
+        step is a ``ValueError`` (it would need a dof outside the mesh).
+        """
+        if not self.reference_terms:
+            return None
+        loads = self.steps[step_index]
+        total = loads.total_time_start + step_time
+        known = self._evaluate(loads.reference, step_time / loads.period, step_time, total)
+        values = np.zeros(len(self.constraints))
+        for k, keys, coefficients in self.reference_terms:
+            given = loads.reference_keys
+            pos = np.minimum(np.searchsorted(given, keys), max(given.size - 1, 0))
+            missing = given[pos] != keys if given.size else np.ones(keys.size, dtype=bool)
+            if np.any(missing):
+                key = int(keys[missing][0])
+                node = int(self.deck.node_ids[key // 3])
+                raise ValueError(
+                    f"{self.constraints[k].name}: node {node} belongs to no element and its "
+                    f"direction {key % 3 + 1} has no *BOUNDARY in step {loads.step.number}: a "
+                    "free reference node is not supported (it needs a dof outside the mesh)"
+                )
+            values[k] = -float(np.dot(coefficients, known[pos]))
+        return values
 
     def _evaluate(
         self, schedule: _Schedule, fraction: float, step_time: float, total_time: float
@@ -310,6 +390,7 @@ class CalculixModel:
             bcs: Initial Dirichlet conditions (usually ``begin_step(0)``).
             options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_options``).
         """
+        options.setdefault("constraints", self.constraints)
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
         return problem
@@ -734,7 +815,8 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
         bc_keys = np.flatnonzero(bc_active & valid)
         bc_dofs, first = np.unique(dofs3[bc_keys], return_index=True)
         bc_keys = bc_keys[first]
-        f_keys = np.flatnonzero(((forces.ref != 0) | (forces.start != 0)) & valid)
+        loaded = (forces.ref != 0) | (forces.start != 0)
+        f_keys = np.flatnonzero(loaded & valid)
         columns = slice(3 * s, 3 * s + 3)
         group_history = unique[:, columns] if unique.size else np.zeros((0, 3))
         steps.append(
@@ -750,6 +832,18 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
                 ),
                 bc_dofs=bc_dofs,
                 bc=_Schedule(np.zeros(bc_dofs.size), bc.ref[bc_keys], bc.amplitude[bc_keys]),
+                reference_force_keys=np.flatnonzero(loaded & ~valid),
+                reference_force=_Schedule(
+                    forces.start[loaded & ~valid],
+                    forces.ref[loaded & ~valid],
+                    forces.amplitude[loaded & ~valid],
+                ),
+                reference_keys=np.flatnonzero(bc_active & ~valid),
+                reference=_Schedule(
+                    bc.start[bc_active & ~valid],
+                    bc.ref[bc_active & ~valid],
+                    bc.amplitude[bc_active & ~valid],
+                ),
             )
         )
     return steps, names, pressure_tags, int(unique.shape[0])
@@ -816,6 +910,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
+    constraints, reference_terms, free_references = _constraints(deck, node_dof)
 
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
@@ -853,4 +948,118 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         steps=steps,
         amplitude_names=amplitude_names,
         _bc_spaces=bc_spaces,
+        constraints=constraints,
+        reference_terms=reference_terms,
+        free_references=free_references,
     )
+
+
+@dataclass(frozen=True, eq=False)
+class FreeReference:
+    """A component of a node in no element, unknown and eliminated by one ``*EQUATION``.
+
+    ``u_ref = sum(mesh_weights * u[mesh_dofs]) + sum(reference_weights * prescribed values of
+    reference_keys)``; a force on it acts on ``mesh_dofs`` with ``mesh_weights`` (virtual work).
+
+    Attributes:
+        key: ``3 node row + component`` of the reference component.
+        mesh_dofs, mesh_weights: Unrolled dofs of ``V`` and their weights.
+        reference_keys, reference_weights: Prescribed reference components and their weights.
+    """
+
+    key: int
+    mesh_dofs: np.ndarray
+    mesh_weights: np.ndarray
+    reference_keys: np.ndarray
+    reference_weights: np.ndarray
+
+
+def _constraints(
+    deck: Deck, node_dof: np.ndarray
+) -> tuple[list[LinearConstraint], list[tuple[int, np.ndarray, np.ndarray]], list[FreeReference]]:
+    """``*EQUATION`` cards as constraints on the displacement dofs (docs/method.md §13.1).
+
+    Terms are keyed ``3 node row + component``. Components of nodes in no element (reference
+    nodes) with a ``*BOUNDARY`` somewhere are *prescribed*: returned apart as ``(constraint, keys,
+    coefficients)``, their values become right-hand sides. The others are *free*: the first
+    equation holding one expresses it by the equation's other terms (a :class:`FreeReference`)
+    and is used up; the others get it substituted.
+    """
+    prescribed = {
+        int(k)
+        for card in (*deck.boundaries, *(b for step in deck.steps for b in step.boundaries))
+        for k in (
+            3 * deck.node_index(card.nodes)[:, None] + np.arange(card.first_dof - 1, card.last_dof)
+        ).ravel()
+    }
+    equations = []  # (location, {key: coefficient} in term order)
+    for equation in deck.equations:
+        keys = 3 * deck.node_index(equation.nodes) + equation.dofs - 1
+        terms: dict[int, float] = {}
+        for key, a in zip(keys.tolist(), equation.coefficients.tolist()):
+            terms[key] = terms.get(key, 0.0) + a
+        equations.append((equation.location, terms))
+
+    def free(key: int) -> bool:
+        return node_dof[key // 3] < 0 and key not in prescribed
+
+    loaded = {
+        int(k)
+        for step in deck.steps
+        for card in step.cloads
+        for k in 3 * deck.node_index(card.nodes) + card.dof - 1
+    }
+    references: list[FreeReference] = []
+    used: set[int] = set()
+    for key in dict.fromkeys(k for _, terms in equations for k in terms if free(k)):
+        holders = [i for i, (_, terms) in enumerate(equations) if key in terms and i not in used]
+        location, terms = equations[holders[0]]
+        if [k for k in terms if free(k)] != [key]:
+            raise ValueError(
+                f"{location}: *EQUATION: more than one component of nodes in no element without "
+                "a *BOUNDARY in one equation is not supported"
+            )
+        a = terms[key]
+        weights = {k: -c / a for k, c in terms.items() if k != key}
+        used.add(holders[0])
+        for i in holders[1:]:
+            _, other = equations[i]
+            factor = other.pop(key)
+            for k, w in weights.items():
+                other[k] = other.get(k, 0.0) + factor * w
+        mesh = [k for k in weights if node_dof[k // 3] >= 0]
+        refs = [k for k in weights if node_dof[k // 3] < 0]
+        references.append(
+            FreeReference(
+                key,
+                np.array([3 * node_dof[k // 3] + k % 3 for k in mesh], dtype=np.int64),
+                np.array([weights[k] for k in mesh]),
+                np.array(refs, dtype=np.int64),
+                np.array([weights[k] for k in refs]),
+            )
+        )
+    constraints, reference_terms = [], []
+    for i, (location, terms) in enumerate(equations):
+        if i in used:
+            continue
+        keys = np.array(list(terms), dtype=np.int64)
+        coefficients = np.array(list(terms.values()))
+        mesh = node_dof[keys // 3] >= 0
+        if not np.any(mesh):
+            raise ValueError(f"{location}: *EQUATION: no node of it belongs to an element")
+        for key in keys[~mesh]:
+            if int(key) in loaded:
+                node = int(deck.node_ids[key // 3])
+                raise ValueError(
+                    f"{location}: *EQUATION node {node} belongs to no element and carries a "
+                    "*CLOAD in a direction with a *BOUNDARY: not supported"
+                )
+        if not np.all(mesh):
+            reference_terms.append((len(constraints), keys[~mesh], coefficients[~mesh]))
+        constraints.append(
+            LinearConstraint(
+                node_dof[keys[mesh] // 3], keys[mesh] % 3, coefficients[mesh],
+                name=f"*EQUATION at {location}",
+            )
+        )  # fmt: skip
+    return constraints, reference_terms, references

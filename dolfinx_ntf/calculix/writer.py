@@ -35,6 +35,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.constraints import LinearConstraint
 from dolfinx_ntf.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.problem import ContactPair
 from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
@@ -542,6 +543,7 @@ def write_inp(
     fixed: Sequence[BoundarySpec] = (),
     steps: Sequence[StepSpec] = (StepSpec(),),
     heading: str = "dolfinx_ntf deck",
+    constraints: Sequence[LinearConstraint] = (),
 ) -> InpNumbering:
     """Write a ccx deck equivalent to a contact problem built in Python. Collective.
 
@@ -557,6 +559,8 @@ def write_inp(
         fixed: Constraints of the model definition (before the first step), normally zero values.
         steps: Static steps with their own boundaries, loads, incrementation, controls and output.
         heading: ``*HEADING`` text.
+        constraints: Linear constraints, written as ``*EQUATION`` cards in their term order (ccx
+            makes the first term dependent: it must have no ``*BOUNDARY``); one process only.
 
     Returns:
         The ccx numbers of this rank's nodes and cells, to compare ccx results with dolfinx ones.
@@ -591,6 +595,7 @@ def write_inp(
         _write_pair(out, V, md, k, pair)
     _write_amplitudes(out, steps)
 
+    _write_equations(out, md, constraints)
     # Node sets are model definition: write all of them before the first step.
     if fixed:
         cards = [
@@ -605,6 +610,26 @@ def write_inp(
     if out.comm.rank == 0:
         Path(path).write_text("\n".join(out.lines) + "\n")
     return InpNumbering(md.node_ids.copy(), md.element_ids.copy(), md.etype)
+
+
+def _write_equations(out: _Out, md: _Mesh, constraints: Sequence[LinearConstraint]) -> None:
+    """``*EQUATION``: per constraint its number of terms, then 4 (node, dof, coefficient) a line."""
+    if not constraints:
+        return
+    if out.comm.size > 1:
+        raise NotImplementedError("write_inp: constraints are written on one process only")
+    lines = []
+    for c in constraints:
+        _check_type(c, LinearConstraint, "write_inp: constraints")
+        if c.value != 0.0:
+            raise ValueError(f"write_inp: {c.label}: ccx's *EQUATION has a zero right-hand side")
+        terms = [
+            f"{int(md.node_ids[n])},{int(k) + 1},{_real(a, 'an *EQUATION coefficient')}"
+            for n, k, a in zip(c.nodes, c.components, c.coefficients)
+        ]
+        lines.append(str(len(terms)))
+        lines += [",".join(terms[i : i + 4]) for i in range(0, len(terms), 4)]
+    out.add("*EQUATION", *lines)
 
 
 def _write_mesh(out: _Out, md: _Mesh, materials, cell_tags) -> None:

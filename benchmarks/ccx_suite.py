@@ -1,0 +1,185 @@
+"""CalculiX's own node-to-surface test decks: ccx 2.20 against ``dolfinx-ntf run``.
+
+Every deck of the Debian package ``calculix-ccx-test`` (``/usr/share/doc/calculix-ccx-test/examples
+/test``, ``.inp`` or ``.inp.gz``) that contains ``TYPE=NODE TO SURFACE`` is run by ``ccx`` and by
+``python -m dolfinx_ntf run``, both at the deck's (ccx's default) controls, each in its own
+directory. The ``.dat`` blocks both codes printed are matched by block, set and time; for each block
+type the table gives the largest difference relative to the largest value of ccx's block. It also
+lists whether our run completed, the reason it refused the deck or stopped, and the Newton
+iterations of both codes (sum over the converged increments, from the ``.sta`` files, and the
+number of increments).
+
+Serial. Needs ``ccx`` on the PATH. Run from the repository root (``make ccx-suite``, about a
+minute)::
+
+    .venv/bin/python benchmarks/ccx_suite.py
+    .venv/bin/python benchmarks/ccx_suite.py --only contact1 cubespring --keep /tmp/suite
+"""
+
+from __future__ import annotations
+
+import argparse
+import gzip
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from dolfinx_ntf.calculix.ccx import read_sta
+from dolfinx_ntf.calculix.dat import read_dat
+
+SUITE = Path("/usr/share/doc/calculix-ccx-test/examples/test")
+BLOCKS = ("U", "RF", "S", "CDIS", "CSTR", "CELS")
+
+
+@dataclass
+class Row:
+    """One deck's outcome."""
+
+    deck: str
+    runs: str = "no"
+    reason: str = ""
+    differences: dict[str, float] = field(default_factory=dict)
+    compared: int = 0
+    ccx_iterations: str = "-"
+    ntf_iterations: str = "-"
+    ccx_time: float = 0.0
+    ntf_time: float = 0.0
+
+
+def node_to_surface_decks(only: list[str] | None) -> list[tuple[str, str]]:
+    """(name, text) of the suite's node-to-surface decks, by name."""
+    decks = []
+    for source in sorted(SUITE.glob("*.inp*")):
+        name = source.name.removesuffix(".gz").removesuffix(".inp")
+        if only and name not in only:
+            continue
+        opener = gzip.open if source.suffix == ".gz" else open
+        with opener(source, "rt", encoding="latin-1") as stream:
+            text = stream.read()
+        if re.search(r"TYPE\s*=\s*NODE\s*TO\s*SURFACE", text, re.IGNORECASE):
+            decks.append((name, text))
+    return decks
+
+
+def _iterations(path: Path) -> str:
+    if not path.is_file():
+        return "-"
+    rows = read_sta(path)
+    return f"{sum(r.iterations for r in rows)} ({len(rows)} inc)" if rows else "0"
+
+
+def _reason(output: str) -> str:
+    lines = [line.strip() for line in output.splitlines() if "*ERROR" in line]
+    if not lines:
+        return output.strip().splitlines()[-1][:120] if output.strip() else ""
+    text = lines[0].replace("*ERROR:", "").strip()
+    return re.sub(r"^\S+\.inp:\d+: ", "", text)[:120]
+
+
+def compare(ccx_dat: Path, ntf_dat: Path) -> tuple[dict[str, float], int]:
+    """Largest relative difference per block type over the blocks both files have."""
+    ours = {(b.name, b.set, round(b.time, 6)): b for b in read_dat(ntf_dat)}
+    differences: dict[str, float] = {}
+    compared = 0
+    for block in read_dat(ccx_dat):
+        mine = ours.get((block.name, block.set, round(block.time, 6)))
+        name = block.name.removesuffix("_TOTAL")
+        if mine is None or name not in BLOCKS:
+            continue
+        if mine.values.shape != block.values.shape or not np.array_equal(mine.labels, block.labels):
+            differences[name] = float("inf")  # other rows (e.g. other contact elements)
+            continue
+        scale = float(np.abs(block.values).max(initial=0.0))
+        diff = float(np.abs(mine.values - block.values).max(initial=0.0))
+        relative = diff / scale if scale > 0 else diff
+        differences[name] = max(differences.get(name, 0.0), relative)
+        compared += 1
+    return differences, compared
+
+
+def run_deck(name: str, text: str, root: Path, timeout: float) -> Row:
+    """Run one deck with both codes and compare."""
+    row = Row(name)
+    ccx_dir, ntf_dir = root / name / "ccx", root / name / "ntf"
+    for directory in (ccx_dir, ntf_dir):
+        directory.mkdir(parents=True, exist_ok=True)
+        (directory / f"{name}.inp").write_text(text, encoding="latin-1")
+    start = time.perf_counter()
+    try:
+        subprocess.run(["ccx", "-i", name], cwd=ccx_dir, capture_output=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pass
+    row.ccx_time = time.perf_counter() - start
+    row.ccx_iterations = _iterations(ccx_dir / f"{name}.sta")
+    start = time.perf_counter()
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "dolfinx_ntf", "run", name],
+            cwd=ntf_dir,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
+        output, code = done.stdout + done.stderr, done.returncode
+    except subprocess.TimeoutExpired:
+        output, code = f"*ERROR: timed out after {timeout:.0f} s", -1
+    row.ntf_time = time.perf_counter() - start
+    row.runs = {0: "yes"}.get(code, "stopped" if code == 2 else "refused")
+    if code != 0:
+        row.reason = _reason(output)
+    row.ntf_iterations = _iterations(ntf_dir / f"{name}.sta")
+    if (ccx_dir / f"{name}.dat").is_file() and (ntf_dir / f"{name}.dat").is_file():
+        row.differences, row.compared = compare(ccx_dir / f"{name}.dat", ntf_dir / f"{name}.dat")
+    return row
+
+
+def table(rows: list[Row]) -> str:
+    """The result table (markdown)."""
+    head = ["deck", "runs", "refusal / stop reason", *BLOCKS, "blocks", "ccx iter", "ntf iter"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        cells = [r.deck, r.runs, r.reason or "-"]
+        cells += [f"{r.differences[k]:.1e}" if k in r.differences else "-" for k in BLOCKS]
+        cells += [str(r.compared), r.ccx_iterations, r.ntf_iterations]
+        lines.append("| " + " | ".join(c.replace("|", "/") for c in cells) + " |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", nargs="*", help="deck names (default: all)")
+    parser.add_argument("--keep", type=Path, help="run in this directory and keep the files")
+    parser.add_argument("--timeout", type=float, default=300.0, help="seconds per run")
+    args = parser.parse_args(argv)
+    if shutil.which("ccx") is None or not SUITE.is_dir():
+        print("needs ccx and the package calculix-ccx-test", file=sys.stderr)
+        return 1
+    decks = node_to_surface_decks(args.only)
+    with tempfile.TemporaryDirectory() as scratch:
+        root = args.keep or Path(scratch)
+        rows = []
+        for name, text in decks:
+            row = run_deck(name, text, root, args.timeout)
+            rows.append(row)
+            print(f"  {name}: {row.runs} ({row.ccx_time:.1f} s ccx, {row.ntf_time:.1f} s ntf)",
+                  file=sys.stderr)  # fmt: skip
+    print(
+        f"ccx 2.20 against dolfinx-ntf run on the {len(rows)} node-to-surface decks of "
+        f"calculix-ccx-test, both at the deck's controls.\nColumns U..CELS: largest |ours - ccx| "
+        "over each printed .dat block of that type, relative to the largest |value| of ccx's "
+        "block (inf: the blocks have different rows); blocks: number of blocks compared; "
+        "iterations: Newton iterations summed over the converged increments (increments).\n"
+    )
+    print(table(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

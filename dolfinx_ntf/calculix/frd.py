@@ -1,0 +1,343 @@
+"""CalculiX ``.frd`` result files (ASCII, ccx 2.20's layout): writer and reader.
+
+See docs/method.md §13.2. ``FrdWriter`` writes what ccx writes for ``*NODE FILE`` (U -> ``DISP``,
+RF -> ``FORC``), ``*EL FILE`` (S -> ``STRESS``, integration-point stresses extrapolated to the
+nodes and averaged over the elements around each node) and ``*CONTACT FILE`` (CDIS/CSTR ->
+``CONTACT``): a header, the nodes, the elements, then per written increment one block per result,
+and `` 9999`` at the end. cgx and converters read it like ccx's file. ``read_frd`` reads both
+ccx's files and ours (the tests compare them value by value). Pure Python/numpy.
+
+Record layout (cgx manual, "Result Format"; widths checked against ccx 2.20's files):
+    - ``    2C`` nodes and ``    3C`` elements blocks, rows ``-1`` (and ``-2`` for element nodes);
+    - per result: ``    1PSTEP`` (block counter, increment, step), ``  100CL`` (output counter,
+      time, number of nodes, increment), ``-4`` name, ``-5`` one line per component, ``-1`` rows
+      (node number I10 and values E12.5), ``-3`` closes.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import typing
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "C3D8_EXTRAPOLATION",
+    "FRD_ELEMENT_TYPES",
+    "FrdBlock",
+    "FrdFile",
+    "FrdWriter",
+    "format_frd_time",
+    "nodal_extrapolation",
+    "read_frd",
+]
+
+#: frd element type numbers of the ccx element types (cgx manual: he8 1, te4 3, te10 6, he20 4).
+FRD_ELEMENT_TYPES: dict[str, int] = {"C3D8": 1, "C3D4": 3, "C3D10": 6, "C3D20": 4, "C3D20R": 4}
+
+#: Result blocks: frd name -> (component lines ``(name, type, row, column)``, ccx's ALL line).
+_COMPONENTS: dict[str, tuple[tuple[tuple[str, int, int, int], ...], bool]] = {
+    "DISP": ((("D1", 2, 1, 0), ("D2", 2, 2, 0), ("D3", 2, 3, 0)), True),
+    "FORC": ((("F1", 2, 1, 0), ("F2", 2, 2, 0), ("F3", 2, 3, 0)), True),
+    "STRESS": (
+        (
+            ("SXX", 4, 1, 1),
+            ("SYY", 4, 2, 2),
+            ("SZZ", 4, 3, 3),
+            ("SXY", 4, 1, 2),
+            ("SYZ", 4, 2, 3),
+            ("SZX", 4, 3, 1),
+        ),
+        False,
+    ),
+    "CONTACT": (
+        (
+            ("COPEN", 4, 1, 1),
+            ("CSLIP1", 4, 2, 2),
+            ("CSLIP2", 4, 3, 3),
+            ("CPRESS", 4, 1, 2),
+            ("CSHEAR1", 4, 2, 3),
+            ("CSHEAR2", 4, 3, 1),
+        ),
+        False,
+    ),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class FrdBlock:
+    """One result block of one increment.
+
+    Attributes:
+        name: ``DISP``, ``FORC``, ``STRESS``, ``CONTACT`` (or any name ccx writes, when read).
+        components: Component names in column order (read blocks; the writer knows them).
+        step, increment: 1-based step and increment numbers (``1PSTEP`` record).
+        time: Total time.
+        nodes: ``(n,)`` node numbers.
+        values: ``(n, k)`` values.
+    """
+
+    name: str
+    components: tuple[str, ...]
+    step: int
+    increment: int
+    time: float
+    nodes: np.ndarray
+    values: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class FrdFile:
+    """A read ``.frd`` file: node coordinates, elements and result blocks in file order."""
+
+    node_ids: np.ndarray
+    node_coords: np.ndarray
+    element_ids: np.ndarray
+    element_types: np.ndarray
+    element_nodes: list[np.ndarray]
+    blocks: list[FrdBlock]
+
+    def blocks_named(self, name: str) -> list[FrdBlock]:
+        """The blocks called ``name``, in file order."""
+        return [b for b in self.blocks if b.name == name]
+
+
+def format_frd_time(value: float) -> str:
+    """ccx's 12-character time field: ``E12.5`` below 1, fixed point with 10 digits from 1 on."""
+    if abs(value) < 1.0:
+        return f"{value:12.5E}"
+    digits = len(str(int(abs(value))))
+    return f"{value:12.{max(10 - digits, 1)}f}"
+
+
+def _e(values: np.ndarray) -> str:
+    return "".join(f"{v:12.5E}" for v in values)
+
+
+def _line72(text: str) -> str:
+    return f"{text:<72}"
+
+
+# ----------------------------------------------------------------------------- extrapolation
+
+#: ccx 2.20's C3D8 extrapolation weight of an integration point by the number of coordinates in
+#: which it lies on the other side of the node (0..3): the trilinear values (1 +- sqrt 3)^k / 8
+#: rounded, summing to 0.99996 over the 8 points. Fitted to ccx's ``.frd`` files (ccx writes a
+#: uniform stress of 10 as 9.9996); they reproduce ccx's nodal stresses to print precision
+#: (docs/method.md §13.2).
+C3D8_EXTRAPOLATION = (2.549, -0.683, 0.183, -0.04904)
+
+
+def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
+    """``(nodes, points)`` matrix taking integration-point values to the element's nodes.
+
+    C3D8: ccx's weights (``C3D8_EXTRAPOLATION``) of the trilinear field through the 2x2x2 Gauss
+    values; C3D4: the constant; C3D10: the linear field through the 4 point values at the
+    corners, midside nodes the mean of their edge's corners. ``points`` are the rule's points
+    (dolfinx reference coordinates, ccx order).
+    """
+    if element_type == "C3D4":
+        return np.ones((4, 1))
+    if element_type == "C3D8":
+        corners = np.array(
+            [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+        )  # ccx node order in dolfinx reference coordinates
+        sides = (points > 0.5).astype(int)
+        distance = np.sum(corners[:, None, :] != sides[None, :, :], axis=2)
+        return np.asarray(C3D8_EXTRAPOLATION)[distance]
+    if element_type == "C3D10":
+        affine = np.column_stack([np.ones(4), points])  # value = c0 + c . x through the points
+        corners = np.array([[1, 0, 0, 0], [1, 1, 0, 0], [1, 0, 1, 0], [1, 0, 0, 1]], float)
+        corner = corners @ np.linalg.inv(affine)
+        edges = [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)]
+        midside = np.array([(corner[a] + corner[b]) / 2 for a, b in edges])
+        return np.vstack([corner, midside])
+    raise NotImplementedError(f"stress extrapolation of {element_type} is not supported")
+
+
+# ----------------------------------------------------------------------------- writer
+
+
+class FrdWriter:
+    """Writes ``JOB.frd``: header, mesh, then result blocks per written increment.
+
+    Args:
+        path: The file (overwritten).
+        node_ids, node_coords: Nodes, ascending numbers.
+        element_ids: ``(E,)`` element numbers.
+        element_type: The ccx element type of all elements.
+        connectivity: ``(E, n)`` ccx node numbers, ccx order.
+        element_materials: ``(E,)`` 1-based material index of each element.
+        materials: Material names in index order (the ``1UMAT`` lines).
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        node_ids: np.ndarray,
+        node_coords: np.ndarray,
+        element_ids: np.ndarray,
+        element_type: str,
+        connectivity: np.ndarray,
+        element_materials: np.ndarray,
+        materials: typing.Sequence[str],
+    ) -> None:
+        self.path = Path(path)
+        self._blocks = 0
+        self._outputs = 0
+        self._increment_key: tuple[int, int] | None = None
+        now = dt.datetime.now()
+        lines = ["    1C"]
+        for key, value in (
+            ("USER", ""),
+            ("DATE", f"{now.day}.{now.strftime('%B').lower()}.{now.year}"),
+            ("TIME", now.strftime("%H:%M:%S")),
+            ("HOST", ""),
+            ("PGM", "dolfinx_ntf"),
+            ("VERSION", "CalculiX 2.20 format"),
+            ("DIR", ""),
+            ("DBN", ""),
+        ):
+            lines.append(_line72(f"    1U{key:<18}{value}"))
+        lines += [_line72(f"    1UMAT{k + 1:5d}{name}") for k, name in enumerate(materials)]
+        ids = np.asarray(node_ids)
+        coords = np.asarray(node_coords)
+        lines.append(f"    2C{'':18}{ids.size:12d}{'':37}1")
+        lines += [f" -1{i:10d}{_e(x)}" for i, x in zip(ids.tolist(), coords)]
+        lines.append(" -3")
+        frd_type = FRD_ELEMENT_TYPES[element_type]
+        element_ids = np.asarray(element_ids)
+        lines.append(f"    3C{'':18}{element_ids.size:12d}{'':37}1")
+        for e, nodes, material in zip(
+            element_ids.tolist(), np.asarray(connectivity).tolist(), np.asarray(element_materials)
+        ):
+            lines.append(f" -1{e:10d}{frd_type:5d}{0:5d}{int(material):5d}")
+            for start in range(0, len(nodes), 10):
+                lines.append(" -2" + "".join(f"{n:10d}" for n in nodes[start : start + 10]))
+        lines.append(" -3")
+        self.path.write_text("\n".join(lines) + "\n")
+
+    def write(self, block: FrdBlock) -> None:
+        """Append one result block (blocks of one increment share its output counter)."""
+        if block.name not in _COMPONENTS:
+            raise ValueError(f"frd block {block.name} is not supported")
+        key = (block.step, block.increment)
+        if key != self._increment_key:
+            self._increment_key = key
+            self._outputs += 1
+        self._blocks += 1
+        components, with_all = _COMPONENTS[block.name]
+        nodes = np.asarray(block.nodes)
+        lines = [
+            f"    1PSTEP{'':14}{self._blocks:12d}{block.increment:12d}{block.step:12d}{'':10}",
+            f"  100CL{100 + self._outputs:5d}{format_frd_time(block.time)}{nodes.size:12d}"
+            f"{'':20}{0:2d}{self._outputs:5d}{'':10}{1:2d}",
+            f" -4  {block.name:<8}{len(components) + with_all:5d}{1:5d}",
+        ]
+        lines += [
+            f" -5  {name:<8}{1:5d}{kind:5d}{row:5d}{column:5d}"
+            for name, kind, row, column in components
+        ]
+        if with_all:
+            lines.append(f" -5  {'ALL':<8}{1:5d}{2:5d}{0:5d}{0:5d}{1:5d}ALL")
+        values = np.asarray(block.values, dtype=float).reshape(nodes.size, len(components))
+        lines += [f" -1{n:10d}{_e(v)}" for n, v in zip(nodes.tolist(), values)]
+        lines.append(" -3")
+        with self.path.open("a") as stream:
+            stream.write("\n".join(lines) + "\n")
+
+    def close(self) -> None:
+        """Write the end record."""
+        with self.path.open("a") as stream:
+            stream.write(" 9999\n")
+
+
+# ----------------------------------------------------------------------------- reader
+
+
+def _floats(text: str, count: int, where: str) -> list[float]:
+    try:
+        return [float(text[12 * k : 12 * (k + 1)]) for k in range(count)]
+    except ValueError:
+        raise ValueError(f"{where}: bad number in {text!r}") from None
+
+
+def read_frd(path: str | Path) -> FrdFile:
+    """Read an ASCII ``.frd`` file (ccx's or ours; short format, results with up to 6 values)."""
+    path = Path(path)
+    lines = path.read_text(encoding="latin-1").splitlines()
+    node_ids: list[int] = []
+    coords: list[list[float]] = []
+    element_ids: list[int] = []
+    element_types: list[int] = []
+    element_nodes: list[list[int]] = []
+    blocks: list[FrdBlock] = []
+    step = increment = 0
+    time = 0.0
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        if line.startswith("    2C"):
+            i += 1
+            while not lines[i].startswith(" -3"):
+                node_ids.append(int(lines[i][3:13]))
+                coords.append(_floats(lines[i][13:], 3, f"{path}:{i + 1}"))
+                i += 1
+        elif line.startswith("    3C"):
+            i += 1
+            while not lines[i].startswith(" -3"):
+                if lines[i].startswith(" -1"):
+                    element_ids.append(int(lines[i][3:13]))
+                    element_types.append(int(lines[i][13:18]))
+                    element_nodes.append([])
+                else:
+                    text = lines[i][3:]
+                    element_nodes[-1] += [int(text[k : k + 10]) for k in range(0, len(text), 10)]
+                i += 1
+        elif line.startswith("    1PSTEP"):
+            fields = line[10:].split()
+            increment, step = int(fields[1]), int(fields[2])
+        elif line.startswith("  100C"):
+            time = float(line[12:24])
+        elif line.startswith(" -4"):
+            name = line[5:13].strip()
+            count = int(line[13:18])
+            i += 1
+            components = []
+            for _ in range(count):
+                if not lines[i].startswith(" -5"):
+                    raise ValueError(f"{path}:{i + 1}: component line (-5) expected")
+                if lines[i][5:13].strip() != "ALL":
+                    components.append(lines[i][5:13].strip())
+                i += 1
+            ids, values = [], []
+            while not lines[i].startswith(" -3"):
+                if not lines[i].startswith(" -1"):
+                    raise ValueError(f"{path}:{i + 1}: result row (-1) expected")
+                ids.append(int(lines[i][3:13]))
+                values.append(_floats(lines[i][13:], len(components), f"{path}:{i + 1}"))
+                i += 1
+            blocks.append(
+                FrdBlock(
+                    name,
+                    tuple(components),
+                    step,
+                    increment,
+                    time,
+                    np.asarray(ids, dtype=np.int64),
+                    np.asarray(values, dtype=float).reshape(len(ids), len(components)),
+                )
+            )
+        elif line.startswith(" 9999"):
+            break
+        i += 1
+    return FrdFile(
+        np.asarray(node_ids, dtype=np.int64),
+        np.asarray(coords, dtype=float).reshape(-1, 3),
+        np.asarray(element_ids, dtype=np.int64),
+        np.asarray(element_types, dtype=np.int64),
+        [np.asarray(n, dtype=np.int64) for n in element_nodes],
+        blocks,
+    )

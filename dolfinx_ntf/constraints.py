@@ -1,0 +1,314 @@
+"""Linear multi-point constraints enforced by elimination (docs/method.md §13.1).
+
+A :class:`LinearConstraint` ``sum_k a_k u[n_k, c_k] = value`` (CalculiX ``*EQUATION``) makes one
+of its dofs *dependent*: ``u_s = sum_j t_sj u_j + g_s``. Over all constraints this is
+``u = T w + g`` with ``w`` the independent dofs. The unknown of the Newton solver stays the full
+displacement ``u``; every iteration
+
+    - back-substitutes the dependent dofs from the independent ones (``u_s = T_s u + g_s``),
+    - reduces the assembled residual and Jacobian, springs included: ``T'^T r`` and ``T'^T J T'``
+      with ``T' = T + E_s`` (``E_s`` the unit diagonal of the dependent dofs), whose dependent
+      rows and columns are then replaced by identity rows with a zero right-hand side, and whose
+      Dirichlet rows are restored,
+
+so that the solve returns the correction of the independent dofs and a zero correction of the
+dependent ones, like the condensed system ``T^T J T`` of dolfinx_mpc but without renumbering. No
+penalty is involved: constraints hold to round-off after every update.
+
+:func:`elimination_rows` (pure numpy/scipy) chooses the dependent dofs and resolves chains;
+:class:`ConstraintElimination` is the thin PETSc glue.
+"""
+
+from __future__ import annotations
+
+import typing
+from dataclasses import dataclass
+
+from petsc4py import PETSc
+
+import numpy as np
+import scipy.sparse
+import scipy.sparse.csgraph
+
+__all__ = ["ConstraintElimination", "LinearConstraint", "elimination_rows"]
+
+
+@dataclass(frozen=True, eq=False)
+class LinearConstraint:
+    """``sum_k coefficients[k] * u[nodes[k], components[k]] = value`` (a ccx ``*EQUATION``).
+
+    The first term whose dof is neither prescribed (Dirichlet) nor already dependent becomes the
+    dependent dof, as in CalculiX where the first term is dependent.
+
+    Args:
+        nodes: Local block dofs of the displacement space (one per term).
+        components: Displacement component 0, 1 or 2 of each term.
+        coefficients: Coefficient of each term.
+        value: Right-hand side (ccx: 0).
+        name: Label for messages (e.g. the deck line).
+    """
+
+    nodes: typing.Sequence[int] | np.ndarray
+    components: typing.Sequence[int] | np.ndarray
+    coefficients: typing.Sequence[float] | np.ndarray
+    value: float = 0.0
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        """Check shapes and values (``ValueError`` naming the constraint)."""
+        nodes = np.asarray(self.nodes, dtype=np.int64).ravel()
+        components = np.asarray(self.components, dtype=np.int64).ravel()
+        coefficients = np.asarray(self.coefficients, dtype=float).ravel()
+        label = f"LinearConstraint {self.name!r}" if self.name else "LinearConstraint"
+        if not (nodes.size == components.size == coefficients.size) or nodes.size == 0:
+            raise ValueError(
+                f"{label}: nodes, components and coefficients need one entry per term (got "
+                f"{nodes.size}, {components.size}, {coefficients.size})"
+            )
+        if np.any(nodes < 0):
+            raise ValueError(f"{label}: node {int(nodes[nodes < 0][0])} is not a mesh node")
+        if np.any((components < 0) | (components > 2)):
+            raise ValueError(f"{label}: components must be 0, 1 or 2, got {components.tolist()}")
+        if not (np.all(np.isfinite(coefficients)) and np.isfinite(self.value)):
+            raise ValueError(f"{label}: coefficients and value must be finite")
+        object.__setattr__(self, "nodes", nodes)
+        object.__setattr__(self, "components", components)
+        object.__setattr__(self, "coefficients", coefficients)
+        object.__setattr__(self, "value", float(self.value))
+
+    @property
+    def label(self) -> str:
+        """Name for messages."""
+        return self.name or "constraint"
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """Unrolled dofs ``3 node + component`` of the terms."""
+        return 3 * self.nodes + self.components
+
+
+def elimination_rows(
+    num_dofs: int,
+    constraints: typing.Sequence[LinearConstraint],
+    prescribed: np.ndarray | None = None,
+) -> tuple[np.ndarray, scipy.sparse.csr_matrix, np.ndarray]:
+    """Dependent dofs ``s`` and their rows: ``u[s] = M @ u + g`` with no dependent column in M.
+
+    See :func:`_elimination` (``g`` from the constraints' values).
+    """
+    s, M, G = _elimination(num_dofs, constraints, prescribed)
+    return s, M, G @ np.array([c.value for c in constraints], dtype=float)
+
+
+def _elimination(
+    num_dofs: int,
+    constraints: typing.Sequence[LinearConstraint],
+    prescribed: np.ndarray | None = None,
+) -> tuple[np.ndarray, scipy.sparse.csr_matrix, scipy.sparse.csr_matrix]:
+    """Dependent dofs ``s`` and their rows: ``u[s] = M @ u + g`` with no dependent column in M.
+
+    Args:
+        num_dofs: Number of unrolled dofs.
+        constraints: The constraints.
+        prescribed: Unrolled dofs with a Dirichlet condition (never made dependent).
+
+    Returns:
+        ``(s, M, G)``: dependent dofs in constraint order, ``(len(s), num_dofs)`` CSR rows and the
+        ``(len(s), len(constraints))`` map from the constraints' values to the offsets ``g``.
+
+    Raises:
+        ValueError: a constraint whose every dof is prescribed or dependent already (redundant or
+            contradictory with the Dirichlet conditions), or circular constraints.
+    """
+    fixed = np.zeros(num_dofs, dtype=bool)
+    if prescribed is not None and len(prescribed):
+        fixed[np.asarray(prescribed, dtype=np.int64)] = True
+    if not constraints:
+        empty = scipy.sparse.csr_matrix((0, num_dofs))
+        return np.zeros(0, np.int64), empty, scipy.sparse.csr_matrix((0, 0))
+    # all terms at once: constraint index, dof, coefficient; repeated dofs of a constraint summed
+    sizes = np.array([c.nodes.size for c in constraints])
+    owner = np.repeat(np.arange(len(constraints)), sizes)
+    dofs = np.concatenate([c.dofs for c in constraints])
+    coefficients = np.concatenate([c.coefficients for c in constraints])
+    if dofs.max() >= num_dofs:
+        bad = int(owner[np.argmax(dofs >= num_dofs)])
+        raise ValueError(f"{constraints[bad].label}: dof {int(dofs.max())} is outside the space")
+    keys, first, inverse = np.unique(
+        owner * num_dofs + dofs, return_index=True, return_inverse=True
+    )
+    order = np.argsort(first, kind="stable")  # terms in written order, constraints ascending
+    merged = np.bincount(inverse.ravel(), weights=coefficients)[order]
+    term_owner, term_dof = (keys // num_dofs)[order], (keys % num_dofs)[order]
+    largest = np.zeros(len(constraints))
+    np.maximum.at(largest, term_owner, np.abs(merged))
+    candidate = (np.abs(merged) > 1e-14 * largest[term_owner]) & ~fixed[term_dof]
+    # the dependent dof: the first candidate term (sequentially when two constraints pick one dof)
+    chosen = np.full(len(constraints), -1, dtype=np.int64)
+    where = np.flatnonzero(candidate)
+    owners, start = np.unique(term_owner[where], return_index=True)
+    chosen[owners] = where[start]
+    picked = term_dof[chosen[chosen >= 0]]
+    if chosen.min() < 0 or np.unique(picked).size != picked.size:
+        chosen = _choose_sequentially(term_owner, term_dof, candidate, len(constraints))
+    missing = np.flatnonzero(chosen < 0)
+    if missing.size:
+        c = constraints[int(missing[0])]
+        node, comp = divmod(int(c.dofs[0]), 3)
+        raise ValueError(
+            f"{c.label}: every dof of the constraint is prescribed by a Dirichlet condition "
+            f"or already dependent in another constraint (first term: node {node}, component "
+            f"{comp}): the constraint is redundant or contradicts them"
+        )
+    s = term_dof[chosen]
+    a = merged[chosen]
+    others = np.ones(term_dof.size, dtype=bool)
+    others[chosen] = False
+    M = scipy.sparse.csr_matrix(
+        (-merged[others] / a[term_owner[others]], (term_owner[others], term_dof[others])),
+        shape=(s.size, num_dofs),
+    )
+    G = scipy.sparse.diags(1.0 / a, format="csr")  # one dependent dof per constraint, in order
+    # chains: a dependent dof on the right-hand side of another constraint is substituted, round
+    # by round (as many rounds as the longest chain); a cycle is refused first
+    chained = M[:, s]
+    chained.eliminate_zeros()
+    if chained.nnz:
+        count, label = scipy.sparse.csgraph.connected_components(chained, connection="strong")
+        sizes = np.bincount(label, minlength=count)
+        if np.any(sizes > 1):
+            cycle = s[sizes[label] > 1]
+            raise ValueError(
+                "circular constraints: dependent dofs depend on each other (dofs "
+                f"{cycle[:5].tolist()}{' ...' if cycle.size > 5 else ''})"
+            )
+    independent = scipy.sparse.diags((~np.isin(np.arange(num_dofs), s)).astype(float))
+    while chained.nnz:
+        M = (M @ independent + chained @ M).tocsr()
+        G = (G + chained @ G).tocsr()
+        chained = M[:, s]
+        chained.eliminate_zeros()
+    M.sum_duplicates()
+    M.eliminate_zeros()
+    return s, M, G
+
+
+class ConstraintElimination:
+    """The PETSc operators of ``u = T w + g`` on one serial vector space (see the module doc).
+
+    Args:
+        num_dofs: Unrolled dofs of the space.
+        constraints: The constraints.
+        prescribed: Unrolled Dirichlet dofs (kept as identity rows, never dependent).
+        comm: The mesh communicator (one process only).
+    """
+
+    def __init__(
+        self,
+        num_dofs: int,
+        constraints: typing.Sequence[LinearConstraint],
+        prescribed: np.ndarray,
+        comm,
+    ) -> None:
+        if comm.size > 1:
+            raise NotImplementedError(
+                f"linear constraints run on one process only for now (got {comm.size} processes)"
+            )
+        self.prescribed = np.unique(np.asarray(prescribed, dtype=np.int64))
+        self.slaves, rows, self._values_to_offsets = _elimination(
+            num_dofs, constraints, self.prescribed
+        )
+        self.offsets = self._values_to_offsets @ np.array([c.value for c in constraints], float)
+        n = num_dofs
+        identity = np.ones(n)
+        identity[self.slaves] = 0.0
+        embed = scipy.sparse.csr_matrix(
+            (np.ones(self.slaves.size), (self.slaves, np.arange(self.slaves.size))),
+            shape=(n, self.slaves.size),
+        )
+        T = (scipy.sparse.diags(identity) + embed @ rows).tocsr()
+        self._T = _petsc(T, comm)  # u = T u + g: back-substitution
+        self._Tp = _petsc((T + scipy.sparse.diags(1.0 - identity)).tocsr(), comm)  # T'
+        self._work = self._T.createVecLeft()
+        self._eliminated = np.union1d(self.slaves, self.prescribed).astype(PETSc.IntType)
+        self._reduced: PETSc.Mat | None = None
+        self._reduced_key: tuple | None = None
+
+    @property
+    def num_constraints(self) -> int:
+        """Number of eliminated (dependent) dofs."""
+        return int(self.slaves.size)
+
+    def set_values(self, values: np.ndarray) -> None:
+        """New right-hand sides of the constraints (in their order), e.g. prescribed by time."""
+        self.offsets = self._values_to_offsets @ np.asarray(values, dtype=float)
+
+    def back_substitute(self, x: PETSc.Vec) -> None:
+        """Dependent dofs of ``x`` from the independent ones: ``x = T x + g``."""
+        self._T.mult(x, self._work)
+        x.array[self.slaves] = self._work.array[self.slaves] + self.offsets
+
+    def reduce_vector(self, b: PETSc.Vec, dirichlet: typing.Callable[[PETSc.Vec], None]) -> None:
+        """``b <- T'^T b`` with zero dependent rows; ``dirichlet(b)`` restores Dirichlet rows."""
+        self._Tp.multTranspose(b, self._work)
+        self._work.copy(b)
+        b.array[self.slaves] = 0.0
+        dirichlet(b)
+
+    def reduce_matrix(self, A: PETSc.Mat, key: tuple) -> PETSc.Mat:
+        """``T'^T A T'`` with identity rows and columns at dependent and Dirichlet dofs.
+
+        ``key`` identifies ``A``'s sparsity pattern: the reduced matrix is reused while it is
+        unchanged, else made anew.
+        """
+        if self._reduced is not None and key == self._reduced_key:
+            A.PtAP(self._Tp, result=self._reduced)
+        else:
+            if self._reduced is not None:
+                self._reduced.destroy()
+            self._reduced = A.PtAP(self._Tp)
+            self._reduced_key = key
+        self._reduced.zeroRowsColumns(self._eliminated, diag=1.0)
+        return self._reduced
+
+    def release(self) -> None:
+        """Free the reduced matrix (made again when needed)."""
+        if self._reduced is not None:
+            self._reduced.destroy()
+        self._reduced, self._reduced_key = None, None
+
+    def destroy(self) -> None:
+        """Free the PETSc objects."""
+        for obj in (self._T, self._Tp, self._work, self._reduced):
+            if obj is not None:
+                obj.destroy()
+        self._reduced = None
+
+
+def _choose_sequentially(
+    owner: np.ndarray, dof: np.ndarray, candidate: np.ndarray, count: int
+) -> np.ndarray:
+    """Term index of each constraint's dependent dof: its first candidate not taken before."""
+    chosen = np.full(count, -1, dtype=np.int64)
+    taken: set[int] = set()
+    for term in np.flatnonzero(candidate).tolist():
+        k, d = int(owner[term]), int(dof[term])
+        if chosen[k] < 0 and d not in taken:
+            chosen[k] = term
+            taken.add(d)
+    return chosen
+
+
+def _petsc(matrix: scipy.sparse.csr_matrix, comm) -> PETSc.Mat:
+    matrix = matrix.tocsr()
+    matrix.sort_indices()
+    n = matrix.shape[0]
+    return PETSc.Mat().createAIJ(
+        (n, n),
+        csr=(
+            matrix.indptr.astype(PETSc.IntType),
+            matrix.indices.astype(PETSc.IntType),
+            matrix.data.astype(PETSc.ScalarType),
+        ),
+        comm=comm,
+    )

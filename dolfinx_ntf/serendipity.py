@@ -1,0 +1,92 @@
+"""The 20-node serendipity hexahedron (CalculiX C3D20/C3D20R) as a constrained Q2 space.
+
+See docs/method.md §13.5. The classical 20-node serendipity space on a hexahedron lies inside the
+27-node triquadratic (Q2) space: it is the Q2 functions whose values at the 6 face centres and the
+cell centre are fixed by the 20 others,
+
+    u(face centre) = -1/4 sum(4 face corners) + 1/2 sum(4 face midside nodes),
+    u(cell centre) = -1/4 sum(8 corners) + 1/4 sum(12 midside nodes),
+
+the values the serendipity shape functions take there. :func:`serendipity_constraints` returns
+these 7 constraints per cell (each face once) for a degree-2 vector Lagrange space on hexahedra;
+with them, :class:`~dolfinx_ntf.ContactProblem` solves in the serendipity space by elimination
+(docs/method.md §13.1) while every ccx node keeps a point-value dof (basix's own serendipity element
+has edge moments as dofs instead, which node-to-face springs cannot use).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.mesh
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.constraints import LinearConstraint
+
+__all__ = ["serendipity_constraints"]
+
+# basix reference hexahedron: vertices in tensor order, edges and faces by their vertices.
+_EDGES = [
+    (0, 1),
+    (0, 2),
+    (0, 4),
+    (1, 3),
+    (1, 5),
+    (2, 3),
+    (2, 6),
+    (3, 7),
+    (4, 5),
+    (4, 6),
+    (5, 7),
+    (6, 7),
+]
+_FACES = [(0, 1, 2, 3), (0, 1, 4, 5), (0, 2, 4, 6), (1, 3, 5, 7), (2, 3, 6, 7), (4, 5, 6, 7)]
+
+
+def _local_rows() -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """(dependent local dof, independent local dofs, weights) of the 7 constraints of a cell.
+
+    Local dofs of a Q2 hexahedron: 0..7 vertices, 8..19 edges, 20..25 faces, 26 the interior.
+    """
+    rows = []
+    for f, face in enumerate(_FACES):
+        edges = [8 + e for e, (a, b) in enumerate(_EDGES) if a in face and b in face]
+        rows.append((20 + f, np.array([*face, *edges]), np.array([-0.25] * 4 + [0.5] * 4)))
+    rows.append((26, np.arange(20), np.array([-0.25] * 8 + [0.25] * 12)))
+    return rows
+
+
+def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstraint]:
+    """Constraints that turn a degree-2 vector Lagrange space on hexahedra into C3D20's space.
+
+    Args:
+        V: Vector Lagrange space of degree 2 on a hexahedral mesh (one process).
+
+    Returns:
+        One constraint per face centre (each face once) and cell centre and component; the centre
+        dof is the dependent one. Dirichlet conditions must leave face- and cell-centre dofs free
+        (their values follow from the 20 nodes).
+    """
+    if V.mesh.topology.cell_type != dolfinx.mesh.CellType.hexahedron:
+        raise ValueError("serendipity_constraints: a hexahedral mesh is needed")
+    if compat.space_degree(V) != 2 or V.dofmap.index_map_bs != 3:
+        raise ValueError("serendipity_constraints: a degree-2 vector Lagrange space is needed")
+    dofs = compat.cell_dofs(V)
+    if dofs.shape[1] != 27:
+        raise ValueError(f"serendipity_constraints: 27 dofs per cell expected, got {dofs.shape[1]}")
+    constraints: list[LinearConstraint] = []
+    seen: set[int] = set()
+    for dependent, independent, weights in _local_rows():
+        coefficients = np.concatenate([[1.0], -weights])
+        for cell_dofs in dofs:
+            centre = int(cell_dofs[dependent])
+            if centre in seen:  # a face shared by two cells
+                continue
+            seen.add(centre)
+            nodes = np.concatenate([[centre], cell_dofs[independent]])
+            for component in range(3):
+                constraints.append(
+                    LinearConstraint(nodes, np.full(nodes.size, component), coefficients)
+                )
+    return constraints

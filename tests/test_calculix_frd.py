@@ -1,0 +1,150 @@
+"""``.frd`` files (dolfinx_ntf.calculix.frd, docs/method.md §13.2): ours and ccx's, one reader."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.frd import (
+    FrdBlock,
+    FrdWriter,
+    format_frd_time,
+    nodal_extrapolation,
+    read_frd,
+)
+from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.calculix.model import INTEGRATION_POINTS
+
+pytestmark = pytest.mark.serial
+
+DATA = Path(__file__).parent / "data" / "calculix"
+# blocks.inp asking for every .frd result, converged tightly by both codes
+_REQUESTS = (
+    "*NODE FILE\nU, RF\n*EL FILE\nS\n*CONTACT FILE\nCDIS, CSTR\n"
+    "*CONTROLS, PARAMETERS=FIELD\n1e-10, 1e-8, , , 1e-10\n"
+)
+
+
+def _deck(directory: Path) -> str:
+    text = (DATA / "model" / "blocks.inp").read_text()
+    text = text.replace("*NODE FILE, CONTACT ELEMENTS\nU\n", _REQUESTS)
+    assert _REQUESTS in text
+    (directory / "frd.inp").write_text(text)
+    return "frd"
+
+
+def test_time_field_like_ccx():
+    assert format_frd_time(0.3) == " 3.00000E-01"
+    assert format_frd_time(0.654297) == " 6.54297E-01"
+    assert format_frd_time(1.2) == " 1.200000000"
+    assert format_frd_time(2.0) == " 2.000000000"
+
+
+def test_records_have_ccx_widths_and_round_trip(tmp_path):
+    path = tmp_path / "a.frd"
+    ids = np.array([1, 2, 3, 4, 7, 8, 9, 10])
+    x = np.random.default_rng(0).uniform(-1, 1, (8, 3))
+    writer = FrdWriter(path, ids, x, np.array([5]), "C3D8", ids[None, :], np.array([1]), ["EL"])
+    u = np.random.default_rng(1).uniform(-1e-3, 1e-3, (8, 3))
+    writer.write(FrdBlock("DISP", (), 1, 2, 0.3, ids, u))
+    writer.write(FrdBlock("CONTACT", (), 1, 2, 0.3, ids[:1], np.arange(6.0)[None, :]))
+    writer.close()
+    lines = path.read_text().splitlines()
+    # as ccx 2.20 writes them (contact1 with *NODE FILE / *CONTACT FILE, first increment)
+    assert "    2C                             8                                     1" in lines
+    assert "    1PSTEP                         1           2           1          " in lines
+    assert "  100CL  101 3.00000E-01           8                     0    1           1" in lines
+    assert " -4  DISP        4    1" in lines
+    assert " -5  D1          1    2    1    0" in lines
+    assert " -5  ALL         1    2    0    0    1ALL" in lines
+    assert " -5  CPRESS      1    4    1    2" in lines
+    assert " -1         5    1    0    1" in lines
+    assert lines[-1] == " 9999"
+    frd = read_frd(path)
+    np.testing.assert_array_equal(frd.node_ids, ids)
+    np.testing.assert_allclose(frd.node_coords, x, rtol=1e-5, atol=1e-5)
+    assert frd.element_nodes[0].tolist() == ids.tolist()
+    (disp,) = frd.blocks_named("DISP")
+    assert (disp.step, disp.increment, disp.time) == (1, 2, 0.3)
+    assert disp.components == ("D1", "D2", "D3")
+    np.testing.assert_allclose(disp.values, u, rtol=1e-5, atol=1e-12)
+    (contact,) = frd.blocks_named("CONTACT")
+    assert contact.components[0] == "COPEN" and contact.values.tolist() == [list(range(6))]
+
+
+def test_extrapolation_matrices():
+    c3d10 = nodal_extrapolation("C3D10", INTEGRATION_POINTS["C3D10"])
+    # a linear field is reproduced at the corners and midside nodes
+    nodes = np.array(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.5, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0],
+         [0, 0, 0.5], [0.5, 0, 0.5], [0, 0.5, 0.5]]
+    )  # fmt: skip
+    field = np.array([1.0, -2.0, 3.0])
+    np.testing.assert_allclose(c3d10 @ (INTEGRATION_POINTS["C3D10"] @ field), nodes @ field)
+    c3d8 = nodal_extrapolation("C3D8", INTEGRATION_POINTS["C3D8"])
+    np.testing.assert_allclose(c3d8.sum(axis=1), 0.99996)  # ccx's weights
+    assert c3d8[0, 0] == 2.549 and c3d8[0, 7] == -0.04904  # node 1: nearest and opposite point
+
+
+def test_job_frd_holds_the_dat_values(tmp_path):
+    name = _deck(tmp_path)
+    text = (tmp_path / f"{name}.inp").read_text()
+    text = text.replace("*CONTACT PRINT\n", "*EL PRINT, ELSET=EALL\nS\n*CONTACT PRINT\n", 1)
+    (tmp_path / f"{name}.inp").write_text(text)
+    result = run_job(name, tmp_path, progress=False)
+    assert result.frd == tmp_path / f"{name}.frd"
+    frd = read_frd(result.frd)
+    dat = read_dat(result.dat)
+    for frd_name, dat_name, columns in (("DISP", "U", [0, 1, 2]), ("FORC", "RF", [0, 1, 2])):
+        for block in (b for b in dat if b.name == dat_name and b.set in ("TOP", "BASE")):
+            (match,) = [b for b in frd.blocks_named(frd_name) if abs(b.time - block.time) < 1e-9]
+            pos = np.searchsorted(match.nodes, block.labels)
+            scale = np.abs(block.values).max()
+            np.testing.assert_allclose(match.values[pos][:, columns], block.values,
+                                       atol=1e-5 * scale)  # fmt: skip
+    for block in (b for b in dat if b.name == "CSTR"):
+        (match,) = [b for b in frd.blocks_named("CONTACT") if abs(b.time - block.time) < 1e-9]
+        np.testing.assert_array_equal(match.nodes, block.labels[::-1])  # reversed, as ccx
+        np.testing.assert_allclose(match.values[::-1, 3], block.values[:, 0], rtol=1e-5)
+    assert len(frd.blocks_named("STRESS")) == len([b for b in dat if b.name == "U"]) == 3
+
+
+@pytest.mark.ccx
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
+def test_job_frd_matches_ccx_frd(tmp_path):
+    from dolfinx_ntf.calculix.ccx import CcxError, run_ccx
+
+    ours, theirs = tmp_path / "ours", tmp_path / "ccx"
+    ours.mkdir()
+    theirs.mkdir()
+    name = _deck(ours)
+    shutil.copy(ours / f"{name}.inp", theirs / f"{name}.inp")
+    run_job(name, ours, progress=False)
+    try:
+        run_ccx(theirs, name, timeout=300)
+    except CcxError:  # at these controls ccx gives up later in the step: its file keeps t = 0.5
+        pass
+    mine, ccx = read_frd(ours / f"{name}.frd"), read_frd(theirs / f"{name}.frd")
+    np.testing.assert_array_equal(mine.node_ids, ccx.node_ids)
+    np.testing.assert_allclose(mine.node_coords, ccx.node_coords)
+    np.testing.assert_array_equal(mine.element_ids, ccx.element_ids)
+    np.testing.assert_array_equal(mine.element_types, ccx.element_types)
+    for a, b in zip(mine.element_nodes, ccx.element_nodes):
+        np.testing.assert_array_equal(a, b)
+    # the first increment (t = 0.5): ccx at these tight controls cuts back later in the step
+    compared = set()
+    for block in ccx.blocks:
+        if abs(block.time - 0.5) > 1e-9 or block.name == "ERROR":  # no error estimator here
+            continue
+        (match,) = [b for b in mine.blocks_named(block.name) if abs(b.time - 0.5) < 1e-9]
+        assert match.components == block.components
+        np.testing.assert_array_equal(match.nodes, block.nodes)  # contact rows in ccx's order
+        scale = np.abs(block.values).max()
+        difference = np.abs(match.values - block.values).max() / scale
+        assert difference < 1e-5, (block.name, difference)
+        compared.add(block.name)
+    assert compared == {"DISP", "STRESS", "FORC", "CONTACT"}
