@@ -9,8 +9,8 @@ CalculiX interop). The method is described in ``docs/method.md``, the code in
 __version__ = "0.1.0"
 
 from dolfinx_ntf import logs as _logs
-from dolfinx_ntf.dynamics import DynamicStep, kinetic_energy
 from dolfinx_ntf.constraints import LinearConstraint
+from dolfinx_ntf.dynamics import DynamicStep, kinetic_energy
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import (
     DynamicLinearLaw,
