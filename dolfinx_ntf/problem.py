@@ -23,6 +23,8 @@ import ufl
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
+from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
+from dolfinx_ntf.friction_state import FrictionState
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
@@ -56,11 +58,13 @@ class ContactPair:
         slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
             surface.
         master: Face-based master surface.
-        interaction: Pressure-overclosure law (and, later, friction).
+        interaction: Pressure-overclosure law and optional friction; may be replaced between
+            steps (new mu and lambda act from then on, the friction state is kept).
         small_sliding: Pair only at increment starts. As in CalculiX, the flag of the *last* pair
             decides for all.
         name: Label used in messages and output.
-        active: Inactive pairs generate no springs (``*MODEL CHANGE``).
+        active: Inactive pairs generate no springs (``*MODEL CHANGE``); a pair that becomes
+            active again starts with a fresh friction state.
     """
 
     slave: FacetSurface | NodeSurface
@@ -113,6 +117,8 @@ class PairState:
     evaluation: SpringEvaluation | None = None
     found_face: np.ndarray | None = None  # face of every slave node at the last pairing, -1: none
     face_changes: int = 0  # slave nodes paired before and after the last pairing, on another face
+    friction: FrictionState | None = None  # friction history per slave node (docs/method.md §11.3)
+    was_active: bool = True  # the pair was active at the previous pairing
 
     @property
     def num_springs(self) -> int:
@@ -153,6 +159,16 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             element nodal forces averaged by the convergence test
             (:meth:`average_element_force`); default ``F`` itself (CalculiX uses the internal
             forces only).
+        friction_tangent: ``"consistent"`` (exact derivative of the friction force) or ``"ccx"``
+            (CalculiX's, projection point frozen in the slip increment), docs/method.md §11.2.
+        reset_friction_on_separation: A slave node that was not in contact at the last converged
+            increment starts with a fresh friction state when it touches (default). False keeps
+            CalculiX's stale state (docs/method.md §11.3).
+        friction_in_tension: Apply ``mu |F_N|`` also when the linear law gives tension, as
+            CalculiX does; by default there is no friction in tension.
+        overlap_ramp: ``"first_increment"`` (CalculiX: the initial overlap is scaled by the
+            increment's time fraction in the first increment only) or ``"linear"`` (over the whole
+            first step, as CalculiX's manual describes), docs/method.md §11.6.
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
@@ -169,6 +185,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
         element_forces: ufl.Form | None = None,
+        friction_tangent: str = "consistent",
+        reset_friction_on_separation: bool = True,
+        friction_in_tension: bool = False,
+        overlap_ramp: str = "first_increment",
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -180,9 +200,25 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             J,
             **compat.jit_keywords(form_compiler_options, jit_options),
         )
+        if friction_tangent not in TANGENT_MODES:
+            raise ValueError(
+                f"ContactProblem: friction_tangent must be one of {TANGENT_MODES}, "
+                f"got {friction_tangent!r}"
+            )
+        if overlap_ramp not in ("first_increment", "linear"):
+            raise ValueError(
+                "ContactProblem: overlap_ramp must be 'first_increment' or 'linear', "
+                f"got {overlap_ramp!r}"
+            )
         V = u.function_space
         self.u = u
         self.symmetric = symmetric
+        self.friction_tangent = friction_tangent
+        self.reset_friction_on_separation = bool(reset_friction_on_separation)
+        self.friction_in_tension = bool(friction_in_tension)
+        self.overlap_ramp = overlap_ramp
+        #: Steps begun so far (:meth:`begin_step`); the linear overlap ramp lasts step 1.
+        self.step_count = 0
         self.linearize_area = linearize_area
         self.max_depth = max_depth
         self.walk_from_previous_face = walk_from_previous_face
@@ -218,10 +254,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
-        if pair.interaction.friction is not None:
-            raise NotImplementedError(
-                f"{name}: friction is not supported yet (frictionless contact only)"
-            )
         V = self.u.function_space
         slave = resolve_slave(V, pair.slave, what=f"{name} slave")
         master_faces = resolve_master(V, pair.master, what=f"{name} master")
@@ -240,7 +272,18 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 f"{name}: {both.size} node(s) belong to both the slave and the master surface "
                 f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
             )
-        return PairState(pair, slave, master_faces, master, np.zeros(slave.nodes.size))
+        friction = FrictionState(
+            slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
+        )
+        return PairState(
+            pair,
+            slave,
+            master_faces,
+            master,
+            np.zeros(slave.nodes.size),
+            friction=friction,
+            was_active=pair.active,
+        )
 
     # -- state -------------------------------------------------------------------------------------
 
@@ -263,6 +306,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         comm = self.u.function_space.mesh.comm
         total, count = comm.allreduce(total), comm.allreduce(count)
         return total / max(count, 1)
+
+    @property
+    def has_friction(self) -> bool:
+        """Whether any pair has friction now (the Jacobian is then unsymmetric)."""
+        return any(s.pair.interaction.friction is not None for s in self.states)
 
     @property
     def face_changes(self) -> int:
@@ -311,14 +359,31 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.time_fraction = float(time_fraction)
         self.static = static
         first = not self._first_pairing_done
+        keep = self.overlap_ramp == "linear" and self.step_count <= 1 and static
         for state in self.states:
-            state.overlap[:] = 0.0
+            if not keep:
+                state.overlap[:] = 0.0
+            state.friction.begin_increment()
         self.iteration = 0
         self.count_changed = False
         self.repair_next_iteration = False
         self.pair(record_overlap=first)
         self._first_pairing_done = True
         self.ensure_matrix()
+
+    def begin_step(self) -> None:
+        """Tell the problem that a new step starts (ends the linear overlap ramp of step 1)."""
+        self.step_count += 1
+        if self.step_count > 1:
+            for state in self.states:
+                state.overlap[:] = 0.0
+
+    def end_increment(self) -> None:
+        """Accept the converged increment: commit the friction state (docs/method.md §11.3)."""
+        if self.has_friction:
+            self.evaluate(tangent=False)
+        for state in self.states:
+            state.friction.commit(state.spring_slave)
 
     def pair(self, *, record_overlap: bool = False) -> int:
         """Pair every slave node with a master face at the current displacement.
@@ -351,7 +416,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 np.empty(0),
                 None,
             )
+            state.was_active = False
             return
+        if not state.was_active:  # reactivated: a fresh friction history
+            state.friction.reset()
+            state.was_active = True
         previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         previous[state.spring_slave] = state.spring_face
         found, face, areas, evaluation = self._search(state, coords, previous)
@@ -366,6 +435,14 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             create
         ]  # 0 = no slave face: springs.py applies the fallback
         state.xi = evaluation.xi[create]
+        if state.pair.interaction.friction is not None:
+            fresh = state.friction.fresh(state.spring_slave)
+            if np.any(fresh):  # anchor at the relative displacement now (docs/method.md §11.3)
+                u = coords - self._reference
+                nodes = state.element_nodes[fresh]
+                phi = evaluation.phi[create][fresh]
+                a = u[nodes[:, -1]] - np.einsum("nj,nji->ni", phi, u[nodes[:, :-1]])
+                state.friction.anchor(state.spring_slave[fresh], a)
         current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         current[state.spring_slave] = state.spring_face
         state.face_changes = int(
@@ -437,7 +514,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return xi0
 
     def _gap_shift(self, state: PairState, slave_index: np.ndarray) -> np.ndarray | float:
-        """g0 (1 - tau) in static steps, 0 otherwise (docs/method.md §3.5)."""
+        """g0 (1 - tau) in static steps, 0 otherwise (docs/method.md §3.5, §11.6)."""
         if not self.static:
             return 0.0
         return state.overlap[slave_index] * (1.0 - self.time_fraction)
@@ -448,8 +525,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """Evaluate every spring at the current displacement; returns the blocks to assemble."""
         coords = self.current_coordinates()
         blocks = []
+        symmetric = self.symmetric and not self.has_friction
         for state in self.states:
             nodes = state.element_nodes
+            friction = self._friction_input(state, coords, nodes)
             if self.linearize_area:  # areas follow the deformation between pairings too
                 faces = state.slave.faces
                 areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
@@ -463,10 +542,14 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 gap_shift=self._gap_shift(state, state.spring_slave),
                 xi0=state.xi,
                 tangent=tangent,
-                symmetric=self.symmetric,
+                symmetric=symmetric,
+                friction=friction,
             )
             state.evaluation = ev
             state.xi = ev.xi
+            if ev.tangential is not None:
+                tf = ev.tangential
+                state.friction.store(state.spring_slave, tf.a, tf.t, tf.slip)
             blocks.append(
                 SpringBlocks(
                     nodes,
@@ -478,6 +561,23 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             if tangent and self.linearize_area:
                 blocks.append(self._area_block(state, coords))
         return blocks
+
+    def _friction_input(
+        self, state: PairState, coords: np.ndarray, nodes: np.ndarray
+    ) -> FrictionInput | None:
+        """Friction state and parameters of the pair's springs, None without friction."""
+        friction = state.pair.interaction.friction
+        if friction is None:
+            return None
+        displacements = (coords - self._reference)[nodes]
+        return FrictionInput(
+            displacements,
+            *state.friction.start_values(state.spring_slave),
+            mu=friction.mu,
+            stick_slope=friction.stick_slope,
+            in_tension=self.friction_in_tension,
+            tangent_mode=self.friction_tangent,
+        )
 
     def _area_block(
         self, state: PairState, coords: np.ndarray, *, values: bool = True

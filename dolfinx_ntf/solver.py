@@ -162,7 +162,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         line_search_from: int = 2,
         check_unpaired: bool = True,
     ) -> None:
-        symmetric = petsc_options is None and getattr(problem, "symmetric", False)
+        symmetric = (
+            petsc_options is None
+            and getattr(problem, "symmetric", False)
+            and not getattr(problem, "has_friction", False)  # friction: never Cholesky
+        )
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
         options = validation.check_solver(
             comm,
@@ -251,6 +255,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         merges = self.problem.assembler.pattern_merges
         self.problem.J(x, A)
         ksp = self.krylov_solver
+        if self.problem.has_friction and ksp.getPC().getType() == "cholesky":
+            logger.info(" friction makes the Jacobian unsymmetric: LU instead of Cholesky")
+            ksp.getPC().setType("lu")
         if self._check_symmetry:  # the default Cholesky solver needs a symmetric bulk Jacobian too
             self._check_symmetry = False
             if not A.isSymmetric(1e-10 * A.norm(PETSc.NormType.NORM_INFINITY)):
@@ -562,6 +569,7 @@ class StaticStep:
                 f"growth_factor ({self.growth_factor})"
             )
         results: list[IncrementResult] = []
+        problem.begin_step()
         t, dt = 0.0, self.initial_increment
         increment = 0
         fast_in_a_row = 0
@@ -594,6 +602,7 @@ class StaticStep:
                             problem.pair()
                             problem.ensure_matrix()
                     iterations, _ = solver.solve(u)
+                    problem.end_increment()
                     break
                 except ContactConvergenceError as error:
                     u.x.array[:] = u_start
