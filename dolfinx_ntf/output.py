@@ -197,7 +197,8 @@ class ContactWriter:
     """Writes the displacement and the :class:`ContactFields` to an XDMF file (for ParaView).
 
     Each :meth:`write` adds a time step: ``u`` and ``contact_pressure``, ``contact_clearance``,
-    ``contact_status``, ``contact_shear`` and ``contact_slip``. The initial state can be written before the first solve (zero fields).
+    ``contact_status``, ``contact_shear`` and ``contact_slip``. The initial state can be written
+    before the first solve (zero fields).
     XDMF keeps vertex values only, so a P2 displacement loses its midside values in the file.
 
     Args:

@@ -6,15 +6,21 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from conftest import (
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    PUNCH,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    elastic_residual,
+    two_blocks,
+)
 
 import dolfinx.fem
 import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-
-from conftest import LOWER_BOTTOM, LOWER_TOP, PUNCH, UPPER_BOTTOM, UPPER_TOP, two_blocks
-from conftest import elastic_residual
 
 pytestmark = pytest.mark.serial
 
