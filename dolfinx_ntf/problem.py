@@ -418,8 +418,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             )
             state.was_active = False
             return
-        if not state.was_active:  # reactivated: a fresh friction history
-            state.friction.reset()
+        if not state.was_active:  # reactivated: a fresh friction history (ccx keeps the old one)
+            if self.reset_friction_on_separation:
+                state.friction.reset()
             state.was_active = True
         previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         previous[state.spring_slave] = state.spring_face

@@ -44,6 +44,8 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.friction import output_tangents
+from dolfinx_ntf.laws import SurfaceInteraction
 from dolfinx_ntf.output import ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactProblem
 from dolfinx_ntf.solver import (
@@ -58,7 +60,7 @@ from dolfinx_ntf.solver import (
 from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
 from .deck import Deck, PrintRequest, Step, read_deck
-from .model import INTEGRATION_POINTS, CalculixModel, build_model
+from .model import INTEGRATION_POINTS, CalculixModel, build_model, friction_of
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -90,8 +92,12 @@ class ContactRows:
         nodes: ``(k,)`` ccx slave node numbers.
         clearance: ``(k,)`` CDIS normal value (negative = penetration).
         pressure: ``(k,)`` CSTR contact pressure.
-        energy: ``(k,)`` CELS spring energy.
+        energy: ``(k,)`` CELS spring energy (with ccx 2.20's friction energy, docs/method.md
+            §11.4).
         master_faces: ``(k, n)`` ccx node numbers of each element's master face, ccx face order.
+        slip: ``(k, 2)`` CDIS tangential columns: accumulated tangential relative displacement
+            along ccx's output directions t1, t2 (zero without friction).
+        shear: ``(k, 2)`` CSTR tangential columns: shear traction along t1, t2.
     """
 
     pair: str
@@ -100,6 +106,8 @@ class ContactRows:
     pressure: np.ndarray
     energy: np.ndarray
     master_faces: np.ndarray
+    slip: np.ndarray | None = None
+    shear: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -283,14 +291,21 @@ class _Job:
             order = np.argsort(nodes, kind="stable")
             facets = state.master_faces.facets[state.spring_face]
             faces = self.model.face_nodes_of(pair.master, facets)
+            t1, t2 = output_tangents(results.normal)
+            slip = np.column_stack([np.einsum("ni,ni->n", results.slip, t) for t in (t1, t2)])
+            shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
+            # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4)
+            energy = results.energy + 2.0 * results.friction_energy
             rows.append(
                 ContactRows(
                     results.pair,
                     nodes[order],
                     results.clearance[order],
                     results.pressure[order],
-                    results.energy[order],
+                    energy[order],
                     faces[order],
+                    slip[order].reshape(-1, 2),
+                    shear[order].reshape(-1, 2),
                 )
             )
         return rows
@@ -356,6 +371,7 @@ class _Job:
         if index > 0:
             bcs = model.begin_step(index)
             problem.set_bcs(bcs)
+        self._contact_changes(step)
         controls = step.field_controls()
         self.solver.controls = {
             k: float(v)
@@ -403,6 +419,18 @@ class _Job:
             pair_after_predictor=self.pair_after_predictor,
         )
         driver.run(self.solver, model.u)
+
+    def _contact_changes(self, step: Step) -> None:
+        """``*CHANGE FRICTION`` and ``*MODEL CHANGE`` of a step (docs/method.md §11.5)."""
+        for change in step.friction_changes:
+            friction = friction_of(self.deck, change.friction)
+            for pair, spec in zip(self.model.pairs, self.deck.contact_pairs):
+                if spec.interaction == change.interaction:
+                    pair.interaction = SurfaceInteraction(pair.interaction.law, friction)
+        for change in step.model_changes:
+            for pair, spec in zip(self.model.pairs, self.deck.contact_pairs):
+                if (spec.slave, spec.master) == (change.slave, change.master):
+                    pair.active = change.action == "ADD"
 
     def _converged(self, index: int, step: Step, result: IncrementResult) -> None:
         model = self.model
@@ -474,12 +502,23 @@ class _Job:
     ) -> list[DatBlock]:
         nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, np.int64)
         zeros = np.zeros(nodes.size)
+        zeros2 = np.zeros((nodes.size, 2))
+
+        def tangential(name: str) -> np.ndarray:
+            return np.concatenate([getattr(r, name) for r in contact]) if contact else zeros2
+
         columns = {
             "CDIS": lambda: np.column_stack(
-                [np.concatenate([r.clearance for r in contact]) if contact else zeros, zeros, zeros]
+                [
+                    np.concatenate([r.clearance for r in contact]) if contact else zeros,
+                    tangential("slip"),
+                ]
             ),
             "CSTR": lambda: np.column_stack(
-                [np.concatenate([r.pressure for r in contact]) if contact else zeros, zeros, zeros]
+                [
+                    np.concatenate([r.pressure for r in contact]) if contact else zeros,
+                    tangential("shear"),
+                ]
             ),
             "CELS": lambda: np.concatenate([r.energy for r in contact]) if contact else zeros,
             "CNUM": lambda: None,
@@ -565,7 +604,14 @@ def run_job(
         model,
         comm,
         tight=tight,
-        problem_options={"walk_from_previous_face": False, **(problem_options or {})},
+        problem_options={
+            "walk_from_previous_face": False,
+            # ccx's friction (docs/method.md §11): stale state, friction in tension, its tangent
+            "reset_friction_on_separation": False,
+            "friction_in_tension": True,
+            "friction_tangent": "ccx",
+            **(problem_options or {}),
+        },
         petsc_options=petsc_options,
         predictor=predictor,
         pair_after_predictor=pair_after_predictor,
