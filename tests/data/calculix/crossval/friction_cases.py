@@ -66,8 +66,8 @@ def _hex_stick_punch(directory: Path) -> None:
               pressures=[PressureSpec(ntf.FacetSurface(ft, facet_tag(1, TOP)), 20.0)]),
         _step(2, boundaries=[_top(ft, (0,), 1e-3, name="DRAG")]),
     ]  # fmt: skip
-    _write(directory, "hex_stick_punch", V, ct, ft, [_pair(ft, 0.5)], steps,
-           "C3D8 punch pressed by a pressure, then its top moved sideways: friction sticks")  # fmt: skip
+    heading = "C3D8 punch pressed by a pressure, then its top moved sideways: friction sticks"
+    _write(directory, "hex_stick_punch", V, ct, ft, [_pair(ft, 0.5)], steps, heading)
 
 
 def _hex_sliding_block(directory: Path) -> None:
