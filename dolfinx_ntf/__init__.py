@@ -9,6 +9,16 @@ CalculiX interop). The method is described in ``docs/method.md``, the code in
 __version__ = "0.1.0"
 
 from dolfinx_ntf import logs as _logs
+from dolfinx_ntf.analysis import (
+    AddPair,
+    Amplitude,
+    AnalysisStep,
+    ChangeFriction,
+    Load,
+    RemovePair,
+    SetSmallSliding,
+    run_steps,
+)
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import (
     ExponentialLaw,
@@ -35,6 +45,10 @@ from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 _logs.route_compiler_lines()
 
 __all__ = [
+    "AddPair",
+    "Amplitude",
+    "AnalysisStep",
+    "ChangeFriction",
     "ContactConvergenceError",
     "ContactDivergenceError",
     "ContactFields",
@@ -49,8 +63,11 @@ __all__ = [
     "Friction",
     "IncrementResult",
     "LinearLaw",
+    "Load",
     "NodeSurface",
     "PressureOverclosureLaw",
+    "RemovePair",
+    "SetSmallSliding",
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",
@@ -61,5 +78,6 @@ __all__ = [
     "contact_results",
     "log_progress",
     "reaction",
+    "run_steps",
     "small_strain_stress",
 ]

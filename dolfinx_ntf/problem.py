@@ -60,8 +60,9 @@ class ContactPair:
         master: Face-based master surface.
         interaction: Pressure-overclosure law and optional friction; may be replaced between
             steps (new mu and lambda act from then on, the friction state is kept).
-        small_sliding: Pair only at increment starts. As in CalculiX, the flag of the *last* pair
-            decides for all.
+        small_sliding: Pair only at increment starts. Per pair by default; with
+            ``ContactProblem(small_sliding_rule="last_pair")`` the flag of the *last* pair decides
+            for all, as in CalculiX.
         name: Label used in messages and output.
         active: Inactive pairs generate no springs (``*MODEL CHANGE``); a pair that becomes
             active again starts with a fresh friction state.
@@ -166,6 +167,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             CalculiX's stale state (docs/method.md §11.3).
         friction_in_tension: Apply ``mu |F_N|`` also when the linear law gives tension, as
             CalculiX does; by default there is no friction in tension.
+        small_sliding_rule: ``"per_pair"`` (each pair's ``small_sliding`` flag) or
+            ``"last_pair"`` (CalculiX: the last pair's flag decides for all), docs/method.md §11.6.
         overlap_ramp: ``"first_increment"`` (CalculiX: the initial overlap is scaled by the
             increment's time fraction in the first increment only) or ``"linear"`` (over the whole
             first step, as CalculiX's manual describes), docs/method.md §11.6.
@@ -189,6 +192,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         reset_friction_on_separation: bool = True,
         friction_in_tension: bool = False,
         overlap_ramp: str = "first_increment",
+        small_sliding_rule: str = "per_pair",
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -205,6 +209,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 f"ContactProblem: friction_tangent must be one of {TANGENT_MODES}, "
                 f"got {friction_tangent!r}"
             )
+        if small_sliding_rule not in ("per_pair", "last_pair"):
+            raise ValueError(
+                "ContactProblem: small_sliding_rule must be 'per_pair' or 'last_pair', "
+                f"got {small_sliding_rule!r}"
+            )
         if overlap_ramp not in ("first_increment", "linear"):
             raise ValueError(
                 "ContactProblem: overlap_ramp must be 'first_increment' or 'linear', "
@@ -217,6 +226,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.reset_friction_on_separation = bool(reset_friction_on_separation)
         self.friction_in_tension = bool(friction_in_tension)
         self.overlap_ramp = overlap_ramp
+        self.small_sliding_rule = small_sliding_rule
         #: Steps begun so far (:meth:`begin_step`); the linear overlap ramp lasts step 1.
         self.step_count = 0
         self.linearize_area = linearize_area
@@ -232,7 +242,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
         validation.check_distinct_pairs(V.mesh.comm, self._surfaces(), self._reference)
-        self.small_sliding = bool(pairs[-1].small_sliding) if pairs else True
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
         self.static = True
         self.iteration = 0
@@ -243,6 +252,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
+        self._increment_start_u = u.x.array.reshape(-1, 3).copy()
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the
         #: residual.
@@ -308,6 +318,17 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return total / max(count, 1)
 
     @property
+    def small_sliding(self) -> bool:
+        """True when no pair is re-paired inside increments (all pairs small sliding)."""
+        return all(self._small_sliding(s) for s in self.states)
+
+    def _small_sliding(self, state: PairState) -> bool:
+        """Whether the pair of ``state`` is paired at increment starts only."""
+        if self.small_sliding_rule == "last_pair":
+            return bool(self.states[-1].pair.small_sliding)
+        return bool(state.pair.small_sliding)
+
+    @property
     def has_friction(self) -> bool:
         """Whether any pair has friction now (the Jacobian is then unsymmetric)."""
         return any(s.pair.interaction.friction is not None for s in self.states)
@@ -358,6 +379,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._check_finite()
         self.time_fraction = float(time_fraction)
         self.static = static
+        self._increment_start_u = self.u.x.array.reshape(-1, 3).copy()
         first = not self._first_pairing_done
         keep = self.overlap_ramp == "linear" and self.step_count <= 1 and static
         for state in self.states:
@@ -385,14 +407,20 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         for state in self.states:
             state.friction.commit(state.spring_slave)
 
-    def pair(self, *, record_overlap: bool = False) -> int:
+    def pair(self, *, record_overlap: bool = False, large_sliding_only: bool = False) -> int:
         """Pair every slave node with a master face at the current displacement.
+
+        Args:
+            record_overlap: Record the initial overlap (first pairing of the analysis).
+            large_sliding_only: Re-pair only the pairs without small sliding.
 
         Returns:
             The number of springs.
         """
         coords = self.current_coordinates()
         for state in self.states:
+            if large_sliding_only and self._small_sliding(state):
+                continue
             self._pair_one(state, coords, record_overlap)
         self.pairings += 1
         self._pattern_checked = False
@@ -438,8 +466,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         state.xi = evaluation.xi[create]
         if state.pair.interaction.friction is not None:
             fresh = state.friction.fresh(state.spring_slave)
-            if np.any(fresh):  # anchor at the relative displacement now (docs/method.md §11.3)
-                u = coords - self._reference
+            if np.any(fresh):  # anchor at the increment start (docs/method.md §11.3)
+                u = self._increment_start_u
                 nodes = state.element_nodes[fresh]
                 phi = evaluation.phi[create][fresh]
                 a = u[nodes[:, -1]] - np.einsum("nj,nji->ni", phi, u[nodes[:, :-1]])
@@ -674,9 +702,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.count_changed = False
         scheduled = not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION
         if scheduled or self.repair_next_iteration:
-            self.repair_next_iteration = False
             before = self.num_springs
-            self.count_changed = self.pair() != before
+            self.count_changed = (
+                self.pair(large_sliding_only=not self.repair_next_iteration) != before
+            )
+            self.repair_next_iteration = False
             self.form(x)
             if self._residual_vector is not None:
                 self.F(x, self._residual_vector)

@@ -197,6 +197,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.increment_start: np.ndarray | None = None
         self._averages: list[float] = []
         self._largest: list[float] = []
+        #: Mean element force of every converged increment so far (the scale of an unloaded one).
+        self.past_averages: list[float] = []
         self.min_iterations = min_iterations
         self.divergence_iteration = divergence_iteration
         self._first_check = divergence_iteration
@@ -328,6 +330,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         start = self.increment_start if self.increment_start is not None else self._solve_start
         change = float(np.abs(x.array - start[: x.array.size]).max(initial=0.0))
         change = self.problem.u.function_space.mesh.comm.allreduce(change, op=MPI.MAX)
+        past = float(np.mean(self.past_averages)) if self.past_averages else 0.0
+        if mean <= controls["epsilon"] * past:
+            # Unloaded (all forces vanish, e.g. a contact pair removed): CalculiX's zero-flux test
+            # against the forces of the earlier increments (docs/method.md §11.6).
+            mean = past
         if average <= controls["epsilon"] * mean:
             c1, c2 = controls["epsilon"], controls["C_epsilon"]
         else:
@@ -465,6 +472,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
                 f"(residual {self.residual_norms[-1]:.3e}, "
                 f"first {self.residual_norms[0]:.3e}){_no_support_hint(self.problem)}"
             )
+        if self._averages:
+            self.past_averages.append(float(np.mean(self._averages)))
         return iterations, True
 
 

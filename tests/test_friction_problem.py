@@ -27,12 +27,13 @@ pytestmark = pytest.mark.serial
 MU, STICK_SLOPE, PRESSURE = 0.2, 500.0, 10.0
 
 
-def drag_problem(mu=MU, stick_slope=STICK_SLOPE, **options):
+def drag_problem(mu=MU, stick_slope=STICK_SLOPE, gap=0.0, **options):
     """The punch of conftest with its top moved horizontally by ``drag`` (a Function's value).
 
-    Returns the problem, the pressure Constant, the drag value setter and the facet tags.
+    Returns the problem, the pressure Constant, the drag value setter and the facet tags; the
+    Function of the prescribed x displacement of the top is ``problem.drag``.
     """
-    mesh, _, ft = two_blocks(MPI.COMM_WORLD, upper=PUNCH)
+    mesh, _, ft = two_blocks(MPI.COMM_WORLD, upper=PUNCH, gap=gap)
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
@@ -56,6 +57,7 @@ def drag_problem(mu=MU, stick_slope=STICK_SLOPE, **options):
         ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), interaction
     )
     problem = ntf.ContactProblem(F, u, [pair], bcs, **options)
+    problem.drag = drag[0]
     return problem, pressure, set_drag, ft
 
 
