@@ -22,6 +22,7 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
+from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
 from dolfinx_ntf.friction_state import FrictionState
@@ -66,6 +67,9 @@ class ContactPair:
         name: Label used in messages and output.
         active: Inactive pairs generate no springs (``*MODEL CHANGE``); a pair that becomes
             active again starts with a fresh friction state.
+        adjust: CalculiX's ADJUST at the first pairing of the analysis (docs/method.md §11.5): a
+            distance ``a >= 0`` (slave nodes with clearance ``g <= a`` are moved onto the
+            master) or a :class:`NodeSurface` of the nodes to move; None moves nothing.
     """
 
     slave: FacetSurface | NodeSurface
@@ -74,6 +78,7 @@ class ContactPair:
     small_sliding: bool = False
     name: str = ""
     active: bool = True
+    adjust: float | NodeSurface | None = None
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -98,6 +103,16 @@ class ContactPair:
             else "",
         )
         validation.check_type(self.name, str, f"{owner}: name")
+        if self.adjust is not None and not isinstance(self.adjust, NodeSurface):
+            if isinstance(self.adjust, bool) or not isinstance(self.adjust, (int, float)):
+                raise TypeError(
+                    f"{owner}: adjust must be a distance >= 0, a NodeSurface or None, got "
+                    f"{validation.describe(self.adjust)}"
+                )
+            if not (np.isfinite(self.adjust) and self.adjust >= 0):
+                raise ValueError(
+                    f"{owner}: adjust must be a finite distance >= 0, got {self.adjust}"
+                )
 
 
 @dataclass
@@ -119,6 +134,7 @@ class PairState:
     found_face: np.ndarray | None = None  # face of every slave node at the last pairing, -1: none
     face_changes: int = 0  # slave nodes paired before and after the last pairing, on another face
     friction: FrictionState | None = None  # friction history per slave node (docs/method.md §11.3)
+    adjust_nodes: np.ndarray | None = None  # ADJUST node set as slave dofs
     was_active: bool = True  # the pair was active at the previous pairing
 
     @property
@@ -285,6 +301,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
+        adjust_nodes = None
+        if isinstance(pair.adjust, NodeSurface):
+            adjust_nodes = resolve_slave(V, pair.adjust, what=f"{name} adjust").nodes
         return PairState(
             pair,
             slave,
@@ -293,6 +312,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             np.zeros(slave.nodes.size),
             friction=friction,
             was_active=pair.active,
+            adjust_nodes=adjust_nodes,
         )
 
     # -- state -------------------------------------------------------------------------------------
@@ -453,6 +473,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         previous[state.spring_slave] = state.spring_face
         found, face, areas, evaluation = self._search(state, coords, previous)
+        if (
+            record_overlap
+            and state.pair.adjust is not None
+            and self._adjust(state, found, evaluation)
+        ):
+            coords = self.current_coordinates()
+            found, face, areas, evaluation = self._search(state, coords, previous)
         state.found_face = face
         gap = evaluation.gap
         if record_overlap:
@@ -504,6 +531,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             xi0=self._previous_xi(state, found, face),
         )
         return found, face, areas, evaluation
+
+    def _adjust(self, state: PairState, found: np.ndarray, evaluation: SpringEvaluation) -> int:
+        """ADJUST: move the selected slave nodes onto the master (docs/method.md §11.5)."""
+        adjust = state.pair.adjust
+        in_set = None
+        if state.adjust_nodes is not None:
+            in_set = np.isin(state.slave.nodes[found], state.adjust_nodes)
+        move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
+        count = int(np.count_nonzero(move))
+        if count:
+            delta = -evaluation.gap[move, None] * evaluation.normal[move]
+            move_reference_nodes(
+                self.u.function_space, self._reference, state.slave.nodes[found[move]], delta
+            )
+            logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
+        return count
 
     def _creates_spring(
         self, state: PairState, found: np.ndarray, gap: np.ndarray, areas: np.ndarray

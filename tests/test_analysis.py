@@ -10,8 +10,10 @@ from conftest import UPPER_TOP
 from test_friction_problem import MU, STICK_SLOPE, drag_problem
 
 import dolfinx.fem
+import dolfinx.fem.petsc
 
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 
 pytestmark = pytest.mark.serial
 
@@ -140,3 +142,31 @@ def test_bad_steps():
     other = drag_problem()[0].states[0].pair
     with pytest.raises(ValueError, match="the pair is not in the problem"):
         ntf.run_steps(solver, [ntf.AnalysisStep(changes=[ntf.RemovePair(other)])])
+
+
+def test_adjust_moves_slave_nodes_onto_the_master_without_strain():
+    problem, pressure, _, _ = drag_problem(gap=0.003)
+    (state,) = problem.states
+    state.pair.adjust = 0.005
+    bottom = state.slave.nodes
+    before = problem.reference_coordinates[bottom].copy()
+    assert np.allclose(before[:, 2], 0.003)
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    problem.begin_increment(0.0)
+    after = problem.reference_coordinates[bottom]
+    np.testing.assert_allclose(after[:, 2], 0.0, atol=1e-15)
+    np.testing.assert_array_equal(after[:, :2], before[:, :2])
+    assert problem.num_springs == bottom.size
+    # the mesh moved with them: the unloaded problem has no residual (no strain)
+    x = problem.u.function_space.mesh.geometry.x
+    assert np.isclose(x[:, 2], 0.0).sum() > np.isclose(x[:, 2], 0.003).sum()
+    b = dolfinx.fem.petsc.create_vector(problem.L)
+    u = compat.petsc_vector(problem.u)
+    problem.form(u)
+    problem.F(u, b)
+    assert b.norm() < 1e-12
+    b.destroy()
+    ntf.run_steps(solver, [ntf.AnalysisStep(_fixed(1), [ntf.Load(pressure, 10.0)])])
+    assert ntf.contact_force(problem)[2] == pytest.approx(10.0 * 0.6 * 0.6, rel=1e-8)
+    with pytest.raises(ValueError, match="adjust must be a finite distance"):
+        ntf.ContactPair(state.pair.slave, state.pair.master, state.pair.interaction, adjust=-1.0)

@@ -411,11 +411,6 @@ def test_contact_blocks_end_to_end(tmp_path):
             r"mixes element types C3D4 \(first at \S*err_mixed.inp:14\), C3D8",
         ),
         (
-            "err_adjust",
-            NotImplementedError,
-            r"err_adjust.inp:34: \*CONTACT PAIR, ADJUST is not supported yet",
-        ),
-        (
             "err_unknown_surface",
             DeckError,
             r"err_unknown_surface.inp:34: master surface NOSUCH is not defined",

@@ -322,9 +322,6 @@ def _not_supported(what: str, location) -> NotImplementedError:
 
 def _check_supported(deck: Deck) -> None:
     """Deck features the solver cannot run yet: a clear error naming the keyword and line."""
-    for pair in deck.contact_pairs:
-        if pair.adjust is not None:
-            raise _not_supported("*CONTACT PAIR, ADJUST", pair.location)
 
 
 def _element_block(deck: Deck):
@@ -538,7 +535,22 @@ def friction_of(deck: Deck, data) -> Friction:
     return Friction(data.mu, data.stick_slope)
 
 
-def _contact_pairs(deck: Deck, surfaces: dict) -> list[ContactPair]:
+def _adjust(deck: Deck, pair, node_vertex: np.ndarray) -> float | NodeSurface | None:
+    """The ADJUST of a pair: a distance, the vertices of a node set, or None."""
+    if pair.adjust is None or isinstance(pair.adjust, float):
+        return pair.adjust
+    ids = deck.nsets[pair.adjust]
+    vertices = node_vertex[deck.node_index(ids)]
+    if np.any(vertices < 0):
+        node = int(ids[np.argmax(vertices < 0)])
+        raise _not_supported(
+            f"ADJUST={pair.adjust} with node {node}, which is not an element corner",
+            pair.location,
+        )
+    return NodeSurface(np.unique(vertices).astype(np.int32), pair.adjust)
+
+
+def _contact_pairs(deck: Deck, surfaces: dict, node_vertex: np.ndarray) -> list[ContactPair]:
     pairs = []
     for pair in deck.contact_pairs:
         law = _law(deck, pair.interaction)
@@ -551,6 +563,7 @@ def _contact_pairs(deck: Deck, surfaces: dict) -> list[ContactPair]:
                 SurfaceInteraction(law, friction),
                 small_sliding=pair.small_sliding,
                 name=f"{pair.slave}-{pair.master}",
+                adjust=_adjust(deck, pair, node_vertex),
             )
         )
     return pairs
@@ -780,8 +793,8 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
-        NotImplementedError: features not supported yet (ADJUST,
-            parallel runs...), naming the keyword and ``file:line``.
+        NotImplementedError: features not supported yet (parallel runs, ...), naming the
+            keyword and ``file:line``.
     """
     if comm.size > 1:
         raise NotImplementedError(
@@ -802,7 +815,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     parts = {"block": block, "node_vertex": node_vertex, "find": _facet_finder(mesh)}
     surfaces, surface_tags, surface_faces = _surfaces(deck, mesh, parts)
-    pairs = _contact_pairs(deck, surfaces)
+    pairs = _contact_pairs(deck, surfaces, node_vertex)
     mu, lmbda = _lame(deck, block, mesh, element_cell)
     steps, amplitude_names, pressure_tags, num_groups = _schedules(
         deck, block, node_dof, parts, mesh

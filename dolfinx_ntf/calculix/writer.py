@@ -704,6 +704,12 @@ def _write_pair(out: _Out, V, md: _Mesh, k: int, pair: ContactPair) -> None:
         )
     _write_face_surface(out, V, md, master, pair.master, f"{what} master")
     small = ", SMALL SLIDING" if pair.small_sliding else ""
+    if isinstance(pair.adjust, NodeSurface):
+        ids = np.unique(out.gather(_node_ids(V, md, pair.adjust, f"{what} adjust")))
+        out.add(f"*NSET, NSET=ADJUST{k}", *_int_lines(ids))
+        small += f", ADJUST=ADJUST{k}"
+    elif pair.adjust is not None:
+        small += f", ADJUST={_real(pair.adjust, 'adjust')}"
     out.add(
         f"*CONTACT PAIR, INTERACTION=SI{k}, TYPE=NODE TO SURFACE{small}",
         f"{slave}, {master}",

@@ -13,6 +13,7 @@ from pathlib import Path
 from cases import BOTTOM, E1, E2, LINEAR, LOWER, NU1, NU2, PUNCH, TOP, Case, blocks, facet_tag
 
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.writer import (
     TIGHT_FIELD_CONTROLS,
     BoundarySpec,
@@ -88,11 +89,42 @@ def _hex_sliding_block(directory: Path) -> None:
            "0.4), lifted with the pair removed, pressed again after ADD")  # fmt: skip
 
 
+def _hex_adjust_gap(directory: Path) -> None:
+    punch = ((0.11, 0.13, 0.003), (0.6, 0.6, 0.4), (3, 3, 2))  # 0.003 above the block
+    V, ct, ft = blocks([LOWER, punch])
+    pair = _pair(ft, 0.3)
+    pair.adjust = 0.005
+    steps = [
+        _step(2, boundaries=[_top(ft, (0, 1))],
+              pressures=[PressureSpec(ntf.FacetSurface(ft, facet_tag(1, TOP)), 20.0)]),
+    ]  # fmt: skip
+    _write(directory, "hex_adjust_gap", V, ct, ft, [pair], steps,
+           "C3D8 punch 0.003 above the block, ADJUST=0.005, friction, pressure")  # fmt: skip
+
+
+def _tet_adjust_set(directory: Path) -> None:
+    punch = ((0.11, 0.13, -0.001), (0.6, 0.6, 0.4), (3, 3, 2))  # overlaps the block by 0.001
+    V, ct, ft = blocks([LOWER, punch], cell="tetrahedron")
+    pair = _pair(ft, 0.3)
+    facets = ft.find(facet_tag(1, BOTTOM))
+    pair.adjust = ntf.NodeSurface(compat.incident_entities(V.mesh, facets, 2, 0), "BOTTOM1")
+    steps = [
+        _step(2, boundaries=[_top(ft, (0, 1))],
+              pressures=[PressureSpec(ntf.FacetSurface(ft, facet_tag(1, TOP)), 20.0)]),
+    ]  # fmt: skip
+    _write(directory, "tet_adjust_set", V, ct, ft, [pair], steps,
+           "C3D4 punch overlapping the block by 0.001, ADJUST=node set of its bottom")  # fmt: skip
+
+
 CASES: tuple[Case, ...] = (
     Case("hex_stick_punch", "C3D8, LINEAR, friction (mu 0.5, lambda 500): pressed, then "
          "dragged by 1e-3: stick, 2 + 2 increments", _hex_stick_punch),
     Case("hex_sliding_block", "C3D8, LINEAR, friction: press, drag 0.04 (slip), *CHANGE FRICTION "
          "and drag back, *MODEL CHANGE REMOVE and lift, ADD and press, 2+3+3+1+2 increments",
          _hex_sliding_block),
+    Case("hex_adjust_gap", "C3D8, LINEAR, friction, punch 0.003 above the block moved onto it by "
+         "ADJUST=0.005, pressure, 2 increments", _hex_adjust_gap),
+    Case("tet_adjust_set", "C3D4, LINEAR, friction, punch overlapping by 0.001 moved out by "
+         "ADJUST=<node set>, pressure, 2 increments", _tet_adjust_set),
 )  # fmt: skip
 """Every friction cross-validation deck."""

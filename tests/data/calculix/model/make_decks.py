@@ -436,7 +436,6 @@ def error_decks() -> dict[str, str]:
     """Decks that must fail with a clear message."""
     return {
         "err_mixed": MIXED,
-        "err_adjust": two_cubes(adjust=", ADJUST=0.01"),
         "err_unknown_surface": two_cubes(master="NOSUCH"),
         "diverge": two_cubes(more=DIVERGE_STEP),
     }
