@@ -6,11 +6,12 @@ sideways by a prescribed displacement, back, and forth again after the friction 
 been raised. Coulomb friction with a tangential penalty (CalculiX ``*FRICTION``: ``mu``, stick
 slope ``lambda = K/100``) acts between the block bottom (slave) and the base top (master).
 
-The analysis is a list of steps (``dolfinx_ntf.run_steps``): press; drag to +d (mu = 0.2); drag to
--d; ``ChangeFriction`` to mu = 0.4 and drag to +d. In every increment each spring either sticks,
-``tau = lambda (t - t_p)`` with ``|tau| < mu p``, or slips, ``|tau| = mu p``; the demo checks that to
-1e-10 over all springs, checks the equilibrium of the block (the support of its top takes the
-friction force) and plots the shear traction and ``mu p`` of the central node and the mean shear
+The analysis is a list of steps (``dolfinx_ntf.run_steps``): press; a small drag (the central node
+sticks: ``tau = lambda t``); drag to +d (mu = 0.2); drag to -d; ``ChangeFriction`` to mu = 0.4 and
+drag to +d. In every increment each spring either sticks (``|tau| < mu p``) or slips
+(``|tau| = mu p``, checked to 1e-10 over all springs); at the end of each drag all springs slip. The
+demo checks the equilibrium of the block (the support of its top takes the friction force) and
+plots the shear traction and ``mu p`` of the central node and the mean shear
 against time (``output/sliding_block.png``). Results go to ``output/sliding_block.xdmf``.
 
 Run it with::
@@ -182,7 +183,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
         ends.append(len(history["time"]))
     writer.close()
 
-    # --- Checks ------------------------------------------------------------------------------------
+    # --- Checks ----------------------------------------------------------------------------------
     force = ntf.contact_force(problem)
     reaction = ntf.reaction(problem, dofs=drag_bc)
     equilibrium = abs(reaction[0] + force[0]) / abs(force[2])
