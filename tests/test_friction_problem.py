@@ -107,6 +107,17 @@ def test_stick_then_slip_on_a_mesh():
     np.testing.assert_allclose(total, 0, atol=1e-10 * abs(force[2]))
 
 
+def test_writer_has_the_friction_fields(tmp_path):
+    problem, _, _ = _press_and_drag(2e-3)
+    with ntf.ContactWriter(problem, tmp_path / "drag.xdmf") as writer:
+        writer.write(1.0)
+        shear = writer.fields.shear.x.array.reshape(-1, 3)
+    (res,) = ntf.contact_results(problem)
+    np.testing.assert_allclose(shear[res.node], res.shear)
+    text = (tmp_path / "drag.xdmf").read_text()
+    assert "contact_shear" in text and "contact_slip" in text
+
+
 def test_friction_jacobian_is_unsymmetric_and_lu():
     problem, solver, _ = _press_and_drag(2e-3, symmetric=True)
     assert problem.has_friction
