@@ -442,6 +442,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             if large_sliding_only and self._small_sliding(state):
                 continue
             self._pair_one(state, coords, record_overlap)
+            if record_overlap and state.pair.adjust is not None:  # ADJUST may have moved nodes
+                coords = self.current_coordinates()
         self.pairings += 1
         self._pattern_checked = False
         count = self.num_springs
