@@ -72,6 +72,7 @@ from dolfinx_ntf.spring_areas import spring_areas
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))
 import cases  # noqa: E402
+import friction_cases  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "dynamic"))
 from impact_deck import write_impact_deck  # noqa: E402
@@ -395,6 +396,25 @@ def _cross_table(runs: list[Run]) -> list[str]:
     return lines
 
 
+def _friction_table(runs: list[Run]) -> list[str]:
+    lines = [
+        "| deck | common increments | Δu / max u | Δp / max p | Δg / max g | ΔE / max E "
+        "| Δslip / max slip | Δτ / max τ | same contact elements | ccx [s] | dolfinx_ntf [s] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for run in runs:
+        c = run.comparison
+        lines.append(
+            f"| `{run.name}` | {len(c.increments)}{'' if c.same_increments else ' (differ)'} "
+            f"| {_fmt(c.relative_displacement)} | {_fmt(c.relative_pressure)} "
+            f"| {_fmt(c.relative_clearance)} | {_fmt(c.relative_energy)} "
+            f"| {_fmt(c.relative_slip)} | {_fmt(c.relative_shear)} "
+            f"| {'yes' if c.same_contact_elements else 'no'} | {run.ccx_time:.2f} "
+            f"| {run.ntf_time:.2f} |"
+        )
+    return lines
+
+
 def _per_increment(run: Run) -> list[str]:
     lines = [
         "| time | Δu / max u | Δp / max p | same contact elements (ccx / dolfinx_ntf) |",
@@ -516,6 +536,28 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
         *(f"| `{r.name}` | {r.description} |" for r in cross),
         "",
     ]
+    friction = [runs[c.name] for c in friction_cases.CASES if c.name in runs]
+    if friction:
+        out += [
+            "## Friction and analyses made of steps",
+            "",
+            "The decks of `tests/data/calculix/crossval/friction_cases.py`, run by "
+            "`tests/test_ccx_friction.py` with the same bounds; slip and τ are the tangential "
+            "columns of CDIS and CSTR (docs/method.md §11.4), E includes ccx 2.20's friction "
+            "energy.",
+            "",
+            *_friction_table(friction),
+            "",
+            "| deck | what it covers |",
+            "|---|---|",
+            *(f"| `{r.name}` | {r.description} |" for r in friction),
+            "",
+            "CalculiX's own frictional decks (`friction1`, `friction2` of calculix-ccx-test) run "
+            "at ccx's default controls in `tests/test_ccx_friction.py`: `friction2` agrees to the "
+            "printed digits, `friction1` within 6e-5 (normal columns) and 1e-3 (tangential), "
+            "both codes being converged to ccx's default R_n = 0.005 only.",
+            "",
+        ]
     if analytic:
         out += [
             "The analytical cases below also run in both codes:",
@@ -743,6 +785,8 @@ def main(argv: typing.Sequence[str] | None = None) -> dict[str, Run]:
     logging.getLogger("dolfinx_ntf").setLevel(logging.WARNING)
 
     definitions = [(c.name, c.description, c.write, c.quirk) for c in cases.CASES]
+    definitions += [(c.name, c.description, c.write, c.quirk) for c in friction_cases.CASES]
+    frictional = {c.name for c in friction_cases.CASES}
     definitions += [
         (
             "hertz",
@@ -795,7 +839,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict[str, Run]:
                 print(f"{name}: failed: {extra['failures'][name][1]}", flush=True)
                 continue
             runs[name] = run
-            if name in _DYNAMIC:
+            if name in _DYNAMIC or name in frictional:  # CELS: no area estimate from it
                 print(f"{name}: {time.perf_counter() - start:.1f} s; {run.comparison.summary()}")
                 continue
             extra["lag"][name] = (

@@ -9,6 +9,16 @@ CalculiX interop). The method is described in ``docs/method.md``, the code in
 __version__ = "0.1.0"
 
 from dolfinx_ntf import logs as _logs
+from dolfinx_ntf.analysis import (
+    AddPair,
+    Amplitude,
+    AnalysisStep,
+    ChangeFriction,
+    Load,
+    RemovePair,
+    SetSmallSliding,
+    run_steps,
+)
 from dolfinx_ntf.constraints import LinearConstraint
 from dolfinx_ntf.dynamics import DynamicStep, kinetic_energy
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
@@ -38,6 +48,10 @@ from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 _logs.route_compiler_lines()
 
 __all__ = [
+    "AddPair",
+    "Amplitude",
+    "AnalysisStep",
+    "ChangeFriction",
     "ContactConvergenceError",
     "ContactDivergenceError",
     "ContactFields",
@@ -55,8 +69,11 @@ __all__ = [
     "IncrementResult",
     "LinearConstraint",
     "LinearLaw",
+    "Load",
     "NodeSurface",
     "PressureOverclosureLaw",
+    "RemovePair",
+    "SetSmallSliding",
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",
@@ -68,5 +85,6 @@ __all__ = [
     "kinetic_energy",
     "log_progress",
     "reaction",
+    "run_steps",
     "small_strain_stress",
 ]

@@ -300,6 +300,7 @@ class DynamicStep:
     ) -> list[IncrementResult]:
         x = compat.petsc_vector(u)
         owned = x.getLocalSize()
+        problem.begin_step()
         self.set_load(0.0)
         problem.begin_increment(0.0, static=False)
         if self.initial_acceleration:  # from u_0 as it is, a jump of prescribed values left out
@@ -340,6 +341,7 @@ class DynamicStep:
                         dt,
                     )
                     iterations, _ = solver.solve(u)
+                    problem.end_increment()  # commits the friction state
                     break
                 except ContactConvergenceError as error:
                     u.x.array[:] = u_start

@@ -38,17 +38,44 @@ __all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh", "write
 _model_counter = itertools.count()
 
 
+def _track_initialization() -> dict[str, bool] | None:
+    """For gmsh without ``isInitialized`` (4.8): follow ``gmsh.initialize``/``finalize`` calls.
+
+    Any other API call before ``initialize`` or after ``finalize`` reads a context gmsh 4.8 does
+    not have, and its error handler then calls ``exit(1)`` at random (measured: silent exits of
+    Python with status 1). The wrappers record the state instead; a session opened before this
+    module was imported is not seen.
+    """
+    if hasattr(gmsh, "isInitialized"):
+        return None
+    state = {"initialized": False}
+    initialize, finalize = gmsh.initialize, gmsh.finalize
+    if getattr(initialize, "_dolfinx_ntf_tracked", False):
+        return initialize._dolfinx_ntf_state
+
+    def tracked_initialize(*args, **kwargs):
+        initialize(*args, **kwargs)
+        state["initialized"] = True
+
+    def tracked_finalize(*args, **kwargs):
+        state["initialized"] = False
+        finalize(*args, **kwargs)
+
+    tracked_initialize._dolfinx_ntf_tracked = True
+    tracked_initialize._dolfinx_ntf_state = state
+    gmsh.initialize, gmsh.finalize = tracked_initialize, tracked_finalize
+    return state
+
+
+_gmsh_state = _track_initialization()
+
+
 def _gmsh_is_initialized() -> bool:
     """Whether the gmsh API is initialized (gmsh 4.8 has no ``gmsh.isInitialized``)."""
     probe = getattr(gmsh, "isInitialized", None)
     if probe is not None:
         return bool(probe())
-    try:
-        # Before initialize() gmsh 4.8 lists no model; after it at least the default one; after
-        # finalize() the call raises.
-        return len(gmsh.model.list()) > 0
-    except Exception:
-        return False
+    return bool(_gmsh_state and _gmsh_state["initialized"])
 
 
 @contextlib.contextmanager

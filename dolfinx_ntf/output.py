@@ -2,8 +2,9 @@
 
 - :func:`contact_results`: one :class:`ContactResults` table per pair (this process's springs).
 - :class:`ContactFields`: contact pressure, clearance and status as dolfinx Functions on the nodes
-  of the displacement space (for ParaView, for UFL expressions, for interpolation).
-- :class:`ContactWriter`: the displacement and the three fields to an XDMF file, at any time
+  of the displacement space (for ParaView, for UFL expressions, for interpolation), and the
+  friction fields shear traction and slip as vector Functions on the displacement space.
+- :class:`ContactWriter`: the displacement and the fields to an XDMF file, at any time
   (also before the first solve).
 
 All of them read the springs of the problem's current pairing, evaluated at the current
@@ -48,10 +49,17 @@ class ContactResults:
         pressure: ``(N,)`` ``F_N / A_p``, compression positive (ccx's CSTR); the linear law gives
             a small tension (negative) inside the cutoff.
         normal_force: ``(N,)`` ``F_N = A_p p(d)``.
-        energy: ``(N,)`` spring energy (ccx's CELS, docs/method.md §8.3).
-        force: ``(N, 3)`` contact force on the slave node (``F_N n``: the master pushes the slave
-            away along the master normal).
+        energy: ``(N,)`` normal spring energy (ccx's CELS without friction, docs/method.md §8.3).
+        force: ``(N, 3)`` contact force on the slave node, ``F_N n - F_T`` (the master pushes the
+            slave away along the master normal, and friction resists the relative motion).
         normal: ``(N, 3)`` unit normal of the master face at the projection point.
+        shear: ``(N, 3)`` shear traction ``F_T / A_p``: the tangential force per area the slave
+            exerts on the master (ccx's CSTR tangential columns); zero without friction.
+        slip: ``(N, 3)`` accumulated tangential relative displacement ``t`` of the slave node
+            relative to the master (ccx's CDIS tangential columns); zero without friction.
+        sliding: ``(N,)`` True where the spring slips (``|F_T| = mu F_N``), False in stick.
+        friction_energy: ``(N,)`` elastic energy of the tangential spring ``|F_T|^2/(2 K_t)``
+            (CalculiX 2.20's CELS adds twice this, docs/method.md §11.4).
     """
 
     pair: str
@@ -64,6 +72,10 @@ class ContactResults:
     energy: np.ndarray
     force: np.ndarray
     normal: np.ndarray
+    shear: np.ndarray | None = None
+    slip: np.ndarray | None = None
+    sliding: np.ndarray | None = None
+    friction_energy: np.ndarray | None = None
 
 
 def _evaluated(problem: ContactProblem) -> None:
@@ -79,6 +91,9 @@ def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactRe
     ev = state.evaluation
     nodes = state.slave.nodes[state.spring_slave]
     law = state.pair.interaction.law
+    num = nodes.size
+    tf = ev.tangential
+    zeros = np.zeros((num, 3))
     return ContactResults(
         pair=state.pair.name or f"pair {index + 1}",
         node=nodes,
@@ -90,6 +105,10 @@ def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactRe
         energy=law.energy(ev.overclosure, ev.area),
         force=-ev.forces[:, -1, :],
         normal=ev.normal,
+        shear=zeros if tf is None else tf.force / ev.area[:, None],
+        slip=zeros.copy() if tf is None else tf.t,
+        sliding=np.zeros(num, dtype=bool) if tf is None else tf.sliding,
+        friction_energy=np.zeros(num) if tf is None else tf.energy,
     )
 
 
@@ -137,6 +156,11 @@ class ContactFields:
         self.pressure = dolfinx.fem.Function(Q, name="contact_pressure")
         self.clearance = dolfinx.fem.Function(Q, name="contact_clearance")
         self.status = dolfinx.fem.Function(Q, name="contact_status")
+        V = problem.u.function_space
+        #: Shear traction ``F_T / A_p`` (vector, on ``u``'s space; 0 without friction).
+        self.shear = dolfinx.fem.Function(V, name="contact_shear")
+        #: Accumulated tangential relative displacement ``t`` (vector, on ``u``'s space).
+        self.slip = dolfinx.fem.Function(V, name="contact_slip")
         self.update()
 
     @property
@@ -155,9 +179,12 @@ class ContactFields:
 
     def update(self) -> None:
         """Fill the Functions from the problem's current springs."""
-        for f in self.functions:
+        for f in (*self.functions, self.shear, self.slip):
             f.x.array[:] = 0.0
+        shear, slip = self.shear.x.array.reshape(-1, 3), self.slip.x.array.reshape(-1, 3)
         for res in contact_results(self.problem):
+            np.add.at(shear, res.node, res.shear)
+            slip[res.node] = res.slip
             q = self._q_of_node[res.node]
             np.add.at(self.pressure.x.array, q, res.pressure)
             self.clearance.x.array[q] = res.clearance
@@ -170,7 +197,8 @@ class ContactWriter:
     """Writes the displacement and the :class:`ContactFields` to an XDMF file (for ParaView).
 
     Each :meth:`write` adds a time step: ``u`` and ``contact_pressure``, ``contact_clearance``,
-    ``contact_status``. The initial state can be written before the first solve (zero fields).
+    ``contact_status``, ``contact_shear`` and ``contact_slip``. The initial state can be written
+    before the first solve (zero fields).
     XDMF keeps vertex values only, so a P2 displacement loses its midside values in the file.
 
     Args:
@@ -217,7 +245,7 @@ class ContactWriter:
     def write(self, t: float) -> None:
         """Write the displacement and the contact fields at time ``t``."""
         self.fields.update()
-        for f in (self.problem.u, *self.fields.functions):
+        for f in (self.problem.u, *self.fields.functions, self.fields.shear, self.fields.slip):
             self._file.write_function(f, t)
 
     def close(self) -> None:

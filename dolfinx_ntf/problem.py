@@ -23,8 +23,11 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
+from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
+from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
+from dolfinx_ntf.friction_state import FrictionState
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
@@ -58,11 +61,17 @@ class ContactPair:
         slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
             surface.
         master: Face-based master surface.
-        interaction: Pressure-overclosure law (and, later, friction).
-        small_sliding: Pair only at increment starts. As in CalculiX, the flag of the *last* pair
-            decides for all.
+        interaction: Pressure-overclosure law and optional friction; may be replaced between
+            steps (new mu and lambda act from then on, the friction state is kept).
+        small_sliding: Pair only at increment starts. Per pair by default; with
+            ``ContactProblem(small_sliding_rule="last_pair")`` the flag of the *last* pair decides
+            for all, as in CalculiX.
         name: Label used in messages and output.
-        active: Inactive pairs generate no springs (``*MODEL CHANGE``).
+        active: Inactive pairs generate no springs (``*MODEL CHANGE``); a pair that becomes
+            active again starts with a fresh friction state.
+        adjust: CalculiX's ADJUST at the first pairing of the analysis (docs/method.md §11.5): a
+            distance ``a >= 0`` (slave nodes with clearance ``g <= a`` are moved onto the
+            master) or a :class:`NodeSurface` of the nodes to move; None moves nothing.
     """
 
     slave: FacetSurface | NodeSurface
@@ -71,6 +80,7 @@ class ContactPair:
     small_sliding: bool = False
     name: str = ""
     active: bool = True
+    adjust: float | NodeSurface | None = None
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -95,6 +105,16 @@ class ContactPair:
             else "",
         )
         validation.check_type(self.name, str, f"{owner}: name")
+        if self.adjust is not None and not isinstance(self.adjust, NodeSurface):
+            if isinstance(self.adjust, bool) or not isinstance(self.adjust, (int, float)):
+                raise TypeError(
+                    f"{owner}: adjust must be a distance >= 0, a NodeSurface or None, got "
+                    f"{validation.describe(self.adjust)}"
+                )
+            if not (np.isfinite(self.adjust) and self.adjust >= 0):
+                raise ValueError(
+                    f"{owner}: adjust must be a finite distance >= 0, got {self.adjust}"
+                )
 
 
 @dataclass
@@ -115,6 +135,9 @@ class PairState:
     evaluation: SpringEvaluation | None = None
     found_face: np.ndarray | None = None  # face of every slave node at the last pairing, -1: none
     face_changes: int = 0  # slave nodes paired before and after the last pairing, on another face
+    friction: FrictionState | None = None  # friction history per slave node (docs/method.md §11.3)
+    adjust_nodes: np.ndarray | None = None  # ADJUST node set as slave dofs
+    was_active: bool = True  # the pair was active at the previous pairing
 
     @property
     def num_springs(self) -> int:
@@ -157,6 +180,18 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             element nodal forces averaged by the convergence test
             (:meth:`average_element_force`); default ``F`` itself (CalculiX uses the internal
             forces only).
+        friction_tangent: ``"consistent"`` (exact derivative of the friction force) or ``"ccx"``
+            (CalculiX's, projection point frozen in the slip increment), docs/method.md §11.2.
+        reset_friction_on_separation: A slave node that was not in contact at the last converged
+            increment starts with a fresh friction state when it touches (default). False keeps
+            CalculiX's stale state (docs/method.md §11.3).
+        friction_in_tension: Apply ``mu |F_N|`` also when the linear law gives tension, as
+            CalculiX does; by default there is no friction in tension.
+        small_sliding_rule: ``"per_pair"`` (each pair's ``small_sliding`` flag) or
+            ``"last_pair"`` (CalculiX: the last pair's flag decides for all), docs/method.md §11.6.
+        overlap_ramp: ``"first_increment"`` (CalculiX: the initial overlap is scaled by the
+            increment's time fraction in the first increment only) or ``"linear"`` (over the whole
+            first step, as CalculiX's manual describes), docs/method.md §11.6.
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
@@ -174,6 +209,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         walk_from_previous_face: bool = True,
         element_forces: ufl.Form | None = None,
         constraints: typing.Sequence[LinearConstraint] = (),
+        friction_tangent: str = "consistent",
+        reset_friction_on_separation: bool = True,
+        friction_in_tension: bool = False,
+        overlap_ramp: str = "first_increment",
+        small_sliding_rule: str = "per_pair",
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -185,9 +225,31 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             J,
             **compat.jit_keywords(form_compiler_options, jit_options),
         )
+        if friction_tangent not in TANGENT_MODES:
+            raise ValueError(
+                f"ContactProblem: friction_tangent must be one of {TANGENT_MODES}, "
+                f"got {friction_tangent!r}"
+            )
+        if small_sliding_rule not in ("per_pair", "last_pair"):
+            raise ValueError(
+                "ContactProblem: small_sliding_rule must be 'per_pair' or 'last_pair', "
+                f"got {small_sliding_rule!r}"
+            )
+        if overlap_ramp not in ("first_increment", "linear"):
+            raise ValueError(
+                "ContactProblem: overlap_ramp must be 'first_increment' or 'linear', "
+                f"got {overlap_ramp!r}"
+            )
         V = u.function_space
         self.u = u
         self.symmetric = symmetric
+        self.friction_tangent = friction_tangent
+        self.reset_friction_on_separation = bool(reset_friction_on_separation)
+        self.friction_in_tension = bool(friction_in_tension)
+        self.overlap_ramp = overlap_ramp
+        self.small_sliding_rule = small_sliding_rule
+        #: Steps begun so far (:meth:`begin_step`); the linear overlap ramp lasts step 1.
+        self.step_count = 0
         self.linearize_area = linearize_area
         self.max_depth = max_depth
         self.walk_from_previous_face = walk_from_previous_face
@@ -201,7 +263,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
         validation.check_distinct_pairs(V.mesh.comm, self._surfaces(), self._reference)
-        self.small_sliding = bool(pairs[-1].small_sliding) if pairs else True
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
         self.static = True
         self.iteration = 0
@@ -212,6 +273,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
+        self._increment_start_u = u.x.array.reshape(-1, 3).copy()
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the
         #: residual.
@@ -258,10 +320,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
-        if pair.interaction.friction is not None:
-            raise NotImplementedError(
-                f"{name}: friction is not supported yet (frictionless contact only)"
-            )
         V = self.u.function_space
         slave = resolve_slave(V, pair.slave, what=f"{name} slave")
         master_faces = resolve_master(V, pair.master, what=f"{name} master")
@@ -280,7 +338,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 f"{name}: {both.size} node(s) belong to both the slave and the master surface "
                 f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
             )
-        return PairState(pair, slave, master_faces, master, np.zeros(slave.nodes.size))
+        friction = FrictionState(
+            slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
+        )
+        adjust_nodes = None
+        if isinstance(pair.adjust, NodeSurface):
+            adjust_nodes = resolve_slave(V, pair.adjust, what=f"{name} adjust").nodes
+        return PairState(
+            pair,
+            slave,
+            master_faces,
+            master,
+            np.zeros(slave.nodes.size),
+            friction=friction,
+            was_active=pair.active,
+            adjust_nodes=adjust_nodes,
+        )
 
     # -- state -------------------------------------------------------------------------------------
 
@@ -306,6 +379,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         comm = self.u.function_space.mesh.comm
         total, count = comm.allreduce(total), comm.allreduce(count)
         return total / max(count, 1)
+
+    @property
+    def small_sliding(self) -> bool:
+        """True when no pair is re-paired inside increments (all pairs small sliding)."""
+        return all(self._small_sliding(s) for s in self.states)
+
+    def _small_sliding(self, state: PairState) -> bool:
+        """Whether the pair of ``state`` is paired at increment starts only."""
+        if self.small_sliding_rule == "last_pair":
+            return bool(self.states[-1].pair.small_sliding)
+        return bool(state.pair.small_sliding)
+
+    @property
+    def has_friction(self) -> bool:
+        """Whether any pair has friction now (the Jacobian is then unsymmetric)."""
+        return any(s.pair.interaction.friction is not None for s in self.states)
 
     @property
     def face_changes(self) -> int:
@@ -353,9 +442,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._check_finite()
         self.time_fraction = float(time_fraction)
         self.static = static
+        self._increment_start_u = self.u.x.array.reshape(-1, 3).copy()
         first = not self._first_pairing_done
+        keep = self.overlap_ramp == "linear" and self.step_count <= 1 and static
         for state in self.states:
-            state.overlap[:] = 0.0
+            if not keep:
+                state.overlap[:] = 0.0
+            state.friction.begin_increment()
         self.iteration = 0
         self.count_changed = False
         self.repair_next_iteration = False
@@ -363,15 +456,37 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._first_pairing_done = True
         self.ensure_matrix()
 
-    def pair(self, *, record_overlap: bool = False) -> int:
+    def begin_step(self) -> None:
+        """Tell the problem that a new step starts (ends the linear overlap ramp of step 1)."""
+        self.step_count += 1
+        if self.step_count > 1:
+            for state in self.states:
+                state.overlap[:] = 0.0
+
+    def end_increment(self) -> None:
+        """Accept the converged increment: commit the friction state (docs/method.md §11.3)."""
+        if self.has_friction:
+            self.evaluate(tangent=False)
+        for state in self.states:
+            state.friction.commit(state.spring_slave)
+
+    def pair(self, *, record_overlap: bool = False, large_sliding_only: bool = False) -> int:
         """Pair every slave node with a master face at the current displacement.
+
+        Args:
+            record_overlap: Record the initial overlap (first pairing of the analysis).
+            large_sliding_only: Re-pair only the pairs without small sliding.
 
         Returns:
             The number of springs.
         """
         coords = self.current_coordinates()
         for state in self.states:
+            if large_sliding_only and self._small_sliding(state):
+                continue
             self._pair_one(state, coords, record_overlap)
+            if record_overlap and state.pair.adjust is not None:  # ADJUST may have moved nodes
+                coords = self.current_coordinates()
         self.pairings += 1
         self._pattern_checked = False
         count = self.num_springs
@@ -394,10 +509,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 np.empty(0),
                 None,
             )
+            state.was_active = False
             return
+        if not state.was_active:  # reactivated: a fresh friction history (ccx keeps the old one)
+            if self.reset_friction_on_separation:
+                state.friction.reset()
+            state.was_active = True
         previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         previous[state.spring_slave] = state.spring_face
         found, face, areas, evaluation = self._search(state, coords, previous)
+        if (
+            record_overlap
+            and state.pair.adjust is not None
+            and self._adjust(state, found, evaluation)
+        ):
+            coords = self.current_coordinates()
+            found, face, areas, evaluation = self._search(state, coords, previous)
         state.found_face = face
         gap = evaluation.gap
         if record_overlap:
@@ -409,6 +536,14 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             create
         ]  # 0 = no slave face: springs.py applies the fallback
         state.xi = evaluation.xi[create]
+        if state.pair.interaction.friction is not None:
+            fresh = state.friction.fresh(state.spring_slave)
+            if np.any(fresh):  # anchor at the increment start (docs/method.md §11.3)
+                u = self._increment_start_u
+                nodes = state.element_nodes[fresh]
+                phi = evaluation.phi[create][fresh]
+                a = u[nodes[:, -1]] - np.einsum("nj,nji->ni", phi, u[nodes[:, :-1]])
+                state.friction.anchor(state.spring_slave[fresh], a)
         current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         current[state.spring_slave] = state.spring_face
         state.face_changes = int(
@@ -441,6 +576,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             xi0=self._previous_xi(state, found, face),
         )
         return found, face, areas, evaluation
+
+    def _adjust(self, state: PairState, found: np.ndarray, evaluation: SpringEvaluation) -> int:
+        """ADJUST: move the selected slave nodes onto the master (docs/method.md §11.5)."""
+        adjust = state.pair.adjust
+        in_set = None
+        if state.adjust_nodes is not None:
+            in_set = np.isin(state.slave.nodes[found], state.adjust_nodes)
+        move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
+        count = int(np.count_nonzero(move))
+        if count:
+            delta = -evaluation.gap[move, None] * evaluation.normal[move]
+            move_reference_nodes(
+                self.u.function_space, self._reference, state.slave.nodes[found[move]], delta
+            )
+            logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
+        return count
 
     def _creates_spring(
         self, state: PairState, found: np.ndarray, gap: np.ndarray, areas: np.ndarray
@@ -480,7 +631,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         return xi0
 
     def _gap_shift(self, state: PairState, slave_index: np.ndarray) -> np.ndarray | float:
-        """g0 (1 - tau) in static steps, 0 otherwise (docs/method.md §3.5)."""
+        """g0 (1 - tau) in static steps, 0 otherwise (docs/method.md §3.5, §11.6)."""
         if not self.static:
             return 0.0
         return state.overlap[slave_index] * (1.0 - self.time_fraction)
@@ -491,8 +642,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """Evaluate every spring at the current displacement; returns the blocks to assemble."""
         coords = self.current_coordinates()
         blocks = []
+        symmetric = self.symmetric and not self.has_friction
         for state in self.states:
             nodes = state.element_nodes
+            friction = self._friction_input(state, coords, nodes)
             if self.linearize_area:  # areas follow the deformation between pairings too
                 faces = state.slave.faces
                 areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
@@ -506,10 +659,14 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 gap_shift=self._gap_shift(state, state.spring_slave),
                 xi0=state.xi,
                 tangent=tangent,
-                symmetric=self.symmetric,
+                symmetric=symmetric,
+                friction=friction,
             )
             state.evaluation = ev
             state.xi = ev.xi
+            if ev.tangential is not None:
+                tf = ev.tangential
+                state.friction.store(state.spring_slave, tf.a, tf.t, tf.slip)
             blocks.append(
                 SpringBlocks(
                     nodes,
@@ -521,6 +678,23 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             if tangent and self.linearize_area:
                 blocks.append(self._area_block(state, coords))
         return blocks
+
+    def _friction_input(
+        self, state: PairState, coords: np.ndarray, nodes: np.ndarray
+    ) -> FrictionInput | None:
+        """Friction state and parameters of the pair's springs, None without friction."""
+        friction = state.pair.interaction.friction
+        if friction is None:
+            return None
+        displacements = (coords - self._reference)[nodes]
+        return FrictionInput(
+            displacements,
+            *state.friction.start_values(state.spring_slave),
+            mu=friction.mu,
+            stick_slope=friction.stick_slope,
+            in_tension=self.friction_in_tension,
+            tangent_mode=self.friction_tangent,
+        )
 
     def _area_block(
         self, state: PairState, coords: np.ndarray, *, values: bool = True
@@ -624,9 +798,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.count_changed = False
         scheduled = not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION
         if scheduled or self.repair_next_iteration:
-            self.repair_next_iteration = False
             before = self.num_springs
-            self.count_changed = self.pair() != before
+            self.count_changed = (
+                self.pair(large_sliding_only=not self.repair_next_iteration) != before
+            )
+            self.repair_next_iteration = False
             self.form(x)
             if self._residual_vector is not None:
                 self.F(x, self._residual_vector)

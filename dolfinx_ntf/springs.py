@@ -25,12 +25,10 @@ fixed); at a corner ∂ξ/∂x = 0. There r is not ∥ n and the exact tangent i
 instead uses the interior-projection formula everywhere (docs/method.md §6.1); both coincide
 for interior projections, the normal contact situation.
 
-Friction is not implemented yet. The code is split so that it can be added without a rewrite:
-the kinematics and their derivatives (``_Kinematics``: ∂ξ/∂x, ∂m/∂x, ∂n/∂x, ∂g/∂x) are computed
-once, the slave force and its derivative are formed from them, and ``_element_stiffness`` turns
-*any* slave force f_p and its derivative ∂f_p/∂x into the element matrix (docs/method.md §6.1); a
-tangential force F_T and its derivative (friction, docs/method.md §4.5) only have to be added to f_p
-and ∂f_p/∂x.
+Friction (docs/method.md §11): the kinematics and their derivatives (``_Kinematics``: ∂ξ/∂x,
+∂m/∂x, ∂n/∂x, ∂g/∂x) are computed once, ``friction.tangential_forces`` adds the tangential force
+F_T to f_p and its derivative to ∂f_p/∂x, and ``_element_stiffness`` turns *any* slave force f_p
+and its derivative into the element matrix (docs/method.md §6.1).
 """
 
 from __future__ import annotations
@@ -40,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dolfinx_ntf.faces import FaceType, _face_coords_array
+from dolfinx_ntf.friction import FrictionInput, TangentialForce, tangential_forces
 from dolfinx_ntf.laws import PressureOverclosureLaw
 from dolfinx_ntf.projection import project_points
 
@@ -75,6 +74,7 @@ class SpringEvaluation:
         force_per_area: (N, n+1, 3) ``forces / area``, i.e. ∂forces/∂A when F_N = A p(d): the
             linearized-area option adds ``outer(force_per_area[k], dA/dx_q)`` to block (k, q).
         stiffness: (N, 3(n+1), 3(n+1)) ∂forces/∂x with dof ``3k + c``, or None if not asked for.
+        tangential: Friction results (docs/method.md §11), or None without friction.
     """
 
     xi: np.ndarray
@@ -87,6 +87,7 @@ class SpringEvaluation:
     forces: np.ndarray
     force_per_area: np.ndarray
     stiffness: np.ndarray | None
+    tangential: TangentialForce | None = None
 
 
 @dataclass
@@ -124,6 +125,7 @@ def evaluate_springs(
     tangent: bool = True,
     symmetric: bool = False,
     area_fallback: bool = True,
+    friction: FrictionInput | None = None,
 ) -> SpringEvaluation:
     """Evaluate internal forces and tangent of N node-to-face springs (docs/method.md §5, §6).
 
@@ -142,6 +144,8 @@ def evaluate_springs(
         area_fallback: Where A_p = 0 (a slave node without slave face), use CalculiX's fallback
             A_p = |m|/2 for a 3-node master face and 4|m| otherwise, m at the projection point
             (docs/method.md §2.2). If False, such springs carry no force.
+        friction: Friction state and parameters: adds the tangential force F_T to f_p and its
+            derivative to the tangent (docs/method.md §11); the tangent is then never symmetrized.
 
     Returns:
         The evaluation; ``stiffness`` is None if ``tangent`` is False.
@@ -170,6 +174,21 @@ def evaluate_springs(
     _check_finite("normal force derivative from the law", dforce)
 
     slave_force = -force[:, None] * kin.normal  # f_p
+    tangential = None
+    if friction is not None:
+        tangential = tangential_forces(
+            kin.weights,
+            kin.normal,
+            force,
+            area,
+            friction,
+            dphi=kin.dphi,
+            dxi=kin.dxi,
+            dnormal=kin.dnormal,
+            dnormal_force=None if kin.dgap is None else -dforce[:, None, None] * kin.dgap,
+        )
+        slave_force = slave_force + tangential.force
+        symmetric = False
     forces = kin.weights[:, :, None] * slave_force[:, None, :]
     force_per_area = _force_per_area(forces, force, area, overclosure, kin.weights, kin.normal, law)
 
@@ -178,6 +197,8 @@ def evaluate_springs(
         # ∂f_p/∂x_k = −∂F_N/∂x_k n − F_N ∂n/∂x_k, with ∂F_N/∂x_k = dF_N/dd · (−∂g/∂x_k).
         dslave_force = (dforce[:, None] * kin.normal)[:, None, :, None] * kin.dgap[:, :, None, :]
         dslave_force -= force[:, None, None, None] * kin.dnormal
+        if tangential is not None:
+            dslave_force += tangential.dforce
         stiffness = _element_stiffness(kin, slave_force, dslave_force)
         _check_finite("stiffness", stiffness)
         if symmetric:
@@ -194,6 +215,7 @@ def evaluate_springs(
         forces=forces,
         force_per_area=force_per_area,
         stiffness=stiffness,
+        tangential=tangential,
     )
 
 

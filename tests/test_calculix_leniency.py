@@ -164,3 +164,22 @@ def test_ccx_node_to_surface_decks_parse_or_name_a_mechanical_feature(tmp_path):
     assert {"cubespring", "friction1", "friction2"} <= {
         k for k, v in table.items() if v == "parses"
     }
+
+
+@pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
+def test_ccx_friction_decks_build(tmp_path):
+    """ccx's frictional decks parse and build (friction and *CHANGE FRICTION are supported).
+
+    ``tests/test_ccx_friction.py`` runs them against ccx.
+    """
+    from mpi4py import MPI
+
+    from dolfinx_ntf.calculix.model import build_model
+
+    decks = {p.stem: p for p in _node_to_surface_decks(tmp_path)}
+    for name in ("friction1", "friction2"):
+        model = build_model(read_deck(decks[name]), MPI.COMM_SELF)
+        friction = model.pairs[0].interaction.friction
+        assert friction is not None and friction.mu == pytest.approx(0.2)
+    steps = read_deck(decks["friction2"]).steps
+    assert [len(s.friction_changes) for s in steps] == [0, 0, 0, 1]

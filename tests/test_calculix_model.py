@@ -411,21 +411,6 @@ def test_contact_blocks_end_to_end(tmp_path):
             r"mixes element types C3D4 \(first at \S*err_mixed.inp:14\), C3D8",
         ),
         (
-            "err_friction",
-            NotImplementedError,
-            r"err_friction.inp:38: \*FRICTION .* not supported yet",
-        ),
-        (
-            "err_adjust",
-            NotImplementedError,
-            r"err_adjust.inp:34: \*CONTACT PAIR, ADJUST is not supported yet",
-        ),
-        (
-            "err_model_change",
-            NotImplementedError,
-            r"err_model_change.inp:53: \*MODEL CHANGE is not supported",
-        ),
-        (
             "err_unknown_surface",
             DeckError,
             r"err_unknown_surface.inp:34: master surface NOSUCH is not defined",
@@ -456,10 +441,10 @@ def test_non_convergence_keeps_results_and_exits_2(tmp_path, capsys):
 
 
 def test_module_entry_point_reports_errors_without_traceback(tmp_path):
-    _copy(tmp_path, "err_friction")
-    command = [sys.executable, "-m", "dolfinx_ntf", "run", "err_friction"]
+    _copy(tmp_path, "err_unknown_surface")
+    command = [sys.executable, "-m", "dolfinx_ntf", "run", "err_unknown_surface"]
     run = subprocess.run(
         command, cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False
     )
     assert run.returncode == 1
-    assert "err_friction.inp:38" in run.stderr and "Traceback" not in run.stderr
+    assert "err_unknown_surface.inp:34" in run.stderr and "Traceback" not in run.stderr

@@ -298,9 +298,8 @@ def test_bad_input(tmp_path):
         write(pairs=[ntf.ContactPair(ntf.FacetSurface(ft, 99), good_pair.master, law)])
     with pytest.raises(ValueError, match="master surface must be a FacetSurface"):
         write(pairs=[ntf.ContactPair(good_pair.slave, ntf.NodeSurface(np.array([0])), law)])
-    with pytest.raises(NotImplementedError, match="friction"):
-        friction = ntf.SurfaceInteraction(law.law, ntf.Friction(0.3, 100.0))
-        write(pairs=[ntf.ContactPair(good_pair.slave, good_pair.master, friction)])
+    with pytest.raises(ValueError, match="model_change 'DELETE'"):
+        write(steps=[StepSpec(model_change={1: "DELETE"})])
     mesh.topology.create_connectivity(2, 3)
     f_to_c = mesh.topology.connectivity(2, 3)
     inner = np.flatnonzero(np.diff(f_to_c.offsets) == 2)[:1].astype(np.int32)

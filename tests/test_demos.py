@@ -79,3 +79,32 @@ def test_impact_demo_keeps_the_energy(tmp_path):
     assert summary["momentum_error"] < 1e-6
     assert max(summary["iterations"]) <= 8
     assert Path(summary["xdmf"]).exists() and Path(summary["png"]).exists()
+
+
+def test_sliding_block_demo_sticks_then_slips(tmp_path):
+    summary = _demo("sliding_block").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    assert summary["increments"] == 17 and summary["springs"] == 25
+    # stick: the central node follows tau = lambda t during the press and the small drag
+    assert summary["centre_sticks"] and summary["stick_law_error"] < 1e-10
+    # slip: |tau| = mu p at every sliding spring, all of them at the end of each drag; the mean
+    # shear then is +-mu p (measured +0.9997, -1.0000, +1.0000), the last one with the raised mu
+    assert summary["slip_error"] < 1e-10
+    assert summary["end_sliding"] == [25, 25, 25]
+    assert summary["mean_ratio_drag"] == pytest.approx(1.0, abs=2e-3)
+    assert summary["mean_ratio_back"] == pytest.approx(-1.0, abs=2e-3)
+    assert summary["mean_ratio_mu"] == pytest.approx(1.0, abs=2e-3)
+    assert summary["equilibrium_error"] < 1e-8
+    assert Path(summary["png"]).exists() and Path(summary["xdmf"]).exists()
+
+
+def test_frictional_punch_demo_has_stick_and_slip_zones(tmp_path):
+    summary = _demo("frictional_punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # measured on the coarse mesh: the 5 central nodes stick, the 20 of the rim slip
+    assert (summary["stick_nodes"], summary["slip_nodes"]) == (5, 20)
+    assert summary["stick_radius"] <= summary["slip_radius"]
+    assert summary["slip_error"] < 1e-10 and summary["stick_margin"] < 0
+    assert summary["equilibrium_error"] < 1e-8
+    assert summary["max_shear_over_pressure"] <= 0.2 * (1 + 1e-10)
+    assert Path(summary["png"]).exists() and Path(summary["xdmf"]).exists()

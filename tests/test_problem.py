@@ -151,9 +151,10 @@ def test_bad_inputs_give_clear_errors():
         ntf.ContactProblem(F, u, [ntf.ContactPair(slave, ntf.NodeSurface(np.array([0])), law)])
     with pytest.raises(ValueError, match=r"outside 0\.\."):
         ntf.ContactProblem(F, u, [ntf.ContactPair(ntf.NodeSurface(np.array([10**7])), master, law)])
-    with pytest.raises(NotImplementedError, match="friction"):
-        friction = ntf.SurfaceInteraction(law.law, ntf.Friction(0.3, 100.0))
-        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, master, friction)])
+    with pytest.raises(ValueError, match="friction_tangent"):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, master, law)], friction_tangent="exact")
+    with pytest.raises(ValueError, match="overlap_ramp"):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, master, law)], overlap_ramp="step")
     cell_tags = dolfinx.mesh.meshtags(
         mesh, 3, np.array([0], dtype=np.int32), np.array([1], dtype=np.int32)
     )

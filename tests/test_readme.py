@@ -21,7 +21,7 @@ def _blocks() -> list[str]:
 
 def test_readme_examples_run(tmp_path, monkeypatch):
     blocks = _blocks()
-    assert len(blocks) == 4
+    assert len(blocks) == 5
     monkeypatch.chdir(tmp_path)  # the writer's file goes here
     # log_progress() of the example: no stream handler on pytest's capture, levels restored after.
     monkeypatch.setattr(logs, "_handler", logging.NullHandler())
@@ -56,9 +56,19 @@ def test_readme_examples_run(tmp_path, monkeypatch):
     assert (tmp_path / "punch.xdmf").read_text().count("Function/contact_pressure/") == 3
     fields = namespace["fields"]
     assert fields.status.x.array.sum() == ntf.contact_results(problem2)[0].node.size
+    # Friction and steps: the dragged punch sticks or slips, never beyond mu = 0.5 of the
+    # pressure, and its support takes the friction force.
+    res3 = namespace["res3"]
+    shear = np.linalg.norm(res3.shear, axis=1)
+    assert res3.node.size > 0 and shear.max() > 0
+    assert np.all(shear <= 0.5 * np.maximum(res3.pressure, 0) * (1 + 1e-10))
+    problem3 = namespace["problem3"]
+    friction = ntf.contact_force(problem3)
+    top = ntf.reaction(problem3, dofs=namespace["bcs3"][1])
+    assert friction[0] < 0 and top[0] == pytest.approx(-friction[0], rel=1e-6)
     # Dynamic step: four fixed increments, the punch lands on the block and is slowed down.
     assert [r.increment for r in namespace["dynamic_results"]] == [1, 2, 3, 4]
-    assert namespace["problem3"].num_springs > 0
+    assert namespace["problem4"].num_springs > 0
     punch_velocity = namespace["velocity"].x.array.reshape(-1, 3)[namespace["punch_nodes"], 2]
     assert -0.5 < punch_velocity.mean() < 0.0
 

@@ -175,19 +175,23 @@ def test_report_keeps_other_platforms_sections(tmp_path):
 @pytest.mark.ccx
 @needs_ccx
 def test_a_failing_run_is_a_row_of_the_table(tmp_path):
-    """ccx runs the deck; dolfinx_ntf rejects ADJUST (not supported yet): a row, not a crash."""
+    """ccx runs the deck; dolfinx_ntf rejects a temperature-dependent TABULAR law: a row."""
     (source,) = ccx_decks.select_decks(["hex_linear_pressure"])
+    law = "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE="
+    table = "TABULAR\n0., 0., 0.\n500., 0.01, 0.\n0., 0., 100.\n500., 0.01, 100.\n"
 
     def write(directory: Path) -> None:
         source.write(directory)
         path = directory / "hex_linear_pressure.inp"
-        path.write_text(path.read_text().replace("TYPE=NODE TO SURFACE", "TYPE=NODE TO SURFACE, "
-                                                 "ADJUST=0.0"))  # fmt: skip
+        text = path.read_text()
+        start = text.index(law) + len(law)
+        end = text.index("\n", text.index("\n", start) + 1) + 1  # the LINEAR card and its line
+        path.write_text(text[:start] + table + text[end:])
 
-    deck = ccx_decks.BenchDeck("hex_linear_pressure", "ADJUST", write)
+    deck = ccx_decks.BenchDeck("hex_linear_pressure", "temperature TABULAR", write)
     result = vs_ccx.run_deck(deck, tmp_path, runs=2)
     assert result.failure("ccx") == ""
-    assert "ADJUST" in result.failure("dolfinx_ntf")
+    assert "temperature-dependent" in result.failure("dolfinx_ntf")
     assert len(result.timed("ccx")) == 2 and len(result.timed("dolfinx_ntf")) == 1
     assert result.ccx.iterations and not result.ntf.iterations
     assert all(m.peak_rss > 0 and m.wall > 0 for m in result.runs)

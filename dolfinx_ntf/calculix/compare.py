@@ -56,6 +56,8 @@ class IncrementResults:
         pressure: ``(S,)`` contact pressure (compression > 0), ccx's CSTR press column.
         energy: ``(S,)`` spring energy (CELS), or None if not available.
         iterations: Newton iterations of the increment, or None if unknown.
+        slip: ``(S, 2)`` CDIS tangential columns, or None.
+        shear: ``(S, 2)`` CSTR tangential columns, or None.
     """
 
     time: float
@@ -66,6 +68,8 @@ class IncrementResults:
     pressure: np.ndarray
     energy: np.ndarray | None = None
     iterations: int | None = None
+    slip: np.ndarray | None = None
+    shear: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +86,7 @@ class IncrementComparison:
         ccx_contact, ntf_contact: Sorted slave nodes with a contact element on each side.
         missing_nodes: Displacement node numbers present on one side only.
         ccx_iterations, ntf_iterations: Newton iterations (None if unknown).
+        slip, slip_scale, shear, shear_scale: Same for the tangential CDIS and CSTR columns.
     """
 
     time: float
@@ -98,6 +103,20 @@ class IncrementComparison:
     missing_nodes: np.ndarray
     ccx_iterations: int | None = None
     ntf_iterations: int | None = None
+    slip: float = math.nan
+    slip_scale: float = math.nan
+    shear: float = math.nan
+    shear_scale: float = math.nan
+
+    @property
+    def relative_slip(self) -> float:
+        """Tangential relative displacement difference over the largest ccx value."""
+        return _ratio(self.slip, self.slip_scale)
+
+    @property
+    def relative_shear(self) -> float:
+        """Shear traction difference over the largest ccx shear traction."""
+        return _ratio(self.shear, self.shear_scale)
 
     @property
     def same_contact_elements(self) -> bool:
@@ -172,6 +191,16 @@ class Comparison:
         return self._max("relative_energy")
 
     @property
+    def relative_slip(self) -> float:
+        """Largest relative tangential displacement (CDIS) difference over the increments."""
+        return self._max("relative_slip")
+
+    @property
+    def relative_shear(self) -> float:
+        """Largest relative shear traction (CSTR) difference over the increments."""
+        return self._max("relative_shear")
+
+    @property
     def clearance(self) -> float:
         """Largest absolute clearance difference over the increments."""
         return self._max("clearance")
@@ -206,6 +235,11 @@ class Comparison:
             f"{self.relative_displacement:.3g}, pressure {self.relative_pressure:.3g}, clearance "
             f"{self.relative_clearance:.3g} (absolute {self.clearance:.3g}), energy "
             f"{self.relative_energy:.3g}"
+            + (
+                f", slip {self.relative_slip:.3g}, shear {self.relative_shear:.3g}"
+                if self.relative_shear > 0 or self.relative_slip > 0
+                else ""
+            )
         ]
         if self.ccx_only or self.ntf_only:
             lines.append(f"increments of ccx only at {list(self.ccx_only)}, dolfinx_ntf only at "
@@ -265,6 +299,8 @@ def ccx_increments(
                 pressure=cstr.values[:, 0],
                 energy=energy,
                 iterations=iterations.get(round(time, 6)),
+                slip=cdis.values[:, 1:3] if cdis.values.shape[1] >= 3 else None,
+                shear=cstr.values[:, 1:3] if cstr.values.shape[1] >= 3 else None,
             )
         )
     return results
@@ -289,6 +325,8 @@ def job_increments(job: typing.Any) -> list[IncrementResults]:
                 pressure=_cat([r.pressure for r in rows]),
                 energy=_cat([r.energy for r in rows]),
                 iterations=int(inc.iterations),
+                slip=_cat2([r.slip for r in rows]),
+                shear=_cat2([r.shear for r in rows]),
             )
         )
     return results
@@ -296,6 +334,16 @@ def job_increments(job: typing.Any) -> list[IncrementResults]:
 
 def _cat(arrays: list) -> np.ndarray:
     return np.concatenate([np.asarray(a, dtype=float) for a in arrays]) if arrays else np.zeros(0)
+
+
+def _cat2(arrays: list) -> np.ndarray | None:
+    if any(a is None for a in arrays):
+        return None
+    return (
+        np.concatenate([np.asarray(a, dtype=float).reshape(-1, 2) for a in arrays])
+        if arrays
+        else np.zeros((0, 2))
+    )
 
 
 # ----------------------------------------------------------------------------- comparison
@@ -333,7 +381,14 @@ def compare_increment(ccx: IncrementResults, ntf: IncrementResults) -> Increment
     if ccx.energy is not None and ntf.energy is not None:
         energy = _max_abs(ccx.energy[k] - ntf.energy[m])
         scale_energy = _max_abs(ccx.energy)
+    tangential = {}
+    for name in ("slip", "shear"):
+        a, b = getattr(ccx, name), getattr(ntf, name)
+        if a is not None and b is not None:
+            tangential[name] = _max_abs(a[k] - b[m])
+            tangential[f"{name}_scale"] = _max_abs(a)
     return IncrementComparison(
+        **tangential,
         time=ccx.time,
         displacement=du,
         displacement_scale=_max_abs(ccx.displacements),

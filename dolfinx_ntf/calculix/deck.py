@@ -418,7 +418,7 @@ class FileRequest:
 
 @dataclass(frozen=True, eq=False)
 class FrictionChange:
-    """``*CHANGE FRICTION`` + ``*FRICTION`` in a step (solver support comes later)."""
+    """``*CHANGE FRICTION`` + ``*FRICTION`` in a step (docs/method.md §11.5)."""
 
     interaction: str
     friction: Friction

@@ -49,6 +49,7 @@ import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.dynamics import DynamicStep
+from dolfinx_ntf.friction import output_tangents
 from dolfinx_ntf.laws import LinearLaw, SurfaceInteraction
 from dolfinx_ntf.output import ContactWriter, contact_results
 from dolfinx_ntf.problem import ContactProblem
@@ -65,7 +66,7 @@ from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
 from .deck import Deck, PrintRequest, Step, read_deck
 from .frd import FrdBlock, FrdWriter, nodal_extrapolation
-from .model import INTEGRATION_POINTS, CalculixModel, build_model
+from .model import INTEGRATION_POINTS, CalculixModel, build_model, friction_of
 from .progress import CvgFile, StaFile
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
@@ -98,8 +99,12 @@ class ContactRows:
         nodes: ``(k,)`` ccx slave node numbers.
         clearance: ``(k,)`` CDIS normal value (negative = penetration).
         pressure: ``(k,)`` CSTR contact pressure.
-        energy: ``(k,)`` CELS spring energy.
+        energy: ``(k,)`` CELS spring energy (with ccx 2.20's friction energy, docs/method.md
+            §11.4).
         master_faces: ``(k, n)`` ccx node numbers of each element's master face, ccx face order.
+        slip: ``(k, 2)`` CDIS tangential columns: accumulated tangential relative displacement
+            along ccx's output directions t1, t2 (zero without friction).
+        shear: ``(k, 2)`` CSTR tangential columns: shear traction along t1, t2.
     """
 
     pair: str
@@ -108,6 +113,8 @@ class ContactRows:
     pressure: np.ndarray
     energy: np.ndarray
     master_faces: np.ndarray
+    slip: np.ndarray | None = None
+    shear: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -302,14 +309,21 @@ class _Job:
             order = np.argsort(nodes, kind="stable")
             facets = state.master_faces.facets[state.spring_face]
             faces = self.model.face_nodes_of(pair.master, facets)
+            t1, t2 = output_tangents(results.normal)
+            slip = np.column_stack([np.einsum("ni,ni->n", results.slip, t) for t in (t1, t2)])
+            shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
+            # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4)
+            energy = results.energy + 2.0 * results.friction_energy
             rows.append(
                 ContactRows(
                     results.pair,
                     nodes[order],
                     results.clearance[order],
                     results.pressure[order],
-                    results.energy[order],
+                    energy[order],
                     faces[order],
+                    slip[order].reshape(-1, 2),
+                    shear[order].reshape(-1, 2),
                 )
             )
         return rows
@@ -381,6 +395,7 @@ class _Job:
         if index > 0:
             bcs = model.begin_step(index)
             problem.set_bcs(bcs)
+        self._contact_changes(step)
         controls = step.field_controls()
         self.solver.controls = {
             k: float(v)
@@ -427,13 +442,16 @@ class _Job:
         driver.run(self.solver, model.u)
 
     def _set_laws(self, *, dynamic: bool) -> None:
-        """ccx's LINEAR law has no tension in ``*DYNAMIC`` steps (docs/method.md §12.3)."""
+        """ccx's LINEAR law has no tension in ``*DYNAMIC`` steps (docs/method.md §12.3).
+
+        Only the law changes; the friction of earlier ``*CHANGE FRICTION`` cards stays.
+        """
         for pair, interaction in zip(self.model.pairs, self._static_interactions):
             law = interaction.law
             if dynamic and isinstance(law, LinearLaw):
-                pair.interaction = SurfaceInteraction(law.dynamic(), interaction.friction)
-            else:
-                pair.interaction = interaction
+                law = law.dynamic()
+            if pair.interaction.law is not law:
+                pair.interaction = SurfaceInteraction(law, pair.interaction.friction)
 
     def _run_dynamic_step(self, index: int, step: Step) -> None:
         """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
@@ -513,6 +531,18 @@ class _Job:
                      self.model.total_time(index, start), start, size)  # fmt: skip
         self.cvg.rows(number, increment, attempt, history)
         self._attempt = None
+
+    def _contact_changes(self, step: Step) -> None:
+        """``*CHANGE FRICTION`` and ``*MODEL CHANGE`` of a step (docs/method.md §11.5)."""
+        for change in step.friction_changes:
+            friction = friction_of(self.deck, change.friction)
+            for pair, spec in zip(self.model.pairs, self.deck.contact_pairs):
+                if spec.interaction == change.interaction:
+                    pair.interaction = SurfaceInteraction(pair.interaction.law, friction)
+        for change in step.model_changes:
+            for pair, spec in zip(self.model.pairs, self.deck.contact_pairs):
+                if (spec.slave, spec.master) == (change.slave, change.master):
+                    pair.active = change.action == "ADD"
 
     def _converged(self, index: int, step: Step, result: IncrementResult) -> None:
         model = self.model
@@ -654,12 +684,23 @@ class _Job:
     ) -> list[DatBlock]:
         nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, np.int64)
         zeros = np.zeros(nodes.size)
+        zeros2 = np.zeros((nodes.size, 2))
+
+        def tangential(name: str) -> np.ndarray:
+            return np.concatenate([getattr(r, name) for r in contact]) if contact else zeros2
+
         columns = {
             "CDIS": lambda: np.column_stack(
-                [np.concatenate([r.clearance for r in contact]) if contact else zeros, zeros, zeros]
+                [
+                    np.concatenate([r.clearance for r in contact]) if contact else zeros,
+                    tangential("slip"),
+                ]
             ),
             "CSTR": lambda: np.column_stack(
-                [np.concatenate([r.pressure for r in contact]) if contact else zeros, zeros, zeros]
+                [
+                    np.concatenate([r.pressure for r in contact]) if contact else zeros,
+                    tangential("shear"),
+                ]
             ),
             "CELS": lambda: np.concatenate([r.energy for r in contact]) if contact else zeros,
             "CNUM": lambda: None,
@@ -808,7 +849,15 @@ def run_job(
         model,
         comm,
         tight=tight,
-        problem_options={"walk_from_previous_face": False, **(problem_options or {})},
+        problem_options={
+            "walk_from_previous_face": False,
+            "small_sliding_rule": "last_pair",
+            # ccx's friction (docs/method.md §11): stale state, friction in tension, its tangent
+            "reset_friction_on_separation": False,
+            "friction_in_tension": True,
+            "friction_tangent": "ccx",
+            **(problem_options or {}),
+        },
         petsc_options=petsc_options,
         predictor=predictor,
         pair_after_predictor=pair_after_predictor,

@@ -33,6 +33,7 @@ Serial only for now: ``build_model`` raises ``NotImplementedError`` on more than
 
 from __future__ import annotations
 
+import logging
 import typing
 from dataclasses import dataclass, field
 
@@ -50,6 +51,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.constraints import LinearConstraint
 from dolfinx_ntf.laws import (
     ExponentialLaw,
+    Friction,
     LinearLaw,
     PressureOverclosureLaw,
     SurfaceInteraction,
@@ -405,21 +407,6 @@ def _not_supported(what: str, location) -> NotImplementedError:
 
 def _check_supported(deck: Deck) -> None:
     """Deck features the solver cannot run yet: a clear error naming the keyword and line."""
-    for pair in deck.contact_pairs:
-        if pair.adjust is not None:
-            raise _not_supported("*CONTACT PAIR, ADJUST", pair.location)
-    for name, interaction in deck.interactions.items():
-        if interaction.friction is not None and any(
-            p.interaction == name for p in deck.contact_pairs
-        ):
-            raise _not_supported(
-                f"*FRICTION (surface interaction {name})", interaction.friction.location
-            )
-    for step in deck.steps:
-        for change in step.friction_changes:
-            raise _not_supported("*CHANGE FRICTION", change.location)
-        for change in step.model_changes:
-            raise _not_supported("*MODEL CHANGE", change.location)
 
 
 def _element_block(deck: Deck):
@@ -608,17 +595,60 @@ def _law(deck: Deck, interaction_name: str) -> PressureOverclosureLaw:
     raise _not_supported(f"*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE={kind}", behavior.location)
 
 
-def _contact_pairs(deck: Deck, surfaces: dict) -> list[ContactPair]:
+def _first_youngs_modulus(deck: Deck, location) -> float:
+    """E of the first ``*ELASTIC`` material: ccx's reference for contact defaults."""
+    elastic = next((m.elastic for m in deck.materials.values() if m.elastic is not None), None)
+    if elastic is None:
+        raise ValueError(f"{location}: contact defaults need an *ELASTIC material")
+    return elastic[0]
+
+
+def friction_of(deck: Deck, data) -> Friction:
+    """A ``*FRICTION`` data line as ccx reads it: a missing or non-positive lambda is ``E/2``.
+
+    The default is announced with a warning, as ccx does (docs/method.md §11.5).
+    """
+    e = _first_youngs_modulus(deck, data.location)
+    if data.stick_slope is None or data.stick_slope <= 0.0:
+        logging.getLogger("dolfinx_ntf").warning(
+            " *WARNING in frictions: stick slope (lambda) missing or not positive at %s; "
+            "using E/2 = %g",
+            data.location,
+            0.5 * e,
+        )
+        return Friction(data.mu, 0.5 * e)
+    return Friction(data.mu, data.stick_slope)
+
+
+def _adjust(deck: Deck, pair, node_vertex: np.ndarray) -> float | NodeSurface | None:
+    """The ADJUST of a pair: a distance, the vertices of a node set, or None."""
+    if pair.adjust is None or isinstance(pair.adjust, float):
+        return pair.adjust
+    ids = deck.nsets[pair.adjust]
+    vertices = node_vertex[deck.node_index(ids)]
+    if np.any(vertices < 0):
+        node = int(ids[np.argmax(vertices < 0)])
+        raise _not_supported(
+            f"ADJUST={pair.adjust} with node {node}, which is not an element corner",
+            pair.location,
+        )
+    return NodeSurface(np.unique(vertices).astype(np.int32), pair.adjust)
+
+
+def _contact_pairs(deck: Deck, surfaces: dict, node_vertex: np.ndarray) -> list[ContactPair]:
     pairs = []
     for pair in deck.contact_pairs:
         law = _law(deck, pair.interaction)
+        data = deck.interactions[pair.interaction].friction
+        friction = None if data is None else friction_of(deck, data)
         pairs.append(
             ContactPair(
                 surfaces[pair.slave],
                 surfaces[pair.master],
-                SurfaceInteraction(law),
+                SurfaceInteraction(law, friction),
                 small_sliding=pair.small_sliding,
                 name=f"{pair.slave}-{pair.master}",
+                adjust=_adjust(deck, pair, node_vertex),
             )
         )
     return pairs
@@ -861,8 +891,8 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
-        NotImplementedError: features not supported yet (friction, ADJUST, *MODEL CHANGE,
-            parallel runs...), naming the keyword and ``file:line``.
+        NotImplementedError: features not supported yet (parallel runs, ...), naming the
+            keyword and ``file:line``.
     """
     if comm.size > 1:
         raise NotImplementedError(
@@ -883,7 +913,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     parts = {"block": block, "node_vertex": node_vertex, "find": _facet_finder(mesh)}
     surfaces, surface_tags, surface_faces = _surfaces(deck, mesh, parts)
-    pairs = _contact_pairs(deck, surfaces)
+    pairs = _contact_pairs(deck, surfaces, node_vertex)
     mu, lmbda = _lame(deck, block, mesh, element_cell)
     steps, amplitude_names, pressure_tags, num_groups = _schedules(
         deck, block, node_dof, parts, mesh

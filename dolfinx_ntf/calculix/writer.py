@@ -158,6 +158,10 @@ class StepSpec:
         time_controls: First data line of ``*CONTROLS, PARAMETERS=TIME INCREMENTATION`` (I_0, I_R,
             I_P, I_C, I_L, I_G, I_S, I_A; None leaves the field blank, i.e. ccx's default).
         output: Print requests.
+        change_friction: New friction of pairs from this step on, by pair number (1-based, the
+            order of ``pairs``): ``*CHANGE FRICTION`` of the pair's interaction ``SI<k>``.
+        model_change: ``"ADD"`` or ``"REMOVE"`` by pair number: ``*MODEL CHANGE, TYPE=CONTACT
+            PAIR``.
     """
 
     boundaries: Sequence[BoundarySpec] = ()
@@ -174,6 +178,8 @@ class StepSpec:
     field_controls: Mapping[str, float] | None = None
     time_controls: Sequence[float | None] | None = None
     output: OutputSpec = field(default_factory=OutputSpec)
+    change_friction: Mapping[int, object] = field(default_factory=dict)
+    model_change: Mapping[int, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -554,8 +560,8 @@ def write_inp(
         materials: Isotropic ``(E, nu)`` of every cell, or a mapping cell-tag value -> ``(E, nu)``.
         cell_tags: Cell tags selecting the material of each cell (needed with a mapping).
         pairs: Contact pairs, written as ``*CONTACT PAIR, TYPE=NODE TO SURFACE`` in this order (ccx
-            numbers contact elements pair by pair). Laws: EXPONENTIAL, LINEAR, TABULAR; no
-            friction.
+            numbers contact elements pair by pair). Laws: EXPONENTIAL, LINEAR, TABULAR; friction
+            as ``*FRICTION``.
         fixed: Constraints of the model definition (before the first step), normally zero values.
         steps: Static steps with their own boundaries, loads, incrementation, controls and output.
         heading: ``*HEADING`` text.
@@ -568,7 +574,6 @@ def write_inp(
     Raises:
         ValueError: Unsupported space or law, bad material, missing tags, empty node sets, bad
             steps.
-        NotImplementedError: A pair with friction.
 
     Example:
         A punch (cell tag 2) pressed on a block (tag 1) in four fixed increments, ccx's
@@ -708,8 +713,6 @@ def _material_groups(
 def _write_pair(out: _Out, V, md: _Mesh, k: int, pair: ContactPair) -> None:
     what = f"contact pair {k}" + (f" ({pair.name})" if getattr(pair, "name", "") else "")
     _check_type(pair, ContactPair, what)
-    if pair.interaction.friction is not None:
-        raise NotImplementedError(f"write_inp: {what}: friction is not supported yet")
     if not pair.active:
         raise ValueError(f"write_inp: {what} is inactive; ccx pairs are active from the first step")
     slave, master = f"SLAVE{k}", f"MASTER{k}"
@@ -726,12 +729,29 @@ def _write_pair(out: _Out, V, md: _Mesh, k: int, pair: ContactPair) -> None:
         )
     _write_face_surface(out, V, md, master, pair.master, f"{what} master")
     small = ", SMALL SLIDING" if pair.small_sliding else ""
+    if isinstance(pair.adjust, NodeSurface):
+        ids = np.unique(out.gather(_node_ids(V, md, pair.adjust, f"{what} adjust")))
+        out.add(f"*NSET, NSET=ADJUST{k}", *_int_lines(ids))
+        small += f", ADJUST=ADJUST{k}"
+    elif pair.adjust is not None:
+        small += f", ADJUST={_real(pair.adjust, 'adjust')}"
     out.add(
         f"*CONTACT PAIR, INTERACTION=SI{k}, TYPE=NODE TO SURFACE{small}",
         f"{slave}, {master}",
         f"*SURFACE INTERACTION, NAME=SI{k}",
         *_law_lines(pair.interaction.law, f"write_inp: {what}"),
+        *_friction_lines(pair.interaction.friction),
     )
+
+
+def _friction_lines(friction: object) -> list[str]:
+    """``*FRICTION`` card of a :class:`~dolfinx_ntf.Friction` (none for ``None``)."""
+    if friction is None:
+        return []
+    return [
+        "*FRICTION",
+        f"{_real(friction.mu, 'mu')}, {_real(friction.stick_slope, 'stick slope')}",
+    ]
 
 
 def _write_face_surface(out: _Out, V, md: _Mesh, name: str, surface, what: str) -> None:
@@ -881,6 +901,12 @@ def _write_step(
         if step.amplitude is not None
         else ""
     )
+    for k, friction in sorted(step.change_friction.items()):
+        out.add(f"*CHANGE FRICTION, INTERACTION=SI{int(k)}", *_friction_lines(friction))
+    for k, action in sorted(step.model_change.items()):
+        if action not in ("ADD", "REMOVE"):
+            raise ValueError(f"write_inp: step {s}: model_change {action!r}: ADD or REMOVE")
+        out.add(f"*MODEL CHANGE, TYPE=CONTACT PAIR, {action}", f"SLAVE{int(k)}, MASTER{int(k)}")
     if boundaries:
         out.add(f"*BOUNDARY{amp}", *boundaries)
     if cloads:

@@ -436,13 +436,7 @@ def error_decks() -> dict[str, str]:
     """Decks that must fail with a clear message."""
     return {
         "err_mixed": MIXED,
-        "err_friction": two_cubes(friction="*FRICTION\n0.2, 1.0e5\n"),
-        "err_adjust": two_cubes(adjust=", ADJUST=0.01"),
         "err_unknown_surface": two_cubes(master="NOSUCH"),
-        "err_model_change": two_cubes(
-            more="*STEP\n*STATIC\n*MODEL CHANGE, TYPE=CONTACT PAIR, REMOVE\n"
-            "SLAVE, MASTER\n*END STEP\n"
-        ),
         "diverge": two_cubes(more=DIVERGE_STEP),
     }
 

@@ -1,0 +1,61 @@
+"""Strain-free moves of slave nodes onto the master (CalculiX's ADJUST), dolfinx glue.
+
+``*CONTACT PAIR, ADJUST=a`` (or ``ADJUST=node set``) moves slave nodes at the first pairing of the
+analysis: a node in the set, or with clearance ``g <= a`` (penetrating nodes always, when a
+distance is given), gets its *reference* coordinates moved by ``-g n`` so that its clearance
+becomes 0 (docs/method.md §11.5). The move changes the mesh geometry, so it creates no strain.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dolfinx.fem
+
+from dolfinx_ntf import compat
+
+__all__ = ["adjusted_nodes", "move_reference_nodes"]
+
+
+def adjusted_nodes(
+    gap: np.ndarray, adjust: float | None, in_set: np.ndarray | None = None
+) -> np.ndarray:
+    """Which located slave nodes ADJUST moves: ``g <= adjust`` (distance) or membership (set).
+
+    Args:
+        gap: ``(k,)`` clearances of the located slave nodes.
+        adjust: The distance ``a >= 0``, or None for a node set.
+        in_set: ``(k,)`` membership of the located nodes in the node set (set form only).
+    """
+    if adjust is not None:
+        return gap <= adjust
+    return np.asarray(in_set, dtype=bool)
+
+
+def move_reference_nodes(
+    V: dolfinx.fem.FunctionSpace, reference: np.ndarray, dofs: np.ndarray, delta: np.ndarray
+) -> None:
+    """Move the reference position of block dofs ``dofs`` by ``delta`` ``(k, 3)``.
+
+    Updates the mesh geometry (the bulk forms see the new coordinates at their next assembly:
+    no strain) and ``reference`` (the contact code's copy) in place.
+
+    Raises:
+        NotImplementedError: A dof without a geometry node (e.g. a P2 midside node on a P1 mesh).
+    """
+    mesh = V.mesh
+    cells = compat.cell_dofs(V)
+    geometry = compat.geometry_dofs(mesh)[: cells.shape[0]]
+    if geometry.shape[1] != cells.shape[1]:
+        raise NotImplementedError(
+            "ADJUST needs a displacement space with the degree of the mesh geometry (its nodes "
+            "are moved)"
+        )
+    node_of_dof = np.full(reference.shape[0], -1, dtype=np.int64)
+    node_of_dof[cells.ravel()] = geometry.ravel()
+    nodes = node_of_dof[np.asarray(dofs, dtype=np.int64)]
+    if np.any(nodes < 0):
+        raise NotImplementedError("ADJUST: a slave node to move has no geometry node")
+    x = mesh.geometry.x
+    x[nodes, :3] += delta
+    reference[dofs] += delta
