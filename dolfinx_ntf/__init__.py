@@ -22,6 +22,13 @@ from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.output import ContactFields, ContactResults, ContactWriter, contact_results
 from dolfinx_ntf.postprocess import contact_area, contact_force, reaction
 from dolfinx_ntf.problem import ContactPair, ContactProblem
+from dolfinx_ntf.rigid import (
+    RigidCylinder,
+    RigidPlane,
+    RigidSphere,
+    RigidSurface,
+    SignedDistanceSurface,
+)
 from dolfinx_ntf.solver import (
     ContactConvergenceError,
     ContactDivergenceError,
@@ -51,6 +58,11 @@ __all__ = [
     "LinearLaw",
     "NodeSurface",
     "PressureOverclosureLaw",
+    "RigidCylinder",
+    "RigidPlane",
+    "RigidSphere",
+    "RigidSurface",
+    "SignedDistanceSurface",
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",

@@ -24,9 +24,10 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
+from dolfinx_ntf.rigid import RigidSurface, rigid_master, spring_evaluator
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
-from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
+from dolfinx_ntf.springs import SpringEvaluation
 from dolfinx_ntf.surfaces import (
     FacetSurface,
     NodeSurface,
@@ -55,7 +56,8 @@ class ContactPair:
     Args:
         slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
             surface.
-        master: Face-based master surface.
+        master: Face-based master surface, or a rigid analytical surface (one-node springs,
+            docs/method.md §15.1).
         interaction: Pressure-overclosure law (and, later, friction).
         small_sliding: Pair only at increment starts. As in CalculiX, the flag of the *last* pair
             decides for all.
@@ -64,7 +66,7 @@ class ContactPair:
     """
 
     slave: FacetSurface | NodeSurface
-    master: FacetSurface
+    master: FacetSurface | RigidSurface
     interaction: SurfaceInteraction
     small_sliding: bool = False
     name: str = ""
@@ -83,7 +85,7 @@ class ContactPair:
                 f"{owner}: the master surface must be a FacetSurface (face-based), got a "
                 "NodeSurface; only the slave surface may be node-based"
             )
-        validation.check_type(self.master, FacetSurface, f"{owner}: master")
+        validation.check_type(self.master, (FacetSurface, RigidSurface), f"{owner}: master")
         validation.check_type(
             self.interaction,
             SurfaceInteraction,
@@ -224,6 +226,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             )
         V = self.u.function_space
         slave = resolve_slave(V, pair.slave, what=f"{name} slave")
+        if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
+            faces, master = rigid_master(pair.master, lambda: self.time_fraction, f"{name} master")
+            return PairState(pair, slave, faces, master, np.zeros(slave.nodes.size))
         master_faces = resolve_master(V, pair.master, what=f"{name} master")
         if master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
@@ -388,7 +393,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         start = previous if self.walk_from_previous_face else None
         face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
         found = np.flatnonzero(face >= 0)
-        evaluation = evaluate_springs(
+        evaluation = spring_evaluator(state.master)(
             state.master_faces.face_type,
             coords[state.master_faces.faces[face[found]]],
             points[found],
@@ -454,7 +459,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 faces = state.slave.faces
                 areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
                 state.spring_area = areas[state.spring_slave]
-            ev = evaluate_springs(
+            ev = spring_evaluator(state.master)(
                 state.master_faces.face_type,
                 coords[nodes[:, :-1]],
                 coords[nodes[:, -1]],

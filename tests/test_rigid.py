@@ -1,0 +1,190 @@
+"""Rigid analytical master surfaces: geometry, one-node springs, tangent, and the patch test."""
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.rigid import evaluate_rigid_springs
+
+RNG = np.random.default_rng(12)
+
+
+def _sphere_callables():
+    center, radius = np.array([0.1, -0.2, 2.0]), 1.5
+
+    def distance(y):
+        return np.linalg.norm(y - center, axis=1) - radius
+
+    def normal(y):
+        r = y - center
+        return r / np.linalg.norm(r, axis=1)[:, None]
+
+    return distance, normal
+
+
+SURFACES = {
+    "plane": lambda: ntf.RigidPlane((0.0, 0.0, 0.5), (0.2, -0.1, 1.0)),
+    "sphere": lambda: ntf.RigidSphere((0.1, -0.2, 2.0), 1.5),
+    "cup": lambda: ntf.RigidSphere((0.1, -0.2, 2.0), 1.55, inside=True),
+    "cylinder": lambda: ntf.RigidCylinder((0.0, 0.0, 2.0), (1.0, 0.3, 0.0), 1.8),
+    "bore": lambda: ntf.RigidCylinder((0.0, 0.0, 2.0), (1.0, 0.3, 0.0), 1.55, inside=True),
+    "callables": lambda: ntf.SignedDistanceSurface(*_sphere_callables()),
+    "moving": lambda: ntf.RigidSphere(
+        (0.1, -0.2, 2.0), 1.5, motion=lambda t: (0.0, 0.05 * t, -0.2 * t)
+    ),
+}
+
+
+def _points(n=12):
+    """Points near the bottom of the test surfaces (some penetrating, some open)."""
+    return np.column_stack(
+        [RNG.uniform(-0.3, 0.3, n), RNG.uniform(-0.3, 0.3, n), RNG.uniform(0.3, 0.7, n)]
+    )
+
+
+@pytest.mark.parametrize("name", sorted(SURFACES))
+def test_normal_and_hessian_are_derivatives_of_the_distance(name):
+    surface, x, h = SURFACES[name](), _points(), 1e-6
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = h
+        dphi = (surface.distance(x + e, 0.7) - surface.distance(x - e, 0.7)) / (2 * h)
+        assert np.allclose(dphi, surface.normal(x, 0.7)[:, j], atol=1e-8)
+        dn = (surface.normal(x + e, 0.7) - surface.normal(x - e, 0.7)) / (2 * h)
+        assert np.allclose(dn, surface.hessian(x, 0.7)[:, :, j], atol=1e-6)
+    assert np.allclose(np.linalg.norm(surface.normal(x, 0.7), axis=1), 1.0)
+
+
+@pytest.mark.parametrize("name", sorted(SURFACES))
+@pytest.mark.parametrize(
+    "law", [ntf.LinearLaw(slope=1e3, tension=1.0), ntf.ExponentialLaw(c0=0.2, p0=5.0)]
+)
+def test_rigid_spring_tangent_matches_finite_differences(name, law):
+    surface, x = SURFACES[name](), _points()
+    areas = RNG.uniform(0.01, 0.05, x.shape[0])
+    ev = evaluate_rigid_springs(surface, x, areas, law, gap_shift=0.01, time=0.6)
+    assert ev.forces.shape == (x.shape[0], 1, 3) and ev.stiffness.shape == (x.shape[0], 3, 3)
+    assert np.any(ev.overclosure > 0) and np.any(ev.normal_force != 0)
+    h = 1e-7
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = h
+        plus = evaluate_rigid_springs(surface, x + e, areas, law, gap_shift=0.01, time=0.6)
+        minus = evaluate_rigid_springs(surface, x - e, areas, law, gap_shift=0.01, time=0.6)
+        fd = (plus.forces[:, 0] - minus.forces[:, 0]) / (2 * h)
+        scale = np.abs(ev.stiffness).max()
+        assert np.allclose(fd, ev.stiffness[:, :, j], atol=1e-6 * scale, rtol=1e-5)
+
+
+def test_spring_force_is_normal_and_pushes_out():
+    plane = ntf.RigidPlane((0, 0, 0), (0, 0, 2))
+    law = ntf.LinearLaw(slope=100.0, tension=1e-3)
+    ev = evaluate_rigid_springs(plane, [[0.0, 0.0, -0.1], [1.0, 2.0, -0.2]], [2.0, 1.0], law)
+    assert np.allclose(ev.gap, [-0.1, -0.2])
+    assert np.allclose(ev.normal_force, law.spring_force([0.1, 0.2], [2.0, 1.0])[0])
+    # Internal force on the slave: -F_N n (the contact force F_N n pushes it out along +z).
+    assert np.allclose(ev.forces[:, 0, :2], 0.0) and np.all(ev.forces[:, 0, 2] < 0)
+
+
+def test_motion_moves_the_surface():
+    plane = ntf.RigidPlane((0, 0, 0), (0, 0, 1), motion=lambda t: (0, 0, -t))
+    assert np.allclose(plane.distance([[0, 0, 0]], 0.25), [0.25])
+    plane.offset = np.array([0.0, 0.0, 1.0])
+    assert np.allclose(plane.distance([[0, 0, 0]], 0.25), [-0.75])
+
+
+def test_bad_surfaces_and_areas_are_named():
+    with pytest.raises(ValueError, match="RigidPlane: normal must not be zero"):
+        ntf.RigidPlane((0, 0, 0), (0, 0, 0))
+    with pytest.raises(ValueError, match="RigidSphere: radius must be a positive"):
+        ntf.RigidSphere((0, 0, 0), -1.0)
+    with pytest.raises(TypeError, match="motion must be a callable"):
+        ntf.RigidPlane((0, 0, 0), (0, 0, 1), motion=3.0)
+    bad = ntf.SignedDistanceSurface(lambda y: np.full(len(y), np.nan), lambda y: y)
+    with pytest.raises(ValueError, match="distance is not finite at points"):
+        bad.distance(np.ones((2, 3)))
+    law = ntf.LinearLaw(slope=1.0, tension=1e-3)
+    with pytest.raises(ValueError, match="have no spring area"):
+        evaluate_rigid_springs(ntf.RigidPlane((0, 0, 0), (0, 0, 1)), np.zeros((2, 3)), [1, 0], law)
+
+
+# -- patch test ------------------------------------------------------------------------------------
+
+E, NU, HEIGHT, DEPTH = 1000.0, 0.3, 0.5, 0.01
+
+
+def _block_on_plane(cell_type, slope):
+    """A block [0,1]x[0,1]x[0,H] pushed down by DEPTH onto the rigid plane z = 0 (rollers)."""
+    comm = MPI.COMM_WORLD
+    kind = getattr(dolfinx.mesh.CellType, cell_type)
+    mesh = dolfinx.mesh.create_box(comm, [[0, 0, 0], [1, 1, HEIGHT]], [3, 4, 2], kind)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    F = ufl.inner(small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
+
+    def facets(where):
+        return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
+
+    bottom = facets(lambda x: np.isclose(x[2], 0.0))
+    tags = dolfinx.mesh.meshtags(mesh, 2, np.sort(bottom), np.full(bottom.size, 1, np.int32))
+    top = component_bc(V, 2, facets(lambda x: np.isclose(x[2], HEIGHT)))
+    bcs = [
+        component_bc(V, 0, facets(lambda x: np.isclose(x[0], 0.0))),
+        component_bc(V, 1, facets(lambda x: np.isclose(x[1], 0.0))),
+        top,
+    ]
+    law = ntf.LinearLaw.with_ccx_defaults(E, slope=slope)
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(tags, 1),
+        ntf.RigidPlane((0, 0, 0), (0, 0, 1)),
+        ntf.SurfaceInteraction(law),
+        name="rigid",
+    )
+    # Areas follow the deformation (else they are those of the last pairing, 1e-8 off here).
+    problem = ntf.ContactProblem(F, u, [pair], bcs, linearize_area=True)
+    return problem, top, law
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("cell_type", ["tetrahedron", "hexahedron"])
+def test_block_on_rigid_plane_gives_the_uniform_pressure(cell_type):
+    slope = 10 * E
+    problem, top, law = _block_on_plane(cell_type, slope)
+    top_values = compat.boundary_values(top)
+
+    def set_load(t):
+        top_values.x.array[:] = -t * DEPTH
+
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    results = ntf.StaticStep(set_load, initial_increment=0.5).run(solver, problem.u)
+    assert results[-1].time == pytest.approx(1.0)
+
+    # Uniaxial stress (rollers, frictionless plane): sigma = E (DEPTH - d)/H at penetration d. The
+    # springs act on the current bottom area (1 + nu eps)^2 (lateral expansion), so that
+    # p(d) (1 + nu eps)^2 = sigma with eps = (DEPTH - d)/H.
+    def stretched(d):
+        return (1 + NU * (DEPTH - d) / HEIGHT) ** 2
+
+    d = scipy.optimize.brentq(
+        lambda d: law.pressure(d) * stretched(d) - E * (DEPTH - d) / HEIGHT, 0, DEPTH, xtol=1e-15
+    )
+    expected, stress = float(law.pressure(d)), E * (DEPTH - d) / HEIGHT
+    (res,) = ntf.contact_results(problem)
+    assert res.node.size == problem.states[0].slave.nodes.size  # every bottom node has a spring
+    assert np.abs(res.pressure / expected - 1).max() < 1e-8
+    assert np.abs(res.clearance + d).max() < 1e-8 * DEPTH
+    assert np.allclose(res.normal, [0, 0, 1])
+    assert ntf.contact_force(problem) == pytest.approx([0, 0, stress], rel=1e-8, abs=1e-8)
+    assert ntf.contact_area(problem) == pytest.approx(stretched(d), rel=1e-8)
+    assert ntf.reaction(problem, dofs=top)[2] == pytest.approx(-stress, rel=1e-8)
+    problem.destroy()
+    solver.destroy()
