@@ -225,6 +225,8 @@ class SignedDistanceSurface(RigidSurface):
             ``normal`` with step ``step`` (symmetrized).
         step: Finite-difference step for the Hessian (length units).
         motion: Translation ``c(t)``, see :class:`RigidSurface`.
+        ufl_distance: Optional ``phi`` as a function of a UFL vector, for the continuum
+            formulations (:mod:`dolfinx_ntf.continuum`); numpy callables cannot enter a form.
     """
 
     def __init__(
@@ -235,8 +237,10 @@ class SignedDistanceSurface(RigidSurface):
         *,
         step: float = 1e-6,
         motion: Motion | None = None,
+        ufl_distance: typing.Callable[[typing.Any], typing.Any] | None = None,
     ) -> None:
         super().__init__(motion)
+        self.ufl_distance = ufl_distance
         for name, f in (("distance", distance), ("normal", normal)):
             if not callable(f):
                 raise TypeError(f"SignedDistanceSurface: {name} must be callable, got {f!r}")

@@ -5,6 +5,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 import scipy.optimize
+from conftest import BLOCK_CONTACT, rigid_block
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -12,7 +13,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.elasticity import small_strain_stress
 from dolfinx_ntf.rigid import evaluate_rigid_springs
 
 RNG = np.random.default_rng(12)
@@ -124,27 +125,13 @@ E, NU, HEIGHT, DEPTH = 1000.0, 0.3, 0.5, 0.01
 
 def _block_on_plane(cell_type, slope):
     """A block [0,1]x[0,1]x[0,H] pushed down by DEPTH onto the rigid plane z = 0 (rollers)."""
-    comm = MPI.COMM_WORLD
-    kind = getattr(dolfinx.mesh.CellType, cell_type)
-    mesh = dolfinx.mesh.create_box(comm, [[0, 0, 0], [1, 1, HEIGHT]], [3, 4, 2], kind)
-    V = compat.vector_space(mesh, "Lagrange", 1)
+    V, tags, bcs = rigid_block(cell_type, HEIGHT)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     F = ufl.inner(small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
-
-    def facets(where):
-        return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
-
-    bottom = facets(lambda x: np.isclose(x[2], 0.0))
-    tags = dolfinx.mesh.meshtags(mesh, 2, np.sort(bottom), np.full(bottom.size, 1, np.int32))
-    top = component_bc(V, 2, facets(lambda x: np.isclose(x[2], HEIGHT)))
-    bcs = [
-        component_bc(V, 0, facets(lambda x: np.isclose(x[0], 0.0))),
-        component_bc(V, 1, facets(lambda x: np.isclose(x[1], 0.0))),
-        top,
-    ]
+    top = bcs[-1]
     law = ntf.LinearLaw.with_ccx_defaults(E, slope=slope)
     pair = ntf.ContactPair(
-        ntf.FacetSurface(tags, 1),
+        ntf.FacetSurface(tags, BLOCK_CONTACT),
         ntf.RigidPlane((0, 0, 0), (0, 0, 1)),
         ntf.SurfaceInteraction(law),
         name="rigid",
