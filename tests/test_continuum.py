@@ -53,10 +53,10 @@ def _solve(method, cell_type="tetrahedron", **parameters):
 
 def test_penalty_block_gives_the_uniform_pressure():
     K = 10 * E
-    u, recovery, reaction, records = _solve("penalty", penalty=K)
+    _u, recovery, reaction, records = _solve("penalty", penalty=K)
     # Uniaxial stress: E (DEPTH - d)/H = K d (the UFL penalty integrates on the reference area).
     d = E * DEPTH / HEIGHT / (K + E / HEIGHT)
-    nodes, p = recovery.nodal()
+    _nodes, p = recovery.nodal()
     assert np.abs(p / (K * d) - 1).max() < 1e-8
     assert reaction[2] == pytest.approx(-K * d, rel=1e-8)
     assert recovery.total() == pytest.approx(K * d, rel=1e-8)
@@ -67,22 +67,22 @@ def test_penalty_block_gives_the_uniform_pressure():
 
 @pytest.mark.parametrize("theta", [1, 0, -1])
 def test_nitsche_block_gives_the_exact_pressure(theta):
-    u, recovery, reaction, records = _solve("nitsche", gamma0=10.0, theta=theta)
+    u, recovery, reaction, _records = _solve("nitsche", gamma0=10.0, theta=theta)
     # Nitsche is consistent: no penetration, sigma = E DEPTH/H.
     expected = E * DEPTH / HEIGHT
     nodes, p = recovery.nodal()
     assert np.abs(p / expected - 1).max() < 1e-8
     assert reaction[2] == pytest.approx(-expected, rel=1e-8)
-    bottom = V_bottom_uz(u, nodes)
+    bottom = _bottom_uz(u, nodes)
     assert np.abs(bottom).max() < 1e-10 * DEPTH
 
 
-def V_bottom_uz(u, nodes):
+def _bottom_uz(u, nodes):
     return u.x.array.reshape(-1, 3)[nodes, 2]
 
 
 def test_bad_arguments_are_named():
-    V, tags, bcs = rigid_block()
+    V, tags, _bcs = rigid_block()
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     obstacle = continuum.RigidObstacle(ntf.RigidPlane((0, 0, 0), (0, 0, 1)), V.mesh)
     ds = continuum.contact_measure(V.mesh, tags, BLOCK_CONTACT)
