@@ -49,7 +49,7 @@ class BoundaryPressure:
         tag: int,
         *,
         lumped: bool | None = None,
-        quadrature_degree: int = 4,
+        quadrature_degree: int = 8,
     ) -> None:
         mesh = V.mesh
         facets = facet_tags.find(tag)
