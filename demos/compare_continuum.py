@@ -168,9 +168,10 @@ def run(
         dolfinx.fem.dirichletbc(top_uz, top, V.sub(2)),
     ]
     if method == "ntf-meshed":  # the whole block clamped: a rigid plane made of elements
+        mesh.topology.create_connectivity(3, 3)
         block = dolfinx.fem.locate_dofs_topological(V, 3, cell_tags.find(geometry.BLOCK))
         bcs.append(dolfinx.fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), block, V))
-    recovery = BoundaryPressure(V, facet_tags, ZONE)
+    recovery = BoundaryPressure(V, facet_tags.find(ZONE))
     loads = [((k + 1) / increments) ** 2 * displacement for k in range(increments)]
     iterations: list[int] = []
     split = {"bulk": 0.0, "contact": 0.0, "solve": 0.0}

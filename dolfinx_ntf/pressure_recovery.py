@@ -23,6 +23,7 @@ import numpy as np
 
 import dolfinx.fem
 import dolfinx.fem.petsc
+import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
@@ -35,8 +36,7 @@ class BoundaryPressure:
 
     Args:
         V: The (vector) displacement space.
-        facet_tags: Facet tags holding the contact boundary.
-        tag: Tag of the contact boundary.
+        facets: Local indices of the contact boundary's facets (e.g. ``facet_tags.find(tag)``).
         lumped: Lumped (row-sum) mass; default for P1 (positive, local), consistent for higher
             degrees (whose lumped corner masses vanish).
         quadrature_degree: Degree of the right-hand side integrals of :meth:`from_expression`.
@@ -45,14 +45,17 @@ class BoundaryPressure:
     def __init__(
         self,
         V: dolfinx.fem.FunctionSpace,
-        facet_tags: compat.MeshTags,
-        tag: int,
+        facets: np.ndarray,
         *,
         lumped: bool | None = None,
         quadrature_degree: int = 8,
     ) -> None:
         mesh = V.mesh
-        facets = facet_tags.find(tag)
+        facets = np.unique(np.asarray(facets, dtype=np.int32))
+        facet_tags = dolfinx.mesh.meshtags(
+            mesh, mesh.topology.dim - 1, facets, np.ones_like(facets)
+        )
+        tag = 1
         self.degree = compat.space_degree(V)
         self.lumped = self.degree == 1 if lumped is None else bool(lumped)
         if self.lumped and self.degree > 1:
@@ -92,7 +95,11 @@ class BoundaryPressure:
             zero = dolfinx.fem.Function(Q)
             bc = dolfinx.fem.dirichletbc(zero, off.astype(np.int32))
             self._bc = [bc]
-            M = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(p * q * self._ds_exact), [bc])
+            # The zero volume term puts every diagonal in the sparsity pattern (off-boundary rows
+            # get the Dirichlet diagonal 1; a ds-only pattern lacks them).
+            zero_volume = dolfinx.fem.Constant(mesh, PETSc.ScalarType(0.0)) * p * q * ufl.dx
+            mass = dolfinx.fem.form(p * q * self._ds_exact + zero_volume)
+            M = dolfinx.fem.petsc.assemble_matrix(mass, [bc])
             M.assemble()
             ksp = PETSc.KSP().create(mesh.comm)
             ksp.setOperators(M)

@@ -44,7 +44,7 @@ def _solve(method, cell_type="tetrahedron", **parameters):
     for t in (0.5, 1.0):
         top.x.array[:] = -t * DEPTH
         records.append(newton.solve())
-    recovery = BoundaryPressure(V, tags, BLOCK_CONTACT)
+    recovery = BoundaryPressure(V, tags.find(BLOCK_CONTACT))
     recovery.from_expression(pressure)
     reaction = measures.facet_reaction(bulk, u, tags, BLOCK_TOP)
     newton.destroy()
@@ -91,7 +91,7 @@ def test_bad_arguments_are_named():
     with pytest.raises(ValueError, match="has no ufl_distance"):
         continuum.RigidObstacle(ntf.SignedDistanceSurface(np.sum, np.sum), V.mesh)
     with pytest.raises(ValueError, match="lumped recovery needs P1"):
-        BoundaryPressure(compat.vector_space(V.mesh, "Lagrange", 2), tags, 1, lumped=True)
+        BoundaryPressure(compat.vector_space(V.mesh, "Lagrange", 2), tags.find(1), lumped=True)
 
 
 def test_signed_distance_surface_in_ufl_matches_the_sphere():
