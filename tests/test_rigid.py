@@ -211,3 +211,32 @@ def test_recovered_pressure_is_the_traction_on_linear_and_quadratic_faces(degree
         assert np.abs(law_values / stress - 1).max() < 0.06
     problem.destroy()
     solver.destroy()
+
+
+@pytest.mark.serial
+def test_moving_rigid_plane_presses_like_a_moving_top():
+    """The plane rises by DEPTH (motion c(t)) under a block whose top is held: the same pressure."""
+    V, tags, bcs = rigid_block("hexahedron", HEIGHT)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    F = ufl.inner(small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
+    law = ntf.LinearLaw.with_ccx_defaults(E, slope=10 * E)
+    plane = ntf.RigidPlane((0, 0, 0), (0, 0, 1), motion=lambda t: (0.0, 0.0, t * DEPTH))
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(tags, BLOCK_CONTACT), plane, ntf.SurfaceInteraction(law)
+    )
+    problem = ntf.ContactProblem(F, u, [pair], bcs, linearize_area=True)
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    results = ntf.StaticStep(lambda t: None, initial_increment=0.5).run(solver, u)
+    assert [r.time for r in results] == [0.5, 1.0]
+    moved, _, _ = _block_on_plane("hexahedron", 10 * E)
+    top_values = compat.boundary_values(moved.bcs[-1])
+    other = ntf.ContactNewtonSolver(MPI.COMM_WORLD, moved)
+    ntf.StaticStep(lambda t: top_values.x.array.fill(-t * DEPTH), initial_increment=0.5).run(
+        other, moved.u
+    )
+    p_moving = ntf.contact_results(problem)[0].pressure
+    p_top = ntf.contact_results(moved)[0].pressure
+    assert p_moving.mean() > 0
+    assert np.allclose(p_moving, p_top.mean(), rtol=1e-8)
+    for obj in (problem, solver, moved, other):
+        obj.destroy()
