@@ -18,6 +18,7 @@ Shared rules:
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -38,17 +39,42 @@ __all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh", "write
 _model_counter = itertools.count()
 
 
+def _track_initialization() -> dict[str, bool]:
+    """gmsh 4.8 has no ``gmsh.isInitialized``: follow ``initialize``/``finalize`` calls instead.
+
+    Probing with an API call before ``initialize()`` is undefined in gmsh 4.8: it usually returns,
+    but sometimes ends the process with exit code 1 (measured under pytest: ``gmsh.model.list()``
+    as the first gmsh call killed the test run silently). A session the user opened before
+    importing this module is not seen.
+    """
+    state = {"initialized": False}
+    if hasattr(gmsh, "isInitialized"):
+        return state
+    initialize, finalize = gmsh.initialize, gmsh.finalize
+
+    @functools.wraps(initialize)
+    def tracked_initialize(*args: Any, **kwargs: Any) -> None:
+        initialize(*args, **kwargs)
+        state["initialized"] = True
+
+    @functools.wraps(finalize)
+    def tracked_finalize(*args: Any, **kwargs: Any) -> None:
+        finalize(*args, **kwargs)
+        state["initialized"] = False
+
+    gmsh.initialize, gmsh.finalize = tracked_initialize, tracked_finalize
+    return state
+
+
+_GMSH_STATE = _track_initialization()
+
+
 def _gmsh_is_initialized() -> bool:
     """Whether the gmsh API is initialized (gmsh 4.8 has no ``gmsh.isInitialized``)."""
     probe = getattr(gmsh, "isInitialized", None)
     if probe is not None:
         return bool(probe())
-    try:
-        # Before initialize() gmsh 4.8 lists no model; after it at least the default one; after
-        # finalize() the call raises.
-        return len(gmsh.model.list()) > 0
-    except Exception:
-        return False
+    return _GMSH_STATE["initialized"]
 
 
 @contextlib.contextmanager
