@@ -91,7 +91,7 @@ def run(levels: tuple[float, ...], sweeps: bool, max_meshed_dofs: int) -> list[d
                     continue
             try:
                 row = demo.run(method, meshes, **params)
-            except RuntimeError as error:  # a failed run is a result too
+            except (RuntimeError, ValueError) as error:  # a failed run is a result too
                 row = {"method": method, "failed": str(error)}
             row.update(level=level, label=_label(method, params), mesh_time=mesh_time)
             rows.append(row)
