@@ -17,6 +17,7 @@ same kind of field.
 
 from __future__ import annotations
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -132,7 +133,7 @@ class BoundaryPressure:
         with rhs.localForm() as local:
             local.set(0.0)
         q = self._q_of_node[np.asarray(nodes, dtype=np.int64)]
-        if np.any(q < 0):
+        if self.space.mesh.comm.allreduce(bool(np.any(q < 0)), op=MPI.LOR):  # fail on all ranks
             raise ValueError("BoundaryPressure.from_forces: nodes outside the displacement space")
         owned = q < rhs.getLocalSize()
         np.add.at(rhs.array, q[owned], np.asarray(forces, dtype=float)[owned])
