@@ -12,7 +12,7 @@ from dolfinx_ntf import compat, continuum, measures
 from dolfinx_ntf.elasticity import small_strain_stress
 from dolfinx_ntf.pressure_recovery import BoundaryPressure
 
-pytestmark = pytest.mark.serial
+pytestmark = pytest.mark.mpi  # also on 2 ranks (make test)
 
 E, NU, HEIGHT, DEPTH = 1000.0, 0.3, 0.5, 0.01
 
