@@ -21,6 +21,7 @@ Serial; from the repository root::
 
     .venv/bin/python benchmarks/continuum.py            # about 10 minutes on 2 shared cores
     .venv/bin/python benchmarks/continuum.py --quick    # coarse mesh and the first level only
+    .venv/bin/python benchmarks/continuum.py --no-sweeps --methods ntf-rigid penalty nitsche
 """
 
 from __future__ import annotations
@@ -75,7 +76,11 @@ def _label(method: str, params: dict) -> str:
 
 
 def run(
-    levels: tuple[float, ...], sweeps: bool, max_meshed_dofs: int, extra_only: bool = False
+    levels: tuple[float, ...],
+    sweeps: bool,
+    max_meshed_dofs: int,
+    extra_only: bool = False,
+    methods: tuple[str, ...] | None = None,
 ) -> list[dict]:
     """Every method at every level, then the sweeps; returns one row per run."""
     demo = _demo()
@@ -86,7 +91,7 @@ def run(
         start = time.perf_counter()
         meshes = demo.make_meshes(level)
         mesh_time = time.perf_counter() - start
-        cases = [] if extra_only else [(m, {}) for m in demo.METHODS]
+        cases = [] if extra_only else [(m, {}) for m in methods or demo.METHODS]
         if sweeps and index == SWEEP_LEVEL:
             cases += SWEEPS
         if sweeps and index == len(levels) - 1:
@@ -221,9 +226,12 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument(
         "--replot", type=Path, default=None, metavar="JSON", help="report the rows of JSON, no runs"
     )
+    parser.add_argument("--levels", type=float, nargs="+", default=list(LEVELS), help="h / R")
+    parser.add_argument("--methods", nargs="+", default=None, help="default: all")
+    parser.add_argument("--no-sweeps", action="store_true", help="no parameter sweeps")
     args = parser.parse_args(argv)
     start = time.perf_counter()
-    levels = (0.04,) if args.quick else LEVELS
+    levels = (0.04,) if args.quick else tuple(args.levels)
     if args.replot:
         rows = json.loads(args.replot.read_text())
         mtime = dt.datetime.fromtimestamp(args.replot.stat().st_mtime, dt.timezone.utc)
@@ -231,9 +239,10 @@ def main(argv: list[str] | None = None) -> list[dict]:
     previous = json.loads(args.extra_only.read_text()) if args.extra_only else []
     rows = previous + run(
         levels,
-        sweeps=not args.quick,
+        sweeps=not (args.quick or args.no_sweeps),
         max_meshed_dofs=args.max_meshed_dofs,
         extra_only=args.extra_only is not None,
+        methods=tuple(args.methods) if args.methods else None,
     )
     total = time.perf_counter() - start + sum(r.get("time", 0.0) for r in previous)
     if args.json:
