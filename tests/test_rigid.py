@@ -240,3 +240,16 @@ def test_moving_rigid_plane_presses_like_a_moving_top():
     assert np.allclose(p_moving, p_top.mean(), rtol=1e-8)
     for obj in (problem, solver, moved, other):
         obj.destroy()
+
+
+def test_decks_have_no_rigid_masters(tmp_path):
+    from dolfinx_ntf.calculix import write_inp
+
+    V, tags, _ = rigid_block()
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(tags, BLOCK_CONTACT),
+        ntf.RigidPlane((0, 0, 0), (0, 0, 1)),
+        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E)),
+    )
+    with pytest.raises(ValueError, match="CalculiX decks have no RigidPlane"):
+        write_inp(tmp_path / "job.inp", displacement_space=V, materials=(E, NU), pairs=[pair])
