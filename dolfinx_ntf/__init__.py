@@ -9,6 +9,7 @@ CalculiX interop). The method is described in ``docs/method.md``, the code in
 __version__ = "0.1.0"
 
 from dolfinx_ntf import logs as _logs
+from dolfinx_ntf.active_set import ActiveSetNewtonSolver
 from dolfinx_ntf.analysis import (
     AddPair,
     Amplitude,
@@ -34,7 +35,15 @@ from dolfinx_ntf.laws import (
 from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.output import ContactFields, ContactResults, ContactWriter, contact_results
 from dolfinx_ntf.postprocess import contact_area, contact_force, reaction
+from dolfinx_ntf.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.problem import ContactPair, ContactProblem
+from dolfinx_ntf.rigid import (
+    RigidCylinder,
+    RigidPlane,
+    RigidSphere,
+    RigidSurface,
+    SignedDistanceSurface,
+)
 from dolfinx_ntf.solver import (
     ContactConvergenceError,
     ContactDivergenceError,
@@ -48,9 +57,11 @@ from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 _logs.route_compiler_lines()
 
 __all__ = [
+    "ActiveSetNewtonSolver",
     "AddPair",
     "Amplitude",
     "AnalysisStep",
+    "BoundaryPressure",
     "ChangeFriction",
     "ContactConvergenceError",
     "ContactDivergenceError",
@@ -73,7 +84,12 @@ __all__ = [
     "NodeSurface",
     "PressureOverclosureLaw",
     "RemovePair",
+    "RigidCylinder",
+    "RigidPlane",
+    "RigidSphere",
+    "RigidSurface",
     "SetSmallSliding",
+    "SignedDistanceSurface",
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",

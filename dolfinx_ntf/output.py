@@ -24,6 +24,7 @@ import dolfinx.fem
 import dolfinx.io
 
 from dolfinx_ntf import validation
+from dolfinx_ntf.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.problem import ContactProblem, PairState
 
 __all__ = ["ContactFields", "ContactResults", "ContactWriter", "contact_results"]
@@ -136,6 +137,11 @@ class ContactFields:
     - ``status`` (name ``contact_status``): 1 where the node's spring is closed (``g_eff < 0``),
       0 where it is open or there is no spring.
 
+    - ``recovered_pressure`` (name ``contact_pressure_recovered``): the spring forces turned into a
+      traction field on the slave faces, ``∫ p_h phi_i ds = F_N,i`` (docs/method.md §15.3); unlike
+      the nodal law values it stays meaningful on quadratic faces, and ``∫ p_h ds`` is the total
+      normal force. It lives on its own copy of the scalar space.
+
     Call :meth:`update` after a solve (the writer does it before writing). Nodal pressures are
     spring forces over lumped areas: on unstructured linear tetrahedra they scatter by about
     +-15 % from node to node around a smooth distribution (docs/method.md §10).
@@ -161,6 +167,13 @@ class ContactFields:
         self.shear = dolfinx.fem.Function(V, name="contact_shear")
         #: Accumulated tangential relative displacement ``t`` (vector, on ``u``'s space).
         self.slip = dolfinx.fem.Function(V, name="contact_slip")
+        slave_facets = [s.slave.faces.facets for s in problem.states]
+        #: Projection of the spring forces onto the slave faces (docs/method.md §15.3).
+        self.recovery = BoundaryPressure(
+            problem.u.function_space,
+            np.concatenate(slave_facets) if slave_facets else np.zeros(0, dtype=np.int32),
+        )
+        self.recovered_pressure = self.recovery.pressure
         self.update()
 
     @property
@@ -182,6 +195,7 @@ class ContactFields:
         for f in (*self.functions, self.shear, self.slip):
             f.x.array[:] = 0.0
         shear, slip = self.shear.x.array.reshape(-1, 3), self.slip.x.array.reshape(-1, 3)
+        nodes, forces = [], []
         for res in contact_results(self.problem):
             np.add.at(shear, res.node, res.shear)
             slip[res.node] = res.slip
@@ -191,15 +205,21 @@ class ContactFields:
             self.status.x.array[q] = np.maximum(
                 self.status.x.array[q], (res.clearance < 0).astype(float)
             )
+            nodes.append(res.node)
+            forces.append(res.normal_force)
+        self.recovery.from_forces(
+            np.concatenate(nodes) if nodes else np.zeros(0, dtype=np.int64),
+            np.concatenate(forces) if forces else np.zeros(0),
+        )
 
 
 class ContactWriter:
     """Writes the displacement and the :class:`ContactFields` to an XDMF file (for ParaView).
 
     Each :meth:`write` adds a time step: ``u`` and ``contact_pressure``, ``contact_clearance``,
-    ``contact_status``, ``contact_shear`` and ``contact_slip``. The initial state can be written
-    before the first solve (zero fields).
-    XDMF keeps vertex values only, so a P2 displacement loses its midside values in the file.
+    ``contact_status``, ``contact_shear``, ``contact_slip`` and ``contact_pressure_recovered``. The
+    initial state can be written before the first solve (zero fields). XDMF keeps vertex values
+    only, so a P2 displacement loses its midside values in the file.
 
     Args:
         problem: The contact problem.
@@ -245,7 +265,14 @@ class ContactWriter:
     def write(self, t: float) -> None:
         """Write the displacement and the contact fields at time ``t``."""
         self.fields.update()
-        for f in (self.problem.u, *self.fields.functions, self.fields.shear, self.fields.slip):
+        fields = self.fields
+        for f in (
+            self.problem.u,
+            *fields.functions,
+            fields.shear,
+            fields.slip,
+            fields.recovered_pressure,
+        ):
             self._file.write_function(f, t)
 
     def close(self) -> None:

@@ -29,9 +29,10 @@ from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
 from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
 from dolfinx_ntf.friction_state import FrictionState
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
+from dolfinx_ntf.rigid import RigidSurface, rigid_master, spring_evaluator
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
-from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
+from dolfinx_ntf.springs import SpringEvaluation
 from dolfinx_ntf.surfaces import (
     FacetSurface,
     NodeSurface,
@@ -60,7 +61,8 @@ class ContactPair:
     Args:
         slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
             surface.
-        master: Face-based master surface.
+        master: Face-based master surface, or a rigid analytical surface (one-node springs,
+            docs/method.md §15.1).
         interaction: Pressure-overclosure law and optional friction; may be replaced between
             steps (new mu and lambda act from then on, the friction state is kept).
         small_sliding: Pair only at increment starts. Per pair by default; with
@@ -75,7 +77,7 @@ class ContactPair:
     """
 
     slave: FacetSurface | NodeSurface
-    master: FacetSurface
+    master: FacetSurface | RigidSurface
     interaction: SurfaceInteraction
     small_sliding: bool = False
     name: str = ""
@@ -95,7 +97,7 @@ class ContactPair:
                 f"{owner}: the master surface must be a FacetSurface (face-based), got a "
                 "NodeSurface; only the slave surface may be node-based"
             )
-        validation.check_type(self.master, FacetSurface, f"{owner}: master")
+        validation.check_type(self.master, (FacetSurface, RigidSurface), f"{owner}: master")
         validation.check_type(
             self.interaction,
             SurfaceInteraction,
@@ -322,6 +324,18 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         name = pair.name or f"pair {index + 1}"
         V = self.u.function_space
         slave = resolve_slave(V, pair.slave, what=f"{name} slave")
+        if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
+            if pair.interaction.friction is not None or pair.adjust is not None:
+                raise NotImplementedError(
+                    f"{name}: friction and ADJUST against a rigid analytical master are not "
+                    "supported yet; use a meshed master"
+                )
+            faces, master = rigid_master(pair.master, lambda: self.time_fraction, f"{name} master")
+            friction = FrictionState(slave.nodes.size)  # stays empty: the bookkeeping is shared
+            return PairState(
+                pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
+                was_active=pair.active,
+            )  # fmt: skip
         master_faces = resolve_master(V, pair.master, what=f"{name} master")
         if master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
@@ -566,7 +580,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         start = previous if self.walk_from_previous_face else None
         face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
         found = np.flatnonzero(face >= 0)
-        evaluation = evaluate_springs(
+        evaluation = spring_evaluator(state.master)(
             state.master_faces.face_type,
             coords[state.master_faces.faces[face[found]]],
             points[found],
@@ -650,7 +664,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 faces = state.slave.faces
                 areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
                 state.spring_area = areas[state.spring_slave]
-            ev = evaluate_springs(
+            ev = spring_evaluator(state.master)(
                 state.master_faces.face_type,
                 coords[nodes[:, :-1]],
                 coords[nodes[:, -1]],

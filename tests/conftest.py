@@ -181,3 +181,39 @@ def punch_problem(
         name=name,
     )
     return ntf.ContactProblem(F, u, [pair], bcs, **problem_options), pressure, ft
+
+
+BLOCK_CONTACT, BLOCK_TOP = 1, 2
+
+
+def rigid_block(cell_type="tetrahedron", height=0.5, divisions=(3, 4, 2), degree=1):
+    """A block [0,1]x[0,1]x[0,height] on rollers (x = 0, y = 0), for contact on a rigid plane z = 0.
+
+    Returns the displacement space, the facet tags (BLOCK_CONTACT bottom, BLOCK_TOP top) and the
+    Dirichlet conditions: rollers and the top's u_z (zero until set through its Function).
+    """
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD,
+        [[0, 0, 0], [1, 1, height]],
+        list(divisions),
+        getattr(dolfinx.mesh.CellType, cell_type),
+    )
+    V = compat.vector_space(mesh, "Lagrange", degree)
+
+    def facets(where):
+        return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
+
+    bottom, top = (
+        facets(lambda x: np.isclose(x[2], 0.0)),
+        facets(lambda x: np.isclose(x[2], height)),
+    )
+    entities = np.concatenate([bottom, top])
+    values = np.concatenate([np.full(bottom.size, BLOCK_CONTACT), np.full(top.size, BLOCK_TOP)])
+    order = np.argsort(entities)
+    tags = dolfinx.mesh.meshtags(mesh, 2, entities[order], values[order].astype(np.int32))
+    bcs = [
+        component_bc(V, 0, facets(lambda x: np.isclose(x[0], 0.0))),
+        component_bc(V, 1, facets(lambda x: np.isclose(x[1], 0.0))),
+        component_bc(V, 2, top),
+    ]
+    return V, tags, bcs

@@ -108,3 +108,28 @@ def test_frictional_punch_demo_has_stick_and_slip_zones(tmp_path):
     assert summary["equilibrium_error"] < 1e-8
     assert summary["max_shear_over_pressure"] <= 0.2 * (1 + 1e-10)
     assert Path(summary["png"]).exists() and Path(summary["xdmf"]).exists()
+
+
+def test_compare_continuum_demo(tmp_path):
+    rows = _demo("compare_continuum").main(["--coarse", "--quiet"])
+    by = {row["method"]: row for row in rows}
+    assert set(by) == {"ntf-rigid", "ntf-active", "ntf-meshed", "penalty", "nitsche"}
+    # A clamped flat block and the analytical plane are the same master: same springs, same force.
+    assert by["ntf-meshed"]["force"] == pytest.approx(by["ntf-rigid"]["force"], rel=1e-8)
+    assert by["ntf-meshed"]["dofs"] > 2 * by["ntf-rigid"]["dofs"]
+    # The active-set Newton converges to the same solution (tolerances differ).
+    assert by["ntf-active"]["force"] == pytest.approx(by["ntf-rigid"]["force"], rel=1e-6)
+    for row in rows:
+        # The recovered pressure carries the reaction (quadrature degree 8 for the UFL forms;
+        # measured within 5e-4 on this mesh).
+        assert abs(row["pressure_force_error"]) < 2e-3, row["method"]
+        # Hertz on 2.5 elements across the contact radius: measured a within 1 %, p0 within 3 %.
+        assert abs(row["a_error"]) < 0.03 and abs(row["p0_error"]) < 0.06, row["method"]
+        if row["method"].startswith("ntf"):  # projected UFL pressures spill to the next node
+            # The edge lies between the bracketing nodes, within one fine element (1 mm) of Hertz's
+            # (gmsh 4.8: 2.819 < a = 2.824 < 3.051; gmsh 4.13's mesh: 2.854 > a = 2.828).
+            assert abs(row["a_last_closed"] - row["a_hertz"]) < 1.0, row["method"]
+            assert row["a_first_open"] > row["a_hertz"], row["method"]
+        assert len(row["iterations"]) == 4 and max(row["iterations"]) <= 8, row["method"]
+    # Penalties penetrate (~p0/K), Nitsche much less.
+    assert by["nitsche"]["penetration"] < 0.5 * by["penalty"]["penetration"]

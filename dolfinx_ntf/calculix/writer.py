@@ -723,9 +723,10 @@ def _write_pair(out: _Out, V, md: _Mesh, k: int, pair: ContactPair) -> None:
         )  # ccx: one node per line
     else:
         _write_face_surface(out, V, md, slave, pair.slave, f"{what} slave")
-    if isinstance(pair.master, NodeSurface):
+    if not isinstance(pair.master, FacetSurface):  # node-based or rigid (docs/method.md §15.1)
         raise ValueError(
-            f"write_inp: {what}: the master surface must be a FacetSurface (face-based)"
+            f"write_inp: {what}: the master surface must be a FacetSurface (face-based); "
+            f"CalculiX decks have no {type(pair.master).__name__}"
         )
     _write_face_surface(out, V, md, master, pair.master, f"{what} master")
     small = ", SMALL SLIDING" if pair.small_sliding else ""

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import typing
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -41,6 +42,7 @@ __all__ = [
     "SYMMETRY_X",
     "SYMMETRY_Y",
     "build_hertz",
+    "build_hertz_sphere",
     "main",
 ]
 
@@ -154,6 +156,37 @@ def build_hertz(
         gmsh.model.mesh.setOrder(order)
     gmsh.model.mesh.renumberNodes()
     gmsh.model.mesh.renumberElements()
+
+
+def build_hertz_sphere(**kwargs: typing.Any) -> None:
+    """:func:`build_hertz`, then the block removed: the same sphere cells alone.
+
+    For contact against a rigid plane ``z = 0`` (docs/method.md §15.1): the sphere mesh is the one
+    the two-body model has, so that rigid and meshed masters compare on identical sphere cells.
+    The sphere keeps its groups (``SPHERE``, ``SPHERE_CONTACT``, ``SPHERE_TOP`` and its parts of
+    ``SYMMETRY_X``/``SYMMETRY_Y``). Takes the arguments of :func:`build_hertz`.
+    """
+    build_hertz(**kwargs)
+    model = gmsh.model
+    spheres = list(model.getEntitiesForPhysicalGroup(3, SPHERE))
+    blocks = list(model.getEntitiesForPhysicalGroup(3, BLOCK))
+    boundary = model.getBoundary([(3, v) for v in spheres], combined=False, oriented=False)
+    sphere_faces = {abs(s) for _, s in boundary}
+    groups = {
+        (dim, tag): list(model.getEntitiesForPhysicalGroup(dim, tag))
+        for dim, tag in model.getPhysicalGroups()
+    }
+    model.removePhysicalGroups()
+    model.removeEntities([(3, b) for b in blocks], recursive=True)
+    for (dim, tag), entities in groups.items():
+        keep = spheres if (dim, tag) == (3, SPHERE) else []
+        if dim == 2:
+            keep = [e for e in entities if e in sphere_faces]
+        if keep:
+            model.addPhysicalGroup(dim, keep, tag)
+            model.setPhysicalName(dim, tag, PHYSICAL_NAMES[tag])
+    model.mesh.renumberNodes()
+    model.mesh.renumberElements()
 
 
 def _positive(value: float, what: str) -> float:

@@ -1,0 +1,439 @@
+"""Rigid analytical master surfaces and their one-node springs (docs/method.md §15.1).
+
+A rigid master is a surface given by a signed distance ``phi(x)`` (positive on the side of the
+slave body, i.e. outside the rigid body), its unit normal ``n = grad phi`` and the Hessian
+``H = grad grad phi``, optionally translated by a prescribed motion ``c(t)``: the surface at step
+time ``t`` is ``{x : phi(x - c(t)) = 0}``. Each slave node p with spring area ``A_p`` gets a spring
+of one node (the master has no nodes):
+
+- clearance ``g = phi(x_p - c)``, overclosure ``d = -(g - gap_shift)``,
+  ``F_N = law.spring_force(d, A)``;
+- internal force on the slave node ``f_p = -F_N n``;
+- tangent ``df_p/dx_p = F_N'(d) n (x) n - F_N H`` (symmetric), with the area held constant.
+
+Everything here is pure numpy. :class:`RigidMaster` adapts a surface to the interface
+:class:`~dolfinx_ntf.ContactProblem` uses for meshed masters (``locate``, ``update``,
+``face_patches`` and a spring evaluator), so that the same pairing schedule, laws, spring areas and
+outputs apply unchanged.
+"""
+
+from __future__ import annotations
+
+import abc
+import typing
+
+import numpy as np
+import numpy.typing as npt
+
+from dolfinx_ntf.laws import PressureOverclosureLaw
+from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
+
+__all__ = [
+    "RigidCylinder",
+    "RigidMaster",
+    "RigidPlane",
+    "RigidSphere",
+    "RigidSurface",
+    "SignedDistanceSurface",
+    "evaluate_rigid_springs",
+    "rigid_master",
+    "spring_evaluator",
+]
+
+Motion = typing.Callable[[float], npt.ArrayLike]
+
+
+def _vector(value: npt.ArrayLike, what: str, *, unit: bool = False) -> np.ndarray:
+    """A finite 3-vector (normalized if ``unit``) or a ValueError naming it."""
+    v = np.asarray(value, dtype=float)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{what} must be 3 finite numbers, got {value!r}")
+    if unit:
+        length = np.linalg.norm(v)
+        if not length > 0.0:
+            raise ValueError(f"{what} must not be zero")
+        v = v / length
+    return v
+
+
+def _positive(value: float, what: str) -> float:
+    value = float(value)
+    if not (np.isfinite(value) and value > 0.0):
+        raise ValueError(f"{what} must be a positive number, got {value!r}")
+    return value
+
+
+def _points(x: npt.ArrayLike) -> np.ndarray:
+    points = np.asarray(x, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"points must have shape (N, 3), got {points.shape}")
+    return points
+
+
+class RigidSurface(abc.ABC):
+    """A rigid surface: signed distance, unit normal and Hessian, optionally moving.
+
+    Args:
+        motion: Translation ``c(t)`` of the surface at relative step time ``t`` (the time at the
+            end of the current increment, 0..1); ``None`` keeps it fixed. Set a new motion between
+            steps, or move :attr:`offset` from a load callback.
+    """
+
+    def __init__(self, motion: Motion | None = None) -> None:
+        if motion is not None and not callable(motion):
+            raise TypeError(f"motion must be a callable c(t) or None, got {motion!r}")
+        self.motion = motion
+        #: Constant translation added to the motion (e.g. set from a StaticStep load callback).
+        self.offset = np.zeros(3)
+
+    def translation(self, time: float = 0.0) -> np.ndarray:
+        """The surface's translation at relative step time ``time``."""
+        c = np.asarray(self.offset, dtype=float).copy()
+        if self.motion is not None:
+            c = c + _vector(self.motion(float(time)), f"{type(self).__name__}.motion({time})")
+        return c
+
+    def distance(self, x: npt.ArrayLike, time: float = 0.0) -> np.ndarray:
+        """Signed distance of points (N, 3) to the surface, positive outside the rigid body."""
+        return self._distance(_points(x) - self.translation(time))
+
+    def normal(self, x: npt.ArrayLike, time: float = 0.0) -> np.ndarray:
+        """Unit normal (N, 3) at the points: the gradient of the signed distance."""
+        return self._normal(_points(x) - self.translation(time))
+
+    def hessian(self, x: npt.ArrayLike, time: float = 0.0) -> np.ndarray:
+        """Derivative of the normal (N, 3, 3): the Hessian of the signed distance."""
+        return self._hessian(_points(x) - self.translation(time))
+
+    @abc.abstractmethod
+    def _distance(self, y: np.ndarray) -> np.ndarray: ...
+
+    @abc.abstractmethod
+    def _normal(self, y: np.ndarray) -> np.ndarray: ...
+
+    @abc.abstractmethod
+    def _hessian(self, y: np.ndarray) -> np.ndarray: ...
+
+
+class RigidPlane(RigidSurface):
+    """The plane through ``point`` with unit ``normal`` pointing towards the slave body."""
+
+    def __init__(
+        self, point: npt.ArrayLike, normal: npt.ArrayLike, motion: Motion | None = None
+    ) -> None:
+        super().__init__(motion)
+        self.point = _vector(point, "RigidPlane: point")
+        self.unit_normal = _vector(normal, "RigidPlane: normal", unit=True)
+
+    def _distance(self, y: np.ndarray) -> np.ndarray:
+        return (y - self.point) @ self.unit_normal
+
+    def _normal(self, y: np.ndarray) -> np.ndarray:
+        return np.broadcast_to(self.unit_normal, y.shape).copy()
+
+    def _hessian(self, y: np.ndarray) -> np.ndarray:
+        return np.zeros((y.shape[0], 3, 3))
+
+
+def _radial(y: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Lengths and unit directions of the vectors y (a ValueError at zero length)."""
+    length = np.linalg.norm(y, axis=1)
+    bad = np.flatnonzero(~(length > 0.0))
+    if bad.size:
+        raise ValueError(
+            f"{what}: the normal is undefined at points {bad[:10].tolist()} (on the axis)"
+        )
+    return length, y / length[:, None]
+
+
+class RigidSphere(RigidSurface):
+    """A sphere of ``radius`` around ``center``.
+
+    The slave body is outside the sphere (a rigid ball), or inside it with ``inside=True`` (a
+    spherical cup).
+    """
+
+    def __init__(
+        self,
+        center: npt.ArrayLike,
+        radius: float,
+        *,
+        inside: bool = False,
+        motion: Motion | None = None,
+    ) -> None:
+        super().__init__(motion)
+        self.center = _vector(center, "RigidSphere: center")
+        self.radius = _positive(radius, "RigidSphere: radius")
+        self.sign = -1.0 if inside else 1.0
+
+    def _distance(self, y: np.ndarray) -> np.ndarray:
+        return self.sign * (np.linalg.norm(y - self.center, axis=1) - self.radius)
+
+    def _normal(self, y: np.ndarray) -> np.ndarray:
+        return self.sign * _radial(y - self.center, "RigidSphere")[1]
+
+    def _hessian(self, y: np.ndarray) -> np.ndarray:
+        length, e = _radial(y - self.center, "RigidSphere")
+        projector = np.eye(3) - e[:, :, None] * e[:, None, :]
+        return self.sign * projector / length[:, None, None]
+
+
+class RigidCylinder(RigidSurface):
+    """An infinite circular cylinder of ``radius`` around the line through ``point`` along ``axis``.
+
+    The slave body is outside (a rigid roller) or, with ``inside=True``, inside it (a bore).
+    """
+
+    def __init__(
+        self,
+        point: npt.ArrayLike,
+        axis: npt.ArrayLike,
+        radius: float,
+        *,
+        inside: bool = False,
+        motion: Motion | None = None,
+    ) -> None:
+        super().__init__(motion)
+        self.point = _vector(point, "RigidCylinder: point")
+        self.axis = _vector(axis, "RigidCylinder: axis", unit=True)
+        self.radius = _positive(radius, "RigidCylinder: radius")
+        self.sign = -1.0 if inside else 1.0
+
+    def _radial_part(self, y: np.ndarray) -> np.ndarray:
+        r = y - self.point
+        return r - (r @ self.axis)[:, None] * self.axis
+
+    def _distance(self, y: np.ndarray) -> np.ndarray:
+        return self.sign * (np.linalg.norm(self._radial_part(y), axis=1) - self.radius)
+
+    def _normal(self, y: np.ndarray) -> np.ndarray:
+        return self.sign * _radial(self._radial_part(y), "RigidCylinder")[1]
+
+    def _hessian(self, y: np.ndarray) -> np.ndarray:
+        length, e = _radial(self._radial_part(y), "RigidCylinder")
+        projector = np.eye(3) - np.outer(self.axis, self.axis) - e[:, :, None] * e[:, None, :]
+        return self.sign * projector / length[:, None, None]
+
+
+class SignedDistanceSurface(RigidSurface):
+    """Any rigid surface given as numpy callables.
+
+    Args:
+        distance: ``phi(y)``: (N, 3) -> (N,) signed distance, positive on the slave side.
+        normal: ``grad phi(y)``: (N, 3) -> (N, 3) unit normals.
+        hessian: ``grad grad phi(y)``: (N, 3) -> (N, 3, 3); by default central differences of
+            ``normal`` with step ``step`` (symmetrized).
+        step: Finite-difference step for the Hessian (length units).
+        motion: Translation ``c(t)``, see :class:`RigidSurface`.
+        ufl_distance: Optional ``phi`` as a function of a UFL vector, for the continuum
+            formulations (:mod:`dolfinx_ntf.continuum`); numpy callables cannot enter a form.
+    """
+
+    def __init__(
+        self,
+        distance: typing.Callable[[np.ndarray], npt.ArrayLike],
+        normal: typing.Callable[[np.ndarray], npt.ArrayLike],
+        hessian: typing.Callable[[np.ndarray], npt.ArrayLike] | None = None,
+        *,
+        step: float = 1e-6,
+        motion: Motion | None = None,
+        ufl_distance: typing.Callable[[typing.Any], typing.Any] | None = None,
+    ) -> None:
+        super().__init__(motion)
+        self.ufl_distance = ufl_distance
+        for name, f in (("distance", distance), ("normal", normal)):
+            if not callable(f):
+                raise TypeError(f"SignedDistanceSurface: {name} must be callable, got {f!r}")
+        if hessian is not None and not callable(hessian):
+            raise TypeError(f"SignedDistanceSurface: hessian must be callable, got {hessian!r}")
+        self._phi, self._grad, self._hess = distance, normal, hessian
+        self.step = _positive(step, "SignedDistanceSurface: step")
+
+    def _call(self, f: typing.Callable, y: np.ndarray, shape: tuple, what: str) -> np.ndarray:
+        value = np.asarray(f(y), dtype=float)
+        if value.shape != shape:
+            raise ValueError(
+                f"SignedDistanceSurface: {what} returned shape {value.shape}, expected {shape}"
+            )
+        bad = np.flatnonzero(~np.all(np.isfinite(value.reshape(shape[0], -1)), axis=1))
+        if bad.size:
+            raise ValueError(
+                f"SignedDistanceSurface: {what} is not finite at points {bad[:10].tolist()}"
+            )
+        return value
+
+    def _distance(self, y: np.ndarray) -> np.ndarray:
+        return self._call(self._phi, y, (y.shape[0],), "distance")
+
+    def _normal(self, y: np.ndarray) -> np.ndarray:
+        return self._call(self._grad, y, y.shape, "normal")
+
+    def _hessian(self, y: np.ndarray) -> np.ndarray:
+        shape = (y.shape[0], 3, 3)
+        if self._hess is not None:
+            return self._call(self._hess, y, shape, "hessian")
+        h = np.empty(shape)
+        for j in range(3):
+            e = np.zeros(3)
+            e[j] = self.step
+            h[:, :, j] = (self._normal(y + e) - self._normal(y - e)) / (2.0 * self.step)
+        return 0.5 * (h + h.transpose(0, 2, 1))
+
+
+def evaluate_rigid_springs(
+    surface: RigidSurface,
+    slave_coords: npt.ArrayLike,
+    areas: npt.ArrayLike,
+    law: PressureOverclosureLaw,
+    *,
+    gap_shift: float | np.ndarray = 0.0,
+    time: float = 0.0,
+    tangent: bool = True,
+    symmetric: bool = False,
+) -> SpringEvaluation:
+    """Forces and tangent of N one-node springs against a rigid surface (docs/method.md §15.1).
+
+    The result has the layout of :func:`~dolfinx_ntf.springs.evaluate_springs` with no master
+    nodes: ``forces`` (N, 1, 3), ``stiffness`` (N, 3, 3), ``xi`` zeros (N, 2), ``phi`` (N, 0).
+
+    Raises:
+        ValueError: Wrong shapes, non-finite values, or a zero spring area (a slave node without
+            slave faces: rigid masters have no face area to fall back on).
+    """
+    x = _points(slave_coords)
+    num = x.shape[0]
+    area = np.asarray(areas, dtype=float)
+    if area.shape != (num,):
+        raise ValueError(f"areas must have shape ({num},), got {area.shape}")
+    zero = np.flatnonzero(~(area > 0.0))
+    if zero.size:
+        raise ValueError(
+            f"rigid master: springs {zero[:10].tolist()} have no spring area (slave nodes without "
+            "slave faces); use a face-based slave surface against a rigid master"
+        )
+    shift = np.broadcast_to(np.asarray(gap_shift, dtype=float), (num,))
+    gap = surface.distance(x, time)
+    normal = surface.normal(x, time)
+    overclosure = -(gap - shift)
+    force, dforce = law.spring_force(overclosure, area)
+    force = np.asarray(force, dtype=float) * np.ones(num)
+    dforce = np.asarray(dforce, dtype=float) * np.ones(num)
+    slave_force = -force[:, None] * normal
+    stiffness = None
+    if tangent:
+        stiffness = dforce[:, None, None] * normal[:, :, None] * normal[:, None, :]
+        stiffness -= force[:, None, None] * surface.hessian(x, time)
+        if symmetric:
+            stiffness = 0.5 * (stiffness + stiffness.transpose(0, 2, 1))
+    return SpringEvaluation(
+        xi=np.zeros((num, 2)),
+        phi=np.zeros((num, 0)),
+        normal=normal,
+        gap=gap,
+        overclosure=overclosure,
+        normal_force=force,
+        area=area,
+        forces=slave_force[:, None, :],
+        force_per_area=(slave_force / area[:, None])[:, None, :],
+        stiffness=stiffness,
+    )
+
+
+class _RigidFaceType:
+    """Stands in for a FaceType: a rigid master has one 'face' without nodes."""
+
+    name = "rigid"
+    num_nodes = 0
+    num_corners = 0
+    is_triangle = False
+    center = np.zeros(2)
+
+
+class _RigidFaces:
+    """Stands in for SurfaceFaces: one face (index 0) without nodes or facets."""
+
+    face_type = _RigidFaceType()
+    faces = np.zeros((1, 0), dtype=np.int64)
+    facets = np.zeros(0, dtype=np.int32)
+    nodes = np.zeros(0, dtype=np.int64)
+
+
+class RigidMaster:
+    """A rigid surface behind the master-surface interface of :class:`~dolfinx_ntf.ContactProblem`.
+
+    Every slave node "finds" the one face 0 unless it lies deeper than ``max_depth``; the spring
+    evaluator ignores the (empty) master coordinates and evaluates :func:`evaluate_rigid_springs`
+    at the time ``clock()`` (the problem's relative step time).
+    """
+
+    def __init__(
+        self, surface: RigidSurface, clock: typing.Callable[[], float], name: str = ""
+    ) -> None:
+        self.surface = surface
+        self.clock = clock
+        self.name = name
+
+    def update(self, coords: np.ndarray) -> None:
+        """Nothing to update: the surface does not follow the mesh."""
+
+    def locate(
+        self,
+        points: np.ndarray,
+        tolerances: np.ndarray,
+        *,
+        max_depth: float | None = None,
+        start_faces: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Face 0 for every point, -1 where it lies deeper than ``max_depth`` below the surface."""
+        face = np.zeros(points.shape[0], dtype=np.int64)
+        if max_depth is not None and points.shape[0]:
+            face[self.surface.distance(points, self.clock()) < -max_depth] = -1
+        return face
+
+    def face_patches(self, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """No master nodes: nothing to reserve in the matrix."""
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+
+    def evaluate_springs(
+        self,
+        face_type: object,
+        master_coords: np.ndarray,
+        slave_coords: np.ndarray,
+        areas: np.ndarray,
+        law: PressureOverclosureLaw,
+        *,
+        gap_shift: float | np.ndarray = 0.0,
+        xi0: np.ndarray | None = None,
+        tangent: bool = True,
+        symmetric: bool = False,
+        friction: object | None = None,
+    ) -> SpringEvaluation:
+        """:func:`evaluate_rigid_springs` with the signature of ``evaluate_springs``."""
+        if friction is not None:
+            raise NotImplementedError(
+                f"{self.name}: friction against a rigid analytical master is not supported yet; "
+                "use a meshed master (docs/method.md §15.1)"
+            )
+        return evaluate_rigid_springs(
+            self.surface,
+            slave_coords,
+            areas,
+            law,
+            gap_shift=gap_shift,
+            time=self.clock(),
+            tangent=tangent,
+            symmetric=symmetric,
+        )
+
+
+def rigid_master(
+    surface: RigidSurface, clock: typing.Callable[[], float], name: str = ""
+) -> tuple[_RigidFaces, RigidMaster]:
+    """The (faces, master) pair a ContactProblem keeps for a rigid master surface."""
+    return _RigidFaces(), RigidMaster(surface, clock, name)
+
+
+def spring_evaluator(master: object) -> typing.Callable[..., SpringEvaluation]:
+    """``evaluate_springs`` for meshed masters, the rigid evaluator for a :class:`RigidMaster`."""
+    return master.evaluate_springs if isinstance(master, RigidMaster) else evaluate_springs
