@@ -187,14 +187,19 @@ def jit_keywords(
 
 
 def sparsity_graph(a: Form) -> tuple[np.ndarray, np.ndarray]:
-    """CSR ``(offsets, columns)`` of a bilinear form's block sparsity pattern, local rows with
-    local (owned + ghost) block columns.
+    """CSR ``(offsets, columns)`` of a bilinear form's block sparsity pattern: owned rows with
+    *global* block columns (in parallel the pattern's column map holds more ghosts than the space).
     """
     pattern = dolfinx.fem.create_sparsity_pattern(a)
     if _LEGACY:
         pattern.assemble()
         graph = pattern.graph
-        return np.asarray(graph.offsets), np.asarray(graph.array)
-    pattern.finalize()
-    columns, offsets = pattern.graph
-    return np.asarray(offsets), np.asarray(columns)
+        offsets, columns = np.asarray(graph.offsets), np.asarray(graph.array)
+    else:
+        pattern.finalize()
+        columns, offsets = (np.asarray(v) for v in pattern.graph)
+    num_rows = pattern.index_map(0).size_local
+    offsets = offsets[: num_rows + 1]
+    column_map = pattern.column_index_map()
+    columns = column_map.local_to_global(columns[: offsets[-1]].astype(np.int32))
+    return offsets, np.asarray(columns, dtype=np.int64)

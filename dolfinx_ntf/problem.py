@@ -21,7 +21,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, validation
+from dolfinx_ntf import compat, parallel, validation
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
 from dolfinx_ntf.search import MasterSurface
@@ -194,7 +194,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         self._element_force_vector = dolfinx.fem.petsc.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
+        #: Contact nodes of other processes (docs/method.md §14); None in serial.
+        self.halo = parallel.NodeHalo(V) if V.mesh.comm.size > 1 else None
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
+        if self.halo is not None:
+            self._reference = self.halo.reference
+            self.assembler.extend(self.halo, u)
         validation.check_distinct_pairs(V.mesh.comm, self._surfaces(), self._reference)
         self.small_sliding = bool(pairs[-1].small_sliding) if pairs else True
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
@@ -223,23 +228,32 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 f"{name}: friction is not supported yet (frictionless contact only)"
             )
         V = self.u.function_space
-        slave = resolve_slave(V, pair.slave, what=f"{name} slave")
-        master_faces = resolve_master(V, pair.master, what=f"{name} master")
+        comm = V.mesh.comm
+        slave = parallel.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        master_faces = parallel.collectively(
+            comm, resolve_master, V, pair.master, what=f"{name} master"
+        )
+        if self.halo is not None:
+            slave, master_faces = parallel.collectively(
+                comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name
+            )
         if master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
         master = MasterSurface(
             master_faces.face_type,
             master_faces.faces,
             name=f"{name} master",
-            coords=self._reference,
+            coords=self._reference if self.halo is None else self.halo.reference,
         )
         both = np.intersect1d(slave.nodes, master_faces.nodes)
+        error = None
         if both.size:
-            x = self._reference[both[0]]
-            raise ValueError(
+            x = (self._reference if self.halo is None else self.halo.reference)[both[0]]
+            error = ValueError(
                 f"{name}: {both.size} node(s) belong to both the slave and the master surface "
                 f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
             )
+        validation.raise_collectively(comm, error)
         return PairState(pair, slave, master_faces, master, np.zeros(slave.nodes.size))
 
     # -- state -------------------------------------------------------------------------------------
@@ -282,20 +296,28 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
         """(name, slave nodes, master facets) of every pair, for checks and messages."""
         return [
-            (s.pair.name or f"pair {i + 1}", s.slave.nodes, s.master_faces.facets)
+            (
+                s.pair.name or f"pair {i + 1}",
+                s.slave.nodes,
+                s.master_faces.facets[s.master_faces.facets >= 0],  # -1: another process's
+            )
             for i, s in enumerate(self.states)
         ]
 
     def _check_finite(self) -> None:
         """A non-finite displacement at a contact node: a ValueError naming node and position."""
         surfaces = []
+        num_local = self.u.x.array.size // 3  # halo nodes are checked by their owners
         for (name, slave, _), state in zip(self._surfaces(), self.states):
-            surfaces += [(f"{name} slave", slave), (f"{name} master", state.master_faces.nodes)]
+            master = state.master_faces.nodes
+            surfaces += [(f"{name} slave", slave), (f"{name} master", master[master < num_local])]
         comm = self.u.function_space.mesh.comm
         validation.check_finite_contact_nodes(comm, self.u, self._reference, surfaces)
 
     def current_coordinates(self) -> np.ndarray:
-        """Node coordinates X + u (local nodes with ghosts)."""
+        """Node coordinates X + u (local nodes with ghosts, then the halo's). Collective."""
+        if self.halo is not None:
+            return self._reference + self.halo.displacement(self.u)
         return self._reference + self.u.x.array.reshape(-1, 3)
 
     # -- pairing -----------------------------------------------------------------------------------
@@ -324,18 +346,19 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """Pair every slave node with a master face at the current displacement.
 
         Returns:
-            The number of springs.
+            The number of springs (over all processes).
         """
         coords = self.current_coordinates()
         for state in self.states:
             self._pair_one(state, coords, record_overlap)
         self.pairings += 1
         self._pattern_checked = False
-        count = self.num_springs
-        if self.iteration >= 1 and self.face_changes:
-            logger.info(
-                " Number of contact spring elements=%d (%d changed face)", count, self.face_changes
-            )
+        comm = self.u.function_space.mesh.comm
+        count, changes = (
+            int(v) for v in comm.allreduce(np.array([self.num_springs, self.face_changes]))
+        )
+        if self.iteration >= 1 and changes:
+            logger.info(" Number of contact spring elements=%d (%d changed face)", count, changes)
         else:
             logger.info(" Number of contact spring elements=%d", count)
         for callback in self.pairing_callbacks:
@@ -574,7 +597,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         scheduled = not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION
         if scheduled or self.repair_next_iteration:
             self.repair_next_iteration = False
-            before = self.num_springs
+            before = self.u.function_space.mesh.comm.allreduce(self.num_springs)
             self.count_changed = self.pair() != before
             self.form(x)
             if self._residual_vector is not None:
@@ -596,6 +619,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.matrix is not None:
             self.matrix.destroy()
             self.matrix = None
+        if self.halo is not None:
+            self.halo.destroy()
 
     def __enter__(self) -> ContactProblem:
         return self
