@@ -103,8 +103,9 @@ class ContactAssembler:
             self._global_dof_masked[self._global_dof.size - fixed.size :][fixed] = -1
 
     def extend(self, halo: parallel.NodeHalo, u: dolfinx.fem.Function) -> None:
-        """Number the halo's nodes too (contact nodes of other processes, docs/method.md §14).
-        Collective.
+        """Number the halo's nodes too: contact nodes of other processes. Collective.
+
+        See docs/method.md §14.
         """
         self._halo, self._u = halo, u
         self._global_node = halo.global_nodes.copy()

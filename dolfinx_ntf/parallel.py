@@ -96,8 +96,9 @@ class NodeHalo:
         return np.where(self._sorted[position] == g, self._order[position], -1)
 
     def local(self, global_nodes: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """Extended indices of global nodes, appending the unknown ones (``reference``: their
-        coordinates, shape ``global_nodes.shape + (3,)``).
+        """Extended indices of global nodes, appending the unknown ones.
+
+        ``reference``: their coordinates, shape ``global_nodes.shape + (3,)``.
         """
         g = np.asarray(global_nodes, dtype=np.int64)
         index = self.find(g)
@@ -133,9 +134,7 @@ class NodeHalo:
         return np.vstack([values, self._scatter_from(compat.petsc_vector(u))])
 
     def constrained(self, u: dolfinx.fem.Function, bcs: typing.Sequence) -> np.ndarray:
-        """Which dofs of the halo nodes the Dirichlet conditions fix, shape (extras, 3).
-        Collective.
-        """
+        """Which dofs of the halo nodes the Dirichlet conditions fix, (extras, 3). Collective."""
         marker = compat.petsc_vector(u).duplicate()
         with marker.localForm() as local:
             local.set(0.0)
