@@ -67,12 +67,15 @@ class ContactResults:
 
 
 def _evaluated(problem: ContactProblem) -> None:
-    """Evaluate the springs at the current displacement if an evaluation is missing or stale."""
-    for state in problem.states:
-        ev = state.evaluation
-        if ev is None or ev.xi.shape[0] != state.num_springs:
-            problem.evaluate(tangent=False)
-            return
+    """Evaluate the springs at the current displacement if an evaluation is missing or stale.
+
+    Collective: a process with stale springs makes all evaluate (docs/method.md §14).
+    """
+    stale = any(
+        s.evaluation is None or s.evaluation.xi.shape[0] != s.num_springs for s in problem.states
+    )
+    if problem.u.function_space.mesh.comm.allreduce(stale, op=MPI.LOR):
+        problem.evaluate(tangent=False)
 
 
 def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactResults:
@@ -164,6 +167,8 @@ class ContactFields:
             self.status.x.array[q] = np.maximum(
                 self.status.x.array[q], (res.clearance < 0).astype(float)
             )
+        for f in self.functions:  # springs live on the owners of their slave nodes
+            f.x.scatter_forward()
 
 
 class ContactWriter:
