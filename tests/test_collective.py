@@ -38,7 +38,7 @@ def blocks():
 
 def test_contact_pairs_run_on_every_process_count(blocks):
     """Each process holds the slave nodes it owns; over all processes, each node once."""
-    mesh, _, ft, u, F = blocks
+    _, _, ft, u, F = blocks
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
     problem = ntf.ContactProblem(F, u, [pair])

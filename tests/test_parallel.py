@@ -1,7 +1,7 @@
 """Contact on several processes gives the serial answer (docs/method.md §14).
 
-Every test compares with the same problem solved on ``COMM_SELF`` in the same run. ``make test-here``
-runs this file on 2 processes and again on 3; in serial the comparisons are trivial.
+Every test compares with the same problem solved on ``COMM_SELF`` in the same run. ``make
+test-here`` runs this file on 2 processes and again on 3; in serial the comparisons are trivial.
 """
 
 import functools
