@@ -209,6 +209,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         #: Re-pair at the start of the next Newton iteration even outside the schedule.
         self.repair_next_iteration = False
         self.pairings = 0
+        #: Springs over all processes at the last pairing (:attr:`num_springs`: this process's).
+        self.total_springs = 0
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
@@ -357,6 +359,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         count, changes = (
             int(v) for v in comm.allreduce(np.array([self.num_springs, self.face_changes]))
         )
+        self.total_springs = count
         if self.iteration >= 1 and changes:
             logger.info(" Number of contact spring elements=%d (%d changed face)", count, changes)
         else:

@@ -58,7 +58,7 @@ PARTITIONS = {"graph": None, "bodies": _bodies, "cut": _cut, "idle": _idle}
 class Run:
     X: np.ndarray  # reference positions of all nodes, sorted
     u: np.ndarray  # displacements in the same order
-    iterations: list[int]
+    iterations: list[tuple[int, int]]  # Newton iterations and springs of every increment
     pairings: list[np.ndarray]  # per pairing: (slave position, master face centre) of every spring
     springs: np.ndarray  # final springs: slave position, area, pressure, clearance
     force: np.ndarray
@@ -97,7 +97,7 @@ def _solve(comm, cell, partition, degree=1):
     run = Run(
         nodes[:, :3],
         nodes[:, 3:],
-        [r.iterations for r in results],
+        [(r.iterations, r.springs) for r in results],
         pairings,
         springs,
         ntf.contact_force(problem),
@@ -219,3 +219,20 @@ def test_writer_and_fields_in_parallel(tmp_path_factory):
                 assert writer.pressure.x.array[q[node]] == values[key]
     solver.destroy()
     problem.destroy()
+
+
+def test_punch_demo_in_parallel(tmp_path_factory):
+    """The demo's checks pass with the serial figures (tests/test_demos.py) on any process count."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "demos" / "punch.py"
+    spec = importlib.util.spec_from_file_location("_demo_punch_mpi", path)
+    demo = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(demo)
+    folder = COMM.bcast(str(tmp_path_factory.mktemp("demo")) if COMM.rank == 0 else None)
+    summary = demo.main(["--coarse", "--quiet", "--output", folder])
+    assert summary["passed"]
+    assert summary["springs"] == [25, 25, 25, 25]
+    assert summary["vertical_error"] < 1e-8 and summary["reaction_error"] < 1e-8
+    assert summary["contact_area"] == pytest.approx(40 * 40, rel=1e-3)
