@@ -217,7 +217,8 @@ def build_problem(
     # Press the upper plate down uniformly so that every slave node is in compression.
     slave_faces = problem.states[0].slave.faces.faces
     x = problem.current_coordinates()
-    h = np.linalg.norm(x[slave_faces[:, 1]] - x[slave_faces[:, 0]], axis=1).mean()
+    edges = np.linalg.norm(x[slave_faces[:, 1]] - x[slave_faces[:, 0]], axis=1)
+    h = mesh.comm.allreduce(edges.sum()) / mesh.comm.allreduce(edges.size)  # any process count
     upper = dolfinx.fem.locate_dofs_topological(V, 3, plates.upper_cells)
     u.x.array.reshape(-1, 3)[upper, 2] = -penetration * h
     u.x.scatter_forward()
