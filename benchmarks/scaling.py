@@ -1,4 +1,4 @@
-"""Contact on 1 and 2 MPI processes: time per phase, speed-up, memory (issue 11, docs/method.md §14).
+"""Contact on 1 and 2 MPI processes: time per phase, speed-up, memory (docs/method.md §14).
 
 The two plates of ``benchmarks/contact_phases.py`` (every slave node in compression), at about 270k
 dofs by default. Each process count runs in its own ``mpirun`` (this script starts them and
@@ -36,15 +36,13 @@ from pathlib import Path
 from mpi4py import MPI
 from petsc4py import PETSc
 
-import numpy as np
-
 import dolfinx.fem.petsc
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import contact_phases  # noqa: E402
+import contact_phases
 
-from dolfinx_ntf import compat  # noqa: E402
-from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION  # noqa: E402
+from dolfinx_ntf import compat
+from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION
 
 ROOT = Path(__file__).resolve().parents[1]
 PHASES = {
