@@ -292,7 +292,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     @property
     def reference_coordinates(self) -> np.ndarray:
-        """Reference coordinates of the displacement nodes (local, with ghosts), shape (N, 3)."""
+        """Reference coordinates of the nodes (local with ghosts, then the halo's), shape (N, 3)."""
         return self._reference
 
     def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
