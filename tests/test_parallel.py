@@ -71,8 +71,10 @@ def _sorted(comm, rows):
     return rows[np.lexsort(np.round(rows, 9).T[::-1])]
 
 
-def _solve(comm, cell, partition, degree=1):
-    problem, pressure, _ = punch_problem(cell, comm=comm, partition=partition, degree=degree)
+def _solve(comm, cell, partition, degree=1, **options):
+    problem, pressure, _ = punch_problem(
+        cell, comm=comm, partition=partition, degree=degree, **options
+    )
     pairings = []
 
     def record(p):
@@ -110,8 +112,8 @@ def _solve(comm, cell, partition, degree=1):
 
 
 @functools.lru_cache
-def _serial(cell, degree=1):
-    return _solve(MPI.COMM_SELF, cell, None, degree)
+def _serial(cell, degree=1, **options):
+    return _solve(MPI.COMM_SELF, cell, None, degree, **options)
 
 
 def _assert_same(run, serial):
@@ -139,6 +141,16 @@ def test_punch_gives_the_serial_answer(cell, partition):
 
 def test_quadratic_tetrahedra_cut_through_the_contact_zone():
     _assert_same(_solve(COMM, "tetrahedron", _cut, degree=2), _serial("tetrahedron", 2))
+
+
+@pytest.mark.parametrize(
+    "options", [{"linearize_area": True}, {"symmetric": True, "walk_from_previous_face": False}]
+)
+def test_problem_options_give_the_serial_answer(options):
+    """Area linearization couples halo slave-face nodes; CalculiX's search and tangent."""
+    run = _solve(COMM, "hexahedron", _cut, **options)
+    _assert_same(run, _serial("hexahedron", **options))
+    assert run.mallocs == 0
 
 
 def test_idle_rank_holds_no_contact_node():
