@@ -11,7 +11,17 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_TOP, UPPER_BOTTOM, punch_problem, two_blocks
+from conftest import (
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    PUNCH,
+    UPPER,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    elastic_residual,
+    punch_problem,
+    two_blocks,
+)
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -19,7 +29,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import small_strain_stress
+from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 
 pytestmark = pytest.mark.mpi
 
@@ -248,3 +258,48 @@ def test_punch_demo_in_parallel(tmp_path_factory):
     assert summary["springs"] == [25, 25, 25, 25]
     assert summary["vertical_error"] < 1e-8 and summary["reaction_error"] < 1e-8
     assert summary["contact_area"] == pytest.approx(40 * 40, rel=1e-3)
+
+
+@pytest.mark.parametrize("partition", ["graph", "cut"])
+def test_node_based_slave_gives_the_serial_answer(partition):
+    """A node-based slave surface whose vertices each process finds among its own (ghosts too)."""
+
+    def solve(comm, owners):
+        mesh, cell_tags, ft = two_blocks(comm, upper=PUNCH, partition=owners)
+        V = compat.vector_space(mesh, "Lagrange", 1)
+        u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+        pressure = dolfinx.fem.Constant(mesh, 0.0)
+        upper = compat.incident_entities(mesh, cell_tags.find(UPPER), 3, 0)
+        bottom = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.isclose(x[2], 0.0))
+        slave = ntf.NodeSurface(np.intersect1d(upper, bottom))
+        law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
+        pair = ntf.ContactPair(slave, ntf.FacetSurface(ft, LOWER_TOP), law)
+        clamp = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+        bcs = [
+            dolfinx.fem.dirichletbc(np.zeros(3), clamp, V),
+            component_bc(V, 0, ft.find(UPPER_TOP)),
+            component_bc(V, 1, ft.find(UPPER_TOP)),
+        ]
+        problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs)
+        solver = ntf.ContactNewtonSolver(comm, problem)
+        results = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t)).run(solver, u)
+        owned = V.dofmap.index_map.size_local
+        nodes = _sorted(
+            comm,
+            np.hstack([problem.reference_coordinates[:owned], u.x.array.reshape(-1, 3)[:owned]]),
+        )
+        table = ntf.contact_results(problem)[0]
+        springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
+        out = ([(r.iterations, r.springs) for r in results], nodes, springs)
+        solver.destroy()
+        problem.destroy()
+        return out
+
+    (iterations, nodes, springs), serial = (
+        solve(COMM, PARTITIONS[partition]),
+        solve(MPI.COMM_SELF, None),
+    )
+    assert iterations == serial[0]
+    np.testing.assert_allclose(nodes, serial[1], rtol=0, atol=1e-10 * np.abs(serial[1]).max())
+    np.testing.assert_allclose(springs, serial[2], rtol=1e-10, atol=1e-12)
+    assert serial[2].shape[0] == 16
