@@ -175,6 +175,32 @@ def section(results: list[dict], args: argparse.Namespace, load: tuple[float, fl
         "- Peak resident memory per process (MB): "
         + ", ".join(f"{r['processes']}: {r['memory']:.0f}" for r in results)
         + ".",
+        "",
+        *_on_paper(results),
+    ]
+
+
+def _on_paper(results: list[dict]) -> list[str]:
+    """How the gather and the exchange grow to 100+ processes and 10^7 slave nodes."""
+    one = results[0]
+    per_node = (one["search"] + one["evaluate"]) / max(one["springs"], 1)
+    last = results[-1]
+    return [
+        "On paper, from these figures (docs/method.md §14.2). The per-iteration exchange moves "
+        "only halo displacements (3 numbers per contact node held elsewhere); it grows with the "
+        "surface cut by the partition, not with the model, and stays a small share of an "
+        f"iteration ({100 * last['exchange'] / last['newton']:.2f} % here). The set-up gather "
+        "sends every process the whole master surface and the slave faces: 16 numbers of 8 "
+        "bytes per quadrilateral face (4 node numbers, 12 coordinates), so 10^7 faces are "
+        "1.3 GB received by every process, and every process updates the whole master "
+        "(normals, planes, k-d tree) at every pairing. With search + spring evaluation measured "
+        f"at {1e6 * per_node:.1f} us per spring in serial here, a pairing over 10^7 faces costs "
+        f"each process up to about {per_node * 1e7:.0f} s whatever P. So the allgather suits "
+        "surfaces up to about 10^6 faces (`MAX_GATHERED_FACES` = 2 x 10^6 refuses more) on a "
+        "few tens of processes; at 100+ processes and 10^7 slave nodes the master must be "
+        "exchanged by bounding boxes (each process receives the master faces within reach of "
+        "its own slave nodes: O(S/P + halo) data and work per process), which is not "
+        "implemented.",
     ]
 
 
@@ -187,6 +213,9 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
     parser.add_argument("--processes", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--write", action="store_true", help="write docs/performance.md")
     parser.add_argument("--worker", help=argparse.SUPPRESS)  # JSON output path of a worker
+    parser.add_argument(
+        "--results", help="folder for the workers' JSON; reused if present (no new runs)"
+    )
     args = parser.parse_args(argv)
     if args.worker:
         out = worker(args.slave_nodes, args.layers, args.repeat)
@@ -197,9 +226,14 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
         parser.error("run without mpirun: the script starts its own mpirun per process count")
     load_start = os.getloadavg()[0]
     results = []
-    with tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory() as temporary:
+        folder = Path(args.results or temporary)
+        folder.mkdir(parents=True, exist_ok=True)
         for n in args.processes:
-            path = Path(folder) / f"{n}.json"
+            path = folder / f"{n}.json"
+            if path.is_file():
+                results.append(json.loads(path.read_text()))
+                continue
             command = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-n", str(n)]
             command += [sys.executable, __file__, "--worker", str(path)]
             command += ["--slave-nodes", str(args.slave_nodes), "--layers", str(args.layers)]
