@@ -287,7 +287,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     @property
     def num_springs(self) -> int:
-        """Total number of contact spring elements over all pairs."""
+        """Contact spring elements of this process over all pairs (all processes: total_springs)."""
         return sum(s.num_springs for s in self.states)
 
     @property
