@@ -4,6 +4,7 @@
 # `make test-here` runs this machine's suite only.
 PY := .venv/bin/python
 MPIRUN := mpirun --allow-run-as-root --oversubscribe -n 2
+MPIRUN3 := mpirun --allow-run-as-root --oversubscribe -n 3
 RUFF_VERSION := 0.17.6
 
 .PHONY: setup demo lint test test-here test-other benchmark benchmark-ccx ccx-suite
@@ -25,6 +26,7 @@ test-here: setup
 	@echo "== dolfinx_ntf tests on $$(. /etc/os-release && echo "$$PRETTY_NAME"), dolfinx $$($(PY) -c 'import dolfinx; print(dolfinx.__version__)')"
 	$(PY) -m pytest -q tests
 	$(MPIRUN) $(PY) -m pytest -q -m mpi tests
+	$(MPIRUN3) $(PY) -m pytest -q -m mpi tests/test_parallel.py tests/test_collective.py
 
 test-other:
 	bash scripts/other_release.sh test-here

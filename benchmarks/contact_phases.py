@@ -26,10 +26,15 @@ problems (the 1e5 case, 892k dofs) use CG + GAMG with the rigid-body near-nullsp
 says so. Measured there with MUMPS on 2 shared cores: 66 s per solve, 111 s with the analysis,
 12 GB.
 
-Serial only. Run::
+Under ``mpirun`` (docs/method.md §14) every phase is timed between barriers and the slowest
+process's time is reported; the extra parallel phases are the gather of the surfaces (in the
+set-up, ``ContactProblem`` construction: "gather") and the halo exchange of displacements
+(``current_coordinates``: "exchange"); insertion then includes the off-process rows. GAMG's
+near-nullspace here is serial only. Run::
 
     .venv/bin/python benchmarks/contact_phases.py                     # 1e3, 1e4, 1e5 slave nodes
     .venv/bin/python benchmarks/contact_phases.py --sizes 1e3 1e4 --repeat 5 --solver gamg
+    mpirun -n 2 .venv/bin/python benchmarks/contact_phases.py --sizes 1e3 1e4
 """
 
 from __future__ import annotations
@@ -217,7 +222,8 @@ def build_problem(
     # Press the upper plate down uniformly so that every slave node is in compression.
     slave_faces = problem.states[0].slave.faces.faces
     x = problem.current_coordinates()
-    h = np.linalg.norm(x[slave_faces[:, 1]] - x[slave_faces[:, 0]], axis=1).mean()
+    edges = np.linalg.norm(x[slave_faces[:, 1]] - x[slave_faces[:, 0]], axis=1)
+    h = mesh.comm.allreduce(edges.sum()) / mesh.comm.allreduce(edges.size)  # any process count
     upper = dolfinx.fem.locate_dofs_topological(V, 3, plates.upper_cells)
     u.x.array.reshape(-1, 3)[upper, 2] = -penetration * h
     u.x.scatter_forward()
@@ -232,21 +238,32 @@ def build_problem(
 
 
 def _timed(fn: typing.Callable[[], typing.Any], repeat: int) -> float:
-    """Median wall time of ``repeat`` calls of ``fn``, after one untimed warm-up call."""
+    """Median wall time of ``repeat`` calls of ``fn``, after one untimed warm-up call.
+
+    In parallel: between barriers, the slowest process's time.
+    """
+    comm = MPI.COMM_WORLD
     fn()
     times = []
     for _ in range(repeat):
+        comm.barrier()
         start = time.perf_counter()
         fn()
-        times.append(time.perf_counter() - start)
+        times.append(comm.allreduce(time.perf_counter() - start, op=MPI.MAX))
     return statistics.median(times)
+
+
+def _print(*args: typing.Any, **kwargs: typing.Any) -> None:
+    """``print`` on rank 0 only."""
+    if MPI.COMM_WORLD.rank == 0:
+        print(*args, **kwargs)
 
 
 def _time_search(problem: ntf.ContactProblem, repeat: int, out: dict[str, typing.Any]) -> None:
     """The whole pairing, then its parts (the calls ``ContactProblem.pair`` makes)."""
     state = problem.states[0]
     out["search"] = _timed(problem.pair, repeat)
-    out["springs"] = problem.num_springs
+    out["springs"] = problem.total_springs
     coords = problem.current_coordinates()
     ft, faces, nodes = state.slave.faces.face_type, state.slave.faces.faces, state.slave.nodes
     out["areas"] = _timed(lambda: spring_areas(ft, faces, coords, nodes), repeat)
@@ -287,10 +304,11 @@ def _time_newton(
         for key, t in zip(parts, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
             parts[key].append(t)
     totals = [sum(p[i] for p in parts.values()) for i in range(repeat + 1)]
-    out["newton"] = statistics.median(totals[1:])
-    out["first_solve"] = parts["solve"][0]
+    comm = MPI.COMM_WORLD  # the slowest process's times
+    out["newton"] = comm.allreduce(statistics.median(totals[1:]), op=MPI.MAX)
+    out["first_solve"] = comm.allreduce(parts["solve"][0], op=MPI.MAX)
     for key, values in parts.items():
-        out[f"newton_{key}"] = statistics.median(values[1:])
+        out[f"newton_{key}"] = comm.allreduce(statistics.median(values[1:]), op=MPI.MAX)
     out["ksp_iterations"] = ksp.getIterationNumber()
 
 
@@ -301,25 +319,30 @@ def run_size(
     solver: str,
     layers: int = 1,
     master_ratio: float = 0.7,
-    log: typing.Callable[[str], None] = print,
+    log: typing.Callable[[str], None] = _print,
 ) -> dict[str, typing.Any]:
     """Build the plates for one size and time every phase; returns median times (s) and counts."""
+    comm = MPI.COMM_WORLD
     t0 = time.perf_counter()
     plates = build_plates(slave_nodes, layers=layers, master_ratio=master_ratio)
+    comm.barrier()
+    t1 = time.perf_counter()
     problem, newton = build_problem(plates, solver, options_prefix=f"bench{slave_nodes}_")
-    setup = time.perf_counter() - t0
+    setup = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
     state = problem.states[0]
     dofs = 3 * problem.u.function_space.dofmap.index_map.size_global
     out: dict[str, typing.Any] = {
-        "slave_nodes": int(state.slave.nodes.size),
+        "slave_nodes": comm.allreduce(int(state.slave.nodes.size)),
         "dofs": dofs,
         "solver": solver,
         "setup": setup,
+        "problem_setup": comm.allreduce(time.perf_counter() - t1, op=MPI.MAX),
     }
     log(
         f"  {out['slave_nodes']} slave nodes, {state.master_faces.faces.shape[0]} master faces, "
-        f"{dofs} dofs, {problem.num_springs} springs; set-up {setup:.1f} s"
+        f"{dofs} dofs, {problem.total_springs} springs; set-up {setup:.1f} s"
     )
+    out["exchange"] = _timed(problem.current_coordinates, repeat)
 
     _time_search(problem, repeat, out)
     out["evaluate"] = _timed(lambda: problem.evaluate(tangent=True), repeat)
@@ -408,6 +431,8 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
     text = [f"Median of {repeat} runs (s).", _format_table(header, rows), ""]
 
     parts = [
+        "problem_setup",
+        "exchange",
         "areas",
         "update",
         "locate",
@@ -424,6 +449,8 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
     ]
     header = [
         "slave nodes",
+        "ContactProblem set-up (gather)",
+        "exchange",
         "areas",
         "master update",
         "locate",
@@ -504,8 +531,8 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
         help="master divisions relative to the slave's (default 0.7)",
     )
     args = parser.parse_args(argv)
-    if MPI.COMM_WORLD.size != 1:
-        parser.error("contact_phases.py runs in serial only")
+    if MPI.COMM_WORLD.size != 1 and args.solver == "gamg":
+        parser.error("--solver gamg: the near-nullspace here is serial only")
     if args.repeat < 1:
         parser.error(f"--repeat {args.repeat}: need at least 1")
     if any(size < 4 for size in args.sizes):
@@ -518,13 +545,14 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
         target = round(size)
         dofs = int(3 * (args.layers + 1) * target * (1 + args.master_ratio**2))  # both plates
         solver = args.solver
-        if solver == "mumps" and args.direct_max_dofs and dofs > args.direct_max_dofs:
+        serial = MPI.COMM_WORLD.size == 1  # in parallel MUMPS throughout (gamg set-up: serial)
+        if serial and solver == "mumps" and args.direct_max_dofs and dofs > args.direct_max_dofs:
             solver = "gamg"
-            print(
+            _print(
                 f"{target} slave nodes: about {dofs} dofs > --direct-max-dofs "
                 f"{args.direct_max_dofs}: the Newton iteration uses cg+gamg instead of MUMPS"
             )
-        print(f"{target} slave nodes ({solver}) ...", flush=True)
+        _print(f"{target} slave nodes ({solver}) ...", flush=True)
         results.append(
             run_size(
                 target,
@@ -534,12 +562,13 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
                 master_ratio=args.master_ratio,
             )
         )
-    print()
-    print(report(results, args.repeat))
+    _print()
+    _print(report(results, args.repeat))
     version = ".".join(map(str, PETSc.Sys.getVersion()))
-    print(
+    _print(
         f"\nTotal {time.perf_counter() - start:.0f} s; layers {args.layers}, master ratio "
-        f"{args.master_ratio}, PETSc {version}, serial; 1-min load average {load:.1f} at start, "
+        f"{args.master_ratio}, PETSc {version}, {MPI.COMM_WORLD.size} process(es); 1-min load "
+        f"average {load:.1f} at start, "
         f"{os.getloadavg()[0]:.1f} at end (other processes on the machine inflate the times)."
     )
     return 0

@@ -242,7 +242,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
         "dofs": V.dofmap.index_map.size_global * V.dofmap.index_map_bs,
         "increments": len(iterations),
         "iterations": iterations,
-        "springs": problem.num_springs,
+        "springs": problem.total_springs,
         "displacement": args.displacement,
         "penalty": args.penalty,
         "force": force,

@@ -17,6 +17,7 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -25,7 +26,7 @@ import scipy.sparse
 import dolfinx.fem
 import dolfinx.fem.petsc
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, parallel
 
 __all__ = ["ContactAssembler", "SpringBlocks"]
 
@@ -82,17 +83,34 @@ class ContactAssembler:
             np.int64
         )
         self._global_dof = _unblocked(self._global_node[:, None], self._bs).ravel()
+        self._first_nodes = np.asarray(self._comm.allgather(int(index_map.local_range[0])))
+        self._halo: parallel.NodeHalo | None = None
+        self._u: dolfinx.fem.Function | None = None
         self.set_bcs(bcs)
         self._pattern_keys = np.empty(0, dtype=np.int64)
         self.matrix_rebuilds = 0
         self.pattern_merges = 0
 
     def set_bcs(self, bcs: typing.Sequence[compat.DirichletBC]) -> None:
-        """Dirichlet conditions whose dofs receive no contact entries."""
+        """Dirichlet conditions whose dofs receive no contact entries. Collective in parallel."""
+        self._bcs = list(bcs)
         self._global_dof_masked = self._global_dof.copy()
         for bc in bcs:
             dofs, _ = bc.dof_indices()
             self._global_dof_masked[dofs] = -1
+        if self._halo is not None:  # collective, even where the halo is empty
+            fixed = self._halo.constrained(self._u, self._bcs).ravel()
+            self._global_dof_masked[self._global_dof.size - fixed.size :][fixed] = -1
+
+    def extend(self, halo: parallel.NodeHalo, u: dolfinx.fem.Function) -> None:
+        """Number the halo's nodes too: contact nodes of other processes. Collective.
+
+        See docs/method.md §14.
+        """
+        self._halo, self._u = halo, u
+        self._global_node = halo.global_nodes.copy()
+        self._global_dof = _unblocked(self._global_node[:, None], self._bs).ravel()
+        self.set_bcs(self._bcs)
 
     # -- sparsity ----------------------------------------------------------------------------------
 
@@ -112,7 +130,8 @@ class ContactAssembler:
         merged, which costs one merge at most.
         """
         keys = self._coupling_keys(blocks)
-        return bool(np.all(np.isin(keys, self._pattern_keys, assume_unique=True)))
+        has = bool(np.all(np.isin(keys, self._pattern_keys, assume_unique=True)))
+        return bool(self._comm.allreduce(has, op=MPI.LAND))
 
     def create_matrix(self, blocks: typing.Sequence[SpringBlocks] = ()) -> PETSc.Mat:
         """A new matrix with the bulk pattern plus the couplings of ``blocks`` and earlier ones."""
@@ -120,7 +139,7 @@ class ContactAssembler:
         # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
         # preallocation.
         offsets, columns = compat.sparsity_graph(self._form)
-        A.setValuesBlockedLocalCSR(
+        A.setValuesBlockedCSR(  # owned rows, global columns
             offsets.astype(PETSc.IntType),
             columns.astype(PETSc.IntType),
             np.zeros(columns.size * self._bs**2),
@@ -141,13 +160,12 @@ class ContactAssembler:
         solver bound to it keeps working).
         """
         bs = self._bs
-        first = self._global_node[0] if self._num_owned else 0
+        first = int(self._first_nodes[self._comm.rank])
+        local_keys = keys
+        if self._comm.size > 1:  # couplings go to the process owning their row
+            owner = np.searchsorted(self._first_nodes, keys // self._num_global, side="right") - 1
+            keys = np.unique(parallel.send_to_owners(self._comm, keys, owner))
         rows = keys // self._num_global
-        owned = (rows >= first) & (rows < first + self._num_owned)
-        if not np.all(owned):
-            raise NotImplementedError(
-                "contact couplings of rows owned by another process (MPI) are not supported yet"
-            )
         block = scipy.sparse.csr_matrix(
             (np.ones(keys.size, dtype=np.int8), (rows - first, keys % self._num_global)),
             shape=(self._num_owned, self._num_global),
@@ -168,7 +186,7 @@ class ContactAssembler:
         C.destroy()
         if A.getBlockSize() != bs or A.getLGMap()[0].getBlockSize() != bs:
             raise RuntimeError("merging the contact pattern lost the matrix block structure")
-        self._pattern_keys = np.union1d(self._pattern_keys, keys)
+        self._pattern_keys = np.union1d(self._pattern_keys, local_keys)
 
     # -- values ------------------------------------------------------------------------------------
 
@@ -198,7 +216,7 @@ class ContactAssembler:
         if check_pattern:
             keys = self._coupling_keys(blocks)
             missing = ~np.isin(keys, self._pattern_keys, assume_unique=True)
-            if np.any(missing):
+            if self._comm.allreduce(bool(np.any(missing)), op=MPI.LOR):
                 self._merge(A, keys, blocks)
                 self.pattern_merges += 1
                 return

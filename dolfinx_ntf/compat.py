@@ -44,6 +44,7 @@ __all__ = [
     "cell_dofs",
     "coordinate_element",
     "cpp_mesh",
+    "create_mesh",
     "entities_to_geometry",
     "evaluate_expression",
     "geometry_dofs",
@@ -187,14 +188,57 @@ def jit_keywords(
 
 
 def sparsity_graph(a: Form) -> tuple[np.ndarray, np.ndarray]:
-    """CSR ``(offsets, columns)`` of a bilinear form's block sparsity pattern, local rows with
-    local (owned + ghost) block columns.
+    """CSR ``(offsets, columns)`` of a bilinear form's block sparsity pattern: owned rows with
+    *global* block columns (in parallel the pattern's column map holds more ghosts than the space).
     """
     pattern = dolfinx.fem.create_sparsity_pattern(a)
     if _LEGACY:
         pattern.assemble()
         graph = pattern.graph
-        return np.asarray(graph.offsets), np.asarray(graph.array)
-    pattern.finalize()
-    columns, offsets = pattern.graph
-    return np.asarray(offsets), np.asarray(columns)
+        offsets, columns = np.asarray(graph.offsets), np.asarray(graph.array)
+    else:
+        pattern.finalize()
+        columns, offsets = (np.asarray(v) for v in pattern.graph)
+    num_rows = pattern.index_map(0).size_local
+    offsets = offsets[: num_rows + 1]
+    column_map = pattern.column_index_map()
+    columns = column_map.local_to_global(columns[: offsets[-1]].astype(np.int32))
+    return offsets, np.asarray(columns, dtype=np.int64)
+
+
+def create_mesh(
+    comm: typing.Any,
+    cells: np.ndarray,
+    points: np.ndarray,
+    element: typing.Any,
+    owners: np.ndarray | None = None,
+) -> dolfinx.mesh.Mesh:
+    """``dolfinx.mesh.create_mesh``; ``owners`` gives the process of each cell passed here (by
+    default dolfinx's graph partitioner decides), e.g. to test chosen partitions."""
+    if owners is None:
+        return dolfinx.mesh.create_mesh(comm, cells, points, element)
+    owners = np.ascontiguousarray(owners, dtype=np.int32)
+    everyone = np.concatenate(comm.allgather(owners))
+
+    def partition(_comm: typing.Any, _parts: int, graph: typing.Any, ghosting: bool) -> typing.Any:
+        """Owner of each local cell, then (when asked) the owners of its facet neighbours."""
+        if not ghosting:
+            return dolfinx.cpp.graph.AdjacencyList_int32(owners)
+        offsets, links = np.asarray(graph.offsets), np.asarray(graph.array)
+        node = np.repeat(np.arange(owners.size), np.diff(offsets))
+        pairs = np.unique(np.column_stack([node, everyone[links]]), axis=0).reshape(-1, 2)
+        pairs = pairs[pairs[:, 1] != owners[pairs[:, 0]]]
+        rows = np.vstack([np.column_stack([np.arange(owners.size), owners]), pairs])
+        rows = rows[np.argsort(rows[:, 0], kind="stable")]
+        counts = np.bincount(rows[:, 0], minlength=owners.size)
+        return dolfinx.cpp.graph.AdjacencyList_int32(
+            rows[:, 1].astype(np.int32), np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+        )
+
+    if _LEGACY:
+        partitioner = dolfinx.cpp.mesh.create_cell_partitioner(partition)
+    else:
+        partitioner = dolfinx.cpp.mesh.create_cell_partitioner(
+            partition, dolfinx.mesh.GhostMode.none
+        )
+    return dolfinx.mesh.create_mesh(comm, cells, points, element, partitioner=partitioner)

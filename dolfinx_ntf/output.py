@@ -80,12 +80,15 @@ class ContactResults:
 
 
 def _evaluated(problem: ContactProblem) -> None:
-    """Evaluate the springs at the current displacement if an evaluation is missing or stale."""
-    for state in problem.states:
-        ev = state.evaluation
-        if ev is None or ev.xi.shape[0] != state.num_springs:
-            problem.evaluate(tangent=False)
-            return
+    """Evaluate the springs at the current displacement if an evaluation is missing or stale.
+
+    Collective: a process with stale springs makes all evaluate (docs/method.md §14).
+    """
+    stale = any(
+        s.evaluation is None or s.evaluation.xi.shape[0] != s.num_springs for s in problem.states
+    )
+    if problem.u.function_space.mesh.comm.allreduce(stale, op=MPI.LOR):
+        problem.evaluate(tangent=False)
 
 
 def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactResults:
@@ -167,7 +170,8 @@ class ContactFields:
         self.shear = dolfinx.fem.Function(V, name="contact_shear")
         #: Accumulated tangential relative displacement ``t`` (vector, on ``u``'s space).
         self.slip = dolfinx.fem.Function(V, name="contact_slip")
-        slave_facets = [s.slave.faces.facets for s in problem.states]
+        # -1: a facet of another process (docs/method.md §14.1)
+        slave_facets = [f[f >= 0] for f in (s.slave.faces.facets for s in problem.states)]
         #: Projection of the spring forces onto the slave faces (docs/method.md §15.3).
         self.recovery = BoundaryPressure(
             problem.u.function_space,
@@ -211,6 +215,8 @@ class ContactFields:
             np.concatenate(nodes) if nodes else np.zeros(0, dtype=np.int64),
             np.concatenate(forces) if forces else np.zeros(0),
         )
+        for f in (*self.functions, self.shear, self.slip):  # springs live on their slave's owner
+            f.x.scatter_forward()
 
 
 class ContactWriter:

@@ -22,7 +22,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, validation
+from dolfinx_ntf import compat, parallel, validation
 from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
@@ -263,7 +263,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         self._element_force_vector = dolfinx.fem.petsc.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
+        #: Contact nodes of other processes (docs/method.md §14); None in serial.
+        self.halo = parallel.NodeHalo(V) if V.mesh.comm.size > 1 else None
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
+        if self.halo is not None:
+            self._reference = self.halo.reference
+            self.assembler.extend(self.halo, u)
         validation.check_distinct_pairs(V.mesh.comm, self._surfaces(), self._reference)
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
         self.static = True
@@ -272,6 +277,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         #: Re-pair at the start of the next Newton iteration even outside the schedule.
         self.repair_next_iteration = False
         self.pairings = 0
+        #: Springs over all processes at the last pairing (:attr:`num_springs`: this process's).
+        self.total_springs = 0
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
@@ -323,12 +330,18 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
         V = self.u.function_space
-        slave = resolve_slave(V, pair.slave, what=f"{name} slave")
+        comm = V.mesh.comm
+        slave = parallel.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
             if pair.interaction.friction is not None or pair.adjust is not None:
                 raise NotImplementedError(
                     f"{name}: friction and ADJUST against a rigid analytical master are not "
                     "supported yet; use a meshed master"
+                )
+            if comm.size > 1:
+                raise NotImplementedError(
+                    f"{name}: rigid analytical masters on {comm.size} MPI processes are not "
+                    "supported yet; run on one process"
                 )
             faces, master = rigid_master(pair.master, lambda: self.time_fraction, f"{name} master")
             friction = FrictionState(slave.nodes.size)  # stays empty: the bookkeeping is shared
@@ -336,22 +349,35 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
                 was_active=pair.active,
             )  # fmt: skip
-        master_faces = resolve_master(V, pair.master, what=f"{name} master")
+        if comm.size > 1 and (pair.adjust is not None or pair.interaction.friction is not None):
+            raise NotImplementedError(
+                f"{name}: friction and ADJUST on {comm.size} MPI processes are not supported yet; "
+                "run on one process (docs/method.md §14.4)"
+            )
+        master_faces = parallel.collectively(
+            comm, resolve_master, V, pair.master, what=f"{name} master"
+        )
+        if self.halo is not None:
+            slave, master_faces = parallel.collectively(
+                comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name
+            )
         if master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
         master = MasterSurface(
             master_faces.face_type,
             master_faces.faces,
             name=f"{name} master",
-            coords=self._reference,
+            coords=self._reference if self.halo is None else self.halo.reference,
         )
         both = np.intersect1d(slave.nodes, master_faces.nodes)
+        error = None
         if both.size:
-            x = self._reference[both[0]]
-            raise ValueError(
+            x = (self._reference if self.halo is None else self.halo.reference)[both[0]]
+            error = ValueError(
                 f"{name}: {both.size} node(s) belong to both the slave and the master surface "
                 f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
             )
+        validation.raise_collectively(comm, error)
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
@@ -417,31 +443,39 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     @property
     def num_springs(self) -> int:
-        """Total number of contact spring elements over all pairs."""
+        """Contact spring elements of this process over all pairs (all processes: total_springs)."""
         return sum(s.num_springs for s in self.states)
 
     @property
     def reference_coordinates(self) -> np.ndarray:
-        """Reference coordinates of the displacement nodes (local, with ghosts), shape (N, 3)."""
+        """Reference coordinates of the nodes (local with ghosts, then the halo's), shape (N, 3)."""
         return self._reference
 
     def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
         """(name, slave nodes, master facets) of every pair, for checks and messages."""
         return [
-            (s.pair.name or f"pair {i + 1}", s.slave.nodes, s.master_faces.facets)
+            (
+                s.pair.name or f"pair {i + 1}",
+                s.slave.nodes,
+                s.master_faces.facets[s.master_faces.facets >= 0],  # -1: another process's
+            )
             for i, s in enumerate(self.states)
         ]
 
     def _check_finite(self) -> None:
         """A non-finite displacement at a contact node: a ValueError naming node and position."""
         surfaces = []
+        num_local = self.u.x.array.size // 3  # halo nodes are checked by their owners
         for (name, slave, _), state in zip(self._surfaces(), self.states):
-            surfaces += [(f"{name} slave", slave), (f"{name} master", state.master_faces.nodes)]
+            master = state.master_faces.nodes
+            surfaces += [(f"{name} slave", slave), (f"{name} master", master[master < num_local])]
         comm = self.u.function_space.mesh.comm
         validation.check_finite_contact_nodes(comm, self.u, self._reference, surfaces)
 
     def current_coordinates(self) -> np.ndarray:
-        """Node coordinates X + u (local nodes with ghosts)."""
+        """Node coordinates X + u (local nodes with ghosts, then the halo's). Collective."""
+        if self.halo is not None:
+            return self._reference + self.halo.displacement(self.u)
         return self._reference + self.u.x.array.reshape(-1, 3)
 
     # -- pairing -----------------------------------------------------------------------------------
@@ -492,7 +526,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             large_sliding_only: Re-pair only the pairs without small sliding.
 
         Returns:
-            The number of springs.
+            The number of springs (over all processes).
         """
         coords = self.current_coordinates()
         for state in self.states:
@@ -503,11 +537,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 coords = self.current_coordinates()
         self.pairings += 1
         self._pattern_checked = False
-        count = self.num_springs
-        if self.iteration >= 1 and self.face_changes:
-            logger.info(
-                " Number of contact spring elements=%d (%d changed face)", count, self.face_changes
-            )
+        comm = self.u.function_space.mesh.comm
+        count, changes = (
+            int(v) for v in comm.allreduce(np.array([self.num_springs, self.face_changes]))
+        )
+        self.total_springs = count
+        if self.iteration >= 1 and changes:
+            logger.info(" Number of contact spring elements=%d (%d changed face)", count, changes)
         else:
             logger.info(" Number of contact spring elements=%d", count)
         for callback in self.pairing_callbacks:
@@ -700,6 +736,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         friction = state.pair.interaction.friction
         if friction is None:
             return None
+        comm = self.u.function_space.mesh.comm
+        if comm.size > 1:  # the same pairs on every process: all raise
+            raise NotImplementedError(
+                f"{state.pair.name or 'a pair'}: friction on {comm.size} MPI processes is not "
+                "supported yet; run on one process (docs/method.md §14.4)"
+            )
         displacements = (coords - self._reference)[nodes]
         return FrictionInput(
             displacements,
@@ -812,7 +854,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.count_changed = False
         scheduled = not self.small_sliding and 2 <= self.iteration <= LAST_REPAIRING_ITERATION
         if scheduled or self.repair_next_iteration:
-            before = self.num_springs
+            before = self.u.function_space.mesh.comm.allreduce(self.num_springs)
             self.count_changed = (
                 self.pair(large_sliding_only=not self.repair_next_iteration) != before
             )
@@ -845,6 +887,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.elimination is not None:
             self.elimination.release()
             self.reduced_matrix = None
+        if self.halo is not None:
+            self.halo.destroy()
 
     def __enter__(self) -> ContactProblem:
         return self

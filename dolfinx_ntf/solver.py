@@ -417,7 +417,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             ratio = norm / first if first > 0 else 0.0
             correction = self.relaxation_parameter * self.last_correction.norm()
             line += f" ({ratio:.1e} of the first), correction {correction:.3e}"
-        line += f", {self.problem.num_springs} contact elements"
+        line += f", {self.problem.total_springs} contact elements"
         newton_logger.info(line + (", converged" if converged else ""))
 
     def _all_contacts_paired(self) -> bool:
@@ -661,7 +661,7 @@ class StaticStep:
                 t,
                 t / self.period,
                 iterations,
-                problem.num_springs,
+                problem.total_springs,
                 solver.residual_norms[-1],
             )
             results.append(result)
@@ -716,7 +716,7 @@ def _non_finite_input(problem: ContactProblem, x: PETSc.Vec) -> str:
 
 def _no_support_hint(problem: ContactProblem) -> str:
     """Why a body may float: contact pairs but no springs."""
-    if problem.num_springs == 0 and problem.states:
+    if problem.total_springs == 0 and problem.states:
         return (
             "; there are no contact springs, so a body held only by contact has no support "
             "(close the initial gap, or start with a prescribed displacement)"

@@ -314,21 +314,36 @@ def resolve_slave(
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     all_faces = boundary_faces(V, exterior, what=what)
     corners = all_faces.faces[:, : all_faces.face_type.num_corners]
-    _check_on_boundary(comm, label, nodes, corners, reference_coordinates(V))
+    to_global = V.dofmap.index_map.local_to_global
+    _check_on_boundary(comm, label, nodes, corners, reference_coordinates(V), to_global)
     touching = np.isin(corners, nodes).any(axis=1)
     faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
     return SlaveSurface(nodes, faces)
 
 
 def _check_on_boundary(
-    comm: MPI.Comm, label: str, nodes: np.ndarray, corners: np.ndarray, X: np.ndarray
+    comm: MPI.Comm,
+    label: str,
+    nodes: np.ndarray,
+    corners: np.ndarray,
+    X: np.ndarray,
+    to_global: typing.Callable[[np.ndarray], np.ndarray],
 ) -> None:
-    """Node-surface vertices inside the mesh: an error if all are, a warning if some are."""
-    interior = nodes[~np.isin(nodes, corners)]
-    num_interior = comm.allreduce(int(interior.size), op=MPI.SUM)
+    """Node-surface vertices inside the mesh: an error if all are, a warning if some are.
+
+    Decided on global node numbers: a vertex a process holds without its boundary faces (held by
+    another process) is on the boundary all the same.
+    """
+    node_ids = np.asarray(to_global(nodes.astype(np.int32)), dtype=np.int64)
+    boundary = np.asarray(to_global(nodes[np.isin(nodes, corners)].astype(np.int32)))
+    all_nodes = np.unique(np.concatenate(comm.allgather(node_ids)))
+    on_boundary = np.concatenate(comm.allgather(boundary)).astype(np.int64)
+    interior_ids = np.setdiff1d(all_nodes, on_boundary)
+    interior = nodes[np.isin(node_ids, interior_ids)]
+    num_interior = int(interior_ids.size)
     if num_interior == 0:
         return
-    total = comm.allreduce(int(nodes.size), op=MPI.SUM)
+    total = int(all_nodes.size)
     where = ""
     if interior.size:
         x = X[interior[0]]

@@ -232,14 +232,6 @@ def check_problem(
         pairs, pair_type, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
     )
     check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
-    comm = u.function_space.mesh.comm
-    if comm.allreduce(len(pairs), op=MPI.MAX) and comm.size > 1:
-        # Each process would search only its own part of the master surface: slave nodes whose
-        # master face lies on another process would get no spring, silently.
-        raise NotImplementedError(
-            f"{owner}: contact pairs on {comm.size} MPI processes are not supported yet; "
-            "contact runs in serial only (docs/method.md §10)"
-        )
     return pairs, check_bcs(bcs, owner)
 
 

@@ -67,8 +67,12 @@ def two_blocks(
     upper=((0, 0, 0), (1, 1, 1), (4, 4, 2)),
     gap=0.0,
     cell="hexahedron",
+    partition=None,
 ):
     """Two boxes (origin, size, divisions) stacked along z; the upper one shifted up by ``gap``.
+
+    ``partition(midpoints)`` optionally gives the process of each cell from its midpoint (MPI
+    tests); dolfinx's partitioner decides by default.
 
     Returns the mesh, cell tags (LOWER, UPPER) and facet tags: LOWER_BOTTOM, LOWER_TOP (master),
     UPPER_BOTTOM (slave), UPPER_TOP.
@@ -86,7 +90,8 @@ def two_blocks(
     if comm.rank != 0:
         points, cells = np.empty((0, 3)), np.empty((0, cells.shape[1]), dtype=np.int64)
     domain = compat.coordinate_element(cell, 1)
-    mesh = dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
+    owners = None if partition is None else partition(points[cells].mean(axis=1))
+    mesh = compat.create_mesh(comm, cells.astype(np.int64), points, domain, owners)
 
     tdim = 3
     midpoints = dolfinx.mesh.compute_midpoints(
@@ -141,9 +146,11 @@ def punch_problem(
     degree=1,
     rollers=False,
     law=None,
+    friction=None,
     gap=0.0,
     name="",
     comm=MPI.COMM_WORLD,
+    partition=None,
     **problem_options,
 ):
     """Upper block (the punch, slave) pressed by a pressure on its top onto a lower block (master).
@@ -154,7 +161,7 @@ def punch_problem(
     Returns:
         The problem, the pressure Constant (0 until set) and the facet tags.
     """
-    mesh, _, ft = two_blocks(comm, cell=cell, upper=upper, gap=gap)
+    mesh, _, ft = two_blocks(comm, cell=cell, upper=upper, gap=gap, partition=partition)
     V = compat.vector_space(mesh, "Lagrange", degree)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
@@ -177,7 +184,7 @@ def punch_problem(
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, UPPER_BOTTOM),
         ntf.FacetSurface(ft, LOWER_TOP),
-        ntf.SurfaceInteraction(law or ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS)),
+        ntf.SurfaceInteraction(law or ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS), friction),
         name=name,
     )
     return ntf.ContactProblem(F, u, [pair], bcs, **problem_options), pressure, ft

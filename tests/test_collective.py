@@ -36,17 +36,16 @@ def blocks():
     return mesh, cell_tags, ft, u, F
 
 
-def test_contact_pairs_are_serial_only(blocks):
-    """In parallel every process would search only its own part of the master: refused on all."""
+def test_contact_pairs_run_on_every_process_count(blocks):
+    """Each process holds the slave nodes it owns; over all processes, each node once."""
     _, _, ft, u, F = blocks
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
-    if COMM.size == 1:
-        assert ntf.ContactProblem(F, u, [pair]).states[0].num_springs == 0
-    else:
-        with pytest.raises(NotImplementedError, match="serial only"):
-            ntf.ContactProblem(F, u, [pair])
-    ntf.ContactProblem(F, u, [])  # no pairs: a plain nonlinear problem, fine in parallel
+    problem = ntf.ContactProblem(F, u, [pair])
+    assert COMM.allreduce(problem.states[0].slave.nodes.size) == 25  # the 5 x 5 bottom nodes
+    assert problem.states[0].master.num_faces == 16  # the whole master on every process
+    problem.destroy()
+    ntf.ContactProblem(F, u, [])  # no pairs: a plain nonlinear problem
 
 
 def test_missing_tag_value_fails_everywhere(blocks):

@@ -1,0 +1,270 @@
+"""Contact on 1 and 2 MPI processes: time per phase, speed-up, memory (docs/method.md §14).
+
+The two plates of ``benchmarks/contact_phases.py`` (every slave node in compression), at about 270k
+dofs by default. Each process count runs in its own ``mpirun`` (this script starts them and
+collects their JSON); every phase is timed between barriers and reported as the slowest process's
+time, the median of ``--repeat`` runs after a warm-up:
+
+- set-up: ``ContactProblem`` construction, including the gather of the surfaces (§14.1);
+- exchange: the halo scatter of displacements (``current_coordinates``), the only per-iteration
+  communication the contact adds;
+- search (``pair``), spring evaluation (``evaluate``), insertion (``add_to_matrix`` + assembly,
+  ``add_to_vector``; with off-process rows in parallel);
+- Newton iteration: ``form`` + ``F`` + ``J`` + MUMPS solve (no re-pairing), and end to end: one
+  increment solved to convergence from the pressed state (``ContactNewtonSolver.solve``).
+
+Run from the repository root (about 10 minutes on 2 shared cores)::
+
+    .venv/bin/python benchmarks/scaling.py               # prints the table
+    .venv/bin/python benchmarks/scaling.py --write       # and writes it to docs/performance.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import typing
+from pathlib import Path
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import dolfinx.fem.petsc
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import contact_phases
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION
+
+ROOT = Path(__file__).resolve().parents[1]
+PHASES = {
+    "setup": "set-up (incl. gather)",
+    "exchange": "exchange (halo scatter)",
+    "search": "search",
+    "evaluate": "spring eval",
+    "insert": "insertion",
+    "contact": "contact per iteration",
+    "newton": "Newton iteration",
+    "end_to_end": "end to end",
+}
+
+
+def _timed(comm: MPI.Comm, fn: typing.Callable[[], typing.Any], repeat: int) -> float:
+    """Median over ``repeat`` runs (after a warm-up) of the slowest process's wall time."""
+    fn()
+    times = []
+    for _ in range(repeat):
+        comm.barrier()
+        start = time.perf_counter()
+        fn()
+        times.append(comm.allreduce(time.perf_counter() - start, op=MPI.MAX))
+    return statistics.median(times)
+
+
+def worker(slave_nodes: int, layers: int, repeat: int) -> dict[str, typing.Any]:
+    """Time every phase on this communicator (run under mpirun)."""
+    comm = MPI.COMM_WORLD
+    load = os.getloadavg()[0]
+    plates = contact_phases.build_plates(slave_nodes, layers=layers)
+    comm.barrier()
+    start = time.perf_counter()
+    problem, newton = contact_phases.build_problem(plates, "mumps", options_prefix="scaling_")
+    out: dict[str, typing.Any] = {"processes": comm.size, "load_start": load, "repeat": repeat}
+    out["layers"] = layers
+    out["setup"] = comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
+    out["dofs"] = 3 * problem.u.function_space.dofmap.index_map.size_global
+    out["springs"] = problem.total_springs
+    out["halo_nodes"] = comm.allreduce(0 if problem.halo is None else problem.halo.extra.size)
+    out["exchange"] = _timed(comm, problem.current_coordinates, repeat)
+    out["search"] = _timed(comm, problem.pair, repeat)
+    out["evaluate"] = _timed(comm, lambda: problem.evaluate(tangent=True), repeat)
+    blocks = problem.evaluate(tangent=True)
+    x, A = compat.petsc_vector(problem.u), problem.matrix
+    problem.iteration = LAST_REPAIRING_ITERATION
+    problem.form(x)
+    problem.J(x, A)
+    b = dolfinx.fem.petsc.create_vector(problem.L)
+
+    def insert() -> None:
+        problem.assembler.add_to_matrix(A, blocks)
+        A.assemble()
+        problem.assembler.add_to_vector(b, blocks)
+
+    out["insert"] = _timed(comm, insert, repeat)
+    out["contact"] = out["exchange"] + out["evaluate"] + out["insert"]
+    ksp, dx = newton.krylov_solver, A.createVecRight()
+
+    def iteration() -> None:
+        problem.iteration = LAST_REPAIRING_ITERATION
+        problem.form(x)
+        problem.F(x, b)
+        problem.J(x, A)
+        ksp.setOperators(A)
+        ksp.solve(b, dx)
+
+    out["newton"] = _timed(comm, iteration, repeat)
+    u0 = problem.u.x.array.copy()
+
+    def solve() -> None:
+        problem.u.x.array[:] = u0
+        problem.begin_increment(1.0)
+        out["iterations"] = newton.solve(problem.u)[0]
+
+    comm.barrier()
+    start = time.perf_counter()
+    solve()
+    out["end_to_end"] = comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
+    out["mallocs"] = A.getInfo()["mallocs"]
+    memory = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # MB (Linux: kB)
+    out["memory"] = comm.allreduce(memory, op=MPI.MAX)
+    out["load"] = os.getloadavg()[0]  # 1-min load average when this run ended
+    newton.destroy()
+    problem.destroy()
+    return out
+
+
+def section(results: list[dict], args: argparse.Namespace, load: tuple[float, float]) -> list[str]:
+    """The Markdown section for docs/performance.md."""
+    base = results[0]
+    load = (base.get("load_start", load[0]), results[-1].get("load", load[1]))  # of the runs
+    header = ["phase", *[f"{r['processes']} process(es) (s)" for r in results], "speed-up"]
+    rows = []
+    for key, name in PHASES.items():
+        times = [r[key] for r in results]
+        speedup = f"{times[0] / times[-1]:.2f}" if times[-1] > 0 else "-"
+        rows.append([name, *[f"{t:.3g}" for t in times], speedup])
+    table = contact_phases._format_table(header, rows)
+    share = [
+        f"{r['processes']}: {100 * r['contact'] / r['newton']:.1f} % contact, "
+        f"{100 * r['exchange'] / r['newton']:.2f} % exchange"
+        for r in results
+    ]
+    last = results[-1]
+    speedup = base["end_to_end"] / last["end_to_end"]
+    version = ".".join(map(str, PETSc.Sys.getVersion()))
+    os_name = "unknown"
+    if Path("/etc/os-release").is_file():
+        for line in Path("/etc/os-release").read_text().splitlines():
+            if line.startswith("PRETTY_NAME="):
+                os_name = line.split("=", 1)[1].strip('"')
+    return [
+        f"## MPI scaling ({os_name}, dolfinx {dolfinx.__version__}, PETSc {version})",
+        "",
+        "Written by `.venv/bin/python benchmarks/scaling.py --write` (docs/method.md §14): the two "
+        f"plates of `benchmarks/contact_phases.py`, {base['dofs']} dofs, {base['springs']} "
+        f"springs (every slave node in compression), {base['layers']} cell layers per plate, MUMPS "
+        f"LU, on this machine's 2 cores (shared; 1-min load {load[0]:.1f} at start, {load[1]:.1f} "
+        f"at end). Slowest process's time, median of {base['repeat']} runs after a warm-up; end to "
+        f"end is one run of an increment from the pressed state to convergence "
+        f"({base['iterations']} Newton iterations on every process count).",
+        "",
+        table,
+        "",
+        f"- End-to-end speed-up on {last['processes']} processes: {speedup:.2f} (parallel "
+        f"efficiency {100 * speedup / last['processes']:.0f} %); target 1.6: "
+        + (
+            "met."
+            if speedup >= 1.6
+            else "**not met**. The MUMPS solve is nearly all of an iteration, so its speed-up "
+            "bounds the end to end; with the cores shared by other jobs (load above, "
+            + f"{load[0]:.1f} to {load[1]:.1f}) two processes seldom run at once, and every "
+            "barrier-synchronized phase waits for the descheduled one (the contact phases got "
+            "slower in parallel here). Re-measure on an idle machine before reading the "
+            "speed-ups as the code's."
+        ),
+        "- Contact share of a Newton iteration (exchange + spring evaluation + insertion; the "
+        "search runs in iterations 1-8 only, see its row): " + "; ".join(share) + ".",
+        f"- Halo nodes (contact nodes held by another process) over all processes: "
+        f"{', '.join(str(r['halo_nodes']) for r in results)}; PETSc mallocs during assembly: "
+        f"{', '.join(str(int(r['mallocs'])) for r in results)}.",
+        "- Peak resident memory per process (MB): "
+        + ", ".join(f"{r['processes']}: {r['memory']:.0f}" for r in results)
+        + ".",
+        "",
+        *_on_paper(results),
+    ]
+
+
+def _on_paper(results: list[dict]) -> list[str]:
+    """How the gather and the exchange grow to 100+ processes and 10^7 slave nodes."""
+    one = results[0]
+    per_node = (one["search"] + one["evaluate"]) / max(one["springs"], 1)
+    last = results[-1]
+    return [
+        "On paper, from these figures (docs/method.md §14.2). The per-iteration exchange moves "
+        "only halo displacements (3 numbers per contact node held elsewhere); it grows with the "
+        "surface cut by the partition, not with the model, and stays a small share of an "
+        f"iteration ({100 * last['exchange'] / last['newton']:.2f} % here). The set-up gather "
+        "sends every process the whole master surface and the slave faces: 16 numbers of 8 "
+        "bytes per quadrilateral face (4 node numbers, 12 coordinates), so 10^7 faces are "
+        "1.3 GB received by every process, and every process updates the whole master "
+        "(normals, planes, k-d tree) at every pairing. With search + spring evaluation measured "
+        f"at {1e6 * per_node:.1f} us per spring in serial here, a pairing over 10^7 faces costs "
+        f"each process up to about {per_node * 1e7:.0f} s whatever P. So the allgather suits "
+        "surfaces up to about 10^6 faces (`MAX_GATHERED_FACES` = 2 x 10^6 refuses more) on a "
+        "few tens of processes; at 100+ processes and 10^7 slave nodes the master must be "
+        "exchanged by bounding boxes (each process receives the master faces within reach of "
+        "its own slave nodes: O(S/P + halo) data and work per process), which is not "
+        "implemented.",
+    ]
+
+
+def main(argv: typing.Sequence[str] | None = None) -> int:
+    """Command line entry point: launches the workers, prints (and writes) the table."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--slave-nodes", type=int, default=20_000)
+    parser.add_argument("--layers", type=int, default=2)
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--processes", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--write", action="store_true", help="write docs/performance.md")
+    parser.add_argument("--worker", help=argparse.SUPPRESS)  # JSON output path of a worker
+    parser.add_argument(
+        "--results", help="folder for the workers' JSON; reused if present (no new runs)"
+    )
+    args = parser.parse_args(argv)
+    if args.worker:
+        out = worker(args.slave_nodes, args.layers, args.repeat)
+        if MPI.COMM_WORLD.rank == 0:
+            Path(args.worker).write_text(json.dumps(out))
+        return 0
+    if MPI.COMM_WORLD.size != 1:
+        parser.error("run without mpirun: the script starts its own mpirun per process count")
+    load_start = os.getloadavg()[0]
+    results = []
+    with tempfile.TemporaryDirectory() as temporary:
+        folder = Path(args.results or temporary)
+        folder.mkdir(parents=True, exist_ok=True)
+        for n in args.processes:
+            path = folder / f"{n}.json"
+            if path.is_file():
+                results.append(json.loads(path.read_text()))
+                continue
+            command = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-n", str(n)]
+            command += [sys.executable, __file__, "--worker", str(path)]
+            command += ["--slave-nodes", str(args.slave_nodes), "--layers", str(args.layers)]
+            command += ["--repeat", str(args.repeat)]
+            print(f"{n} process(es) ...", flush=True)
+            # this launcher is an MPI singleton: its Open MPI/PMIx variables must not leak
+            env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_"))}
+            subprocess.run(command, check=True, cwd=ROOT, env=env)
+            results.append(json.loads(path.read_text()))
+    lines = section(results, args, (load_start, os.getloadavg()[0]))
+    print("\n".join(lines))
+    if args.write:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        import vs_ccx
+
+        vs_ccx.write_report(ROOT / "docs" / "performance.md", "MPI scaling", lines)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
