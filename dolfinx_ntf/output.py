@@ -13,6 +13,7 @@ displacement (docs/method.md §8).
 
 from __future__ import annotations
 
+import dataclasses
 import typing
 from dataclasses import dataclass
 
@@ -61,6 +62,8 @@ class ContactResults:
         sliding: ``(N,)`` True where the spring slips (``|F_T| = mu F_N``), False in stick.
         friction_energy: ``(N,)`` elastic energy of the tangential spring ``|F_T|^2/(2 K_t)``
             (CalculiX 2.20's CELS adds twice this, docs/method.md §11.4).
+        recovered_pressure: ``(N,)`` the recovered contact pressure ``p_h`` at the slave node
+            (docs/method.md §15.3), with ``contact_results(problem, recovered=True)``; else None.
     """
 
     pair: str
@@ -77,6 +80,7 @@ class ContactResults:
     slip: np.ndarray | None = None
     sliding: np.ndarray | None = None
     friction_energy: np.ndarray | None = None
+    recovered_pressure: np.ndarray | None = None
 
 
 def _evaluated(problem: ContactProblem) -> None:
@@ -116,15 +120,32 @@ def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactRe
     )
 
 
-def contact_results(problem: ContactProblem) -> list[ContactResults]:
+def contact_results(problem: ContactProblem, *, recovered: bool = False) -> list[ContactResults]:
     """Results of every pair at the current pairing (local springs of this process).
 
     Before the first pairing (e.g. before any solve) every table is empty.
+
+    Args:
+        problem: The contact problem.
+        recovered: Also give the recovered pressure at each slave node (docs/method.md §15.3):
+            the projection of all pairs' spring forces onto the slave faces. Collective; the
+            first call compiles its forms, later calls on the same problem reuse them.
     """
     validation.check_type(problem, ContactProblem, "contact_results: problem")
     _evaluated(problem)
     coords = problem.current_coordinates()
-    return [_pair_results(i, s, coords) for i, s in enumerate(problem.states)]
+    results = [_pair_results(i, s, coords) for i, s in enumerate(problem.states)]
+    if recovered:
+        fields = getattr(problem, "_recovery_fields", None)  # kept with the problem
+        if fields is None:
+            fields = problem._recovery_fields = ContactFields(problem)
+        else:
+            fields.update()
+        results = [
+            dataclasses.replace(res, recovered_pressure=fields.recovery.at_nodes(res.node))
+            for res in results
+        ]
+    return results
 
 
 class ContactFields:

@@ -158,6 +158,10 @@ class BoundaryPressure:
         """``(nodes, values)``: block indices of ``u``'s space on the boundary and ``p_h`` there."""
         return self._node_of_q[self.dofs], self.pressure.x.array[self.dofs].copy()
 
+    def at_nodes(self, nodes: np.ndarray) -> np.ndarray:
+        """``p_h`` at nodes given as block indices of ``u``'s space (local, with ghosts)."""
+        return self.pressure.x.array[self._q_of_node[np.asarray(nodes, dtype=np.int64)]].copy()
+
     def destroy(self) -> None:
         """Free the PETSc objects."""
         self._rhs.destroy()
