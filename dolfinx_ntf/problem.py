@@ -349,10 +349,18 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
                 was_active=pair.active,
             )  # fmt: skip
-        if comm.size > 1 and (pair.adjust is not None or pair.interaction.friction is not None):
+        unsupported = [
+            what
+            for what, used in (
+                ("friction", pair.interaction.friction is not None),
+                ("ADJUST", pair.adjust is not None),
+            )
+            if used
+        ]
+        if comm.size > 1 and unsupported:
             raise NotImplementedError(
-                f"{name}: friction and ADJUST on {comm.size} MPI processes are not supported yet; "
-                "run on one process (docs/method.md §14.4)"
+                f"{name}: {' and '.join(unsupported)} on {comm.size} MPI processes: not supported "
+                "yet; run on one process (docs/method.md §14.4)"
             )
         master_faces = parallel.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
