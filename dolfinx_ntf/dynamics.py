@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 import typing
 from dataclasses import dataclass
 
@@ -28,10 +27,10 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.problem import ContactProblem
 from dolfinx_ntf.solver import (
     ContactConvergenceError,
-    ContactDivergenceError,
     ContactNewtonSolver,
     IncrementResult,
     LoadControl,
+    run_increments,
 )
 
 __all__ = ["CCX_ALPHA", "DynamicStep", "kinetic_energy", "newmark_parameters"]
@@ -307,97 +306,20 @@ class DynamicStep:
             _static_residual(problem, inertia, x, start=True)
             _initial_acceleration(mass, problem, inertia.last_residual, acceleration)
         _static_residual(problem, inertia, x)  # r_0 of the alpha method, with such a jump
-        max_inc = self.period if self.max_increment is None else self.max_increment
-        results: list[IncrementResult] = []
-        t, dt = 0.0, self.initial_increment
-        increment, fast_in_a_row = 0, 0
-        while t < self.period * (1 - 1e-12):
-            increment += 1
-            attempt = 0
-            u_start = u.x.array.copy()
-            solver.increment_start = u_start
-            first_failure: ContactConvergenceError | None = None
-            while True:
-                attempt += 1
-                dt = min(dt, self.period - t)
-                t_new = t + dt
-                logger.info(
-                    " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
-                    increment,
-                    attempt,
-                    dt,
-                    t_new,
-                )
-                self.set_load(t_new)
-                start = time.perf_counter()
-                try:
-                    problem.begin_increment(t_new / self.period, static=False)
-                    dolfinx.fem.petsc.set_bc(x, problem.bcs)  # prescribed values at t_{n+1}
-                    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-                    inertia.predict(
-                        u_start[:owned],
-                        velocity.x.array[:owned],
-                        acceleration.x.array[:owned],
-                        dt,
-                    )
-                    iterations, _ = solver.solve(u)
-                    problem.end_increment()  # commits the friction state
-                    break
-                except ContactConvergenceError as error:
-                    u.x.array[:] = u_start
-                    u.x.scatter_forward()
-                    first_failure = first_failure or error
-                    factor = (
-                        self.divergence_cutback_factor
-                        if isinstance(error, ContactDivergenceError)
-                        else self.cutback_factor
-                    )
-                    if self.fixed or dt * factor < self._min_increment():
-                        why = (
-                            "fixed increments"
-                            if self.fixed
-                            else f"increment size {dt:.3e} cannot be cut back below the "
-                            f"minimum {self._min_increment():.3e}"
-                        )
-                        first = (
-                            "" if first_failure is error else f"; first attempt: {first_failure}"
-                        )
-                        raise ContactConvergenceError(
-                            f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
-                            f"failed after {attempt} attempt(s) ({why}): {error}{first}"
-                        ) from error
-                    dt *= factor
-                    fast_in_a_row = 0
-                    logger.info(" %s; cutting back to %.6e", error, dt)
+
+        def start(t_new: float, dt: float, u_start: np.ndarray) -> None:
+            problem.begin_increment(t_new / self.period, static=False)
+            dolfinx.fem.petsc.set_bc(x, problem.bcs)  # prescribed values at t_{n+1}
+            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            inertia.predict(
+                u_start[:owned], velocity.x.array[:owned], acceleration.x.array[:owned], dt
+            )
+
+        def converged(dt: float, u_start: np.ndarray) -> None:
             self._advance(u, velocity, acceleration, inertia, owned)
             _static_residual(problem, inertia, x)
-            t = t_new
-            result = IncrementResult(
-                increment,
-                attempt,
-                t,
-                t / self.period,
-                iterations,
-                problem.num_springs,
-                solver.residual_norms[-1],
-            )
-            results.append(result)
-            logger.info(
-                " increment %d converged: time %.6g, %d iterations, %d contact elements, "
-                "residual %.3e (%.2f s)",
-                increment,
-                t,
-                iterations,
-                result.springs,
-                result.residual,
-                time.perf_counter() - start,
-            )
-            if self.on_increment is not None:
-                self.on_increment(result)
-            fast_in_a_row = fast_in_a_row + 1 if iterations <= self.growth_iterations else 0
-            if not self.fixed and fast_in_a_row >= 2:
-                dt = min(self.growth_factor * dt, max_inc)
-        return results
+
+        return run_increments(self, solver, u, self._min_increment(), start, converged)
 
     @staticmethod
     def _advance(

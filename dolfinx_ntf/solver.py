@@ -589,98 +589,132 @@ class StaticStep:
                 f"divergence_cutback_factor ({self.divergence_cutback_factor}) < 1 <= "
                 f"growth_factor ({self.growth_factor})"
             )
-        results: list[IncrementResult] = []
         problem.begin_step()
-        t, dt = 0.0, self.initial_increment
-        increment = 0
-        fast_in_a_row = 0
-        velocity = None
-        while t < self.period * (1 - 1e-12):
-            increment += 1
-            attempt = 0
-            u_start = u.x.array.copy()
-            solver.increment_start = u_start
-            first_failure: ContactConvergenceError | None = None
-            while True:
-                attempt += 1
-                dt = min(dt, self.period - t)
-                t_new = t + dt
-                logger.info(
-                    " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
-                    increment,
-                    attempt,
-                    dt,
-                    t_new,
-                )
-                self.set_load(t_new)
-                start = time.perf_counter()
-                try:
-                    problem.begin_increment(t_new / self.period)
-                    if self.predictor and velocity is not None:
-                        u.x.array[:] = u_start + dt * velocity
-                        u.x.scatter_forward()
-                        if self.pair_after_predictor:
-                            problem.pair()
-                            problem.ensure_matrix()
-                    iterations, _ = solver.solve(u)
-                    problem.end_increment()
-                    break
-                except ContactConvergenceError as error:
-                    u.x.array[:] = u_start
-                    u.x.scatter_forward()
-                    first_failure = first_failure or error
-                    factor = (
-                        self.divergence_cutback_factor
-                        if isinstance(error, ContactDivergenceError)
-                        else self.cutback_factor
-                    )
-                    if self.fixed or dt * factor < self.min_increment:
-                        why = (
-                            "fixed increments"
-                            if self.fixed
-                            else (
-                                f"increment size {dt:.3e} cannot be cut back below the minimum "
-                                f"{self.min_increment:.3e}"
-                            )
-                        )
-                        first = (
-                            "" if first_failure is error else f"; first attempt: {first_failure}"
-                        )
-                        raise ContactConvergenceError(
-                            f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
-                            f"failed after {attempt} attempt(s) ({why}): {error}{first}"
-                        ) from error
-                    dt *= factor
-                    fast_in_a_row = 0
-                    logger.info(" %s; cutting back to %.6e", error, dt)
+        velocity: np.ndarray | None = None
+
+        def start(t_new: float, dt: float, u_start: np.ndarray) -> None:
+            problem.begin_increment(t_new / self.period)
+            if self.predictor and velocity is not None:
+                u.x.array[:] = u_start + dt * velocity
+                u.x.scatter_forward()
+                if self.pair_after_predictor:
+                    problem.pair()
+                    problem.ensure_matrix()
+
+        def converged(dt: float, u_start: np.ndarray) -> None:
+            nonlocal velocity
             velocity = (u.x.array - u_start) / dt
-            t = t_new
-            result = IncrementResult(
+
+        return run_increments(self, solver, u, self.min_increment, start, converged)
+
+
+def run_increments(
+    step: typing.Any,
+    solver: ContactNewtonSolver,
+    u: dolfinx.fem.Function,
+    min_increment: float,
+    start: typing.Callable[[float, float, np.ndarray], None],
+    converged: typing.Callable[[float, np.ndarray], None],
+) -> list[IncrementResult]:
+    """CalculiX's increment control over ``step.period``, shared by the static and dynamic steps.
+
+    Each attempt sets the loads at the new time (``step.set_load``), calls ``start(t_new, dt,
+    u_start)`` (the step's own start of an increment) and solves; a failed attempt restores
+    ``u`` and is cut back (docs/method.md §7.2); a converged one commits the problem's increment
+    state, calls ``converged(dt, u_start)`` and may let the next increment grow.
+
+    Args:
+        step: The step's configuration (period, increments, cutback and growth factors, fixed,
+            set_load, on_increment) as in :class:`StaticStep`.
+        solver: The solver of the problem.
+        u: The problem's displacement.
+        min_increment: The smallest increment a cutback may reach.
+        start: Begins an attempt after its loads are set.
+        converged: Updates the step's own state after a converged increment.
+    """
+    problem = solver.problem
+    max_inc = step.period if step.max_increment is None else step.max_increment
+    results: list[IncrementResult] = []
+    t, dt = 0.0, step.initial_increment
+    increment, fast_in_a_row = 0, 0
+    while t < step.period * (1 - 1e-12):
+        increment += 1
+        attempt = 0
+        u_start = u.x.array.copy()
+        solver.increment_start = u_start
+        first_failure: ContactConvergenceError | None = None
+        while True:
+            attempt += 1
+            dt = min(dt, step.period - t)
+            t_new = t + dt
+            logger.info(
+                " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
                 increment,
                 attempt,
-                t,
-                t / self.period,
-                iterations,
-                problem.total_springs,
-                solver.residual_norms[-1],
+                dt,
+                t_new,
             )
-            results.append(result)
-            logger.info(
-                " increment %d converged: time %.6g, %d iterations, %d contact elements, "
-                "residual %.3e (%.2f s)",
-                increment,
-                t,
-                iterations,
-                result.springs,
-                result.residual,
-                time.perf_counter() - start,
-            )
-            if self.on_increment is not None:
-                self.on_increment(result)
-            fast_in_a_row = fast_in_a_row + 1 if iterations <= self.growth_iterations else 0
-            if not self.fixed and fast_in_a_row >= 2:
-                dt = min(self.growth_factor * dt, max_inc)
-        return results
+            step.set_load(t_new)
+            clock = time.perf_counter()
+            try:
+                start(t_new, dt, u_start)
+                iterations, _ = solver.solve(u)
+                problem.end_increment()  # commits the friction state
+                break
+            except ContactConvergenceError as error:
+                u.x.array[:] = u_start
+                u.x.scatter_forward()
+                first_failure = first_failure or error
+                factor = (
+                    step.divergence_cutback_factor
+                    if isinstance(error, ContactDivergenceError)
+                    else step.cutback_factor
+                )
+                if step.fixed or dt * factor < min_increment:
+                    why = (
+                        "fixed increments"
+                        if step.fixed
+                        else (
+                            f"increment size {dt:.3e} cannot be cut back below the minimum "
+                            f"{min_increment:.3e}"
+                        )
+                    )
+                    first = "" if first_failure is error else f"; first attempt: {first_failure}"
+                    raise ContactConvergenceError(
+                        f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
+                        f"failed after {attempt} attempt(s) ({why}): {error}{first}"
+                    ) from error
+                dt *= factor
+                fast_in_a_row = 0
+                logger.info(" %s; cutting back to %.6e", error, dt)
+        converged(dt, u_start)
+        t = t_new
+        result = IncrementResult(
+            increment,
+            attempt,
+            t,
+            t / step.period,
+            iterations,
+            problem.total_springs,
+            solver.residual_norms[-1],
+        )
+        results.append(result)
+        logger.info(
+            " increment %d converged: time %.6g, %d iterations, %d contact elements, "
+            "residual %.3e (%.2f s)",
+            increment,
+            t,
+            iterations,
+            result.springs,
+            result.residual,
+            time.perf_counter() - clock,
+        )
+        if step.on_increment is not None:
+            step.on_increment(result)
+        fast_in_a_row = fast_in_a_row + 1 if iterations <= step.growth_iterations else 0
+        if not step.fixed and fast_in_a_row >= 2:
+            dt = min(step.growth_factor * dt, max_inc)
+    return results
 
 
 def _ksp_reason(reason: int) -> str:
