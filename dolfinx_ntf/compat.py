@@ -14,6 +14,8 @@ cell dofmaps                           ``AdjacencyList`` (``.array``)           
 form compiler / JIT option names       ``form_compiler_params``, ``jit_params``     ``..._options``
 class names for type hints             ``DirichletBCMetaClass``, ...                ``DirichletBC``, ...
 sparsity graph                         ``AdjacencyList``                            ``(array, offsets)``
+scalar space of one component          scalar space, same numbering (``collapse``   ``V.sub(i).collapse()``
+                                       crashes on a process without cells)
 =====================================  ===========================================  ==============================
 
 A user's own UFL code differs the same way (element and space creation); :func:`vector_space`
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import typing
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -42,6 +45,7 @@ __all__ = [
     "MeshTags",
     "boundary_values",
     "cell_dofs",
+    "component_space",
     "coordinate_element",
     "cpp_mesh",
     "create_mesh",
@@ -90,6 +94,33 @@ def scalar_space(
     return dolfinx.fem.functionspace(mesh, (family, degree))
 
 
+def component_space(
+    V: dolfinx.fem.FunctionSpace, component: int
+) -> tuple[dolfinx.fem.FunctionSpace, np.ndarray]:
+    """The scalar space of one component of a vector space and the dofs of ``V`` it maps to.
+
+    What ``V.sub(component).collapse()`` gives. On dolfinx 0.5.2 ``collapse`` crashes with a
+    segmentation fault on a process that holds no cells, so there the scalar space of the same
+    element is built instead: its numbering is the blocked numbering of ``V`` (checked on every
+    process, collectively), so its dof ``k`` is ``V``'s dof ``bs * k + component``.
+    """
+    if not _LEGACY:
+        Q, dofs = V.sub(component).collapse()
+        return Q, np.asarray(dofs, dtype=np.int64)
+    Q = scalar_space(V.mesh, space_family(V), space_degree(V))
+    bs = V.dofmap.index_map_bs
+    same = (
+        np.array_equal(cell_dofs(Q), cell_dofs(V))
+        and Q.dofmap.index_map.size_local == V.dofmap.index_map.size_local
+        and np.array_equal(Q.dofmap.index_map.ghosts, V.dofmap.index_map.ghosts)
+    )
+    if not V.mesh.comm.allreduce(same, op=MPI.LAND):
+        Q, dofs = V.sub(component).collapse()
+        return Q, np.asarray(dofs, dtype=np.int64)
+    num = Q.dofmap.index_map.size_local + Q.dofmap.index_map.num_ghosts
+    return Q, bs * np.arange(num, dtype=np.int64) + component
+
+
 def coordinate_element(cell_name: str, degree: int = 1, gdim: int = 3) -> typing.Any:
     """The coordinate element that ``dolfinx.mesh.create_mesh`` takes for Lagrange geometry."""
     if _LEGACY:
@@ -135,8 +166,7 @@ def cell_dofs(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
     """Block dofs of every local cell (owned and ghost), shape (num_cells, dofs per cell)."""
     dofs = V.dofmap.list
     if _LEGACY:
-        num_cells = dofs.num_nodes
-        return dofs.array.reshape(num_cells, -1)
+        return dofs.array.reshape(dofs.num_nodes, V.dofmap.dof_layout.num_dofs)
     return np.asarray(dofs)
 
 
@@ -144,7 +174,7 @@ def geometry_dofs(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
     """Geometry nodes of every local cell, shape (num_cells, nodes per cell)."""
     dofs = mesh.geometry.dofmap
     if _LEGACY:
-        return dofs.array.reshape(dofs.num_nodes, -1)
+        return dofs.array.reshape(dofs.num_nodes, mesh.geometry.cmap.create_dof_layout().num_dofs)
     return np.asarray(dofs)
 
 

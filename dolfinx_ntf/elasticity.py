@@ -40,7 +40,7 @@ def component_bc(
     V: dolfinx.fem.FunctionSpace, component: int, facets: np.ndarray
 ) -> compat.DirichletBC:
     """Zero displacement component ``component`` on the given facets (rollers, symmetry planes)."""
-    Vc, _ = V.sub(component).collapse()
+    Vc, _ = compat.component_space(V, component)
     dofs = dolfinx.fem.locate_dofs_topological(
         (V.sub(component), Vc), V.mesh.topology.dim - 1, facets
     )

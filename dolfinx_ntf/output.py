@@ -24,7 +24,7 @@ import numpy as np
 import dolfinx.fem
 import dolfinx.io
 
-from dolfinx_ntf import validation
+from dolfinx_ntf import compat, validation
 from dolfinx_ntf.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.problem import ContactProblem, PairState
 
@@ -177,7 +177,7 @@ class ContactFields:
     def __init__(self, problem: ContactProblem) -> None:
         validation.check_type(problem, ContactProblem, "ContactFields: problem")
         self.problem = problem
-        Q, dofs = problem.u.function_space.sub(0).collapse()
+        Q, dofs = compat.component_space(problem.u.function_space, 0)
         #: The scalar space of the fields.
         self.space = Q
         node_of_q = np.asarray(dofs) // 3

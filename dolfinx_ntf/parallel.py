@@ -46,7 +46,7 @@ def collectively(comm: MPI.Comm, function: typing.Callable, *args, **kwargs) -> 
     result, error = None, None
     try:
         result = function(*args, **kwargs)
-    except (ValueError, TypeError) as exc:
+    except Exception as exc:  # an unexpected error on one process must not leave the others waiting
         error = exc
     validation.raise_collectively(comm, error)
     return result

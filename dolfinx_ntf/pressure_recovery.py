@@ -64,7 +64,7 @@ class BoundaryPressure:
                 "BoundaryPressure: lumped recovery needs P1 (the lumped masses of quadratic corner "
                 "nodes vanish); use lumped=False"
             )
-        Q, dofs = V.sub(0).collapse()
+        Q, dofs = compat.component_space(V, 0)
         self.space = Q
         node_of_q = np.asarray(dofs) // 3
         self._q_of_node = np.full(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, -1)

@@ -20,6 +20,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+import dolfinx.cpp
 import dolfinx.fem
 import dolfinx.mesh
 
@@ -217,7 +218,8 @@ def _facet_cells(
             f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
         )
     cells = f_to_c.array[f_to_c.offsets[facets]]
-    cell_facets = c_to_f.array.reshape(-1, c_to_f.offsets[1] - c_to_f.offsets[0])
+    facets_per_cell = dolfinx.cpp.mesh.cell_num_entities(mesh.topology.cell_type, tdim - 1)
+    cell_facets = c_to_f.array.reshape(-1, facets_per_cell)
     local_facet = np.argmax(cell_facets[cells] == facets[:, None], axis=1)
     return cells, local_facet
 

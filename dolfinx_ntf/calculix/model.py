@@ -945,7 +945,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
     for component in range(3):
-        Vi, dof_map = V.sub(component).collapse()
+        Vi, dof_map = compat.component_space(V, component)
         inverse = np.full(num_unrolled, -1, dtype=np.int64)
         inverse[np.asarray(dof_map)] = np.arange(len(dof_map))
         bc_spaces.append((Vi, inverse, dolfinx.fem.Function(Vi)))
