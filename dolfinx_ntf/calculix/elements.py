@@ -31,7 +31,8 @@ __all__ = [
 ]
 
 
-def _frozen(values, dtype=np.float64) -> np.ndarray:
+def _frozen_array(values, dtype) -> np.ndarray:
+    """A read-only copy of ``values``."""
     array = np.array(values, dtype=dtype)
     array.flags.writeable = False
     return array
@@ -160,23 +161,23 @@ def _element_type(
     quadrature_degree: int,
     frd_type: int,
 ) -> ElementType:
-    points = _frozen(_POINTS[name])
+    points = _frozen_array(_POINTS[name], np.float64)
     midside_edges = _TET_EDGES if num_nodes == 10 else ()
     return ElementType(
         name,
         num_nodes,
         num_corners,
         face_type,
-        _frozen(np.asarray(faces) - 1, np.int64),
+        _frozen_array(np.asarray(faces) - 1, np.int64),
         cell,
         degree,
-        _frozen(to_dolfinx, np.int64),
-        _frozen(mirrored_vertices, np.int64),
+        _frozen_array(to_dolfinx, np.int64),
+        _frozen_array(mirrored_vertices, np.int64),
         midside_edges,
         quadrature_degree,
         points,
         frd_type,
-        _frozen(nodal_extrapolation(name, points)),
+        _frozen_array(nodal_extrapolation(name, points), np.float64),
     )
 
 
