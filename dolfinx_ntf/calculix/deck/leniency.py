@@ -15,7 +15,11 @@ from .lexer import _name
 # Keywords and parameters in neither this table nor a handler are refused as well.
 _OUTPUT_ONLY = "output only: ccx 2.20 ignores it"
 _TIME_POINTS = "ccx cuts the increments to reach the time points"
-_FILE_RULES = {"POSITION": ("warn", _OUTPUT_ONLY), "TIME POINTS": ("refuse", _TIME_POINTS)}
+_FILE_RULES = {
+    "POSITION": ("warn", _OUTPUT_ONLY),
+    "ELSET": ("warn", "not a file request parameter: ccx 2.20 ignores it and writes every node"),
+    "TIME POINTS": ("refuse", _TIME_POINTS),
+}
 LENIENCY: dict[str, dict[str, tuple[str, str]]] = {
     "*HEADING": {"*": ("warn", "ccx ignores *HEADING parameters")},
     "*NSET": {"FREQUENCY": ("warn", "not a *NSET parameter: ccx ignores it")},

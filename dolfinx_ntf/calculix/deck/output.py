@@ -71,11 +71,16 @@ class _OutputCards(_ReaderState):
     def _file_card(self, card: _Card) -> None:
         step = self._in_step(card)
         kind = _FILE_KEYWORDS[card.keyword]
-        self._check_params(card, allowed={"NSET", "ELSET", "FREQUENCY", "FREQUENCYF", "GLOBAL",
-                                          "OUTPUT", "LASTITERATIONS", "CONTACTELEMENTS",
+        self._check_params(card, allowed={"NSET", "FREQUENCY", "FREQUENCYF", "GLOBAL", "OUTPUT",
+                                          "LASTITERATIONS", "CONTACTELEMENTS",
                                           "SECTIONFORCES"})  # fmt: skip
         keys = tuple(k for fields, _, _ in card.lines for k in fields if k != "")
-        set_name = card.params.get("NSET") or card.params.get("ELSET")
+        set_name = None
+        if "NSET" in card.params:  # ccx restricts *NODE/EL FILE to it (docs/method.md §13.2)
+            set_name = card.params["NSET"] or ""
+            if set_name not in self.nsets:
+                raise DeckError(f"node set {set_name} is not defined (before this line)",
+                                card.location)  # fmt: skip
         frequency = self._frequency(card)
         if not any(r.kind == kind for r in step.new_files):
             self.files = [r for r in self.files if r.kind != kind]
