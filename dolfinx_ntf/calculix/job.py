@@ -65,8 +65,8 @@ from dolfinx_ntf.solver import (
 from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
 from .deck import Deck, PrintRequest, Step, read_deck
-from .frd import FrdBlock, FrdWriter, nodal_extrapolation
-from .model import INTEGRATION_POINTS, CalculixModel, build_model, friction_of
+from .frd import FrdBlock, FrdWriter
+from .model import CalculixModel, build_model, friction_of
 from .progress import CvgFile, StaFile
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
@@ -286,7 +286,7 @@ class _Job:
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points."""
         if self._stress is None:
-            points = INTEGRATION_POINTS[self.model.element_type.name]
+            points = self.model.element_type.integration_points
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
         expression, q = self._stress
         cells = self.model.element_cells(element_ids).astype(np.int32)
@@ -588,8 +588,8 @@ class _Job:
 
         def node_block(name: str, request, values: np.ndarray) -> None:
             ids = self.deck.node_ids
-            if request.set is not None:
-                ids = np.unique(self.deck.nsets[request.set])
+            if request.set is not None:  # in set order, repeats kept, as ccx (docs/method.md §13.2)
+                ids = self.deck.nsets[request.set]
             values = self.model.nodal_values(ids, values)
             if name == "DISP":
                 values = self._with_reference(ids, values)
@@ -599,6 +599,11 @@ class _Job:
             node_block("DISP", keys["NODE", "U"], self.model.u.x.array.reshape(-1, 3))
         if ("EL", "S") in keys:
             nodes, values = self.nodal_stresses()
+            if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
+                members = self.deck.nsets[keys["EL", "S"].set]
+                pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
+                keep = nodes[pos] == members
+                nodes, values = members[keep], values[pos[keep]]
             blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
         if ("NODE", "RF") in keys:
             node_block("FORC", keys["NODE", "RF"], self.internal_forces())
@@ -633,8 +638,7 @@ class _Job:
         around a node (docs/method.md §13.2).
         """
         block = self.deck.elements[self.model.element_type.name]
-        points = INTEGRATION_POINTS[self.model.element_type.name]
-        extrapolate = nodal_extrapolation(self.model.element_type.name, points)
+        extrapolate = self.model.element_type.extrapolation
         at_nodes = np.einsum("nq,eqk->enk", extrapolate, self.stresses(block.ids))
         index = self.deck.node_index(block.connectivity)
         total = np.zeros((self.deck.node_ids.size, 6))

@@ -60,7 +60,8 @@ from dolfinx_ntf.laws import (
 from dolfinx_ntf.problem import ContactPair, ContactProblem
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 
-from .deck import Deck, ElementType, Step
+from .deck import Deck, Step
+from .elements import ELEMENT_TYPES, ElementType
 
 __all__ = [
     "CELL_PERMUTATIONS",
@@ -71,45 +72,15 @@ __all__ = [
 ]
 
 #: dolfinx cell node order as 0-based indices into the ccx element's nodes, by ccx element type.
-#: C3D8: dolfinx hexahedron vertices are in tensor order. C3D10: dolfinx P2 tetrahedron edges are
-#: (v2,v3), (v1,v3), (v1,v2), (v0,v3), (v0,v2), (v0,v1); ccx midside nodes are 5 on 1-2, 6 on 2-3,
-#: 7 on 3-1, 8 on 1-4, 9 on 2-4, 10 on 3-4.
-CELL_PERMUTATIONS: dict[str, np.ndarray] = {
-    "C3D4": np.array([0, 1, 2, 3]),
-    "C3D8": np.array([0, 1, 3, 2, 4, 5, 7, 6]),
-    "C3D10": np.array([0, 1, 2, 3, 9, 8, 5, 7, 6, 4]),
-}
+CELL_PERMUTATIONS: dict[str, np.ndarray] = {n: t.to_dolfinx for n, t in ELEMENT_TYPES.items()}
 
-_DOLFINX_CELLS = {
-    "C3D4": ("tetrahedron", 1),
-    "C3D8": ("hexahedron", 1),
-    "C3D10": ("tetrahedron", 2),
-}
-
-#: Volume quadrature degree of ccx's rules: C3D8 2x2x2 Gauss, C3D4 1 point, C3D10 4 points.
-_QUADRATURE_DEGREE = {"C3D4": 1, "C3D8": 2, "C3D10": 2}
 #: Face quadrature degree of pressure loads (2x2 Gauss on quads, 3 points on triangles).
 _FACET_QUADRATURE_DEGREE = 2
 
-_G = 1.0 / np.sqrt(3.0)
-_A10, _B10 = 0.1381966011250105, 0.5854101966249685
-
 #: ccx integration points of each element type in ccx order (``*EL PRINT`` rows), as dolfinx
-#: reference coordinates. C3D8: ccx point (xi, eta, zeta) in [-1, 1]^3, xi fastest, maps to
-#: ((xi+1)/2, (eta+1)/2, (zeta+1)/2); tetrahedra share dolfinx's reference vertices.
+#: reference coordinates.
 INTEGRATION_POINTS: dict[str, np.ndarray] = {
-    "C3D4": np.array([[0.25, 0.25, 0.25]]),
-    "C3D8": np.array(
-        [
-            [(x + 1) / 2, (y + 1) / 2, (z + 1) / 2]
-            for z in (-_G, _G)
-            for y in (-_G, _G)
-            for x in (-_G, _G)
-        ]
-    ),
-    "C3D10": np.array(
-        [[_A10, _A10, _A10], [_B10, _A10, _A10], [_A10, _B10, _A10], [_A10, _A10, _B10]]
-    ),
+    n: t.integration_points for n, t in ELEMENT_TYPES.items()
 }
 
 
@@ -422,10 +393,9 @@ def _element_block(deck: Deck):
 
 
 def _create_mesh(deck: Deck, block, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
-    cell_name, degree = _DOLFINX_CELLS[block.type.name]
-    domain = compat.coordinate_element(cell_name, degree)
+    domain = compat.coordinate_element(block.type.cell, block.type.degree)
     if comm.rank == 0:
-        cells = deck.node_index(block.connectivity)[:, CELL_PERMUTATIONS[block.type.name]]
+        cells = deck.node_index(block.connectivity)[:, block.type.to_dolfinx]
         x = np.asarray(deck.node_coords, dtype=np.float64)
     else:
         cells = np.zeros((0, block.type.num_nodes), dtype=np.int64)
@@ -903,8 +873,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     block = _element_block(deck)
     etype = block.type
     mesh = _create_mesh(deck, block, comm)
-    degree = _DOLFINX_CELLS[etype.name][1]
-    V = compat.vector_space(mesh, "Lagrange", degree)
+    V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
     node_dof, dof_node, node_vertex, original = _numbering(deck, mesh, V)
     element_cell = np.empty(block.ids.size, dtype=np.int64)
@@ -923,9 +892,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     F, P, sigma = _stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
     v = ufl.TestFunction(V)
-    dx = ufl.Measure(
-        "dx", domain=mesh, metadata={"quadrature_degree": _QUADRATURE_DEGREE[etype.name]}
-    )
+    dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
     residual = ufl.inner(P, ufl.grad(v)) * dx
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     if pressures:
