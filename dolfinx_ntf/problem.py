@@ -25,7 +25,7 @@ import ufl
 from dolfinx_ntf import compat, parallel, validation
 from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
-from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
+from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
 from dolfinx_ntf.friction_state import FrictionState
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
@@ -210,7 +210,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
         element_forces: ufl.Form | None = None,
-        constraints: typing.Sequence[LinearConstraint] = (),
+        constraints: typing.Sequence[LinearConstraint | LinearConstraintBlock] = (),
         friction_tangent: str = "consistent",
         reset_friction_on_separation: bool = True,
         friction_in_tension: bool = False,
@@ -318,7 +318,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if not self.constraints:
             return
         for c in self.constraints:
-            validation.check_type(c, LinearConstraint, "ContactProblem: constraints")
+            validation.check_type(
+                c, (LinearConstraint, LinearConstraintBlock), "ContactProblem: constraints"
+            )
         prescribed = [bc.dof_indices()[0] for bc in self.bcs]
         self.elimination = ConstraintElimination(
             self.u.x.array.size,

@@ -22,9 +22,9 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.constraints import LinearConstraint
+from dolfinx_ntf.constraints import LinearConstraintBlock
 
-__all__ = ["serendipity_constraints"]
+__all__ = ["serendipity_centres", "serendipity_constraints"]
 
 # basix reference hexahedron: vertices in tensor order, edges and faces by their vertices.
 _EDGES = [
@@ -57,36 +57,49 @@ def _local_rows() -> list[tuple[int, np.ndarray, np.ndarray]]:
     return rows
 
 
-def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstraint]:
+def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstraintBlock]:
     """Constraints that turn a degree-2 vector Lagrange space on hexahedra into C3D20's space.
 
     Args:
         V: Vector Lagrange space of degree 2 on a hexahedral mesh (one process).
 
     Returns:
-        One constraint per face centre (each face once) and cell centre and component; the centre
-        dof is the dependent one. Dirichlet conditions must leave face- and cell-centre dofs free
-        (their values follow from the 20 nodes).
+        Two blocks (all arrays, no Python loop over cells): the face centres (each face once,
+        9 terms) and the cell centres (21 terms), three components each; the centre dof is the
+        first term, the dependent one. Dirichlet conditions must leave face- and cell-centre dofs
+        free (their values follow from the 20 nodes).
     """
     if V.mesh.topology.cell_type != dolfinx.mesh.CellType.hexahedron:
         raise ValueError("serendipity_constraints: a hexahedral mesh is needed")
     if compat.space_degree(V) != 2 or V.dofmap.index_map_bs != 3:
         raise ValueError("serendipity_constraints: a degree-2 vector Lagrange space is needed")
-    dofs = compat.cell_dofs(V)
+    dofs = compat.cell_dofs(V).astype(np.int64)
     if dofs.shape[1] != 27:
         raise ValueError(f"serendipity_constraints: 27 dofs per cell expected, got {dofs.shape[1]}")
-    constraints: list[LinearConstraint] = []
-    seen: set[int] = set()
-    for dependent, independent, weights in _local_rows():
+    rows = _local_rows()
+    face_local = np.array([[dependent, *independent] for dependent, independent, _ in rows[:6]])
+    face_nodes = dofs[:, face_local].reshape(-1, 9)  # (cells * 6, 9)
+    _, first = np.unique(face_nodes[:, 0], return_index=True)  # a shared face once
+    face_nodes = face_nodes[np.sort(first)]
+    cell_nodes = dofs[:, [rows[6][0], *rows[6][1]]]
+    blocks = []
+    for nodes, weights, what in (
+        (face_nodes, rows[0][2], "face centres"),
+        (cell_nodes, rows[6][2], "cell centres"),
+    ):
         coefficients = np.concatenate([[1.0], -weights])
-        for cell_dofs in dofs:
-            centre = int(cell_dofs[dependent])
-            if centre in seen:  # a face shared by two cells
-                continue
-            seen.add(centre)
-            nodes = np.concatenate([[centre], cell_dofs[independent]])
-            for component in range(3):
-                constraints.append(
-                    LinearConstraint(nodes, np.full(nodes.size, component), coefficients)
-                )
-    return constraints
+        blocks.append(
+            LinearConstraintBlock(
+                np.repeat(nodes, 3, axis=0),
+                np.tile(np.arange(3), nodes.shape[0])[:, None],
+                coefficients,
+                name=f"C3D20 {what}",
+            )
+        )
+    return blocks
+
+
+def serendipity_centres(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Sorted local block dofs of the face and cell centres of a degree-2 hexahedral space."""
+    dofs = compat.cell_dofs(V)
+    return np.unique(dofs[:, 20:27])
