@@ -270,8 +270,8 @@ def _elimination(
         node, comp = divmod(first_dof(int(missing[0])), 3)
         raise ValueError(
             f"{label(int(missing[0]))}: every dof of the constraint is prescribed by a Dirichlet "
-            f"condition or already dependent in another constraint (first term: node {node}, component "
-            f"{comp}): the constraint is redundant or contradicts them"
+            "condition or already dependent in another constraint (first term: node "
+            f"{node}, component {comp}): the constraint is redundant or contradicts them"
         )
     s = term_dof[chosen]
     a = merged[chosen]
