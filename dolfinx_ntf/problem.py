@@ -22,7 +22,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, parallel, validation
+from dolfinx_ntf import compat, parallel, serendipity, validation
 from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, LinearConstraintBlock
@@ -265,6 +265,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         #: Contact nodes of other processes (docs/method.md §14); None in serial.
         self.halo = parallel.NodeHalo(V) if V.mesh.comm.size > 1 else None
+        #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
+        self._face_centres = serendipity.face_centres(constraints)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
         if self.halo is not None:
             self._reference = self.halo.reference
@@ -334,6 +336,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         V = self.u.function_space
         comm = V.mesh.comm
         slave = parallel.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        if self._face_centres.size:  # C3D20: quad8 slave faces, no face-centre slave nodes
+            faces = serendipity.as_quad8(slave.faces, self._face_centres)
+            nodes = slave.nodes[~np.isin(slave.nodes, self._face_centres)]
+            slave = SlaveSurface(nodes, faces)
         if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
             if pair.interaction.friction is not None or pair.adjust is not None:
                 raise NotImplementedError(
@@ -367,6 +373,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         master_faces = parallel.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
+        master_faces = serendipity.as_quad8(master_faces, self._face_centres)
         if self.halo is not None:
             slave, master_faces = parallel.collectively(
                 comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name

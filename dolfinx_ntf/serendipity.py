@@ -16,6 +16,8 @@ has edge moments as dofs instead, which node-to-face springs cannot use).
 
 from __future__ import annotations
 
+import typing
+
 import numpy as np
 
 import dolfinx.fem
@@ -23,8 +25,16 @@ import dolfinx.mesh
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.constraints import LinearConstraintBlock
+from dolfinx_ntf.faces import QUAD8, QUAD9
+from dolfinx_ntf.surfaces import SurfaceFaces
 
-__all__ = ["serendipity_centres", "serendipity_constraints"]
+__all__ = [
+    "add_centres",
+    "as_quad8",
+    "face_centres",
+    "serendipity_centres",
+    "serendipity_constraints",
+]
 
 # basix reference hexahedron: vertices in tensor order, edges and faces by their vertices.
 _EDGES = [
@@ -103,3 +113,62 @@ def serendipity_centres(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
     """Sorted local block dofs of the face and cell centres of a degree-2 hexahedral space."""
     dofs = compat.cell_dofs(V)
     return np.unique(dofs[:, 20:27])
+
+
+#: Coefficients of a face-centre row: the centre, its 4 corners, its 4 midside nodes.
+_FACE_ROW = np.array([1.0, 0.25, 0.25, 0.25, 0.25, -0.5, -0.5, -0.5, -0.5])
+
+
+def face_centres(constraints: typing.Sequence) -> np.ndarray:
+    """Sorted nodes fixed by serendipity face-centre rows among ``constraints`` (maybe none).
+
+    A row counts when it is a :class:`LinearConstraintBlock` row of 9 terms with the
+    coefficients of :func:`serendipity_constraints` (the centre first).
+    """
+    found = [
+        c.nodes[np.all(np.isclose(c.coefficients, _FACE_ROW), axis=1), 0]
+        for c in constraints
+        if isinstance(c, LinearConstraintBlock) and c.nodes.shape[1] == 9
+    ]
+    return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int64)
+
+
+def as_quad8(faces: SurfaceFaces, centres: np.ndarray) -> SurfaceFaces:
+    """quad9 faces whose centre node is a serendipity face centre as ccx's quad8 faces.
+
+    The centre's value is the quad8 interpolation of the other 8 nodes, so the face is the
+    quad8 face (docs/method.md §13.5); other faces are returned unchanged.
+    """
+    if faces.face_type is not QUAD9 or centres.size == 0 or faces.faces.shape[0] == 0:
+        return faces
+    constrained = np.isin(faces.faces[:, 8], centres)
+    if not np.any(constrained):
+        return faces
+    if not np.all(constrained):
+        raise ValueError(
+            "a surface mixes serendipity (C3D20) and triquadratic faces: "
+            f"{int(np.sum(~constrained))} of {constrained.size} face centres are free"
+        )
+    return SurfaceFaces(QUAD8, np.ascontiguousarray(faces.faces[:, :8]), faces.facets)
+
+
+def add_centres(cells: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """27-node cells from 20-node ones (dolfinx order): face and cell centres appended to ``x``.
+
+    ``cells`` are ``(C, 20)`` rows into ``x`` in dolfinx's order of a 27-node hexahedron
+    (vertices, then edges). Centres are placed by the serendipity map of the 20 nodes
+    (docs/method.md §13.5); a face shared by two cells gets one node (keyed by its sorted
+    corners). Their rows come after those of ``x``.
+    """
+    rows = _local_rows()
+    faces = np.stack([cells[:, independent] for _, independent, _ in rows[:6]], axis=1)
+    weights = rows[0][2]
+    face_x = np.einsum("cfk,cfkd->cfd", np.broadcast_to(weights, faces.shape), x[faces])
+    keys = np.sort(faces[:, :, :4], axis=2).reshape(-1, 4)
+    unique, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    num_faces = unique.shape[0]
+    face_node = x.shape[0] + inverse.ravel().reshape(cells.shape[0], 6)
+    cell_x = x[cells[:, :20]].transpose(0, 2, 1) @ rows[6][2]
+    cell_node = x.shape[0] + num_faces + np.arange(cells.shape[0])
+    x = np.vstack([x, face_x.reshape(-1, 3)[first], cell_x])
+    return np.hstack([cells, face_node, cell_node[:, None]]), x

@@ -160,6 +160,15 @@ def _element_type(
     return ElementType(name, num_nodes, num_corners, face_type, table)
 
 
+_C3D20_FACES = [
+    [4, 3, 2, 1, 11, 10, 9, 12],
+    [5, 6, 7, 8, 13, 14, 15, 16],
+    [1, 2, 6, 5, 9, 18, 13, 17],
+    [2, 3, 7, 6, 10, 19, 14, 18],
+    [3, 4, 8, 7, 11, 20, 15, 19],
+    [4, 1, 5, 8, 12, 17, 16, 20],
+]
+
 ELEMENT_TYPES: dict[str, ElementType] = {
     # Manual: S1 1-2-3, S2 1-4-2, S3 2-4-3, S4 3-4-1 (inward); reversed here to point outward.
     "C3D4": _element_type("C3D4", 4, 4, "tri3", [[1, 3, 2], [1, 2, 4], [2, 3, 4], [1, 4, 3]]),
@@ -179,8 +188,18 @@ ELEMENT_TYPES: dict[str, ElementType] = {
         "quad4",
         [[4, 3, 2, 1], [5, 6, 7, 8], [1, 2, 6, 5], [2, 3, 7, 6], [3, 4, 8, 7], [4, 1, 5, 8]],
     ),
+    # Corners as C3D8; midside nodes 9 on 1-2, 10 on 2-3, 11 on 3-4, 12 on 4-1, 13 on 5-6,
+    # 14 on 6-7, 15 on 7-8, 16 on 8-5, 17 on 1-5, 18 on 2-6, 19 on 3-7, 20 on 4-8 (manual);
+    # faces as C3D8's, then the midside nodes of edges c1-c2, c2-c3, c3-c4, c4-c1.
+    **{name: _element_type(name, 20, 8, "quad8", _C3D20_FACES) for name in ("C3D20", "C3D20R")},
 }
 """Supported element types by ccx name."""
+
+#: Why some common ccx elements are refused (appended to the refusal).
+_REFUSED_ELEMENTS = {
+    "C3D8R": ": its one-point integration with hourglass control is not reproduced",
+    "C3D8I": ": its incompatible modes (extra internal displacement fields) are not reproduced",
+}
 
 
 # ----------------------------------------------------------------------------- data model
@@ -1230,8 +1249,10 @@ class _Reader:
         type_name = card.params["TYPE"] or ""
         if type_name not in ELEMENT_TYPES:
             supported = ", ".join(ELEMENT_TYPES)
+            why = _REFUSED_ELEMENTS.get(type_name, "")
             raise DeckError(
-                f"element type {type_name} is not supported (supported: {supported})", card.location
+                f"element type {type_name} is not supported{why} (supported: {supported})",
+                card.location,
             )
         etype = ELEMENT_TYPES[type_name]
         needed = etype.num_nodes + 1

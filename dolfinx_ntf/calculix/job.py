@@ -556,6 +556,7 @@ class _Job:
         total = model.total_time(index, result.time)
         node_ids = model.dof_node
         order = np.argsort(node_ids)
+        order = order[node_ids[order] >= 0]  # not C3D20's added face and cell centres
         displacement = model.u.x.array.reshape(-1, 3)
         contact = self.contact_rows()
         self.result.increments.append(

@@ -48,7 +48,7 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.constraints import LinearConstraint
+from dolfinx_ntf.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.laws import (
     ExponentialLaw,
     Friction,
@@ -58,6 +58,7 @@ from dolfinx_ntf.laws import (
     TabularLaw,
 )
 from dolfinx_ntf.problem import ContactPair, ContactProblem
+from dolfinx_ntf.serendipity import add_centres, serendipity_constraints
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 
 from .deck import Deck, ElementType, Step
@@ -78,21 +79,33 @@ CELL_PERMUTATIONS: dict[str, np.ndarray] = {
     "C3D4": np.array([0, 1, 2, 3]),
     "C3D8": np.array([0, 1, 3, 2, 4, 5, 7, 6]),
     "C3D10": np.array([0, 1, 2, 3, 9, 8, 5, 7, 6, 4]),
+    # C3D20: corners as C3D8, then the ccx midside node of each dolfinx edge (v0-v1, v0-v2,
+    # v0-v4, v1-v3, v1-v5, v2-v3, v2-v6, v3-v7, v4-v5, v4-v6, v5-v7, v6-v7); the 6 face and the
+    # cell centres of the 27-node cell are added by ``_create_mesh`` (docs/method.md §13.5).
+    **{
+        name: np.array([0, 1, 3, 2, 4, 5, 7, 6, 8, 11, 16, 9, 17, 10, 19, 18, 12, 15, 13, 14])
+        for name in ("C3D20", "C3D20R")
+    },
 }
 
 _DOLFINX_CELLS = {
     "C3D4": ("tetrahedron", 1),
     "C3D8": ("hexahedron", 1),
     "C3D10": ("tetrahedron", 2),
+    "C3D20": ("hexahedron", 2),
+    "C3D20R": ("hexahedron", 2),
 }
 
-#: Volume quadrature degree of ccx's rules: C3D8 2x2x2 Gauss, C3D4 1 point, C3D10 4 points.
-_QUADRATURE_DEGREE = {"C3D4": 1, "C3D8": 2, "C3D10": 2}
-#: Face quadrature degree of pressure loads (2x2 Gauss on quads, 3 points on triangles).
-_FACET_QUADRATURE_DEGREE = 2
+#: Volume quadrature degree of ccx's rules: C3D8 2x2x2 Gauss, C3D4 1 point, C3D10 4 points,
+#: C3D20 3x3x3 Gauss (basix's degree-5 rule on hexahedra), C3D20R 2x2x2 Gauss.
+_QUADRATURE_DEGREE = {"C3D4": 1, "C3D8": 2, "C3D10": 2, "C3D20": 5, "C3D20R": 2}
+#: Face quadrature degree of pressure loads (2x2 Gauss on quads, 3 points on triangles; C3D20
+#: faces 3x3 Gauss).
+_FACET_QUADRATURE_DEGREE = {"C3D20": 5}
 
 _G = 1.0 / np.sqrt(3.0)
 _A10, _B10 = 0.1381966011250105, 0.5854101966249685
+_G3 = (-np.sqrt(0.6), 0.0, np.sqrt(0.6))
 
 #: ccx integration points of each element type in ccx order (``*EL PRINT`` rows), as dolfinx
 #: reference coordinates. C3D8: ccx point (xi, eta, zeta) in [-1, 1]^3, xi fastest, maps to
@@ -110,7 +123,12 @@ INTEGRATION_POINTS: dict[str, np.ndarray] = {
     "C3D10": np.array(
         [[_A10, _A10, _A10], [_B10, _A10, _A10], [_A10, _B10, _A10], [_A10, _A10, _B10]]
     ),
+    # C3D20: 3x3x3 Gauss, xi fastest; C3D20R: C3D8's 2x2x2 points.
+    "C3D20": np.array(
+        [[(x + 1) / 2, (y + 1) / 2, (z + 1) / 2] for z in _G3 for y in _G3 for x in _G3]
+    ),
 }
+INTEGRATION_POINTS["C3D20R"] = INTEGRATION_POINTS["C3D8"]
 
 
 # ----------------------------------------------------------------------------- load schedules
@@ -192,7 +210,8 @@ class CalculixModel:
             with value ``group + 1``.
         steps: Load schedule of every step.
         amplitude_names: Amplitude names by index.
-        constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1).
+        constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1), then
+            for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5).
         reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
             in no element, whose prescribed values move to the constraint's right-hand side.
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
@@ -225,7 +244,7 @@ class CalculixModel:
     steps: list[StepLoads]
     amplitude_names: list[str]
     _bc_spaces: list = field(default_factory=list, repr=False)
-    constraints: list[LinearConstraint] = field(default_factory=list)
+    constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
 
@@ -354,7 +373,7 @@ class CalculixModel:
         loads = self.steps[step_index]
         total = loads.total_time_start + step_time
         known = self._evaluate(loads.reference, step_time / loads.period, step_time, total)
-        values = np.zeros(len(self.constraints))
+        values = np.zeros(num_equations(self.constraints))
         for k, keys, coefficients in self.reference_terms:
             given = loads.reference_keys
             pos = np.minimum(np.searchsorted(given, keys), max(given.size - 1, 0))
@@ -424,11 +443,15 @@ def _element_block(deck: Deck):
 def _create_mesh(deck: Deck, block, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
     cell_name, degree = _DOLFINX_CELLS[block.type.name]
     domain = compat.coordinate_element(cell_name, degree)
+    serendipity = cell_name == "hexahedron" and degree == 2
+    width = 27 if serendipity else block.type.num_nodes
     if comm.rank == 0:
         cells = deck.node_index(block.connectivity)[:, CELL_PERMUTATIONS[block.type.name]]
         x = np.asarray(deck.node_coords, dtype=np.float64)
+        if serendipity:
+            cells, x = add_centres(cells, x)
     else:
-        cells = np.zeros((0, block.type.num_nodes), dtype=np.int64)
+        cells = np.zeros((0, width), dtype=np.int64)
         x = np.zeros((0, 3))
     return dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), x, domain)
 
@@ -445,11 +468,12 @@ def _numbering(deck: Deck, mesh: dolfinx.mesh.Mesh, V: dolfinx.fem.FunctionSpace
     dof_of_geometry = np.full(num_geometry, -1, dtype=np.int64)
     dof_of_geometry[geometry_dofs.ravel()] = space_dofs.ravel()
     input_index = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    deck_node = input_index < deck.node_ids.size  # not C3D20's added face and cell centres
     node_dof = np.full(deck.node_ids.size, -1, dtype=np.int64)
-    node_dof[input_index] = dof_of_geometry
+    node_dof[input_index[deck_node]] = dof_of_geometry[deck_node]
     num_dofs = V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts
-    dof_node = np.zeros(num_dofs, dtype=np.int64)
-    dof_node[dof_of_geometry] = deck.node_ids[input_index]
+    dof_node = np.full(num_dofs, -1, dtype=np.int64)  # -1: an added centre, no ccx node
+    dof_node[dof_of_geometry[deck_node]] = deck.node_ids[input_index[deck_node]]
 
     num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
     vertices = np.arange(num_vertices, dtype=np.int32)
@@ -933,7 +957,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             "ds",
             domain=mesh,
             subdomain_data=pressure_tags,
-            metadata={"quadrature_degree": _FACET_QUADRATURE_DEGREE},
+            metadata={"quadrature_degree": _FACET_QUADRATURE_DEGREE.get(etype.name, 2)},
         )
         N = ufl.FacetNormal(mesh)
         traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
@@ -941,6 +965,8 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = _constraints(deck, node_dof)
+    if degree == 2 and mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron:
+        constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
 
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
