@@ -39,6 +39,7 @@ def to_hex20(path: Path, reduced: bool = False) -> None:
 
     out: list[str] = []
     section = ""
+    members: list[int] = []
     for line in path.read_text().splitlines():
         if line.startswith("*"):
             if section == "NSET":
