@@ -18,10 +18,8 @@ Conventions shared by the whole module (they follow ccx, manual §"Input deck fo
     - Node and element sets keep their members in definition order, duplicates included (ccx
       prints ``*NODE PRINT`` rows in that order). Set names must be defined before they are
       used; node and element *numbers* may be defined anywhere and are checked at the end.
-    - Face tables are in CalculiX's *internal* face order (outward normal, node 1 of the face as
-      ccx numbers it), verified against the ``.cel`` files written by ccx 2.20. The manual's
-      ``*SURFACE``/``*DLOAD`` tables list the same nodes with the inward orientation
-      (e.g. C3D8 S1 is ``1-2-3-4`` in the manual and ``4-3-2-1`` here).
+    - Element types and their face tables are in ``calculix.elements`` (ccx's internal face
+      order, outward normals).
     - Pure Python/numpy: no dolfinx import.
 """
 
@@ -34,6 +32,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from .elements import ELEMENT_TYPES, ElementType
 
 __all__ = [
     "ELEMENT_TYPES",
@@ -121,79 +121,6 @@ class DeckWarning:
             f" *WARNING reading {self.keyword}: {what} ignored ({self.reason}) at {self.location}"
         )
 
-
-@dataclass(frozen=True, eq=False)
-class ElementType:
-    """A supported CalculiX solid element type and its faces.
-
-    Attributes:
-        name: ccx type name (``C3D4``, ``C3D8``, ``C3D10``).
-        num_nodes: nodes per element.
-        num_corners: corner (vertex) nodes per element, listed first.
-        face_type: face type name of ``dolfinx_ntf.faces`` (``tri3``, ``quad4``, ``tri6``).
-        faces: ``(num_faces, face_nodes)`` 0-based element-local node indices of faces S1..Sk,
-            corners counter-clockwise seen from outside the element, then midside nodes.
-    """
-
-    name: str
-    num_nodes: int
-    num_corners: int
-    face_type: str
-    faces: np.ndarray
-
-    @property
-    def num_faces(self) -> int:
-        """Number of faces (labels S1..S<num_faces>)."""
-        return int(self.faces.shape[0])
-
-    @property
-    def face_corners(self) -> int:
-        """Number of corner nodes per face."""
-        return 3 if self.face_type.startswith("tri") else 4
-
-
-def _element_type(
-    name: str, num_nodes: int, num_corners: int, face_type: str, faces: list[list[int]]
-) -> ElementType:
-    table = np.asarray(faces, dtype=np.int64) - 1
-    table.flags.writeable = False
-    return ElementType(name, num_nodes, num_corners, face_type, table)
-
-
-_C3D20_FACES = [
-    [4, 3, 2, 1, 11, 10, 9, 12],
-    [5, 6, 7, 8, 13, 14, 15, 16],
-    [1, 2, 6, 5, 9, 18, 13, 17],
-    [2, 3, 7, 6, 10, 19, 14, 18],
-    [3, 4, 8, 7, 11, 20, 15, 19],
-    [4, 1, 5, 8, 12, 17, 16, 20],
-]
-
-ELEMENT_TYPES: dict[str, ElementType] = {
-    # Manual: S1 1-2-3, S2 1-4-2, S3 2-4-3, S4 3-4-1 (inward); reversed here to point outward.
-    "C3D4": _element_type("C3D4", 4, 4, "tri3", [[1, 3, 2], [1, 2, 4], [2, 3, 4], [1, 4, 3]]),
-    # Midside nodes: 5 on 1-2, 6 on 2-3, 7 on 3-1, 8 on 1-4, 9 on 2-4, 10 on 3-4 (manual fig. 55).
-    "C3D10": _element_type(
-        "C3D10",
-        10,
-        4,
-        "tri6",
-        [[1, 3, 2, 7, 6, 5], [1, 2, 4, 5, 9, 8], [2, 3, 4, 6, 10, 9], [1, 4, 3, 8, 10, 7]],
-    ),
-    # Manual: S1 1-2-3-4, S2 5-8-7-6, S3 1-5-6-2, S4 2-6-7-3, S5 3-7-8-4, S6 4-8-5-1 (inward).
-    "C3D8": _element_type(
-        "C3D8",
-        8,
-        8,
-        "quad4",
-        [[4, 3, 2, 1], [5, 6, 7, 8], [1, 2, 6, 5], [2, 3, 7, 6], [3, 4, 8, 7], [4, 1, 5, 8]],
-    ),
-    # Corners as C3D8; midside nodes 9 on 1-2, 10 on 2-3, 11 on 3-4, 12 on 4-1, 13 on 5-6,
-    # 14 on 6-7, 15 on 7-8, 16 on 8-5, 17 on 1-5, 18 on 2-6, 19 on 3-7, 20 on 4-8 (manual);
-    # faces as C3D8's, then the midside nodes of edges c1-c2, c2-c3, c3-c4, c4-c1.
-    **{name: _element_type(name, 20, 8, "quad8", _C3D20_FACES) for name in ("C3D20", "C3D20R")},
-}
-"""Supported element types by ccx name."""
 
 #: Why some common ccx elements are refused (appended to the refusal).
 _REFUSED_ELEMENTS = {

@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .elements import C3D8_EXTRAPOLATION, ELEMENT_TYPES, nodal_extrapolation
+
 __all__ = [
     "C3D8_EXTRAPOLATION",
     "FRD_ELEMENT_TYPES",
@@ -35,7 +37,7 @@ __all__ = [
 ]
 
 #: frd element type numbers of the ccx element types (cgx manual: he8 1, te4 3, te10 6, he20 4).
-FRD_ELEMENT_TYPES: dict[str, int] = {"C3D8": 1, "C3D4": 3, "C3D10": 6, "C3D20": 4, "C3D20R": 4}
+FRD_ELEMENT_TYPES: dict[str, int] = {n: t.frd_type for n, t in ELEMENT_TYPES.items()}
 
 #: Result blocks: frd name -> (component lines ``(name, type, row, column)``, ccx's ALL line).
 _COMPONENTS: dict[str, tuple[tuple[tuple[str, int, int, int], ...], bool]] = {
@@ -118,43 +120,6 @@ def _e(values: np.ndarray) -> str:
 
 def _line72(text: str) -> str:
     return f"{text:<72}"
-
-
-# ----------------------------------------------------------------------------- extrapolation
-
-#: ccx 2.20's C3D8 extrapolation weight of an integration point by the number of coordinates in
-#: which it lies on the other side of the node (0..3): the trilinear values (1 +- sqrt 3)^k / 8
-#: rounded, summing to 0.99996 over the 8 points. Fitted to ccx's ``.frd`` files (ccx writes a
-#: uniform stress of 10 as 9.9996); they reproduce ccx's nodal stresses to print precision
-#: (docs/method.md §13.2).
-C3D8_EXTRAPOLATION = (2.549, -0.683, 0.183, -0.04904)
-
-
-def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
-    """``(nodes, points)`` matrix taking integration-point values to the element's nodes.
-
-    C3D8: ccx's weights (``C3D8_EXTRAPOLATION``) of the trilinear field through the 2x2x2 Gauss
-    values; C3D4: the constant; C3D10: the linear field through the 4 point values at the
-    corners, midside nodes the mean of their edge's corners. ``points`` are the rule's points
-    (dolfinx reference coordinates, ccx order).
-    """
-    if element_type == "C3D4":
-        return np.ones((4, 1))
-    if element_type == "C3D8":
-        corners = np.array(
-            [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
-        )  # ccx node order in dolfinx reference coordinates
-        sides = (points > 0.5).astype(int)
-        distance = np.sum(corners[:, None, :] != sides[None, :, :], axis=2)
-        return np.asarray(C3D8_EXTRAPOLATION)[distance]
-    if element_type == "C3D10":
-        affine = np.column_stack([np.ones(4), points])  # value = c0 + c . x through the points
-        corners = np.array([[1, 0, 0, 0], [1, 1, 0, 0], [1, 0, 1, 0], [1, 0, 0, 1]], float)
-        corner = corners @ np.linalg.inv(affine)
-        edges = [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)]
-        midside = np.array([(corner[a] + corner[b]) / 2 for a, b in edges])
-        return np.vstack([corner, midside])
-    raise NotImplementedError(f"stress extrapolation of {element_type} is not supported")
 
 
 # ----------------------------------------------------------------------------- writer

@@ -65,8 +65,8 @@ from dolfinx_ntf.solver import (
 from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
 from .deck import Deck, PrintRequest, Step, read_deck
-from .frd import FrdBlock, FrdWriter, nodal_extrapolation
-from .model import INTEGRATION_POINTS, CalculixModel, build_model, friction_of
+from .frd import FrdBlock, FrdWriter
+from .model import CalculixModel, build_model, friction_of
 from .progress import CvgFile, StaFile
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
@@ -286,7 +286,7 @@ class _Job:
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points."""
         if self._stress is None:
-            points = INTEGRATION_POINTS[self.model.element_type.name]
+            points = self.model.element_type.integration_points
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
         expression, q = self._stress
         cells = self.model.element_cells(element_ids).astype(np.int32)
@@ -634,8 +634,7 @@ class _Job:
         around a node (docs/method.md §13.2).
         """
         block = self.deck.elements[self.model.element_type.name]
-        points = INTEGRATION_POINTS[self.model.element_type.name]
-        extrapolate = nodal_extrapolation(self.model.element_type.name, points)
+        extrapolate = self.model.element_type.extrapolation
         at_nodes = np.einsum("nq,eqk->enk", extrapolate, self.stresses(block.ids))
         index = self.deck.node_index(block.connectivity)
         total = np.zeros((self.deck.node_ids.size, 6))

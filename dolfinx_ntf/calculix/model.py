@@ -3,14 +3,16 @@
 ``build_model`` turns a :class:`~dolfinx_ntf.calculix.deck.Deck` into a :class:`CalculixModel`:
 
     - the mesh of the deck's one element type (C3D4 -> P1 tetrahedra, C3D8 -> Q1 hexahedra,
-      C3D10 -> P2 tetrahedra with P2 geometry) and the maps between ccx node/element numbers and
+      C3D10 -> P2 tetrahedra with P2 geometry, C3D20/C3D20R -> Q2 hexahedra constrained to the
+      serendipity space, docs/method.md §13.5) and the maps between ccx node/element numbers and
       dolfinx block dofs/cells (always through per-cell tables, never by assuming equal numbers);
     - surfaces: element-face surfaces as facet tags (one ``MeshTags`` per ccx surface, value 1)
       wrapped in :class:`~dolfinx_ntf.FacetSurface`, ``TYPE=NODE`` surfaces as
       :class:`~dolfinx_ntf.NodeSurface`;
     - the bulk residual: small-strain isotropic elasticity, or total-Lagrangian St.Venant-Kirchhoff
       with ``NLGEOM`` (switched by a Constant when a deck has both kinds of steps), integrated like
-      ccx (C3D8 2x2x2 Gauss, C3D4 one point, C3D10 four points); ``*DLOAD`` pressures on the
+      ccx (C3D8 2x2x2 Gauss, C3D4 one point, C3D10 four points, C3D20 3x3x3, C3D20R 2x2x2);
+      ``*DLOAD`` pressures on the
       reference faces, or as follower loads ``p J F^-T N`` with ``NLGEOM``;
     - the loads and prescribed displacements of every step with ccx's rules (:class:`StepLoads`);
     - the contact pairs with their pressure-overclosure laws.
@@ -61,7 +63,8 @@ from dolfinx_ntf.problem import ContactPair, ContactProblem
 from dolfinx_ntf.serendipity import add_centres, serendipity_constraints
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 
-from .deck import Deck, ElementType, Step
+from .deck import Deck, Step
+from .elements import ELEMENT_TYPES, ElementType
 
 __all__ = [
     "CELL_PERMUTATIONS",
@@ -72,63 +75,13 @@ __all__ = [
 ]
 
 #: dolfinx cell node order as 0-based indices into the ccx element's nodes, by ccx element type.
-#: C3D8: dolfinx hexahedron vertices are in tensor order. C3D10: dolfinx P2 tetrahedron edges are
-#: (v2,v3), (v1,v3), (v1,v2), (v0,v3), (v0,v2), (v0,v1); ccx midside nodes are 5 on 1-2, 6 on 2-3,
-#: 7 on 3-1, 8 on 1-4, 9 on 2-4, 10 on 3-4.
-CELL_PERMUTATIONS: dict[str, np.ndarray] = {
-    "C3D4": np.array([0, 1, 2, 3]),
-    "C3D8": np.array([0, 1, 3, 2, 4, 5, 7, 6]),
-    "C3D10": np.array([0, 1, 2, 3, 9, 8, 5, 7, 6, 4]),
-    # C3D20: corners as C3D8, then the ccx midside node of each dolfinx edge (v0-v1, v0-v2,
-    # v0-v4, v1-v3, v1-v5, v2-v3, v2-v6, v3-v7, v4-v5, v4-v6, v5-v7, v6-v7); the 6 face and the
-    # cell centres of the 27-node cell are added by ``_create_mesh`` (docs/method.md §13.5).
-    **{
-        name: np.array([0, 1, 3, 2, 4, 5, 7, 6, 8, 11, 16, 9, 17, 10, 19, 18, 12, 15, 13, 14])
-        for name in ("C3D20", "C3D20R")
-    },
-}
-
-_DOLFINX_CELLS = {
-    "C3D4": ("tetrahedron", 1),
-    "C3D8": ("hexahedron", 1),
-    "C3D10": ("tetrahedron", 2),
-    "C3D20": ("hexahedron", 2),
-    "C3D20R": ("hexahedron", 2),
-}
-
-#: Volume quadrature degree of ccx's rules: C3D8 2x2x2 Gauss, C3D4 1 point, C3D10 4 points,
-#: C3D20 3x3x3 Gauss (basix's degree-5 rule on hexahedra), C3D20R 2x2x2 Gauss.
-_QUADRATURE_DEGREE = {"C3D4": 1, "C3D8": 2, "C3D10": 2, "C3D20": 5, "C3D20R": 2}
-#: Face quadrature degree of pressure loads (2x2 Gauss on quads, 3 points on triangles; C3D20
-#: faces 3x3 Gauss).
-_FACET_QUADRATURE_DEGREE = {"C3D20": 5}
-
-_G = 1.0 / np.sqrt(3.0)
-_A10, _B10 = 0.1381966011250105, 0.5854101966249685
-_G3 = (-np.sqrt(0.6), 0.0, np.sqrt(0.6))
+CELL_PERMUTATIONS: dict[str, np.ndarray] = {n: t.to_dolfinx for n, t in ELEMENT_TYPES.items()}
 
 #: ccx integration points of each element type in ccx order (``*EL PRINT`` rows), as dolfinx
-#: reference coordinates. C3D8: ccx point (xi, eta, zeta) in [-1, 1]^3, xi fastest, maps to
-#: ((xi+1)/2, (eta+1)/2, (zeta+1)/2); tetrahedra share dolfinx's reference vertices.
+#: reference coordinates.
 INTEGRATION_POINTS: dict[str, np.ndarray] = {
-    "C3D4": np.array([[0.25, 0.25, 0.25]]),
-    "C3D8": np.array(
-        [
-            [(x + 1) / 2, (y + 1) / 2, (z + 1) / 2]
-            for z in (-_G, _G)
-            for y in (-_G, _G)
-            for x in (-_G, _G)
-        ]
-    ),
-    "C3D10": np.array(
-        [[_A10, _A10, _A10], [_B10, _A10, _A10], [_A10, _B10, _A10], [_A10, _A10, _B10]]
-    ),
-    # C3D20: 3x3x3 Gauss, xi fastest; C3D20R: C3D8's 2x2x2 points.
-    "C3D20": np.array(
-        [[(x + 1) / 2, (y + 1) / 2, (z + 1) / 2] for z in _G3 for y in _G3 for x in _G3]
-    ),
+    n: t.integration_points for n, t in ELEMENT_TYPES.items()
 }
-INTEGRATION_POINTS["C3D20R"] = INTEGRATION_POINTS["C3D8"]
 
 
 # ----------------------------------------------------------------------------- load schedules
@@ -441,17 +394,15 @@ def _element_block(deck: Deck):
 
 
 def _create_mesh(deck: Deck, block, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
-    cell_name, degree = _DOLFINX_CELLS[block.type.name]
-    domain = compat.coordinate_element(cell_name, degree)
-    serendipity = cell_name == "hexahedron" and degree == 2
-    width = 27 if serendipity else block.type.num_nodes
+    domain = compat.coordinate_element(block.type.cell, block.type.degree)
+    serendipity = block.type.num_nodes == 20  # C3D20(R): 27-node cells (docs/method.md §13.5)
     if comm.rank == 0:
-        cells = deck.node_index(block.connectivity)[:, CELL_PERMUTATIONS[block.type.name]]
+        cells = deck.node_index(block.connectivity)[:, block.type.to_dolfinx]
         x = np.asarray(deck.node_coords, dtype=np.float64)
         if serendipity:
             cells, x = add_centres(cells, x)
     else:
-        cells = np.zeros((0, width), dtype=np.int64)
+        cells = np.zeros((0, 27 if serendipity else block.type.num_nodes), dtype=np.int64)
         x = np.zeros((0, 3))
     return dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), x, domain)
 
@@ -927,8 +878,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     block = _element_block(deck)
     etype = block.type
     mesh = _create_mesh(deck, block, comm)
-    degree = _DOLFINX_CELLS[etype.name][1]
-    V = compat.vector_space(mesh, "Lagrange", degree)
+    V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
     node_dof, dof_node, node_vertex, original = _numbering(deck, mesh, V)
     element_cell = np.empty(block.ids.size, dtype=np.int64)
@@ -947,9 +897,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     F, P, sigma = _stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
     v = ufl.TestFunction(V)
-    dx = ufl.Measure(
-        "dx", domain=mesh, metadata={"quadrature_degree": _QUADRATURE_DEGREE[etype.name]}
-    )
+    dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
     residual = ufl.inner(P, ufl.grad(v)) * dx
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     if pressures:
@@ -957,7 +905,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             "ds",
             domain=mesh,
             subdomain_data=pressure_tags,
-            metadata={"quadrature_degree": _FACET_QUADRATURE_DEGREE.get(etype.name, 2)},
+            metadata={"quadrature_degree": etype.face_quadrature_degree},
         )
         N = ufl.FacetNormal(mesh)
         traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
@@ -965,7 +913,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = _constraints(deck, node_dof)
-    if degree == 2 and mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron:
+    if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
 
     bc_spaces = []

@@ -41,7 +41,8 @@ from dolfinx_ntf.problem import ContactPair
 from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
 
-from .deck import ELEMENT_TYPES, FIELD_CONTROL_NAMES
+from .deck import FIELD_CONTROL_NAMES
+from .elements import ELEMENT_TYPES, element_for_cell
 
 __all__ = [
     "TIGHT_FIELD_CONTROLS",
@@ -257,10 +258,9 @@ def _element_type(V: dolfinx.fem.FunctionSpace) -> str:
             f"write_inp: displacement space family {family!r} has no ccx element; use Lagrange"
         )
     cell = mesh.topology.cell_type
-    if cell == dolfinx.mesh.CellType.tetrahedron and degree in (1, 2):
-        return "C3D4" if degree == 1 else "C3D10"
-    if cell == dolfinx.mesh.CellType.hexahedron and degree == 1:
-        return "C3D8"
+    etype = element_for_cell(cell.name, degree)
+    if etype is not None:
+        return etype.name
     raise ValueError(
         f"write_inp: no ccx element for degree-{degree} Lagrange on {cell.name} cells (supported: "
         "P1/P2 tetrahedra -> C3D4/C3D10, P1 hexahedra -> C3D8; 27-node hexahedra are not ccx's "
@@ -268,19 +268,9 @@ def _element_type(V: dolfinx.fem.FunctionSpace) -> str:
     )
 
 
-# ccx corner order as dolfinx vertex indices: [positive orientation, mirrored]
-_CORNERS = {
-    "C3D4": (np.array([0, 1, 2, 3]), np.array([0, 2, 1, 3])),
-    "C3D10": (np.array([0, 1, 2, 3]), np.array([0, 2, 1, 3])),
-    "C3D8": (np.array([0, 1, 3, 2, 4, 5, 7, 6]), np.array([4, 5, 7, 6, 0, 1, 3, 2])),
-}
-# ccx C3D10 midside nodes 5..10 sit on the edges between these ccx corners (0-based).
-_C3D10_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
-
-
 def _signed_volume(x: np.ndarray, etype: str) -> np.ndarray:
     """Sign-carrying Jacobian of cells ``x (C, k, 3)`` in ccx corner order."""
-    if etype == "C3D8":
+    if ELEMENT_TYPES[etype].cell == "hexahedron":
         dxi = x[:, [1, 2, 6, 5]].sum(axis=1) - x[:, [0, 3, 7, 4]].sum(axis=1)
         deta = x[:, [3, 2, 6, 7]].sum(axis=1) - x[:, [0, 1, 5, 4]].sum(axis=1)
         dzeta = x[:, 4:8].sum(axis=1) - x[:, 0:4].sum(axis=1)
@@ -291,19 +281,21 @@ def _signed_volume(x: np.ndarray, etype: str) -> np.ndarray:
 
 def _local_node_order(V: dolfinx.fem.FunctionSpace, etype: str) -> tuple[np.ndarray, np.ndarray]:
     """Per orientation: ccx element node -> cell-local dof, and dolfinx vertex -> ccx corner."""
-    corners = _CORNERS[etype]
-    if etype != "C3D10":
+    table = ELEMENT_TYPES[etype]
+    corners = (table.corner_vertices, table.mirrored_vertices)
+    if not table.midside_edges:
         orders = [c for c in corners]
     else:
         layout = V.dofmap.dof_layout
-        edge_vertices = dolfinx.cpp.mesh.get_entity_vertices(dolfinx.mesh.CellType.tetrahedron, 1)
+        cell_type = V.mesh.topology.cell_type
+        edge_vertices = dolfinx.cpp.mesh.get_entity_vertices(cell_type, 1)
         edge_dof = {}
-        for e in range(6):
+        for e in range(dolfinx.cpp.mesh.cell_num_entities(cell_type, 1)):
             a, b = (int(v) for v in edge_vertices.links(e))
             edge_dof[frozenset((a, b))] = int(layout.entity_dofs(1, e)[0])
         orders = []
         for c in corners:
-            mids = [edge_dof[frozenset((int(c[a]), int(c[b])))] for a, b in _C3D10_EDGES]
+            mids = [edge_dof[frozenset((int(c[a]), int(c[b])))] for a, b in table.midside_edges]
             orders.append(np.concatenate([c, mids]))
     vertex_to_corner = []
     for c in corners:
@@ -368,7 +360,7 @@ def _mesh_data(V: dolfinx.fem.FunctionSpace) -> _Mesh:
     cell_dofs = compat.cell_dofs(V)[: cmap.size_local]
     X = _node_coordinates(V)
     orders, vertex_to_corner = _local_node_order(V, etype)
-    ncorners = 4 if etype != "C3D8" else 8
+    ncorners = ELEMENT_TYPES[etype].num_corners
     local = cell_dofs[:, orders[0]]
     mirrored = _signed_volume(X[local[:, :ncorners]], etype) < 0
     local[mirrored] = cell_dofs[mirrored][:, orders[1]]
@@ -383,7 +375,7 @@ def _mesh_data(V: dolfinx.fem.FunctionSpace) -> _Mesh:
     cell_type = mesh.topology.cell_type
     facet_vertices = dolfinx.cpp.mesh.get_entity_vertices(cell_type, tdim - 1)
     num_facets = dolfinx.cpp.mesh.cell_num_entities(cell_type, tdim - 1)
-    ccx_faces = ELEMENT_TYPES[etype].faces[:, : 3 if etype != "C3D8" else 4]
+    ccx_faces = ELEMENT_TYPES[etype].faces[:, : ELEMENT_TYPES[etype].face_corners]
     face_by_mask = {int(np.sum(1 << f)): k + 1 for k, f in enumerate(ccx_faces)}
     face_of_facet = np.array(
         [

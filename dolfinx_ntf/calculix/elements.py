@@ -1,0 +1,304 @@
+"""The table of supported CalculiX solid elements, shared by reader, model, writer and .frd code.
+
+See docs/method.md §8.5 and §13.2. One frozen :class:`ElementType` per ccx type holds everything
+the package knows about it: node and face tables (reader), the dolfinx cell, degree and node
+permutation (model, writer), ccx's volume integration rule (model, ``*EL PRINT``), and the frd
+type number and stress extrapolation (``.frd``). Pure Python/numpy: no dolfinx import.
+
+Conventions:
+    - Node indices are 0-based element-local positions in ccx's node order.
+    - Face tables are in CalculiX's *internal* face order (outward normal, node 1 of the face as
+      ccx numbers it), verified against the ``.cel`` files written by ccx 2.20. The manual's
+      ``*SURFACE``/``*DLOAD`` tables list the same nodes with the inward orientation
+      (e.g. C3D8 S1 is ``1-2-3-4`` in the manual and ``4-3-2-1`` here).
+    - Points are dolfinx reference coordinates: the unit cube for hexahedra (ccx's
+      ``(xi, eta, zeta)`` in ``[-1, 1]^3`` maps to ``((xi+1)/2, (eta+1)/2, (zeta+1)/2)``) and the
+      unit tetrahedron, whose vertices are ccx's corners 1..4 in order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "C3D8_EXTRAPOLATION",
+    "ELEMENT_TYPES",
+    "ElementType",
+    "element_for_cell",
+    "nodal_extrapolation",
+]
+
+
+def _frozen(values, dtype=np.float64) -> np.ndarray:
+    array = np.array(values, dtype=dtype)
+    array.flags.writeable = False
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class ElementType:
+    """A supported CalculiX solid element type.
+
+    Attributes:
+        name: ccx type name (``C3D4``, ``C3D8``, ``C3D10``).
+        num_nodes: nodes per element.
+        num_corners: corner (vertex) nodes per element, listed first.
+        face_type: face type name of ``dolfinx_ntf.faces`` (``tri3``, ``quad4``, ``tri6``).
+        faces: ``(num_faces, face_nodes)`` 0-based element-local node indices of faces S1..Sk,
+            corners counter-clockwise seen from outside the element, then midside nodes.
+        cell: dolfinx cell name (``tetrahedron``, ``hexahedron``).
+        degree: degree of the dolfinx Lagrange space and coordinate element.
+        to_dolfinx: ``(num_nodes,)`` dolfinx cell node ``k`` is ccx node ``to_dolfinx[k]``.
+        mirrored_vertices: ccx corner ``i`` of a cell mirrored against ccx's orientation is dolfinx
+            vertex ``mirrored_vertices[i]`` (the writer numbers such cells this way).
+        midside_edges: the two corners (0-based) of the edge of each midside node, in ccx order.
+        quadrature_degree: volume quadrature degree that gives ccx's integration rule.
+        integration_points: ``(q, 3)`` ccx's integration points in ccx order (``*EL PRINT`` rows).
+        frd_type: element type number in ``.frd`` files (cgx manual).
+        extrapolation: ``(num_nodes, q)`` integration-point values -> nodal values, as ccx's
+            ``.frd`` stresses (:func:`nodal_extrapolation`).
+        face_quadrature_degree: face quadrature degree of ``*DLOAD`` pressures (2x2 Gauss on
+            quads, 3 points on triangles; C3D20 3x3).
+    """
+
+    name: str
+    num_nodes: int
+    num_corners: int
+    face_type: str
+    faces: np.ndarray
+    cell: str
+    degree: int
+    to_dolfinx: np.ndarray
+    mirrored_vertices: np.ndarray
+    midside_edges: tuple[tuple[int, int], ...]
+    quadrature_degree: int
+    integration_points: np.ndarray
+    frd_type: int
+    extrapolation: np.ndarray
+    face_quadrature_degree: int = 2
+
+    @property
+    def num_faces(self) -> int:
+        """Number of faces (labels S1..S<num_faces>)."""
+        return int(self.faces.shape[0])
+
+    @property
+    def face_corners(self) -> int:
+        """Number of corner nodes per face."""
+        return 3 if self.face_type.startswith("tri") else 4
+
+    @property
+    def corner_vertices(self) -> np.ndarray:
+        """ccx corner ``i`` is dolfinx vertex ``corner_vertices[i]``."""
+        return np.argsort(self.to_dolfinx[: self.num_corners])
+
+
+#: ccx 2.20's C3D8 extrapolation weight of an integration point by the number of coordinates in
+#: which it lies on the other side of the node (0..3): the trilinear values (1 +- sqrt 3)^k / 8
+#: rounded, summing to 0.99996 over the 8 points. Fitted to ccx's ``.frd`` files (ccx writes a
+#: uniform stress of 10 as 9.9996); they reproduce ccx's nodal stresses to print precision
+#: (docs/method.md §13.2).
+C3D8_EXTRAPOLATION = (2.549, -0.683, 0.183, -0.04904)
+
+# ccx node order of the 8 hexahedron corners in dolfinx reference coordinates.
+_HEX_CORNERS = np.array(
+    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+)
+# ccx C3D10 midside nodes 5..10 sit on the edges between these ccx corners (manual fig. 55).
+_TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
+# ccx C3D20 midside nodes 9..20 (manual): on 1-2, 2-3, 3-4, 4-1, 5-6, 6-7, 7-8, 8-5, 1-5, 2-6,
+# 3-7, 4-8.
+_HEX_EDGES = (
+    (0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)
+)  # fmt: skip
+
+
+def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
+    """``(nodes, points)`` matrix taking integration-point values to the element's nodes.
+
+    C3D8: ccx's weights (``C3D8_EXTRAPOLATION``) of the trilinear field through the 2x2x2 Gauss
+    values; C3D4: the constant; C3D10: the linear field through the 4 point values at the
+    corners, midside nodes the mean of their edge's corners. ``points`` are the rule's points
+    (dolfinx reference coordinates, ccx order).
+    """
+    if element_type == "C3D4":
+        return np.ones((4, 1))
+    if element_type == "C3D8":
+        sides = (points > 0.5).astype(int)
+        distance = np.sum(_HEX_CORNERS[:, None, :] != sides[None, :, :], axis=2)
+        return np.asarray(C3D8_EXTRAPOLATION)[distance]
+    if element_type == "C3D10":
+        affine = np.column_stack([np.ones(4), points])  # value = c0 + c . x through the points
+        corners = np.array([[1, 0, 0, 0], [1, 1, 0, 0], [1, 0, 1, 0], [1, 0, 0, 1]], float)
+        corner = corners @ np.linalg.inv(affine)
+        midside = np.array([(corner[a] + corner[b]) / 2 for a, b in _TET_EDGES])
+        return np.vstack([corner, midside])
+    if element_type == "C3D20R":
+        corner = nodal_extrapolation("C3D8", points)
+        midside = np.array([(corner[a] + corner[b]) / 2 for a, b in _HEX_EDGES])
+        return np.vstack([corner, midside])
+    if element_type == "C3D20":
+        nodes = np.vstack(
+            [_HEX_CORNERS, [(_HEX_CORNERS[a] + _HEX_CORNERS[b]) / 2 for a, b in _HEX_EDGES]]
+        )
+        return _lagrange_27(points, nodes)
+    raise NotImplementedError(f"stress extrapolation of {element_type} is not supported")
+
+
+def _lagrange_27(points: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``(len(at), 27)`` values at ``at`` of the triquadratic field through 27 point values."""
+
+    def basis(x: np.ndarray) -> np.ndarray:  # the 27 monomials x^a y^b z^c, a, b, c <= 2
+        return np.stack(
+            [x[:, 0] ** a * x[:, 1] ** b * x[:, 2] ** c
+             for c in range(3) for b in range(3) for a in range(3)], axis=1
+        )  # fmt: skip
+
+    return basis(np.asarray(at, float)) @ np.linalg.inv(basis(points))
+
+
+_G = 1.0 / np.sqrt(3.0)
+_A10, _B10 = 0.1381966011250105, 0.5854101966249685
+_G3 = (-np.sqrt(0.6), 0.0, np.sqrt(0.6))
+
+# C3D8 2x2x2 Gauss points in ccx order (xi fastest); C3D4 one point; C3D10 four points.
+_POINTS = {
+    "C3D4": [[0.25, 0.25, 0.25]],
+    "C3D8": [
+        [(x + 1) / 2, (y + 1) / 2, (z + 1) / 2]
+        for z in (-_G, _G)
+        for y in (-_G, _G)
+        for x in (-_G, _G)
+    ],
+    "C3D10": [[_A10, _A10, _A10], [_B10, _A10, _A10], [_A10, _B10, _A10], [_A10, _A10, _B10]],
+    # C3D20: 3x3x3 Gauss, xi fastest (checked against ccx's *EL PRINT); C3D20R as C3D8.
+    "C3D20": [[(x + 1) / 2, (y + 1) / 2, (z + 1) / 2] for z in _G3 for y in _G3 for x in _G3],
+}
+_POINTS["C3D20R"] = _POINTS["C3D8"]
+
+
+def _element_type(
+    name: str,
+    num_nodes: int,
+    num_corners: int,
+    face_type: str,
+    faces: list[list[int]],
+    *,
+    cell: str,
+    degree: int,
+    to_dolfinx: list[int],
+    mirrored_vertices: list[int],
+    quadrature_degree: int,
+    frd_type: int,
+    face_quadrature_degree: int = 2,
+) -> ElementType:
+    points = _frozen(_POINTS[name])
+    midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES}.get(num_nodes, ())
+    return ElementType(
+        name,
+        num_nodes,
+        num_corners,
+        face_type,
+        _frozen(np.asarray(faces) - 1, np.int64),
+        cell,
+        degree,
+        _frozen(to_dolfinx, np.int64),
+        _frozen(mirrored_vertices, np.int64),
+        midside_edges,
+        quadrature_degree,
+        points,
+        frd_type,
+        _frozen(nodal_extrapolation(name, points)),
+        face_quadrature_degree,
+    )
+
+
+ELEMENT_TYPES: dict[str, ElementType] = {
+    # Manual: S1 1-2-3, S2 1-4-2, S3 2-4-3, S4 3-4-1 (inward); reversed here to point outward.
+    "C3D4": _element_type(
+        "C3D4",
+        4,
+        4,
+        "tri3",
+        [[1, 3, 2], [1, 2, 4], [2, 3, 4], [1, 4, 3]],
+        cell="tetrahedron",
+        degree=1,
+        to_dolfinx=[0, 1, 2, 3],
+        mirrored_vertices=[0, 2, 1, 3],
+        quadrature_degree=1,
+        frd_type=3,
+    ),
+    # Midside nodes: 5 on 1-2, 6 on 2-3, 7 on 3-1, 8 on 1-4, 9 on 2-4, 10 on 3-4 (manual fig. 55).
+    # dolfinx P2 tetrahedron edges are (v2,v3), (v1,v3), (v1,v2), (v0,v3), (v0,v2), (v0,v1).
+    "C3D10": _element_type(
+        "C3D10",
+        10,
+        4,
+        "tri6",
+        [[1, 3, 2, 7, 6, 5], [1, 2, 4, 5, 9, 8], [2, 3, 4, 6, 10, 9], [1, 4, 3, 8, 10, 7]],
+        cell="tetrahedron",
+        degree=2,
+        to_dolfinx=[0, 1, 2, 3, 9, 8, 5, 7, 6, 4],
+        mirrored_vertices=[0, 2, 1, 3],
+        quadrature_degree=2,
+        frd_type=6,
+    ),
+    # Manual: S1 1-2-3-4, S2 5-8-7-6, S3 1-5-6-2, S4 2-6-7-3, S5 3-7-8-4, S6 4-8-5-1 (inward).
+    # dolfinx hexahedron vertices are in tensor order.
+    "C3D8": _element_type(
+        "C3D8",
+        8,
+        8,
+        "quad4",
+        [[4, 3, 2, 1], [5, 6, 7, 8], [1, 2, 6, 5], [2, 3, 7, 6], [3, 4, 8, 7], [4, 1, 5, 8]],
+        cell="hexahedron",
+        degree=1,
+        to_dolfinx=[0, 1, 3, 2, 4, 5, 7, 6],
+        mirrored_vertices=[4, 5, 7, 6, 0, 1, 3, 2],
+        quadrature_degree=2,
+        frd_type=1,
+    ),
+    # C3D20 (3x3x3 Gauss) and C3D20R (2x2x2): corners as C3D8, midside nodes 9..20 on the edges
+    # _HEX_EDGES; faces as C3D8's, then the midside nodes of edges c1-c2, c2-c3, c3-c4, c4-c1.
+    # The dolfinx cell is a 27-node hexahedron: to_dolfinx gives its corners and edge nodes (v0-v1,
+    # v0-v2, v0-v4, v1-v3, v1-v5, v2-v3, v2-v6, v3-v7, v4-v5, v4-v6, v5-v7, v6-v7); the model adds
+    # the face and cell centres and constrains them to the serendipity space (docs/method.md §13.5).
+    **{
+        name: _element_type(
+            name,
+            20,
+            8,
+            "quad8",
+            [
+                [4, 3, 2, 1, 11, 10, 9, 12],
+                [5, 6, 7, 8, 13, 14, 15, 16],
+                [1, 2, 6, 5, 9, 18, 13, 17],
+                [2, 3, 7, 6, 10, 19, 14, 18],
+                [3, 4, 8, 7, 11, 20, 15, 19],
+                [4, 1, 5, 8, 12, 17, 16, 20],
+            ],
+            cell="hexahedron",
+            degree=2,
+            to_dolfinx=[0, 1, 3, 2, 4, 5, 7, 6, 8, 11, 16, 9, 17, 10, 19, 18, 12, 15, 13, 14],
+            mirrored_vertices=[4, 5, 7, 6, 0, 1, 3, 2],
+            quadrature_degree=quadrature,
+            frd_type=4,
+            face_quadrature_degree=quadrature,
+        )
+        for name, quadrature in (("C3D20", 5), ("C3D20R", 2))
+    },
+}
+"""Supported element types by ccx name."""
+
+
+def element_for_cell(cell: str, degree: int) -> ElementType | None:
+    """The ccx element of a degree-``degree`` Lagrange space on ``cell`` cells, or None.
+
+    None for degree-2 hexahedra: a 27-node space is not C3D20's (docs/method.md §13.5).
+    """
+    for etype in ELEMENT_TYPES.values():
+        if etype.cell == cell and etype.degree == degree and etype.num_nodes != 20:
+            return etype
+    return None
