@@ -61,6 +61,8 @@ class ElementType:
             ``.frd`` stresses (:func:`nodal_extrapolation`).
         face_quadrature_degree: face quadrature degree of ``*DLOAD`` pressures (2x2 Gauss on
             quads, 3 points on triangles; C3D20 3x3).
+        frd_order: the ccx nodes of an element in ``.frd`` order (ccx order but for C3D20:
+            nodes 1..12, 17..20, 13..16, as ccx 2.20 writes them).
     """
 
     name: str
@@ -78,6 +80,12 @@ class ElementType:
     frd_type: int
     extrapolation: np.ndarray
     face_quadrature_degree: int = 2
+    frd_order: np.ndarray | None = None
+
+    @property
+    def frd_nodes(self) -> np.ndarray:
+        """Column order of the ccx connectivity in ``.frd`` element records."""
+        return np.arange(self.num_nodes) if self.frd_order is None else self.frd_order
 
     @property
     def num_faces(self) -> int:
@@ -212,6 +220,9 @@ def _element_type(
         frd_type,
         _frozen(nodal_extrapolation(name, points)),
         face_quadrature_degree,
+        _frozen([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
+        if num_nodes == 20
+        else None,
     )
 
 

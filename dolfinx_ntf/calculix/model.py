@@ -50,7 +50,12 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.constraints import LinearConstraint, LinearConstraintBlock, num_equations
+from dolfinx_ntf.constraints import (
+    LinearConstraint,
+    LinearConstraintBlock,
+    elimination_rows,
+    num_equations,
+)
 from dolfinx_ntf.laws import (
     ExponentialLaw,
     Friction,
@@ -200,6 +205,7 @@ class CalculixModel:
     constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
+    _centre_rows: tuple | None = field(default=None, repr=False)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -226,6 +232,22 @@ class CalculixModel:
         out = np.zeros((dofs.size, *values.shape[1:]))
         out[dofs >= 0] = values[dofs[dofs >= 0]]
         return out
+
+    def on_ccx_nodes(self, forces: np.ndarray) -> np.ndarray:
+        """Nodal forces ``(num_dofs, 3)`` as ccx's nodes carry them.
+
+        C3D20's face- and cell-centre forces move to the 20 nodes they depend on (virtual work,
+        ``f + M^T f_centres``), as ccx's RF; other elements' forces are returned unchanged.
+        """
+        if self.element_type.num_nodes != 20:
+            return forces
+        if self._centre_rows is None:
+            self._centre_rows = elimination_rows(forces.size, serendipity_constraints(self.V))[:2]
+        centres, rows = self._centre_rows
+        flat = forces.ravel().copy()
+        flat += rows.T @ flat[centres]
+        flat[centres] = 0.0
+        return flat.reshape(forces.shape)
 
     def face_nodes_of(self, surface: str, facets: np.ndarray) -> np.ndarray:
         """Ccx node numbers (ccx face order) of local ``facets`` of an element-face surface."""
