@@ -3,10 +3,11 @@
 Each :class:`Case` writes ``<name>.inp`` into a directory; ``tests/test_ccx_crossval.py`` and
 ``benchmarks/validate.py`` run ccx and dolfinx_ntf on it and compare. The meshes are structured
 boxes (hexahedra, or each hexahedron split into six tetrahedra) stacked along z, with
-non-matching grids across each contact interface. Together the cases cover C3D8, C3D4 and
-C3D10; the EXPONENTIAL, LINEAR and TABULAR laws; small strain and NLGEOM; several increments;
-a curved (warped bilinear) master; face- and node-based slaves; two contact pairs in one deck;
-pressure, prescribed-displacement and point loads; an amplitude.
+non-matching grids across each contact interface. Together the cases cover C3D8, C3D4,
+C3D10, C3D20 and C3D20R (C3D8 decks given midside nodes by ``hex20.py``); the EXPONENTIAL,
+LINEAR and TABULAR laws; small strain and NLGEOM; several increments; a curved (warped
+bilinear) master; face- and node-based slaves; two contact pairs in one deck; pressure,
+prescribed-displacement and point loads; an amplitude.
 
 Facet tag of body ``k`` (0-based, bottom to top): ``10 (k + 1) + side`` with the sides below.
 Cell tag of body ``k``: ``k + 1``.
@@ -21,6 +22,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 import numpy as np
+from hex20 import to_hex20  # this directory is on sys.path
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -314,6 +316,28 @@ def _tet_nlgeom_pressure(directory: Path) -> None:
     )
 
 
+def _hex20_linear_pressure(directory: Path) -> None:
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (3, 3, 1))
+    punch = ((0.11, 0.13, 0.0), (0.6, 0.6, 0.4), (2, 2, 1))
+    V, ct, ft = blocks([lower, punch])
+    steps = [_step(2, pressures=[PressureSpec(_top(ft, 1), 20.0)])]
+    _write(directory, "hex20_linear_pressure", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D20 punch (quad8 faces) on a block, LINEAR law, pressure, 2 increments")  # fmt: skip
+    to_hex20(directory / "hex20_linear_pressure.inp")
+
+
+def _hex20r_exponential(directory: Path) -> None:
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (3, 3, 1))
+    punch = ((0.11, 0.13, 0.001), (0.6, 0.6, 0.4), (2, 2, 1))  # starts 0.001 above the block
+    V, ct, ft = blocks([lower, punch])
+    steps = [_step(3, boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.006, name="PRESS")])]
+    law = ntf.ExponentialLaw(c0=0.002, p0=2.0)
+    _write(directory, "hex20r_exponential", V, ct, ft, [_pair(ft, 1, 0, law)], steps,
+           "C3D20R punch with an initial gap, EXPONENTIAL law, prescribed displacement, "
+           "3 increments")  # fmt: skip
+    to_hex20(directory / "hex20r_exponential.inp", reduced=True)
+
+
 #: ccx's converged NLGEOM increments are not in equilibrium with the follower pressure on their own
 #: final faces (measured below): the displacements agree to a few 1e-6 only.
 NLGEOM_PRESSURE_QUIRK = (
@@ -366,6 +390,16 @@ CASES: tuple[Case, ...] = (
         _tet_nlgeom_pressure,
         quirk=NLGEOM_PRESSURE_QUIRK,
         tolerances={"displacement": 3e-6},
+    ),
+    Case(
+        "hex20_linear_pressure",
+        "C3D20 (quad8 faces), LINEAR, face slave, pressure, 2 increments",
+        _hex20_linear_pressure,
+    ),
+    Case(
+        "hex20r_exponential",
+        "C3D20R, EXPONENTIAL, initial gap, prescribed displacement, 3 increments",
+        _hex20r_exponential,
     ),
 )
 """Every cross-validation deck."""
