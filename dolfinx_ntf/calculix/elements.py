@@ -24,6 +24,7 @@ import numpy as np
 
 __all__ = [
     "C3D8_EXTRAPOLATION",
+    "C3D20_EXTRAPOLATION",
     "ELEMENT_TYPES",
     "ElementType",
     "element_for_cell",
@@ -148,23 +149,47 @@ def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
         midside = np.array([(corner[a] + corner[b]) / 2 for a, b in _HEX_EDGES])
         return np.vstack([corner, midside])
     if element_type == "C3D20":
-        nodes = np.vstack(
-            [_HEX_CORNERS, [(_HEX_CORNERS[a] + _HEX_CORNERS[b]) / 2 for a, b in _HEX_EDGES]]
-        )
-        return _lagrange_27(points, nodes)
+        return _c3d20_extrapolation(points)
     raise NotImplementedError(f"stress extrapolation of {element_type} is not supported")
 
 
-def _lagrange_27(points: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """``(len(at), 27)`` values at ``at`` of the triquadratic field through 27 point values."""
+#: ccx 2.20's C3D20 extrapolation weights from the 3x3x3 Gauss points, by how the point lies
+#: from the node along each axis (n: the point layer nearest the node, m: the middle layer, f:
+#: the farthest); a midside node's key starts with c (the point in the middle layer along its
+#: edge) or o (an outer layer). They are the triquadratic values through the 27 points (products
+#: of ``(1 + sqrt .6) / 1.2, -2/3, (1 - sqrt .6) / 1.2``; zero in the outer layers) changed by at
+#: most 6e-6, fitted to ccx's ``.frd`` stresses of one element under random nodal displacements;
+#: rows sum to 0.99996 at corners and 1.00005 at midside nodes, as ccx writes a uniform stress
+#: (docs/method.md §13.5).
+C3D20_EXTRAPOLATION = {
+    "nnn": 3.2341145, "mnn": -1.4579587, "fnn": 0.4107842, "mmn": 0.6572575,
+    "fmn": -0.1851893, "ffn": 0.0521753, "mmm": -0.2962968, "fmm": 0.0834806,
+    "ffm": -0.0235225, "fff": 0.0066279,
+    "cnn": 2.1869451, "cmn": -0.9858814, "cfn": 0.2777794, "cmm": 0.4444462, "cfm": -0.1252212,
+    "cff": 0.0352856,
+    "onn": 0.0000019, "omn": 0.0000015, "ofn": -0.0000001, "omm": 0.0000004, "ofm": 0.0000012,
+    "off": 0.0000018,
+}  # fmt: skip
 
-    def basis(x: np.ndarray) -> np.ndarray:  # the 27 monomials x^a y^b z^c, a, b, c <= 2
-        return np.stack(
-            [x[:, 0] ** a * x[:, 1] ** b * x[:, 2] ** c
-             for c in range(3) for b in range(3) for a in range(3)], axis=1
-        )  # fmt: skip
 
-    return basis(np.asarray(at, float)) @ np.linalg.inv(basis(points))
+def _c3d20_extrapolation(points: np.ndarray) -> np.ndarray:
+    """``(20, 27)`` ccx's C3D20 weights (``C3D20_EXTRAPOLATION``) for the 3x3x3 Gauss points."""
+    nodes = np.vstack(
+        [_HEX_CORNERS, [(_HEX_CORNERS[a] + _HEX_CORNERS[b]) / 2 for a, b in _HEX_EDGES]]
+    )
+    layer = np.digitize(points, [0.4, 0.6])  # 0, 1, 2: low, middle, high layer per axis
+    weights = np.zeros((20, points.shape[0]))
+    for i, node in enumerate(nodes):  # 20 x 27 table entries, built once at import
+        for q in range(points.shape[0]):
+            edge, key = "", []
+            for axis in range(3):
+                if node[axis] == 0.5:  # along a midside node's edge
+                    edge = "c" if layer[q, axis] == 1 else "o"
+                    continue
+                near = 0 if node[axis] == 0 else 2
+                key.append("m" if layer[q, axis] == 1 else ("n" if layer[q, axis] == near else "f"))
+            weights[i, q] = C3D20_EXTRAPOLATION[edge + "".join(sorted(key, key="fmn".index))]
+    return weights
 
 
 _G = 1.0 / np.sqrt(3.0)
