@@ -256,7 +256,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.max_depth = max_depth
         self.walk_from_previous_face = walk_from_previous_face
         self._reference = reference_coordinates(V)
-        self._element_forces = _broken(
+        self._element_forces, self._element_space = _broken(
             F if element_forces is None else element_forces,
             V,
             compat.jit_keywords(form_compiler_options, jit_options),
@@ -424,6 +424,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(vector, self._element_forces)
         values = vector.array_r  # owned entries: broken dofs belong to one cell each
+        if self._face_centres.size:  # C3D20: the forces of its 20 nodes (docs/method.md §13.5)
+            values = serendipity.element_forces_on_nodes(values, self._element_space)
         total, count = float(np.abs(values).sum()), values.size
         for state in self.states:
             if state.evaluation is not None and state.num_springs:
@@ -923,10 +925,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._eliminate()
 
 
-def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict) -> compat.Form:
+def _broken(
+    form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict
+) -> tuple[compat.Form, dolfinx.fem.FunctionSpace]:
     """``form`` with its test function replaced by one of the discontinuous space of its degree.
 
-    The assembled vector then holds every element's nodal forces separately.
+    The assembled vector then holds every element's nodal forces separately. Returns the form
+    and that space.
     """
     arguments = form.arguments()
     if len(arguments) != 1:
@@ -937,4 +942,4 @@ def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict) -> comp
     mesh = V.mesh
     family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
     W = compat.vector_space(mesh, family, compat.space_degree(V))
-    return dolfinx.fem.form(ufl.replace(form, {arguments[0]: ufl.TestFunction(W)}), **options)
+    return dolfinx.fem.form(ufl.replace(form, {arguments[0]: ufl.TestFunction(W)}), **options), W

@@ -172,3 +172,27 @@ def add_centres(cells: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarra
     cell_node = x.shape[0] + num_faces + np.arange(cells.shape[0])
     x = np.vstack([x, face_x.reshape(-1, 3)[first], cell_x])
     return np.hstack([cells, face_node, cell_node[:, None]]), x
+
+
+def element_forces_on_nodes(values: np.ndarray, space: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Element nodal forces of a broken Q2 vector as C3D20's: ``(cells, 20, 3)`` flattened.
+
+    ``values`` is a vector of ``space``, a discontinuous degree-2 vector space on hexahedra
+    (every cell's 27 nodal forces). Each centre's force moves to the 20 nodes it depends
+    on (virtual work), so that CalculiX's average element force (docs/method.md §7.1) is taken
+    over the 20 nodes of each element, as ccx does.
+    """
+    dofs = compat.cell_dofs(space)
+    forces = np.asarray(values).reshape(-1, 3)[dofs]  # (cells, 27, 3)
+    return (forces[:, :20] + np.einsum("kn,ckd->cnd", _CENTRE_WEIGHTS, forces[:, 20:])).ravel()
+
+
+def _centre_weights() -> np.ndarray:
+    """``(7, 20)``: value of face centre ``k`` (then the cell centre) from the 20 local nodes."""
+    weights = np.zeros((7, 20))
+    for k, (_, independent, w) in enumerate(_local_rows()):
+        weights[k, independent] = w
+    return weights
+
+
+_CENTRE_WEIGHTS = _centre_weights()

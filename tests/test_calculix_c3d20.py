@@ -242,6 +242,11 @@ def test_c3d20_printed_and_file_results_match_ccx(tmp_path):
         if a.name in ("S", "RF"):
             scale = np.abs(a.values).max()
             assert np.abs(a.values - b.values).max() < 2e-6 * scale, a.name
+    # the first Newton iteration's residual in % of the average element force (20 nodes each)
+    ccx_cvg, our_cvg = (
+        (d / f"{case.name}.cvg").read_text().splitlines()[4] for d in (theirs, ours)
+    )
+    assert float(our_cvg.split()[5]) == pytest.approx(float(ccx_cvg.split()[5]), rel=1e-3)
     ccx_frd, our_frd = read_frd(theirs / f"{case.name}.frd"), read_frd(ours / f"{case.name}.frd")
     for a, b in zip(ccx_frd.element_nodes, our_frd.element_nodes):
         np.testing.assert_array_equal(a, b)  # he20 node order as ccx writes it
