@@ -6,8 +6,8 @@ boxes (hexahedra, or each hexahedron split into six tetrahedra) stacked along z,
 non-matching grids across each contact interface. Together the cases cover C3D8, C3D4,
 C3D10, C3D20 and C3D20R (C3D8 decks given midside nodes by ``hex20.py``); the EXPONENTIAL,
 LINEAR and TABULAR laws; small strain and NLGEOM; several increments; a curved (warped
-bilinear) master; face- and node-based slaves; two contact pairs in one deck; pressure,
-prescribed-displacement and point loads; an amplitude.
+bilinear) master and a cylindrical quad8 slave; face- and node-based slaves; two contact pairs
+in one deck; pressure, prescribed-displacement and point loads; an amplitude.
 
 Facet tag of body ``k`` (0-based, bottom to top): ``10 (k + 1) + side`` with the sides below.
 Cell tag of body ``k``: ``k + 1``.
@@ -22,7 +22,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 import numpy as np
-from hex20 import to_hex20  # this directory is on sys.path
+from hex20 import move_nodes, to_hex20  # this directory is on sys.path
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -338,6 +338,26 @@ def _hex20r_exponential(directory: Path) -> None:
     to_hex20(directory / "hex20r_exponential.inp", reduced=True)
 
 
+def _hex20_cylinder(directory: Path) -> None:
+    """A C3D20 punch with a cylindrical bottom (radius 5, axis along y) pressed onto a block."""
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (4, 2, 1))
+    punch = ((0.13, 0.11, 0.0), (0.6, 0.6, 0.3), (4, 2, 1))
+    V, ct, ft = blocks([lower, punch])
+    steps = [_step(3, boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.006, name="PRESS")])]
+    name = "hex20_cylinder"
+    _write(directory, name, V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D20 punch with a cylindrical bottom (R = 5) on a block, LINEAR law, prescribed "
+           "displacement, 3 increments")  # fmt: skip
+    to_hex20(directory / f"{name}.inp")
+
+    def curve(x: np.ndarray) -> np.ndarray:  # lift the bottom, fading to zero at the top
+        radius, axis = 5.0, 0.43
+        lift = radius - np.sqrt(radius**2 - (x[:, 0] - axis) ** 2)
+        return np.column_stack([x[:, 0], x[:, 1], x[:, 2] + lift * (1 - x[:, 2] / 0.3)])
+
+    move_nodes(directory / f"{name}.inp", "E2", curve)
+
+
 #: ccx's converged NLGEOM increments are not in equilibrium with the follower pressure on their own
 #: final faces (measured below): the displacements agree to a few 1e-6 only.
 NLGEOM_PRESSURE_QUIRK = (
@@ -395,6 +415,12 @@ CASES: tuple[Case, ...] = (
         "hex20_linear_pressure",
         "C3D20 (quad8 faces), LINEAR, face slave, pressure, 2 increments",
         _hex20_linear_pressure,
+    ),
+    Case(
+        "hex20_cylinder",
+        "C3D20, cylindrical slave bottom (R = 5) on a flat quad8 master, LINEAR, prescribed "
+        "displacement, contact line growing 11 -> 20 nodes, 3 increments",
+        _hex20_cylinder,
     ),
     Case(
         "hex20r_exponential",

@@ -84,3 +84,22 @@ def _with_midsides(members: list[int], ends: np.ndarray, mid_ids: np.ndarray) ->
 
 def _lines(ids: list[int]) -> list[str]:
     return [", ".join(map(str, ids[i : i + 16])) for i in range(0, len(ids), 16)]
+
+
+def move_nodes(path: Path, elset: str, function) -> None:
+    """Move every node of the elements of ``elset`` to ``function(x)`` (``(n, 3)`` arrays)."""
+    deck = read_deck(path)
+    block = next(b for b in deck.elements.values() if b.ids.size)
+    members = np.isin(block.ids, deck.elsets[elset])
+    ids = np.unique(block.connectivity[members])
+    x = np.asarray(deck.node_coords)[deck.node_index(ids)]
+    moved = dict(zip(ids.tolist(), function(x)))
+    out, section = [], False
+    for line in path.read_text().splitlines():
+        if line.startswith("*"):
+            section = line.upper().replace(" ", "").startswith("*NODE,") or line.upper() == "*NODE"
+        elif section and int(line.split(",")[0]) in moved:
+            node = int(line.split(",")[0])
+            line = f"{node}, " + ", ".join(repr(float(v)) for v in moved[node])
+        out.append(line)
+    path.write_text("\n".join(out) + "\n")
