@@ -471,13 +471,14 @@ def test_face_number_beyond_element_faces(tmp_path):
 
 
 def test_calculix_file_formats_are_pure_python_numpy():
-    """Deck, .dat, .cel and ccx-runner modules need no dolfinx (model, job, writer are the glue)."""
+    """File formats, element table, ccx runner: no dolfinx (model, job, writer are the glue)."""
     import ast
 
     import dolfinx_ntf.calculix as package
 
-    for name in ("deck.py", "dat.py", "cel.py", "ccx.py", "compare.py"):
-        path = Path(package.__file__).parent / name
+    here = Path(package.__file__).parent
+    names = ["elements.py", "frd.py", "dat.py", "cel.py", "ccx.py", "compare.py"]
+    for path in [here / name for name in names] + sorted((here / "deck").glob("*.py")):
         tree = ast.parse(path.read_text())
         for node in ast.walk(tree):
             names = []

@@ -26,13 +26,15 @@ __all__ = [
     "C3D8_EXTRAPOLATION",
     "C3D20_EXTRAPOLATION",
     "ELEMENT_TYPES",
+    "REFUSED_ELEMENTS",
     "ElementType",
     "element_for_cell",
     "nodal_extrapolation",
 ]
 
 
-def _frozen(values, dtype=np.float64) -> np.ndarray:
+def _frozen_array(values, dtype) -> np.ndarray:
+    """A read-only copy of ``values``."""
     array = np.array(values, dtype=dtype)
     array.flags.writeable = False
     return array
@@ -227,25 +229,25 @@ def _element_type(
     frd_type: int,
     face_quadrature_degree: int = 2,
 ) -> ElementType:
-    points = _frozen(_POINTS[name])
+    points = _frozen_array(_POINTS[name], np.float64)
     midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES}.get(num_nodes, ())
     return ElementType(
         name,
         num_nodes,
         num_corners,
         face_type,
-        _frozen(np.asarray(faces) - 1, np.int64),
+        _frozen_array(np.asarray(faces) - 1, np.int64),
         cell,
         degree,
-        _frozen(to_dolfinx, np.int64),
-        _frozen(mirrored_vertices, np.int64),
+        _frozen_array(to_dolfinx, np.int64),
+        _frozen_array(mirrored_vertices, np.int64),
         midside_edges,
         quadrature_degree,
         points,
         frd_type,
-        _frozen(nodal_extrapolation(name, points)),
+        _frozen_array(nodal_extrapolation(name, points), np.float64),
         face_quadrature_degree,
-        _frozen([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
+        _frozen_array([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
         if num_nodes == 20
         else None,
     )
@@ -327,6 +329,13 @@ ELEMENT_TYPES: dict[str, ElementType] = {
     },
 }
 """Supported element types by ccx name."""
+
+
+#: Why some common ccx elements are refused (appended to the reader's refusal).
+REFUSED_ELEMENTS = {
+    "C3D8R": ": its one-point integration with hourglass control is not reproduced",
+    "C3D8I": ": its incompatible modes (extra internal displacement fields) are not reproduced",
+}
 
 
 def element_for_cell(cell: str, degree: int) -> ElementType | None:

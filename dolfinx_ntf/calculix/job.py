@@ -589,8 +589,8 @@ class _Job:
 
         def node_block(name: str, request, values: np.ndarray) -> None:
             ids = self.deck.node_ids
-            if request.set is not None:
-                ids = np.unique(self.deck.nsets[request.set])
+            if request.set is not None:  # in set order, repeats kept, as ccx (docs/method.md §13.2)
+                ids = self.deck.nsets[request.set]
             values = self.model.nodal_values(ids, values)
             if name == "DISP":
                 values = self._with_reference(ids, values)
@@ -600,6 +600,11 @@ class _Job:
             node_block("DISP", keys["NODE", "U"], self.model.u.x.array.reshape(-1, 3))
         if ("EL", "S") in keys:
             nodes, values = self.nodal_stresses()
+            if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
+                members = self.deck.nsets[keys["EL", "S"].set]
+                pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
+                keep = nodes[pos] == members
+                nodes, values = members[keep], values[pos[keep]]
             blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
         if ("NODE", "RF") in keys:
             node_block("FORC", keys["NODE", "RF"], self.internal_forces())

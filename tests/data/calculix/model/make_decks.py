@@ -5,7 +5,7 @@
 Meshes are structured boxes in ccx node order: C3D8 bricks, C3D4 (six tetrahedra per brick, ccx's
 positive orientation) and C3D10 (C3D4 plus midside nodes; midside nodes of interior edges are moved
 off the edge so that a wrong midside-node order would show). Faces for ``*SURFACE``/``*DLOAD`` are
-chosen by position with the face tables of ``dolfinx_ntf.calculix.deck``. Pure numpy.
+chosen by position with the face tables of ``dolfinx_ntf.calculix.elements``. Pure numpy.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 
 HERE = Path(__file__).parent
 
-# ccx outward face tables (0-based), as in dolfinx_ntf.calculix.deck.ELEMENT_TYPES
+# ccx outward face tables (0-based), as in dolfinx_ntf.calculix.elements.ELEMENT_TYPES
 FACES = {
     "C3D8": [[3, 2, 1, 0], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]],
     "C3D4": [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],

@@ -1,0 +1,210 @@
+"""Checks once the whole deck is read, and the assembly of the ``Deck``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..elements import ELEMENT_TYPES, _frozen_array
+from .data import Deck, ElementBlock, Material, SolidSection, SurfaceInteraction
+from .errors import DeckError, Location
+from .state import _ReaderState
+
+
+class _Checks(_ReaderState):
+    """Cross-references, numbering and completeness checks; builds the ``Deck``."""
+
+    def _finish(self) -> Deck:
+        node_ids, node_coords = self._assemble_nodes()
+        elements = self._assemble_elements()
+        all_elements = (
+            np.sort(np.concatenate([b.ids for b in elements.values()]))
+            if elements
+            else np.zeros(0, np.int64)
+        )
+        for block in elements.values():
+            self._check_known(node_ids, block.connectivity, "node", "element connectivity",
+                              block.locations)  # fmt: skip
+        for what, ids, loc in self.node_refs:
+            self._check_known(node_ids, ids, "node", what, (loc,))
+        for what, ids, loc in self.element_refs:
+            self._check_known(all_elements, ids, "element", what, (loc,))
+        self._check_faces(elements)
+        materials = self._check_materials(elements, all_elements)
+        interactions = self._check_contact()
+        for step in self.steps:
+            for load in step.dloads:
+                self._check_face_numbers(elements, load.elements, load.face, load.location)
+            for change in step.model_changes:
+                if not any((p.slave, p.master) == (change.slave, change.master)
+                           for p in self.contact_pairs):  # fmt: skip
+                    raise DeckError(
+                        f"*MODEL CHANGE: no *CONTACT PAIR {change.slave}, {change.master}",
+                        change.location,
+                    )
+        return Deck(
+            path=str(self.path),
+            heading="\n".join(self.heading),
+            node_ids=node_ids,
+            node_coords=node_coords,
+            elements=elements,
+            nsets={k: _frozen_array(v, np.int64) for k, v in self.nsets.items()},
+            elsets={k: _frozen_array(v, np.int64) for k, v in self.elsets.items()},
+            surfaces=dict(self.surfaces),
+            materials=materials,
+            sections=tuple(self.sections),
+            interactions=interactions,
+            contact_pairs=tuple(self.contact_pairs),
+            amplitudes=dict(self.amplitudes),
+            boundaries=tuple(self.boundaries),
+            steps=tuple(self.steps),
+            ignored=tuple(self.ignored),
+            warnings=tuple(self.warnings),
+            initial_velocities=tuple(self.initial_velocities),
+            equations=tuple(self.equations),
+        )
+
+    def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        ids_array = np.array(self.node_ids, dtype=np.int64)
+        coords_array = np.array(self.node_coords, dtype=np.float64).reshape(-1, 3)
+        order = np.argsort(ids_array, kind="stable")
+        ids_array, coords_array = ids_array[order], coords_array[order]
+        duplicate = np.flatnonzero(np.diff(ids_array) == 0)
+        if duplicate.size:
+            node = int(ids_array[duplicate[0]])
+            first, second = order[duplicate[0]], order[duplicate[0] + 1]
+            raise DeckError(
+                f"node {node} is defined twice (first at {self.node_locs[first]})",
+                self.node_locs[second],
+            )
+        if np.any(ids_array <= 0):
+            bad = int(np.argmin(ids_array))
+            raise DeckError(
+                f"node numbers must be > 0, got {int(ids_array[bad])}", self.node_locs[order[bad]]
+            )
+        ids_array.flags.writeable = False
+        coords_array.flags.writeable = False
+        return ids_array, coords_array
+
+    def _assemble_elements(self) -> dict[str, ElementBlock]:
+        blocks: dict[str, ElementBlock] = {}
+        for name, etype in ELEMENT_TYPES.items():
+            if not self.element_ids[name]:
+                continue
+            ids = np.array(self.element_ids[name], dtype=np.int64)
+            conn = np.array(self.element_rows[name], dtype=np.int64).reshape(-1, etype.num_nodes)
+            locations = tuple(self.element_locs[name])
+            bad = np.flatnonzero(ids <= 0)
+            if bad.size:
+                raise DeckError(f"element {int(ids[bad[0]])} must be > 0", locations[bad[0]])
+            ordered = np.sort(conn, axis=1)
+            repeats = np.flatnonzero(np.any(ordered[:, 1:] == ordered[:, :-1], axis=1))
+            if repeats.size:
+                k = repeats[0]
+                raise DeckError(f"element {int(ids[k])} repeats a node", locations[k])
+            ids.flags.writeable = False
+            conn.flags.writeable = False
+            blocks[name] = ElementBlock(ELEMENT_TYPES[name], ids, conn, locations)
+        all_ids = np.concatenate([b.ids for b in blocks.values()]) if blocks else np.zeros(0, int)
+        all_locs = [loc for b in blocks.values() for loc in b.locations]
+        order = np.argsort(all_ids, kind="stable")
+        twice = np.flatnonzero(np.diff(all_ids[order]) == 0)
+        if twice.size:
+            first, second = order[twice[0]], order[twice[0] + 1]
+            raise DeckError(
+                f"element {int(all_ids[first])} is defined twice (first at {all_locs[first]})",
+                all_locs[second],
+            )
+        return blocks
+
+    @staticmethod
+    def _check_known(known: np.ndarray, ids: np.ndarray, kind: str, what: str,
+                     locations: tuple[Location, ...]) -> None:  # fmt: skip
+        if ids.size == 0:
+            return
+        ok = np.isin(ids, known)
+        if np.all(ok):
+            return
+        bad = np.argwhere(~ok)[0]
+        loc = locations[bad[0]] if len(locations) > 1 else locations[0]
+        number = int(ids[tuple(bad)])
+        raise DeckError(f"{what} refers to {kind} {number}, which is not defined", loc)
+
+    def _check_faces(self, elements: dict[str, ElementBlock]) -> None:
+        for surface in self.surfaces.values():
+            if surface.type == "ELEMENT":
+                for face in np.unique(surface.faces):
+                    mask = surface.faces == face
+                    self._check_face_numbers(elements, surface.elements[mask], int(face),
+                                             surface.location)  # fmt: skip
+
+    @staticmethod
+    def _check_face_numbers(elements: dict[str, ElementBlock], ids: np.ndarray, face: int,
+                            location: Location) -> None:  # fmt: skip
+        for block in elements.values():
+            if face > block.type.num_faces:
+                hit = np.isin(ids, block.ids)
+                if np.any(hit):
+                    element = int(ids[np.argmax(hit)])
+                    raise DeckError(
+                        f"face {face} of element {element}: {block.type.name} has faces "
+                        f"1..{block.type.num_faces}",
+                        location,
+                    )
+
+    def _check_materials(self, elements: dict[str, ElementBlock],
+                         all_elements: np.ndarray) -> dict[str, Material]:  # fmt: skip
+        owner: dict[int, SolidSection] = {}
+        for section in self.sections:
+            if section.material not in self.materials:
+                raise DeckError(f"material {section.material} is not defined", section.location)
+            if self.materials[section.material].elastic is None:
+                raise DeckError(
+                    f"material {section.material} has no *ELASTIC card",
+                    self.materials[section.material].location,
+                )
+            for element in self.elsets[section.elset]:
+                if element in owner and owner[element] is not section:
+                    raise DeckError(
+                        f"element {element} is in two solid sections (the other at "
+                        f"{owner[element].location})",
+                        section.location,
+                    )
+                owner[element] = section
+        missing = all_elements[~np.isin(all_elements, np.fromiter(owner, np.int64, len(owner)))]
+        if missing.size:
+            element = int(missing[0])
+            loc = next(
+                b.locations[int(np.argmax(b.ids == element))]
+                for b in elements.values()
+                if np.any(b.ids == element)
+            )
+            raise DeckError(f"element {element} has no *SOLID SECTION (no material)", loc)
+        return {
+            name: Material(m.name, m.elastic, dict(m.extra), m.location)
+            for name, m in self.materials.items()
+        }
+
+    def _check_contact(self) -> dict[str, SurfaceInteraction]:
+        for pair in self.contact_pairs:
+            if pair.interaction not in self.interactions:
+                raise DeckError(
+                    f"surface interaction {pair.interaction} is not defined", pair.location
+                )
+            if self.interactions[pair.interaction].behavior is None:
+                raise DeckError(
+                    f"surface interaction {pair.interaction} has no *SURFACE BEHAVIOR "
+                    "(required for penalty contact)",
+                    self.interactions[pair.interaction].location,
+                )
+            for role, name in (("slave", pair.slave), ("master", pair.master)):
+                if name not in self.surfaces:
+                    raise DeckError(f"{role} surface {name} is not defined", pair.location)
+            if self.surfaces[pair.master].type != "ELEMENT":
+                raise DeckError(
+                    f"master surface {pair.master} must be made of element faces, not TYPE=NODE",
+                    pair.location,
+                )
+        return {
+            name: SurfaceInteraction(i.name, i.behavior, i.friction, dict(i.extra), i.location)
+            for name, i in self.interactions.items()
+        }

@@ -1,0 +1,462 @@
+"""The parsed deck as frozen dataclasses: ``Deck``, its steps, sets, surfaces, materials, loads.
+
+See docs/method.md §8.5. Every object keeps the ``Location`` of its card.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..elements import ElementType
+from .errors import DeckWarning, Location
+
+
+@dataclass(frozen=True, eq=False)
+class ElementBlock:
+    """All elements of one type: ``ids (E,)`` and ``connectivity (E, num_nodes)`` node ids."""
+
+    type: ElementType
+    ids: np.ndarray
+    connectivity: np.ndarray
+    locations: tuple[Location, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class Surface:
+    """A ``*SURFACE``: element faces (``elements``, 1-based ``faces``) or nodes (``TYPE=NODE``)."""
+
+    name: str
+    type: str  # "ELEMENT" or "NODE"
+    elements: np.ndarray
+    faces: np.ndarray
+    nodes: np.ndarray
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Material:
+    """A ``*MATERIAL``: isotropic ``elastic = (E, nu)`` plus data a static step does not use."""
+
+    name: str
+    elastic: tuple[float, float] | None
+    extra: dict[str, tuple[tuple[float | None, ...], ...]]
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class SolidSection:
+    """A ``*SOLID SECTION``: material of the elements of ``elset``."""
+
+    elset: str
+    material: str
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class SurfaceBehavior:
+    """A ``*SURFACE BEHAVIOR`` as written.
+
+    ccx's defaults are resolved by the law (docs/method.md §4.2).
+
+    Attributes:
+        pressure_overclosure: ``EXPONENTIAL``, ``LINEAR``, ``TABULAR`` or ``HARD``.
+        values: the data line (EXPONENTIAL ``(c0, p0)``; LINEAR/HARD ``(K, sigma_inf, c0)`` with
+            ``None`` for missing entries, empty if no data line), empty for TABULAR.
+        table: TABULAR ``(k, 2)`` rows ``(pressure, overclosure)`` (``(k, 3)`` with temperatures).
+    """
+
+    pressure_overclosure: str
+    values: tuple[float | None, ...]
+    table: np.ndarray | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Friction:
+    """A ``*FRICTION`` data line: coefficient ``mu`` and stick slope (``None``: ccx default)."""
+
+    mu: float
+    stick_slope: float | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class SurfaceInteraction:
+    """A ``*SURFACE INTERACTION`` with its behavior, optional friction and unused extra data."""
+
+    name: str
+    behavior: SurfaceBehavior | None
+    friction: Friction | None
+    extra: dict[str, tuple[tuple[float | None, ...], ...]]
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class ContactPair:
+    """One data line of ``*CONTACT PAIR`` (``adjust``: a clearance, a node set name, or None)."""
+
+    slave: str
+    master: str
+    interaction: str
+    type: str
+    small_sliding: bool
+    adjust: float | str | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Amplitude:
+    """An ``*AMPLITUDE``: piecewise linear ``values`` at ``times`` (step or total time)."""
+
+    name: str
+    times: np.ndarray
+    values: np.ndarray
+    total_time: bool
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Boundary:
+    """One ``*BOUNDARY`` data line: dofs ``first..last`` (1..3) of ``nodes`` set to ``value``.
+
+    ``op`` is the card's OP parameter; ccx applies it for the first card of a step only
+    (``Step.boundary_op``). ``target`` is the node number or set name as written.
+    """
+
+    nodes: np.ndarray
+    first_dof: int
+    last_dof: int
+    value: float
+    amplitude: str | None
+    op: str
+    target: str
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Equation:
+    """One ``*EQUATION``: ``sum coefficients[k] u[nodes[k], dofs[k]] = 0``, first term dependent.
+
+    ``dofs`` are 1..3 (docs/method.md §13.1).
+    """
+
+    nodes: np.ndarray
+    dofs: np.ndarray
+    coefficients: np.ndarray
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class CLoad:
+    """One ``*CLOAD`` data line: force ``value`` in direction ``dof`` (1..3) on every node."""
+
+    nodes: np.ndarray
+    dof: int
+    value: float
+    amplitude: str | None
+    op: str
+    target: str
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class DLoad:
+    """One ``*DLOAD`` data line: pressure ``value`` on face ``face`` (1-based) of ``elements``."""
+
+    elements: np.ndarray
+    face: int
+    value: float
+    amplitude: str | None
+    op: str
+    target: str
+    location: Location
+
+
+@dataclass(frozen=True)
+class Static:
+    """``*STATIC`` parameters and data line (``None``: ccx default, resolved by the solver)."""
+
+    initial_increment: float = 1.0
+    period: float = 1.0
+    minimum: float | None = None
+    maximum: float | None = None
+    direct: bool = False
+    time_reset: bool = False
+    total_time_at_start: float | None = None
+
+
+@dataclass(frozen=True)
+class Dynamic:
+    """``*DYNAMIC`` (implicit) parameters; its data line (increments) is the step's ``static``."""
+
+    alpha: float = -0.05
+
+
+@dataclass(frozen=True, eq=False)
+class InitialVelocity:
+    """``*INITIAL CONDITIONS, TYPE=VELOCITY`` data line: ``value`` along ``dof`` of ``nodes``."""
+
+    nodes: np.ndarray
+    dof: int
+    value: float
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class PrintRequest:
+    """A ``*NODE PRINT`` (kind ``NODE``), ``*EL PRINT`` (``EL``) or ``*CONTACT PRINT`` card.
+
+    ``keys`` are in card order; ccx writes the blocks in that order, cards in deck order.
+    ``totals`` is ``NO``, ``YES`` or ``ONLY``; ``set`` is None for contact prints.
+    """
+
+    kind: str
+    keys: tuple[str, ...]
+    set: str | None
+    totals: str
+    frequency: int | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class FileRequest:
+    """A ``*NODE/EL/CONTACT FILE`` or ``*NODE/ELEMENT/CONTACT OUTPUT`` card (``.frd`` output).
+
+    ``kind`` is ``NODE``, ``EL`` or ``CONTACT``; ``contact_elements`` is the CONTACT ELEMENTS
+    flag that asks for the ``.cel`` file (docs/method.md §8.5).
+    """
+
+    keyword: str
+    kind: str
+    keys: tuple[str, ...]
+    set: str | None
+    contact_elements: bool
+    frequency: int | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class FrictionChange:
+    """``*CHANGE FRICTION`` + ``*FRICTION`` in a step (docs/method.md §11.5)."""
+
+    interaction: str
+    friction: Friction
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class ModelChange:
+    """``*MODEL CHANGE, TYPE=CONTACT PAIR`` data line: ``action`` is ``ADD`` or ``REMOVE``."""
+
+    action: str
+    slave: str
+    master: str
+    location: Location
+
+
+FIELD_CONTROL_NAMES: tuple[str, ...] = (
+    "R_n",
+    "C_n",
+    "q_0",
+    "q_u",
+    "R_p",
+    "epsilon",
+    "C_epsilon",
+    "R_l",
+)
+"""Names of the ``*CONTROLS, PARAMETERS=FIELD`` values in data-line order (ccx manual)."""
+
+FIELD_CONTROL_DEFAULTS: dict[str, float | None] = {
+    "R_n": 0.005,
+    "C_n": 0.01,
+    "q_0": None,  # time average force of the previous steps, 0.01 for the first step
+    "q_u": None,  # no user-defined average force
+    "R_p": 0.02,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-3,
+    "R_l": 1e-8,
+}
+"""Defaults of ``*CONTROLS, PARAMETERS=FIELD`` (ccx manual), by name."""
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """A ``*STEP`` ... ``*END STEP`` block.
+
+    Output requests and controls are the *effective* ones, with ccx's carry-over rules already
+    applied: a step without ``*NODE PRINT`` keeps the previous step's node prints (likewise for
+    ``*EL PRINT``, ``*CONTACT PRINT`` and each kind of file request); ``output_frequency`` is the
+    last FREQUENCY given on any output card so far; ``controls`` maps a ``*CONTROLS`` PARAMETERS
+    value to its data lines and persists until ``*CONTROLS, RESET``; ``nlgeom`` stays on once set.
+    Loads and boundaries are the cards of this step only (their OP rules are the solver's job).
+
+    Attributes:
+        number: 1-based step number.
+        nlgeom: geometrically nonlinear (NLGEOM).
+        max_increments: INC parameter (ccx default 100).
+        static: the ``*STATIC`` procedure, or the increments of the ``*DYNAMIC`` one.
+        boundaries, cloads, dloads: the cards of this step, in deck order.
+        prints: node, element and contact print requests in the order ccx writes them.
+        file_requests: ``.frd``/``.cel`` output requests.
+        output_frequency: effective FREQUENCY (write every N-th increment and the last one).
+        controls: effective ``*CONTROLS`` data by PARAMETERS value (``FIELD``, ...).
+        friction_changes, model_changes: ``*CHANGE FRICTION`` / ``*MODEL CHANGE`` cards.
+    """
+
+    number: int
+    nlgeom: bool
+    max_increments: int
+    static: Static
+    boundaries: tuple[Boundary, ...]
+    cloads: tuple[CLoad, ...]
+    dloads: tuple[DLoad, ...]
+    prints: tuple[PrintRequest, ...]
+    file_requests: tuple[FileRequest, ...]
+    output_frequency: int
+    controls: dict[str, tuple[tuple[float | None, ...], ...]]
+    friction_changes: tuple[FrictionChange, ...]
+    model_changes: tuple[ModelChange, ...]
+    location: Location
+    dynamic: Dynamic | None = None
+
+    @property
+    def node_prints(self) -> tuple[PrintRequest, ...]:
+        """The ``*NODE PRINT`` requests."""
+        return tuple(p for p in self.prints if p.kind == "NODE")
+
+    @property
+    def el_prints(self) -> tuple[PrintRequest, ...]:
+        """The ``*EL PRINT`` requests."""
+        return tuple(p for p in self.prints if p.kind == "EL")
+
+    @property
+    def contact_prints(self) -> tuple[PrintRequest, ...]:
+        """The ``*CONTACT PRINT`` requests."""
+        return tuple(p for p in self.prints if p.kind == "CONTACT")
+
+    @property
+    def contact_elements(self) -> bool:
+        """True if a file/output request carries CONTACT ELEMENTS (write the ``.cel`` file)."""
+        return any(r.contact_elements for r in self.file_requests)
+
+    @property
+    def boundary_op(self) -> str:
+        """OP of the first ``*BOUNDARY`` card of the step (``MOD`` if none)."""
+        return self.boundaries[0].op if self.boundaries else "MOD"
+
+    @property
+    def cload_op(self) -> str:
+        """OP of the first ``*CLOAD`` card of the step (``MOD`` if none)."""
+        return self.cloads[0].op if self.cloads else "MOD"
+
+    @property
+    def dload_op(self) -> str:
+        """OP of the first ``*DLOAD`` card of the step (``MOD`` if none)."""
+        return self.dloads[0].op if self.dloads else "MOD"
+
+    def field_controls(self) -> dict[str, float | None]:
+        """``*CONTROLS, PARAMETERS=FIELD`` values by name, ccx defaults where not given."""
+        values = dict(FIELD_CONTROL_DEFAULTS)
+        given = [v for line in self.controls.get("FIELD", ()) for v in line]
+        for name, value in zip(FIELD_CONTROL_NAMES, given):
+            if value is not None:
+                values[name] = value
+        return values
+
+
+@dataclass(frozen=True, eq=False)
+class Deck:
+    """A parsed deck.
+
+    Attributes:
+        path: the main deck file.
+        heading: ``*HEADING`` text.
+        node_ids: ``(N,)`` node numbers, ascending.
+        node_coords: ``(N, 3)`` reference coordinates, rows matching ``node_ids``.
+        elements: element blocks by type name (``C3D8``, ...).
+        nsets, elsets: members in definition order (duplicates kept).
+        surfaces, materials, interactions, amplitudes: by upper-case name.
+        sections: ``*SOLID SECTION`` cards.
+        contact_pairs: in deck order (docs/method.md §2.1: contact elements follow that order).
+        boundaries: ``*BOUNDARY`` cards of the model definition (before the first step).
+        steps: the steps.
+        ignored: ``(keyword, file, line)`` of output/control keywords that were skipped.
+        warnings: every keyword and parameter skipped by ``LENIENCY``, in deck order.
+        equations: ``*EQUATION`` constraints (model definition), in deck order.
+    """
+
+    path: str
+    heading: str
+    node_ids: np.ndarray
+    node_coords: np.ndarray
+    elements: dict[str, ElementBlock]
+    nsets: dict[str, np.ndarray]
+    elsets: dict[str, np.ndarray]
+    surfaces: dict[str, Surface]
+    materials: dict[str, Material]
+    sections: tuple[SolidSection, ...]
+    interactions: dict[str, SurfaceInteraction]
+    contact_pairs: tuple[ContactPair, ...]
+    amplitudes: dict[str, Amplitude]
+    boundaries: tuple[Boundary, ...]
+    steps: tuple[Step, ...]
+    ignored: tuple[tuple[str, str, int], ...]
+    warnings: tuple[DeckWarning, ...] = ()
+    initial_velocities: tuple[InitialVelocity, ...] = ()
+    equations: tuple[Equation, ...] = ()
+
+    @property
+    def num_elements(self) -> int:
+        """Total number of elements (ccx numbers contact elements after them)."""
+        return sum(int(b.ids.size) for b in self.elements.values())
+
+    def node_index(self, ids) -> np.ndarray:
+        """Row indices in ``node_ids``/``node_coords`` of node numbers ``ids`` (any shape)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        index = np.searchsorted(self.node_ids, ids)
+        index = np.minimum(index, max(self.node_ids.size - 1, 0))
+        bad = self.node_ids.size == 0 or np.any(self.node_ids[index] != ids)
+        if bad:
+            missing = ids[self.node_ids[index] != ids] if self.node_ids.size else ids
+            raise ValueError(f"node {int(missing.flat[0])} is not defined in {self.path}")
+        return index
+
+    @functools.cached_property
+    def _element_lookup(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+        names = list(self.elements)
+        ids = [b.ids for b in self.elements.values()]
+        all_ids = np.concatenate(ids) if ids else np.zeros(0, np.int64)
+        type_index = (
+            np.concatenate(
+                [np.full(b.ids.size, k, np.int64) for k, b in enumerate(self.elements.values())]
+            )
+            if ids
+            else np.zeros(0, np.int64)
+        )
+        row = (
+            np.concatenate([np.arange(b.ids.size) for b in self.elements.values()])
+            if ids
+            else (np.zeros(0, np.int64))
+        )
+        order = np.argsort(all_ids, kind="stable")
+        return all_ids[order], type_index[order], row[order], names
+
+    def element_location(self, ids) -> tuple[np.ndarray, np.ndarray]:
+        """For element numbers ``ids (K,)``: index into ``list(elements)`` and row in that block."""
+        ids = np.asarray(ids, dtype=np.int64).ravel()
+        sorted_ids, type_index, row, _ = self._element_lookup
+        pos = np.searchsorted(sorted_ids, ids)
+        pos = np.minimum(pos, max(sorted_ids.size - 1, 0))
+        if sorted_ids.size == 0 or np.any(sorted_ids[pos] != ids):
+            missing = ids[sorted_ids[pos] != ids] if sorted_ids.size else ids
+            raise ValueError(f"element {int(missing[0])} is not defined in {self.path}")
+        return type_index[pos], row[pos]
+
+    def element_types(self, ids) -> list[str]:
+        """Type name of each element number in ``ids``."""
+        type_index, _ = self.element_location(ids)
+        names = self._element_lookup[3]
+        return [names[k] for k in type_index]

@@ -1,0 +1,47 @@
+"""Which keywords belong where: model definition, steps, material and interaction blocks."""
+
+from __future__ import annotations
+
+from .lexer import _name
+
+# Constraints and kinematic couplings: "not supported yet".
+_UNSUPPORTED_CONSTRAINTS = {
+    _name(k)
+    for k in (
+        "TIE", "RIGID BODY", "MPC", "NETWORK MPC", "COUPLING", "KINEMATIC",
+        "DISTRIBUTING", "DISTRIBUTING COUPLING", "PRE-TENSION SECTION", "CLEARANCE", "GAP",
+        "SPRING", "DASHPOT", "MASS", "TRANSFORM", "ORIENTATION", "CHANGE CONTACT TYPE",
+        "CHANGE KINEMATIC", "CHANGE TIE", "CYCLIC SYMMETRY MODEL", "RETAINED NODAL DOFS",
+    )
+}  # fmt: skip
+
+
+# Material data a static step does not use.
+_UNUSED_MATERIAL = {_name(k) for k in ("DENSITY", "EXPANSION", "CONDUCTIVITY", "SPECIFIC HEAT")}
+
+# Interaction data a static mechanical step does not use.
+_UNUSED_INTERACTION = {_name(k) for k in ("CONTACT DAMPING", "GAP CONDUCTANCE")}
+
+# Keywords that continue the current *MATERIAL / *SURFACE INTERACTION block.
+_CONTEXT_KEYWORDS = (
+    {"ELASTIC", "FRICTION", "SURFACEBEHAVIOR"} | _UNUSED_MATERIAL | _UNUSED_INTERACTION
+)
+
+_STEP_KEYWORDS = {
+    _name(k)
+    for k in (
+        "STATIC", "CLOAD", "DLOAD", "NODE PRINT", "EL PRINT", "CONTACT PRINT", "NODE FILE",
+        "EL FILE", "CONTACT FILE", "NODE OUTPUT", "ELEMENT OUTPUT", "CONTACT OUTPUT", "CONTROLS",
+        "CHANGE FRICTION", "MODEL CHANGE", "END STEP", "DYNAMIC",
+    )
+}  # fmt: skip
+
+_MODEL_KEYWORDS = {
+    _name(k)
+    for k in (
+        "NODE", "ELEMENT", "NSET", "ELSET", "SURFACE", "MATERIAL", "ELASTIC", "SOLID SECTION",
+        "CONTACT PAIR", "SURFACE INTERACTION", "SURFACE BEHAVIOR", "DENSITY", "EXPANSION",
+        "CONDUCTIVITY", "SPECIFIC HEAT", "CONTACT DAMPING", "GAP CONDUCTANCE", "EQUATION",
+        "INITIAL CONDITIONS",
+    )
+}  # fmt: skip

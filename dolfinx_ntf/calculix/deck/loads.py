@@ -1,0 +1,177 @@
+"""Load, constraint and initial condition cards.
+
+``*AMPLITUDE``, ``*BOUNDARY``, ``*EQUATION``, ``*INITIAL CONDITIONS``, ``*CLOAD``, ``*DLOAD``.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from ..elements import _frozen_array
+from .data import Amplitude, Boundary, CLoad, DLoad, Equation, InitialVelocity
+from .errors import DeckError
+from .lexer import _Card
+from .state import _ReaderState
+
+
+class _LoadCards(_ReaderState):
+    """Handlers of the load, constraint and initial condition cards."""
+
+    def _k_AMPLITUDE(self, card: _Card) -> None:
+        self._check_params(card, allowed={"NAME", "TIME"}, required={"NAME"})
+        time = card.params.get("TIME")
+        if time not in (None, "TOTALTIME", "STEPTIME"):
+            raise DeckError(f"*AMPLITUDE, TIME={time}: use TIME=TOTAL TIME", card.location)
+        self._need_data(card)
+        values: list[float] = []
+        for fields, _, loc in card.lines:
+            values.extend(self._float(t, "amplitude data", loc) for t in fields if t != "")
+        if len(values) % 2:
+            raise DeckError(
+                "*AMPLITUDE needs time, value pairs (odd number of entries)", card.location
+            )
+        pairs = np.array(values, dtype=np.float64).reshape(-1, 2)
+        if np.any(np.diff(pairs[:, 0]) < 0.0):
+            raise DeckError("*AMPLITUDE times must not decrease", card.location)
+        name = card.params["NAME"] or ""
+        self.amplitudes[name] = Amplitude(
+            name,
+            _frozen_array(pairs[:, 0], np.float64),
+            _frozen_array(pairs[:, 1], np.float64),
+            time == "TOTALTIME",
+            card.location,
+        )
+
+    def _amplitude_param(self, card: _Card) -> str | None:
+        name = card.params.get("AMPLITUDE")
+        if name is not None and name not in self.amplitudes:
+            raise DeckError(f"amplitude {name} is not defined (before this line)", card.location)
+        return name
+
+    def _k_BOUNDARY(self, card: _Card) -> None:
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
+        op = self._op(card)
+        amplitude = self._amplitude_param(card)
+        target_list = self.step.boundaries if self.step is not None else self.boundaries
+        for fields, _, loc in card.lines:
+            if not 2 <= len(fields) <= 4:
+                raise DeckError(
+                    "*BOUNDARY data line: node or node set, first dof[, last dof[, value]]", loc
+                )
+            nodes = self._nodes_of(fields[0], card, loc)
+            first = self._dof(fields[1], loc)
+            last = self._dof(fields[2], loc) if len(fields) > 2 and fields[2] else first
+            if last < first:
+                raise DeckError(f"*BOUNDARY: last dof {last} < first dof {first}", loc)
+            value = self._optional_float(fields, 3, "prescribed value", loc) or 0.0
+            target_list.append(
+                Boundary(
+                    _frozen_array(nodes, np.int64),
+                    first,
+                    last,
+                    value,
+                    amplitude,
+                    op,
+                    fields[0],
+                    loc,
+                )
+            )
+
+    def _k_EQUATION(self, card: _Card) -> None:
+        """Blocks of a term count line, then that many (node, dof, coefficient) triples."""
+        self._check_params(card, allowed=set())
+        self._need_data(card)
+        lines = iter(card.lines)
+        for fields, _, loc in lines:
+            fields = [f for f in fields if f != ""]
+            if len(fields) != 1:
+                raise DeckError("*EQUATION: a line with the number of terms is expected", loc)
+            count = self._int(fields[0], "number of terms", loc)
+            if count < 1:
+                raise DeckError(f"*EQUATION: number of terms must be >= 1, got {count}", loc)
+            tokens: list[str] = []
+            for more, _, more_loc in lines:
+                more = [f for f in more if f != ""]
+                if len(more) % 3 or len(tokens) + len(more) > 3 * count:
+                    raise DeckError(
+                        f"*EQUATION: {count} terms (node, dof, coefficient) expected; this line "
+                        f"has {len(more)} fields after {len(tokens) // 3} terms",
+                        more_loc,
+                    )
+                tokens += more
+                if len(tokens) == 3 * count:
+                    break
+            if len(tokens) != 3 * count:
+                raise DeckError(f"*EQUATION: {count} terms expected, the card ends before", loc)
+            nodes = []
+            for token in tokens[0::3]:
+                ids = self._nodes_of(token, card, loc)
+                if ids.size != 1:
+                    raise DeckError(
+                        f"*EQUATION: node set {token} has {ids.size} nodes, one is needed", loc
+                    )
+                nodes.append(int(ids[0]))
+            dofs = [self._dof(t, loc) for t in tokens[1::3]]
+            coefficients = [self._float(t, "coefficient", loc) for t in tokens[2::3]]
+            if coefficients[0] == 0.0:
+                raise DeckError("*EQUATION: the first (dependent) coefficient is zero", loc)
+            self.equations.append(Equation(
+                _frozen_array(nodes, np.int64), _frozen_array(dofs, np.int64),
+                _frozen_array(coefficients, np.float64), loc,
+            ))  # fmt: skip
+
+    def _k_INITIALCONDITIONS(self, card: _Card) -> None:
+        self._check_params(card, allowed={"TYPE"}, required={"TYPE"})
+        if card.params["TYPE"] != "VELOCITY":
+            raise DeckError(
+                "*INITIAL CONDITIONS is not supported yet for "
+                f"TYPE={card.raw_params['TYPE']} (only TYPE=VELOCITY)",
+                card.location,
+            )
+        self._need_data(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 3:
+                raise DeckError(
+                    "*INITIAL CONDITIONS, TYPE=VELOCITY data line: node or node set, dof, value",
+                    loc,
+                )
+            nodes = self._nodes_of(fields[0], card, loc)
+            value = self._floats_line(fields[2:3], "*INITIAL CONDITIONS", loc)[0]
+            self.initial_velocities.append(
+                InitialVelocity(_frozen_array(nodes, np.int64), self._dof(fields[1], loc),
+                                float(value or 0.0), loc)
+            )  # fmt: skip
+
+    def _k_CLOAD(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
+        op, amplitude = self._op(card), self._amplitude_param(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 3:
+                raise DeckError("*CLOAD data line: node or node set, dof, value", loc)
+            nodes = self._nodes_of(fields[0], card, loc)
+            dof = self._dof(fields[1], loc)
+            value = self._float(fields[2], "load", loc)
+            step.cloads.append(CLoad(_frozen_array(nodes, np.int64), dof, value, amplitude, op,
+                                     fields[0], loc))  # fmt: skip
+
+    def _k_DLOAD(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
+        op, amplitude = self._op(card), self._amplitude_param(card)
+        for fields, _, loc in card.lines:
+            label = fields[1] if len(fields) > 1 else ""
+            if label and not re.fullmatch(r"P[1-6]", label):
+                raise DeckError(
+                    f"*DLOAD load type {label} is not supported yet (only uniform pressure P1..P6)",
+                    loc,
+                )
+            if len(fields) != 3:
+                raise DeckError("*DLOAD data line: element or element set, P1..P6, pressure", loc)
+            elements = self._elements_of(fields[0], card, loc)
+            self.element_refs.append((f"{card.name} face {label}", elements, loc))
+            value = self._float(fields[2], "pressure", loc)
+            step.dloads.append(DLoad(_frozen_array(elements, np.int64), int(label[1]), value,
+                                     amplitude, op, fields[0], loc))  # fmt: skip

@@ -1,0 +1,66 @@
+"""Material cards: ``*MATERIAL``, ``*ELASTIC``, unused material data, ``*SOLID SECTION``."""
+
+from __future__ import annotations
+
+from .data import SolidSection
+from .errors import DeckError
+from .lexer import _Card
+from .state import _MaterialBuilder, _ReaderState
+
+
+class _MaterialCards(_ReaderState):
+    """Handlers of the material and section cards."""
+
+    def _k_MATERIAL(self, card: _Card) -> None:
+        self._check_params(card, allowed={"NAME"}, required={"NAME"})
+        self._no_data(card)
+        name = self._new_name(card, self.materials, "material")
+        self.context = self.materials[name] = _MaterialBuilder(name, card.location)
+
+    def _material(self, card: _Card) -> _MaterialBuilder:
+        if not isinstance(self.context, _MaterialBuilder):
+            raise DeckError(f"{card.name} must follow a *MATERIAL card", card.location)
+        return self.context
+
+    def _k_ELASTIC(self, card: _Card) -> None:
+        material = self._material(card)
+        self._check_params(card, allowed={"TYPE"})
+        etype = card.params.get("TYPE") or "ISO"
+        if etype != "ISO":
+            raise DeckError(
+                f"*ELASTIC, TYPE={etype} is not supported yet (only isotropic)", card.location
+            )
+        self._need_data(card)
+        if len(card.lines) > 1:
+            raise DeckError(
+                "temperature-dependent *ELASTIC (several data lines) is not supported yet",
+                card.lines[1][2],
+            )
+        fields, _, loc = card.lines[0]
+        if not 2 <= len(fields) <= 3:
+            raise DeckError("*ELASTIC data line: E, nu[, temperature]", loc)
+        young = self._float(fields[0], "Young's modulus", loc)
+        nu = self._float(fields[1], "Poisson's ratio", loc)
+        if young <= 0.0 or not -1.0 < nu < 0.5:
+            raise DeckError(f"*ELASTIC needs E > 0 and -1 < nu < 0.5, got {young}, {nu}", loc)
+        if material.elastic is not None:
+            raise DeckError(
+                f"material {material.name} has two *ELASTIC cards (first at "
+                f"{material.elastic_location})",
+                card.location,
+            )
+        material.elastic = (young, nu)
+        material.elastic_location = card.location
+
+    def _unused_material(self, card: _Card) -> None:
+        material = self._material(card)
+        material.extra[card.name] = tuple(
+            self._floats_line(f, card.name, loc) for f, _, loc in card.lines
+        )
+
+    def _k_SOLIDSECTION(self, card: _Card) -> None:
+        self._check_params(card, allowed={"ELSET", "MATERIAL"}, required={"ELSET", "MATERIAL"})
+        elset = card.params["ELSET"] or ""
+        if elset not in self.elsets:
+            raise DeckError(f"element set {elset} is not defined (before this line)", card.location)
+        self.sections.append(SolidSection(elset, card.params["MATERIAL"] or "", card.location))

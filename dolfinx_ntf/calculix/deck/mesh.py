@@ -1,0 +1,155 @@
+"""Mesh cards: ``*NODE``, ``*ELEMENT``, ``*NSET``, ``*ELSET``, ``*SURFACE``."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from ..elements import ELEMENT_TYPES, REFUSED_ELEMENTS, _frozen_array
+from .data import Surface
+from .errors import DeckError, Location
+from .lexer import _INT_RE, _Card
+from .state import _ReaderState
+
+
+class _MeshCards(_ReaderState):
+    """Handlers of the mesh, set and surface cards."""
+
+    def _k_NODE(self, card: _Card) -> None:
+        self._check_params(card, allowed={"NSET"})
+        ids: list[int] = []
+        for fields, _, loc in card.lines:
+            if not 1 <= len(fields) <= 4:
+                raise DeckError("*NODE data line: node number, x, y, z", loc)
+            ids.append(self._int(fields[0], "node number", loc))
+            xyz = [self._optional_float(fields, i, "a coordinate", loc) or 0.0 for i in (1, 2, 3)]
+            self.node_coords.append((xyz[0], xyz[1], xyz[2]))
+            self.node_locs.append(loc)
+        self.node_ids.extend(ids)
+        if card.params.get("NSET"):
+            self._add_set(self.nsets, "node", card.params["NSET"], ids, card.location)
+
+    def _k_ELEMENT(self, card: _Card) -> None:
+        self._check_params(card, allowed={"TYPE", "ELSET"}, required={"TYPE"})
+        type_name = card.params["TYPE"] or ""
+        if type_name not in ELEMENT_TYPES:
+            supported = ", ".join(ELEMENT_TYPES)
+            why = REFUSED_ELEMENTS.get(type_name, "")
+            raise DeckError(
+                f"element type {type_name} is not supported{why} (supported: {supported})",
+                card.location,
+            )
+        etype = ELEMENT_TYPES[type_name]
+        needed = etype.num_nodes + 1
+        ids: list[int] = []
+        tokens: list[str] = []
+        start: Location | None = None
+        for fields, raw, loc in card.lines:
+            if not tokens:
+                start = loc
+            tokens.extend(fields)
+            if len(tokens) < needed:
+                continue
+            if len(tokens) > needed:
+                raise DeckError(
+                    f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has "
+                    f"{etype.num_nodes}",
+                    start,
+                )
+            numbers = [self._int(t, "element or node number", start) for t in tokens]
+            ids.append(numbers[0])
+            self.element_rows[type_name].append(numbers[1:])
+            self.element_locs[type_name].append(start)
+            tokens = []
+        if tokens:
+            raise DeckError(
+                f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has "
+                f"{etype.num_nodes}",
+                start,
+            )
+        self.element_ids[type_name].extend(ids)
+        if card.params.get("ELSET"):
+            self._add_set(self.elsets, "element", card.params["ELSET"], ids, card.location)
+
+    def _add_set(self, sets: dict, kind: str, name: str, ids: list[int], loc: Location) -> None:
+        sets.setdefault(name, []).extend(ids)
+        self.set_locations.setdefault((kind, name), loc)
+
+    def _k_NSET(self, card: _Card) -> None:
+        self._set_card(card, "NSET", self.nsets, "node")
+
+    def _k_ELSET(self, card: _Card) -> None:
+        self._set_card(card, "ELSET", self.elsets, "element")
+
+    def _set_card(self, card: _Card, param: str, sets: dict, kind: str) -> None:
+        self._check_params(card, allowed={param, "GENERATE"}, required={param})
+        name = card.params[param] or ""
+        members: list[int] = []
+        for fields, _, loc in card.lines:
+            if "GENERATE" in card.params:
+                if len(fields) not in (2, 3):
+                    raise DeckError(
+                        f"{card.name}, GENERATE data line: first, last[, increment]", loc
+                    )
+                first, last = (self._int(t, f"{kind} number", loc) for t in fields[:2])
+                inc = self._int(fields[2], "increment", loc) if len(fields) == 3 else 1
+                if inc <= 0 or last < first:
+                    raise DeckError(
+                        f"{card.name}, GENERATE: need first <= last and increment > 0, got "
+                        f"{first}, {last}, {inc}",
+                        loc,
+                    )
+                ids = list(range(first, last + 1, inc))
+                self._ref(kind, card, np.array(ids, dtype=np.int64), loc)
+                members.extend(ids)
+                continue
+            for token in fields:
+                if token == "":
+                    continue
+                if _INT_RE.match(token):
+                    self._ref(kind, card, np.array([int(token)], dtype=np.int64), loc)
+                    members.append(int(token))
+                elif token in sets:
+                    members.extend(sets[token])
+                else:
+                    raise DeckError(f"{kind} set {token} is not defined (before this line)", loc)
+        self._add_set(sets, kind, name, members, card.location)
+
+    def _ref(self, kind: str, card: _Card, ids: np.ndarray, loc: Location) -> None:
+        (self.node_refs if kind == "node" else self.element_refs).append((card.name, ids, loc))
+
+    def _k_SURFACE(self, card: _Card) -> None:
+        self._check_params(card, allowed={"NAME", "TYPE"}, required={"NAME"})
+        stype = card.params.get("TYPE") or "ELEMENT"
+        if stype not in ("ELEMENT", "NODE"):
+            raise DeckError(f"*SURFACE TYPE={stype}: use TYPE=ELEMENT or TYPE=NODE", card.location)
+        name = self._new_name(card, self.surfaces, "surface")
+        elements: list[np.ndarray] = []
+        faces: list[np.ndarray] = []
+        nodes: list[np.ndarray] = []
+        for fields, _, loc in card.lines:
+            fields = [f for f in fields if f != ""]
+            if stype == "NODE":
+                for token in fields:
+                    nodes.append(self._nodes_of(token, card, loc))
+                continue
+            if len(fields) != 2:
+                raise DeckError(
+                    "*SURFACE data line: element or element set, face label S1..S6", loc
+                )
+            label = fields[1]
+            if not re.fullmatch(r"S[1-6]", label):
+                raise DeckError(f"bad face label {label!r}: use S1..S6", loc)
+            ids = self._elements_of(fields[0], card, loc)
+            self.element_refs.append((f"{card.name} face {label}", ids, loc))
+            elements.append(ids)
+            faces.append(np.full(ids.size, int(label[1]), dtype=np.int64))
+        self.surfaces[name] = Surface(
+            name=name,
+            type=stype,
+            elements=_frozen_array(np.concatenate(elements) if elements else [], np.int64),
+            faces=_frozen_array(np.concatenate(faces) if faces else [], np.int64),
+            nodes=_frozen_array(np.concatenate(nodes) if nodes else [], np.int64),
+            location=card.location,
+        )

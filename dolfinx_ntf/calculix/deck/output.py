@@ -1,0 +1,93 @@
+"""Output request cards: ``*NODE/EL/CONTACT PRINT`` and ``*NODE/EL/CONTACT FILE`` (``OUTPUT``)."""
+
+from __future__ import annotations
+
+from .data import FileRequest, PrintRequest
+from .errors import DeckError
+from .lexer import _Card
+from .state import _ReaderState
+
+_FILE_KEYWORDS = {
+    "NODEFILE": "NODE",
+    "NODEOUTPUT": "NODE",
+    "ELFILE": "EL",
+    "ELEMENTOUTPUT": "EL",
+    "CONTACTFILE": "CONTACT",
+    "CONTACTOUTPUT": "CONTACT",
+}
+
+_PRINT_KEYS = {"NODE": ("U", "RF"), "EL": ("S",), "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM")}
+
+
+class _OutputCards(_ReaderState):
+    """Handlers of the print and file request cards."""
+
+    def _print_card(self, card: _Card, kind: str) -> None:
+        step = self._in_step(card)
+        set_param = {"NODE": "NSET", "EL": "ELSET", "CONTACT": "NSET"}[kind]
+        allowed = {set_param, "TOTALS", "FREQUENCY", "FREQUENCYF", "GLOBAL"}
+        required = {set_param} if kind != "CONTACT" else set()
+        self._check_params(card, allowed=allowed, required=required)
+        totals = card.params.get("TOTALS") or "NO"
+        if totals not in ("YES", "NO", "ONLY"):
+            raise DeckError(f"TOTALS={totals}: use YES, NO or ONLY", card.location)
+        set_name = None
+        if kind != "CONTACT":  # ccx ignores NSET on *CONTACT PRINT (docs/method.md §8.5)
+            set_name = card.params[set_param] or ""
+            sets = self.nsets if kind == "NODE" else self.elsets
+            if set_name not in sets:
+                raise DeckError(
+                    f"{'node' if kind == 'NODE' else 'element'} set {set_name} is not defined "
+                    "(before this line)",
+                    card.location,
+                )
+        self._need_data(card)
+        keys = tuple(k for fields, _, _ in card.lines for k in fields if k != "")
+        if kind == "CONTACT":  # ccx reads the first four characters only (CDISP is CDIS)
+            keys = tuple(k[:4] for k in keys)
+        for key in keys:
+            if key not in _PRINT_KEYS[kind]:
+                raise DeckError(
+                    f"{card.name} key {key} is not supported yet (supported: "
+                    f"{', '.join(_PRINT_KEYS[kind])})",
+                    card.location,
+                )
+        frequency = self._frequency(card)
+        if not any(p.kind == kind for p in step.new_prints):
+            self.prints = [p for p in self.prints if p.kind != kind]
+        request = PrintRequest(kind, keys, set_name, totals, frequency, card.location)
+        step.new_prints.append(request)
+        self.prints.append(request)
+
+    def _k_NODEPRINT(self, card: _Card) -> None:
+        self._print_card(card, "NODE")
+
+    def _k_ELPRINT(self, card: _Card) -> None:
+        self._print_card(card, "EL")
+
+    def _k_CONTACTPRINT(self, card: _Card) -> None:
+        self._print_card(card, "CONTACT")
+
+    def _file_card(self, card: _Card) -> None:
+        step = self._in_step(card)
+        kind = _FILE_KEYWORDS[card.keyword]
+        self._check_params(card, allowed={"NSET", "FREQUENCY", "FREQUENCYF", "GLOBAL", "OUTPUT",
+                                          "LASTITERATIONS", "CONTACTELEMENTS",
+                                          "SECTIONFORCES"})  # fmt: skip
+        keys = tuple(k for fields, _, _ in card.lines for k in fields if k != "")
+        set_name = None
+        if "NSET" in card.params:  # ccx restricts *NODE/EL FILE to it (docs/method.md §13.2)
+            set_name = card.params["NSET"] or ""
+            if set_name not in self.nsets:
+                raise DeckError(f"node set {set_name} is not defined (before this line)",
+                                card.location)  # fmt: skip
+        frequency = self._frequency(card)
+        if not any(r.kind == kind for r in step.new_files):
+            self.files = [r for r in self.files if r.kind != kind]
+        request = FileRequest(card.name, kind, keys, set_name, "CONTACTELEMENTS" in card.params,
+                              frequency, card.location)  # fmt: skip
+        step.new_files.append(request)
+        self.files.append(request)
+
+    _k_NODEFILE = _k_NODEOUTPUT = _k_ELFILE = _k_ELEMENTOUTPUT = _file_card
+    _k_CONTACTFILE = _k_CONTACTOUTPUT = _file_card

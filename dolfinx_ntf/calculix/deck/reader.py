@@ -1,0 +1,112 @@
+"""``read_deck``: the cards of a deck dispatched to their handlers.
+
+See docs/method.md §8.5.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from .checks import _Checks
+from .data import Deck
+from .errors import DeckError, DeckWarning
+from .interactions import _InteractionCards
+from .keywords import (
+    _CONTEXT_KEYWORDS,
+    _MODEL_KEYWORDS,
+    _STEP_KEYWORDS,
+    _UNSUPPORTED_CONSTRAINTS,
+    _UNUSED_INTERACTION,
+    _UNUSED_MATERIAL,
+)
+from .leniency import _LENIENCY
+from .lexer import _CANONICAL, _Card, read_cards
+from .loads import _LoadCards
+from .materials import _MaterialCards
+from .mesh import _MeshCards
+from .output import _OutputCards
+from .steps import _StepCards
+
+
+class _Reader(
+    _MeshCards, _MaterialCards, _InteractionCards, _LoadCards, _StepCards, _OutputCards, _Checks
+):
+    """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""
+
+    def read(self) -> Deck:
+        for card in read_cards(self.path):
+            self._dispatch(card)
+        if self.step is not None:
+            raise DeckError("*STEP without *END STEP", self.step.location)
+        return self._finish()
+
+    def _dispatch(self, card: _Card) -> None:
+        key = card.keyword
+        if key in _STEP_KEYWORDS and key != "ENDSTEP":
+            self._in_step(card)
+        if key in _MODEL_KEYWORDS and self.step is not None:
+            raise DeckError(
+                f"{card.name} is a model definition keyword: it must come before the first *STEP",
+                card.location,
+            )
+        if key not in _CONTEXT_KEYWORDS:
+            self.context = None
+        if self._apply_leniency(card):
+            return
+        handler: Callable[[_Card], None] | None = getattr(self, f"_k_{key.replace('-', '_')}", None)
+        if handler is not None:
+            handler(card)
+        elif key in _UNUSED_MATERIAL:
+            self._unused_material(card)
+        elif key in _UNUSED_INTERACTION:
+            self._unused_interaction(card)
+        elif key in _UNSUPPORTED_CONSTRAINTS:
+            raise DeckError(f"{card.name} is not supported yet (constraint)", card.location)
+        elif key in _CANONICAL:
+            raise DeckError(f"{card.name} is not supported yet", card.location)
+        else:
+            raise DeckError(f"unknown keyword *{card.text}", card.location)
+
+    def _apply_leniency(self, card: _Card) -> bool:
+        """Apply ``LENIENCY`` to ``card``: warn or refuse; True if the whole card is skipped."""
+        rules = _LENIENCY.get(card.keyword, {})
+        for key in list(card.params):
+            rule = rules.get(key) or rules.get("*")
+            if rule is None:
+                continue
+            action, reason, spelling = rule
+            if action == "refuse":
+                raise DeckError(
+                    f"{card.name}, {spelling} is not supported yet ({reason})", card.location
+                )
+            raw = card.raw_params[key]
+            written = key if spelling == "*" else spelling
+            self.warnings.append(DeckWarning(
+                card.name, written if raw is None else f"{written}={raw}", reason, card.location
+            ))  # fmt: skip
+            del card.params[key], card.raw_params[key]
+        if "" not in rules:
+            return False
+        self._ignore(card, rules[""][1])
+        return True
+
+    def _k_HEADING(self, card: _Card) -> None:
+        self._check_params(card, allowed=set())
+        self.heading.extend(raw.strip() for _, raw, _ in card.lines)
+
+
+def read_deck(path: str | Path) -> Deck:
+    """Read a CalculiX ``.inp`` deck (node-to-face contact subset) with its ``*INCLUDE`` files.
+
+    Args:
+        path: the deck file.
+
+    Returns:
+        The parsed ``Deck``.
+
+    Raises:
+        DeckError: (a ``ValueError``) bad, inconsistent or unsupported input; the message starts
+            with ``file:line`` and names the keyword, number or set at fault.
+    """
+    return _Reader(Path(path)).read()

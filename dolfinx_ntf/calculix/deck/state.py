@@ -1,0 +1,208 @@
+"""The state of a deck being read and the field parsers every card handler uses."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..elements import ELEMENT_TYPES
+from .data import (
+    Amplitude,
+    Boundary,
+    CLoad,
+    ContactPair,
+    DLoad,
+    Dynamic,
+    Equation,
+    FileRequest,
+    Friction,
+    FrictionChange,
+    InitialVelocity,
+    ModelChange,
+    PrintRequest,
+    SolidSection,
+    Static,
+    Step,
+    Surface,
+    SurfaceBehavior,
+)
+from .errors import DeckError, DeckWarning, Location
+from .leniency import _SETS_FREQUENCY
+from .lexer import _INT_RE, _Card, _check_params
+
+
+@dataclass
+class _StepBuilder:
+    number: int
+    nlgeom: bool
+    max_increments: int
+    location: Location
+    static: Static | None = None
+    dynamic: Dynamic | None = None
+    boundaries: list[Boundary] = field(default_factory=list)
+    cloads: list[CLoad] = field(default_factory=list)
+    dloads: list[DLoad] = field(default_factory=list)
+    new_prints: list[PrintRequest] = field(default_factory=list)
+    new_files: list[FileRequest] = field(default_factory=list)
+    friction_changes: list[FrictionChange] = field(default_factory=list)
+    model_changes: list[ModelChange] = field(default_factory=list)
+    pending_friction: tuple[str, Location] | None = None
+
+
+@dataclass
+class _MaterialBuilder:
+    name: str
+    location: Location
+    elastic: tuple[float, float] | None = None
+    elastic_location: Location | None = None
+    extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
+
+
+@dataclass
+class _InteractionBuilder:
+    name: str
+    location: Location
+    behavior: SurfaceBehavior | None = None
+    friction: Friction | None = None
+    extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
+
+
+class _ReaderState:
+    """What has been read so far, and the helpers that parse and check card fields."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.heading: list[str] = []
+        self.node_ids: list[int] = []
+        self.node_coords: list[tuple[float, float, float]] = []
+        self.node_locs: list[Location] = []
+        self.element_rows: dict[str, list[list[int]]] = {t: [] for t in ELEMENT_TYPES}
+        self.element_ids: dict[str, list[int]] = {t: [] for t in ELEMENT_TYPES}
+        self.element_locs: dict[str, list[Location]] = {t: [] for t in ELEMENT_TYPES}
+        self.nsets: dict[str, list[int]] = {}
+        self.elsets: dict[str, list[int]] = {}
+        self.set_locations: dict[tuple[str, str], Location] = {}
+        self.surfaces: dict[str, Surface] = {}
+        self.materials: dict[str, _MaterialBuilder] = {}
+        self.sections: list[SolidSection] = []
+        self.interactions: dict[str, _InteractionBuilder] = {}
+        self.contact_pairs: list[ContactPair] = []
+        self.amplitudes: dict[str, Amplitude] = {}
+        self.boundaries: list[Boundary] = []
+        self.initial_velocities: list[InitialVelocity] = []
+        self.equations: list[Equation] = []
+        self.steps: list[Step] = []
+        self.ignored: list[tuple[str, str, int]] = []
+        self.warnings: list[DeckWarning] = []
+        self.step: _StepBuilder | None = None
+        self.context: _MaterialBuilder | _InteractionBuilder | None = None
+        # carried over between steps
+        self.prints: list[PrintRequest] = []
+        self.files: list[FileRequest] = []
+        self.controls: dict[str, tuple[tuple[float | None, ...], ...]] = {}
+        self.frequency = 1
+        self.nlgeom = False
+        # checks done once everything is read: (what, ids, location)
+        self.node_refs: list[tuple[str, np.ndarray, Location]] = []
+        self.element_refs: list[tuple[str, np.ndarray, Location]] = []
+
+    _check_params = staticmethod(_check_params)
+
+    @staticmethod
+    def _no_data(card: _Card) -> None:
+        if card.lines:
+            raise DeckError(f"{card.name} takes no data lines", card.lines[0][2])
+
+    @staticmethod
+    def _need_data(card: _Card) -> None:
+        if not card.lines:
+            raise DeckError(f"{card.name} needs a data line", card.location)
+
+    @staticmethod
+    def _new_name(card: _Card, defined: dict, what: str) -> str:
+        """The NAME parameter of ``card``, which must not name an already defined ``what``."""
+        name = card.params["NAME"] or ""
+        if name in defined:
+            raise DeckError(
+                f"{what} {name} is defined twice (first at {defined[name].location})", card.location
+            )
+        return name
+
+    @staticmethod
+    def _int(token: str, what: str, location: Location) -> int:
+        if token.isascii() and token.isdigit():
+            return int(token)
+        if not _INT_RE.match(token):
+            raise DeckError(f"bad {what} {token!r}: an integer is required", location)
+        return int(token)
+
+    @staticmethod
+    def _float(token: str, what: str, location: Location) -> float:
+        try:
+            value = float(token.replace("D", "E").replace("d", "e"))
+        except ValueError:
+            raise DeckError(f"bad number {token!r} for {what}", location) from None
+        if not np.isfinite(value):
+            raise DeckError(f"bad number {token!r} for {what}: not finite", location)
+        return value
+
+    def _optional_float(self, fields: list[str], i: int, what: str, loc: Location) -> float | None:
+        if i < len(fields) and fields[i] != "":
+            return self._float(fields[i], what, loc)
+        return None
+
+    def _floats_line(self, fields: list[str], what: str, loc: Location) -> tuple[float | None, ...]:
+        return tuple(self._optional_float(fields, i, what, loc) for i in range(len(fields)))
+
+    def _nodes_of(self, token: str, card: _Card, loc: Location) -> np.ndarray:
+        if _INT_RE.match(token):
+            ids = np.array([int(token)], dtype=np.int64)
+            self.node_refs.append((f"{card.name}", ids, loc))
+            return ids
+        if token not in self.nsets:
+            raise DeckError(f"node set {token} is not defined (before this line)", loc)
+        return np.array(self.nsets[token], dtype=np.int64)
+
+    def _elements_of(self, token: str, card: _Card, loc: Location) -> np.ndarray:
+        if _INT_RE.match(token):
+            return np.array([int(token)], dtype=np.int64)
+        if token not in self.elsets:
+            raise DeckError(f"element set {token} is not defined (before this line)", loc)
+        return np.array(self.elsets[token], dtype=np.int64)
+
+    def _dof(self, token: str, loc: Location) -> int:
+        dof = self._int(token, "degree of freedom", loc)
+        if dof not in (1, 2, 3):
+            raise DeckError(
+                f"degree of freedom {dof} is not supported (solid elements have dofs 1, 2, 3)", loc
+            )
+        return dof
+
+    def _op(self, card: _Card) -> str:
+        op = card.params.get("OP") or "MOD"
+        if op not in ("NEW", "MOD"):
+            raise DeckError(f"OP={op} of {card.name}: use OP=NEW or OP=MOD", card.location)
+        return op
+
+    def _frequency(self, card: _Card) -> int | None:
+        if "FREQUENCY" not in card.params:
+            return None
+        value = self._int(card.params["FREQUENCY"] or "", "FREQUENCY", card.location)
+        if value < 0:
+            raise DeckError(f"FREQUENCY must be >= 0, got {value}", card.location)
+        self.frequency = value
+        return value
+
+    def _in_step(self, card: _Card) -> _StepBuilder:
+        if self.step is None:
+            raise DeckError(f"{card.name} is a step keyword: it must follow *STEP", card.location)
+        return self.step
+
+    def _ignore(self, card: _Card, reason: str) -> None:
+        """Skip a keyword, keeping the FREQUENCY it sets for every output (ccx rule)."""
+        if "FREQUENCY" in card.params and card.keyword in _SETS_FREQUENCY:
+            self._frequency(card)
+        self.ignored.append((card.name, card.location.file, card.location.line))
+        self.warnings.append(DeckWarning(card.name, None, reason, card.location))

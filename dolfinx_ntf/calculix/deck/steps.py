@@ -1,0 +1,175 @@
+"""Step cards: procedures, controls and changes between steps.
+
+``*STEP``, ``*STATIC``, ``*DYNAMIC``, ``*CONTROLS``, ``*CHANGE FRICTION``, ``*MODEL CHANGE``,
+``*END STEP``.
+"""
+
+from __future__ import annotations
+
+from .data import Dynamic, ModelChange, Static, Step
+from .errors import DeckError
+from .lexer import _Card
+from .state import _ReaderState, _StepBuilder
+
+
+class _StepCards(_ReaderState):
+    """Handlers of the step, procedure and step-change cards."""
+
+    def _k_STEP(self, card: _Card) -> None:
+        if self.step is not None:
+            raise DeckError(f"*STEP inside the step started at {self.step.location}", card.location)
+        self._check_params(card, allowed={"NLGEOM", "INC", "INCF"})
+        self._no_data(card)
+        nlgeom = card.params.get("NLGEOM", "NO" if not self.nlgeom else "YES")
+        if nlgeom not in (None, "YES", "NO"):
+            raise DeckError(f"NLGEOM={nlgeom}: use NLGEOM or NLGEOM=YES/NO", card.location)
+        self.nlgeom = nlgeom != "NO"
+        inc = 100
+        if "INC" in card.params:
+            inc = self._int(card.params["INC"] or "", "INC", card.location)
+            if inc <= 0:
+                raise DeckError(f"INC must be > 0, got {inc}", card.location)
+        self.step = _StepBuilder(len(self.steps) + 1, self.nlgeom, inc, card.location)
+        self.context = None
+
+    def _k_STATIC(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed={"DIRECT", "SOLVER", "TIMERESET", "TOTALTIMEATSTART",
+                                          "EXPLICIT"})  # fmt: skip
+        if step.static is not None:
+            raise DeckError("a step can have only one *STATIC card", card.location)
+        values: tuple[float | None, ...] = ()
+        if card.lines:
+            fields, _, loc = card.lines[0]
+            if len(card.lines) > 1 or len(fields) > 5:
+                raise DeckError(
+                    "*STATIC data line: initial increment, period, minimum, maximum", loc
+                )
+            values = self._floats_line(fields[:4], "*STATIC", loc)
+        values = values + (None,) * (4 - len(values))
+        for name, value in zip(("initial increment", "period", "minimum", "maximum"), values):
+            if value is not None and value <= 0.0 and name != "minimum":
+                raise DeckError(f"*STATIC {name} must be > 0, got {value}", card.location)
+        total_at_start = None
+        if "TOTALTIMEATSTART" in card.params:
+            total_at_start = self._float(
+                card.params["TOTALTIMEATSTART"] or "", "TOTAL TIME AT START", card.location
+            )
+        step.static = Static(
+            initial_increment=values[0] if values[0] is not None else 1.0,
+            period=values[1] if values[1] is not None else 1.0,
+            minimum=values[2],
+            maximum=values[3],
+            direct="DIRECT" in card.params,
+            time_reset="TIMERESET" in card.params,
+            total_time_at_start=total_at_start,
+        )
+
+    def _k_DYNAMIC(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed={"DIRECT", "ALPHA", "SOLVER", "EXPLICIT"})
+        if "EXPLICIT" in card.params:
+            raise DeckError(
+                "*DYNAMIC, EXPLICIT is not supported yet (implicit only)", card.location
+            )
+        if step.static is not None:
+            raise DeckError("a step can have only one *STATIC or *DYNAMIC card", card.location)
+        alpha = -0.05
+        if "ALPHA" in card.params:
+            alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
+            if not -1.0 / 3.0 <= alpha <= 0.0:
+                raise DeckError(f"*DYNAMIC ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        self._need_data(card)
+        fields, _, loc = card.lines[0]
+        if len(card.lines) > 1 or len(fields) > 5:
+            raise DeckError(
+                "*DYNAMIC data line: initial increment, period, minimum, maximum[, CFD increment]",
+                loc,
+            )
+        values = self._floats_line(fields[:4], "*DYNAMIC", loc)
+        values = values + (None,) * (4 - len(values))
+        for name, value in zip(("initial increment", "period"), values[:2]):
+            if value is None or value <= 0.0:
+                raise DeckError(f"*DYNAMIC {name} must be given and > 0, got {value}", loc)
+        step.static = Static(
+            initial_increment=values[0],
+            period=values[1],
+            minimum=values[2],
+            maximum=values[3],
+            direct="DIRECT" in card.params,
+        )
+        step.dynamic = Dynamic(alpha=alpha)
+
+    def _k_CONTROLS(self, card: _Card) -> None:
+        self._in_step(card)
+        self._check_params(card, allowed={"PARAMETERS", "RESET"})
+        if "RESET" in card.params:
+            self._no_data(card)
+            self.controls = {}
+            return
+        if "PARAMETERS" not in card.params or not card.params["PARAMETERS"]:
+            raise DeckError("*CONTROLS needs PARAMETERS=... or RESET", card.location)
+        self._need_data(card)
+        self.controls[card.params["PARAMETERS"]] = tuple(
+            self._floats_line(fields, "*CONTROLS", loc) for fields, _, loc in card.lines
+        )
+
+    def _k_CHANGEFRICTION(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed={"INTERACTION"}, required={"INTERACTION"})
+        self._no_data(card)
+        name = card.params["INTERACTION"] or ""
+        if name not in self.interactions:
+            raise DeckError(f"surface interaction {name} is not defined", card.location)
+        step.pending_friction = (name, card.location)
+
+    def _k_MODELCHANGE(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed={"TYPE", "ADD", "REMOVE"}, required={"TYPE"})
+        if card.params["TYPE"] != "CONTACTPAIR":
+            raise DeckError(
+                f"*MODEL CHANGE, TYPE={card.params['TYPE']} is not supported yet "
+                "(only TYPE=CONTACT PAIR)",
+                card.location,
+            )
+        if ("ADD" in card.params) == ("REMOVE" in card.params):
+            raise DeckError("*MODEL CHANGE needs exactly one of ADD and REMOVE", card.location)
+        action = "ADD" if "ADD" in card.params else "REMOVE"
+        self._need_data(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 2:
+                raise DeckError("*MODEL CHANGE data line: slave surface, master surface", loc)
+            step.model_changes.append(ModelChange(action, fields[0], fields[1], loc))
+
+    def _k_ENDSTEP(self, card: _Card) -> None:
+        step = self._in_step(card)
+        self._check_params(card, allowed=set())
+        self._no_data(card)
+        if step.static is None:
+            raise DeckError(
+                "the step has no *STATIC or *DYNAMIC procedure (the only ones supported)",
+                step.location,
+            )
+        if step.pending_friction is not None:
+            raise DeckError("*CHANGE FRICTION without a following *FRICTION",
+                            step.pending_friction[1])  # fmt: skip
+        self.steps.append(
+            Step(
+                number=step.number,
+                nlgeom=step.nlgeom,
+                max_increments=step.max_increments,
+                static=step.static,
+                boundaries=tuple(step.boundaries),
+                cloads=tuple(step.cloads),
+                dloads=tuple(step.dloads),
+                prints=tuple(self.prints),
+                file_requests=tuple(self.files),
+                output_frequency=self.frequency,
+                controls=dict(self.controls),
+                friction_changes=tuple(step.friction_changes),
+                model_changes=tuple(step.model_changes),
+                location=step.location,
+                dynamic=step.dynamic,
+            )
+        )
+        self.step = None
