@@ -338,8 +338,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         slave = parallel.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if self._face_centres.size:  # C3D20: quad8 slave faces, no face-centre slave nodes
             faces = serendipity.as_quad8(slave.faces, self._face_centres)
-            nodes = slave.nodes[~np.isin(slave.nodes, self._face_centres)]
-            slave = SlaveSurface(nodes, faces)
+            keep = ~np.isin(slave.nodes, self._face_centres)
+            faceless = None if slave.faceless is None else slave.faceless[keep]
+            slave = SlaveSurface(slave.nodes[keep], faces, faceless)
         if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
             if pair.interaction.friction is not None or pair.adjust is not None:
                 raise NotImplementedError(
@@ -627,8 +628,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         Returns the slave indices with a face, the face of every slave node (-1: none), the spring
         areas of all slave nodes, and the springs' kinematics (no tangent) of the found nodes.
         """
-        slave_faces = state.slave.faces
-        areas = spring_areas(slave_faces.face_type, slave_faces.faces, coords, state.slave.nodes)
+        areas = _slave_areas(state.slave, coords)
         state.master.update(coords)
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
@@ -716,8 +716,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             nodes = state.element_nodes
             friction = self._friction_input(state, coords, nodes)
             if self.linearize_area:  # areas follow the deformation between pairings too
-                faces = state.slave.faces
-                areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
+                areas = _slave_areas(state.slave, coords)
                 state.spring_area = areas[state.spring_slave]
             ev = spring_evaluator(state.master)(
                 state.master_faces.face_type,
@@ -783,6 +782,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
         spring = spring_of_slave[slave_index]
         keep = spring >= 0
+        if state.slave.faceless is not None:  # no face area: the fallback, not dA/du
+            keep &= ~state.slave.faceless[slave_index]
         spring, node, gradient = spring[keep], node[keep], gradient[keep]
         block_values = None
         if values:
@@ -923,6 +924,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.bcs = list(bcs)
         self.assembler.set_bcs(self.bcs)
         self._eliminate()
+
+
+def _slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
+    """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
+    faces = slave.faces
+    areas = spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    if slave.faceless is not None:
+        areas[slave.faceless] = 0.0
+    return areas
 
 
 def _broken(

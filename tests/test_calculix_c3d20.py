@@ -256,3 +256,29 @@ def test_c3d20_printed_and_file_results_match_ccx(tmp_path):
             scale = np.abs(a.values).max()
             # STRESS: the triquadratic extrapolation of the 27 values differs by 2.7e-5
             assert np.abs(a.values - b.values).max() < bound * scale, name
+
+
+def test_c3d20_node_surface_midside_nodes_take_no_face_area(tmp_path):
+    """ccx's rule: midside nodes of a TYPE=NODE slave surface get the fallback area, not 24/100."""
+    case = next(c for c in cases.CASES if c.name == "hex20_nodal")
+    case.write(tmp_path)
+    deck = read_deck(tmp_path / f"{case.name}.inp")
+    model = build_model(deck, COMM)
+    problem = model.create_problem(model.begin_step(0))
+    (state,) = problem.states
+    listed = deck.surfaces[deck.contact_pairs[0].slave].nodes
+    np.testing.assert_array_equal(np.sort(model.dof_node[state.slave.nodes]), np.sort(listed))
+    corners = np.isin(model.dof_node[state.slave.nodes], deck.elements["C3D20"].connectivity[:, :8])
+    np.testing.assert_array_equal(state.slave.faceless, ~corners)
+    assert np.sum(~corners) == 12  # the midside nodes of the punch's bottom
+    from dolfinx_ntf.problem import _slave_areas
+
+    areas = _slave_areas(state.slave, problem.current_coordinates())
+    assert np.all(areas[~corners] == 0.0) and np.all(areas[corners] > 0.0)
+
+
+def test_node_surface_checks_midside_nodes():
+    from dolfinx_ntf.surfaces import NodeSurface
+
+    with pytest.raises(ValueError, match="midside_nodes must be non-negative"):
+        NodeSurface(np.array([0, 1]), "s", midside_nodes=np.array([-1]))

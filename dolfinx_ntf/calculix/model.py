@@ -533,15 +533,25 @@ def _surfaces(deck: Deck, mesh, parts: dict):
     node_vertex = parts["node_vertex"]
     for name, surface in deck.surfaces.items():
         if surface.type == "NODE":
-            vertices = node_vertex[deck.node_index(surface.nodes)]
-            if np.any(vertices < 0):
+            rows = deck.node_index(surface.nodes)
+            vertices, dofs = node_vertex[rows], parts["node_dof"][rows]
+            if np.any(dofs < 0):
+                node = int(surface.nodes[np.argmax(dofs < 0)])
+                raise ValueError(
+                    f"{surface.location}: *SURFACE {name}, TYPE=NODE: node {node} belongs to no "
+                    "element"
+                )
+            midside = np.unique(dofs[vertices < 0]).astype(np.int32)  # quadratic elements
+            if midside.size and parts["block"].type.num_nodes != 20:  # checked for C3D20 only
                 node = int(surface.nodes[np.argmax(vertices < 0)])
                 raise _not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
-                    "corner (midside or unused node)",
+                    f"corner, on {parts['block'].type.name} elements (midside nodes of "
+                    "node-based surfaces: C3D20 only)",
                     surface.location,
                 )
-            surfaces[name] = NodeSurface(np.unique(vertices).astype(np.int32), name)
+            vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)
+            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside)
             continue
         facets, nodes = _element_faces_to_facets(
             deck, parts, surface.elements, surface.faces, f"*SURFACE {name}", surface.location
@@ -907,7 +917,12 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     element_cell[original] = np.arange(original.size)
     cell_element = block.ids[original]
 
-    parts = {"block": block, "node_vertex": node_vertex, "find": _facet_finder(mesh)}
+    parts = {
+        "block": block,
+        "node_vertex": node_vertex,
+        "node_dof": node_dof,
+        "find": _facet_finder(mesh),
+    }
     surfaces, surface_tags, surface_faces = _surfaces(deck, mesh, parts)
     pairs = _contact_pairs(deck, surfaces, node_vertex)
     mu, lmbda = _lame(deck, block, mesh, element_cell)

@@ -358,6 +358,18 @@ def _hex20_cylinder(directory: Path) -> None:
     move_nodes(directory / f"{name}.inp", "E2", curve)
 
 
+def _hex20_nodal(directory: Path) -> None:
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (3, 3, 1))
+    punch = ((0.11, 0.13, 0.0), (0.6, 0.6, 0.4), (2, 2, 1))
+    V, ct, ft = blocks([lower, punch])
+    law = ntf.TabularLaw(pressures=[0.0, 20.0, 1020.0], overclosures=[0.0, 5e-4, 0.0105])
+    steps = [_step(2, boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.004, name="PRESS")])]
+    _write(directory, "hex20_nodal", V, ct, ft, [_pair(ft, 1, 0, law, nodal=True, V=V)], steps,
+           "C3D20 punch, node-based slave with midside nodes (TYPE=NODE), TABULAR law, "
+           "2 increments")  # fmt: skip
+    to_hex20(directory / "hex20_nodal.inp")
+
+
 #: ccx's converged NLGEOM increments are not in equilibrium with the follower pressure on their own
 #: final faces (measured below): the displacements agree to a few 1e-6 only.
 NLGEOM_PRESSURE_QUIRK = (
@@ -421,6 +433,12 @@ CASES: tuple[Case, ...] = (
         "C3D20, cylindrical slave bottom (R = 5) on a flat quad8 master, LINEAR, prescribed "
         "displacement, contact line growing 11 -> 20 nodes, 3 increments",
         _hex20_cylinder,
+    ),
+    Case(
+        "hex20_nodal",
+        "C3D20, node-based slave holding midside nodes (TYPE=NODE), TABULAR, prescribed "
+        "displacement, 2 increments",
+        _hex20_nodal,
     ),
     Case(
         "hex20r_exponential",

@@ -3,8 +3,9 @@
 ``to_hex20(path, reduced)`` rewrites a deck of ``write_inp``: the ``*NODE`` block gets one node at
 the middle of every element edge (numbered after the last node), every ``*ELEMENT, TYPE=C3D8``
 block becomes ``C3D20`` (or ``C3D20R``) with ccx's 20-node order, and every ``*NSET`` other than
-the ``*NODE`` set gains the midside nodes of the edges whose two ends it holds (sets of the decks
-are planes or faces). Surfaces keep their element faces S1..S6, which C3D20 numbers like C3D8.
+the ``*NODE`` set and every ``*SURFACE, TYPE=NODE`` gains the midside nodes of the edges whose two
+ends it holds (sets of the decks are planes or faces). Element-face surfaces keep their faces
+S1..S6, which C3D20 numbers like C3D8. ``move_nodes`` then moves the nodes of an element set.
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ def to_hex20(path: Path, reduced: bool = False) -> None:
         if line.startswith("*"):
             if section == "NSET":
                 out.extend(_lines(_with_midsides(members, unique, mid_ids)))
+            if section == "NODE SURFACE":
+                out.extend(map(str, _with_midsides(members, unique, mid_ids)))
             section = ""
             upper = line.upper().replace(" ", "")
             if upper.startswith("*NODE,") or upper == "*NODE":
@@ -58,6 +61,8 @@ def to_hex20(path: Path, reduced: bool = False) -> None:
                 continue
             if upper.startswith("*NSET,"):
                 section, members = "NSET", []
+            if upper.startswith("*SURFACE,") and "TYPE=NODE" in upper:
+                section, members = "NODE SURFACE", []
             out.append(line)
             continue
         if section == "NODE":
@@ -68,12 +73,14 @@ def to_hex20(path: Path, reduced: bool = False) -> None:
             out.append(", ".join(map(str, nodes[:11])) + ",")
             out.append(", ".join(map(str, nodes[11:])))
             continue
-        if section == "NSET":
+        if section in ("NSET", "NODE SURFACE"):
             members += [int(t) for t in line.replace(",", " ").split()]
             continue
         out.append(line)
     if section == "NSET":
         out.extend(_lines(_with_midsides(members, unique, mid_ids)))
+    if section == "NODE SURFACE":
+        out.extend(map(str, _with_midsides(members, unique, mid_ids)))
     path.write_text("\n".join(out) + "\n")
 
 
