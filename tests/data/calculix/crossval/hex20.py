@@ -52,8 +52,8 @@ def to_hex20(path: Path, reduced: bool = False) -> None:
             if upper.startswith("*NODE,") or upper == "*NODE":
                 section = "NODE"
                 out.append(line)
-                out.extend(f"{i}, {a!r}, {b!r}, {c!r}" for i, (a, b, c) in zip(deck.node_ids, x))
-                out.extend(f"{i}, {a!r}, {b!r}, {c!r}" for i, (a, b, c) in zip(mid_ids, mid_x))
+                for ids, coords in ((deck.node_ids, x), (mid_ids, mid_x)):
+                    out.extend(_node_line(i, p) for i, p in zip(ids.tolist(), coords.tolist()))
                 continue
             if upper.startswith("*ELEMENT,") and "TYPE=C3D8" in upper:
                 section = "ELEMENT"
@@ -82,6 +82,10 @@ def to_hex20(path: Path, reduced: bool = False) -> None:
     if section == "NODE SURFACE":
         out.extend(map(str, _with_midsides(members, unique, mid_ids)))
     path.write_text("\n".join(out) + "\n")
+
+
+def _node_line(node: int, x: list[float]) -> str:
+    return f"{node}, " + ", ".join(repr(float(v)) for v in x)
 
 
 def _with_midsides(members: list[int], ends: np.ndarray, mid_ids: np.ndarray) -> list[int]:
