@@ -14,8 +14,6 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-import basix
-
 from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
@@ -87,20 +85,6 @@ def _cube(tmp_path: Path, element: str = "C3D20") -> Path:
     path.write_text(_CUBE.format(E=E, NU=NU, P=P))
     to_hex20(path, reduced=element == "C3D20R")
     return path
-
-
-def test_c3d20_rules_are_gauss_rules():
-    """ccx's 3x3x3 and 2x2x2 Gauss points are basix's rules of the table's quadrature degrees."""
-    for name, count in (("C3D20", 27), ("C3D20R", 8)):
-        etype = ELEMENT_TYPES[name]
-        points, weights = basix.make_quadrature(basix.CellType.hexahedron, etype.quadrature_degree)
-        assert weights.size == count
-        ours = etype.integration_points
-        assert ours.shape == (count, 3)
-        key = np.lexsort(np.round(points, 12).T)
-        np.testing.assert_allclose(np.sort(ours[np.lexsort(ours.T)], axis=0),
-                                   np.sort(points[key], axis=0), atol=1e-14)  # fmt: skip
-        assert np.unique(np.round(ours[:, 0], 12)).size == round(count ** (1 / 3))
 
 
 def test_c3d20_extrapolation_is_nearly_triquadratic():
