@@ -20,7 +20,7 @@ from dolfinx_ntf.analysis import (
     SetSmallSliding,
     run_steps,
 )
-from dolfinx_ntf.constraints import LinearConstraint
+from dolfinx_ntf.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.dynamics import DynamicStep, kinetic_energy
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.laws import (
@@ -44,6 +44,7 @@ from dolfinx_ntf.rigid import (
     RigidSurface,
     SignedDistanceSurface,
 )
+from dolfinx_ntf.serendipity import serendipity_constraints
 from dolfinx_ntf.solver import (
     ContactConvergenceError,
     ContactDivergenceError,
@@ -79,6 +80,7 @@ __all__ = [
     "Friction",
     "IncrementResult",
     "LinearConstraint",
+    "LinearConstraintBlock",
     "LinearLaw",
     "Load",
     "NodeSurface",
@@ -102,5 +104,6 @@ __all__ = [
     "log_progress",
     "reaction",
     "run_steps",
+    "serendipity_constraints",
     "small_strain_stress",
 ]

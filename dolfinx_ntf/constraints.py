@@ -30,7 +30,13 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.csgraph
 
-__all__ = ["ConstraintElimination", "LinearConstraint", "elimination_rows"]
+__all__ = [
+    "ConstraintElimination",
+    "LinearConstraint",
+    "LinearConstraintBlock",
+    "elimination_rows",
+    "num_equations",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,9 +93,117 @@ class LinearConstraint:
         return 3 * self.nodes + self.components
 
 
+@dataclass(frozen=True, eq=False)
+class LinearConstraintBlock:
+    """``K`` constraints of ``m`` terms each, as arrays (e.g. C3D20's face centres, §13.5).
+
+    Row ``k`` states ``sum_j coefficients[k, j] * u[nodes[k, j], components[k, j]] = values[k]``
+    and behaves like one :class:`LinearConstraint`; a block avoids one Python object per
+    constraint on large meshes.
+
+    Args:
+        nodes: ``(K, m)`` local block dofs.
+        components: ``(K, m)`` components (0, 1 or 2).
+        coefficients: ``(K, m)`` or ``(m,)`` (the same for every row) coefficients.
+        values: ``(K,)`` right-hand sides; default 0.
+        name: Label for messages.
+    """
+
+    nodes: np.ndarray
+    components: np.ndarray
+    coefficients: np.ndarray
+    values: np.ndarray | None = None
+    name: str = "constraint block"
+
+    def __post_init__(self) -> None:
+        """Check shapes and values (``ValueError`` naming the block)."""
+        nodes = np.atleast_2d(np.asarray(self.nodes, dtype=np.int64))
+        components = np.asarray(self.components, dtype=np.int64)
+        coefficients = np.asarray(self.coefficients, dtype=float)
+        label = f"LinearConstraintBlock {self.name!r}"
+        try:
+            components = np.broadcast_to(components, nodes.shape)
+            coefficients = np.broadcast_to(coefficients, nodes.shape)
+        except ValueError:
+            raise ValueError(
+                f"{label}: components {components.shape} and coefficients {coefficients.shape} "
+                f"do not match nodes {nodes.shape}"
+            ) from None
+        values = np.zeros(nodes.shape[0]) if self.values is None else np.asarray(self.values, float)
+        if nodes.ndim != 2 or nodes.shape[1] == 0 or values.shape != (nodes.shape[0],):
+            raise ValueError(f"{label}: nodes must be (K, m) with m > 0 and values (K,)")
+        if nodes.size and nodes.min() < 0:
+            raise ValueError(f"{label}: node {int(nodes.min())} is not a mesh node")
+        if np.any((components < 0) | (components > 2)):
+            raise ValueError(f"{label}: components must be 0, 1 or 2")
+        if not (np.all(np.isfinite(coefficients)) and np.all(np.isfinite(values))):
+            raise ValueError(f"{label}: coefficients and values must be finite")
+        object.__setattr__(self, "nodes", nodes)
+        object.__setattr__(self, "components", components)
+        object.__setattr__(self, "coefficients", coefficients)
+        object.__setattr__(self, "values", values)
+
+    def __len__(self) -> int:
+        """Number of constraints (rows)."""
+        return int(self.nodes.shape[0])
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """``(K, m)`` unrolled dofs ``3 node + component``."""
+        return 3 * self.nodes + self.components
+
+
+Constraints = typing.Sequence[LinearConstraint | LinearConstraintBlock]
+
+
+def num_equations(constraints: Constraints) -> int:
+    """Number of scalar constraints (a block counts its rows)."""
+    return sum(len(c) if isinstance(c, LinearConstraintBlock) else 1 for c in constraints)
+
+
+def _values(constraints: Constraints) -> np.ndarray:
+    """Right-hand sides of all scalar constraints in order."""
+    parts = [
+        c.values if isinstance(c, LinearConstraintBlock) else np.array([c.value])
+        for c in constraints
+    ]
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
+def _terms(constraints: Constraints):
+    """All terms at once: ``(sizes, dofs, coefficients, label)`` of the scalar constraints.
+
+    ``label(k)`` names scalar constraint ``k`` and ``first_dof(k)`` its first term's dof.
+    """
+    sizes, dofs, coefficients, owners = [], [], [], []
+    for index, c in enumerate(constraints):
+        if isinstance(c, LinearConstraintBlock):
+            sizes.append(np.full(len(c), c.nodes.shape[1]))
+            dofs.append(c.dofs.ravel())
+            coefficients.append(c.coefficients.ravel())
+            owners.append(np.full(len(c), index))
+        else:
+            sizes.append(np.array([c.nodes.size]))
+            dofs.append(c.dofs)
+            coefficients.append(c.coefficients)
+            owners.append(np.array([index]))
+    sizes_a = np.concatenate(sizes)
+    dofs_a = np.concatenate(dofs)
+    starts = np.concatenate([[0], np.cumsum(sizes_a)[:-1]])
+    owner_of = np.concatenate(owners)
+
+    def label(k: int) -> str:
+        c = constraints[int(owner_of[k])]
+        if isinstance(c, LinearConstraintBlock):
+            return f"{c.name} (row {k - int(np.flatnonzero(owner_of == owner_of[k])[0])})"
+        return c.label
+
+    return sizes_a, dofs_a, np.concatenate(coefficients), label, lambda k: int(dofs_a[starts[k]])
+
+
 def elimination_rows(
     num_dofs: int,
-    constraints: typing.Sequence[LinearConstraint],
+    constraints: Constraints,
     prescribed: np.ndarray | None = None,
 ) -> tuple[np.ndarray, scipy.sparse.csr_matrix, np.ndarray]:
     """Dependent dofs ``s`` and their rows: ``u[s] = M @ u + g`` with no dependent column in M.
@@ -97,24 +211,25 @@ def elimination_rows(
     See :func:`_elimination` (``g`` from the constraints' values).
     """
     s, M, G = _elimination(num_dofs, constraints, prescribed)
-    return s, M, G @ np.array([c.value for c in constraints], dtype=float)
+    return s, M, G @ _values(constraints)
 
 
 def _elimination(
     num_dofs: int,
-    constraints: typing.Sequence[LinearConstraint],
+    constraints: Constraints,
     prescribed: np.ndarray | None = None,
 ) -> tuple[np.ndarray, scipy.sparse.csr_matrix, scipy.sparse.csr_matrix]:
     """Dependent dofs ``s`` and their rows: ``u[s] = M @ u + g`` with no dependent column in M.
 
     Args:
         num_dofs: Number of unrolled dofs.
-        constraints: The constraints.
+        constraints: The constraints (a block counts as its rows).
         prescribed: Unrolled dofs with a Dirichlet condition (never made dependent).
 
     Returns:
         ``(s, M, G)``: dependent dofs in constraint order, ``(len(s), num_dofs)`` CSR rows and the
-        ``(len(s), len(constraints))`` map from the constraints' values to the offsets ``g``.
+        ``(len(s), num_equations(constraints))`` map from the constraints' values to the
+        offsets ``g``.
 
     Raises:
         ValueError: a constraint whose every dof is prescribed or dependent already (redundant or
@@ -127,38 +242,36 @@ def _elimination(
         empty = scipy.sparse.csr_matrix((0, num_dofs))
         return np.zeros(0, np.int64), empty, scipy.sparse.csr_matrix((0, 0))
     # all terms at once: constraint index, dof, coefficient; repeated dofs of a constraint summed
-    sizes = np.array([c.nodes.size for c in constraints])
-    owner = np.repeat(np.arange(len(constraints)), sizes)
-    dofs = np.concatenate([c.dofs for c in constraints])
-    coefficients = np.concatenate([c.coefficients for c in constraints])
+    sizes, dofs, coefficients, label, first_dof = _terms(constraints)
+    count = sizes.size
+    owner = np.repeat(np.arange(count), sizes)
     if dofs.max() >= num_dofs:
         bad = int(owner[np.argmax(dofs >= num_dofs)])
-        raise ValueError(f"{constraints[bad].label}: dof {int(dofs.max())} is outside the space")
+        raise ValueError(f"{label(bad)}: dof {int(dofs.max())} is outside the space")
     keys, first, inverse = np.unique(
         owner * num_dofs + dofs, return_index=True, return_inverse=True
     )
     order = np.argsort(first, kind="stable")  # terms in written order, constraints ascending
     merged = np.bincount(inverse.ravel(), weights=coefficients)[order]
     term_owner, term_dof = (keys // num_dofs)[order], (keys % num_dofs)[order]
-    largest = np.zeros(len(constraints))
+    largest = np.zeros(count)
     np.maximum.at(largest, term_owner, np.abs(merged))
     candidate = (np.abs(merged) > 1e-14 * largest[term_owner]) & ~fixed[term_dof]
     # the dependent dof: the first candidate term (sequentially when two constraints pick one dof)
-    chosen = np.full(len(constraints), -1, dtype=np.int64)
+    chosen = np.full(count, -1, dtype=np.int64)
     where = np.flatnonzero(candidate)
     owners, start = np.unique(term_owner[where], return_index=True)
     chosen[owners] = where[start]
     picked = term_dof[chosen[chosen >= 0]]
     if chosen.min() < 0 or np.unique(picked).size != picked.size:
-        chosen = _choose_sequentially(term_owner, term_dof, candidate, len(constraints))
+        chosen = _choose_sequentially(term_owner, term_dof, candidate, count)
     missing = np.flatnonzero(chosen < 0)
     if missing.size:
-        c = constraints[int(missing[0])]
-        node, comp = divmod(int(c.dofs[0]), 3)
+        node, comp = divmod(first_dof(int(missing[0])), 3)
         raise ValueError(
-            f"{c.label}: every dof of the constraint is prescribed by a Dirichlet condition "
-            f"or already dependent in another constraint (first term: node {node}, component "
-            f"{comp}): the constraint is redundant or contradicts them"
+            f"{label(int(missing[0]))}: every dof of the constraint is prescribed by a Dirichlet "
+            "condition or already dependent in another constraint (first term: node "
+            f"{node}, component {comp}): the constraint is redundant or contradicts them"
         )
     s = term_dof[chosen]
     a = merged[chosen]
@@ -206,7 +319,7 @@ class ConstraintElimination:
     def __init__(
         self,
         num_dofs: int,
-        constraints: typing.Sequence[LinearConstraint],
+        constraints: Constraints,
         prescribed: np.ndarray,
         comm,
     ) -> None:
@@ -218,7 +331,7 @@ class ConstraintElimination:
         self.slaves, rows, self._values_to_offsets = _elimination(
             num_dofs, constraints, self.prescribed
         )
-        self.offsets = self._values_to_offsets @ np.array([c.value for c in constraints], float)
+        self.offsets = self._values_to_offsets @ _values(constraints)
         n = num_dofs
         identity = np.ones(n)
         identity[self.slaves] = 0.0

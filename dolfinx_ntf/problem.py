@@ -22,10 +22,10 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, parallel, validation
+from dolfinx_ntf import compat, parallel, serendipity, validation
 from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
-from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
+from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
 from dolfinx_ntf.friction_state import FrictionState
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
@@ -210,7 +210,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
         element_forces: ufl.Form | None = None,
-        constraints: typing.Sequence[LinearConstraint] = (),
+        constraints: typing.Sequence[LinearConstraint | LinearConstraintBlock] = (),
         friction_tangent: str = "consistent",
         reset_friction_on_separation: bool = True,
         friction_in_tension: bool = False,
@@ -256,7 +256,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.max_depth = max_depth
         self.walk_from_previous_face = walk_from_previous_face
         self._reference = reference_coordinates(V)
-        self._element_forces = _broken(
+        self._element_forces, self._element_space = _broken(
             F if element_forces is None else element_forces,
             V,
             compat.jit_keywords(form_compiler_options, jit_options),
@@ -265,6 +265,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         #: Contact nodes of other processes (docs/method.md §14); None in serial.
         self.halo = parallel.NodeHalo(V) if V.mesh.comm.size > 1 else None
+        #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
+        self._face_centres = serendipity.face_centres(constraints)
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
         if self.halo is not None:
             self._reference = self.halo.reference
@@ -318,7 +320,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if not self.constraints:
             return
         for c in self.constraints:
-            validation.check_type(c, LinearConstraint, "ContactProblem: constraints")
+            validation.check_type(
+                c, (LinearConstraint, LinearConstraintBlock), "ContactProblem: constraints"
+            )
         prescribed = [bc.dof_indices()[0] for bc in self.bcs]
         self.elimination = ConstraintElimination(
             self.u.x.array.size,
@@ -332,6 +336,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         V = self.u.function_space
         comm = V.mesh.comm
         slave = parallel.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        if self._face_centres.size:  # C3D20: quad8 slave faces, no face-centre slave nodes
+            faces = serendipity.as_quad8(slave.faces, self._face_centres)
+            keep = ~np.isin(slave.nodes, self._face_centres)
+            faceless = None if slave.faceless is None else slave.faceless[keep]
+            slave = SlaveSurface(slave.nodes[keep], faces, faceless)
         if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
             if pair.interaction.friction is not None or pair.adjust is not None:
                 raise NotImplementedError(
@@ -365,6 +374,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         master_faces = parallel.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
+        master_faces = serendipity.as_quad8(master_faces, self._face_centres)
         if self.halo is not None:
             slave, master_faces = parallel.collectively(
                 comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name
@@ -415,6 +425,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(vector, self._element_forces)
         values = vector.array_r  # owned entries: broken dofs belong to one cell each
+        if self._face_centres.size:  # C3D20: the forces of its 20 nodes (docs/method.md §13.5)
+            values = serendipity.element_forces_on_nodes(values, self._element_space)
         total, count = float(np.abs(values).sum()), values.size
         for state in self.states:
             if state.evaluation is not None and state.num_springs:
@@ -616,8 +628,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         Returns the slave indices with a face, the face of every slave node (-1: none), the spring
         areas of all slave nodes, and the springs' kinematics (no tangent) of the found nodes.
         """
-        slave_faces = state.slave.faces
-        areas = spring_areas(slave_faces.face_type, slave_faces.faces, coords, state.slave.nodes)
+        areas = _slave_areas(state.slave, coords)
         state.master.update(coords)
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
@@ -705,8 +716,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             nodes = state.element_nodes
             friction = self._friction_input(state, coords, nodes)
             if self.linearize_area:  # areas follow the deformation between pairings too
-                faces = state.slave.faces
-                areas = spring_areas(faces.face_type, faces.faces, coords, state.slave.nodes)
+                areas = _slave_areas(state.slave, coords)
                 state.spring_area = areas[state.spring_slave]
             ev = spring_evaluator(state.master)(
                 state.master_faces.face_type,
@@ -772,6 +782,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
         spring = spring_of_slave[slave_index]
         keep = spring >= 0
+        if state.slave.faceless is not None:  # no face area: the fallback, not dA/du
+            keep &= ~state.slave.faceless[slave_index]
         spring, node, gradient = spring[keep], node[keep], gradient[keep]
         block_values = None
         if values:
@@ -914,10 +926,22 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._eliminate()
 
 
-def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict) -> compat.Form:
+def _slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
+    """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
+    faces = slave.faces
+    areas = spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    if slave.faceless is not None:
+        areas[slave.faceless] = 0.0
+    return areas
+
+
+def _broken(
+    form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict
+) -> tuple[compat.Form, dolfinx.fem.FunctionSpace]:
     """``form`` with its test function replaced by one of the discontinuous space of its degree.
 
-    The assembled vector then holds every element's nodal forces separately.
+    The assembled vector then holds every element's nodal forces separately. Returns the form
+    and that space.
     """
     arguments = form.arguments()
     if len(arguments) != 1:
@@ -928,4 +952,4 @@ def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace, options: dict) -> comp
     mesh = V.mesh
     family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
     W = compat.vector_space(mesh, family, compat.space_degree(V))
-    return dolfinx.fem.form(ufl.replace(form, {arguments[0]: ufl.TestFunction(W)}), **options)
+    return dolfinx.fem.form(ufl.replace(form, {arguments[0]: ufl.TestFunction(W)}), **options), W

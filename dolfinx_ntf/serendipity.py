@@ -16,15 +16,25 @@ has edge moments as dofs instead, which node-to-face springs cannot use).
 
 from __future__ import annotations
 
+import typing
+
 import numpy as np
 
 import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.constraints import LinearConstraint
+from dolfinx_ntf.constraints import LinearConstraintBlock
+from dolfinx_ntf.faces import QUAD8, QUAD9
+from dolfinx_ntf.surfaces import SurfaceFaces
 
-__all__ = ["serendipity_constraints"]
+__all__ = [
+    "add_centres",
+    "as_quad8",
+    "face_centres",
+    "serendipity_centres",
+    "serendipity_constraints",
+]
 
 # basix reference hexahedron: vertices in tensor order, edges and faces by their vertices.
 _EDGES = [
@@ -57,36 +67,132 @@ def _local_rows() -> list[tuple[int, np.ndarray, np.ndarray]]:
     return rows
 
 
-def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstraint]:
+def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstraintBlock]:
     """Constraints that turn a degree-2 vector Lagrange space on hexahedra into C3D20's space.
 
     Args:
         V: Vector Lagrange space of degree 2 on a hexahedral mesh (one process).
 
     Returns:
-        One constraint per face centre (each face once) and cell centre and component; the centre
-        dof is the dependent one. Dirichlet conditions must leave face- and cell-centre dofs free
-        (their values follow from the 20 nodes).
+        Two blocks (all arrays, no Python loop over cells): the face centres (each face once,
+        9 terms) and the cell centres (21 terms), three components each; the centre dof is the
+        first term, the dependent one. Dirichlet conditions must leave face- and cell-centre dofs
+        free (their values follow from the 20 nodes).
     """
     if V.mesh.topology.cell_type != dolfinx.mesh.CellType.hexahedron:
         raise ValueError("serendipity_constraints: a hexahedral mesh is needed")
     if compat.space_degree(V) != 2 or V.dofmap.index_map_bs != 3:
         raise ValueError("serendipity_constraints: a degree-2 vector Lagrange space is needed")
-    dofs = compat.cell_dofs(V)
+    dofs = compat.cell_dofs(V).astype(np.int64)
     if dofs.shape[1] != 27:
         raise ValueError(f"serendipity_constraints: 27 dofs per cell expected, got {dofs.shape[1]}")
-    constraints: list[LinearConstraint] = []
-    seen: set[int] = set()
-    for dependent, independent, weights in _local_rows():
+    rows = _local_rows()
+    face_local = np.array([[dependent, *independent] for dependent, independent, _ in rows[:6]])
+    face_nodes = dofs[:, face_local].reshape(-1, 9)  # (cells * 6, 9)
+    _, first = np.unique(face_nodes[:, 0], return_index=True)  # a shared face once
+    face_nodes = face_nodes[np.sort(first)]
+    cell_nodes = dofs[:, [rows[6][0], *rows[6][1]]]
+    blocks = []
+    for nodes, weights, what in (
+        (face_nodes, rows[0][2], "face centres"),
+        (cell_nodes, rows[6][2], "cell centres"),
+    ):
         coefficients = np.concatenate([[1.0], -weights])
-        for cell_dofs in dofs:
-            centre = int(cell_dofs[dependent])
-            if centre in seen:  # a face shared by two cells
-                continue
-            seen.add(centre)
-            nodes = np.concatenate([[centre], cell_dofs[independent]])
-            for component in range(3):
-                constraints.append(
-                    LinearConstraint(nodes, np.full(nodes.size, component), coefficients)
-                )
-    return constraints
+        blocks.append(
+            LinearConstraintBlock(
+                np.repeat(nodes, 3, axis=0),
+                np.tile(np.arange(3), nodes.shape[0])[:, None],
+                coefficients,
+                name=f"C3D20 {what}",
+            )
+        )
+    return blocks
+
+
+def serendipity_centres(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Sorted local block dofs of the face and cell centres of a degree-2 hexahedral space."""
+    dofs = compat.cell_dofs(V)
+    return np.unique(dofs[:, 20:27])
+
+
+#: Coefficients of a face-centre row: the centre, its 4 corners, its 4 midside nodes.
+_FACE_ROW = np.array([1.0, 0.25, 0.25, 0.25, 0.25, -0.5, -0.5, -0.5, -0.5])
+
+
+def face_centres(constraints: typing.Sequence) -> np.ndarray:
+    """Sorted nodes fixed by serendipity face-centre rows among ``constraints`` (maybe none).
+
+    A row counts when it is a :class:`LinearConstraintBlock` row of 9 terms with the
+    coefficients of :func:`serendipity_constraints` (the centre first).
+    """
+    found = [
+        c.nodes[np.all(np.isclose(c.coefficients, _FACE_ROW), axis=1), 0]
+        for c in constraints
+        if isinstance(c, LinearConstraintBlock) and c.nodes.shape[1] == 9
+    ]
+    return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int64)
+
+
+def as_quad8(faces: SurfaceFaces, centres: np.ndarray) -> SurfaceFaces:
+    """quad9 faces whose centre node is a serendipity face centre as ccx's quad8 faces.
+
+    The centre's value is the quad8 interpolation of the other 8 nodes, so the face is the
+    quad8 face (docs/method.md §13.5); other faces are returned unchanged.
+    """
+    if faces.face_type is not QUAD9 or centres.size == 0 or faces.faces.shape[0] == 0:
+        return faces
+    constrained = np.isin(faces.faces[:, 8], centres)
+    if not np.any(constrained):
+        return faces
+    if not np.all(constrained):
+        raise ValueError(
+            "a surface mixes serendipity (C3D20) and triquadratic faces: "
+            f"{int(np.sum(~constrained))} of {constrained.size} face centres are free"
+        )
+    return SurfaceFaces(QUAD8, np.ascontiguousarray(faces.faces[:, :8]), faces.facets)
+
+
+def add_centres(cells: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """27-node cells from 20-node ones (dolfinx order): face and cell centres appended to ``x``.
+
+    ``cells`` are ``(C, 20)`` rows into ``x`` in dolfinx's order of a 27-node hexahedron
+    (vertices, then edges). Centres are placed by the serendipity map of the 20 nodes
+    (docs/method.md §13.5); a face shared by two cells gets one node (keyed by its sorted
+    corners). Their rows come after those of ``x``.
+    """
+    rows = _local_rows()
+    faces = np.stack([cells[:, independent] for _, independent, _ in rows[:6]], axis=1)
+    weights = rows[0][2]
+    face_x = np.einsum("cfk,cfkd->cfd", np.broadcast_to(weights, faces.shape), x[faces])
+    keys = np.sort(faces[:, :, :4], axis=2).reshape(-1, 4)
+    unique, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    num_faces = unique.shape[0]
+    face_node = x.shape[0] + inverse.ravel().reshape(cells.shape[0], 6)
+    cell_x = x[cells[:, :20]].transpose(0, 2, 1) @ rows[6][2]
+    cell_node = x.shape[0] + num_faces + np.arange(cells.shape[0])
+    x = np.vstack([x, face_x.reshape(-1, 3)[first], cell_x])
+    return np.hstack([cells, face_node, cell_node[:, None]]), x
+
+
+def element_forces_on_nodes(values: np.ndarray, space: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Element nodal forces of a broken Q2 vector as C3D20's: ``(cells, 20, 3)`` flattened.
+
+    ``values`` is a vector of ``space``, a discontinuous degree-2 vector space on hexahedra
+    (every cell's 27 nodal forces). Each centre's force moves to the 20 nodes it depends
+    on (virtual work), so that CalculiX's average element force (docs/method.md §7.1) is taken
+    over the 20 nodes of each element, as ccx does.
+    """
+    dofs = compat.cell_dofs(space)
+    forces = np.asarray(values).reshape(-1, 3)[dofs]  # (cells, 27, 3)
+    return (forces[:, :20] + np.einsum("kn,ckd->cnd", _CENTRE_WEIGHTS, forces[:, 20:])).ravel()
+
+
+def _centre_weights() -> np.ndarray:
+    """``(7, 20)``: value of face centre ``k`` (then the cell centre) from the 20 local nodes."""
+    weights = np.zeros((7, 20))
+    for k, (_, independent, w) in enumerate(_local_rows()):
+        weights[k, independent] = w
+    return weights
+
+
+_CENTRE_WEIGHTS = _centre_weights()

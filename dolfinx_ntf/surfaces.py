@@ -92,16 +92,28 @@ class NodeSurface:
             ``dolfinx.mesh.locate_entities(mesh, 0, marker)`` returns them). They must lie on the
             boundary of the mesh; non-integer, negative or out-of-range indices are errors.
         name: Label used in messages.
+        midside_nodes: Local block dofs of the displacement space at the surface's other nodes
+            (midside nodes of quadratic elements, which a ccx node set lists too); they are slave
+            nodes as well and must lie on the boundary. As in ccx, they take no share of the
+            faces' area (their springs get the fallback area, docs/method.md §2.2). One process
+            only.
     """
 
     vertices: np.ndarray = field(repr=False)
     name: str = "nodes"
+    midside_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32), repr=False)
 
     def __post_init__(self) -> None:
         """Check the indices and store them as an int32 array."""
         validation.check_type(self.name, str, "NodeSurface: name")
         owner = f"NodeSurface '{self.name}'"
         object.__setattr__(self, "vertices", validation.vertex_indices(self.vertices, owner))
+        midside = np.asarray(self.midside_nodes).ravel()
+        if midside.size and (
+            not np.issubdtype(midside.dtype, np.integer) or int(midside.min()) < 0
+        ):
+            raise ValueError(f"{owner}: midside_nodes must be non-negative block dof indices")
+        object.__setattr__(self, "midside_nodes", midside.astype(np.int32))
 
     @classmethod
     def from_marker(
@@ -130,10 +142,15 @@ class SurfaceFaces:
 
 @dataclass(frozen=True)
 class SlaveSurface:
-    """Slave nodes and the faces that give them spring area (docs/method.md §2.1)."""
+    """Slave nodes and the faces that give them spring area (docs/method.md §2.1).
+
+    ``faceless`` marks slave nodes that take no share of the faces' area and get CalculiX's
+    fallback area instead (ccx: the midside nodes of a node-based surface, §13.5); None: none.
+    """
 
     nodes: np.ndarray  # (S,) sorted local block dofs
     faces: SurfaceFaces
+    faceless: np.ndarray | None = None  # (S,) bool
 
 
 def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
@@ -320,6 +337,21 @@ def resolve_slave(
     _check_on_boundary(comm, label, nodes, corners, reference_coordinates(V), to_global)
     touching = np.isin(corners, nodes).any(axis=1)
     faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
+    midside = surface.midside_nodes
+    if comm.allreduce(int(midside.size), op=MPI.MAX):
+        if comm.size > 1:
+            raise NotImplementedError(
+                f"{label}: midside nodes on {comm.size} MPI processes are not supported yet"
+            )
+        outside = midside[~np.isin(midside, all_faces.faces)]
+        if outside.size:
+            x = reference_coordinates(V)[outside[0]]
+            raise ValueError(
+                f"{label}: {outside.size} midside node(s) are not on the boundary (first at "
+                f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
+            )
+        nodes = np.union1d(nodes, midside).astype(nodes.dtype)
+        return SlaveSurface(nodes, faces, np.isin(nodes, midside))
     return SlaveSurface(nodes, faces)
 
 

@@ -72,7 +72,7 @@ def _solve(mesh, V, constraints=None):
     bottom = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda p: np.isclose(p[2], 0.0))
     dofs = dolfinx.fem.locate_dofs_topological(V, 2, bottom)
     if constraints:  # face-centre dofs follow from the nodes
-        dependent = {int(c.nodes[0]) for c in constraints}
+        dependent = set(np.concatenate([c.nodes[:, 0] for c in constraints]).tolist())
         dofs = np.array([d for d in dofs if int(d) not in dependent], dtype=np.int32)
     bc = dolfinx.fem.dirichletbc(dolfinx.fem.Function(V), dofs)
     if constraints is None:
@@ -98,7 +98,9 @@ def test_constrained_q2_solves_like_the_serendipity_element():
     S = compat.vector_space(mesh, "S", 2)
     Q = compat.vector_space(mesh, "Lagrange", 2)
     constraints = serendipity_constraints(Q)
-    assert len(constraints) == 3 * (36 + 8)  # 36 faces, 8 cells, 3 components
+    assert ntf.constraints.num_equations(constraints) == 3 * (
+        36 + 8
+    )  # 36 faces, 8 cells, 3 components
     u_s = _solve(mesh, S)
     u_q = _solve(mesh, Q, constraints)
     P1 = compat.vector_space(mesh, "Lagrange", 1)
@@ -113,3 +115,61 @@ def test_constrained_q2_solves_like_the_serendipity_element():
     w_p = dolfinx.fem.Function(P1)
     w_p.interpolate(u_plain)
     assert np.abs(w_p.x.array - w_s.x.array).max() > 1e-4 * scale
+
+
+def test_constraint_blocks_eliminate_like_single_constraints():
+    """The vectorized blocks give the rows of one LinearConstraint per row."""
+    from dolfinx_ntf.constraints import LinearConstraintBlock, elimination_rows
+
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 1]], [2, 1, 1], dolfinx.mesh.CellType.hexahedron
+    )
+    Q = compat.vector_space(mesh, "Lagrange", 2)
+    blocks = serendipity_constraints(Q)
+    assert all(isinstance(b, LinearConstraintBlock) for b in blocks)
+    singles = [
+        ntf.LinearConstraint(b.nodes[k], b.components[k], b.coefficients[k])
+        for b in blocks
+        for k in range(len(b))
+    ]
+    n = 3 * compat.cell_dofs(Q).max() + 3
+    s_block, M_block, g_block = elimination_rows(n, blocks)
+    s_single, M_single, g_single = elimination_rows(n, singles)
+    np.testing.assert_array_equal(s_block, s_single)
+    assert abs(M_block - M_single).max() == 0.0
+    assert np.all(g_block == 0.0) and np.all(g_single == 0.0)
+    # every face centre once (11 faces of two cells), then the 2 cell centres
+    assert [len(b) for b in blocks] == [3 * 11, 3 * 2]
+
+
+def test_constraint_block_checks_its_arrays():
+    from dolfinx_ntf.constraints import LinearConstraintBlock
+
+    with pytest.raises(ValueError, match=r"'bad'.*do not match"):
+        LinearConstraintBlock(np.zeros((2, 3)), 0, np.ones(4), name="bad")
+    with pytest.raises(ValueError, match="components must be 0, 1 or 2"):
+        LinearConstraintBlock(np.zeros((2, 3)), 3, np.ones(3))
+    with pytest.raises(ValueError, match="not a mesh node"):
+        LinearConstraintBlock(-np.ones((2, 3)), 0, np.ones(3))
+
+
+def test_quad9_faces_with_serendipity_centres_become_quad8():
+    from dolfinx_ntf.serendipity import as_quad8, face_centres
+    from dolfinx_ntf.surfaces import boundary_faces
+
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 1]], [2, 2, 1], dolfinx.mesh.CellType.hexahedron
+    )
+    Q = compat.vector_space(mesh, "Lagrange", 2)
+    mesh.topology.create_connectivity(2, 3)
+    top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda p: np.isclose(p[2], 1.0))
+    faces = boundary_faces(Q, top)
+    assert faces.face_type.name == "quad9"
+    centres = face_centres(serendipity_constraints(Q))
+    quad8 = as_quad8(faces, centres)
+    assert quad8.face_type.name == "quad8"
+    np.testing.assert_array_equal(quad8.faces, faces.faces[:, :8])
+    assert not np.isin(quad8.faces, centres).any()
+    assert as_quad8(faces, np.zeros(0, np.int64)) is faces  # plain Q2: unchanged
+    with pytest.raises(ValueError, match="mixes serendipity"):
+        as_quad8(faces, centres[~np.isin(centres, faces.faces[:1, 8])])

@@ -24,7 +24,9 @@ import numpy as np
 
 __all__ = [
     "C3D8_EXTRAPOLATION",
+    "C3D20_EXTRAPOLATION",
     "ELEMENT_TYPES",
+    "REFUSED_ELEMENTS",
     "ElementType",
     "element_for_cell",
     "nodal_extrapolation",
@@ -60,6 +62,10 @@ class ElementType:
         frd_type: element type number in ``.frd`` files (cgx manual).
         extrapolation: ``(num_nodes, q)`` integration-point values -> nodal values, as ccx's
             ``.frd`` stresses (:func:`nodal_extrapolation`).
+        face_quadrature_degree: face quadrature degree of ``*DLOAD`` pressures (2x2 Gauss on
+            quads, 3 points on triangles; C3D20 3x3).
+        frd_order: the ccx nodes of an element in ``.frd`` order (ccx order but for C3D20:
+            nodes 1..12, 17..20, 13..16, as ccx 2.20 writes them).
     """
 
     name: str
@@ -76,6 +82,13 @@ class ElementType:
     integration_points: np.ndarray
     frd_type: int
     extrapolation: np.ndarray
+    face_quadrature_degree: int = 2
+    frd_order: np.ndarray | None = None
+
+    @property
+    def frd_nodes(self) -> np.ndarray:
+        """Column order of the ccx connectivity in ``.frd`` element records."""
+        return np.arange(self.num_nodes) if self.frd_order is None else self.frd_order
 
     @property
     def num_faces(self) -> int:
@@ -106,6 +119,11 @@ _HEX_CORNERS = np.array(
 )
 # ccx C3D10 midside nodes 5..10 sit on the edges between these ccx corners (manual fig. 55).
 _TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
+# ccx C3D20 midside nodes 9..20 (manual): on 1-2, 2-3, 3-4, 4-1, 5-6, 6-7, 7-8, 8-5, 1-5, 2-6,
+# 3-7, 4-8.
+_HEX_EDGES = (
+    (0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)
+)  # fmt: skip
 
 
 def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
@@ -128,11 +146,57 @@ def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
         corner = corners @ np.linalg.inv(affine)
         midside = np.array([(corner[a] + corner[b]) / 2 for a, b in _TET_EDGES])
         return np.vstack([corner, midside])
+    if element_type == "C3D20R":
+        corner = nodal_extrapolation("C3D8", points)
+        midside = np.array([(corner[a] + corner[b]) / 2 for a, b in _HEX_EDGES])
+        return np.vstack([corner, midside])
+    if element_type == "C3D20":
+        return _c3d20_extrapolation(points)
     raise NotImplementedError(f"stress extrapolation of {element_type} is not supported")
+
+
+#: ccx 2.20's C3D20 extrapolation weights from the 3x3x3 Gauss points, by how the point lies
+#: from the node along each axis (n: the point layer nearest the node, m: the middle layer, f:
+#: the farthest); a midside node's key starts with c (the point in the middle layer along its
+#: edge) or o (an outer layer). They are the triquadratic values through the 27 points (products
+#: of ``(1 + sqrt .6) / 1.2, -2/3, (1 - sqrt .6) / 1.2``; zero in the outer layers) changed by at
+#: most 6e-6, fitted to ccx's ``.frd`` stresses of one element under random nodal displacements;
+#: rows sum to 0.99996 at corners and 1.00005 at midside nodes, as ccx writes a uniform stress
+#: (docs/method.md §13.5).
+C3D20_EXTRAPOLATION = {
+    "nnn": 3.2341145, "mnn": -1.4579587, "fnn": 0.4107842, "mmn": 0.6572575,
+    "fmn": -0.1851893, "ffn": 0.0521753, "mmm": -0.2962968, "fmm": 0.0834806,
+    "ffm": -0.0235225, "fff": 0.0066279,
+    "cnn": 2.1869451, "cmn": -0.9858814, "cfn": 0.2777794, "cmm": 0.4444462, "cfm": -0.1252212,
+    "cff": 0.0352856,
+    "onn": 0.0000019, "omn": 0.0000015, "ofn": -0.0000001, "omm": 0.0000004, "ofm": 0.0000012,
+    "off": 0.0000018,
+}  # fmt: skip
+
+
+def _c3d20_extrapolation(points: np.ndarray) -> np.ndarray:
+    """``(20, 27)`` ccx's C3D20 weights (``C3D20_EXTRAPOLATION``) for the 3x3x3 Gauss points."""
+    nodes = np.vstack(
+        [_HEX_CORNERS, [(_HEX_CORNERS[a] + _HEX_CORNERS[b]) / 2 for a, b in _HEX_EDGES]]
+    )
+    layer = np.digitize(points, [0.4, 0.6])  # 0, 1, 2: low, middle, high layer per axis
+    weights = np.zeros((20, points.shape[0]))
+    for i, node in enumerate(nodes):  # 20 x 27 table entries, built once at import
+        for q in range(points.shape[0]):
+            edge, key = "", []
+            for axis in range(3):
+                if node[axis] == 0.5:  # along a midside node's edge
+                    edge = "c" if layer[q, axis] == 1 else "o"
+                    continue
+                near = 0 if node[axis] == 0 else 2
+                key.append("m" if layer[q, axis] == 1 else ("n" if layer[q, axis] == near else "f"))
+            weights[i, q] = C3D20_EXTRAPOLATION[edge + "".join(sorted(key, key="fmn".index))]
+    return weights
 
 
 _G = 1.0 / np.sqrt(3.0)
 _A10, _B10 = 0.1381966011250105, 0.5854101966249685
+_G3 = (-np.sqrt(0.6), 0.0, np.sqrt(0.6))
 
 # C3D8 2x2x2 Gauss points in ccx order (xi fastest); C3D4 one point; C3D10 four points.
 _POINTS = {
@@ -144,7 +208,10 @@ _POINTS = {
         for x in (-_G, _G)
     ],
     "C3D10": [[_A10, _A10, _A10], [_B10, _A10, _A10], [_A10, _B10, _A10], [_A10, _A10, _B10]],
+    # C3D20: 3x3x3 Gauss, xi fastest (checked against ccx's *EL PRINT); C3D20R as C3D8.
+    "C3D20": [[(x + 1) / 2, (y + 1) / 2, (z + 1) / 2] for z in _G3 for y in _G3 for x in _G3],
 }
+_POINTS["C3D20R"] = _POINTS["C3D8"]
 
 
 def _element_type(
@@ -160,9 +227,10 @@ def _element_type(
     mirrored_vertices: list[int],
     quadrature_degree: int,
     frd_type: int,
+    face_quadrature_degree: int = 2,
 ) -> ElementType:
     points = _frozen_array(_POINTS[name], np.float64)
-    midside_edges = _TET_EDGES if num_nodes == 10 else ()
+    midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES}.get(num_nodes, ())
     return ElementType(
         name,
         num_nodes,
@@ -178,6 +246,10 @@ def _element_type(
         points,
         frd_type,
         _frozen_array(nodal_extrapolation(name, points), np.float64),
+        face_quadrature_degree,
+        _frozen_array([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
+        if num_nodes == 20
+        else None,
     )
 
 
@@ -226,13 +298,52 @@ ELEMENT_TYPES: dict[str, ElementType] = {
         quadrature_degree=2,
         frd_type=1,
     ),
+    # C3D20 (3x3x3 Gauss) and C3D20R (2x2x2): corners as C3D8, midside nodes 9..20 on the edges
+    # _HEX_EDGES; faces as C3D8's, then the midside nodes of edges c1-c2, c2-c3, c3-c4, c4-c1.
+    # The dolfinx cell is a 27-node hexahedron: to_dolfinx gives its corners and edge nodes (v0-v1,
+    # v0-v2, v0-v4, v1-v3, v1-v5, v2-v3, v2-v6, v3-v7, v4-v5, v4-v6, v5-v7, v6-v7); the model adds
+    # the face and cell centres and constrains them to the serendipity space (docs/method.md §13.5).
+    **{
+        name: _element_type(
+            name,
+            20,
+            8,
+            "quad8",
+            [
+                [4, 3, 2, 1, 11, 10, 9, 12],
+                [5, 6, 7, 8, 13, 14, 15, 16],
+                [1, 2, 6, 5, 9, 18, 13, 17],
+                [2, 3, 7, 6, 10, 19, 14, 18],
+                [3, 4, 8, 7, 11, 20, 15, 19],
+                [4, 1, 5, 8, 12, 17, 16, 20],
+            ],
+            cell="hexahedron",
+            degree=2,
+            to_dolfinx=[0, 1, 3, 2, 4, 5, 7, 6, 8, 11, 16, 9, 17, 10, 19, 18, 12, 15, 13, 14],
+            mirrored_vertices=[4, 5, 7, 6, 0, 1, 3, 2],
+            quadrature_degree=quadrature,
+            frd_type=4,
+            face_quadrature_degree=quadrature,
+        )
+        for name, quadrature in (("C3D20", 5), ("C3D20R", 2))
+    },
 }
 """Supported element types by ccx name."""
 
 
+#: Why some common ccx elements are refused (appended to the reader's refusal).
+REFUSED_ELEMENTS = {
+    "C3D8R": ": its one-point integration with hourglass control is not reproduced",
+    "C3D8I": ": its incompatible modes (extra internal displacement fields) are not reproduced",
+}
+
+
 def element_for_cell(cell: str, degree: int) -> ElementType | None:
-    """The ccx element of a degree-``degree`` Lagrange space on ``cell`` cells, or None."""
+    """The ccx element of a degree-``degree`` Lagrange space on ``cell`` cells, or None.
+
+    None for degree-2 hexahedra: a 27-node space is not C3D20's (docs/method.md §13.5).
+    """
     for etype in ELEMENT_TYPES.values():
-        if etype.cell == cell and etype.degree == degree:
+        if etype.cell == cell and etype.degree == degree and etype.num_nodes != 20:
             return etype
     return None

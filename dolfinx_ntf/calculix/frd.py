@@ -175,8 +175,9 @@ class FrdWriter:
         frd_type = FRD_ELEMENT_TYPES[element_type]
         element_ids = np.asarray(element_ids)
         lines.append(f"    3C{'':18}{element_ids.size:12d}{'':37}1")
+        connectivity = np.asarray(connectivity)[:, ELEMENT_TYPES[element_type].frd_nodes]
         for e, nodes, material in zip(
-            element_ids.tolist(), np.asarray(connectivity).tolist(), np.asarray(element_materials)
+            element_ids.tolist(), connectivity.tolist(), np.asarray(element_materials)
         ):
             lines.append(f" -1{e:10d}{frd_type:5d}{0:5d}{int(material):5d}")
             for start in range(0, len(nodes), 10):

@@ -281,7 +281,7 @@ class _Job:
         vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         forces = vector.array.reshape(-1, 3).copy()
         vector.destroy()
-        return forces + self._contact_forces()
+        return self.model.on_ccx_nodes(forces + self._contact_forces())
 
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points."""
@@ -556,6 +556,7 @@ class _Job:
         total = model.total_time(index, result.time)
         node_ids = model.dof_node
         order = np.argsort(node_ids)
+        order = order[node_ids[order] >= 0]  # not C3D20's added face and cell centres
         displacement = model.u.x.array.reshape(-1, 3)
         contact = self.contact_rows()
         self.result.increments.append(

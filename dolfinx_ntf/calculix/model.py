@@ -3,14 +3,16 @@
 ``build_model`` turns a :class:`~dolfinx_ntf.calculix.deck.Deck` into a :class:`CalculixModel`:
 
     - the mesh of the deck's one element type (C3D4 -> P1 tetrahedra, C3D8 -> Q1 hexahedra,
-      C3D10 -> P2 tetrahedra with P2 geometry) and the maps between ccx node/element numbers and
+      C3D10 -> P2 tetrahedra with P2 geometry, C3D20/C3D20R -> Q2 hexahedra constrained to the
+      serendipity space, docs/method.md §13.5) and the maps between ccx node/element numbers and
       dolfinx block dofs/cells (always through per-cell tables, never by assuming equal numbers);
     - surfaces: element-face surfaces as facet tags (one ``MeshTags`` per ccx surface, value 1)
       wrapped in :class:`~dolfinx_ntf.FacetSurface`, ``TYPE=NODE`` surfaces as
       :class:`~dolfinx_ntf.NodeSurface`;
     - the bulk residual: small-strain isotropic elasticity, or total-Lagrangian St.Venant-Kirchhoff
       with ``NLGEOM`` (switched by a Constant when a deck has both kinds of steps), integrated like
-      ccx (C3D8 2x2x2 Gauss, C3D4 one point, C3D10 four points); ``*DLOAD`` pressures on the
+      ccx (C3D8 2x2x2 Gauss, C3D4 one point, C3D10 four points, C3D20 3x3x3, C3D20R 2x2x2);
+      ``*DLOAD`` pressures on the
       reference faces, or as follower loads ``p J F^-T N`` with ``NLGEOM``;
     - the loads and prescribed displacements of every step with ccx's rules (:class:`StepLoads`);
     - the contact pairs with their pressure-overclosure laws.
@@ -48,7 +50,12 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.constraints import LinearConstraint
+from dolfinx_ntf.constraints import (
+    LinearConstraint,
+    LinearConstraintBlock,
+    elimination_rows,
+    num_equations,
+)
 from dolfinx_ntf.laws import (
     ExponentialLaw,
     Friction,
@@ -58,6 +65,7 @@ from dolfinx_ntf.laws import (
     TabularLaw,
 )
 from dolfinx_ntf.problem import ContactPair, ContactProblem
+from dolfinx_ntf.serendipity import add_centres, serendipity_constraints
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 
 from .deck import Deck, Step
@@ -73,9 +81,6 @@ __all__ = [
 
 #: dolfinx cell node order as 0-based indices into the ccx element's nodes, by ccx element type.
 CELL_PERMUTATIONS: dict[str, np.ndarray] = {n: t.to_dolfinx for n, t in ELEMENT_TYPES.items()}
-
-#: Face quadrature degree of pressure loads (2x2 Gauss on quads, 3 points on triangles).
-_FACET_QUADRATURE_DEGREE = 2
 
 #: ccx integration points of each element type in ccx order (``*EL PRINT`` rows), as dolfinx
 #: reference coordinates.
@@ -163,7 +168,8 @@ class CalculixModel:
             with value ``group + 1``.
         steps: Load schedule of every step.
         amplitude_names: Amplitude names by index.
-        constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1).
+        constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1), then
+            for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5).
         reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
             in no element, whose prescribed values move to the constraint's right-hand side.
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
@@ -196,9 +202,10 @@ class CalculixModel:
     steps: list[StepLoads]
     amplitude_names: list[str]
     _bc_spaces: list = field(default_factory=list, repr=False)
-    constraints: list[LinearConstraint] = field(default_factory=list)
+    constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
+    _centre_rows: tuple | None = field(default=None, repr=False)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -225,6 +232,22 @@ class CalculixModel:
         out = np.zeros((dofs.size, *values.shape[1:]))
         out[dofs >= 0] = values[dofs[dofs >= 0]]
         return out
+
+    def on_ccx_nodes(self, forces: np.ndarray) -> np.ndarray:
+        """Nodal forces ``(num_dofs, 3)`` as ccx's nodes carry them.
+
+        C3D20's face- and cell-centre forces move to the 20 nodes they depend on (virtual work,
+        ``f + M^T f_centres``), as ccx's RF; other elements' forces are returned unchanged.
+        """
+        if self.element_type.num_nodes != 20:
+            return forces
+        if self._centre_rows is None:
+            self._centre_rows = elimination_rows(forces.size, serendipity_constraints(self.V))[:2]
+        centres, rows = self._centre_rows
+        flat = forces.ravel().copy()
+        flat += rows.T @ flat[centres]
+        flat[centres] = 0.0
+        return flat.reshape(forces.shape)
 
     def face_nodes_of(self, surface: str, facets: np.ndarray) -> np.ndarray:
         """Ccx node numbers (ccx face order) of local ``facets`` of an element-face surface."""
@@ -325,7 +348,7 @@ class CalculixModel:
         loads = self.steps[step_index]
         total = loads.total_time_start + step_time
         known = self._evaluate(loads.reference, step_time / loads.period, step_time, total)
-        values = np.zeros(len(self.constraints))
+        values = np.zeros(num_equations(self.constraints))
         for k, keys, coefficients in self.reference_terms:
             given = loads.reference_keys
             pos = np.minimum(np.searchsorted(given, keys), max(given.size - 1, 0))
@@ -394,11 +417,14 @@ def _element_block(deck: Deck):
 
 def _create_mesh(deck: Deck, block, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
     domain = compat.coordinate_element(block.type.cell, block.type.degree)
+    serendipity = block.type.num_nodes == 20  # C3D20(R): 27-node cells (docs/method.md §13.5)
     if comm.rank == 0:
         cells = deck.node_index(block.connectivity)[:, block.type.to_dolfinx]
         x = np.asarray(deck.node_coords, dtype=np.float64)
+        if serendipity:
+            cells, x = add_centres(cells, x)
     else:
-        cells = np.zeros((0, block.type.num_nodes), dtype=np.int64)
+        cells = np.zeros((0, 27 if serendipity else block.type.num_nodes), dtype=np.int64)
         x = np.zeros((0, 3))
     return dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), x, domain)
 
@@ -415,11 +441,12 @@ def _numbering(deck: Deck, mesh: dolfinx.mesh.Mesh, V: dolfinx.fem.FunctionSpace
     dof_of_geometry = np.full(num_geometry, -1, dtype=np.int64)
     dof_of_geometry[geometry_dofs.ravel()] = space_dofs.ravel()
     input_index = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    deck_node = input_index < deck.node_ids.size  # not C3D20's added face and cell centres
     node_dof = np.full(deck.node_ids.size, -1, dtype=np.int64)
-    node_dof[input_index] = dof_of_geometry
+    node_dof[input_index[deck_node]] = dof_of_geometry[deck_node]
     num_dofs = V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts
-    dof_node = np.zeros(num_dofs, dtype=np.int64)
-    dof_node[dof_of_geometry] = deck.node_ids[input_index]
+    dof_node = np.full(num_dofs, -1, dtype=np.int64)  # -1: an added centre, no ccx node
+    dof_node[dof_of_geometry[deck_node]] = deck.node_ids[input_index[deck_node]]
 
     num_vertices = mesh.topology.index_map(0).size_local + mesh.topology.index_map(0).num_ghosts
     vertices = np.arange(num_vertices, dtype=np.int32)
@@ -506,15 +533,25 @@ def _surfaces(deck: Deck, mesh, parts: dict):
     node_vertex = parts["node_vertex"]
     for name, surface in deck.surfaces.items():
         if surface.type == "NODE":
-            vertices = node_vertex[deck.node_index(surface.nodes)]
-            if np.any(vertices < 0):
+            rows = deck.node_index(surface.nodes)
+            vertices, dofs = node_vertex[rows], parts["node_dof"][rows]
+            if np.any(dofs < 0):
+                node = int(surface.nodes[np.argmax(dofs < 0)])
+                raise ValueError(
+                    f"{surface.location}: *SURFACE {name}, TYPE=NODE: node {node} belongs to no "
+                    "element"
+                )
+            midside = np.unique(dofs[vertices < 0]).astype(np.int32)  # quadratic elements
+            if midside.size and parts["block"].type.num_nodes != 20:  # checked for C3D20 only
                 node = int(surface.nodes[np.argmax(vertices < 0)])
                 raise _not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
-                    "corner (midside or unused node)",
+                    f"corner, on {parts['block'].type.name} elements (midside nodes of "
+                    "node-based surfaces: C3D20 only)",
                     surface.location,
                 )
-            surfaces[name] = NodeSurface(np.unique(vertices).astype(np.int32), name)
+            vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)
+            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside)
             continue
         facets, nodes = _element_faces_to_facets(
             deck, parts, surface.elements, surface.faces, f"*SURFACE {name}", surface.location
@@ -880,7 +917,12 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     element_cell[original] = np.arange(original.size)
     cell_element = block.ids[original]
 
-    parts = {"block": block, "node_vertex": node_vertex, "find": _facet_finder(mesh)}
+    parts = {
+        "block": block,
+        "node_vertex": node_vertex,
+        "node_dof": node_dof,
+        "find": _facet_finder(mesh),
+    }
     surfaces, surface_tags, surface_faces = _surfaces(deck, mesh, parts)
     pairs = _contact_pairs(deck, surfaces, node_vertex)
     mu, lmbda = _lame(deck, block, mesh, element_cell)
@@ -900,7 +942,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             "ds",
             domain=mesh,
             subdomain_data=pressure_tags,
-            metadata={"quadrature_degree": _FACET_QUADRATURE_DEGREE},
+            metadata={"quadrature_degree": etype.face_quadrature_degree},
         )
         N = ufl.FacetNormal(mesh)
         traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
@@ -908,6 +950,8 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = _constraints(deck, node_dof)
+    if etype.num_nodes == 20:
+        constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
 
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from ..elements import ELEMENT_TYPES, _frozen_array
+from ..elements import ELEMENT_TYPES, REFUSED_ELEMENTS, _frozen_array
 from .data import Surface
 from .errors import DeckError, Location
 from .lexer import _INT_RE, _Card
@@ -35,8 +35,10 @@ class _MeshCards(_ReaderState):
         type_name = card.params["TYPE"] or ""
         if type_name not in ELEMENT_TYPES:
             supported = ", ".join(ELEMENT_TYPES)
+            why = REFUSED_ELEMENTS.get(type_name, "")
             raise DeckError(
-                f"element type {type_name} is not supported (supported: {supported})", card.location
+                f"element type {type_name} is not supported{why} (supported: {supported})",
+                card.location,
             )
         etype = ELEMENT_TYPES[type_name]
         needed = etype.num_nodes + 1

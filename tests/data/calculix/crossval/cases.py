@@ -3,10 +3,11 @@
 Each :class:`Case` writes ``<name>.inp`` into a directory; ``tests/test_ccx_crossval.py`` and
 ``benchmarks/validate.py`` run ccx and dolfinx_ntf on it and compare. The meshes are structured
 boxes (hexahedra, or each hexahedron split into six tetrahedra) stacked along z, with
-non-matching grids across each contact interface. Together the cases cover C3D8, C3D4 and
-C3D10; the EXPONENTIAL, LINEAR and TABULAR laws; small strain and NLGEOM; several increments;
-a curved (warped bilinear) master; face- and node-based slaves; two contact pairs in one deck;
-pressure, prescribed-displacement and point loads; an amplitude.
+non-matching grids across each contact interface. Together the cases cover C3D8, C3D4,
+C3D10, C3D20 and C3D20R (C3D8 decks given midside nodes by ``hex20.py``); the EXPONENTIAL,
+LINEAR and TABULAR laws; small strain and NLGEOM; several increments; a curved (warped
+bilinear) master and a cylindrical quad8 slave; face- and node-based slaves; two contact pairs
+in one deck; pressure, prescribed-displacement and point loads; an amplitude.
 
 Facet tag of body ``k`` (0-based, bottom to top): ``10 (k + 1) + side`` with the sides below.
 Cell tag of body ``k``: ``k + 1``.
@@ -21,6 +22,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 import numpy as np
+from hex20 import move_nodes, to_hex20  # this directory is on sys.path
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -314,6 +316,60 @@ def _tet_nlgeom_pressure(directory: Path) -> None:
     )
 
 
+def _hex20_linear_pressure(directory: Path) -> None:
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (3, 3, 1))
+    punch = ((0.11, 0.13, 0.0), (0.6, 0.6, 0.4), (2, 2, 1))
+    V, ct, ft = blocks([lower, punch])
+    steps = [_step(2, pressures=[PressureSpec(_top(ft, 1), 20.0)])]
+    _write(directory, "hex20_linear_pressure", V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D20 punch (quad8 faces) on a block, LINEAR law, pressure, 2 increments")  # fmt: skip
+    to_hex20(directory / "hex20_linear_pressure.inp")
+
+
+def _hex20r_exponential(directory: Path) -> None:
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (3, 3, 1))
+    punch = ((0.11, 0.13, 0.001), (0.6, 0.6, 0.4), (2, 2, 1))  # starts 0.001 above the block
+    V, ct, ft = blocks([lower, punch])
+    steps = [_step(3, boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.006, name="PRESS")])]
+    law = ntf.ExponentialLaw(c0=0.002, p0=2.0)
+    _write(directory, "hex20r_exponential", V, ct, ft, [_pair(ft, 1, 0, law)], steps,
+           "C3D20R punch with an initial gap, EXPONENTIAL law, prescribed displacement, "
+           "3 increments")  # fmt: skip
+    to_hex20(directory / "hex20r_exponential.inp", reduced=True)
+
+
+def _hex20_cylinder(directory: Path) -> None:
+    """A C3D20 punch with a cylindrical bottom (radius 5, axis along y) pressed onto a block."""
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (4, 2, 1))
+    punch = ((0.13, 0.11, 0.0), (0.6, 0.6, 0.3), (4, 2, 1))
+    V, ct, ft = blocks([lower, punch])
+    steps = [_step(3, boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.006, name="PRESS")])]
+    name = "hex20_cylinder"
+    _write(directory, name, V, ct, ft, [_pair(ft, 1, 0, LINEAR)], steps,
+           "C3D20 punch with a cylindrical bottom (R = 5) on a block, LINEAR law, prescribed "
+           "displacement, 3 increments")  # fmt: skip
+    to_hex20(directory / f"{name}.inp")
+
+    def curve(x: np.ndarray) -> np.ndarray:  # lift the bottom, fading to zero at the top
+        radius, axis = 5.0, 0.43
+        lift = radius - np.sqrt(radius**2 - (x[:, 0] - axis) ** 2)
+        return np.column_stack([x[:, 0], x[:, 1], x[:, 2] + lift * (1 - x[:, 2] / 0.3)])
+
+    move_nodes(directory / f"{name}.inp", "E2", curve)
+
+
+def _hex20_nodal(directory: Path) -> None:
+    lower = ((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (3, 3, 1))
+    punch = ((0.11, 0.13, 0.0), (0.6, 0.6, 0.4), (2, 2, 1))
+    V, ct, ft = blocks([lower, punch])
+    law = ntf.TabularLaw(pressures=[0.0, 20.0, 1020.0], overclosures=[0.0, 5e-4, 0.0105])
+    steps = [_step(2, boundaries=[BoundarySpec(_top(ft, 1), (2,), -0.004, name="PRESS")])]
+    _write(directory, "hex20_nodal", V, ct, ft, [_pair(ft, 1, 0, law, nodal=True, V=V)], steps,
+           "C3D20 punch, node-based slave with midside nodes (TYPE=NODE), TABULAR law, "
+           "2 increments")  # fmt: skip
+    to_hex20(directory / "hex20_nodal.inp")
+
+
 #: ccx's converged NLGEOM increments are not in equilibrium with the follower pressure on their own
 #: final faces (measured below): the displacements agree to a few 1e-6 only.
 NLGEOM_PRESSURE_QUIRK = (
@@ -366,6 +422,28 @@ CASES: tuple[Case, ...] = (
         _tet_nlgeom_pressure,
         quirk=NLGEOM_PRESSURE_QUIRK,
         tolerances={"displacement": 3e-6},
+    ),
+    Case(
+        "hex20_linear_pressure",
+        "C3D20 (quad8 faces), LINEAR, face slave, pressure, 2 increments",
+        _hex20_linear_pressure,
+    ),
+    Case(
+        "hex20_cylinder",
+        "C3D20, cylindrical slave bottom (R = 5) on a flat quad8 master, LINEAR, prescribed "
+        "displacement, contact line growing 11 -> 20 nodes, 3 increments",
+        _hex20_cylinder,
+    ),
+    Case(
+        "hex20_nodal",
+        "C3D20, node-based slave holding midside nodes (TYPE=NODE), TABULAR, prescribed "
+        "displacement, 2 increments",
+        _hex20_nodal,
+    ),
+    Case(
+        "hex20r_exponential",
+        "C3D20R, EXPONENTIAL, initial gap, prescribed displacement, 3 increments",
+        _hex20r_exponential,
     ),
 )
 """Every cross-validation deck."""
