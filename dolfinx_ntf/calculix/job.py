@@ -73,6 +73,10 @@ __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
+#: CalculiX 2.20 counts a largest residual force below this (in the deck's force unit) as zero
+#: in its convergence test (measured, docs/method.md §7.1); not with ``tight=True``.
+CCX_RESIDUAL_FLOOR = 1e-6
+
 
 class JobError(RuntimeError):
     """A job that stopped early (e.g. no convergence); files keep the converged increments.
@@ -247,7 +251,11 @@ class _Job:
         self._internal = dolfinx.fem.form(internal)
         self._stress = None
         self.solver = ContactNewtonSolver(
-            comm, self.problem, petsc_options=petsc_options, check_unpaired=False
+            comm,
+            self.problem,
+            petsc_options=petsc_options,
+            check_unpaired=False,
+            residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
         )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
