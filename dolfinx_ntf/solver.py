@@ -147,6 +147,10 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             :meth:`is_converged` (then the ``R_l`` test holds). CalculiX 2.20 does this with
             1e-6 in the deck's force unit (docs/method.md §7.1), which the deck runner
             reproduces; 0 (the default) keeps the test scale-free.
+        average_over_step: ``q~`` of :meth:`is_converged` is the mean over the increments of
+            the step so far (each earlier one by its last ``q``, the current one by its mean so
+            far), CalculiX's time-averaged force, which the deck runner reproduces; default: the
+            mean over the iterations of the current increment.
     """
 
     def __init__(
@@ -166,6 +170,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         line_search_from: int = 2,
         check_unpaired: bool = True,
         residual_floor: float = 0.0,
+        average_over_step: bool = False,
     ) -> None:
         symmetric = (
             petsc_options is None
@@ -213,6 +218,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.line_search_from = line_search_from
         self.check_unpaired = check_unpaired
         self.residual_floor = residual_floor
+        self.average_over_step = average_over_step
+        #: Last average force ``q`` of each converged increment of the current step.
+        self.step_forces: list[float] = []
         self.extra_pairings = 0
         self.step_lengths: list[float] = []
         self._trial_residual = self._b.duplicate()
@@ -335,6 +343,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         average = self.problem.average_element_force()
         self._averages.append(average)
         mean = float(np.mean(self._averages))
+        if self.average_over_step and self.step_forces:
+            mean = (sum(self.step_forces) + mean) / (len(self.step_forces) + 1)
         largest = b.norm(PETSc.NormType.NORM_INFINITY)
         if largest < self.residual_floor:
             largest = 0.0
@@ -494,6 +504,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             )
         if self._averages:
             self.past_averages.append(float(np.mean(self._averages)))
+            self.step_forces.append(self._averages[-1])
         return iterations, True
 
 
@@ -543,6 +554,11 @@ class StaticStep:
             ``growth_factor`` after two consecutive increments that each converged in at most
             ``growth_iterations`` iterations.
         on_increment: Called with the :class:`IncrementResult` of each converged increment.
+        guard_predictor: With ``predictor`` and without ``pair_after_predictor``: start from
+            ``u_n`` instead when the predicted displacement brings slave nodes into contact that
+            the increment-start pairing gave no spring (the growing contact zones on which the
+            predictor makes the iterates run away); the deck runner's default (docs/method.md
+            §7.2).
     """
 
     set_load: LoadControl
@@ -558,6 +574,7 @@ class StaticStep:
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
+    guard_predictor: bool = False
 
     def __post_init__(self) -> None:
         """Check the configuration (``TypeError``/``ValueError`` naming the field)."""
@@ -608,6 +625,13 @@ class StaticStep:
                 if self.pair_after_predictor:
                     problem.pair()
                     problem.ensure_matrix()
+                elif self.guard_predictor and (unpaired := problem.unpaired_contacts()):
+                    u.x.array[:] = u_start
+                    u.x.scatter_forward()
+                    logger.info(
+                        " predictor dropped: it brings %d unpaired slave node(s) into contact",
+                        unpaired,
+                    )
 
         def converged(dt: float, u_start: np.ndarray) -> None:
             nonlocal velocity
@@ -641,6 +665,7 @@ def run_increments(
         converged: Updates the step's own state after a converged increment.
     """
     problem = solver.problem
+    solver.step_forces = []
     max_inc = step.period if step.max_increment is None else step.max_increment
     results: list[IncrementResult] = []
     t, dt = 0.0, step.initial_increment

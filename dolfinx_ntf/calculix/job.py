@@ -225,9 +225,11 @@ class _Job:
         petsc_options: dict | None,
         predictor: bool = False,
         pair_after_predictor: bool = False,
+        guard_predictor: bool = True,
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
         self.predictor = predictor
+        self.guard_predictor = guard_predictor
         self.pair_after_predictor = pair_after_predictor
         self.result = JobResult(jobname, directory, model)
         self.result.dat = directory / f"{jobname}.dat"
@@ -256,6 +258,7 @@ class _Job:
             petsc_options=petsc_options,
             check_unpaired=False,
             residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
+            average_over_step=not tight,
         )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
@@ -446,6 +449,7 @@ class _Job:
             on_increment=on_increment,
             predictor=self.predictor,
             pair_after_predictor=self.pair_after_predictor,
+            guard_predictor=self.guard_predictor,
         )
         driver.run(self.solver, model.u)
 
@@ -807,8 +811,9 @@ def run_job(
     progress: bool = True,
     problem_options: dict | None = None,
     petsc_options: dict | None = None,
-    predictor: bool = False,
+    predictor: bool = True,
     pair_after_predictor: bool = False,
+    guard_predictor: bool = True,
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -822,10 +827,13 @@ def run_job(
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
             the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``).
         petsc_options: Linear solver options (default: MUMPS LU).
-        predictor: ccx's predictor ``u_n + dt v_prev`` (off by default, as in the Python API: see
-            :class:`~dolfinx_ntf.StaticStep`).
+        predictor: ccx's predictor ``u_n + dt v_prev`` from the second increment of a step (on by
+            default, unlike the Python API: see :class:`~dolfinx_ntf.StaticStep`).
         pair_after_predictor: Pair again once the predictor has moved the nodes (beyond ccx, see
             :class:`~dolfinx_ntf.StaticStep`).
+        guard_predictor: Start from ``u_n`` instead when the predicted displacement brings slave
+            nodes into contact that the increment-start pairing gave no spring (beyond ccx, see
+            :class:`~dolfinx_ntf.StaticStep`); False is ccx's predictor everywhere.
 
     Returns:
         The :class:`JobResult`.
@@ -869,6 +877,7 @@ def run_job(
         petsc_options=petsc_options,
         predictor=predictor,
         pair_after_predictor=pair_after_predictor,
+        guard_predictor=guard_predictor,
     )
     try:
         return job.run()
