@@ -198,6 +198,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self._A = problem.ensure_matrix()
         self.setJ(self._jacobian, self._A)
         self.setF(self._residual, self._b)
+        self.set_form(self._form)
         self.set_update(self._update)
         self.convergence_criterion = "residual"
         self.controls = controls
@@ -224,6 +225,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.extra_pairings = 0
         self.step_lengths: list[float] = []
         self._trial_residual = self._b.duplicate()
+        #: The line search's last trial is the new iterate: its springs and residual are reused.
+        self._trial_is_current = False
         self._line_search_start = self._b.duplicate()
         self.rtol = 0.0
         self.max_it = max_it
@@ -310,6 +313,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         best_step, best_norm = 1.0, np.inf
         step = 1.0
         x.copy(self._line_search_start)
+        # _update repeats the same axpy, so the last trial is the new iterate bit for bit (not
+        # with constraints: form() back-substitutes the eliminated values into x)
+        reusable = self.problem.elimination is None
         for _ in range(self.max_line_search_halvings + 1):
             x.axpy(-step * self.relaxation_parameter, dx)
             self.problem.form(x)
@@ -319,9 +325,16 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             if norm < best_norm:
                 best_step, best_norm = step, norm
             if norm <= (1.0 - 1e-4 * step) * start:
+                self._trial_is_current = reusable
                 return step
-            step *= 0.5
+            last, step = step, 0.5 * step
+        self._trial_is_current = reusable and best_step == last
         return best_step
+
+    def _form(self, x: PETSc.Vec) -> None:
+        """Springs at the new iterate, unless the line search has just evaluated them there."""
+        if not self._trial_is_current:
+            self.problem.form(x)
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
         """CalculiX's force-scaled test of the mechanical field, after each Newton update.
@@ -396,7 +409,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         )
 
     def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        self.problem.F(x, b)
+        if self._trial_is_current:  # the line search's accepted trial: same springs, same x
+            self._trial_residual.copy(b)
+            self._trial_is_current = False
+        else:
+            self.problem.F(x, b)
         norm = b.norm()
         if not np.isfinite(norm):
             if self.updates == 0:
@@ -480,6 +497,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         max_it = self.max_it
         self._solve_start = u.x.array.copy()
         self.updates = 0
+        self._trial_is_current = False
         self._first_check = self.divergence_iteration
         self._bind_matrix()
         try:
