@@ -148,9 +148,12 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             1e-6 in the deck's force unit (docs/method.md §7.1), which the deck runner
             reproduces; 0 (the default) keeps the test scale-free.
         average_over_step: ``q~`` of :meth:`is_converged` is the mean over the increments of
-            the step so far (each earlier one by its last ``q``, the current one by its mean so
-            far), CalculiX's time-averaged force, which the deck runner reproduces; default: the
-            mean over the iterations of the current increment.
+            the step so far (each by its last ``q``, the current one by its ``q`` now),
+            CalculiX's time-averaged force, which the deck runner reproduces; default: the mean
+            over the iterations of the current increment.
+        change_over_iterations: The displacement change ``du`` of :meth:`is_converged` is the
+            largest over the iterations of the increment so far (CalculiX's; the deck runner
+            reproduces it); default: the change now.
     """
 
     def __init__(
@@ -171,6 +174,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         check_unpaired: bool = True,
         residual_floor: float = 0.0,
         average_over_step: bool = False,
+        change_over_iterations: bool = False,
     ) -> None:
         symmetric = (
             petsc_options is None
@@ -220,6 +224,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.check_unpaired = check_unpaired
         self.residual_floor = residual_floor
         self.average_over_step = average_over_step
+        self.change_over_iterations = change_over_iterations
+        self._largest_change = 0.0
         #: Last average force ``q`` of each converged increment of the current step.
         self.step_forces: list[float] = []
         self.extra_pairings = 0
@@ -356,8 +362,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         average = self.problem.average_element_force()
         self._averages.append(average)
         mean = float(np.mean(self._averages))
-        if self.average_over_step and self.step_forces:
-            mean = (sum(self.step_forces) + mean) / (len(self.step_forces) + 1)
+        if self.average_over_step:
+            mean = (sum(self.step_forces) + average) / (len(self.step_forces) + 1)
         largest = b.norm(PETSc.NormType.NORM_INFINITY)
         if largest < self.residual_floor:
             largest = 0.0
@@ -369,6 +375,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         start = self.increment_start if self.increment_start is not None else self._solve_start
         change = float(np.abs(x.array - start[: x.array.size]).max(initial=0.0))
         change = self.problem.u.function_space.mesh.comm.allreduce(change, op=MPI.MAX)
+        if self.change_over_iterations:
+            self._largest_change = change = max(self._largest_change, change)
         past = float(np.mean(self.past_averages)) if self.past_averages else 0.0
         if mean <= controls["epsilon"] * past:
             # Unloaded (all forces vanish, e.g. a contact pair removed): CalculiX's zero-flux test
@@ -498,6 +506,10 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self._solve_start = u.x.array.copy()
         self.updates = 0
         self._trial_is_current = False
+        self._largest_change = 0.0  # with a predictor, its own change counts too (as in ccx)
+        if self.change_over_iterations and self.increment_start is not None:
+            moved = np.abs(u.x.array - self.increment_start[: u.x.array.size]).max(initial=0.0)
+            self._largest_change = u.function_space.mesh.comm.allreduce(moved, op=MPI.MAX)
         self._first_check = self.divergence_iteration
         self._bind_matrix()
         try:

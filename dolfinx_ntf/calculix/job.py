@@ -259,6 +259,7 @@ class _Job:
             check_unpaired=False,
             residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
             average_over_step=not tight,
+            change_over_iterations=not tight,
         )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
