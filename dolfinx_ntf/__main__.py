@@ -44,9 +44,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--predictor",
-        action="store_true",
-        help="start each increment from ccx's extrapolation u_n + dt v_prev; default: from the "
-        "last converged displacement, which converges more often on growing contact zones",
+        choices=("guarded", "ccx", "off"),
+        default="guarded",
+        help="start each increment from ccx's extrapolation u_n + dt v_prev: 'guarded' (default) "
+        "unless it brings slave nodes into contact that have no spring yet (then from u_n, which "
+        "converges more often on growing contact zones), 'ccx' always, 'off' never",
     )
     run.add_argument(
         "--pair-after-predictor",
@@ -86,7 +88,8 @@ def main(argv: list[str] | None = None) -> int:
             comm=MPI.COMM_WORLD,
             tight=args.tight,
             problem_options={"walk_from_previous_face": args.stable_pairing},
-            predictor=args.predictor,
+            predictor=args.predictor != "off",
+            guard_predictor=args.predictor == "guarded",
             pair_after_predictor=args.pair_after_predictor,
         )
     except JobError as error:

@@ -143,6 +143,17 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             increment is taken in full: from an unloaded contact it overshoots the residual of
             the LINEAR law (slope K/2 at zero overclosure, K beyond) and is corrected in one
             more iteration, which damping would only delay.
+        residual_floor: A largest residual force below this absolute value counts as zero in
+            :meth:`is_converged` (then the ``R_l`` test holds). CalculiX 2.20 does this with
+            1e-6 in the deck's force unit (docs/method.md §7.1), which the deck runner
+            reproduces; 0 (the default) keeps the test scale-free.
+        average_over_step: ``q~`` of :meth:`is_converged` is the mean over the increments of
+            the step so far (each by its last ``q``, the current one by its ``q`` now),
+            CalculiX's time-averaged force, which the deck runner reproduces; default: the mean
+            over the iterations of the current increment.
+        change_over_iterations: The displacement change ``du`` of :meth:`is_converged` is the
+            largest over the iterations of the increment so far (CalculiX's; the deck runner
+            reproduces it); default: the change now.
     """
 
     def __init__(
@@ -161,6 +172,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         max_line_search_halvings: int = 4,
         line_search_from: int = 2,
         check_unpaired: bool = True,
+        residual_floor: float = 0.0,
+        average_over_step: bool = False,
+        change_over_iterations: bool = False,
     ) -> None:
         symmetric = (
             petsc_options is None
@@ -188,6 +202,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self._A = problem.ensure_matrix()
         self.setJ(self._jacobian, self._A)
         self.setF(self._residual, self._b)
+        self.set_form(self._form)
         self.set_update(self._update)
         self.convergence_criterion = "residual"
         self.controls = controls
@@ -207,9 +222,17 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.max_line_search_halvings = max_line_search_halvings
         self.line_search_from = line_search_from
         self.check_unpaired = check_unpaired
+        self.residual_floor = residual_floor
+        self.average_over_step = average_over_step
+        self.change_over_iterations = change_over_iterations
+        self._largest_change = 0.0
+        #: Last average force ``q`` of each converged increment of the current step.
+        self.step_forces: list[float] = []
         self.extra_pairings = 0
         self.step_lengths: list[float] = []
         self._trial_residual = self._b.duplicate()
+        #: The line search's last trial is the new iterate: its springs and residual are reused.
+        self._trial_is_current = False
         self._line_search_start = self._b.duplicate()
         self.rtol = 0.0
         self.max_it = max_it
@@ -296,6 +319,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         best_step, best_norm = 1.0, np.inf
         step = 1.0
         x.copy(self._line_search_start)
+        # _update repeats the same axpy, so the last trial is the new iterate bit for bit (not
+        # with constraints: form() back-substitutes the eliminated values into x)
+        reusable = self.problem.elimination is None
         for _ in range(self.max_line_search_halvings + 1):
             x.axpy(-step * self.relaxation_parameter, dx)
             self.problem.form(x)
@@ -305,9 +331,16 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             if norm < best_norm:
                 best_step, best_norm = step, norm
             if norm <= (1.0 - 1e-4 * step) * start:
+                self._trial_is_current = reusable
                 return step
-            step *= 0.5
+            last, step = step, 0.5 * step
+        self._trial_is_current = reusable and best_step == last
         return best_step
+
+    def _form(self, x: PETSc.Vec) -> None:
+        """Springs at the new iterate, unless the line search has just evaluated them there."""
+        if not self._trial_is_current:
+            self.problem.form(x)
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
         """CalculiX's force-scaled test of the mechanical field, after each Newton update.
@@ -329,7 +362,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         average = self.problem.average_element_force()
         self._averages.append(average)
         mean = float(np.mean(self._averages))
+        if self.average_over_step:
+            mean = (sum(self.step_forces) + average) / (len(self.step_forces) + 1)
         largest = b.norm(PETSc.NormType.NORM_INFINITY)
+        if largest < self.residual_floor:
+            largest = 0.0
         self._largest.append(largest)
         correction = self.relaxation_parameter * self.last_correction.norm(
             PETSc.NormType.NORM_INFINITY
@@ -338,6 +375,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         start = self.increment_start if self.increment_start is not None else self._solve_start
         change = float(np.abs(x.array - start[: x.array.size]).max(initial=0.0))
         change = self.problem.u.function_space.mesh.comm.allreduce(change, op=MPI.MAX)
+        if self.change_over_iterations:
+            self._largest_change = change = max(self._largest_change, change)
         past = float(np.mean(self.past_averages)) if self.past_averages else 0.0
         if mean <= controls["epsilon"] * past:
             # Unloaded (all forces vanish, e.g. a contact pair removed): CalculiX's zero-flux test
@@ -378,7 +417,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         )
 
     def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        self.problem.F(x, b)
+        if self._trial_is_current:  # the line search's accepted trial: same springs, same x
+            self._trial_residual.copy(b)
+            self._trial_is_current = False
+        else:
+            self.problem.F(x, b)
         norm = b.norm()
         if not np.isfinite(norm):
             if self.updates == 0:
@@ -462,6 +505,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         max_it = self.max_it
         self._solve_start = u.x.array.copy()
         self.updates = 0
+        self._trial_is_current = False
+        self._largest_change = 0.0  # with a predictor, its own change counts too (as in ccx)
+        if self.change_over_iterations and self.increment_start is not None:
+            moved = np.abs(u.x.array - self.increment_start[: u.x.array.size]).max(initial=0.0)
+            self._largest_change = u.function_space.mesh.comm.allreduce(moved, op=MPI.MAX)
         self._first_check = self.divergence_iteration
         self._bind_matrix()
         try:
@@ -486,6 +534,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             )
         if self._averages:
             self.past_averages.append(float(np.mean(self._averages)))
+            self.step_forces.append(self._averages[-1])
         return iterations, True
 
 
@@ -535,6 +584,11 @@ class StaticStep:
             ``growth_factor`` after two consecutive increments that each converged in at most
             ``growth_iterations`` iterations.
         on_increment: Called with the :class:`IncrementResult` of each converged increment.
+        guard_predictor: With ``predictor`` and without ``pair_after_predictor``: start from
+            ``u_n`` instead when the predicted displacement brings slave nodes into contact that
+            the increment-start pairing gave no spring (the growing contact zones on which the
+            predictor makes the iterates run away); the deck runner's default (docs/method.md
+            §7.2).
     """
 
     set_load: LoadControl
@@ -550,6 +604,7 @@ class StaticStep:
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
+    guard_predictor: bool = False
 
     def __post_init__(self) -> None:
         """Check the configuration (``TypeError``/``ValueError`` naming the field)."""
@@ -600,6 +655,13 @@ class StaticStep:
                 if self.pair_after_predictor:
                     problem.pair()
                     problem.ensure_matrix()
+                elif self.guard_predictor and (unpaired := problem.unpaired_contacts()):
+                    u.x.array[:] = u_start
+                    u.x.scatter_forward()
+                    logger.info(
+                        " predictor dropped: it brings %d unpaired slave node(s) into contact",
+                        unpaired,
+                    )
 
         def converged(dt: float, u_start: np.ndarray) -> None:
             nonlocal velocity
@@ -633,6 +695,7 @@ def run_increments(
         converged: Updates the step's own state after a converged increment.
     """
     problem = solver.problem
+    solver.step_forces = []
     max_inc = step.period if step.max_increment is None else step.max_increment
     results: list[IncrementResult] = []
     t, dt = 0.0, step.initial_increment

@@ -154,8 +154,22 @@ class SlaveSurface:
 
 
 def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
-    """Reference coordinates of the nodes of ``V``, shape (num_local_blocks_with_ghosts, 3)."""
-    return V.tabulate_dof_coordinates().reshape(-1, 3).copy()
+    """Reference coordinates of the nodes of ``V``, shape (num_local_blocks_with_ghosts, 3).
+
+    Nodes at mesh vertices of a Lagrange space take the mesh's own coordinates: the push-forward
+    of ``tabulate_dof_coordinates`` adds round-off (1e-17 off a plane ``z = 0``), which decides
+    whether a slave node placed on a master face starts open or closed (docs/method.md §3.4).
+    """
+    X = V.tabulate_dof_coordinates().reshape(-1, 3).copy()
+    if compat.space_family(V) not in ("Lagrange", "P", "Q", "CG"):
+        return X
+    mesh = V.mesh
+    vertices = dolfinx.cpp.mesh.cell_num_vertices(mesh.topology.cell_type)
+    dofs = compat.cell_dofs(V)[:, :vertices].ravel()  # Lagrange numbers vertex nodes first
+    exact = mesh.geometry.x[compat.geometry_dofs(mesh)[:, :vertices].ravel()]
+    if dofs.size and np.allclose(X[dofs], exact, rtol=0.0, atol=1e-9 * np.ptp(exact, axis=0).max()):
+        X[dofs] = exact
+    return X
 
 
 def _cell_arrays(V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:

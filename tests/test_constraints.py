@@ -254,14 +254,14 @@ def test_unsupported_reference_nodes_are_refused(tmp_path):
         run_job("ref", tmp_path, progress=False)
 
 
-def _compare_with_ccx(tmp_path: Path, text: str):
+def _compare_with_ccx(tmp_path: Path, text: str, *, predictor: bool = True):
     """Run ``text`` with both codes; first increment to round-off, second within ccx's controls."""
     from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
 
     for where in ("ours", "ccx"):
         (tmp_path / where).mkdir()
         (tmp_path / where / "ref.inp").write_text(text)
-    result = run_job("ref", tmp_path / "ours", progress=False)
+    result = run_job("ref", tmp_path / "ours", progress=False, predictor=predictor)
     run_ccx(tmp_path / "ccx", "ref", timeout=120)
     ours, theirs = read_dat(tmp_path / "ours" / "ref.dat"), read_ccx_dat(tmp_path / "ccx", "ref")
     assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
@@ -297,7 +297,12 @@ def test_loaded_free_reference_node_matches_ccx(tmp_path):
 def test_prescribed_reference_node_matches_ccx(tmp_path):
     """Face nodes tied to a node in no element whose displacement is prescribed: its value becomes
     the constraints' right-hand side; ccx prints it as the node's displacement."""
-    result, ours = _compare_with_ccx(tmp_path, _reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n"))
+    # Without the predictor: from it both codes start the second increment at the same residual
+    # (6269 % of the average force), creep down (ccx 11 iterations, we 10) and stop within
+    # R_n = 0.005 at states 9e-3 apart (reaction forces); from u_n we converge in 3, closer to
+    # the solution than ccx's state. The predictor is not what this test checks.
+    text = _reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n")
+    result, ours = _compare_with_ccx(tmp_path, text, predictor=False)
     np.testing.assert_array_equal(result.last.displacement_of([11, 12, 15, 16])[:, 2], -1e-6)
     assert ours[0].rows[-1][1:] == (0.0, 0.0, -5e-7)
 

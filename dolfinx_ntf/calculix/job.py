@@ -73,6 +73,10 @@ __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
+#: CalculiX 2.20 counts a largest residual force below this (in the deck's force unit) as zero
+#: in its convergence test (measured, docs/method.md §7.1); not with ``tight=True``.
+CCX_RESIDUAL_FLOOR = 1e-6
+
 
 class JobError(RuntimeError):
     """A job that stopped early (e.g. no convergence); files keep the converged increments.
@@ -221,9 +225,11 @@ class _Job:
         petsc_options: dict | None,
         predictor: bool = False,
         pair_after_predictor: bool = False,
+        guard_predictor: bool = True,
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
         self.predictor = predictor
+        self.guard_predictor = guard_predictor
         self.pair_after_predictor = pair_after_predictor
         self.result = JobResult(jobname, directory, model)
         self.result.dat = directory / f"{jobname}.dat"
@@ -247,7 +253,13 @@ class _Job:
         self._internal = dolfinx.fem.form(internal)
         self._stress = None
         self.solver = ContactNewtonSolver(
-            comm, self.problem, petsc_options=petsc_options, check_unpaired=False
+            comm,
+            self.problem,
+            petsc_options=petsc_options,
+            check_unpaired=False,
+            residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
+            average_over_step=not tight,
+            change_over_iterations=not tight,
         )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
@@ -438,6 +450,7 @@ class _Job:
             on_increment=on_increment,
             predictor=self.predictor,
             pair_after_predictor=self.pair_after_predictor,
+            guard_predictor=self.guard_predictor,
         )
         driver.run(self.solver, model.u)
 
@@ -804,8 +817,9 @@ def run_job(
     progress: bool = True,
     problem_options: dict | None = None,
     petsc_options: dict | None = None,
-    predictor: bool = False,
+    predictor: bool = True,
     pair_after_predictor: bool = False,
+    guard_predictor: bool = True,
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -819,10 +833,13 @@ def run_job(
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
             the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``).
         petsc_options: Linear solver options (default: MUMPS LU).
-        predictor: ccx's predictor ``u_n + dt v_prev`` (off by default, as in the Python API: see
-            :class:`~dolfinx_ntf.StaticStep`).
+        predictor: ccx's predictor ``u_n + dt v_prev`` from the second increment of a step (on by
+            default, unlike the Python API: see :class:`~dolfinx_ntf.StaticStep`).
         pair_after_predictor: Pair again once the predictor has moved the nodes (beyond ccx, see
             :class:`~dolfinx_ntf.StaticStep`).
+        guard_predictor: Start from ``u_n`` instead when the predicted displacement brings slave
+            nodes into contact that the increment-start pairing gave no spring (beyond ccx, see
+            :class:`~dolfinx_ntf.StaticStep`); False is ccx's predictor everywhere.
 
     Returns:
         The :class:`JobResult`.
@@ -866,6 +883,7 @@ def run_job(
         petsc_options=petsc_options,
         predictor=predictor,
         pair_after_predictor=pair_after_predictor,
+        guard_predictor=guard_predictor,
     )
     try:
         return job.run()
