@@ -1,4 +1,4 @@
-"""Direct against iterative linear solvers on the punch: where the crossover lies (docs/method.md §14.7).
+"""Direct against iterative linear solvers on the punch: the crossover (docs/method.md §14.7).
 
 The punch of ``tests/conftest.py`` (a block pressed onto a larger clamped block, non-matching
 meshes, LINEAR law) refined to ``--sizes`` cells per side of the lower block (the punch is 25 %
@@ -43,9 +43,8 @@ import dolfinx
 import dolfinx.fem
 import ufl
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 import conftest  # the punch's mesh and residual
 from contact_phases import _format_table
 
@@ -54,6 +53,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf import solver as ntf_solver
 from dolfinx_ntf.elasticity import component_bc
 
+ROOT = Path(__file__).resolve().parents[1]
 #: Pressure on the punch's top (E = 1000): a few per mille of strain.
 PRESSURE = 20.0
 
@@ -209,7 +209,7 @@ def section(results: list[dict], threshold: int) -> list[str]:
         "",
         _format_table(header, rows),
         "",
-        f"`linear_solver=\"auto\"` (the default) uses the direct solver up to "
+        f'`linear_solver="auto"` (the default) uses the direct solver up to '
         f"`DIRECT_MAX_DOFS` = {threshold} dofs and the iterative one above.",
     ]
 

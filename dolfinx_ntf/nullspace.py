@@ -42,9 +42,11 @@ def connected_components(
         The number of components and the component of every node (numbered from 0).
     """
     cell_nodes = np.asarray(cell_nodes, dtype=np.int64)
-    cell_nodes = cell_nodes.reshape(cell_nodes.shape[0], -1) if cell_nodes.size else np.zeros((0, 1))
-    first = np.repeat(cell_nodes[:, 0], cell_nodes.shape[1]).astype(np.int64)  # a star per cell is enough
-    rows, cols = [first], [cell_nodes.ravel().astype(np.int64)]
+    if cell_nodes.size == 0:
+        cell_nodes = np.zeros((0, 1), dtype=np.int64)
+    cell_nodes = cell_nodes.reshape(cell_nodes.shape[0], -1)
+    first = np.repeat(cell_nodes[:, 0], cell_nodes.shape[1])  # a star per cell is enough
+    rows, cols = [first], [cell_nodes.ravel()]
     if links is not None and len(links):
         links = np.asarray(links, dtype=np.int64).reshape(-1, 2)
         rows.append(links[:, 0])
@@ -128,7 +130,7 @@ def body_numbers(V: dolfinx.fem.FunctionSpace) -> tuple[int, np.ndarray]:
 
 
 def near_nullspace(V: dolfinx.fem.FunctionSpace) -> PETSc.NullSpace:
-    """The rigid-body modes of every body of V as a PETSc near-nullspace (for ``MatSetNearNullSpace``).
+    """The rigid-body modes of every body of V as a PETSc near-nullspace (``MatSetNearNullSpace``).
 
     Collective. V is a 3D vector Lagrange space (any degree); the vectors have the layout of the
     owned dofs of V (the rows of its matrices).

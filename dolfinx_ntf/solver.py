@@ -774,7 +774,7 @@ def _default_options(problem: object, linear_solver: object, symmetric: bool) ->
 
 
 def _unsymmetric(ksp: PETSc.KSP, why: str) -> None:
-    """Replace the symmetric solvers of ``ksp``: Cholesky by LU, CG by right-preconditioned GMRES."""
+    """Swap the symmetric solvers of ``ksp``: Cholesky for LU, CG for right-preconditioned GMRES."""
     if ksp.getPC().getType() == "cholesky":
         logger.info(" %s: LU instead of Cholesky", why)
         ksp.getPC().setType("lu")
