@@ -44,7 +44,8 @@ def connected_components(
     cell_nodes = np.asarray(cell_nodes, dtype=np.int64)
     if cell_nodes.size == 0:
         cell_nodes = np.zeros((0, 1), dtype=np.int64)
-    cell_nodes = cell_nodes.reshape(cell_nodes.shape[0], -1)
+    elif cell_nodes.ndim != 2:
+        cell_nodes = cell_nodes.reshape(cell_nodes.shape[0], -1)
     first = np.repeat(cell_nodes[:, 0], cell_nodes.shape[1])  # a star per cell is enough
     rows, cols = [first], [cell_nodes.ravel()]
     if links is not None and len(links):
