@@ -203,25 +203,52 @@ def section(results: list[dict], args: argparse.Namespace, load: tuple[float, fl
 
 def _on_paper(results: list[dict]) -> list[str]:
     """How the gather and the exchange grow to 100+ processes and 10^7 slave nodes."""
-    one = results[0]
-    per_node = (one["search"] + one["evaluate"]) / max(one["springs"], 1)
-    last = results[-1]
+    one, last = results[0], results[-1]
+    springs = max(one["springs"], 1)
+    search = one["search"] / springs  # s per spring, serial
+    contact = (one["evaluate"] + one["insert"]) / springs  # per spring and Newton iteration
+    bulk = (one["newton"] - one["contact"]) / one["dofs"]  # per dof and Newton iteration
+    ratio = one["dofs"] / springs
+    halo = max(last["halo_nodes"], 1)
+    exchange = last["exchange"] / halo if last["halo_nodes"] else 0.0
+    s7, p = 1e7, 128
+    share_balanced = contact / (contact + ratio * bulk)
+    share_surface = (
+        contact * s7 / p ** (2 / 3) / (contact * s7 / p ** (2 / 3) + ratio * bulk * s7 / p)
+    )
     return [
-        "On paper, from these figures (docs/method.md §14.2). The per-iteration exchange moves "
-        "only halo displacements (3 numbers per contact node held elsewhere); it grows with the "
-        "surface cut by the partition, not with the model, and stays a small share of an "
-        f"iteration ({100 * last['exchange'] / last['newton']:.2f} % here). The set-up gather "
-        "sends every process the whole master surface and the slave faces: 16 numbers of 8 "
-        "bytes per quadrilateral face (4 node numbers, 12 coordinates), so 10^7 faces are "
-        "1.3 GB received by every process, and every process updates the whole master "
-        "(normals, planes, k-d tree) at every pairing. With search + spring evaluation measured "
-        f"at {1e6 * per_node:.1f} us per spring in serial here, a pairing over 10^7 faces costs "
-        f"each process up to about {per_node * 1e7:.0f} s whatever P. So the allgather suits "
-        "surfaces up to about 10^6 faces (`MAX_GATHERED_FACES` = 2 x 10^6 refuses more) on a "
-        "few tens of processes; at 100+ processes and 10^7 slave nodes the master must be "
-        "exchanged by bounding boxes (each process receives the master faces within reach of "
-        "its own slave nodes: O(S/P + halo) data and work per process), which is not "
-        "implemented.",
+        "On paper, from these figures (docs/method.md §14.2), for S = 10^7 slave nodes (and about "
+        "as many master faces) on P = 128 processes:",
+        "",
+        f"- Per-spring costs measured here in serial: search {1e6 * search:.1f} us (iterations "
+        f"1-8 only), evaluation + insertion {1e6 * contact:.1f} us per Newton iteration; the rest "
+        f"of an iteration (bulk assembly and linear solve) {1e6 * bulk:.1f} us per dof, with "
+        f"{ratio:.0f} dofs per spring in this model. Evaluation and insertion are local to the "
+        "owner of each slave node, so they divide by the processes that own slave nodes: P if "
+        "the partitioner spreads the contact surface over all of them (contact share of an "
+        f"iteration {100 * share_balanced:.1f} %, as in serial), about P^(2/3) = "
+        f"{p ** (2 / 3):.0f} if it cuts the model into compact blocks of which only those on "
+        f"the surface hold slave nodes ({100 * share_surface:.0f} % at P = 128, growing like "
+        "P^(1/3)).",
+        f"- The per-iteration exchange moves 3 numbers per halo node (contact node held "
+        f"elsewhere): {1e6 * exchange:.2f} us per halo node here"
+        + ("" if last["halo_nodes"] else " (no halo nodes in this run)")
+        + ". It grows with the partition cut through the contact surface (about S^(1/2) P^(1/2) "
+        "nodes over all processes for a surface cut in P pieces), not with the model: "
+        "negligible at any P.",
+        "- The set-up allgather sends every process the whole master surface and the slave "
+        "faces: 16 numbers of 8 bytes per quadrilateral face (4 node numbers, 12 coordinates). "
+        "For 10^7 faces that is 1.3 GB received and stored by every process (0.3 s at 5 GB/s, "
+        "but P times the memory of the surface), and every pairing updates the whole master "
+        f"(normals, planes, k-d tree) on every process: up to about {search * s7:.0f} s per pairing "
+        "whatever P, with the search cost above. It suits surfaces up to about 10^6 faces "
+        "(`MAX_GATHERED_FACES` = 2 x 10^6 refuses more) on a few tens of processes.",
+        "- Beyond that the master must be exchanged by bounding boxes: an allgather of one box "
+        "per process (6 P numbers: 6 kB at P = 128), then each process receives, by one "
+        "Alltoallv, the master faces within reach of its own slave nodes' box (grown by the "
+        "search tolerance): O(S/P + boundary) data and work per process, about "
+        f"{search * s7 / p:.1f} s per pairing at P = 128 if the surface is spread evenly. "
+        "Not implemented.",
     ]
 
 
