@@ -241,7 +241,8 @@ def _on_paper(results: list[dict]) -> list[str]:
         "For 10^7 faces that is 1.3 GB received and stored by every process (0.3 s at 5 GB/s, "
         "but P times the memory of the surface), and every pairing updates the whole master "
         "(normals, planes, k-d tree) on every process: up to about "
-        f"{search * s7:.0f} s per pairing whatever P, with the search cost above. It suits surfaces up to about 10^6 faces "
+        f"{search * s7:.0f} s per pairing whatever P, with the search cost above. It suits "
+        "surfaces up to about 10^6 faces "
         "(`MAX_GATHERED_FACES` = 2 x 10^6 refuses more) on a few tens of processes.",
         "- Beyond that the master must be exchanged by bounding boxes: an allgather of one box "
         "per process (6 P numbers: 6 kB at P = 128), then each process receives, by one "
