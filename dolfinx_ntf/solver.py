@@ -762,7 +762,9 @@ def _default_options(problem: object, linear_solver: object, symmetric: bool) ->
     if linear_solver == "auto" and isinstance(problem, ContactProblem):
         index_map = problem.u.function_space.dofmap.index_map
         dofs = index_map.size_global * problem.u.function_space.dofmap.index_map_bs
-        linear_solver = "direct" if dofs <= DIRECT_MAX_DOFS else "iterative"
+        # linear constraints: the reduced matrix has no rigid modes for GAMG (§14.7)
+        small = dofs <= DIRECT_MAX_DOFS or bool(getattr(problem, "constraints", None))
+        linear_solver = "direct" if small else "iterative"
         logger.info(" %d dofs: %s linear solver", dofs, linear_solver)
     if linear_solver == "iterative":
         if not symmetric:

@@ -9,7 +9,7 @@ from petsc4py import PETSc
 
 import numpy as np
 import pytest
-from conftest import elastic_residual, punch_problem
+from conftest import LOWER_TOP, elastic_residual, punch_problem
 
 import dolfinx.fem
 import dolfinx.fem.petsc
@@ -149,7 +149,7 @@ def test_iterative_solver_gives_the_direct_answer(symmetric):
 def test_auto_choice_and_prefix_override(monkeypatch):
     """The "auto" choice is direct up to DIRECT_MAX_DOFS, iterative above; options in PETSc's
     database under the solver's prefix take precedence and are left there."""
-    problem, _, _ = punch_problem()
+    problem, _, ft = punch_problem()
     solver = ntf.ContactNewtonSolver(COMM, problem)
     assert solver.krylov_solver.getPC().getType() == "lu" and solver.near_nullspace is None
     solver.destroy()
@@ -181,6 +181,14 @@ def test_auto_choice_and_prefix_override(monkeypatch):
         options.delValue("ntftest_pc_type")
     with pytest.raises(ValueError, match="linear_solver must be one of"):
         ntf.ContactNewtonSolver(COMM, problem, linear_solver="cg")
+    V = problem.u.function_space
+    low = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_TOP))  # not clamped
+    tie = ntf.LinearConstraint([int(low[0]), int(low[1])], [2, 2], [1.0, -1.0], name="tie")
+    problem.destroy()
+    problem, _, _ = punch_problem(constraints=[tie])  # reduced matrix: no rigid modes, direct
+    solver = ntf.ContactNewtonSolver(COMM, problem)
+    assert solver.krylov_solver.getPC().getType() == "lu"
+    solver.destroy()
     problem.destroy()
 
 
