@@ -190,6 +190,28 @@ def section(results: list[dict], threshold: int) -> list[str]:
                 f"{r['load'][0]:.1f}, {r['load'][1]:.1f}",
             ]
         )
+    notes = []
+    for processes in sorted({r["processes"] for r in results}):
+        pairs = []
+        for r in results:
+            if r["processes"] != processes or r["solver"] != "direct":
+                continue
+            other = [
+                i
+                for i in results
+                if i["n"] == r["n"] and i["processes"] == processes and i["solver"] != "direct"
+            ]
+            if other:
+                per = [x["cpu"] / sum(x["iterations"]) for x in (r, other[0])]
+                same = r["iterations"] == other[0]["iterations"]
+                pairs.append((r["dofs"], per[0] / per[1], same))
+        if pairs:
+            ratios = ", ".join(f"{d}: {q:.2f}" for d, q, _ in pairs)
+            same = "the same" if all(p[2] for p in pairs) else "**not** the same"
+            notes.append(
+                f"- {processes} process(es): CPU time per Newton iteration, direct over "
+                f"iterative, by dofs: {ratios}; Newton iterations {same} with both solvers."
+            )
     version = ".".join(map(str, PETSc.Sys.getVersion()))
     loads = [x for r in results for x in r["load"]]
     return [
@@ -208,6 +230,8 @@ def section(results: list[dict], threshold: int) -> list[str]:
         "include waiting for a core, so read the CPU times for the crossover.",
         "",
         _format_table(header, rows),
+        "",
+        *notes,
         "",
         f'`linear_solver="auto"` (the default) uses the direct solver up to '
         f"`DIRECT_MAX_DOFS` = {threshold} dofs and the iterative one above.",

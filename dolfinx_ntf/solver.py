@@ -99,7 +99,7 @@ ITERATIVE_PETSC_OPTIONS = {
 
 #: ``linear_solver="auto"`` chooses the direct solver up to this many dofs, the iterative one above
 #: (measured crossover on 2 cores, docs/performance.md "Linear solvers").
-DIRECT_MAX_DOFS = 150_000
+DIRECT_MAX_DOFS = 50_000
 
 #: Values of ``ContactNewtonSolver(linear_solver=...)``.
 LINEAR_SOLVERS = ("auto", "direct", "iterative")
