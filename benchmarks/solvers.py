@@ -212,6 +212,22 @@ def section(results: list[dict], threshold: int) -> list[str]:
                 f"- {processes} process(es): CPU time per Newton iteration, direct over "
                 f"iterative, by dofs: {ratios}; Newton iterations {same} with both solvers."
             )
+    for solver in ("direct", "iterative"):
+        largest = [r for r in results if r["solver"] == solver]
+        if not largest:
+            continue
+        n = max(r["n"] for r in largest)
+        runs = {r["processes"]: r for r in largest if r["n"] == n}
+        if 1 in runs and 2 in runs:
+            one, two = (runs[p] for p in (1, 2))
+            per = [r["cpu"] / sum(r["iterations"]) for r in (one, two)]
+            walls = [r["wall"] / sum(r["iterations"]) for r in (one, two)]
+            notes.append(
+                f"- {solver}, {one['dofs']} dofs, 2 processes against 1: wall time per "
+                f"iteration {walls[0] / walls[1]:.2f}x faster (under different loads), CPU time "
+                f"summed over the processes {per[1] / per[0]:.2f}x that of 1 process; on 2 idle "
+                f"cores that would give at most {2 * per[0] / per[1]:.2f}x."
+            )
     version = ".".join(map(str, PETSc.Sys.getVersion()))
     loads = [x for r in results for x in r["load"]]
     return [
