@@ -273,6 +273,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         The Jacobian belongs to the problem (:meth:`ContactProblem.destroy`).
         """
         self._b.destroy()
+        if self.near_nullspace is not None:  # the matrix keeps its own reference
+            self.near_nullspace.destroy()
+            self.near_nullspace = None
 
     def __del__(self) -> None:
         # dolfinx 0.9's NewtonSolver.__del__ destroys its matrix, which here is the problem's.
