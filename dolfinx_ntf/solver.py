@@ -22,7 +22,7 @@ import numpy as np
 import dolfinx.fem
 import dolfinx.nls.petsc
 
-from dolfinx_ntf import validation
+from dolfinx_ntf import nullspace, validation
 from dolfinx_ntf.logs import log_progress, newton_logger, quiet_dolfinx
 from dolfinx_ntf.problem import ContactProblem
 
@@ -82,6 +82,28 @@ DEFAULT_PETSC_OPTIONS = {
     "pc_factor_mat_solver_type": "mumps",
 }
 
+#: Iterative linear solver of large problems (docs/method.md §14.7): GMRES (CG when the Jacobian is
+#: symmetric) preconditioned by smoothed-aggregation AMG with the rigid-body modes of every body
+#: as near-nullspace; the true residual is reduced by ``ksp_rtol`` (tight enough to leave Newton's
+#: iteration counts unchanged).
+ITERATIVE_PETSC_OPTIONS = {
+    "ksp_type": "gmres",
+    "ksp_pc_side": "right",
+    "ksp_gmres_restart": 100,
+    "ksp_rtol": 1e-10,
+    "ksp_max_it": 1000,
+    "pc_type": "gamg",
+    "mg_levels_ksp_type": "chebyshev",
+    "mg_levels_pc_type": "jacobi",
+}
+
+#: ``linear_solver="auto"`` chooses the direct solver up to this many dofs, the iterative one above
+#: (measured crossover on 2 cores, docs/performance.md "Linear solvers").
+DIRECT_MAX_DOFS = 50_000
+
+#: Values of ``ContactNewtonSolver(linear_solver=...)``.
+LINEAR_SOLVERS = ("auto", "direct", "iterative")
+
 
 #: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
 #: strict comparison, with a margin for iterations that stagnate at round-off level.
@@ -110,13 +132,19 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         comm: MPI communicator.
         problem: The contact problem.
         petsc_options: PETSc options of the linear solver, set under ``options_prefix``
-            (default: MUMPS LU, see :data:`DEFAULT_PETSC_OPTIONS`; MUMPS Cholesky,
-            :data:`CHOLESKY_PETSC_OPTIONS`, when the problem is ``symmetric`` and its first
-            Jacobian is symmetric).
-        options_prefix: Prefix of the Krylov solver's options (command-line options such as
-            ``-ntf_ksp_view`` still apply). ``petsc_options`` are set under it, read once, and
-            removed from PETSc's global options database again; unknown solver names are a
-            ``ValueError`` naming the option.
+            (default: chosen by ``linear_solver``).
+        linear_solver: Without ``petsc_options``: ``"direct"`` (MUMPS LU, see
+            :data:`DEFAULT_PETSC_OPTIONS`; MUMPS Cholesky, :data:`CHOLESKY_PETSC_OPTIONS`, when
+            the problem is ``symmetric`` and its first Jacobian is symmetric), ``"iterative"``
+            (GMRES, or CG when symmetric, with GAMG and the rigid-body modes of every body,
+            :data:`ITERATIVE_PETSC_OPTIONS`), or ``"auto"``: direct up to
+            :data:`DIRECT_MAX_DOFS` dofs, iterative above (docs/method.md §14.7). Whatever the
+            choice, a GAMG preconditioner gets the per-body near-nullspace.
+        options_prefix: Prefix of the Krylov solver's options. ``petsc_options`` are set under
+            it, read once, and removed from PETSc's global options database again; options
+            already in the database under the prefix (command-line options such as
+            ``-ntf_ksp_view`` or ``-ntf_pc_type gamg``) take precedence over them. Unknown
+            solver names are a ``ValueError`` naming the option.
         controls: CalculiX's ``*CONTROLS, PARAMETERS=FIELD`` values of the force-scaled
             convergence test (:meth:`is_converged`): ``R_n``, ``C_n``, ``R_p``, ``R_l``,
             ``epsilon``, ``C_epsilon``; default :data:`TIGHT_FIELD_CONTROLS` (round-off level,
@@ -162,6 +190,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         problem: ContactProblem,
         *,
         petsc_options: dict | None = None,
+        linear_solver: str = "auto",
         options_prefix: str = "ntf_",
         controls: typing.Mapping[str, float] | None = None,
         relaxation_iteration: int = 9,
@@ -186,7 +215,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             comm,
             problem,
             ContactProblem,
-            (CHOLESKY_PETSC_OPTIONS if symmetric else DEFAULT_PETSC_OPTIONS)
+            _default_options(problem, linear_solver, symmetric)
             if petsc_options is None
             else petsc_options,
             options_prefix,
@@ -247,6 +276,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         ksp.setOptionsPrefix(options_prefix)
         self._check_symmetry = symmetric
         opts = PETSc.Options()
+        options = {k: v for k, v in options.items() if not opts.hasName(f"{options_prefix}{k}")}
         for key, value in options.items():
             opts[f"{options_prefix}{key}"] = value
         try:
@@ -254,6 +284,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         finally:
             for key in options:
                 opts.delValue(f"{options_prefix}{key}")
+        #: Rigid-body modes of every body, the near-nullspace of a GAMG preconditioner.
+        self.near_nullspace: PETSc.NullSpace | None = None
+        if ksp.getPC().getType() == "gamg":
+            self.near_nullspace = nullspace.near_nullspace(problem.u.function_space)
+            self._A.setNearNullSpace(self.near_nullspace)
 
     def destroy(self) -> None:
         """Destroy the PETSc vector the solver owns (the residual). Collective.
@@ -261,6 +296,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         The Jacobian belongs to the problem (:meth:`ContactProblem.destroy`).
         """
         self._b.destroy()
+        if self.near_nullspace is not None:  # the matrix keeps its own reference
+            self.near_nullspace.destroy()
+            self.near_nullspace = None
 
     def __del__(self) -> None:
         # dolfinx 0.9's NewtonSolver.__del__ destroys its matrix, which here is the problem's.
@@ -283,16 +321,16 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         merges = self.problem.assembler.pattern_merges
         self.problem.J(x, A)
         ksp = self.krylov_solver
-        if self.problem.has_friction and ksp.getPC().getType() == "cholesky":
-            logger.info(" friction makes the Jacobian unsymmetric: LU instead of Cholesky")
-            ksp.getPC().setType("lu")
-        if self._check_symmetry:  # the default Cholesky solver needs a symmetric bulk Jacobian too
+        if self.problem.has_friction:
+            _unsymmetric(ksp, "friction makes the Jacobian unsymmetric")
+        if self._check_symmetry:  # Cholesky and CG need a symmetric bulk Jacobian too
             self._check_symmetry = False
             if not A.isSymmetric(1e-10 * A.norm(PETSc.NormType.NORM_INFINITY)):
-                logger.info(" the Jacobian is not symmetric: LU instead of Cholesky")
-                ksp.getPC().setType("lu")
+                _unsymmetric(ksp, "the Jacobian is not symmetric")
         if self.problem.assembler.pattern_merges != merges:
             ksp.getPC().reset()
+            if self.near_nullspace is not None:
+                A.setNearNullSpace(self.near_nullspace)
             ksp.setOperators(A, A)
         reduced = self.problem.reduced_matrix  # constraints: solve the reduced system
         if reduced is not None:
@@ -778,6 +816,40 @@ def run_increments(
         if not step.fixed and fast_in_a_row >= 2:
             dt = min(step.growth_factor * dt, max_inc)
     return results
+
+
+def _default_options(problem: object, linear_solver: object, symmetric: bool) -> dict:
+    """PETSc options of ``linear_solver`` for this problem (docs/method.md §14.7)."""
+    if not isinstance(linear_solver, str) or linear_solver not in LINEAR_SOLVERS:
+        raise ValueError(
+            f"ContactNewtonSolver: linear_solver must be one of {LINEAR_SOLVERS}, "
+            f"got {linear_solver!r}"
+        )
+    if linear_solver == "auto" and isinstance(problem, ContactProblem):
+        index_map = problem.u.function_space.dofmap.index_map
+        dofs = index_map.size_global * problem.u.function_space.dofmap.index_map_bs
+        # linear constraints: the reduced matrix has no rigid modes for GAMG (§14.7)
+        small = dofs <= DIRECT_MAX_DOFS or bool(getattr(problem, "constraints", None))
+        linear_solver = "direct" if small else "iterative"
+        logger.info(" %d dofs: %s linear solver", dofs, linear_solver)
+    if linear_solver == "iterative":
+        if not symmetric:
+            return dict(ITERATIVE_PETSC_OPTIONS)
+        options = {**ITERATIVE_PETSC_OPTIONS, "ksp_type": "cg", "ksp_norm_type": "unpreconditioned"}
+        del options["ksp_pc_side"], options["ksp_gmres_restart"]
+        return options
+    return dict(CHOLESKY_PETSC_OPTIONS if symmetric else DEFAULT_PETSC_OPTIONS)
+
+
+def _unsymmetric(ksp: PETSc.KSP, why: str) -> None:
+    """Swap the symmetric solvers of ``ksp``: Cholesky for LU, CG for right-preconditioned GMRES."""
+    if ksp.getPC().getType() == "cholesky":
+        logger.info(" %s: LU instead of Cholesky", why)
+        ksp.getPC().setType("lu")
+    if ksp.getType() == "cg":
+        logger.info(" %s: GMRES instead of CG", why)
+        ksp.setType("gmres")
+        ksp.setPCSide(PETSc.PC.Side.RIGHT)
 
 
 def _ksp_reason(reason: int) -> str:
