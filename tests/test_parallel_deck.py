@@ -224,13 +224,10 @@ def test_bad_deck_fails_on_every_process(shared):
 
 @pytest.mark.skipif(COMM.size == 1, reason="the refusal is on several processes")
 def test_friction_deck_refused_on_every_process(shared):
-    path = shared / "friction" / "friction.inp"
+    path = _deck("hex_linear_pressure", shared / "friction")
     if COMM.rank == 0:
-        path.parent.mkdir(exist_ok=True)
-        text = (DATA / "two_cubes.inp").read_text()
-        path.write_text(
-            text.replace("1.0e7, 1.0, 1.0e-3\n", "1.0e7, 1.0, 1.0e-3\n*FRICTION\n0.2, 1e5\n")
-        )
+        behavior = re.compile(r"(\*SURFACE BEHAVIOR[^\n]*\n[^\n]*\n)")
+        path.write_text(behavior.sub(r"\1*FRICTION\n0.2, 1e5\n", path.read_text(), count=1))
     COMM.barrier()
     with pytest.raises(NotImplementedError, match=r"friction on .* MPI processes"):
-        run_job("friction", path.parent, comm=COMM, progress=False)
+        run_job(path.stem, path.parent, comm=COMM, progress=False)
