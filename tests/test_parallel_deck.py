@@ -8,8 +8,10 @@ The ``.sta`` and ``.cel`` files must be byte-identical. In ``.dat``, ``.cvg`` an
 line must have the same text and every number the same digits, except numbers at round-off level
 (zero in exact arithmetic: displacements and shear stresses zero by symmetry, reactions at free
 nodes, the residual of a converged Newton iteration): their round-off depends on the partition
-(the linear solver's rounding does), so two such numbers may differ by at most 1e-12 times the
-largest number of their block (measured: at most 2.4e-14).
+(the linear solver's rounding does, amplified by the condition number of the penalty springs), so
+two such numbers may differ by at most 1e-10 times the largest number of their block (measured: at
+most 4e-13 with dolfinx 0.5, 7.5e-12 with dolfinx 0.9, on two_cubes: reactions at free nodes). A
+number above 1e-3 of its block's largest therefore has all its printed digits identical.
 """
 
 import re
@@ -32,7 +34,7 @@ pytestmark = pytest.mark.mpi
 COMM = MPI.COMM_WORLD
 DATA = Path(__file__).parent / "data" / "calculix"
 #: Largest difference of a printed number between partitions, relative to the largest of its block.
-ROUND_OFF = 1e-12
+ROUND_OFF = 1e-10
 
 #: Output requests added to every step: all prints and all file outputs.
 REQUESTS = (
