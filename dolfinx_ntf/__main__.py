@@ -4,6 +4,9 @@ Runs the CalculiX deck ``JOB.inp`` like ``ccx -i JOB``: ccx-like progress on the
 ``JOB.dat``, ``JOB.cel`` and ``JOB.xdmf`` next to the deck. Exit status: 0 done, 1 bad or
 unsupported input (the message names ``file:line``), 2 no convergence (files keep the converged
 increments).
+
+Under ``mpirun -n N`` every process runs the job and rank 0 writes the files and the messages
+(docs/method.md §14.5); an error ends every process with the same status.
 """
 
 from __future__ import annotations
@@ -81,6 +84,7 @@ def main(argv: list[str] | None = None) -> int:
     from dolfinx_ntf.calculix.job import JobError, run_job
 
     jobname, directory = _job_path(args.job)
+    root = MPI.COMM_WORLD.rank == 0
     try:
         result = run_job(
             jobname,
@@ -93,20 +97,23 @@ def main(argv: list[str] | None = None) -> int:
             pair_after_predictor=args.pair_after_predictor,
         )
     except JobError as error:
-        print(
-            f"\n *ERROR: {error}\n Results of the converged increments are kept in "
-            f"{directory / jobname}.dat",
-            file=sys.stderr,
-        )
+        if root:
+            print(
+                f"\n *ERROR: {error}\n Results of the converged increments are kept in "
+                f"{directory / jobname}.dat",
+                file=sys.stderr,
+            )
         return error.exit_code
     except (ValueError, NotImplementedError, OSError) as error:  # DeckError is a ValueError
-        print(f" *ERROR: {error}", file=sys.stderr)
+        if root:
+            print(f" *ERROR: {error}", file=sys.stderr)
         return EXIT_INPUT
-    print(
-        f" Wrote {result.dat}" + (f", {result.cel}" if result.cel else "") + f", {result.frd} "
-        f"(.sta, .cvg) and {result.xdmf} "
-        f"({len(result.increments)} increments, {result.wall_time:.1f} s)"
-    )
+    if root:
+        print(
+            f" Wrote {result.dat}" + (f", {result.cel}" if result.cel else "") + f", {result.frd} "
+            f"(.sta, .cvg) and {result.xdmf} "
+            f"({len(result.increments)} increments, {result.wall_time:.1f} s)"
+        )
     return EXIT_OK
 
 

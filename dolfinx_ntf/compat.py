@@ -165,7 +165,7 @@ def entities_to_geometry(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray
 def cell_dofs(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
     """Block dofs of every local cell (owned and ghost), shape (num_cells, dofs per cell)."""
     dofs = V.dofmap.list
-    if _LEGACY:
+    if _LEGACY:  # an empty list (a process without cells) has no row width
         return dofs.array.reshape(dofs.num_nodes, V.dofmap.dof_layout.num_dofs)
     return np.asarray(dofs)
 
@@ -173,7 +173,7 @@ def cell_dofs(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
 def geometry_dofs(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
     """Geometry nodes of every local cell, shape (num_cells, nodes per cell)."""
     dofs = mesh.geometry.dofmap
-    if _LEGACY:
+    if _LEGACY:  # an empty list (a process without cells) has no row width
         return dofs.array.reshape(dofs.num_nodes, mesh.geometry.cmap.create_dof_layout().num_dofs)
     return np.asarray(dofs)
 

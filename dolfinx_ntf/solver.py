@@ -269,8 +269,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.report = False
         self.updates = 0
         self.residual_norms: list[float] = []
-        #: Per Newton update of the current solve: (update, springs, largest residual force,
-        #: mean average force, largest correction, largest displacement change in the increment).
+        #: Per Newton update of the current solve: (update, springs (all processes), largest
+        #: residual force, mean average force, largest correction, largest displacement change in
+        #: the increment).
         self.history: list[tuple[int, int, float, float, float, float]] = []
         ksp = self.krylov_solver
         ksp.setOptionsPrefix(options_prefix)
@@ -425,9 +426,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         else:
             c1 = controls["R_n"] if self.updates <= self.relaxation_iteration else controls["R_p"]
             c2 = controls["C_n"]
-        self.history.append(
-            (self.updates, self.problem.num_springs, largest, mean, correction, change)
-        )
+        springs = self.problem.u.function_space.mesh.comm.allreduce(self.problem.num_springs)
+        self.history.append((self.updates, springs, largest, mean, correction, change))
         estimate = np.inf
         if self.updates >= 3 and min(self._largest[-3:-1]) > 0:
             estimate = largest * correction / min(self._largest[-3:-1])

@@ -28,6 +28,11 @@ correction must be small against the increment's displacement change (``C_n``), 
 
 Steps without contact pairs and without NLGEOM are linear: one increment over the whole step, as in
 ccx.
+
+Under ``mpirun -n N`` the model is distributed by dolfinx and every output is gathered in ccx
+numbering (``gather.py``) and written by rank 0: the files are those of the serial run
+(docs/method.md §14.5). ``*DYNAMIC`` steps and ``*CHANGE FRICTION`` are refused there, as are
+friction, ADJUST and ``*EQUATION``.
 """
 
 from __future__ import annotations
@@ -38,7 +43,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mpi4py import MPI
-from petsc4py import PETSc
 
 import numpy as np
 
@@ -47,7 +51,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, parallel
 from dolfinx_ntf.dynamics import DynamicStep
 from dolfinx_ntf.friction import output_tangents
 from dolfinx_ntf.laws import LinearLaw, SurfaceInteraction
@@ -66,6 +70,7 @@ from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
 from .deck import Deck, PrintRequest, Step, read_deck
 from .frd import FrdBlock, FrdWriter
+from .gather import CcxNumbering, Discard
 from .model import CalculixModel, build_model, friction_of
 from .progress import CvgFile, StaFile
 
@@ -233,13 +238,15 @@ class _Job:
         self.pair_after_predictor = pair_after_predictor
         self.result = JobResult(jobname, directory, model)
         self.result.dat = directory / f"{jobname}.dat"
-        write_dat(self.result.dat, [])
+        self.root = comm.rank == 0  # writes the files (docs/method.md §14.5)
+        if self.root:
+            write_dat(self.result.dat, [])
         self.cel: ContactElementsFile | None = None
         cel = directory / f"{jobname}.cel"
         if any(step.contact_elements for step in deck.steps):
             self.result.cel = cel
-            self.cel = ContactElementsFile(cel, deck.num_elements)
-        elif cel.exists():  # ccx deletes the file at program start
+            self.cel = ContactElementsFile(cel, deck.num_elements) if self.root else Discard()
+        elif cel.exists() and self.root:  # ccx deletes the file at program start
             cel.unlink()
         self.counters = _Counters()
         self._cel_overflow = False
@@ -250,7 +257,7 @@ class _Job:
             model.begin_step(0), element_forces=internal, **problem_options
         )
         self.problem.pairing_callbacks.append(self._on_pairing)
-        self._internal = dolfinx.fem.form(internal)
+        self.numbering = CcxNumbering(model, internal)
         self._stress = None
         self.solver = ContactNewtonSolver(
             comm,
@@ -267,75 +274,81 @@ class _Job:
         self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
         self.acceleration: dolfinx.fem.Function | None = None
         self.result.frd = directory / f"{jobname}.frd"
-        self.frd = _frd_writer(self.result.frd, deck, model)
-        self.sta = StaFile(directory / f"{jobname}.sta")
-        self.cvg = CvgFile(directory / f"{jobname}.cvg")
+        self.frd = _frd_writer(self.result.frd, deck, model) if self.root else Discard()
+        self.sta = StaFile(directory / f"{jobname}.sta") if self.root else Discard()
+        self.cvg = CvgFile(directory / f"{jobname}.cvg") if self.root else Discard()
         self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
         self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
         self._step_time = 0.0
 
     # -- forces ------------------------------------------------------------------------------------
 
-    def _contact_forces(self) -> np.ndarray:
-        forces = np.zeros((self.model.dof_node.size, 3))
-        for state in self.problem.states:
-            if state.evaluation is not None and state.num_springs:
-                np.add.at(
-                    forces,
-                    state.element_nodes,
-                    state.evaluation.forces.reshape(state.num_springs, -1, 3),
-                )
-        return forces
-
     def internal_forces(self) -> np.ndarray:
-        """``(num_dofs, 3)`` internal force of bulk elements plus contact springs at every node."""
-        vector = dolfinx.fem.petsc.assemble_vector(self._internal)
-        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        forces = vector.array.reshape(-1, 3).copy()
-        vector.destroy()
-        return self.model.on_ccx_nodes(forces + self._contact_forces())
+        """``(N, 3)`` internal force of bulk elements plus contact springs at every deck node.
+
+        Summed in ccx order, the same on any number of processes; C3D20's face- and cell-centre
+        forces moved to its 20 nodes (docs/method.md §13.5). Collective.
+        """
+        return self.numbering.nodal_forces(self.problem)
 
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
-        """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points."""
+        """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points.
+
+        Collective: each element is evaluated by the process owning it.
+        """
         if self._stress is None:
             points = self.model.element_type.integration_points
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
         expression, q = self._stress
-        cells = self.model.element_cells(element_ids).astype(np.int32)
-        values = compat.evaluate_expression(expression, self.model.mesh, cells).reshape(
-            cells.size, q, 3, 3
-        )
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
-        return values[:, :, index[0], index[1]]
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(
+                expression, self.model.mesh, cells.astype(np.int32)
+            ).reshape(cells.size, q, 3, 3)
+            return values[:, :, index[0], index[1]]
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 6))
 
     # -- contact -----------------------------------------------------------------------------------
 
     def contact_rows(self) -> list[ContactRows]:
-        """Contact rows of every pair at the current springs, slave nodes ascending."""
+        """Contact rows of every pair at the current springs, slave nodes ascending.
+
+        Collective: the springs of all processes.
+        """
         rows = []
-        dof_node = self.model.dof_node
+        numbering = self.numbering
         for state, results, pair in zip(
             self.problem.states, contact_results(self.problem), self.deck.contact_pairs
         ):
-            nodes = dof_node[results.node]
-            order = np.argsort(nodes, kind="stable")
-            facets = state.master_faces.facets[state.spring_face]
-            faces = self.model.face_nodes_of(pair.master, facets)
+            faces = numbering.ccx_nodes(self.problem, state.master_faces.faces[state.spring_face])
             t1, t2 = output_tangents(results.normal)
             slip = np.column_stack([np.einsum("ni,ni->n", results.slip, t) for t in (t1, t2)])
             shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
             # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4)
             energy = results.energy + 2.0 * results.friction_energy
+            nodes, clearance, pressure, energy, faces, slip, shear = numbering.allgather(
+                numbering.ccx_nodes(self.problem, results.node),
+                results.clearance,
+                results.pressure,
+                energy,
+                faces,
+                slip.reshape(-1, 2),
+                shear.reshape(-1, 2),
+            )
+            faces = numbering.master_faces(pair.master, faces)
+            order = np.argsort(nodes, kind="stable")
             rows.append(
                 ContactRows(
                     results.pair,
                     nodes[order],
-                    results.clearance[order],
-                    results.pressure[order],
+                    clearance[order],
+                    pressure[order],
                     energy[order],
                     faces[order],
-                    slip[order].reshape(-1, 2),
-                    shear[order].reshape(-1, 2),
+                    slip[order],
+                    shear[order],
                 )
             )
         return rows
@@ -359,13 +372,14 @@ class _Job:
             )
             self._cel_overflow = True
             return
-        dof_node = self.model.dof_node
+        numbering = self.numbering
         for state, pair in zip(problem.states, self.deck.contact_pairs):
-            slaves = dof_node[state.slave.nodes[state.spring_slave]]
-            order = np.argsort(slaves, kind="stable")
-            faces = self.model.face_nodes_of(
-                pair.master, state.master_faces.facets[state.spring_face]
+            slaves, faces = numbering.allgather(
+                numbering.ccx_nodes(problem, state.slave.nodes[state.spring_slave]),
+                numbering.ccx_nodes(problem, state.master_faces.faces[state.spring_face]),
             )
+            faces = numbering.master_faces(pair.master, faces)
+            order = np.argsort(slaves, kind="stable")
             step_, increment, attempt, iteration = numbers
             self.cel.write(
                 faces[order],
@@ -567,10 +581,11 @@ class _Job:
                 unpaired,
             )
         total = model.total_time(index, result.time)
-        node_ids = model.dof_node
+        meshed = np.zeros(self.deck.node_ids.size, dtype=bool)
+        meshed[self.numbering.allgather(self.numbering.owned_rows)[0]] = True
+        node_ids = self.deck.node_ids[meshed]
         order = np.argsort(node_ids)
-        order = order[node_ids[order] >= 0]  # not C3D20's added face and cell centres
-        displacement = model.u.x.array.reshape(-1, 3)
+        displacement = self.numbering.nodal(model.u.x.array.reshape(-1, 3))[meshed]
         contact = self.contact_rows()
         self.result.increments.append(
             IncrementOutput(
@@ -589,7 +604,9 @@ class _Job:
         frequency = step.output_frequency
         last = result.time_fraction >= 1 - 1e-12
         if frequency > 0 and (result.increment % frequency == 0 or last):
-            write_dat(self.result.dat, self._blocks(step, total, contact), append=True)
+            blocks = self._blocks(step, total, contact)
+            if self.root:
+                write_dat(self.result.dat, blocks, append=True)
             for block in self._frd_blocks(step, result.increment, total, contact):
                 self.frd.write(block)
 
@@ -604,13 +621,15 @@ class _Job:
             ids = self.deck.node_ids
             if request.set is not None:  # in set order, repeats kept, as ccx (docs/method.md §13.2)
                 ids = self.deck.nsets[request.set]
-            values = self.model.nodal_values(ids, values)
+            values = values[self.deck.node_index(ids)]
             if name == "DISP":
                 values = self._with_reference(ids, values)
             blocks.append(FrdBlock(name, (), step.number, increment, total, ids, values))
 
         if ("NODE", "U") in keys:
-            node_block("DISP", keys["NODE", "U"], self.model.u.x.array.reshape(-1, 3))
+            node_block(
+                "DISP", keys["NODE", "U"], self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
+            )
         if ("EL", "S") in keys:
             nodes, values = self.nodal_stresses()
             if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
@@ -666,14 +685,14 @@ class _Job:
     def _blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
         blocks: list[DatBlock] = []
         forces = None
-        displacement = self.model.u.x.array.reshape(-1, 3)
+        displacement = self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
         for request in step.prints:
             if request.kind == "NODE":
                 ids = self.deck.nsets[request.set]
                 for key in request.keys:
                     if key == "RF" and forces is None:
                         forces = self.internal_forces()
-                    values = self.model.nodal_values(ids, displacement if key == "U" else forces)
+                    values = (displacement if key == "U" else forces)[self.deck.node_index(ids)]
                     if key == "U":
                         values = self._with_reference(ids, values)
                     blocks += node_print_blocks(
@@ -808,6 +827,36 @@ def _check_requests(deck: Deck) -> None:
                     )
 
 
+def _check_parallel(deck: Deck, comm: MPI.Comm) -> None:
+    """Deck features not supported on several processes yet: the same error on every process."""
+    if comm.size == 1:
+        return
+    for step in deck.steps:
+        for what, used in (
+            ("*DYNAMIC steps", step.dynamic is not None),
+            ("*CHANGE FRICTION", bool(step.friction_changes)),
+        ):
+            if used:
+                raise NotImplementedError(
+                    f"{step.location}: {what} on {comm.size} MPI processes: not supported yet; "
+                    "run on one process (docs/method.md §14.5)"
+                )
+
+
+def _read(path: Path, comm: MPI.Comm) -> Deck:
+    """The deck at ``path``, read by every process; an error on one is an error on all."""
+
+    def read() -> Deck:
+        if not path.is_file():
+            raise ValueError(f"deck {path} does not exist")
+        deck = read_deck(path)
+        if not deck.steps:
+            raise ValueError(f"{path}: the deck has no *STEP: nothing to run")
+        return deck
+
+    return parallel.collectively(comm, read)
+
+
 def run_job(
     jobname: str,
     directory: str | Path = ".",
@@ -826,7 +875,8 @@ def run_job(
     Args:
         jobname: Deck name without ``.inp``.
         directory: Directory of the deck; results are written there.
-        comm: Communicator (one process only for now).
+        comm: Communicator; on several processes the files are written by rank 0 and are
+            those of the serial run (docs/method.md §14.5).
         tight: Converge every increment to a largest residual of 1e-10 times the average element
             force (ccx's criterion with ``R_n = R_p = 1e-10``) instead of the deck's controls.
         progress: Print ccx-like progress (``log_progress``).
@@ -855,14 +905,12 @@ def run_job(
         log_progress()
     directory = Path(directory)
     path = directory / f"{jobname}.inp"
-    if not path.is_file():
-        raise ValueError(f"deck {path} does not exist")
-    deck = read_deck(path)
-    if not deck.steps:
-        raise ValueError(f"{path}: the deck has no *STEP: nothing to run")
-    for warning in deck.warnings:
-        logger.warning("%s", warning)
+    deck = _read(path, comm)
+    if comm.rank == 0:
+        for warning in deck.warnings:
+            logger.warning("%s", warning)
     _check_requests(deck)
+    _check_parallel(deck, comm)
     model = build_model(deck, comm)
     job = _Job(
         jobname,

@@ -30,7 +30,9 @@ Load rules (ccx manual, ``*AMPLITUDE``, ``*BOUNDARY``, ``*CLOAD``, ``*DLOAD``, `
     - A prescribed displacement ramps from the displacement at the start of the step.
     - Model-definition ``*BOUNDARY`` cards act as if given at the start of step 1.
 
-Serial only for now: ``build_model`` raises ``NotImplementedError`` on more than one process.
+On several processes (docs/method.md §14.5) every process reads the whole deck; the mesh is
+distributed by dolfinx from rank 0's cells, and the numbering maps hold this process's nodes and
+cells only (-1 elsewhere). ``*EQUATION`` and C3D20/C3D20R decks are refused there.
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, validation
 from dolfinx_ntf.constraints import (
     LinearConstraint,
     LinearConstraintBlock,
@@ -146,10 +148,11 @@ class CalculixModel:
         element_type: The deck's element type.
         mesh, V, u: Mesh, vector displacement space (degree of the element) and displacement.
         node_dof: ``(N,)`` local block dof of each deck node (rows of ``deck.node_ids``), -1 for
-            nodes in no element.
+            nodes in no element (and, on several processes, nodes this process does not hold).
         dof_node: ccx node number of each local block dof.
         node_vertex: ``(N,)`` local mesh vertex of each deck node, -1 for midside or unused nodes.
-        element_cell: ``(E,)`` local cell of each element (rows of the deck's element block).
+        element_cell: ``(E,)`` local cell of each element (rows of the deck's element block), -1
+            for elements this process does not hold.
         cell_element: ccx element number of each local cell.
         surfaces: dolfinx surface of each ccx surface name.
         surface_tags: facet tags (value 1) of each element-face surface.
@@ -214,7 +217,7 @@ class CalculixModel:
         return self.node_dof[self.deck.node_index(node_ids)]
 
     def element_cells(self, element_ids: np.ndarray) -> np.ndarray:
-        """Local cells of ccx element numbers."""
+        """Local cells of ccx element numbers (-1 for cells of other processes)."""
         block = self.deck.elements[self.element_type.name]
         order = np.argsort(block.ids)
         ids = np.asarray(element_ids, dtype=np.int64)
@@ -507,7 +510,10 @@ def _exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray) -> np.ndarray:
 def _element_faces_to_facets(
     deck: Deck, model_parts: dict, element_ids: np.ndarray, faces: np.ndarray, what: str, location
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Local facets and ccx face nodes ``(F, n)`` of element faces (1-based face numbers)."""
+    """Local facets and ccx face nodes ``(F, n)`` of element faces (1-based face numbers).
+
+    The facet is -1 for faces of elements this process does not hold.
+    """
     block, node_vertex, find = model_parts["block"], model_parts["node_vertex"], model_parts["find"]
     etype = block.type
     order = np.argsort(block.ids)
@@ -515,9 +521,12 @@ def _element_faces_to_facets(
     rows = order[pos]
     nodes = block.connectivity[rows[:, None], etype.faces[faces - 1]]
     corners = node_vertex[deck.node_index(nodes[:, : etype.face_corners])]
-    facets = find(corners)
-    if np.any(facets < 0):
-        bad = int(np.argmax(facets < 0))
+    here = model_parts["element_cell"][rows] >= 0
+    facets = np.full(here.size, -1, dtype=np.int64)
+    if np.any(here):  # a process without cells has no facets to search
+        facets[here] = find(corners[here])
+    if np.any(here & (facets < 0)):
+        bad = int(np.argmax(here & (facets < 0)))
         raise ValueError(
             f"{location}: {what}: face S{faces[bad]} of element {element_ids[bad]} is not a "
             "facet of "
@@ -530,33 +539,35 @@ def _surfaces(deck: Deck, mesh, parts: dict):
     surfaces: dict[str, FacetSurface | NodeSurface] = {}
     tags: dict[str, compat.MeshTags] = {}
     faces: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    node_vertex = parts["node_vertex"]
+    node_vertex, corner = parts["node_vertex"], parts["corner"]
     for name, surface in deck.surfaces.items():
         if surface.type == "NODE":
             rows = deck.node_index(surface.nodes)
-            vertices, dofs = node_vertex[rows], parts["node_dof"][rows]
-            if np.any(dofs < 0):
-                node = int(surface.nodes[np.argmax(dofs < 0)])
+            if not np.all(parts["meshed"][rows]):
+                node = int(surface.nodes[np.argmax(~parts["meshed"][rows])])
                 raise ValueError(
                     f"{surface.location}: *SURFACE {name}, TYPE=NODE: node {node} belongs to no "
                     "element"
                 )
-            midside = np.unique(dofs[vertices < 0]).astype(np.int32)  # quadratic elements
-            if midside.size and parts["block"].type.num_nodes != 20:  # checked for C3D20 only
-                node = int(surface.nodes[np.argmax(vertices < 0)])
+            vertices, dofs = node_vertex[rows], parts["node_dof"][rows]
+            midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)  # quadratic
+            if not np.all(corner[rows]) and parts["block"].type.num_nodes != 20:  # C3D20 only
+                node = int(surface.nodes[np.argmax(~corner[rows])])
                 raise _not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
                     f"corner, on {parts['block'].type.name} elements (midside nodes of "
                     "node-based surfaces: C3D20 only)",
                     surface.location,
                 )
-            vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)
+            vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)  # this process's
             surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside)
             continue
         facets, nodes = _element_faces_to_facets(
             deck, parts, surface.elements, surface.faces, f"*SURFACE {name}", surface.location
         )
         facets, first = np.unique(facets, return_index=True)
+        if facets.size and facets[0] < 0:  # faces of other processes' elements
+            facets, first = facets[1:], first[1:]
         inner = ~_exterior(mesh, facets)
         if np.any(inner):
             k = int(np.argmax(inner))
@@ -627,22 +638,23 @@ def friction_of(deck: Deck, data) -> Friction:
     return Friction(data.mu, data.stick_slope)
 
 
-def _adjust(deck: Deck, pair, node_vertex: np.ndarray) -> float | NodeSurface | None:
+def _adjust(deck: Deck, pair, parts: dict) -> float | NodeSurface | None:
     """The ADJUST of a pair: a distance, the vertices of a node set, or None."""
     if pair.adjust is None or isinstance(pair.adjust, float):
         return pair.adjust
     ids = deck.nsets[pair.adjust]
-    vertices = node_vertex[deck.node_index(ids)]
-    if np.any(vertices < 0):
-        node = int(ids[np.argmax(vertices < 0)])
+    vertices = parts["node_vertex"][deck.node_index(ids)]
+    corner = parts["corner"][deck.node_index(ids)]
+    if not np.all(corner):
+        node = int(ids[np.argmax(~corner)])
         raise _not_supported(
             f"ADJUST={pair.adjust} with node {node}, which is not an element corner",
             pair.location,
         )
-    return NodeSurface(np.unique(vertices).astype(np.int32), pair.adjust)
+    return NodeSurface(np.unique(vertices[vertices >= 0]).astype(np.int32), pair.adjust)
 
 
-def _contact_pairs(deck: Deck, surfaces: dict, node_vertex: np.ndarray) -> list[ContactPair]:
+def _contact_pairs(deck: Deck, surfaces: dict, parts: dict) -> list[ContactPair]:
     pairs = []
     for pair in deck.contact_pairs:
         law = _law(deck, pair.interaction)
@@ -655,7 +667,7 @@ def _contact_pairs(deck: Deck, surfaces: dict, node_vertex: np.ndarray) -> list[
                 SurfaceInteraction(law, friction),
                 small_sliding=pair.small_sliding,
                 name=f"{pair.slave}-{pair.master}",
-                adjust=_adjust(deck, pair, node_vertex),
+                adjust=_adjust(deck, pair, parts),
             )
         )
     return pairs
@@ -671,7 +683,7 @@ def _lame(deck: Deck, block, mesh, element_cell: np.ndarray):
         order = np.argsort(block.ids)
         rows = order[np.searchsorted(block.ids, members, sorter=order)]
         cells = element_cell[rows]
-        dofs = compat.cell_dofs(Q)[cells, 0]
+        dofs = compat.cell_dofs(Q)[cells[cells >= 0], 0]
         mu.x.array[dofs] = young / (2 * (1 + nu))
         lmbda.x.array[dofs] = young * nu / ((1 + nu) * (1 - 2 * nu))
     return mu, lmbda
@@ -762,7 +774,10 @@ def _step_times(deck: Deck) -> list[float]:
 
 
 def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
-    """Per-step schedules of forces, pressures (grouped) and prescribed displacements."""
+    """Per-step schedules of forces, pressures (grouped) and prescribed displacements.
+
+    Dofs are this process's; nodes in no element (``parts["meshed"]`` false) are references.
+    """
     names = list(deck.amplitudes)
     amp_total = np.array([deck.amplitudes[n].total_time for n in names] + [False], dtype=bool)
     num_nodes = deck.node_ids.size
@@ -827,7 +842,7 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
         facets, _ = _element_faces_to_facets(
             deck, parts, block.ids[keys // 6], keys % 6 + 1, "*DLOAD", deck.path
         )
-        inner = ~_exterior(mesh, facets)
+        inner = (facets >= 0) & ~_exterior(mesh, np.maximum(facets, 0))
         if np.any(inner):
             k = int(np.argmax(inner))
             raise ValueError(
@@ -836,6 +851,8 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
                 "lies between two elements, not on the boundary"
             )
         facets, first = np.unique(facets, return_index=True)
+        if facets.size and facets[0] < 0:  # faces of other processes' elements
+            facets, first = facets[1:], first[1:]
         pressure_tags = dolfinx.mesh.meshtags(
             mesh,
             mesh.topology.dim - 1,
@@ -848,12 +865,13 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
         dofs3 = 3 * np.repeat(node_dof, 3) + np.tile(
             np.arange(3), num_nodes
         )  # unrolled dof of each key
-        valid = np.repeat(node_dof >= 0, 3)
-        bc_keys = np.flatnonzero(bc_active & valid)
+        local = np.repeat(node_dof >= 0, 3)
+        valid = np.repeat(parts["meshed"], 3)
+        bc_keys = np.flatnonzero(bc_active & local)
         bc_dofs, first = np.unique(dofs3[bc_keys], return_index=True)
         bc_keys = bc_keys[first]
         loaded = (forces.ref != 0) | (forces.start != 0)
-        f_keys = np.flatnonzero(loaded & valid)
+        f_keys = np.flatnonzero(loaded & local)
         columns = slice(3 * s, 3 * s + 3)
         group_history = unique[:, columns] if unique.size else np.zeros((0, 3))
         steps.append(
@@ -891,44 +909,70 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     Args:
         deck: The deck (``read_deck``).
-        comm: Communicator; only one process is supported for now.
+        comm: Communicator. On several processes the mesh is distributed by dolfinx from rank
+            0's cells (docs/method.md §14.5); every process must have read the same deck.
 
     Returns:
         The :class:`CalculixModel`.
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
-        NotImplementedError: features not supported yet (parallel runs, ...), naming the
-            keyword and ``file:line``.
+        NotImplementedError: features not supported yet (``*EQUATION`` on several processes,
+            ...), naming the keyword and ``file:line``. Raised on every process.
     """
-    if comm.size > 1:
+    if comm.size > 1 and deck.equations:
         raise NotImplementedError(
-            "CalculiX decks run on one process only for now (got "
-            f"{comm.size} processes); run without mpirun"
+            f"{deck.equations[0].location}: *EQUATION on {comm.size} MPI processes is not "
+            "supported yet; run on one process (docs/method.md §14.5)"
         )
     _check_supported(deck)
     block = _element_block(deck)
     etype = block.type
+    if comm.size > 1 and etype.num_nodes == 20:  # every process reads the same deck: all raise
+        raise NotImplementedError(
+            f"{block.locations[0]}: {etype.name} elements on {comm.size} MPI processes are not "
+            "supported yet (their added face and cell centres have no ccx node to gather, "
+            "docs/method.md §14.5); run on one process"
+        )
     mesh = _create_mesh(deck, block, comm)
+    empty = comm.allreduce(int(mesh.topology.index_map(3).size_local == 0))
+    if empty:  # dolfinx 0.5 crashes in sub-space collapse on a process without cells
+        raise ValueError(
+            f"{deck.path}: the partition of its {block.ids.size} elements leaves {empty} of the "
+            f"{comm.size} MPI processes without an element; run on fewer processes"
+        )
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
     node_dof, dof_node, node_vertex, original = _numbering(deck, mesh, V)
-    element_cell = np.empty(block.ids.size, dtype=np.int64)
+    element_cell = np.full(block.ids.size, -1, dtype=np.int64)
     element_cell[original] = np.arange(original.size)
     cell_element = block.ids[original]
 
+    # over all processes (from the deck): nodes of an element, element corners
+    meshed = np.zeros(deck.node_ids.size, dtype=bool)
+    meshed[deck.node_index(block.connectivity)] = True
+    corner = np.zeros(deck.node_ids.size, dtype=bool)
+    corner[deck.node_index(block.connectivity[:, : etype.num_corners])] = True
     parts = {
         "block": block,
         "node_vertex": node_vertex,
         "node_dof": node_dof,
         "find": _facet_finder(mesh),
+        "element_cell": element_cell,
+        "meshed": meshed,
+        "corner": corner,
     }
-    surfaces, surface_tags, surface_faces = _surfaces(deck, mesh, parts)
-    pairs = _contact_pairs(deck, surfaces, node_vertex)
+    error = None
+    try:  # local work: a bad face found by one process is an error on all (no collective inside)
+        surfaces, surface_tags, surface_faces = _surfaces(deck, mesh, parts)
+        pairs = _contact_pairs(deck, surfaces, parts)
+        steps, amplitude_names, pressure_tags, num_groups = _schedules(
+            deck, block, node_dof, parts, mesh
+        )
+    except (ValueError, NotImplementedError) as exc:
+        error = exc
+    validation.raise_collectively(comm, error)
     mu, lmbda = _lame(deck, block, mesh, element_cell)
-    steps, amplitude_names, pressure_tags, num_groups = _schedules(
-        deck, block, node_dof, parts, mesh
-    )
 
     kinds = {step.nlgeom for step in deck.steps}
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None

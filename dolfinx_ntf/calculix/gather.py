@@ -1,0 +1,225 @@
+"""The deck runner's results in ccx numbering, the same on every process (docs/method.md §14.5).
+
+Each process contributes what it owns (nodes, cells, springs); the pieces are allgathered and put
+in ccx order (rows of the deck's nodes, element numbers, slave nodes), and the sums of element and
+spring forces at a node (``RF``) are taken in that order. The printed values therefore do not
+depend on the partition: the files of a run on N processes are those of the serial run. On one
+process the same code runs without communication.
+"""
+
+from __future__ import annotations
+
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.fem.petsc
+import dolfinx.mesh
+import ufl
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.problem import ContactProblem
+
+from .deck import Deck
+from .model import CalculixModel
+
+__all__ = ["CcxNumbering", "Discard", "match_rows", "surface_face_nodes"]
+
+
+class Discard:
+    """A file writer that writes nothing (processes other than rank 0)."""
+
+    def __getattr__(self, name: str) -> typing.Callable[..., None]:
+        return lambda *args, **kwargs: None
+
+
+def match_rows(table: np.ndarray, query: np.ndarray) -> np.ndarray:
+    """Row of ``table`` with the same set of numbers as each row of ``query`` (-1 if none).
+
+    The first such row when several match.
+    """
+    if query.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    keys = np.vstack([np.sort(table, axis=1), np.sort(query, axis=1)])
+    _, inverse = np.unique(keys, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    first = np.full(int(inverse.max()) + 1, -1, dtype=np.int64)
+    n = table.shape[0]
+    first[inverse[:n][::-1]] = np.arange(n)[::-1]
+    return first[inverse[n:]]
+
+
+def surface_face_nodes(deck: Deck, block, name: str) -> np.ndarray:
+    """Ccx node numbers ``(F, n)`` of an element-face surface's faces, in ccx face order."""
+    surface = deck.surfaces[name]
+    order = np.argsort(block.ids)
+    rows = order[np.searchsorted(block.ids, surface.elements, sorter=order)]
+    return block.connectivity[rows[:, None], block.type.faces[surface.faces - 1]]
+
+
+def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace) -> typing.Any:
+    """``form`` tested with the discontinuous space of ``V``'s degree: per-element vectors."""
+    mesh = V.mesh
+    family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
+    W = compat.vector_space(mesh, family, compat.space_degree(V))
+    (argument,) = form.arguments()
+    return dolfinx.fem.form(ufl.replace(form, {argument: ufl.TestFunction(W)})), W
+
+
+class CcxNumbering:
+    """This process's nodes, cells and springs in ccx numbering, and their allgather.
+
+    Args:
+        model: The deck's model.
+        internal: The bulk internal force form (test function on ``model.V``), whose element
+            vectors make the ``RF`` output.
+    """
+
+    def __init__(self, model: CalculixModel, internal: ufl.Form) -> None:
+        self.model, self.deck = model, model.deck
+        V = model.V
+        self.comm: MPI.Comm = V.mesh.comm
+        index_map = V.dofmap.index_map
+        num_owned = index_map.size_local
+        # owned dofs at deck nodes (not C3D20's added face and cell centres, dof_node -1)
+        self._owned_dofs = np.flatnonzero(model.dof_node[:num_owned] >= 0)
+        self.owned_rows = self.deck.node_index(model.dof_node[self._owned_dofs])
+        self._global_node = model.dof_node  # ccx node of each global block dof
+        if self.comm.size > 1:
+            owned = index_map.local_to_global(np.arange(num_owned, dtype=np.int32))
+            self._global_node = np.zeros(index_map.size_global, dtype=np.int64)
+            for g, nodes in self.comm.allgather((owned, model.dof_node[:num_owned])):
+                self._global_node[g] = nodes
+        tdim = V.mesh.topology.dim
+        self.num_owned_cells = V.mesh.topology.index_map(tdim).size_local
+        self._internal = internal
+        self._form: typing.Any = None  # compiled on first use
+        self._W: dolfinx.fem.FunctionSpace | None = None
+        self.block = self.deck.elements[model.element_type.name]
+        self._faces: dict[str, np.ndarray] = {}
+
+    # -- gathering -------------------------------------------------------------------------------
+
+    def allgather(self, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Every process's arrays, concatenated along the first axis in rank order."""
+        if self.comm.size == 1:
+            return arrays
+        parts = self.comm.allgather(arrays)
+        return tuple(np.concatenate([p[k] for p in parts]) for k in range(len(arrays)))
+
+    def nodal(self, values: np.ndarray) -> np.ndarray:
+        """A per-dof array ``(num_dofs, k)`` at every deck node ``(N, k)`` (zero off the mesh)."""
+        owned = values[self._owned_dofs]
+        rows, owned = self.allgather(self.owned_rows, owned)
+        out = np.zeros((self.deck.node_ids.size, *values.shape[1:]))
+        out[rows] = owned
+        return out
+
+    def element_values(
+        self,
+        element_ids: np.ndarray,
+        evaluate: typing.Callable[[np.ndarray], np.ndarray],
+        shape: tuple[int, ...],
+    ) -> np.ndarray:
+        """``evaluate(cells)`` of shape ``(cells, *shape)`` at ccx elements, in their order.
+
+        Each element is evaluated on the process owning its cell.
+        """
+        cells = self.model.element_cells(element_ids)
+        mine = np.flatnonzero((cells >= 0) & (cells < self.num_owned_cells))
+        values = evaluate(cells[mine]) if mine.size else np.zeros((0, *shape))
+        positions, values = self.allgather(mine, values.reshape(-1, *shape))
+        out = np.zeros((np.asarray(element_ids).size, *shape))
+        out[positions] = values
+        return out
+
+    def ccx_nodes(self, problem: ContactProblem, nodes: np.ndarray) -> np.ndarray:
+        """Ccx node numbers of the problem's (halo-extended, docs/method.md §14.1) nodes."""
+        if problem.halo is None:
+            return self.model.dof_node[nodes]
+        return self._global_node[problem.halo.global_nodes[nodes]]
+
+    def master_faces(self, surface: str, nodes: np.ndarray) -> np.ndarray:
+        """Ccx node numbers of master faces ``(k, n)`` (ccx numbers, any order), in ccx order."""
+        if surface not in self._faces:
+            self._faces[surface] = surface_face_nodes(self.deck, self.block, surface)
+        table = self._faces[surface]
+        rows = match_rows(table, nodes)
+        if np.any(rows < 0):
+            raise RuntimeError(f"a contact face is not a face of surface {surface}")
+        return table[rows]
+
+    # -- forces ----------------------------------------------------------------------------------
+
+    def _element_forces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Owned elements of this process: numbers, node rows ``(E, n)``, forces ``(E, n, 3)``."""
+        if self._form is None:
+            self._form, self._W = _broken(self._internal, self.model.V)
+        vector = dolfinx.fem.petsc.assemble_vector(self._form)
+        forces = vector.array_r.reshape(-1, 3).copy()  # broken dofs: one cell each, no sum
+        vector.destroy()
+        cells = np.arange(self.num_owned_cells)
+        values = forces[compat.cell_dofs(self._W)[cells]]
+        rows = self.deck.node_index(self.model.dof_node[compat.cell_dofs(self.model.V)[cells]])
+        return self.model.cell_element[cells], rows, values
+
+    def _spring_forces(self, problem: ContactProblem) -> tuple[np.ndarray, ...]:
+        """This process's springs: (pair, slave node, position) keys, node rows and forces."""
+        keys, rows, values = (
+            [np.zeros((0, 3), np.int64)],
+            [np.zeros(0, np.int64)],
+            [np.zeros((0, 3))],
+        )
+        for p, state in enumerate(problem.states):
+            if state.evaluation is None or not state.num_springs:
+                continue
+            nodes = self.ccx_nodes(problem, state.element_nodes)
+            k, m = nodes.shape
+            key = np.empty((k, m, 3), dtype=np.int64)
+            key[..., 0], key[..., 1], key[..., 2] = p, nodes[:, -1:], np.arange(m)
+            keys.append(key.reshape(-1, 3))
+            rows.append(self.deck.node_index(nodes).ravel())
+            values.append(state.evaluation.forces.reshape(-1, 3))
+        return np.concatenate(keys), np.concatenate(rows), np.vstack(values)
+
+    def nodal_forces(self, problem: ContactProblem) -> np.ndarray:
+        """Internal force of the elements plus the springs at every deck node ``(N, 3)``.
+
+        Summed in ccx order (elements by number, springs by pair and slave node), whatever the
+        partition. Collective. C3D20/C3D20R (one process only, docs/method.md §14.5): the forces
+        of the 27-node cells, whose face- and cell-centre forces move to the 20 ccx nodes
+        (``model.on_ccx_nodes``, §13.5).
+        """
+        if self.model.element_type.num_nodes == 20:
+            return self.nodal(self.model.on_ccx_nodes(self._dof_forces(problem)))
+        elements, rows, values = self.allgather(*self._element_forces())
+        order = np.argsort(elements, kind="stable")
+        bulk = np.zeros((self.deck.node_ids.size, 3))
+        np.add.at(bulk, rows[order].ravel(), values[order].reshape(-1, 3))
+        keys, rows, values = self.allgather(*self._spring_forces(problem))
+        order = np.lexsort(keys.T[::-1])
+        contact = np.zeros_like(bulk)
+        np.add.at(contact, rows[order], values[order])
+        return bulk + contact
+
+    def _dof_forces(self, problem: ContactProblem) -> np.ndarray:
+        """Internal force of the elements plus the springs at every local dof ``(num_dofs, 3)``."""
+        if self._form is None:
+            self._form = dolfinx.fem.form(self._internal)
+        vector = dolfinx.fem.petsc.assemble_vector(self._form)
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        forces = vector.array.reshape(-1, 3).copy()
+        vector.destroy()
+        contact = np.zeros_like(forces)
+        for state in problem.states:
+            if state.evaluation is not None and state.num_springs:
+                np.add.at(
+                    contact,
+                    state.element_nodes,
+                    state.evaluation.forces.reshape(state.num_springs, -1, 3),
+                )
+        return forces + contact

@@ -1,0 +1,252 @@
+"""The deck runner on several processes writes the serial run's files (docs/method.md §14.5).
+
+Each test runs a deck on ``COMM_SELF`` (rank 0, the reference) and on ``COMM_WORLD`` in the same
+run, then compares the files, the Newton iteration counts and the contact elements. ``make
+test-here`` runs this file on 2 processes and again on 3; in serial the comparisons are trivial.
+
+The ``.sta`` and ``.cel`` files must be byte-identical. In ``.dat``, ``.cvg`` and ``.frd`` every
+line must have the same text and every number the same digits, except numbers at round-off level
+(zero in exact arithmetic: displacements and shear stresses zero by symmetry, reactions at free
+nodes, the residual of a converged Newton iteration): their round-off depends on the partition
+(the linear solver's rounding does, amplified by the condition number of the penalty springs), so
+two such numbers may differ by at most 1e-10 times the largest number of their block (measured: at
+most 4e-13 with dolfinx 0.5, 7.5e-12 with dolfinx 0.9, on two_cubes: reactions at free nodes). A
+number above 1e-3 of its block's largest therefore has all its printed digits identical.
+"""
+
+import re
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf.__main__ import EXIT_INPUT, main
+from dolfinx_ntf.calculix.deck import read_deck
+from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.calculix.model import build_model
+
+pytestmark = pytest.mark.mpi
+
+COMM = MPI.COMM_WORLD
+DATA = Path(__file__).parent / "data" / "calculix"
+#: Largest difference of a printed number between partitions, relative to the largest of its block.
+ROUND_OFF = 1e-10
+
+#: Output requests added to every step: all prints and all file outputs.
+REQUESTS = (
+    "*NODE PRINT, NSET=NALL, TOTALS=YES\nRF\n*EL PRINT, ELSET=EALL\nS\n"
+    "*NODE FILE, CONTACT ELEMENTS\nU, RF\n*EL FILE\nS\n*CONTACT FILE\nCDIS, CSTR\n*END STEP"
+)
+
+_NUMBER = re.compile(r"\s*[-+]?(?:\d+\.\d*|\.\d+|\d+)[Ee][-+]?\d+")
+_CLOCK = re.compile(r"^\s*1U(TIME|DATE)")  # .frd header lines with the wall-clock time
+
+
+@pytest.fixture(scope="module")
+def shared():
+    """A directory all processes see (created by rank 0)."""
+    path = Path(tempfile.mkdtemp(prefix="ntf-deck-")) if COMM.rank == 0 else None
+    path = COMM.bcast(path, root=0)
+    yield path
+    COMM.barrier()
+    if COMM.rank == 0:
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def _crossval(name: str, directory: Path) -> Path:
+    """A cross-validation deck (tests/data/calculix/crossval) written on rank 0."""
+    sys.path.insert(0, str(DATA / "crossval"))
+    try:
+        import cases
+    finally:
+        sys.path.pop(0)
+    (case,) = [c for c in cases.CASES if c.name == name]
+    case.write(directory)
+    return directory / f"{name}.inp"
+
+
+def _deck(name: str, directory: Path) -> Path:
+    """Deck ``name`` with every output request, on rank 0; its path on every process."""
+    path = directory / name / f"{name}.inp"
+    if COMM.rank == 0:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        source = DATA / f"{name}.inp"
+        if not source.exists():
+            source = _crossval(name, path.parent)
+        path.write_text(source.read_text().replace("*END STEP", REQUESTS))
+    COMM.barrier()
+    return path
+
+
+def _blocks(text: str) -> list[list[str]]:
+    """Lines in blocks; a line with letters outside its numbers starts a block."""
+    blocks: list[list[str]] = [[]]
+    for line in text.splitlines():
+        if _CLOCK.match(line):
+            continue
+        if re.search(r"[A-Za-z]", _NUMBER.sub("", line)) and blocks[-1]:
+            blocks.append([])
+        blocks[-1].append(line)
+    return blocks
+
+
+def _compare(serial: str, parallel: str, what: str) -> tuple[int, float]:
+    """Differing numbers and the largest difference relative to its block; fails otherwise."""
+    a, b = _blocks(serial), _blocks(parallel)
+    assert len(a) == len(b), f"{what}: {len(a)} blocks in serial, {len(b)} in parallel"
+    count, worst = 0, 0.0
+    for block_a, block_b in zip(a, b):
+        assert len(block_a) == len(block_b), f"{what}: block {block_a[0]!r} has other lines"
+        numbers = [abs(float(x)) for line in block_a for x in _NUMBER.findall(line)]
+        scale = max(numbers, default=0.0)
+        for x, y in zip(block_a, block_b):
+            if x == y:
+                continue
+            assert _NUMBER.sub("#", x) == _NUMBER.sub("#", y), f"{what}: {x!r} != {y!r}"
+            for u, v in zip(_NUMBER.findall(x), _NUMBER.findall(y)):
+                if u != v:
+                    count += 1
+                    assert abs(float(u) - float(v)) <= ROUND_OFF * scale, (
+                        f"{what}: {x!r} != {y!r} (largest of the block {scale:g})"
+                    )
+                    worst = max(worst, abs(float(u) - float(v)) / scale)
+    return count, worst
+
+
+def _run_both(path: Path):
+    """The deck on rank 0 alone (in ``serial/``) and on all processes; both results."""
+    serial_dir = path.parent / "serial"
+    serial = None
+    if COMM.rank == 0:
+        serial_dir.mkdir(exist_ok=True)
+        shutil.copy(path, serial_dir / path.name)
+        serial = run_job(path.stem, serial_dir, comm=MPI.COMM_SELF, progress=False)
+    COMM.barrier()
+    parallel = run_job(path.stem, path.parent, comm=COMM, progress=False)
+    return serial, parallel, serial_dir
+
+
+def _check_files(path: Path, serial_dir: Path) -> str | None:
+    """Rank 0: the comparison of every file (None when they agree)."""
+    try:
+        for suffix in (".sta", ".cel"):
+            a, b = serial_dir / (path.stem + suffix), path.with_suffix(suffix)
+            if a.exists() or b.exists():
+                assert a.read_bytes() == b.read_bytes(), f"{b.name} differs from the serial file"
+        for suffix in (".dat", ".cvg", ".frd"):
+            a, b = serial_dir / (path.stem + suffix), path.with_suffix(suffix)
+            _compare(a.read_text(), b.read_text(), b.name)
+    except AssertionError as error:
+        return str(error)
+    return None
+
+
+DECKS = [
+    "two_cubes",  # C3D8, two elements, *CONTACT PRINT with TOTALS, CONTACT ELEMENTS
+    "hex_linear_pressure",  # C3D8 punch, *DLOAD, 3 increments
+    "tet_linear_two_steps",  # C3D4, two steps
+    "tet10_exponential",  # C3D10, 6-node faces
+    "hex_two_pairs",  # C3D8, two pairs, *CLOAD
+]
+
+
+@pytest.mark.parametrize("name", DECKS)
+def test_deck_gives_the_serial_files(name, shared):
+    path = _deck(name, shared)
+    if name == "two_cubes" and COMM.size > 2:  # two elements: a process would hold none
+        with pytest.raises(ValueError, match="without an element; run on fewer processes"):
+            run_job(path.stem, path.parent, comm=COMM, progress=False)
+        return
+    serial, parallel, serial_dir = _run_both(path)
+    serial = COMM.bcast(serial and _summary(serial), root=0)
+    assert _summary(parallel)["iterations"] == serial["iterations"]
+    assert _summary(parallel)["contact"] == serial["contact"]
+    u, u_ref = parallel.last.displacement, serial["displacement"]
+    assert np.array_equal(parallel.last.node_ids, serial["node_ids"])
+    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
+    assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
+    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
+    error = COMM.bcast(error, root=0)
+    assert error is None, error
+
+
+def _summary(result) -> dict:
+    """Iterations, contact elements (slave node, master face) per increment, last displacement."""
+    return {
+        "iterations": [(i.step, i.increment, i.attempt, i.iterations) for i in result.increments],
+        "contact": [
+            [(r.pair, r.nodes.tolist(), r.master_faces.tolist()) for r in i.contact]
+            for i in result.increments
+        ],
+        "node_ids": result.last.node_ids,
+        "displacement": result.last.displacement,
+    }
+
+
+def _interior_face(path: Path) -> tuple[int, int]:
+    """An element face between two elements of the deck: (element, face number)."""
+    deck = read_deck(path)
+    block = next(b for b in deck.elements.values() if b.ids.size)
+    faces = block.connectivity[:, block.type.faces[:, : block.type.face_corners]]
+    keys = np.sort(faces.reshape(-1, block.type.face_corners), axis=1)
+    _, first, counts = np.unique(keys, axis=0, return_index=True, return_counts=True)
+    k = int(first[np.argmax(counts > 1)])
+    return int(block.ids[k // faces.shape[1]]), k % faces.shape[1] + 1
+
+
+def test_bad_face_found_by_one_process_fails_on_all(shared):
+    path = _deck("hex_linear_pressure", shared / "bad")
+    if COMM.rank == 0:
+        element, face = _interior_face(path)
+        text = path.read_text().replace(
+            "*STEP", f"*SURFACE, NAME=INSIDE\n{element}, S{face}\n*STEP", 1
+        )
+        path.write_text(text)
+    COMM.barrier()
+    with pytest.raises(ValueError, match="lies between two elements, not on the boundary"):
+        run_job(path.stem, path.parent, comm=COMM, progress=False)
+
+
+def test_bad_deck_fails_on_every_process(shared):
+    path = shared / "broken" / "broken.inp"
+    if COMM.rank == 0:
+        path.parent.mkdir(exist_ok=True)
+        text = (DATA / "two_cubes.inp").read_text()
+        path.write_text(text.replace("*SOLID SECTION, ELSET=EALL", "*SOLID SECTION, ELSET=NONE"))
+    COMM.barrier()
+    with pytest.raises(ValueError, match="NONE"):
+        run_job("broken", path.parent, comm=COMM, progress=False)
+    assert main(["run", str(path)]) == EXIT_INPUT  # the command line: same status everywhere
+    assert main(["run", str(path.parent / "missing")]) == EXIT_INPUT
+
+
+def test_friction_deck_refused_on_every_process(shared):
+    path = _deck("hex_linear_pressure", shared / "friction")
+    if COMM.rank == 0:
+        behavior = re.compile(r"(\*SURFACE BEHAVIOR[^\n]*\n[^\n]*\n)")
+        path.write_text(behavior.sub(r"\1*FRICTION\n0.2, 1e5\n", path.read_text(), count=1))
+    COMM.barrier()
+    if COMM.size == 1:  # serial: the same deck is accepted
+        model = build_model(read_deck(path), COMM)
+        problem = model.create_problem(model.begin_step(0))
+        assert problem.has_friction
+        problem.destroy()
+        return
+    with pytest.raises(NotImplementedError, match=r"friction on .* MPI processes"):
+        run_job(path.stem, path.parent, comm=COMM, progress=False)
+
+
+def test_c3d20_deck_refused_on_every_process(shared):
+    """C3D20's added face and cell centres are not gathered in ccx numbering: one process only."""
+    path = _deck("hex20_linear_pressure", shared / "c3d20")
+    if COMM.size == 1:  # serial: the same deck is accepted
+        model = build_model(read_deck(path), COMM)
+        assert model.element_type.name == "C3D20"
+        return
+    with pytest.raises(NotImplementedError, match=rf"C3D20 elements on {COMM.size} MPI processes"):
+        run_job(path.stem, path.parent, comm=COMM, progress=False)
