@@ -282,7 +282,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
-        self._increment_start_u = u.x.array.reshape(-1, 3).copy()
+        self._increment_start_u = self._displacement().copy()
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the
         #: residual.
@@ -349,18 +349,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
                 was_active=pair.active,
             )  # fmt: skip
-        unsupported = [
-            what
-            for what, used in (
-                ("friction", pair.interaction.friction is not None),
-                ("ADJUST", pair.adjust is not None),
-            )
-            if used
-        ]
-        if comm.size > 1 and unsupported:
+        if comm.size > 1 and pair.adjust is not None:
             raise NotImplementedError(
-                f"{name}: {' and '.join(unsupported)} on {comm.size} MPI processes: not supported "
-                "yet; run on one process (docs/method.md §14.4)"
+                f"{name}: ADJUST on {comm.size} MPI processes: not supported yet; run on one "
+                "process (docs/method.md §14.6)"
             )
         master_faces = parallel.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
@@ -482,9 +474,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts, then the halo's). Collective."""
+        return self._reference + self._displacement()
+
+    def _displacement(self) -> np.ndarray:
+        """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
         if self.halo is not None:
-            return self._reference + self.halo.displacement(self.u)
-        return self._reference + self.u.x.array.reshape(-1, 3)
+            return self.halo.displacement(self.u)
+        return self.u.x.array.reshape(-1, 3)
 
     # -- pairing -----------------------------------------------------------------------------------
 
@@ -498,7 +494,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._check_finite()
         self.time_fraction = float(time_fraction)
         self.static = static
-        self._increment_start_u = self.u.x.array.reshape(-1, 3).copy()
+        self._increment_start_u = self._displacement().copy()  # halo nodes too: anchors
         first = not self._first_pairing_done
         keep = self.overlap_ramp == "linear" and self.step_count <= 1 and static
         for state in self.states:
@@ -744,12 +740,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         friction = state.pair.interaction.friction
         if friction is None:
             return None
-        comm = self.u.function_space.mesh.comm
-        if comm.size > 1:  # the same pairs on every process: all raise
-            raise NotImplementedError(
-                f"{state.pair.name or 'a pair'}: friction on {comm.size} MPI processes is not "
-                "supported yet; run on one process (docs/method.md §14.4)"
-            )
         displacements = (coords - self._reference)[nodes]
         return FrictionInput(
             displacements,
