@@ -29,6 +29,7 @@ from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
 from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
 from dolfinx_ntf.friction_state import FrictionState
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
+from dolfinx_ntf.parallel_constraints import distributed_elimination
 from dolfinx_ntf.rigid import RigidSurface, rigid_master, spring_evaluator
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
@@ -177,7 +178,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             shared edges during re-pairing. False reproduces CalculiX's search (the deck runner's
             default).
         constraints: Linear multi-point constraints (CalculiX ``*EQUATION``), enforced by
-            elimination (docs/method.md §13.1); one process only.
+            elimination (docs/method.md §13.1); in parallel each process gives those among its
+            nodes (ghosts included), the union counts (docs/method.md §14.6).
         element_forces: Linear form in the test function of ``F`` whose element vectors are the
             element nodal forces averaged by the convergence test
             (:meth:`average_element_force`); default ``F`` itself (CalculiX uses the internal
@@ -310,21 +312,24 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             self.elimination, self.reduced_matrix = None, None
         V = self.u.function_space
         comm = V.mesh.comm
-        if comm.size > 1 and comm.allreduce(len(self.constraints), op=MPI.MAX):
-            raise NotImplementedError(
-                f"ContactProblem: linear constraints on {comm.size} MPI processes are not "
-                "supported yet; run on one process"
-            )
-        if not self.constraints:
+        if not comm.allreduce(len(self.constraints), op=MPI.MAX):
             return
-        for c in self.constraints:
-            validation.check_type(c, LinearConstraint, "ContactProblem: constraints")
+        parallel.collectively(
+            comm,
+            lambda: [
+                validation.check_type(c, LinearConstraint, "ContactProblem: constraints")
+                for c in self.constraints
+            ],
+        )
         prescribed = [bc.dof_indices()[0] for bc in self.bcs]
+        prescribed = np.concatenate(prescribed) if prescribed else np.zeros(0, np.int64)
+        if comm.size > 1:  # every process's constraints, in the global numbering (§14.6)
+            self.elimination = parallel.collectively(
+                comm, distributed_elimination, V, self.constraints, prescribed
+            )
+            return
         self.elimination = ConstraintElimination(
-            self.u.x.array.size,
-            self.constraints,
-            np.concatenate(prescribed) if prescribed else np.zeros(0, np.int64),
-            V.mesh.comm,
+            self.u.x.array.size, self.constraints, prescribed, comm
         )
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
@@ -815,9 +820,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     def form(self, x: PETSc.Vec) -> None:
         """Before F: update ghost values and evaluate the springs of the current pairing."""
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        if self.elimination is not None:
+        if self.elimination is not None:  # before the ghost update: ghosts get the new values
             self.elimination.back_substitute(x)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._blocks = self.evaluate(tangent=True)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
@@ -870,7 +875,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         for term in self.extra_terms:
             term.add_to_jacobian(x, A)
         if self.elimination is not None:
-            key = (id(A), self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
+            key = (A.handle, self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
             self.reduced_matrix = self.elimination.reduce_matrix(A, key)
 
     def destroy(self) -> None:
