@@ -354,11 +354,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
                 was_active=pair.active,
             )  # fmt: skip
-        if comm.size > 1 and pair.adjust is not None:
-            raise NotImplementedError(
-                f"{name}: ADJUST on {comm.size} MPI processes: not supported yet; run on one "
-                "process (docs/method.md §14.6)"
-            )
         master_faces = parallel.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
@@ -388,7 +383,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         adjust_nodes = None
         if isinstance(pair.adjust, NodeSurface):
-            adjust_nodes = resolve_slave(V, pair.adjust, what=f"{name} adjust").nodes
+            adjust_nodes = parallel.collectively(
+                comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
+            ).nodes
+            if self.halo is not None:  # the union over processes, as extended nodes
+                held = self.halo.local_global[adjust_nodes]
+                adjust_nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
+                adjust_nodes = adjust_nodes[adjust_nodes >= 0]
         return PairState(
             pair,
             slave,
@@ -643,11 +644,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if state.adjust_nodes is not None:
             in_set = np.isin(state.slave.nodes[found], state.adjust_nodes)
         move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
-        count = int(np.count_nonzero(move))
-        if count:
+        count = self.u.function_space.mesh.comm.allreduce(int(np.count_nonzero(move)))
+        if count:  # on every process: the moves reach ghost and halo copies (§14.6)
             delta = -evaluation.gap[move, None] * evaluation.normal[move]
             move_reference_nodes(
-                self.u.function_space, self._reference, state.slave.nodes[found[move]], delta
+                self.u.function_space,
+                self._reference,
+                state.slave.nodes[found[move]],
+                delta,
+                self.halo,
             )
             logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
         return count
