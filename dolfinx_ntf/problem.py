@@ -343,10 +343,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                     f"{name}: friction and ADJUST against a rigid analytical master are not "
                     "supported yet; use a meshed master"
                 )
-            if comm.size > 1:
-                raise NotImplementedError(
-                    f"{name}: rigid analytical masters on {comm.size} MPI processes are not "
-                    "supported yet; run on one process"
+            if self.halo is not None:  # the owned slave nodes; no master nodes (§14.6)
+                slave = parallel.collectively(
+                    comm, parallel.distribute_slave, V, self.halo, pair.slave, slave, name
                 )
             faces, master = rigid_master(pair.master, lambda: self.time_fraction, f"{name} master")
             friction = FrictionState(slave.nodes.size)  # stays empty: the bookkeeping is shared
