@@ -13,6 +13,7 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.parallel import NodeHalo
 
 __all__ = ["adjusted_nodes", "move_reference_nodes"]
 
@@ -33,16 +34,29 @@ def adjusted_nodes(
 
 
 def move_reference_nodes(
-    V: dolfinx.fem.FunctionSpace, reference: np.ndarray, dofs: np.ndarray, delta: np.ndarray
+    V: dolfinx.fem.FunctionSpace,
+    reference: np.ndarray,
+    dofs: np.ndarray,
+    delta: np.ndarray,
+    halo: NodeHalo | None = None,
 ) -> None:
     """Move the reference position of block dofs ``dofs`` by ``delta`` ``(k, 3)``.
 
     Updates the mesh geometry (the bulk forms see the new coordinates at their next assembly:
-    no strain) and ``reference`` (the contact code's copy) in place.
+    no strain) and ``reference`` (the contact code's copy) in place. With a ``halo`` (several
+    processes, collective) ``dofs`` are this process's owned slave nodes, and every process moves
+    its copies of all processes' nodes: ghosts and halo nodes alike (docs/method.md §14.6).
 
     Raises:
         NotImplementedError: A dof without a geometry node (e.g. a P2 midside node on a P1 mesh).
     """
+    if halo is not None:
+        parts = halo.comm.allgather((halo.global_nodes[dofs], np.asarray(delta).reshape(-1, 3)))
+        index = halo.find(np.concatenate([p[0] for p in parts]))
+        here = index >= 0
+        dofs, delta = index[here], np.vstack([p[1] for p in parts])[here]
+        reference[dofs[dofs >= halo.num_local]] += delta[dofs >= halo.num_local]
+        delta, dofs = delta[dofs < halo.num_local], dofs[dofs < halo.num_local]
     mesh = V.mesh
     cells = compat.cell_dofs(V)
     geometry = compat.geometry_dofs(mesh)[: cells.shape[0]]
@@ -51,7 +65,7 @@ def move_reference_nodes(
             "ADJUST needs a displacement space with the degree of the mesh geometry (its nodes "
             "are moved)"
         )
-    node_of_dof = np.full(reference.shape[0], -1, dtype=np.int64)
+    node_of_dof = np.full(cells.max(initial=-1) + 1, -1, dtype=np.int64)
     node_of_dof[cells.ravel()] = geometry.ravel()
     nodes = node_of_dof[np.asarray(dofs, dtype=np.int64)]
     if np.any(nodes < 0):

@@ -24,6 +24,7 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -47,7 +48,9 @@ class LinearConstraint:
     dependent dof, as in CalculiX where the first term is dependent.
 
     Args:
-        nodes: Local block dofs of the displacement space (one per term).
+        nodes: Local block dofs of the displacement space (one per term). In parallel, this
+            process's (owned or ghost); the constraints of all processes count, each once
+            (docs/method.md §14.6).
         components: Displacement component 0, 1 or 2 of each term.
         coefficients: Coefficient of each term.
         value: Right-hand side (ccx: 0).
@@ -307,13 +310,19 @@ def _elimination(
 
 
 class ConstraintElimination:
-    """The PETSc operators of ``u = T w + g`` on one serial vector space (see the module doc).
+    """The PETSc operators of ``u = T w + g`` on a vector space (see the module doc).
+
+    In parallel every process passes the same constraints in the global numbering (PETSc's
+    unrolled dofs) and builds the rows of ``T`` and ``T'`` it owns (docs/method.md §14.6).
 
     Args:
-        num_dofs: Unrolled dofs of the space.
-        constraints: The constraints.
-        prescribed: Unrolled Dirichlet dofs (kept as identity rows, never dependent).
-        comm: The mesh communicator (one process only).
+        num_dofs: Unrolled dofs of the space (over all processes).
+        constraints: The constraints (global dofs; the same on every process).
+        prescribed: Unrolled Dirichlet dofs (kept as identity rows, never dependent): in parallel
+            those in constraints on any process and those this process owns.
+        comm: The mesh communicator.
+        first_dof: First dof this process owns.
+        num_owned: Dofs this process owns (default all).
     """
 
     def __init__(
@@ -322,28 +331,41 @@ class ConstraintElimination:
         constraints: Constraints,
         prescribed: np.ndarray,
         comm,
+        *,
+        first_dof: int = 0,
+        num_owned: int | None = None,
     ) -> None:
-        if comm.size > 1:
-            raise NotImplementedError(
-                f"linear constraints run on one process only for now (got {comm.size} processes)"
-            )
+        n = num_dofs if num_owned is None else int(num_owned)
+        self._comm = comm
         self.prescribed = np.unique(np.asarray(prescribed, dtype=np.int64))
         self.slaves, rows, self._values_to_offsets = _elimination(
             num_dofs, constraints, self.prescribed
         )
         self.offsets = self._values_to_offsets @ _values(constraints)
-        n = num_dofs
+        owned = (self.slaves >= first_dof) & (self.slaves < first_dof + n)
+        self._owned = np.flatnonzero(owned)  # positions in ``slaves`` of the owned ones
+        self._local_slaves = self.slaves[owned] - first_dof  # their local rows
         identity = np.ones(n)
-        identity[self.slaves] = 0.0
+        identity[self._local_slaves] = 0.0
         embed = scipy.sparse.csr_matrix(
-            (np.ones(self.slaves.size), (self.slaves, np.arange(self.slaves.size))),
-            shape=(n, self.slaves.size),
+            (np.ones(self._owned.size), (self._local_slaves, np.arange(self._owned.size))),
+            shape=(n, self._owned.size),
         )
-        T = (scipy.sparse.diags(identity) + embed @ rows).tocsr()
+        local = np.arange(n)
+        diagonal = scipy.sparse.csr_matrix(
+            (identity, (local, first_dof + local)), shape=(n, num_dofs)
+        )
+        T = (diagonal + embed @ rows[self._owned]).tocsr()
+        dependent = scipy.sparse.csr_matrix(
+            (1.0 - identity, (local, first_dof + local)), shape=(n, num_dofs)
+        )
         self._T = _petsc(T, comm)  # u = T u + g: back-substitution
-        self._Tp = _petsc((T + scipy.sparse.diags(1.0 - identity)).tocsr(), comm)  # T'
+        self._Tp = _petsc((T + dependent).tocsr(), comm)  # T'
         self._work = self._T.createVecLeft()
-        self._eliminated = np.union1d(self.slaves, self.prescribed).astype(PETSc.IntType)
+        in_range = (self.prescribed >= first_dof) & (self.prescribed < first_dof + n)
+        self._eliminated = np.union1d(self.slaves[owned], self.prescribed[in_range]).astype(
+            PETSc.IntType
+        )
         self._reduced: PETSc.Mat | None = None
         self._reduced_key: tuple | None = None
 
@@ -359,13 +381,14 @@ class ConstraintElimination:
     def back_substitute(self, x: PETSc.Vec) -> None:
         """Dependent dofs of ``x`` from the independent ones: ``x = T x + g``."""
         self._T.mult(x, self._work)
-        x.array[self.slaves] = self._work.array[self.slaves] + self.offsets
+        rows = self._local_slaves
+        x.array[rows] = self._work.array[rows] + self.offsets[self._owned]
 
     def reduce_vector(self, b: PETSc.Vec, dirichlet: typing.Callable[[PETSc.Vec], None]) -> None:
         """``b <- T'^T b`` with zero dependent rows; ``dirichlet(b)`` restores Dirichlet rows."""
         self._Tp.multTranspose(b, self._work)
         self._work.copy(b)
-        b.array[self.slaves] = 0.0
+        b.array[self._local_slaves] = 0.0
         dirichlet(b)
 
     def reduce_matrix(self, A: PETSc.Mat, key: tuple) -> PETSc.Mat:
@@ -374,7 +397,10 @@ class ConstraintElimination:
         ``key`` identifies ``A``'s sparsity pattern: the reduced matrix is reused while it is
         unchanged, else made anew.
         """
-        if self._reduced is not None and key == self._reduced_key:
+        reuse = self._reduced is not None and key == self._reduced_key
+        if self._comm.size > 1:  # one process's new pattern makes all start afresh
+            reuse = self._comm.allreduce(reuse, op=MPI.LAND)
+        if reuse:
             A.PtAP(self._Tp, result=self._reduced)
         else:
             if self._reduced is not None:
@@ -413,11 +439,12 @@ def _choose_sequentially(
 
 
 def _petsc(matrix: scipy.sparse.csr_matrix, comm) -> PETSc.Mat:
+    """This process's rows (all columns, global) as a square PETSc matrix of ``comm``."""
     matrix = matrix.tocsr()
     matrix.sort_indices()
-    n = matrix.shape[0]
+    n, size = matrix.shape
     return PETSc.Mat().createAIJ(
-        (n, n),
+        ((n, size), (n, size)),
         csr=(
             matrix.indptr.astype(PETSc.IntType),
             matrix.indices.astype(PETSc.IntType),

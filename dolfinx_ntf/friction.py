@@ -10,7 +10,8 @@ node ``j``, ``+1`` for the slave):
   projected onto the current tangent plane, as CalculiX does);
 - elastic part ``t_e = t - t_p,n``, trial force ``F_tr = K_t t_e`` with ``K_t = lambda A``;
 - limit ``F_s = mu |F_N|`` (CalculiX), or ``mu max(F_N, 0)`` without friction in tension;
-- stick (``|F_tr| < F_s`` or ``|F_tr| = 0``): ``F_T = F_tr``, slip unchanged;
+- stick (``|F_tr| < (1 - SLIP_TIE) F_s``, or ``t_e`` zero up to round-off): ``F_T = F_tr``, slip
+  unchanged;
 - slip: ``e = t_e/|t_e|``, ``F_T = F_s e``, ``t_p = t_p,n + (|F_tr| - F_s)/K_t e``.
 
 ``F_T`` is added to the slave node's internal force ``f_p = -F_N n + F_T``. The tangent
@@ -38,6 +39,16 @@ TANGENT_MODES = ("consistent", "ccx")
 
 #: ccx's threshold for the choice of the first output tangent (docs/method.md §11.4).
 _TANGENT_SWITCH = 1.5231e-6
+#: Relative band below the friction limit where a trial force already slips (docs/method.md
+#: §11.1). A node that slipped starts the next increment with ``|F_tr| = F_s`` up to round-off;
+#: without the band round-off would pick its tangent (stick or slip), differently on different
+#: partitions of the mesh (docs/method.md §14.6).
+SLIP_TIE = 1e-8
+#: Relative size, against the displacements it is computed from, below which the elastic
+#: tangential displacement ``t_e`` is round-off: the spring sticks (``F_T = F_tr``, about 0).
+#: Otherwise a spring without normal force would stick or slip (and get one tangent or another)
+#: as round-off makes ``t_e`` exactly zero or not (docs/method.md §14.6).
+ROUND_OFF = 1e-12
 
 
 @dataclass
@@ -148,7 +159,11 @@ def tangential_forces(
     trial_norm = np.linalg.norm(trial, axis=1)
     sign = np.sign(normal_force) if data.in_tension else (normal_force > 0).astype(float)
     limit = mu * (np.abs(normal_force) if data.in_tension else np.maximum(normal_force, 0.0))
-    sliding = ~((trial_norm < limit) | (trial_norm <= 0.0))
+    magnitude = sum(
+        np.linalg.norm(v, axis=1) for v in (a, data.a_start, data.t_start, data.slip_start)
+    )
+    settled = trial_norm <= ROUND_OFF * k_t * magnitude  # includes |F_tr| = 0
+    sliding = ~settled & (trial_norm >= (1.0 - SLIP_TIE) * limit)
     if data.force_stick:
         sliding[:] = False
     elastic_norm = np.linalg.norm(elastic, axis=1)

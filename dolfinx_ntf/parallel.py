@@ -32,7 +32,14 @@ from dolfinx_ntf.surfaces import (
     reference_coordinates,
 )
 
-__all__ = ["MAX_GATHERED_FACES", "NodeHalo", "collectively", "distribute_pair", "send_to_owners"]
+__all__ = [
+    "MAX_GATHERED_FACES",
+    "NodeHalo",
+    "collectively",
+    "distribute_pair",
+    "distribute_slave",
+    "send_to_owners",
+]
 
 #: Faces of one contact surface (over all processes) that setup allgathers (docs/method.md §14.2).
 MAX_GATHERED_FACES = 2_000_000
@@ -211,9 +218,24 @@ def distribute_pair(
     every slave face (of any process) holding one of them, so that spring areas are complete at
     partition cuts (docs/method.md §14.1).
     """
-    comm = halo.comm
     g, x, facets = _gather_faces(halo, master, f"{what} master")
     master = SurfaceFaces(master.face_type, halo.local(g, x).astype(np.int32), facets)
+    return distribute_slave(V, halo, surface, slave, what), master
+
+
+def distribute_slave(
+    V: dolfinx.fem.FunctionSpace,
+    halo: NodeHalo,
+    surface: object,
+    slave: SlaveSurface,
+    what: str,
+) -> SlaveSurface:
+    """The slave nodes this process owns and every slave face holding one of them. Collective.
+
+    For :func:`distribute_pair`, and alone for a rigid master (no master nodes, docs/method.md
+    §14.6).
+    """
+    comm = halo.comm
     slave_global = np.unique(
         np.concatenate(comm.allgather(halo.local_global[slave.nodes])).astype(np.int64)
     )
@@ -228,7 +250,7 @@ def distribute_pair(
         faces.face_type, halo.local(g[keep], x[keep]).astype(np.int32), facets[keep]
     )
     nodes = np.sort(halo.find(mine))
-    return SlaveSurface(nodes, slave_faces), master
+    return SlaveSurface(nodes, slave_faces)
 
 
 def send_to_owners(comm: MPI.Comm, keys: np.ndarray, owner: np.ndarray) -> np.ndarray:

@@ -29,6 +29,7 @@ from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, Lin
 from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
 from dolfinx_ntf.friction_state import FrictionState
 from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
+from dolfinx_ntf.parallel_constraints import distributed_elimination
 from dolfinx_ntf.rigid import RigidSurface, rigid_master, spring_evaluator
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
@@ -177,7 +178,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             shared edges during re-pairing. False reproduces CalculiX's search (the deck runner's
             default).
         constraints: Linear multi-point constraints (CalculiX ``*EQUATION``), enforced by
-            elimination (docs/method.md §13.1); one process only.
+            elimination (docs/method.md §13.1); in parallel each process gives those among its
+            nodes (ghosts included), the union counts (docs/method.md §14.6).
         element_forces: Linear form in the test function of ``F`` whose element vectors are the
             element nodal forces averaged by the convergence test
             (:meth:`average_element_force`); default ``F`` itself (CalculiX uses the internal
@@ -284,7 +286,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
-        self._increment_start_u = u.x.array.reshape(-1, 3).copy()
+        self._increment_start_u = self._displacement().copy()
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the
         #: residual.
@@ -312,23 +314,30 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             self.elimination, self.reduced_matrix = None, None
         V = self.u.function_space
         comm = V.mesh.comm
-        if comm.size > 1 and comm.allreduce(len(self.constraints), op=MPI.MAX):
-            raise NotImplementedError(
-                f"ContactProblem: linear constraints on {comm.size} MPI processes are not "
-                "supported yet; run on one process"
-            )
-        if not self.constraints:
+        if not comm.allreduce(len(self.constraints), op=MPI.MAX):
             return
-        for c in self.constraints:
-            validation.check_type(
-                c, (LinearConstraint, LinearConstraintBlock), "ContactProblem: constraints"
-            )
+        def check() -> None:
+            for c in self.constraints:
+                validation.check_type(
+                    c, (LinearConstraint, LinearConstraintBlock), "ContactProblem: constraints"
+                )
+                if comm.size > 1 and isinstance(c, LinearConstraintBlock):
+                    raise NotImplementedError(
+                        f"ContactProblem: constraint blocks (e.g. serendipity_constraints) on "
+                        f"{comm.size} MPI processes are not supported yet; pass LinearConstraint "
+                        "objects or run on one process"
+                    )
+
+        parallel.collectively(comm, check)
         prescribed = [bc.dof_indices()[0] for bc in self.bcs]
+        prescribed = np.concatenate(prescribed) if prescribed else np.zeros(0, np.int64)
+        if comm.size > 1:  # every process's constraints, in the global numbering (§14.6)
+            self.elimination = parallel.collectively(
+                comm, distributed_elimination, V, self.constraints, prescribed
+            )
+            return
         self.elimination = ConstraintElimination(
-            self.u.x.array.size,
-            self.constraints,
-            np.concatenate(prescribed) if prescribed else np.zeros(0, np.int64),
-            V.mesh.comm,
+            self.u.x.array.size, self.constraints, prescribed, comm
         )
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
@@ -347,10 +356,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                     f"{name}: friction and ADJUST against a rigid analytical master are not "
                     "supported yet; use a meshed master"
                 )
-            if comm.size > 1:
-                raise NotImplementedError(
-                    f"{name}: rigid analytical masters on {comm.size} MPI processes are not "
-                    "supported yet; run on one process"
+            if self.halo is not None:  # the owned slave nodes; no master nodes (§14.6)
+                slave = parallel.collectively(
+                    comm, parallel.distribute_slave, V, self.halo, pair.slave, slave, name
                 )
             faces, master = rigid_master(pair.master, lambda: self.time_fraction, f"{name} master")
             friction = FrictionState(slave.nodes.size)  # stays empty: the bookkeeping is shared
@@ -358,19 +366,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
                 was_active=pair.active,
             )  # fmt: skip
-        unsupported = [
-            what
-            for what, used in (
-                ("friction", pair.interaction.friction is not None),
-                ("ADJUST", pair.adjust is not None),
-            )
-            if used
-        ]
-        if comm.size > 1 and unsupported:
-            raise NotImplementedError(
-                f"{name}: {' and '.join(unsupported)} on {comm.size} MPI processes: not supported "
-                "yet; run on one process (docs/method.md §14.4)"
-            )
         master_faces = parallel.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
@@ -401,7 +396,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         adjust_nodes = None
         if isinstance(pair.adjust, NodeSurface):
-            adjust_nodes = resolve_slave(V, pair.adjust, what=f"{name} adjust").nodes
+            adjust_nodes = parallel.collectively(
+                comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
+            ).nodes
+            if self.halo is not None:  # the union over processes, as extended nodes
+                held = self.halo.local_global[adjust_nodes]
+                adjust_nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
+                adjust_nodes = adjust_nodes[adjust_nodes >= 0]
         return PairState(
             pair,
             slave,
@@ -494,9 +495,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts, then the halo's). Collective."""
+        return self._reference + self._displacement()
+
+    def _displacement(self) -> np.ndarray:
+        """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
         if self.halo is not None:
-            return self._reference + self.halo.displacement(self.u)
-        return self._reference + self.u.x.array.reshape(-1, 3)
+            return self.halo.displacement(self.u)
+        return self.u.x.array.reshape(-1, 3)
 
     # -- pairing -----------------------------------------------------------------------------------
 
@@ -510,7 +515,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._check_finite()
         self.time_fraction = float(time_fraction)
         self.static = static
-        self._increment_start_u = self.u.x.array.reshape(-1, 3).copy()
+        self._increment_start_u = self._displacement().copy()  # halo nodes too: anchors
         first = not self._first_pairing_done
         keep = self.overlap_ramp == "linear" and self.step_count <= 1 and static
         for state in self.states:
@@ -653,11 +658,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if state.adjust_nodes is not None:
             in_set = np.isin(state.slave.nodes[found], state.adjust_nodes)
         move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
-        count = int(np.count_nonzero(move))
-        if count:
+        count = self.u.function_space.mesh.comm.allreduce(int(np.count_nonzero(move)))
+        if count:  # on every process: the moves reach ghost and halo copies (§14.6)
             delta = -evaluation.gap[move, None] * evaluation.normal[move]
             move_reference_nodes(
-                self.u.function_space, self._reference, state.slave.nodes[found[move]], delta
+                self.u.function_space,
+                self._reference,
+                state.slave.nodes[found[move]],
+                delta,
+                self.halo,
             )
             logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
         return count
@@ -754,12 +763,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         friction = state.pair.interaction.friction
         if friction is None:
             return None
-        comm = self.u.function_space.mesh.comm
-        if comm.size > 1:  # the same pairs on every process: all raise
-            raise NotImplementedError(
-                f"{state.pair.name or 'a pair'}: friction on {comm.size} MPI processes is not "
-                "supported yet; run on one process (docs/method.md §14.4)"
-            )
         displacements = (coords - self._reference)[nodes]
         return FrictionInput(
             displacements,
@@ -837,9 +840,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     def form(self, x: PETSc.Vec) -> None:
         """Before F: update ghost values and evaluate the springs of the current pairing."""
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        if self.elimination is not None:
+        if self.elimination is not None:  # before the ghost update: ghosts get the new values
             self.elimination.back_substitute(x)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._blocks = self.evaluate(tangent=True)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
@@ -892,7 +895,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         for term in self.extra_terms:
             term.add_to_jacobian(x, A)
         if self.elimination is not None:
-            key = (id(A), self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
+            key = (A.handle, self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
             self.reduced_matrix = self.elimination.reduce_matrix(A, key)
 
     def destroy(self) -> None:

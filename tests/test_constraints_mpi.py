@@ -1,8 +1,17 @@
-"""Linear constraints are serial only: refused on every process (run by ``make test`` on 2)."""
+"""Linear constraints on several processes give the serial answer (docs/method.md §14.6).
+
+Each process gives the constraints among its own nodes (ghosts included); the union counts each
+once. Compared with the same problem solved on ``COMM_SELF`` in the same run.
+"""
+
+import itertools
 
 from mpi4py import MPI
 
+import numpy as np
 import pytest
+from conftest import LOWER_BOTTOM, LOWER_TOP, PUNCH, UPPER_BOTTOM, elastic_residual, two_blocks
+from test_parallel import PARTITIONS, _sorted
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -10,20 +19,115 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
+from dolfinx_ntf.elasticity import component_bc
 
 pytestmark = pytest.mark.mpi
 
+COMM = MPI.COMM_WORLD
+TILT = 2e-4  # prescribed difference of u_z along y at x = 0.8 between the first two nodes
 
-def test_constraints_run_on_one_process_only():
-    comm = MPI.COMM_WORLD
-    mesh = dolfinx.mesh.create_unit_cube(comm, 2, 2, 2, dolfinx.mesh.CellType.hexahedron)
+
+def test_constraints_given_on_one_process_count_once():
+    mesh = dolfinx.mesh.create_unit_cube(COMM, 2, 2, 2, dolfinx.mesh.CellType.hexahedron)
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     F = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
-    # constraints given on rank 0 only: every process must stop, none may wait alone
-    tie = [ntf.LinearConstraint([0, 1], [2, 2], [1.0, -1.0])] if comm.rank == 0 else []
-    if comm.size == 1:
-        assert ntf.ContactProblem(F, u, [], constraints=tie).elimination.num_constraints == 1
-    else:
-        with pytest.raises(NotImplementedError, match=f"constraints on {comm.size} MPI processes"):
-            ntf.ContactProblem(F, u, [], constraints=tie)
+    tie = [ntf.LinearConstraint([0, 1], [2, 2], [1.0, -1.0])] if COMM.rank == 0 else []
+    assert ntf.ContactProblem(F, u, [], constraints=tie).elimination.num_constraints == 1
+    # the same constraint on every process (each in its own numbering) also counts once
+    x = V.tabulate_dof_coordinates()
+    ends = [np.flatnonzero(np.isclose(x, p).all(axis=1)) for p in ([0, 0, 0], [0.5, 0, 0])]
+    tie = [ntf.LinearConstraint([ends[0][0], ends[1][0]], [0, 0], [1.0, -1.0])]
+    held = COMM.allreduce(int(all(e.size for e in ends)))
+    problem = ntf.ContactProblem(F, u, [], constraints=tie if all(e.size for e in ends) else [])
+    assert held >= 1 and problem.elimination.num_constraints == 1
+
+
+def test_a_node_outside_one_process_fails_on_all():
+    mesh = dolfinx.mesh.create_unit_cube(COMM, 2, 2, 2, dolfinx.mesh.CellType.hexahedron)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    F = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx
+    far = V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts
+    bad = [ntf.LinearConstraint([0, far], [2, 2], [1.0, -1.0], name="far")]
+    with pytest.raises(ValueError, match=r"far: (node|dof)"):
+        ntf.ContactProblem(F, u, [], constraints=bad if COMM.rank == COMM.size - 1 else [])
+
+
+def _top_ties(V):
+    """u_z of the punch top tied along x (chains), and along y at x = 0.8 with one tilt.
+
+    Each process ties the pairs of neighbours it holds (owned or ghost): a pair held by two
+    processes is given twice and counts once.
+    """
+    x = V.tabulate_dof_coordinates()
+    top = np.flatnonzero(np.isclose(x[:, 2], 0.5))
+    position = {tuple(np.round(x[n], 9)): int(n) for n in top}
+    grid = np.round(np.linspace(0.2, 0.8, 4), 9)
+    ties = []
+    for a, b in itertools.pairwise(grid):
+        for c in grid:
+            for first, second, value in (
+                ((a, c), (b, c), 0.0),  # along x
+                ((0.8, a), (0.8, b), TILT if a == grid[0] else 0.0),  # along y at x = 0.8
+            ):
+                i, j = position.get((*first, 0.5)), position.get((*second, 0.5))
+                if i is not None and j is not None and (first[0] == a or c == grid[0]):
+                    ties.append(ntf.LinearConstraint([i, j], [2, 2], [1.0, -1.0], value))
+    return ties
+
+
+def _solve(comm, partition):
+    mesh, _, ft = two_blocks(comm, upper=PUNCH, partition=partition)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[2], 0.5))
+    bcs = [
+        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
+        component_bc(V, 0, top),
+        component_bc(V, 1, top),
+    ]
+    law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
+    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
+    problem = ntf.ContactProblem(
+        elastic_residual(u, v, ft, pressure), u, [pair], bcs, constraints=_top_ties(V)
+    )
+    solver = ntf.ContactNewtonSolver(comm, problem)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", 20.0 * t), initial_increment=0.5)
+    results = step.run(solver, u)
+    owned = V.dofmap.index_map.size_local
+    X = problem.reference_coordinates[:owned]
+    nodes = _sorted(comm, np.hstack([X, u.x.array.reshape(-1, 3)[:owned]]))
+    table = ntf.contact_results(problem)[0]
+    springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
+    out = (
+        [(r.iterations, r.springs) for r in results],
+        nodes,
+        springs,
+        problem.elimination.num_constraints,
+        problem.matrix.getInfo()["mallocs"],
+    )
+    solver.destroy()
+    problem.destroy()
+    return out
+
+
+@pytest.mark.parametrize("partition", PARTITIONS)
+def test_tied_punch_gives_the_serial_answer(partition):
+    """Ties across partition cuts (dofs owned by different processes), chains and a value."""
+    (increments, nodes, springs, count, mallocs) = _solve(COMM, PARTITIONS[partition])
+    serial = _solve(MPI.COMM_SELF, None)
+    assert count == serial[3] == 15
+    assert increments == serial[0]
+    scale = np.abs(serial[1][:, 3:]).max()
+    np.testing.assert_allclose(nodes, serial[1], rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(springs, serial[2], rtol=1e-10, atol=1e-12)
+    assert springs.shape[0] == 16 and mallocs == 0
+    # the constraints hold: the top is flat along x, tilted by TILT along y
+    top = nodes[np.isclose(nodes[:, 2], 0.5) & (nodes[:, 0] > 0.1) & (nodes[:, 1] > 0.1)]
+    uz = {tuple(np.round(r[:2], 9)): r[5] for r in top}
+    assert uz[(0.2, 0.4)] == pytest.approx(uz[(0.8, 0.4)], abs=1e-14)
+    assert uz[(0.8, 0.2)] - uz[(0.8, 0.4)] == pytest.approx(TILT, abs=1e-14)
+    assert uz[(0.8, 0.4)] < -1e-3  # pressed

@@ -165,17 +165,6 @@ def test_problem_options_give_the_serial_answer(options):
     assert run.mallocs == 0
 
 
-def test_friction_is_refused_on_every_process():
-    """Friction on several processes is not supported yet: every process raises, none waits."""
-    if COMM.size == 1:  # serial: the same problem is accepted
-        problem, _, _ = punch_problem(comm=COMM, friction=ntf.Friction(0.2, 1e4))
-        assert problem.has_friction
-        problem.destroy()
-        return
-    with pytest.raises(NotImplementedError, match=f"pair 1: friction on {COMM.size} MPI processes"):
-        punch_problem(comm=COMM, friction=ntf.Friction(0.2, 1e4))
-
-
 def test_idle_rank_holds_no_contact_node():
     """The partition leaves the last rank owning no contact node (when there are >= 2)."""
     problem, _, _ = punch_problem(comm=COMM, partition=_idle)

@@ -1,0 +1,76 @@
+"""Rigid analytical masters on several processes give the serial answer (docs/method.md §14.6).
+
+The punch of conftest pressed onto a rigid sphere under its centre (the lower block takes no part):
+the contact spreads from the four middle nodes.
+Compared with the same analysis on ``COMM_SELF`` in the same run.
+"""
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+from conftest import LOWER_BOTTOM, PUNCH, UPPER_BOTTOM, UPPER_TOP, elastic_residual, two_blocks
+from test_parallel import PARTITIONS, _sorted
+
+import dolfinx.fem
+import ufl
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.elasticity import component_bc
+
+pytestmark = pytest.mark.mpi
+
+COMM = MPI.COMM_WORLD
+RADIUS = 4.0
+
+
+def _solve(comm, partition):
+    mesh, _, ft = two_blocks(comm, upper=PUNCH, partition=partition)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    bcs = [
+        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
+        component_bc(V, 0, ft.find(UPPER_TOP)),
+        component_bc(V, 1, ft.find(UPPER_TOP)),
+    ]
+    # the four middle nodes of the punch bottom (0.1 sqrt 2 off the axis) touch the sphere
+    sphere = ntf.RigidSphere((0.5, 0.5, -np.sqrt(RADIUS**2 - 0.02)), RADIUS)
+    law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
+    pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), sphere, law)
+    problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs)
+    solver = ntf.ContactNewtonSolver(comm, problem)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", 20.0 * t), initial_increment=0.5)
+    results = step.run(solver, u)
+    owned = V.dofmap.index_map.size_local
+    X = problem.reference_coordinates[:owned]
+    nodes = _sorted(comm, np.hstack([X, u.x.array.reshape(-1, 3)[:owned]]))
+    table = ntf.contact_results(problem)[0]
+    springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
+    out = (
+        [(r.iterations, r.springs) for r in results],
+        nodes,
+        springs,
+        ntf.contact_force(problem),
+        problem.matrix.getInfo()["mallocs"],
+    )
+    solver.destroy()
+    problem.destroy()
+    return out
+
+
+@pytest.mark.parametrize("partition", PARTITIONS)
+def test_punch_on_a_rigid_sphere_gives_the_serial_answer(partition):
+    increments, nodes, springs, force, mallocs = _solve(COMM, PARTITIONS[partition])
+    serial = _solve(MPI.COMM_SELF, None)
+    assert increments == serial[0]
+    scale = np.abs(serial[1][:, 3:]).max()
+    np.testing.assert_allclose(nodes, serial[1], rtol=0, atol=1e-10 * scale)
+    # positions, areas (complete at partition cuts) and pressures of every spring
+    assert springs.shape == serial[2].shape and serial[2].shape[0] > 4
+    np.testing.assert_allclose(springs, serial[2], rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(force, serial[3], rtol=0, atol=1e-10 * np.abs(serial[3]).max())
+    # the load reaches the sphere: its force balances the pressure on the punch top (0.6 x 0.6)
+    assert force[2] == pytest.approx(20.0 * 0.36, rel=1e-8) and mallocs == 0
