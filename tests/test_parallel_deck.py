@@ -63,9 +63,10 @@ def _crossval(name: str, directory: Path) -> Path:
     sys.path.insert(0, str(DATA / "crossval"))
     try:
         import cases
+        import friction_cases
     finally:
         sys.path.pop(0)
-    (case,) = [c for c in cases.CASES if c.name == name]
+    (case,) = [c for c in cases.CASES + friction_cases.CASES if c.name == name]
     case.write(directory)
     return directory / f"{name}.inp"
 
@@ -225,20 +226,27 @@ def test_bad_deck_fails_on_every_process(shared):
     assert main(["run", str(path.parent / "missing")]) == EXIT_INPUT
 
 
-def test_friction_deck_refused_on_every_process(shared):
-    path = _deck("hex_linear_pressure", shared / "friction")
-    if COMM.rank == 0:
-        behavior = re.compile(r"(\*SURFACE BEHAVIOR[^\n]*\n[^\n]*\n)")
-        path.write_text(behavior.sub(r"\1*FRICTION\n0.2, 1e5\n", path.read_text(), count=1))
-    COMM.barrier()
-    if COMM.size == 1:  # serial: the same deck is accepted
-        model = build_model(read_deck(path), COMM)
-        problem = model.create_problem(model.begin_step(0))
-        assert problem.has_friction
-        problem.destroy()
-        return
-    with pytest.raises(NotImplementedError, match=r"friction on .* MPI processes"):
-        run_job(path.stem, path.parent, comm=COMM, progress=False)
+FRICTION_DECKS = [
+    "hex_stick_punch",  # friction: press, then drag (stick)
+    "hex_sliding_block",  # slip, *CHANGE FRICTION, *MODEL CHANGE REMOVE/ADD, five steps
+    "hex_adjust_gap",  # ADJUST by distance, friction
+    "tet_adjust_set",  # ADJUST by node set
+]
+
+
+@pytest.mark.parametrize("name", FRICTION_DECKS)
+def test_friction_and_adjust_decks_give_the_serial_files(name, shared):
+    """Friction state on the slave node's owner, ADJUST moves on every process (§14.6)."""
+    path = _deck(name, shared / "friction")
+    serial, parallel, serial_dir = _run_both(path)
+    serial = COMM.bcast(serial and _summary(serial), root=0)
+    assert _summary(parallel)["iterations"] == serial["iterations"]
+    assert _summary(parallel)["contact"] == serial["contact"]
+    u, u_ref = parallel.last.displacement, serial["displacement"]
+    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
+    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
+    error = COMM.bcast(error, root=0)
+    assert error is None, error
 
 
 def test_c3d20_deck_refused_on_every_process(shared):

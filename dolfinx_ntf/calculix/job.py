@@ -834,7 +834,6 @@ def _check_parallel(deck: Deck, comm: MPI.Comm) -> None:
     for step in deck.steps:
         for what, used in (
             ("*DYNAMIC steps", step.dynamic is not None),
-            ("*CHANGE FRICTION", bool(step.friction_changes)),
         ):
             if used:
                 raise NotImplementedError(
