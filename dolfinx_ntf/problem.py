@@ -316,6 +316,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         comm = V.mesh.comm
         if not comm.allreduce(len(self.constraints), op=MPI.MAX):
             return
+
         def check() -> None:
             for c in self.constraints:
                 validation.check_type(

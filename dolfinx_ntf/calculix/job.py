@@ -832,9 +832,7 @@ def _check_parallel(deck: Deck, comm: MPI.Comm) -> None:
     if comm.size == 1:
         return
     for step in deck.steps:
-        for what, used in (
-            ("*DYNAMIC steps", step.dynamic is not None),
-        ):
+        for what, used in (("*DYNAMIC steps", step.dynamic is not None),):
             if used:
                 raise NotImplementedError(
                     f"{step.location}: {what} on {comm.size} MPI processes: not supported yet; "
