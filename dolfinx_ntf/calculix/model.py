@@ -935,12 +935,6 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             "docs/method.md §14.5); run on one process"
         )
     mesh = _create_mesh(deck, block, comm)
-    empty = comm.allreduce(int(mesh.topology.index_map(3).size_local == 0))
-    if empty:  # dolfinx 0.5 crashes in sub-space collapse on a process without cells
-        raise ValueError(
-            f"{deck.path}: the partition of its {block.ids.size} elements leaves {empty} of the "
-            f"{comm.size} MPI processes without an element; run on fewer processes"
-        )
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
     node_dof, dof_node, node_vertex, original = _numbering(deck, mesh, V)
