@@ -83,6 +83,20 @@ def _sorted(comm, rows):
     return rows[np.lexsort(np.round(rows, 9).T[::-1])]
 
 
+def solve_step(comm, problem, pressure, u):
+    """The punch's two increments of ``LOAD``: (iterations and springs per increment, sorted
+    reference positions and displacements of the owned nodes, this process's contact table)."""
+    solver = ntf.ContactNewtonSolver(comm, problem)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t), initial_increment=0.5)
+    results = step.run(solver, u)
+    solver.destroy()
+    owned = u.function_space.dofmap.index_map.size_local
+    X = problem.reference_coordinates[:owned]
+    nodes = _sorted(comm, np.hstack([X, u.x.array.reshape(-1, 3)[:owned]]))
+    increments = [(r.iterations, r.springs) for r in results]
+    return increments, nodes, ntf.contact_results(problem)[0]
+
+
 def _solve(comm, cell, partition, degree=1, **options):
     problem, pressure, _ = punch_problem(
         cell, comm=comm, partition=partition, degree=degree, **options

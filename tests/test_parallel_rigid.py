@@ -10,7 +10,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from conftest import LOWER_BOTTOM, PUNCH, UPPER_BOTTOM, UPPER_TOP, elastic_residual, two_blocks
-from test_parallel import PARTITIONS, _sorted
+from test_parallel import PARTITIONS, _sorted, solve_step
 
 import dolfinx.fem
 import ufl
@@ -41,22 +41,15 @@ def _solve(comm, partition):
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), sphere, law)
     problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs)
-    solver = ntf.ContactNewtonSolver(comm, problem)
-    step = ntf.StaticStep(lambda t: setattr(pressure, "value", 20.0 * t), initial_increment=0.5)
-    results = step.run(solver, u)
-    owned = V.dofmap.index_map.size_local
-    X = problem.reference_coordinates[:owned]
-    nodes = _sorted(comm, np.hstack([X, u.x.array.reshape(-1, 3)[:owned]]))
-    table = ntf.contact_results(problem)[0]
+    increments, nodes, table = solve_step(comm, problem, pressure, u)
     springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
     out = (
-        [(r.iterations, r.springs) for r in results],
+        increments,
         nodes,
         springs,
         ntf.contact_force(problem),
         problem.matrix.getInfo()["mallocs"],
     )
-    solver.destroy()
     problem.destroy()
     return out
 
