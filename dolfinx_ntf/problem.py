@@ -842,6 +842,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def form(self, x: PETSc.Vec) -> None:
         """Before F: update ghost values and evaluate the springs of the current pairing."""
         if self.elimination is not None:  # before the ghost update: ghosts get the new values
+            # Prescribed values first: the reduced Jacobian cannot carry their lifting through
+            # the constraints (C3D20's centres move with the prescribed nodes, §13.1, §13.5).
+            dolfinx.fem.petsc.set_bc(x, self.bcs)
             self.elimination.back_substitute(x)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._blocks = self.evaluate(tangent=True)

@@ -159,16 +159,23 @@ def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
     Nodes at mesh vertices of a Lagrange space take the mesh's own coordinates: the push-forward
     of ``tabulate_dof_coordinates`` adds round-off (1e-17 off a plane ``z = 0``), which decides
     whether a slave node placed on a master face starts open or closed (docs/method.md §3.4).
+    So do all nodes of a space with the geometry's nodes (C3D10, C3D20: the midside nodes).
     """
     X = V.tabulate_dof_coordinates().reshape(-1, 3).copy()
     if compat.space_family(V) not in ("Lagrange", "P", "Q", "CG"):
         return X
     mesh = V.mesh
     vertices = dolfinx.cpp.mesh.cell_num_vertices(mesh.topology.cell_type)
-    dofs = compat.cell_dofs(V)[:, :vertices].ravel()  # Lagrange numbers vertex nodes first
-    exact = mesh.geometry.x[compat.geometry_dofs(mesh)[:, :vertices].ravel()]
-    if dofs.size and np.allclose(X[dofs], exact, rtol=0.0, atol=1e-9 * np.ptp(exact, axis=0).max()):
-        X[dofs] = exact
+    cell_dofs, geometry = compat.cell_dofs(V), compat.geometry_dofs(mesh)
+    for width in dict.fromkeys((cell_dofs.shape[1], vertices)):  # Lagrange: vertex nodes first
+        if width > geometry.shape[1]:
+            continue
+        dofs = cell_dofs[:, :width].ravel()
+        exact = mesh.geometry.x[geometry[:, :width].ravel()]
+        scale = 1e-9 * np.ptp(exact, axis=0).max() if dofs.size else 0.0
+        if dofs.size and np.allclose(X[dofs], exact, rtol=0.0, atol=scale):
+            X[dofs] = exact
+            break
     return X
 
 
