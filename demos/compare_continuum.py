@@ -157,7 +157,7 @@ def run(
 
     dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
     bulk = ufl.inner(stress(u), ufl.grad(v)) * dx
-    Vz, _ = V.sub(2).collapse()
+    Vz, _ = compat.component_space(V, 2)
     top_uz = dolfinx.fem.Function(Vz)
     top = dolfinx.fem.locate_dofs_topological(
         (V.sub(2), Vz), 2, facet_tags.find(geometry.SPHERE_TOP)

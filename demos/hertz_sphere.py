@@ -158,7 +158,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # under a force the sphere would be held by contact springs alone, and a Newton iterate that
     # opens them leaves it floating.
     bottom = dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM))
-    Vz, _ = V.sub(2).collapse()
+    Vz, _ = compat.component_space(V, 2)
     top_uz = dolfinx.fem.Function(Vz)
     top = dolfinx.fem.locate_dofs_topological(
         (V.sub(2), Vz), 2, facet_tags.find(geometry.SPHERE_TOP)

@@ -49,7 +49,7 @@ def test_steps_change_friction_remove_and_add_a_pair():
 
     # a prescribed vertical displacement of the top, for the steps without contact
     V = problem.u.function_space
-    Vz, _ = V.sub(2).collapse()
+    Vz, _ = compat.component_space(V, 2)
     dofs = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2, ft.find(UPPER_TOP))
     lift = dolfinx.fem.Function(Vz)
     lift_bc = dolfinx.fem.dirichletbc(lift, dofs, V.sub(2))
@@ -111,7 +111,7 @@ def test_linear_overlap_ramp():
     for ramp in ("first_increment", "linear"):
         problem, _, _, ft = drag_problem(gap=-1e-3, overlap_ramp=ramp)
         V = problem.u.function_space
-        Vz, _ = V.sub(2).collapse()
+        Vz, _ = compat.component_space(V, 2)
         dofs = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2, ft.find(UPPER_TOP))
         hold = dolfinx.fem.dirichletbc(dolfinx.fem.Function(Vz), dofs, V.sub(2))
         solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)

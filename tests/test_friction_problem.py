@@ -42,7 +42,7 @@ def drag_problem(mu=MU, stick_slope=STICK_SLOPE, gap=0.0, **options):
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3), bottom, V)]
     drag = []
     for component in (0, 1):
-        Vc, _ = V.sub(component).collapse()
+        Vc, _ = compat.component_space(V, component)
         dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, ft.find(UPPER_TOP))
         g = dolfinx.fem.Function(Vc)
         bcs.append(dolfinx.fem.dirichletbc(g, dofs, V.sub(component)))

@@ -63,7 +63,7 @@ def _analysis(comm, partition, cell="hexahedron", **options):
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3), bottom, V)]
     drag = []
     for component in (0, 1):
-        Vc, _ = V.sub(component).collapse()
+        Vc, _ = compat.component_space(V, component)
         dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, ft.find(UPPER_TOP))
         drag.append(dolfinx.fem.Function(Vc))
         bcs.append(dolfinx.fem.dirichletbc(drag[-1], dofs, V.sub(component)))
