@@ -225,7 +225,7 @@ def build_problem(
     return problem, newton  # a GAMG preconditioner gets the per-body rigid modes (nullspace.py)
 
 
-def _timed(fn: typing.Callable[[], typing.Any], repeat: int) -> float:
+def timed(fn: typing.Callable[[], typing.Any], repeat: int) -> float:
     """Median wall time of ``repeat`` calls of ``fn``, after one untimed warm-up call.
 
     In parallel: between barriers, the slowest process's time.
@@ -250,16 +250,16 @@ def _print(*args: typing.Any, **kwargs: typing.Any) -> None:
 def _time_search(problem: ntf.ContactProblem, repeat: int, out: dict[str, typing.Any]) -> None:
     """The whole pairing, then its parts (the calls ``ContactProblem.pair`` makes)."""
     state = problem.states[0]
-    out["search"] = _timed(problem.pair, repeat)
+    out["search"] = timed(problem.pair, repeat)
     out["springs"] = problem.total_springs
     coords = problem.current_coordinates()
     ft, faces, nodes = state.slave.faces.face_type, state.slave.faces.faces, state.slave.nodes
-    out["areas"] = _timed(lambda: spring_areas(ft, faces, coords, nodes), repeat)
+    out["areas"] = timed(lambda: spring_areas(ft, faces, coords, nodes), repeat)
     areas = spring_areas(ft, faces, coords, nodes)
-    out["update"] = _timed(lambda: state.master.update(coords), repeat)
+    out["update"] = timed(lambda: state.master.update(coords), repeat)
     points = coords[nodes]
     tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
-    out["locate"] = _timed(lambda: state.master.locate(points, tolerances), repeat)
+    out["locate"] = timed(lambda: state.master.locate(points, tolerances), repeat)
     out["gap"] = max(out["search"] - out["areas"] - out["update"] - out["locate"], 0.0)
 
 
@@ -330,10 +330,10 @@ def run_size(
         f"  {out['slave_nodes']} slave nodes, {state.master_faces.faces.shape[0]} master faces, "
         f"{dofs} dofs, {problem.total_springs} springs; set-up {setup:.1f} s"
     )
-    out["exchange"] = _timed(problem.current_coordinates, repeat)
+    out["exchange"] = timed(problem.current_coordinates, repeat)
 
     _time_search(problem, repeat, out)
-    out["evaluate"] = _timed(lambda: problem.evaluate(tangent=True), repeat)
+    out["evaluate"] = timed(lambda: problem.evaluate(tangent=True), repeat)
 
     # Insertion into an assembled Jacobian (as left by problem.J) and into a residual vector.
     blocks = problem.evaluate(tangent=True)
@@ -348,15 +348,15 @@ def run_size(
         assembler.add_to_matrix(A, blocks)
         A.assemble()
 
-    out["insert_mat"] = _timed(insert_matrix, repeat)
-    out["insert_vec"] = _timed(lambda: assembler.add_to_vector(b, blocks), repeat)
+    out["insert_mat"] = timed(insert_matrix, repeat)
+    out["insert_vec"] = timed(lambda: assembler.add_to_vector(b, blocks), repeat)
     out["insert"] = out["insert_mat"] + out["insert_vec"]
-    out["has_pattern"] = _timed(lambda: assembler.has_pattern(blocks), repeat)
+    out["has_pattern"] = timed(lambda: assembler.has_pattern(blocks), repeat)
 
     # Pattern build as ensure_matrix does it on a rebuild; dolfinx's bulk-only matrix for scale.
     pattern_blocks = [SpringBlocks(s.element_nodes, s.element_nodes) for s in problem.states]
-    out["pattern"] = _timed(lambda: assembler.create_matrix(pattern_blocks).destroy(), repeat)
-    out["pattern_bulk"] = _timed(
+    out["pattern"] = timed(lambda: assembler.create_matrix(pattern_blocks).destroy(), repeat)
+    out["pattern_bulk"] = timed(
         lambda: dolfinx.fem.petsc.create_matrix(problem.a).destroy(), repeat
     )
 

@@ -25,7 +25,6 @@ import argparse
 import json
 import os
 import resource
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -62,18 +61,6 @@ PHASES = {
 }
 
 
-def _timed(comm: MPI.Comm, fn: typing.Callable[[], typing.Any], repeat: int) -> float:
-    """Median over ``repeat`` runs (after a warm-up) of the slowest process's wall time."""
-    fn()
-    times = []
-    for _ in range(repeat):
-        comm.barrier()
-        start = time.perf_counter()
-        fn()
-        times.append(comm.allreduce(time.perf_counter() - start, op=MPI.MAX))
-    return statistics.median(times)
-
-
 def worker(slave_nodes: int, layers: int, repeat: int, solver: str) -> dict[str, typing.Any]:
     """Time every phase on this communicator (run under mpirun)."""
     comm = MPI.COMM_WORLD
@@ -89,9 +76,9 @@ def worker(slave_nodes: int, layers: int, repeat: int, solver: str) -> dict[str,
     out["dofs"] = 3 * problem.u.function_space.dofmap.index_map.size_global
     out["springs"] = problem.total_springs
     out["halo_nodes"] = comm.allreduce(0 if problem.halo is None else problem.halo.extra.size)
-    out["exchange"] = _timed(comm, problem.current_coordinates, repeat)
-    out["search"] = _timed(comm, problem.pair, repeat)
-    out["evaluate"] = _timed(comm, lambda: problem.evaluate(tangent=True), repeat)
+    out["exchange"] = contact_phases.timed(problem.current_coordinates, repeat)
+    out["search"] = contact_phases.timed(problem.pair, repeat)
+    out["evaluate"] = contact_phases.timed(lambda: problem.evaluate(tangent=True), repeat)
     blocks = problem.evaluate(tangent=True)
     x, A = compat.petsc_vector(problem.u), problem.matrix
     problem.iteration = LAST_REPAIRING_ITERATION
@@ -104,7 +91,7 @@ def worker(slave_nodes: int, layers: int, repeat: int, solver: str) -> dict[str,
         A.assemble()
         problem.assembler.add_to_vector(b, blocks)
 
-    out["insert"] = _timed(comm, insert, repeat)
+    out["insert"] = contact_phases.timed(insert, repeat)
     out["contact"] = out["exchange"] + out["evaluate"] + out["insert"]
     ksp, dx = newton.krylov_solver, A.createVecRight()
 
@@ -116,7 +103,7 @@ def worker(slave_nodes: int, layers: int, repeat: int, solver: str) -> dict[str,
         ksp.setOperators(A)
         ksp.solve(b, dx)
 
-    out["newton"] = _timed(comm, iteration, repeat)
+    out["newton"] = contact_phases.timed(iteration, repeat)
     u0 = problem.u.x.array.copy()
 
     def solve() -> None:
