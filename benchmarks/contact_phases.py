@@ -214,6 +214,7 @@ def build_problem(
     x = problem.current_coordinates()
     edges = np.linalg.norm(x[slave_faces[:, 1]] - x[slave_faces[:, 0]], axis=1)
     h = mesh.comm.allreduce(edges.sum()) / mesh.comm.allreduce(edges.size)  # any process count
+    mesh.topology.create_connectivity(3, 3)  # dolfinx 0.9 needs it to locate dofs by cell
     upper = dolfinx.fem.locate_dofs_topological(V, 3, plates.upper_cells)
     u.x.array.reshape(-1, 3)[upper, 2] = -penetration * h
     u.x.scatter_forward()
