@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import abc
 import math
+import sys
 import warnings
 from dataclasses import dataclass
 from typing import ClassVar
@@ -54,6 +55,17 @@ TABULAR_MIN_INCREMENT: float = 1e-10
 
 _P0_ZERO: float = 1e-30
 _TENSION_MIN: float = 1e-30
+
+
+def _warn(message: str) -> None:
+    """A ``UserWarning`` at the user's call, printed once under MPI (by rank 0 of COMM_WORLD).
+
+    Laws are built alike on every process, so every process would print the same warning; this
+    module stays free of MPI and looks at mpi4py only if the program has imported it.
+    """
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is None or mpi.COMM_WORLD.rank == 0:
+        warnings.warn(message, UserWarning, stacklevel=3)
 
 
 def _check_scalar(owner: str, name: str, value: object) -> float:
@@ -305,11 +317,9 @@ class LinearLaw(PressureOverclosureLaw):
         for name, value in (("slope", slope), ("tension", tension), ("c0", c0)):
             given = None if value is None else _check_scalar(owner, name, value)
             if given is not None and given < 0.0:
-                warnings.warn(
+                _warn(
                     f"{owner}: {name} = {given!r} is negative; using ccx's default "
-                    f"{rules[name]} = {defaults[name]!r} instead (pass None to ask for it)",
-                    UserWarning,
-                    stacklevel=2,
+                    f"{rules[name]} = {defaults[name]!r} instead (pass None to ask for it)"
                 )
             values[name] = defaults[name] if given is None or given <= 0.0 else given
         return cls(**values)
@@ -539,11 +549,9 @@ class Friction:
             raise ValueError(f"{owner}: youngs_modulus must be > 0, got {e!r}")
         lam = None if stick_slope is None else _check_scalar(owner, "stick_slope", stick_slope)
         if lam is None or lam <= 0.0:
-            warnings.warn(
+            _warn(
                 f"*FRICTION: stick slope {lam!r} is missing or not positive; "
-                f"using E/2 = {e / 2.0!r}",
-                UserWarning,
-                stacklevel=2,
+                f"using E/2 = {e / 2.0!r}"
             )
             lam = 0.5 * e
         return cls(mu=mu, stick_slope=lam)

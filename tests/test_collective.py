@@ -83,3 +83,15 @@ def test_writer_path_errors_everywhere(blocks, tmp_path_factory):
         ntf.ContactWriter(problem, f"{folder}/missing/out.xdmf")
     with ntf.ContactWriter(problem, f"{folder}/ok.xdmf") as writer:
         writer.write(0.0)
+
+
+def test_law_warnings_print_once():
+    """A law's warning is the same on every process: only rank 0 shows it."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ntf.LinearLaw.with_ccx_defaults(2.1e5, slope=-1.0)
+        ntf.Friction.with_ccx_defaults(0.3, None, 2.1e5)
+    assert len(caught) == (2 if COMM.rank == 0 else 0)
+    assert COMM.allreduce(len(caught)) == 2
