@@ -9,6 +9,7 @@ above or below the norm accordingly.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import time
 import typing
@@ -96,6 +97,35 @@ ITERATIVE_PETSC_OPTIONS = {
     "mg_levels_ksp_type": "chebyshev",
     "mg_levels_pc_type": "jacobi",
 }
+
+#: PETSc's algorithm for GAMG's Galerkin products ``P^T A P`` on one process (``-matptap_via``):
+#: "rap" (``A P`` first) took 3.9 s where the default took 8.8 s on the plates of
+#: ``benchmarks/scaling.py`` at 70k dofs, the same on PETSc 3.18 and 3.22 (docs/method.md §14.7).
+#: Distributed matrices have no such algorithm and keep PETSc's default.
+SEQUENTIAL_PTAP = "rap"
+
+
+@contextlib.contextmanager
+def galerkin_products(ksp: PETSc.KSP) -> typing.Iterator[None]:
+    """Use :data:`SEQUENTIAL_PTAP` for GAMG's Galerkin products inside the context.
+
+    Only if ``ksp`` is GAMG on one process and the user has not chosen ``-matptap_via``; PETSc
+    reads the option, without prefix, at each set-up of the hierarchy.
+    """
+    options = PETSc.Options()
+    use = (
+        ksp.getComm().getSize() == 1
+        and ksp.getPC().getType() == "gamg"
+        and not options.hasName("matptap_via")
+    )
+    if use:
+        options["matptap_via"] = SEQUENTIAL_PTAP
+    try:
+        yield
+    finally:
+        if use:
+            options.delValue("matptap_via")
+
 
 #: ``linear_solver="auto"`` chooses the direct solver up to this many dofs, the iterative one above
 #: (measured crossover on 2 cores, docs/performance.md "Linear solvers").
@@ -551,7 +581,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self._first_check = self.divergence_iteration
         self._bind_matrix()
         try:
-            with quiet_dolfinx():  # non-convergence is reported below, with the residuals
+            # non-convergence is reported below, with the residuals
+            with quiet_dolfinx(), galerkin_products(self.krylov_solver):
                 iterations, converged = super().solve(u)
         except (ContactConvergenceError, ContactSolverError):
             raise

@@ -95,3 +95,29 @@ def test_law_warnings_print_once():
         ntf.Friction.with_ccx_defaults(0.3, None, 2.1e5)
     assert len(caught) == (2 if COMM.rank == 0 else 0)
     assert COMM.allreduce(len(caught)) == 2
+
+
+@pytest.mark.parametrize("pc_type", ["gamg", "lu"])
+def test_sequential_galerkin_products_only_for_serial_gamg(pc_type):
+    """The faster PtAP algorithm is set for a serial GAMG solve only, and never over the user's."""
+    from petsc4py import PETSc
+
+    from dolfinx_ntf.solver import SEQUENTIAL_PTAP, galerkin_products
+
+    ksp = PETSc.KSP().create(COMM)
+    ksp.getPC().setType(pc_type)
+    options = PETSc.Options()
+    expected = SEQUENTIAL_PTAP if pc_type == "gamg" and COMM.size == 1 else None
+    with galerkin_products(ksp):
+        assert (options.getString("matptap_via") if options.hasName("matptap_via") else None) == (
+            expected
+        )
+    assert not options.hasName("matptap_via")
+    options["matptap_via"] = "scalable"
+    try:
+        with galerkin_products(ksp):
+            assert options.getString("matptap_via") == "scalable"
+        assert options.getString("matptap_via") == "scalable"
+    finally:
+        options.delValue("matptap_via")
+    ksp.destroy()
