@@ -27,6 +27,12 @@ TIE_DIGITS = 9
 """Centroid distances equal to this many digits of the surface size are ties."""
 TIE_CANDIDATES = 8
 """Nearest centroids compared for ties (the most triangles around a node of a regular mesh)."""
+CCX_CENTROID_SUMS: dict[str, tuple[tuple[int, int, int], ...]] = {
+    "quad4": ((0, 2, 1), (1, 2, 0)),
+}
+"""Order in which CalculiX 2.20 adds the three corners of each sub-triangle (positions in the
+triangle, ``(a + b) + c``) to get its centroid, by face type: measured on quad4
+(docs/method.md §3.6); other face types add in the triangle's node order."""
 
 
 class MasterSurface:
@@ -212,6 +218,10 @@ class MasterSurface:
             )
         self._triangle_normals = m / norm[:, None]
         self._triangle_origins = a
+        sums = CCX_CENTROID_SUMS.get(self._face_type.name, ((0, 1, 2),))
+        order = np.asarray(sums, dtype=np.int64)[np.arange(self._triangles.shape[0]) % len(sums)]
+        v = x[np.take_along_axis(self._local_triangles, order, axis=1)]
+        self._ccx_centroids = ((v[:, 0] + v[:, 1]) + v[:, 2]) / 3.0
 
         # Bounding plane of each unique edge, oriented outward for its forward traversal.
         xs, xe = x[self._edges[:, 0]], x[self._edges[:, 1]]
@@ -293,6 +303,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start_faces: np.ndarray | None = None,
+        ccx_ties: bool = False,
     ) -> np.ndarray:
         """Master face holding each point, by the triangle walk of docs/method.md §3.2.
 
@@ -307,6 +318,8 @@ class MasterSurface:
                 the nearest centroid. Starting from the previous face keeps a node on it while it
                 stays within the tolerance (not in ccx, whose walk always starts at the nearest
                 centroid).
+            ccx_ties: Find the nearest centroid as CalculiX does (docs/method.md §3.6) instead of
+                breaking ties by position.
 
         Returns:
             (N,) face index, or -1 where no face is found.
@@ -318,8 +331,9 @@ class MasterSurface:
                 start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1
             )
         tri = self.locate_triangles(
-            points, tolerances, max_depth=max_depth, max_steps=max_steps, start=start
-        )
+            points, tolerances, max_depth=max_depth, max_steps=max_steps, start=start,
+            ccx_ties=ccx_ties,
+        )  # fmt: skip
         out = np.full(tri.shape, -1, dtype=np.int64)
         found = tri >= 0
         out[found] = self._triangle_faces[tri[found]]
@@ -333,6 +347,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start: np.ndarray | None = None,
+        ccx_ties: bool = False,
     ) -> np.ndarray:
         """Sub-triangle accepted by the walk for each point (see `locate`); -1 for none.
 
@@ -342,6 +357,7 @@ class MasterSurface:
             max_depth: Optional penetration-side depth limit (see `locate`).
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
             start: Optional (N,) start triangle per point; -1 (or None) for the nearest centroid.
+            ccx_ties: Nearest centroid as CalculiX finds it (see `locate`).
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
@@ -355,7 +371,7 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        cur = self._nearest_centroids(points)
+        cur = self._ccx_nearest_centroids(points) if ccx_ties else self._nearest_centroids(points)
         if start is not None:
             start = np.asarray(start, dtype=np.int64)
             cur = np.where(start >= 0, start, cur)
@@ -404,6 +420,24 @@ class MasterSurface:
         distance, nearest = self._tree.query(points, k=k)
         distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
         tied = distance <= distance[:, :1] + 10.0**-TIE_DIGITS * self._scale
+        rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)
+        return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
+
+    def _ccx_nearest_centroids(self, points: np.ndarray) -> np.ndarray:
+        """The nearest centroid as CalculiX 2.20 decides ties (docs/method.md §3.6).
+
+        CalculiX compares squared distances ``(dx**2 + dy**2) + dz**2`` in floating point to
+        centroids summed in its own order (`CCX_CENTROID_SUMS`), so a geometric tie goes to the
+        centroid its round-off puts nearer. Distances that are equal even in floating point are
+        decided by its coordinate-sorted search, which is not reproduced: the position order of
+        `_nearest_centroids` decides them.
+        """
+        k = min(TIE_CANDIDATES, self._centroids.shape[0])
+        _, nearest = self._tree.query(points, k=k)
+        nearest = nearest.reshape(-1, k)
+        d = (self._ccx_centroids[nearest] - points[:, None, :]) ** 2
+        d2 = (d[:, :, 0] + d[:, :, 1]) + d[:, :, 2]
+        tied = d2 == d2.min(axis=1, keepdims=True)
         rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)
         return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
 
