@@ -1,0 +1,68 @@
+"""CalculiX's choice on exact ties (docs/method.md §3.6): the deck runner's ``.cel`` sets against
+ccx 2.20's on a tie deck, and the floating-point nearest centroid of the ccx-mode search."""
+
+from __future__ import annotations
+
+import shutil
+import sys
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf.calculix.cel import compare_cel
+from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.faces import QUAD4
+from dolfinx_ntf.search import MasterSurface
+
+TIES = Path(__file__).resolve().parent / "data" / "calculix" / "ties"
+sys.path.insert(0, str(TIES))
+import make_tie_deck  # noqa: E402
+
+pytestmark = pytest.mark.serial
+
+
+def test_stored_tie_deck_is_the_generators():
+    assert (TIES / "tie_grid.inp").read_text() == make_tie_deck.deck_text()
+
+
+def test_deck_runner_pairs_a_tie_deck_like_ccx_in_every_iteration(tmp_path):
+    """21 of the 25 slave nodes are ties between two master faces; ccx 2.20's ``.cel`` is stored.
+
+    The position order alone gives 21 of them another face than ccx in iteration 1.
+    """
+    shutil.copy(TIES / "tie_grid.inp", tmp_path)
+    result = run_job("tie_grid", tmp_path, comm=MPI.COMM_SELF, progress=False)
+    assert [inc.iterations for inc in result.increments] == [3]
+    differences = compare_cel(TIES / "tie_grid.cel", tmp_path / "tie_grid.cel")
+    assert [d.set[-3:] for d in differences] == ["it1", "it2", "it3"]
+    assert [d.count for d in differences] == [0, 0, 0]
+
+
+def _grid(offset: float) -> MasterSurface:
+    """2 x 2 unit quads, corners in CalculiX's face order, shifted by ``offset`` in x and y."""
+    xy = np.array([(i, j) for j in range(3) for i in range(3)], dtype=float) + offset
+    coords = np.column_stack([xy, np.zeros(9)])
+    faces = [[i + 3 * j, i + 3 * (j + 1), i + 1 + 3 * (j + 1), i + 1 + 3 * j]
+             for j in range(2) for i in range(2)]  # fmt: skip
+    return MasterSurface(QUAD4, np.array(faces), coords=coords)
+
+
+def test_ccx_ties_follow_the_floating_point_distance():
+    """Above the middle node, the centroids of the SW and NE faces' corner triangles are equally
+    near; in floating point (ccx's sums) the NE one is nearer by an ulp, and ccx 2.20 takes it."""
+    surface = _grid(0.0)
+    point = np.array([[1.0, 1.0, 0.0]])
+    assert surface.locate(point, 1e-3, ccx_ties=True)[0] == 3  # NE, as ccx
+    assert surface.locate(point, 1e-3)[0] == 0  # SW: first in position order
+
+
+def test_ccx_ties_equal_in_floating_point_fall_back_to_the_position_order():
+    surface = _grid(-1.0)  # symmetric about the origin: the sums are exact
+    centroids = surface._ccx_centroids
+    np.testing.assert_array_equal(centroids[1], -centroids[6])
+    point = np.zeros((1, 3))
+    assert surface.locate(point, 1e-3, ccx_ties=True)[0] == 0
+    assert surface.locate(point, 1e-3)[0] == 0
