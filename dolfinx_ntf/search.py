@@ -27,12 +27,6 @@ TIE_DIGITS = 9
 """Centroid distances equal to this many digits of the surface size are ties."""
 TIE_CANDIDATES = 8
 """Nearest centroids compared for ties (the most triangles around a node of a regular mesh)."""
-CCX_CENTROID_SUMS: dict[str, tuple[tuple[int, int, int], ...]] = {
-    "quad4": ((0, 2, 1), (1, 2, 0)),
-}
-"""Order in which CalculiX 2.20 adds the three corners of each sub-triangle (positions in the
-triangle, ``(a + b) + c``) to get its centroid, by face type: measured on quad4
-(docs/method.md §3.6); other face types add in the triangle's node order."""
 
 
 class MasterSurface:
@@ -207,7 +201,7 @@ class MasterSurface:
 
         self._nodal_normals = self._compute_nodal_normals(x)
         a, b, c = (x[self._local_triangles[:, k]] for k in range(3))
-        self._centroids = (a + b + c) / 3.0
+        self._centroids = ((a + b) + c) / 3.0  # CalculiX's sums (docs/method.md §3.6)
         m = np.cross(b - a, c - a)
         norm = np.linalg.norm(m, axis=1)
         if np.any(norm <= 0.0) or not np.all(np.isfinite(norm)):
@@ -218,10 +212,6 @@ class MasterSurface:
             )
         self._triangle_normals = m / norm[:, None]
         self._triangle_origins = a
-        sums = CCX_CENTROID_SUMS.get(self._face_type.name, ((0, 1, 2),))
-        order = np.asarray(sums, dtype=np.int64)[np.arange(self._triangles.shape[0]) % len(sums)]
-        v = x[np.take_along_axis(self._local_triangles, order, axis=1)]
-        self._ccx_centroids = ((v[:, 0] + v[:, 1]) + v[:, 2]) / 3.0
 
         # Bounding plane of each unique edge, oriented outward for its forward traversal.
         xs, xe = x[self._edges[:, 0]], x[self._edges[:, 1]]
@@ -426,16 +416,16 @@ class MasterSurface:
     def _ccx_nearest_centroids(self, points: np.ndarray) -> np.ndarray:
         """The nearest centroid as CalculiX 2.20 decides ties (docs/method.md §3.6).
 
-        CalculiX compares squared distances ``(dx**2 + dy**2) + dz**2`` in floating point to
-        centroids summed in its own order (`CCX_CENTROID_SUMS`), so a geometric tie goes to the
-        centroid its round-off puts nearer. Distances that are equal even in floating point are
-        decided by its coordinate-sorted search, which is not reproduced: the position order of
-        `_nearest_centroids` decides them.
+        CalculiX compares squared distances ``(dx**2 + dy**2) + dz**2`` in floating point to the
+        centroids ``((a + b) + c) / 3`` of the sub-triangles (nodes in their outward order), so a
+        geometric tie goes to the centroid its round-off puts nearer. Distances that are equal even
+        in floating point are decided by its coordinate-sorted search, which is not reproduced: the
+        position order of `_nearest_centroids` decides them.
         """
         k = min(TIE_CANDIDATES, self._centroids.shape[0])
         _, nearest = self._tree.query(points, k=k)
         nearest = nearest.reshape(-1, k)
-        d = (self._ccx_centroids[nearest] - points[:, None, :]) ** 2
+        d = (self._centroids[nearest] - points[:, None, :]) ** 2
         d2 = (d[:, :, 0] + d[:, :, 1]) + d[:, :, 2]
         tied = d2 == d2.min(axis=1, keepdims=True)
         rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)

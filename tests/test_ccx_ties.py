@@ -24,28 +24,34 @@ import make_tie_deck  # noqa: E402
 pytestmark = pytest.mark.serial
 
 
-def test_stored_tie_deck_is_the_generators():
-    assert (TIES / "tie_grid.inp").read_text() == make_tie_deck.deck_text()
+@pytest.mark.parametrize("job", sorted(make_tie_deck.DECKS))
+def test_stored_tie_decks_are_the_generators(job):
+    assert (TIES / f"{job}.inp").read_text() == make_tie_deck.deck_text(job)
 
 
-def test_deck_runner_pairs_a_tie_deck_like_ccx_in_every_iteration(tmp_path):
+@pytest.mark.parametrize("job", sorted(make_tie_deck.DECKS))
+def test_deck_runner_pairs_a_tie_deck_like_ccx(tmp_path, job):
     """21 of the 25 slave nodes are ties between two master faces; ccx 2.20's ``.cel`` is stored.
 
-    The position order alone gives 21 of them another face than ccx in iteration 1.
+    Iteration 1 pairs the undeformed mesh: every node gets ccx's face (the position order alone
+    gives 21 of them another face on ``tie_grid``). Later pairings also agree, except possibly at
+    the centre node 63: above the master node on both symmetry planes of the deck, its tie
+    persists under load and the round-off of each code's displacement decides it.
     """
-    shutil.copy(TIES / "tie_grid.inp", tmp_path)
-    result = run_job("tie_grid", tmp_path, comm=MPI.COMM_SELF, progress=False)
+    shutil.copy(TIES / f"{job}.inp", tmp_path)
+    result = run_job(job, tmp_path, comm=MPI.COMM_SELF, progress=False)
     assert [inc.iterations for inc in result.increments] == [3]
-    differences = compare_cel(TIES / "tie_grid.cel", tmp_path / "tie_grid.cel")
-    assert [d.set[-3:] for d in differences] == ["it1", "it2", "it3"]
-    assert [d.count for d in differences] == [0, 0, 0]
+    first, *later = compare_cel(TIES / f"{job}.cel", tmp_path / f"{job}.cel")
+    assert first.set.endswith("_it1") and first.count == 0
+    assert [d.set[-3:] for d in later] == ["it2", "it3"]
+    assert all(d.count == len(d.other_face) and set(d.other_face) <= {63} for d in later)
 
 
 def _grid(offset: float) -> MasterSurface:
-    """2 x 2 unit quads, corners in CalculiX's face order, shifted by ``offset`` in x and y."""
+    """2 x 2 unit quads facing +z (corners counterclockwise), shifted by ``offset`` in x and y."""
     xy = np.array([(i, j) for j in range(3) for i in range(3)], dtype=float) + offset
     coords = np.column_stack([xy, np.zeros(9)])
-    faces = [[i + 3 * j, i + 3 * (j + 1), i + 1 + 3 * (j + 1), i + 1 + 3 * j]
+    faces = [[i + 3 * j, i + 1 + 3 * j, i + 1 + 3 * (j + 1), i + 3 * (j + 1)]
              for j in range(2) for i in range(2)]  # fmt: skip
     return MasterSurface(QUAD4, np.array(faces), coords=coords)
 
@@ -61,7 +67,7 @@ def test_ccx_ties_follow_the_floating_point_distance():
 
 def test_ccx_ties_equal_in_floating_point_fall_back_to_the_position_order():
     surface = _grid(-1.0)  # symmetric about the origin: the sums are exact
-    centroids = surface._ccx_centroids
+    centroids = surface.triangle_centroids
     np.testing.assert_array_equal(centroids[1], -centroids[6])
     point = np.zeros((1, 3))
     assert surface.locate(point, 1e-3, ccx_ties=True)[0] == 0
