@@ -26,7 +26,15 @@ pytestmark = pytest.mark.serial
 
 @pytest.mark.parametrize("job", sorted(make_tie_deck.DECKS))
 def test_stored_tie_decks_are_the_generators(job):
-    assert (TIES / f"{job}.inp").read_text() == make_tie_deck.deck_text(job)
+    """Same cards; the rotated deck's coordinates may differ in the last digit between numpy
+    builds (the stored file is the one ccx ran)."""
+    stored = (TIES / f"{job}.inp").read_text().splitlines()
+    made = make_tie_deck.deck_text(job).splitlines()
+    assert len(stored) == len(made)
+    for a, b in zip(stored, made):
+        if a != b:
+            x, y = (np.array([float(v) for v in line.split(",")]) for line in (a, b))
+            np.testing.assert_allclose(x, y, rtol=1e-15, atol=0)
 
 
 @pytest.mark.parametrize("job", sorted(make_tie_deck.DECKS))
