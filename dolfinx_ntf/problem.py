@@ -639,14 +639,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
         start = previous if self.walk_from_previous_face else None
-        ccx_ties = False
-        if not self.walk_from_previous_face:  # ccx's round-off is ours until nodes move
-            # (docs/method.md §3.6): decide ties like ccx there, by position elsewhere
-            still = np.all(coords == self._reference, axis=1)
-            ccx_ties = still[state.slave.nodes] & bool(np.all(still[state.master.nodes]))
         face = state.master.locate(
-            points, tolerances, max_depth=self.max_depth, start_faces=start, ccx_ties=ccx_ties
-        )
+            points, tolerances, max_depth=self.max_depth, start_faces=start,
+            ccx_ties=not self.walk_from_previous_face,
+        )  # fmt: skip
         found = np.flatnonzero(face >= 0)
         evaluation = spring_evaluator(state.master)(
             state.master_faces.face_type,

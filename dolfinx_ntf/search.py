@@ -293,7 +293,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start_faces: np.ndarray | None = None,
-        ccx_ties: bool | np.ndarray = False,
+        ccx_ties: bool = False,
     ) -> np.ndarray:
         """Master face holding each point, by the triangle walk of docs/method.md §3.2.
 
@@ -309,7 +309,7 @@ class MasterSurface:
                 stays within the tolerance (not in ccx, whose walk always starts at the nearest
                 centroid).
             ccx_ties: Find the nearest centroid as CalculiX does (docs/method.md §3.6) instead of
-                breaking ties by position; a scalar or one flag per point.
+                breaking ties by position.
 
         Returns:
             (N,) face index, or -1 where no face is found.
@@ -337,7 +337,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start: np.ndarray | None = None,
-        ccx_ties: bool | np.ndarray = False,
+        ccx_ties: bool = False,
     ) -> np.ndarray:
         """Sub-triangle accepted by the walk for each point (see `locate`); -1 for none.
 
@@ -347,7 +347,7 @@ class MasterSurface:
             max_depth: Optional penetration-side depth limit (see `locate`).
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
             start: Optional (N,) start triangle per point; -1 (or None) for the nearest centroid.
-            ccx_ties: Nearest centroid as CalculiX finds it, scalar or per point (see `locate`).
+            ccx_ties: Nearest centroid as CalculiX finds it (see `locate`).
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
@@ -361,10 +361,7 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        cur = self._nearest_centroids(points)
-        ccx = np.broadcast_to(np.asarray(ccx_ties, dtype=bool), (n,))
-        if np.any(ccx):
-            cur[ccx] = self._ccx_nearest_centroids(points[ccx])
+        cur = self._ccx_nearest_centroids(points) if ccx_ties else self._nearest_centroids(points)
         if start is not None:
             start = np.asarray(start, dtype=np.int64)
             cur = np.where(start >= 0, start, cur)
