@@ -15,6 +15,7 @@ import pytest
 from dolfinx_ntf.calculix.cel import compare_cel
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.faces import QUAD4
+from dolfinx_ntf.rigid import RigidPlane, rigid_master
 from dolfinx_ntf.search import MasterSurface
 
 TIES = Path(__file__).resolve().parent / "data" / "calculix" / "ties"
@@ -80,3 +81,10 @@ def test_ccx_ties_equal_in_floating_point_fall_back_to_the_position_order():
     point = np.zeros((1, 3))
     assert surface.locate(point, 1e-3, ccx_ties=True)[0] == 0
     assert surface.locate(point, 1e-3)[0] == 0
+
+
+def test_rigid_masters_take_the_ccx_search_option():
+    """The deck runner's search passes ``ccx_ties`` to every master, rigid ones included."""
+    _, master = rigid_master(RigidPlane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), lambda: 1.0)
+    points = np.array([[0.0, 0.0, -0.1], [1.0, 2.0, 0.5]])
+    np.testing.assert_array_equal(master.locate(points, 1e-3, ccx_ties=True), [0, 0])
