@@ -34,8 +34,9 @@ Each deck is built as a dolfinx problem (mesh, tags, contact pair, constraints, 
 - **Cross-validation decks**: ``tests/data/calculix/crossval/cases.py`` as they are.
 
 Every deck prints U of all nodes and CDIS, CSTR, CELS per increment, so that both codes' results
-can be compared with :mod:`dolfinx_ntf.calculix.compare`; ``tie_punch`` also asks for the ``.cel``
-contact element sets. Serial (``MPI.COMM_SELF``).
+can be compared with :mod:`dolfinx_ntf.calculix.compare`; the punch decks also ask for the
+``.cel`` contact element sets, which ``vs_ccx.py`` compares pairing by pairing. Serial
+(``MPI.COMM_SELF``).
 """
 
 from __future__ import annotations
@@ -445,7 +446,7 @@ def _punch_decks() -> list[BenchDeck]:
             _model_deck(
                 f"punch_{n}",
                 f"C3D8 {n} x {n} punch on a {spec.block} x {spec.block} block, 1 increment",
-                lambda spec=spec: punch_model(spec),
+                lambda spec=spec: punch_model(spec, contact_elements=True),
                 n == 10,
             )
         )

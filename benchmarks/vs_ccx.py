@@ -20,7 +20,11 @@ Per deck and code:
 - the largest result difference over the increments both codes converged, read from both ``.dat``
   files with ``dolfinx_ntf.calculix.compare``: displacements (all nodes) over ccx's largest
   displacement, contact pressures (slave nodes paired in both) over ccx's largest pressure, and
-  whether the same slave nodes carry contact elements.
+  whether the same slave nodes carry contact elements;
+- for decks that ask for the ``.cel`` contact element sets (the punch decks): both codes' sets
+  compared pairing by pairing (``dolfinx_ntf.calculix.cel.compare_cel``), up to ccx's last
+  pairing when it fails: the first pairing whose sets differ and, per pairing, the slave nodes
+  with another master face or with a contact element in one code only.
 
 Both codes run on one thread (``--threads``: ``OMP_NUM_THREADS`` for ccx, and the OpenMP/OpenBLAS
 thread counts for dolfinx_ntf's MUMPS). Serial; needs ``ccx`` on the PATH. From the repository
@@ -119,6 +123,8 @@ class DeckResult:
         same_contact: Same slave nodes with contact elements in every common increment.
         common_increments: Increments both codes converged.
         comparison_error: Why results could not be compared (empty if they could).
+        cel: Both codes' ``.cel`` files compared pairing by pairing (ccx's sets, in order; None
+            without both files): :func:`dolfinx_ntf.calculix.cel.compare_cel`.
     """
 
     name: str
@@ -132,6 +138,7 @@ class DeckResult:
     same_contact: bool | None = None
     common_increments: int = 0
     comparison_error: str = ""
+    cel: list[typing.Any] | None = None
 
     def timed(self, code: str) -> list[Measurement]:
         """Timed runs of ``code`` (the warm-up excluded)."""
@@ -304,6 +311,7 @@ def _compare(result: DeckResult, ccx_dir: Path, ntf_dir: Path) -> None:
     from dolfinx_ntf.calculix.compare import ccx_increments, compare_increments
 
     job = result.name
+    _compare_cel(result, ccx_dir / f"{job}.cel", ntf_dir / f"{job}.cel")
     ccx_dat, ntf_dat = ccx_dir / f"{job}.dat", ntf_dir / f"{job}.dat"
     if not (ccx_dat.is_file() and ntf_dat.is_file()):
         result.comparison_error = "no .dat file"
@@ -322,6 +330,46 @@ def _compare(result: DeckResult, ccx_dir: Path, ntf_dir: Path) -> None:
         result.displacement = comparison.relative_displacement
         result.pressure = comparison.relative_pressure
         result.same_contact = comparison.same_contact_elements
+
+
+def _compare_cel(result: DeckResult, ccx_cel: Path, ntf_cel: Path) -> None:
+    """Fill ``result.cel`` from both ``.cel`` files (when both codes wrote one)."""
+    from dolfinx_ntf.calculix.cel import compare_cel
+
+    if ccx_cel.is_file() and ntf_cel.is_file():
+        result.cel = compare_cel(ccx_cel, ntf_cel)
+
+
+def _iteration(set_name: str) -> str:
+    """``in<i> it<n>`` of a ``.cel`` set name (``contactelements_st1_in1_at1_it3``)."""
+    parts = dict(re.findall(r"_(st|in|at|it)(\d+)", set_name))
+    text = f"in{parts.get('in', '?')} it{parts.get('it', '?')}"
+    return text + (f" (attempt {parts['at']})" if parts.get("at", "1") != "1" else "")
+
+
+def cel_lines(results: list[DeckResult]) -> list[str]:
+    """Per deck with both ``.cel`` files: the pairings compared, the first that differs and how
+    many slave nodes have another master face (or a contact element in one code only)."""
+    rows = [r for r in results if r.cel is not None]
+    if not rows:
+        return []
+    lines = [
+        "| deck | pairings compared | first that differs | slave nodes differing per pairing "
+        "(other face / ccx only / dolfinx_ntf only) |",
+        "|---|---|---|---|",
+    ]
+    for r in rows:
+        first = next((d for d in r.cel if d.count), None)
+        per = ", ".join(
+            f"{_iteration(d.set)}: {len(d.other_face)}/{len(d.only_first)}/{len(d.only_second)}"
+            for d in r.cel
+            if d.count
+        )
+        lines.append(
+            f"| `{r.name}` | {len(r.cel)} | "
+            f"{'none' if first is None else _iteration(first.set)} | {per or 'identical'} |"
+        )
+    return lines
 
 
 def run_deck(
@@ -522,6 +570,15 @@ def section(results: list[DeckResult], env: dict[str, str], loads: list[float],
     failures = _failures(results)
     if failures:
         out += ["Failures:", "", *failures, ""]
+    cel = cel_lines(results)
+    if cel:
+        out += [
+            "Contact element sets (`.cel`), ccx's pairings against dolfinx_ntf's, iteration by "
+            "iteration (up to ccx's last pairing when it fails):",
+            "",
+            *cel,
+            "",
+        ]
     out += ["Timed runs:", "", *_details(results), ""]
     return out
 
@@ -560,7 +617,9 @@ _HEADER = [
     "the largest difference over the increments both codes converged, displacements over ccx's "
     "largest displacement and contact pressures over ccx's largest pressure "
     "(`dolfinx_ntf.calculix.compare`), and whether the same slave nodes carry contact elements. "
-    "A failed run shows as **failed**, with its message below the table.",
+    "A failed run shows as **failed**, with its message below the table. For the punch decks, "
+    "a second table compares both codes' `.cel` contact element sets pairing by pairing "
+    "(`dolfinx_ntf.calculix.cel.compare_cel`).",
     "",
 ]
 

@@ -639,7 +639,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
         start = previous if self.walk_from_previous_face else None
-        face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
+        face = state.master.locate(
+            points, tolerances, max_depth=self.max_depth, start_faces=start,
+            ccx_ties=not self.walk_from_previous_face,
+        )  # fmt: skip
         found = np.flatnonzero(face >= 0)
         evaluation = spring_evaluator(state.master)(
             state.master_faces.face_type,

@@ -383,8 +383,12 @@ class RigidMaster:
         *,
         max_depth: float | None = None,
         start_faces: np.ndarray | None = None,
+        ccx_ties: bool = False,
     ) -> np.ndarray:
-        """Face 0 for every point, -1 where it lies deeper than ``max_depth`` below the surface."""
+        """Face 0 for every point, -1 where it lies deeper than ``max_depth`` below the surface.
+
+        One face: no ties, so ``ccx_ties`` (docs/method.md §3.6) changes nothing.
+        """
         face = np.zeros(points.shape[0], dtype=np.int64)
         if max_depth is not None and points.shape[0]:
             face[self.surface.distance(points, self.clock()) < -max_depth] = -1

@@ -201,7 +201,7 @@ class MasterSurface:
 
         self._nodal_normals = self._compute_nodal_normals(x)
         a, b, c = (x[self._local_triangles[:, k]] for k in range(3))
-        self._centroids = (a + b + c) / 3.0
+        self._centroids = ((a + b) + c) / 3.0  # CalculiX's sums (docs/method.md §3.6)
         m = np.cross(b - a, c - a)
         norm = np.linalg.norm(m, axis=1)
         if np.any(norm <= 0.0) or not np.all(np.isfinite(norm)):
@@ -293,6 +293,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start_faces: np.ndarray | None = None,
+        ccx_ties: bool = False,
     ) -> np.ndarray:
         """Master face holding each point, by the triangle walk of docs/method.md §3.2.
 
@@ -307,6 +308,8 @@ class MasterSurface:
                 the nearest centroid. Starting from the previous face keeps a node on it while it
                 stays within the tolerance (not in ccx, whose walk always starts at the nearest
                 centroid).
+            ccx_ties: Find the nearest centroid as CalculiX does (docs/method.md §3.6) instead of
+                breaking ties by position.
 
         Returns:
             (N,) face index, or -1 where no face is found.
@@ -318,8 +321,9 @@ class MasterSurface:
                 start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1
             )
         tri = self.locate_triangles(
-            points, tolerances, max_depth=max_depth, max_steps=max_steps, start=start
-        )
+            points, tolerances, max_depth=max_depth, max_steps=max_steps, start=start,
+            ccx_ties=ccx_ties,
+        )  # fmt: skip
         out = np.full(tri.shape, -1, dtype=np.int64)
         found = tri >= 0
         out[found] = self._triangle_faces[tri[found]]
@@ -333,6 +337,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start: np.ndarray | None = None,
+        ccx_ties: bool = False,
     ) -> np.ndarray:
         """Sub-triangle accepted by the walk for each point (see `locate`); -1 for none.
 
@@ -342,6 +347,7 @@ class MasterSurface:
             max_depth: Optional penetration-side depth limit (see `locate`).
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
             start: Optional (N,) start triangle per point; -1 (or None) for the nearest centroid.
+            ccx_ties: Nearest centroid as CalculiX finds it (see `locate`).
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
@@ -355,7 +361,7 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        cur = self._nearest_centroids(points)
+        cur = self._ccx_nearest_centroids(points) if ccx_ties else self._nearest_centroids(points)
         if start is not None:
             start = np.asarray(start, dtype=np.int64)
             cur = np.where(start >= 0, start, cur)
@@ -404,6 +410,24 @@ class MasterSurface:
         distance, nearest = self._tree.query(points, k=k)
         distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
         tied = distance <= distance[:, :1] + 10.0**-TIE_DIGITS * self._scale
+        rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)
+        return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
+
+    def _ccx_nearest_centroids(self, points: np.ndarray) -> np.ndarray:
+        """The nearest centroid as CalculiX 2.20 decides ties (docs/method.md §3.6).
+
+        CalculiX compares squared distances ``(dx**2 + dy**2) + dz**2`` in floating point to the
+        centroids ``((a + b) + c) / 3`` of the sub-triangles (nodes in their outward order), so a
+        geometric tie goes to the centroid its round-off puts nearer. Distances that are equal even
+        in floating point are decided by its coordinate-sorted search, which is not reproduced: the
+        position order of `_nearest_centroids` decides them.
+        """
+        k = min(TIE_CANDIDATES, self._centroids.shape[0])
+        _, nearest = self._tree.query(points, k=k)
+        nearest = nearest.reshape(-1, k)
+        d = (self._centroids[nearest] - points[:, None, :]) ** 2
+        d2 = (d[:, :, 0] + d[:, :, 1]) + d[:, :, 2]
+        tied = d2 == d2.min(axis=1, keepdims=True)
         rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)
         return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
 

@@ -42,6 +42,11 @@ _ODD = [127, 119, 127, 5, 103]
 def _deck(directory: Path, requests: str = _REQUESTS) -> str:
     text = (DATA / "model" / "blocks.inp").read_text()
     text = text.replace("*NODE FILE, CONTACT ELEMENTS\nU\n", requests)
+    # Slave node 105 lies exactly above master node 14: a tie whose face flips at every re-pairing
+    # in both codes (docs/method.md §3.6), so the face it ends an increment on depends on the
+    # parity of the iteration count, which tight controls make differ; move it off the tie.
+    text = text.replace("\n105, 0.5, 0.5, 0.5\n", "\n105, 0.52, 0.51, 0.5\n")
+    assert "\n105, 0.52, 0.51, 0.5\n" in text
     text = text.replace(
         "*MATERIAL,", f"*NSET, NSET=ODD\n{', '.join(map(str, _ODD))}\n*MATERIAL,", 1
     )

@@ -23,7 +23,15 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CelElement", "ContactElementsFile", "format_contact_elements", "read_cel"]
+__all__ = [
+    "CelDifference",
+    "CelElement",
+    "ContactElementsFile",
+    "cel_pairings",
+    "compare_cel",
+    "format_contact_elements",
+    "read_cel",
+]
 
 
 def _set_name(step: int, increment: int, attempt: int, iteration: int) -> str:
@@ -155,3 +163,77 @@ def read_cel(path: str | Path) -> list[CelElement]:
             raise ValueError(f"{path}:{number}: bad element data line {line.strip()!r}") from None
         elements.append(CelElement(elset or "", etype, values[0], tuple(values[1:])))
     return elements
+
+
+def cel_pairings(elements: list[CelElement]) -> dict[str, dict[int, frozenset[int]]]:
+    """Each pairing's master face per slave node: ``{set: {slave node: face corner nodes}}``.
+
+    Sets keep their file order (one per pairing). A ``C3D6`` element ``(m2, s, m3, m1, s, m4)``
+    gives its slave ``s`` and corners ``m1..m4``, a ``C3D4`` ``(m1, m2, m3, s)`` its slave ``s``
+    and corners ``m1..m3``.
+
+    Raises:
+        ValueError: An element that is neither, or a slave node twice in one set.
+    """
+    sets: dict[str, dict[int, frozenset[int]]] = {}
+    for element in elements:
+        nodes = element.nodes
+        if element.type == "C3D6" and len(nodes) == 6 and nodes[1] == nodes[4]:
+            slave, corners = nodes[1], frozenset((nodes[0], nodes[2], nodes[3], nodes[5]))
+        elif element.type == "C3D4" and len(nodes) == 4:
+            slave, corners = nodes[3], frozenset(nodes[:3])
+        else:
+            raise ValueError(
+                f"contact element {element.number} ({element.type}, nodes {list(nodes)}) of set "
+                f"{element.set} is not a C3D6 (m2, s, m3, m1, s, m4) or C3D4 (m1, m2, m3, s)"
+            )
+        pairing = sets.setdefault(element.set, {})
+        if slave in pairing:
+            raise ValueError(f"slave node {slave} has two contact elements in set {element.set}")
+        pairing[slave] = corners
+    return sets
+
+
+@dataclass(frozen=True)
+class CelDifference:
+    """One pairing of two ``.cel`` files compared (see :func:`compare_cel`).
+
+    Attributes:
+        set: The set name (``contactelements_st<s>_in<i>_at<a>_it<n>``).
+        other_face: Slave nodes paired in both, to different master faces.
+        only_first, only_second: Slave nodes with a contact element in one file only.
+    """
+
+    set: str
+    other_face: tuple[int, ...]
+    only_first: tuple[int, ...]
+    only_second: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        """Slave nodes whose pairing differs (other face, or paired in one file only)."""
+        return len(self.other_face) + len(self.only_first) + len(self.only_second)
+
+
+def compare_cel(first: str | Path, second: str | Path) -> list[CelDifference]:
+    """Compare two ``.cel`` files pairing by pairing.
+
+    Only sets both files contain are compared, in the first file's order (e.g. ccx's, which stops
+    at its failure, against ours).
+    """
+    a, b = cel_pairings(read_cel(first)), cel_pairings(read_cel(second))
+    out = []
+    for name, pa in a.items():
+        if name not in b:
+            continue
+        pb = b[name]
+        common = pa.keys() & pb.keys()
+        out.append(
+            CelDifference(
+                name,
+                tuple(sorted(s for s in common if pa[s] != pb[s])),
+                tuple(sorted(pa.keys() - pb.keys())),
+                tuple(sorted(pb.keys() - pa.keys())),
+            )
+        )
+    return out
