@@ -18,6 +18,7 @@ import scipy.sparse
 from scipy.spatial import cKDTree
 
 from dolfinx_ntf.faces import FaceType
+from dolfinx_ntf.tie_frame import TieFrame, triangle_moments
 
 __all__ = ["MAX_WALK_STEPS", "MasterSurface"]
 
@@ -176,6 +177,20 @@ class MasterSurface:
         self._require_update()
         return self._centroids
 
+    def surface_moments(self) -> tuple[np.ndarray, np.ndarray]:
+        """Area moments of the triangulated surface about its area centroid, for `TieFrame`.
+
+        Returns:
+            ``(origin, moments)``: the centroid and the moment vector about it
+            (``dolfinx_ntf.tie_frame``).
+        """
+        self._require_update()
+        x = self._current
+        a, b, c = (x[self._local_triangles[:, k]] for k in range(3))
+        area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+        origin = (area @ self._centroids) / area.sum()
+        return origin, triangle_moments(a, b, c, origin)
+
     # ------------------------------------------------------------------ update
     def update(self, coords: np.ndarray) -> None:
         """Recompute normals, bounding planes and the centroid tree for current coordinates.
@@ -212,6 +227,7 @@ class MasterSurface:
             )
         self._triangle_normals = m / norm[:, None]
         self._triangle_origins = a
+        self._current = x
 
         # Bounding plane of each unique edge, oriented outward for its forward traversal.
         xs, xe = x[self._edges[:, 0]], x[self._edges[:, 1]]
@@ -293,6 +309,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start_faces: np.ndarray | None = None,
+        tie_frame: TieFrame | None = None,
     ) -> np.ndarray:
         """Master face holding each point, by the triangle walk of docs/method.md §3.2.
 
@@ -307,6 +324,8 @@ class MasterSurface:
                 the nearest centroid. Starting from the previous face keeps a node on it while it
                 stays within the tolerance (not in ccx, whose walk always starts at the nearest
                 centroid).
+            tie_frame: Decide centroids equally near by position in this frame instead of the
+                global axes (the stable search, docs/method.md §3.2).
 
         Returns:
             (N,) face index, or -1 where no face is found.
@@ -318,7 +337,12 @@ class MasterSurface:
                 start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1
             )
         tri = self.locate_triangles(
-            points, tolerances, max_depth=max_depth, max_steps=max_steps, start=start
+            points,
+            tolerances,
+            max_depth=max_depth,
+            max_steps=max_steps,
+            start=start,
+            tie_frame=tie_frame,
         )
         out = np.full(tri.shape, -1, dtype=np.int64)
         found = tri >= 0
@@ -333,6 +357,7 @@ class MasterSurface:
         max_depth: float | None = None,
         max_steps: int = MAX_WALK_STEPS,
         start: np.ndarray | None = None,
+        tie_frame: TieFrame | None = None,
     ) -> np.ndarray:
         """Sub-triangle accepted by the walk for each point (see `locate`); -1 for none.
 
@@ -342,6 +367,7 @@ class MasterSurface:
             max_depth: Optional penetration-side depth limit (see `locate`).
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
             start: Optional (N,) start triangle per point; -1 (or None) for the nearest centroid.
+            tie_frame: Optional frame deciding ties of the nearest centroid (see `locate`).
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
@@ -355,7 +381,7 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        cur = self._nearest_centroids(points)
+        cur = self._nearest_centroids(points, tie_frame)
         if start is not None:
             start = np.asarray(start, dtype=np.int64)
             cur = np.where(start >= 0, start, cur)
@@ -393,17 +419,22 @@ class MasterSurface:
             result[found[depth > max_depth]] = -1
         return result
 
-    def _nearest_centroids(self, points: np.ndarray) -> np.ndarray:
+    def _nearest_centroids(
+        self, points: np.ndarray, tie_frame: TieFrame | None = None
+    ) -> np.ndarray:
         """The triangle with the nearest centroid to each point, ties broken by position.
 
         Among centroids equally near (to ``10**-TIE_DIGITS`` of the surface size) the first in
-        (x, y, z) order, so the choice depends neither on the numbering of nodes and faces nor on
-        k-d tree internals.
+        (x, y, z) order, or in the axes of ``tie_frame`` if given, so the choice depends neither on
+        the numbering of nodes and faces nor on k-d tree internals.
         """
         k = min(TIE_CANDIDATES, self._centroids.shape[0])
         distance, nearest = self._tree.query(points, k=k)
         distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
         tied = distance <= distance[:, :1] + 10.0**-TIE_DIGITS * self._scale
+        if tie_frame is not None:
+            first = tie_frame.first(self._centroids[nearest], tied, 10.0**-TIE_DIGITS * self._scale)
+            return nearest[np.arange(nearest.shape[0]), first].astype(np.int64)
         rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)
         return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
 
