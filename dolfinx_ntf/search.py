@@ -381,7 +381,10 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        cur = self._nearest_centroids(points, tie_frame)
+        if tie_frame is None:
+            cur = self._nearest_centroids(points)
+        else:
+            cur = self._nearest_centroids_in_frame(points, tie_frame)
         if start is not None:
             start = np.asarray(start, dtype=np.int64)
             cur = np.where(start >= 0, start, cur)
@@ -419,22 +422,33 @@ class MasterSurface:
             result[found[depth > max_depth]] = -1
         return result
 
-    def _nearest_centroids(
-        self, points: np.ndarray, tie_frame: TieFrame | None = None
-    ) -> np.ndarray:
+    def _nearest_centroids_in_frame(self, points: np.ndarray, tie_frame: TieFrame) -> np.ndarray:
+        """The triangle with the nearest centroid to each point, ties broken in ``tie_frame``.
+
+        Among centroids equally near (to ``10**-TIE_DIGITS`` of the surface size) the first by
+        position in the frame (``TieFrame.first``): the same under renumbering and rigid motions
+        of the model (the stable search, docs/method.md §3.2).
+        """
+        k = min(TIE_CANDIDATES, self._centroids.shape[0])
+        distance, nearest = self._tree.query(points, k=k)
+        distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
+        tolerance = 10.0**-TIE_DIGITS * self._scale
+        first = tie_frame.first(
+            self._centroids[nearest], distance <= distance[:, :1] + tolerance, tolerance
+        )
+        return nearest[np.arange(nearest.shape[0]), first].astype(np.int64)
+
+    def _nearest_centroids(self, points: np.ndarray) -> np.ndarray:
         """The triangle with the nearest centroid to each point, ties broken by position.
 
         Among centroids equally near (to ``10**-TIE_DIGITS`` of the surface size) the first in
-        (x, y, z) order, or in the axes of ``tie_frame`` if given, so the choice depends neither on
-        the numbering of nodes and faces nor on k-d tree internals.
+        (x, y, z) order, so the choice depends neither on the numbering of nodes and faces nor on
+        k-d tree internals.
         """
         k = min(TIE_CANDIDATES, self._centroids.shape[0])
         distance, nearest = self._tree.query(points, k=k)
         distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
         tied = distance <= distance[:, :1] + 10.0**-TIE_DIGITS * self._scale
-        if tie_frame is not None:
-            first = tie_frame.first(self._centroids[nearest], tied, 10.0**-TIE_DIGITS * self._scale)
-            return nearest[np.arange(nearest.shape[0]), first].astype(np.int64)
         rank = np.where(tied, self._centroid_rank[nearest], np.iinfo(np.int64).max)
         return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
 
