@@ -43,7 +43,10 @@ def _parser() -> argparse.ArgumentParser:
         "--stable-pairing",
         action="store_true",
         help="beyond ccx: a slave node keeps its master face while that face holds it within the "
-        "search tolerance (no face ping-pong at re-pairings); default: ccx's search",
+        "search tolerance (no face ping-pong at re-pairings), ties decided in a frame of the "
+        "model, "
+        "and the penetration slope of the LINEAR law for springs touching at an increment start; "
+        "default: ccx's search",
     )
     run.add_argument(
         "--predictor",
@@ -91,7 +94,10 @@ def main(argv: list[str] | None = None) -> int:
             directory,
             comm=MPI.COMM_WORLD,
             tight=args.tight,
-            problem_options={"walk_from_previous_face": args.stable_pairing},
+            problem_options={
+                "walk_from_previous_face": args.stable_pairing,
+                "contact_start_slope": args.stable_pairing,
+            },
             predictor=args.predictor != "off",
             guard_predictor=args.predictor == "guarded",
             pair_after_predictor=args.pair_after_predictor,

@@ -34,6 +34,7 @@ from dolfinx_ntf.rigid import RigidSurface, rigid_master, spring_evaluator
 from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
 from dolfinx_ntf.springs import SpringEvaluation
+from dolfinx_ntf.start_slope import start_law
 from dolfinx_ntf.surfaces import (
     FacetSurface,
     NodeSurface,
@@ -43,6 +44,7 @@ from dolfinx_ntf.surfaces import (
     resolve_master,
     resolve_slave,
 )
+from dolfinx_ntf.tie_frame import TieFrame, frame_from_moments, point_moments
 
 __all__ = ["ContactPair", "ContactProblem", "PairState"]
 
@@ -176,7 +178,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             nearest centroid (beyond CalculiX; default): a node stays on its face while that face
             holds it within the search tolerance, which stops the face ping-pong of nodes on
             shared edges during re-pairing. False reproduces CalculiX's search (the deck runner's
-            default).
+            default). Ties are decided in a frame of the model (docs/method.md §3.2).
+        contact_start_slope: In the first Newton iteration of an attempt, give springs at the
+            kink of the LINEAR law (``|d| <= eps``, e.g. bodies touching at the increment start)
+            the slope ``K`` instead of ``K/2`` (beyond CalculiX; docs/method.md §7.1). Saves an
+            iteration where contact starts at ``d = 0``; the converged state is the same.
         constraints: Linear multi-point constraints (CalculiX ``*EQUATION``), enforced by
             elimination (docs/method.md §13.1); in parallel each process gives those among its
             nodes (ghosts included), the union counts (docs/method.md §14.6).
@@ -211,6 +217,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         linearize_area: bool = False,
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
+        contact_start_slope: bool = False,
         element_forces: ufl.Form | None = None,
         constraints: typing.Sequence[LinearConstraint | LinearConstraintBlock] = (),
         friction_tangent: str = "consistent",
@@ -257,6 +264,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.linearize_area = linearize_area
         self.max_depth = max_depth
         self.walk_from_previous_face = walk_from_previous_face
+        self.contact_start_slope = contact_start_slope
         self._reference = reference_coordinates(V)
         self._element_forces, self._element_space = _broken(
             F if element_forces is None else element_forces,
@@ -638,11 +646,17 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         state.master.update(coords)
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
-        start = previous if self.walk_from_previous_face else None
+        start, frame = None, None
+        if self.walk_from_previous_face:
+            start, frame = previous, self._tie_frame(state, points, areas)
         face = state.master.locate(
-            points, tolerances, max_depth=self.max_depth, start_faces=start,
+            points,
+            tolerances,
+            max_depth=self.max_depth,
+            start_faces=start,
+            tie_frame=frame,
             ccx_ties=not self.walk_from_previous_face,
-        )  # fmt: skip
+        )
         found = np.flatnonzero(face >= 0)
         evaluation = spring_evaluator(state.master)(
             state.master_faces.face_type,
@@ -654,6 +668,20 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             xi0=self._previous_xi(state, found, face),
         )
         return found, face, areas, evaluation
+
+    def _tie_frame(
+        self, state: PairState, points: np.ndarray, areas: np.ndarray
+    ) -> TieFrame | None:
+        """Frame of master surface and slave nodes deciding search ties (docs/method.md §3.2).
+
+        Collective: the slave nodes' moments are summed over the processes.
+        """
+        if not isinstance(state.master, MasterSurface):
+            return None
+        origin, moments = state.master.surface_moments()
+        slave = point_moments(points, areas, origin)
+        comm = self.u.function_space.mesh.comm
+        return frame_from_moments(moments + comm.allreduce(slave, op=MPI.SUM), origin)
 
     def _adjust(self, state: PairState, found: np.ndarray, evaluation: SpringEvaluation) -> int:
         """ADJUST: move the selected slave nodes onto the master (docs/method.md §11.5)."""
@@ -736,7 +764,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 coords[nodes[:, :-1]],
                 coords[nodes[:, -1]],
                 state.spring_area,
-                state.pair.interaction.law,
+                self._tangent_law(state.pair.interaction.law),
                 gap_shift=self._gap_shift(state, state.spring_slave),
                 xi0=state.xi,
                 tangent=tangent,
@@ -759,6 +787,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             if tangent and self.linearize_area:
                 blocks.append(self._area_block(state, coords))
         return blocks
+
+    def _tangent_law(self, law: PressureOverclosureLaw) -> PressureOverclosureLaw:
+        """The law whose slope the tangent takes (``contact_start_slope``, docs/method.md §7.1)."""
+        return start_law(law) if self.contact_start_slope and self.iteration == 0 else law
 
     def _friction_input(
         self, state: PairState, coords: np.ndarray, nodes: np.ndarray

@@ -384,6 +384,7 @@ class RigidMaster:
         max_depth: float | None = None,
         start_faces: np.ndarray | None = None,
         ccx_ties: bool = False,
+        tie_frame: object | None = None,
     ) -> np.ndarray:
         """Face 0 for every point, -1 where it lies deeper than ``max_depth`` below the surface.
 

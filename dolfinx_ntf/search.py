@@ -18,6 +18,7 @@ import scipy.sparse
 from scipy.spatial import cKDTree
 
 from dolfinx_ntf.faces import FaceType
+from dolfinx_ntf.tie_frame import TieFrame, triangle_moments
 
 __all__ = ["MAX_WALK_STEPS", "MasterSurface"]
 
@@ -176,6 +177,20 @@ class MasterSurface:
         self._require_update()
         return self._centroids
 
+    def surface_moments(self) -> tuple[np.ndarray, np.ndarray]:
+        """Area moments of the triangulated surface about its area centroid, for `TieFrame`.
+
+        Returns:
+            ``(origin, moments)``: the centroid and the moment vector about it
+            (``dolfinx_ntf.tie_frame``).
+        """
+        self._require_update()
+        x = self._current
+        a, b, c = (x[self._local_triangles[:, k]] for k in range(3))
+        area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+        origin = (area @ self._centroids) / area.sum()
+        return origin, triangle_moments(a, b, c, origin)
+
     # ------------------------------------------------------------------ update
     def update(self, coords: np.ndarray) -> None:
         """Recompute normals, bounding planes and the centroid tree for current coordinates.
@@ -212,6 +227,7 @@ class MasterSurface:
             )
         self._triangle_normals = m / norm[:, None]
         self._triangle_origins = a
+        self._current = x
 
         # Bounding plane of each unique edge, oriented outward for its forward traversal.
         xs, xe = x[self._edges[:, 0]], x[self._edges[:, 1]]
@@ -294,6 +310,7 @@ class MasterSurface:
         max_steps: int = MAX_WALK_STEPS,
         start_faces: np.ndarray | None = None,
         ccx_ties: bool = False,
+        tie_frame: TieFrame | None = None,
     ) -> np.ndarray:
         """Master face holding each point, by the triangle walk of docs/method.md §3.2.
 
@@ -310,6 +327,8 @@ class MasterSurface:
                 centroid).
             ccx_ties: Find the nearest centroid as CalculiX does (docs/method.md §3.6) instead of
                 breaking ties by position.
+            tie_frame: Decide centroids equally near by position in this frame instead of the
+                global axes (the stable search, docs/method.md §3.2).
 
         Returns:
             (N,) face index, or -1 where no face is found.
@@ -321,9 +340,14 @@ class MasterSurface:
                 start_faces >= 0, self._first_triangle_of_face[np.maximum(start_faces, 0)], -1
             )
         tri = self.locate_triangles(
-            points, tolerances, max_depth=max_depth, max_steps=max_steps, start=start,
+            points,
+            tolerances,
+            max_depth=max_depth,
+            max_steps=max_steps,
+            start=start,
+            tie_frame=tie_frame,
             ccx_ties=ccx_ties,
-        )  # fmt: skip
+        )
         out = np.full(tri.shape, -1, dtype=np.int64)
         found = tri >= 0
         out[found] = self._triangle_faces[tri[found]]
@@ -338,6 +362,7 @@ class MasterSurface:
         max_steps: int = MAX_WALK_STEPS,
         start: np.ndarray | None = None,
         ccx_ties: bool = False,
+        tie_frame: TieFrame | None = None,
     ) -> np.ndarray:
         """Sub-triangle accepted by the walk for each point (see `locate`); -1 for none.
 
@@ -348,6 +373,7 @@ class MasterSurface:
             max_steps: A walk needing more steps than this finds nothing (ccx: 100).
             start: Optional (N,) start triangle per point; -1 (or None) for the nearest centroid.
             ccx_ties: Nearest centroid as CalculiX finds it (see `locate`).
+            tie_frame: Optional frame deciding ties of the nearest centroid (see `locate`).
 
         Returns:
             (N,) triangle index, or -1. The accepted triangle's normal is the one ADJUST uses
@@ -361,7 +387,12 @@ class MasterSurface:
         result = np.full(n, -1, dtype=np.int64)
         if n == 0:
             return result
-        cur = self._ccx_nearest_centroids(points) if ccx_ties else self._nearest_centroids(points)
+        if ccx_ties:
+            cur = self._ccx_nearest_centroids(points)
+        elif tie_frame is None:
+            cur = self._nearest_centroids(points)
+        else:
+            cur = self._nearest_centroids_in_frame(points, tie_frame)
         if start is not None:
             start = np.asarray(start, dtype=np.int64)
             cur = np.where(start >= 0, start, cur)
@@ -398,6 +429,22 @@ class MasterSurface:
             )
             result[found[depth > max_depth]] = -1
         return result
+
+    def _nearest_centroids_in_frame(self, points: np.ndarray, tie_frame: TieFrame) -> np.ndarray:
+        """The triangle with the nearest centroid to each point, ties broken in ``tie_frame``.
+
+        Among centroids equally near (to ``10**-TIE_DIGITS`` of the surface size) the first by
+        position in the frame (``TieFrame.first``): the same under renumbering and rigid motions
+        of the model (the stable search, docs/method.md §3.2).
+        """
+        k = min(TIE_CANDIDATES, self._centroids.shape[0])
+        distance, nearest = self._tree.query(points, k=k)
+        distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
+        tolerance = 10.0**-TIE_DIGITS * self._scale
+        first = tie_frame.first(
+            self._centroids[nearest], distance <= distance[:, :1] + tolerance, tolerance
+        )
+        return nearest[np.arange(nearest.shape[0]), first].astype(np.int64)
 
     def _nearest_centroids(self, points: np.ndarray) -> np.ndarray:
         """The triangle with the nearest centroid to each point, ties broken by position.
