@@ -181,8 +181,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             default). Ties are decided in a frame of the model (docs/method.md §3.2).
         contact_start_slope: In the first Newton iteration of an attempt, give springs at the
             kink of the LINEAR law (``|d| <= eps``, e.g. bodies touching at the increment start)
-            the slope ``K`` instead of ``K/2`` (beyond CalculiX; docs/method.md §7.1). Saves an
-            iteration where contact starts at ``d = 0``; the converged state is the same.
+            the slope ``K`` instead of ``K/2`` (beyond CalculiX; default; docs/method.md §7.1).
+            Saves an iteration where contact starts at ``d = 0``; the converged state is the same.
+            False is CalculiX's tangent (the deck runner's default).
         constraints: Linear multi-point constraints (CalculiX ``*EQUATION``), enforced by
             elimination (docs/method.md §13.1); in parallel each process gives those among its
             nodes (ghosts included), the union counts (docs/method.md §14.6).
@@ -217,7 +218,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         linearize_area: bool = False,
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
-        contact_start_slope: bool = False,
+        contact_start_slope: bool = True,
         element_forces: ufl.Form | None = None,
         constraints: typing.Sequence[LinearConstraint | LinearConstraintBlock] = (),
         friction_tangent: str = "consistent",

@@ -918,6 +918,7 @@ def run_job(
         tight=tight,
         problem_options={
             "walk_from_previous_face": False,
+            "contact_start_slope": False,
             "small_sliding_rule": "last_pair",
             # ccx's friction (docs/method.md §11): stale state, friction in tension, its tangent
             "reset_friction_on_separation": False,
