@@ -34,6 +34,11 @@ from dolfinx_ntf.laws import (
 )
 from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.output import ContactFields, ContactResults, ContactWriter, contact_results
+from dolfinx_ntf.parallel_constraints import (
+    GlobalLinearConstraint,
+    global_constraints,
+    input_node_ids,
+)
 from dolfinx_ntf.postprocess import contact_area, contact_force, reaction
 from dolfinx_ntf.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.problem import ContactPair, ContactProblem
@@ -78,6 +83,7 @@ __all__ = [
     "ExponentialLaw",
     "FacetSurface",
     "Friction",
+    "GlobalLinearConstraint",
     "IncrementResult",
     "LinearConstraint",
     "LinearConstraintBlock",
@@ -100,6 +106,8 @@ __all__ = [
     "contact_area",
     "contact_force",
     "contact_results",
+    "global_constraints",
+    "input_node_ids",
     "kinetic_energy",
     "log_progress",
     "reaction",

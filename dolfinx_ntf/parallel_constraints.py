@@ -3,8 +3,13 @@
 Each process gives the constraints it knows in its local numbering (owned or ghost nodes of the
 displacement space). The elimination needs them all, on every process, in the same order: they
 are mapped to PETSc's global unrolled dofs and allgathered, in process order, and a constraint
-given by several processes (the same terms, coefficients and value, e.g. built per cell on both
-sides of a partition cut) counts once. Every process then chooses the same dependent dofs.
+given by several processes (the same terms, coefficients, value and name, e.g. built per cell on
+both sides of a partition cut) counts once. Every process then chooses the same dependent dofs.
+
+A constraint among nodes that no single process holds is written with node *ids* instead (the
+mesh's input node indices, or any numbering the caller gives): :func:`global_constraints` finds
+the owner of each id and returns :class:`GlobalLinearConstraint` objects in the global numbering,
+which any process may pass (docs/method.md §14.9).
 """
 
 from __future__ import annotations
@@ -17,10 +22,121 @@ import numpy as np
 
 import dolfinx.fem
 
-from dolfinx_ntf import validation
+from dolfinx_ntf import compat, validation
 from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
 
-__all__ = ["distributed_elimination", "gather_constraints"]
+__all__ = [
+    "GlobalLinearConstraint",
+    "distributed_elimination",
+    "gather_constraints",
+    "global_constraints",
+    "input_node_ids",
+]
+
+
+class GlobalLinearConstraint(LinearConstraint):
+    """A :class:`LinearConstraint` whose ``nodes`` are global block dofs of the space.
+
+    PETSc's numbering of the displacement space (``index_map.local_to_global``; on one process the
+    local block dofs), so any process may give it, whichever processes hold its nodes. Made by
+    :func:`global_constraints` (docs/method.md §14.9).
+    """
+
+
+def input_node_ids(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Input index of the mesh node at each local block dof of ``V`` (owned, then ghosts).
+
+    The node's position in the points given to ``dolfinx.mesh.create_mesh`` (a mesh file's node
+    order), the same on any number of processes. ``V`` must have the geometry's cell layout
+    (Lagrange of the mesh's degree), else ``ValueError``.
+    """
+    mesh = V.mesh
+    cells = mesh.topology.index_map(mesh.topology.dim)
+    num_cells = cells.size_local + cells.num_ghosts
+    geometry = compat.geometry_dofs(mesh)[:num_cells]
+    space = compat.cell_dofs(V)[:num_cells]
+    if geometry.shape != space.shape:
+        raise ValueError(
+            "input_node_ids: the space's cell layout differs from the geometry's (use Lagrange "
+            "of the mesh's degree, or pass node_ids)"
+        )
+    index_map = V.dofmap.index_map
+    ids = np.full(index_map.size_local + index_map.num_ghosts, -1, dtype=np.int64)
+    inputs = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    ids[space.ravel()] = inputs[geometry.ravel()]
+    return ids
+
+
+def global_constraints(
+    V: dolfinx.fem.FunctionSpace,
+    constraints: typing.Sequence[LinearConstraint],
+    node_ids: np.ndarray | None = None,
+) -> list[GlobalLinearConstraint]:
+    """Constraints written with node ids, in ``V``'s global numbering. Collective.
+
+    The terms' nodes may be held by any processes, none of which needs to hold them all: the
+    owner of each id gives its global block dof (docs/method.md §14.9).
+
+    Args:
+        V: The displacement space (block size 3).
+        constraints: This process's constraints, whose ``nodes`` are node ids. Each process may
+            give any constraints; one given by several processes counts once in ``ContactProblem``.
+        node_ids: Id of each local block dof of ``V`` (owned, then ghosts; -1 for none), the same
+            on every process holding the node. Default :func:`input_node_ids`.
+
+    Returns:
+        The constraints as :class:`GlobalLinearConstraint`, in the given order.
+
+    Raises:
+        ValueError: on every process, naming the constraint and the id, for an id that no process
+            holds or that several nodes carry.
+    """
+    comm = V.mesh.comm
+    index_map = V.dofmap.index_map
+    num_local = index_map.size_local + index_map.num_ghosts
+    error = None
+    try:
+        for c in constraints:
+            validation.check_type(c, LinearConstraint, "global_constraints: constraints")
+        ids = input_node_ids(V) if node_ids is None else np.asarray(node_ids, dtype=np.int64)
+        if ids.shape != (num_local,):
+            raise ValueError(
+                f"global_constraints: node_ids needs one id per local block dof ({num_local}), "
+                f"got shape {ids.shape} on process {comm.rank}"
+            )
+    except (TypeError, ValueError) as exc:
+        error = exc
+    validation.raise_collectively(comm, error)
+    parts = [c.nodes for c in constraints]
+    wanted = np.unique(np.concatenate(parts)) if parts else np.zeros(0, np.int64)
+    if comm.size > 1:
+        wanted = np.unique(np.concatenate(comm.allgather(wanted)))
+    # each owner answers for the ids of its owned nodes (an id on several nodes is counted)
+    order = np.argsort(ids[: index_map.size_local], kind="stable")
+    owned = ids[order]
+    first = np.searchsorted(owned, wanted, side="left")
+    count = (np.searchsorted(owned, wanted, side="right") - first).astype(np.int64)
+    found = np.full(wanted.size, -1, dtype=np.int64)
+    found[count > 0] = int(index_map.local_range[0]) + order[first[count > 0]]
+    if comm.size > 1:
+        comm.Allreduce(MPI.IN_PLACE, found, op=MPI.MAX)
+        comm.Allreduce(MPI.IN_PLACE, count, op=MPI.SUM)
+    result, error = [], None
+    for c in constraints:
+        where = np.searchsorted(wanted, c.nodes)
+        bad = count[where] != 1
+        if np.any(bad):
+            node, many = int(c.nodes[bad][0]), bool(count[where][bad][0])
+            error = ValueError(
+                f"{c.label}: node {node}: "
+                + ("several nodes carry this id" if many else "no node of the mesh has this id")
+            )
+            break
+        result.append(
+            GlobalLinearConstraint(found[where], c.components, c.coefficients, c.value, c.name)
+        )
+    validation.raise_collectively(comm, error)
+    return result
 
 
 def gather_constraints(
@@ -32,11 +148,15 @@ def gather_constraints(
 
     Args:
         comm: The communicator.
-        constraints: This process's constraints (local block dofs, ghosts included).
+        constraints: This process's constraints (local block dofs, ghosts included, or
+            :class:`GlobalLinearConstraint`).
         global_dofs: Global unrolled dof of every local unrolled dof.
     """
     local, error = [], None
     for c in constraints:
+        if isinstance(c, GlobalLinearConstraint):  # already global (§14.9)
+            local.append((c.dofs, c.coefficients, c.value, c.name))
+            continue
         if c.dofs.max() >= global_dofs.size:
             node = int(c.nodes.max())
             error = ValueError(
@@ -51,7 +171,7 @@ def gather_constraints(
     for part in comm.allgather(local):
         for dofs, coefficients, value, name in part:
             order = np.argsort(dofs, kind="stable")
-            key = (dofs[order].tobytes(), coefficients[order].tobytes(), value)
+            key = (dofs[order].tobytes(), coefficients[order].tobytes(), value, name)
             if key in seen:
                 continue
             seen.add(key)

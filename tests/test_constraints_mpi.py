@@ -10,7 +10,15 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, LOWER_TOP, PUNCH, UPPER_BOTTOM, elastic_residual, two_blocks
+from conftest import (
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    PUNCH,
+    UPPER_BOTTOM,
+    _box_grid,
+    elastic_residual,
+    two_blocks,
+)
 from test_parallel import PARTITIONS, _sorted, solve_step
 
 import dolfinx.fem
@@ -77,7 +85,7 @@ def _top_ties(V):
     return ties
 
 
-def _solve(comm, partition):
+def _solve(comm, partition, ties=_top_ties):
     mesh, _, ft = two_blocks(comm, upper=PUNCH, partition=partition)
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
@@ -92,7 +100,7 @@ def _solve(comm, partition):
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
     problem = ntf.ContactProblem(
-        elastic_residual(u, v, ft, pressure), u, [pair], bcs, constraints=_top_ties(V)
+        elastic_residual(u, v, ft, pressure), u, [pair], bcs, constraints=ties(V)
     )
     increments, nodes, table = solve_step(comm, problem, pressure, u)
     springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
@@ -124,3 +132,71 @@ def test_tied_punch_gives_the_serial_answer(partition):
     assert uz[(0.2, 0.4)] == pytest.approx(uz[(0.8, 0.4)], abs=1e-14)
     assert uz[(0.8, 0.2)] - uz[(0.8, 0.4)] == pytest.approx(TILT, abs=1e-14)
     assert uz[(0.8, 0.4)] < -1e-3  # pressed
+
+
+# ----------------------------------------------------------------- nodes no process holds together
+
+#: The points of two_blocks(upper=PUNCH) in input order: a node's id is its row (input index).
+POINTS = np.vstack([_box_grid((0, 0, -1), (1, 1, 1), (4, 4, 2))[0], _box_grid(*PUNCH)[0]])
+
+
+def _id(x, y, z):
+    (row,) = np.flatnonzero(np.isclose(POINTS, [x, y, z]).all(axis=1))
+    return int(row)
+
+
+def _far_terms():
+    """(ids, components, coefficients, value, name): u_x of the lower block's top edges x = 0
+    and x = 1 made asymmetric, and a three-term tie of two lower-block corners to a punch node."""
+    terms = [
+        ([_id(0.0, y, 0.0), _id(1.0, y, 0.0)], [0, 0], [1.0, 1.0], TILT, f"edge y={y}")
+        for y in (0.25, 0.5, 0.75)
+    ]
+    ids = [_id(0.0, 0.0, 0.0), _id(1.0, 1.0, 0.0), _id(0.2, 0.2, 0.25)]
+    terms.append((ids, [0, 0, 2], [1.0, -0.5, 1.0], 0.0, "bodies"))
+    return terms
+
+
+def _far_ties(V):
+    """The ties of _far_terms by input node ids, given on every process (each counts once)."""
+    ties = [ntf.LinearConstraint(*t[:4], name=t[4]) for t in _far_terms()]
+    return ntf.global_constraints(V, ties)
+
+
+@pytest.mark.parametrize("partition", ["cut", "bodies", "empty", "graph"])
+def test_ties_between_nodes_no_process_holds_together(partition):
+    """Constraints by node ids across processes that share none of their nodes (§14.9)."""
+    mesh, _, _ = two_blocks(COMM, upper=PUNCH, partition=PARTITIONS[partition])
+    held = set(ntf.input_node_ids(compat.vector_space(mesh, "Lagrange", 1)).tolist())
+    apart = [not set(t[0]) <= held for t in _far_terms()]  # this process lacks a node
+    apart = np.array(COMM.allreduce([apart], op=MPI.SUM)).all(axis=0)  # ... and so do all others
+    # the partition guarantees it: no process holds all nodes of a tie (ghosts included)
+    if COMM.size > 1 and partition == "bodies":  # one process holds the lower block only
+        assert apart[-1]
+    if COMM.size == 2 and partition == "cut":  # on 3, the middle slice's ghosts hold x = 0 to 1
+        assert apart.all()
+    (increments, nodes, springs, count, mallocs) = _solve(COMM, PARTITIONS[partition], _far_ties)
+    serial = _solve(MPI.COMM_SELF, None, _far_ties)
+    assert count == serial[3] == 4
+    assert increments == serial[0]
+    scale = np.abs(serial[1][:, 3:]).max()
+    np.testing.assert_allclose(nodes, serial[1], rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(springs, serial[2], rtol=1e-10, atol=1e-12)
+    assert mallocs == 0
+    u = {tuple(np.round(r[:3], 9)): r[3:] for r in nodes}
+    for y in (0.25, 0.5, 0.75):  # the constraints hold to round-off
+        assert u[0.0, y, 0.0][0] + u[1.0, y, 0.0][0] == pytest.approx(TILT, abs=1e-14)
+    tied = u[0.0, 0.0, 0.0][0] - 0.5 * u[1.0, 1.0, 0.0][0] + u[0.2, 0.2, 0.25][2]
+    assert tied == pytest.approx(0.0, abs=1e-14) and abs(u[0.2, 0.2, 0.25][2]) > 1e-3
+
+
+def test_a_node_id_no_process_holds_fails_on_all():
+    mesh = dolfinx.mesh.create_unit_cube(COMM, 2, 2, 2, dolfinx.mesh.CellType.hexahedron)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    tie = [ntf.LinearConstraint([0, 10**6], [2, 2], [1.0, -1.0], name="deck.inp:7")]
+    with pytest.raises(ValueError, match=r"deck\.inp:7: node 1000000: no node of the mesh"):
+        ntf.global_constraints(V, tie if COMM.rank == COMM.size - 1 else [])
+    ids = np.zeros_like(ntf.input_node_ids(V))  # every node carries id 0
+    tie = [ntf.LinearConstraint([0, 1], [2, 2], [1.0, -1.0], name="same")]
+    with pytest.raises(ValueError, match="same: node 0: several nodes carry this id"):
+        ntf.global_constraints(V, tie, node_ids=ids)

@@ -254,3 +254,58 @@ def test_c3d20_deck_refused_on_every_process(shared):
         return
     with pytest.raises(NotImplementedError, match=rf"C3D20 elements on {COMM.size} MPI processes"):
         run_job(path.stem, path.parent, comm=COMM, progress=False)
+
+
+# ----------------------------------------------------------------------------- *EQUATION
+
+CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
+
+
+def _equation_deck(name: str) -> str:
+    """ccx's *EQUATION decks (§13.1) and variants: a tie across the two cubes, reference nodes."""
+    from test_constraints import _reference_node_deck
+
+    if name in ("contact1", "contact3", "contact6"):
+        return (CCX_TESTS / f"{name}.inp").read_text()
+    if name == "contact1_across":  # node 14 (upper cube) on nodes 10 (upper) and 3 (lower)
+        text = (CCX_TESTS / "contact1.inp").read_text()
+        return text.replace("2\n14,3,1.,10,3,-1.\n", "3\n14,3,1.,10,3,-1.,3,3,0.001\n")
+    if name == "reference_prescribed":  # the upper top tied to node 99 (no element), prescribed
+        return _reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n")
+    return _reference_node_deck("*CLOAD\n99,3,-1.\n")  # ... free and loaded
+
+
+EQUATION_DECKS = [
+    "contact1",
+    "contact3",
+    "contact6",
+    "contact1_across",
+    "reference_prescribed",
+    "reference_free",
+]
+
+
+@pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
+@pytest.mark.parametrize("name", EQUATION_DECKS)
+def test_equation_decks_give_the_serial_files(name, shared):
+    """*EQUATION terms on nodes of any process, numbered globally (docs/method.md §14.9)."""
+    path = shared / "equation" / name / f"{name}.inp"
+    if COMM.rank == 0:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(_equation_deck(name).replace("*END STEP", REQUESTS))
+    COMM.barrier()
+    if name == "contact1_across" and COMM.size == 2:  # the cubes on different processes (on 3,
+        # dolfinx's partitioner puts both on one and leaves two processes without a cell)
+        model = build_model(read_deck(path), COMM)
+        held = COMM.allgather(set(model.dof_node[model.dof_node > 0].tolist()))
+        assert not any({3, 10, 14} <= nodes for nodes in held)
+    serial, parallel, serial_dir = _run_both(path)
+    serial = COMM.bcast(serial and _summary(serial), root=0)
+    assert _summary(parallel)["iterations"] == serial["iterations"]
+    assert _summary(parallel)["contact"] == serial["contact"]
+    u, u_ref = parallel.last.displacement, serial["displacement"]
+    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
+    assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
+    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
+    error = COMM.bcast(error, root=0)
+    assert error is None, error

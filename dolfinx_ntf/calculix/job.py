@@ -654,7 +654,10 @@ class _Job:
 
     def _with_reference(self, ids: np.ndarray, values: np.ndarray) -> np.ndarray:
         """``values (n, 3)`` of nodes ``ids``, reference nodes at their prescribed displacement."""
-        keys, known = self.model.reference_displacements(*self._load_time)
+        gathered = None  # free reference nodes: from the displacement of all processes
+        if self.model.free_references:
+            gathered = self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
+        keys, known = self.model.reference_displacements(*self._load_time, gathered)
         if keys.size == 0:
             return values
         wanted = 3 * self.deck.node_index(ids)[:, None] + np.arange(3)

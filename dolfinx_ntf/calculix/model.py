@@ -32,7 +32,8 @@ Load rules (ccx manual, ``*AMPLITUDE``, ``*BOUNDARY``, ``*CLOAD``, ``*DLOAD``, `
 
 On several processes (docs/method.md §14.5) every process reads the whole deck; the mesh is
 distributed by dolfinx from rank 0's cells, and the numbering maps hold this process's nodes and
-cells only (-1 elsewhere). ``*EQUATION`` and C3D20/C3D20R decks are refused there.
+cells only (-1 elsewhere); ``*EQUATION`` terms are numbered globally (docs/method.md §14.9).
+C3D20/C3D20R decks are refused there.
 """
 
 from __future__ import annotations
@@ -66,6 +67,7 @@ from dolfinx_ntf.laws import (
     SurfaceInteraction,
     TabularLaw,
 )
+from dolfinx_ntf.parallel_constraints import global_constraints
 from dolfinx_ntf.problem import ContactPair, ContactProblem
 from dolfinx_ntf.serendipity import add_centres, serendipity_constraints
 from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
@@ -298,9 +300,13 @@ class CalculixModel:
             forces = self._evaluate(loads.reference_force, fraction, step_time, total)
             by_key = dict(zip(loads.reference_force_keys.tolist(), forces))
             for ref in self.free_references:  # virtual work of the force on the reference node
-                if ref.key in by_key:
+                if ref.key in by_key:  # at the dofs this process holds (owned and ghost)
+                    dofs = 3 * self.node_dof[ref.mesh_keys // 3] + ref.mesh_keys % 3
+                    held = dofs >= 0
                     np.add.at(
-                        self.nodal_loads.x.array, ref.mesh_dofs, by_key[ref.key] * ref.mesh_weights
+                        self.nodal_loads.x.array,
+                        dofs[held],
+                        by_key[ref.key] * ref.mesh_weights[held],
                     )
         for constant, value in zip(
             self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
@@ -312,11 +318,13 @@ class CalculixModel:
             g.x.array[inverse[loads.bc_dofs[mask]]] = values[mask]
 
     def reference_displacements(
-        self, step_index: int, step_time: float
+        self, step_index: int, step_time: float, displacement: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Prescribed components of nodes in no element at ``step_time``: keys and values.
+        """Components of nodes in no element at ``step_time``: keys and values.
 
         Keys are ``3 node row + component``; ccx prints the values as the nodes' displacement.
+        Free components are computed from ``displacement``, ``(N, 3)`` at every deck node (on
+        several processes the gathered one; default this process's ``u``).
         """
         loads = self.steps[step_index]
         keys, values = np.zeros(0, np.int64), np.zeros(0)
@@ -327,9 +335,13 @@ class CalculixModel:
         if not self.free_references:
             return keys, values
         known = dict(zip(keys.tolist(), values))
+        if displacement is None:
+            displacement = np.zeros((self.deck.node_ids.size, 3))
+            held = self.node_dof >= 0
+            displacement[held] = self.u.x.array.reshape(-1, 3)[self.node_dof[held]]
         free = []
         for ref in self.free_references:
-            u = float(np.dot(ref.mesh_weights, self.u.x.array[ref.mesh_dofs]))
+            u = float(np.dot(ref.mesh_weights, displacement.ravel()[ref.mesh_keys]))
             u += sum(
                 w * known.get(int(k), 0.0)
                 for k, w in zip(ref.reference_keys, ref.reference_weights)
@@ -917,14 +929,9 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
-        NotImplementedError: features not supported yet (``*EQUATION`` on several processes,
-            ...), naming the keyword and ``file:line``. Raised on every process.
+        NotImplementedError: features not supported yet (C3D20 on several processes, ...),
+            naming the keyword and ``file:line``. Raised on every process.
     """
-    if comm.size > 1 and deck.equations:
-        raise NotImplementedError(
-            f"{deck.equations[0].location}: *EQUATION on {comm.size} MPI processes is not "
-            "supported yet; run on one process (docs/method.md §14.5)"
-        )
     _check_supported(deck)
     block = _element_block(deck)
     etype = block.type
@@ -987,7 +994,9 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
-    constraints, reference_terms, free_references = _constraints(deck, node_dof)
+    constraints, reference_terms, free_references = _constraints(deck, meshed)
+    # terms on ccx node numbers, held by any process: global dofs (docs/method.md §14.9)
+    constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
 
@@ -1042,23 +1051,25 @@ class FreeReference:
 
     Attributes:
         key: ``3 node row + component`` of the reference component.
-        mesh_dofs, mesh_weights: Unrolled dofs of ``V`` and their weights.
+        mesh_keys, mesh_weights: Keys ``3 node row + component`` of the mesh terms (nodes of
+            elements, on any process) and their weights.
         reference_keys, reference_weights: Prescribed reference components and their weights.
     """
 
     key: int
-    mesh_dofs: np.ndarray
+    mesh_keys: np.ndarray
     mesh_weights: np.ndarray
     reference_keys: np.ndarray
     reference_weights: np.ndarray
 
 
 def _constraints(
-    deck: Deck, node_dof: np.ndarray
+    deck: Deck, meshed: np.ndarray
 ) -> tuple[list[LinearConstraint], list[tuple[int, np.ndarray, np.ndarray]], list[FreeReference]]:
-    """``*EQUATION`` cards as constraints on the displacement dofs (docs/method.md §13.1).
+    """``*EQUATION`` cards as constraints on ccx node numbers (docs/method.md §13.1).
 
-    Terms are keyed ``3 node row + component``. Components of nodes in no element (reference
+    ``meshed[row]``: the deck node belongs to an element (on any process). Terms are keyed
+    ``3 node row + component``. Components of nodes in no element (reference
     nodes) with a ``*BOUNDARY`` somewhere are *prescribed*: returned apart as ``(constraint, keys,
     coefficients)``, their values become right-hand sides. The others are *free*: the first
     equation holding one expresses it by the equation's other terms (a :class:`FreeReference`)
@@ -1080,7 +1091,7 @@ def _constraints(
         equations.append((equation.location, terms))
 
     def free(key: int) -> bool:
-        return node_dof[key // 3] < 0 and key not in prescribed
+        return not meshed[key // 3] and key not in prescribed
 
     loaded = {
         int(k)
@@ -1106,12 +1117,12 @@ def _constraints(
             factor = other.pop(key)
             for k, w in weights.items():
                 other[k] = other.get(k, 0.0) + factor * w
-        mesh = [k for k in weights if node_dof[k // 3] >= 0]
-        refs = [k for k in weights if node_dof[k // 3] < 0]
+        mesh = [k for k in weights if meshed[k // 3]]
+        refs = [k for k in weights if not meshed[k // 3]]
         references.append(
             FreeReference(
                 key,
-                np.array([3 * node_dof[k // 3] + k % 3 for k in mesh], dtype=np.int64),
+                np.array(mesh, dtype=np.int64),
                 np.array([weights[k] for k in mesh]),
                 np.array(refs, dtype=np.int64),
                 np.array([weights[k] for k in refs]),
@@ -1123,7 +1134,7 @@ def _constraints(
             continue
         keys = np.array(list(terms), dtype=np.int64)
         coefficients = np.array(list(terms.values()))
-        mesh = node_dof[keys // 3] >= 0
+        mesh = meshed[keys // 3]
         if not np.any(mesh):
             raise ValueError(f"{location}: *EQUATION: no node of it belongs to an element")
         for key in keys[~mesh]:
@@ -1137,7 +1148,7 @@ def _constraints(
             reference_terms.append((len(constraints), keys[~mesh], coefficients[~mesh]))
         constraints.append(
             LinearConstraint(
-                node_dof[keys[mesh] // 3], keys[mesh] % 3, coefficients[mesh],
+                deck.node_ids[keys[mesh] // 3], keys[mesh] % 3, coefficients[mesh],
                 name=f"*EQUATION at {location}",
             )
         )  # fmt: skip
