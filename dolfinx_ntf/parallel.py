@@ -242,6 +242,9 @@ def distribute_slave(
     faces = slave.faces
     if isinstance(surface, NodeSurface):  # vertices given on one process touch faces of others
         faces = _exterior_faces_touching(V, halo, slave_global, f"{what} slave")
+        if faces.face_type is not slave.faces.face_type:  # C3D20: quad9 facets as quad8 (§13.5)
+            n = slave.faces.face_type.num_nodes
+            faces = SurfaceFaces(slave.faces.face_type, faces.faces[:, :n], faces.facets)
     g, x, facets = _gather_faces(halo, faces, f"{what} slave")
     owned_global = halo.local_global[: halo.num_owned]
     mine = np.intersect1d(slave_global, owned_global)
@@ -250,7 +253,12 @@ def distribute_slave(
         faces.face_type, halo.local(g[keep], x[keep]).astype(np.int32), facets[keep]
     )
     nodes = np.sort(halo.find(mine))
-    return SlaveSurface(nodes, slave_faces)
+    faceless = None  # midside nodes of a node-based surface (docs/method.md §13.5, §14.10)
+    marked = slave.nodes[slave.faceless] if slave.faceless is not None else slave.nodes[:0]
+    if comm.allreduce(int(marked.size), op=MPI.MAX):
+        marked = np.concatenate(comm.allgather(halo.local_global[marked]))
+        faceless = np.isin(halo.global_nodes[nodes], marked)
+    return SlaveSurface(nodes, slave_faces, faceless)
 
 
 def send_to_owners(comm: MPI.Comm, keys: np.ndarray, owner: np.ndarray) -> np.ndarray:

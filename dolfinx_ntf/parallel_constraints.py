@@ -10,6 +10,10 @@ A constraint among nodes that no single process holds is written with node *ids*
 mesh's input node indices, or any numbering the caller gives): :func:`global_constraints` finds
 the owner of each id and returns :class:`GlobalLinearConstraint` objects in the global numbering,
 which any process may pass (docs/method.md §14.9).
+
+A :class:`LinearConstraintBlock` (C3D20's face and cell centres, §13.5) stays a block: its rows
+are gathered as arrays and a row given by several processes (a face centre of a face between
+cells of two processes) counts once, the first in process order (docs/method.md §14.10).
 """
 
 from __future__ import annotations
@@ -23,7 +27,11 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint
+from dolfinx_ntf.constraints import (
+    ConstraintElimination,
+    LinearConstraint,
+    LinearConstraintBlock,
+)
 
 __all__ = [
     "GlobalLinearConstraint",
@@ -141,10 +149,13 @@ def global_constraints(
 
 def gather_constraints(
     comm: MPI.Comm,
-    constraints: typing.Sequence[LinearConstraint],
+    constraints: typing.Sequence[LinearConstraint | LinearConstraintBlock],
     global_dofs: np.ndarray,
-) -> list[LinearConstraint]:
+) -> list[LinearConstraint | LinearConstraintBlock]:
     """Every process's constraints with global dofs, each once, in process order. Collective.
+
+    Blocks are gathered block by block (by position in each process's list, then name): one
+    block per name and width, its rows in process order, a repeated row once.
 
     Args:
         comm: The communicator.
@@ -157,26 +168,57 @@ def gather_constraints(
         if isinstance(c, GlobalLinearConstraint):  # already global (§14.9)
             local.append((c.dofs, c.coefficients, c.value, c.name))
             continue
-        if c.dofs.max() >= global_dofs.size:
+        if c.dofs.size and c.dofs.max() >= global_dofs.size:
             node = int(c.nodes.max())
             error = ValueError(
-                f"{c.label}: node {node} is not a node of process {comm.rank} (local nodes "
-                f"0..{global_dofs.size // 3 - 1}, ghosts included)"
+                f"{getattr(c, 'label', c.name)}: node {node} is not a node of process "
+                f"{comm.rank} (local nodes 0..{global_dofs.size // 3 - 1}, ghosts included)"
             )
             break
-        local.append((global_dofs[c.dofs], c.coefficients, c.value, c.name))
+        if isinstance(c, LinearConstraintBlock):
+            local.append(("block", global_dofs[c.dofs], c.coefficients, c.values, c.name))
+        else:
+            local.append(("one", global_dofs[c.dofs], c.coefficients, c.value, c.name))
     validation.raise_collectively(comm, error)
     seen: set[tuple] = set()
-    result = []
+    result: list[LinearConstraint | LinearConstraintBlock] = []
+    blocks: dict[tuple[str, int], list] = {}  # (name, width) -> [position in result, parts]
     for part in comm.allgather(local):
-        for dofs, coefficients, value, name in part:
+        for kind, dofs, coefficients, value, name in part:
+            if kind == "block":
+                key = (name, dofs.shape[1])
+                if key not in blocks:
+                    blocks[key] = [len(result), []]
+                    result.append(None)
+                blocks[key][1].append((dofs, coefficients, value))
+                continue
             order = np.argsort(dofs, kind="stable")
             key = (dofs[order].tobytes(), coefficients[order].tobytes(), value, name)
             if key in seen:
                 continue
             seen.add(key)
             result.append(LinearConstraint(dofs // 3, dofs % 3, coefficients, value, name))
+    for (name, _), (position, parts) in blocks.items():
+        result[position] = _merged_block(name, parts)
     return result
+
+
+def _merged_block(name: str, parts: list) -> LinearConstraintBlock:
+    """One block of the rows of ``parts`` ``(dofs, coefficients, values)``, each row once."""
+    dofs = np.vstack([d for d, _, _ in parts])
+    coefficients = np.vstack([np.broadcast_to(c, d.shape) for d, c, _ in parts])
+    values = np.concatenate([v for _, _, v in parts])
+    order = np.argsort(dofs, axis=1, kind="stable")  # a row's terms in any order: the same key
+    sorted_dofs = np.take_along_axis(dofs, order, axis=1)
+    sorted_coefficients = np.take_along_axis(coefficients, order, axis=1)
+    keys = np.hstack(
+        [sorted_dofs, sorted_coefficients.view(np.int64), values.view(np.int64)[:, None]]
+    )
+    _, first = np.unique(keys, axis=0, return_index=True)
+    rows = np.sort(first)
+    return LinearConstraintBlock(
+        dofs[rows] // 3, dofs[rows] % 3, coefficients[rows], values[rows], name=name
+    )
 
 
 def distributed_elimination(
@@ -197,7 +239,7 @@ def distributed_elimination(
     nodes = index_map.local_to_global(np.arange(num_local, dtype=np.int32)).astype(np.int64)
     global_dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
     everything = gather_constraints(comm, constraints, global_dofs)
-    terms = np.unique(np.concatenate([c.dofs for c in everything]))
+    terms = np.unique(np.concatenate([c.dofs.ravel() for c in everything]))
     fixed = global_dofs[np.asarray(prescribed, dtype=np.int64)]
     in_terms = np.concatenate(comm.allgather(fixed[np.isin(fixed, terms)]))
     owned = fixed[np.asarray(prescribed) < 3 * index_map.size_local]

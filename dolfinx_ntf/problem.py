@@ -278,6 +278,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.halo = parallel.NodeHalo(V) if V.mesh.comm.size > 1 else None
         #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
         self._face_centres = serendipity.face_centres(constraints)
+        self._serendipity = bool(V.mesh.comm.allreduce(self._face_centres.size, op=MPI.MAX))
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
         if self.halo is not None:
             self._reference = self.halo.reference
@@ -331,12 +332,6 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 validation.check_type(
                     c, (LinearConstraint, LinearConstraintBlock), "ContactProblem: constraints"
                 )
-                if comm.size > 1 and isinstance(c, LinearConstraintBlock):
-                    raise NotImplementedError(
-                        f"ContactProblem: constraint blocks (e.g. serendipity_constraints) on "
-                        f"{comm.size} MPI processes are not supported yet; pass LinearConstraint "
-                        "objects or run on one process"
-                    )
 
         parallel.collectively(comm, check)
         prescribed = [bc.dof_indices()[0] for bc in self.bcs]
@@ -355,7 +350,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         V = self.u.function_space
         comm = V.mesh.comm
         slave = parallel.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
-        if self._face_centres.size:  # C3D20: quad8 slave faces, no face-centre slave nodes
+        if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
             faces = serendipity.as_quad8(slave.faces, self._face_centres)
             keep = ~np.isin(slave.nodes, self._face_centres)
             faceless = None if slave.faceless is None else slave.faceless[keep]
@@ -379,7 +374,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         master_faces = parallel.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
-        master_faces = serendipity.as_quad8(master_faces, self._face_centres)
+        if self._serendipity:
+            master_faces = serendipity.as_quad8(master_faces, self._face_centres)
         if self.halo is not None:
             slave, master_faces = parallel.collectively(
                 comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name

@@ -71,7 +71,9 @@ def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstrai
     """Constraints that turn a degree-2 vector Lagrange space on hexahedra into C3D20's space.
 
     Args:
-        V: Vector Lagrange space of degree 2 on a hexahedral mesh (one process).
+        V: Vector Lagrange space of degree 2 on a hexahedral mesh. On several processes the
+            rows of this process's cells, ghosts included (a face between two processes'
+            cells on both: ``ContactProblem`` counts it once, docs/method.md §14.10).
 
     Returns:
         Two blocks (all arrays, no Python loop over cells): the face centres (each face once,
@@ -139,8 +141,10 @@ def as_quad8(faces: SurfaceFaces, centres: np.ndarray) -> SurfaceFaces:
     The centre's value is the quad8 interpolation of the other 8 nodes, so the face is the
     quad8 face (docs/method.md §13.5); other faces are returned unchanged.
     """
-    if faces.face_type is not QUAD9 or centres.size == 0 or faces.faces.shape[0] == 0:
+    if faces.face_type is not QUAD9:
         return faces
+    if faces.faces.shape[0] == 0:  # every process the same face type (docs/method.md §14.10)
+        return SurfaceFaces(QUAD8, np.zeros((0, 8), faces.faces.dtype), faces.facets)
     constrained = np.isin(faces.faces[:, 8], centres)
     if not np.any(constrained):
         return faces
@@ -178,11 +182,12 @@ def element_forces_on_nodes(values: np.ndarray, space: dolfinx.fem.FunctionSpace
     """Element nodal forces of a broken Q2 vector as C3D20's: ``(cells, 20, 3)`` flattened.
 
     ``values`` is a vector of ``space``, a discontinuous degree-2 vector space on hexahedra
-    (every cell's 27 nodal forces). Each centre's force moves to the 20 nodes it depends
-    on (virtual work), so that CalculiX's average element force (docs/method.md §7.1) is taken
-    over the 20 nodes of each element, as ccx does.
+    (every cell's 27 nodal forces; owned entries). Each centre's force moves to the 20 nodes it
+    depends on (virtual work), so that CalculiX's average element force (docs/method.md §7.1) is
+    taken over the 20 nodes of each element, as ccx does. On several processes: the owned cells.
     """
-    dofs = compat.cell_dofs(space)
+    num_owned = space.mesh.topology.index_map(space.mesh.topology.dim).size_local
+    dofs = compat.cell_dofs(space)[:num_owned]
     forces = np.asarray(values).reshape(-1, 3)[dofs]  # (cells, 27, 3)
     return (forces[:, :20] + np.einsum("kn,ckd->cnd", _CENTRE_WEIGHTS, forces[:, 20:])).ravel()
 

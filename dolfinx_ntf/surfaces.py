@@ -360,11 +360,12 @@ def resolve_slave(
     faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
     midside = surface.midside_nodes
     if comm.allreduce(int(midside.size), op=MPI.MAX):
-        if comm.size > 1:
-            raise NotImplementedError(
-                f"{label}: midside nodes on {comm.size} MPI processes are not supported yet"
-            )
-        outside = midside[~np.isin(midside, all_faces.faces)]
+        on_faces = np.isin(midside, all_faces.faces)
+        if comm.size > 1:  # on global numbers: another process may hold the node's faces
+            held = np.asarray(to_global(midside[on_faces].astype(np.int32)), dtype=np.int64)
+            held = np.concatenate(comm.allgather(held))
+            on_faces = np.isin(np.asarray(to_global(midside.astype(np.int32))), held)
+        outside = midside[~on_faces]
         if outside.size:
             x = reference_coordinates(V)[outside[0]]
             raise ValueError(

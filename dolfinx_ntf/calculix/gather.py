@@ -12,7 +12,6 @@ from __future__ import annotations
 import typing
 
 from mpi4py import MPI
-from petsc4py import PETSc
 
 import numpy as np
 
@@ -23,6 +22,7 @@ import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.problem import ContactProblem
+from dolfinx_ntf.serendipity import element_forces_on_nodes
 
 from .deck import Deck
 from .model import CalculixModel
@@ -164,7 +164,11 @@ class CcxNumbering:
         vector.destroy()
         cells = np.arange(self.num_owned_cells)
         values = forces[compat.cell_dofs(self._W)[cells]]
-        rows = self.deck.node_index(self.model.dof_node[compat.cell_dofs(self.model.V)[cells]])
+        dofs = compat.cell_dofs(self.model.V)[cells]
+        if self.model.element_type.num_nodes == 20:  # C3D20: centre forces on the 20 nodes
+            values = element_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 20, 3)
+            dofs = dofs[:, :20]
+        rows = self.deck.node_index(self.model.dof_node[dofs])
         return self.model.cell_element[cells], rows, values
 
     def _spring_forces(self, problem: ContactProblem) -> tuple[np.ndarray, ...]:
@@ -190,12 +194,9 @@ class CcxNumbering:
         """Internal force of the elements plus the springs at every deck node ``(N, 3)``.
 
         Summed in ccx order (elements by number, springs by pair and slave node), whatever the
-        partition. Collective. C3D20/C3D20R (one process only, docs/method.md §14.5): the forces
-        of the 27-node cells, whose face- and cell-centre forces move to the 20 ccx nodes
-        (``model.on_ccx_nodes``, §13.5).
+        partition. Collective. C3D20/C3D20R: each 27-node cell's face- and cell-centre forces
+        move to its 20 ccx nodes first (``serendipity.element_forces_on_nodes``, §13.5, §14.10).
         """
-        if self.model.element_type.num_nodes == 20:
-            return self.nodal(self.model.on_ccx_nodes(self._dof_forces(problem)))
         elements, rows, values = self.allgather(*self._element_forces())
         order = np.argsort(elements, kind="stable")
         bulk = np.zeros((self.deck.node_ids.size, 3))
@@ -205,21 +206,3 @@ class CcxNumbering:
         contact = np.zeros_like(bulk)
         np.add.at(contact, rows[order], values[order])
         return bulk + contact
-
-    def _dof_forces(self, problem: ContactProblem) -> np.ndarray:
-        """Internal force of the elements plus the springs at every local dof ``(num_dofs, 3)``."""
-        if self._form is None:
-            self._form = dolfinx.fem.form(self._internal)
-        vector = dolfinx.fem.petsc.assemble_vector(self._form)
-        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        forces = vector.array.reshape(-1, 3).copy()
-        vector.destroy()
-        contact = np.zeros_like(forces)
-        for state in problem.states:
-            if state.evaluation is not None and state.num_springs:
-                np.add.at(
-                    contact,
-                    state.element_nodes,
-                    state.evaluation.forces.reshape(state.num_springs, -1, 3),
-                )
-        return forces + contact

@@ -31,8 +31,7 @@ ccx.
 
 Under ``mpirun -n N`` the model is distributed by dolfinx and every output is gathered in ccx
 numbering (``gather.py``) and written by rank 0: the files are those of the serial run
-(docs/method.md §14.5). ``*DYNAMIC`` steps and ``*CHANGE FRICTION`` are refused there, as are
-friction, ADJUST and ``*EQUATION``.
+(docs/method.md §14.5, §14.9, §14.10).
 """
 
 from __future__ import annotations
@@ -769,6 +768,7 @@ def _mass_form(deck: Deck, model: CalculixModel) -> ufl.Form:
             )
         members = np.unique(deck.elsets[section.elset])
         cells = model.element_cells(members[np.isin(members, block_ids)])
+        cells = cells[cells >= 0]  # this process's (owned and ghost) cells
         rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
     w, v = ufl.TrialFunction(model.V), ufl.TestFunction(model.V)
     return rho * ufl.inner(w, v) * ufl.dx(domain=model.mesh)  # consistent mass, exact
@@ -828,19 +828,6 @@ def _check_requests(deck: Deck) -> None:
                         key,
                         request.location,
                     )
-
-
-def _check_parallel(deck: Deck, comm: MPI.Comm) -> None:
-    """Deck features not supported on several processes yet: the same error on every process."""
-    if comm.size == 1:
-        return
-    for step in deck.steps:
-        for what, used in (("*DYNAMIC steps", step.dynamic is not None),):
-            if used:
-                raise NotImplementedError(
-                    f"{step.location}: {what} on {comm.size} MPI processes: not supported yet; "
-                    "run on one process (docs/method.md §14.5)"
-                )
 
 
 def _read(path: Path, comm: MPI.Comm) -> Deck:
@@ -910,7 +897,6 @@ def run_job(
         for warning in deck.warnings:
             logger.warning("%s", warning)
     _check_requests(deck)
-    _check_parallel(deck, comm)
     model = build_model(deck, comm)
     job = _Job(
         jobname,

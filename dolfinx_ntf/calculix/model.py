@@ -33,7 +33,6 @@ Load rules (ccx manual, ``*AMPLITUDE``, ``*BOUNDARY``, ``*CLOAD``, ``*DLOAD``, `
 On several processes (docs/method.md §14.5) every process reads the whole deck; the mesh is
 distributed by dolfinx from rank 0's cells, and the numbering maps hold this process's nodes and
 cells only (-1 elsewhere); ``*EQUATION`` terms are numbered globally (docs/method.md §14.9).
-C3D20/C3D20R decks are refused there.
 """
 
 from __future__ import annotations
@@ -56,7 +55,6 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.constraints import (
     LinearConstraint,
     LinearConstraintBlock,
-    elimination_rows,
     num_equations,
 )
 from dolfinx_ntf.laws import (
@@ -210,7 +208,6 @@ class CalculixModel:
     constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
-    _centre_rows: tuple | None = field(default=None, repr=False)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -237,22 +234,6 @@ class CalculixModel:
         out = np.zeros((dofs.size, *values.shape[1:]))
         out[dofs >= 0] = values[dofs[dofs >= 0]]
         return out
-
-    def on_ccx_nodes(self, forces: np.ndarray) -> np.ndarray:
-        """Nodal forces ``(num_dofs, 3)`` as ccx's nodes carry them.
-
-        C3D20's face- and cell-centre forces move to the 20 nodes they depend on (virtual work,
-        ``f + M^T f_centres``), as ccx's RF; other elements' forces are returned unchanged.
-        """
-        if self.element_type.num_nodes != 20:
-            return forces
-        if self._centre_rows is None:
-            self._centre_rows = elimination_rows(forces.size, serendipity_constraints(self.V))[:2]
-        centres, rows = self._centre_rows
-        flat = forces.ravel().copy()
-        flat += rows.T @ flat[centres]
-        flat[centres] = 0.0
-        return flat.reshape(forces.shape)
 
     def face_nodes_of(self, surface: str, facets: np.ndarray) -> np.ndarray:
         """Ccx node numbers (ccx face order) of local ``facets`` of an element-face surface."""
@@ -929,18 +910,12 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
-        NotImplementedError: features not supported yet (C3D20 on several processes, ...),
+        NotImplementedError: features not supported yet,
             naming the keyword and ``file:line``. Raised on every process.
     """
     _check_supported(deck)
     block = _element_block(deck)
     etype = block.type
-    if comm.size > 1 and etype.num_nodes == 20:  # every process reads the same deck: all raise
-        raise NotImplementedError(
-            f"{block.locations[0]}: {etype.name} elements on {comm.size} MPI processes are not "
-            "supported yet (their added face and cell centres have no ccx node to gather, "
-            "docs/method.md §14.5); run on one process"
-        )
     mesh = _create_mesh(deck, block, comm)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
