@@ -22,7 +22,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, parallel, serendipity, validation
+from dolfinx_ntf import compat, master_exchange, parallel, serendipity, validation
 from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, LinearConstraintBlock
@@ -371,13 +371,20 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
         master_faces = serendipity.as_quad8(master_faces, self._face_centres)
-        if self.halo is not None:
+        patch = None
+        if self.halo is not None and master_exchange.uses_exchange(comm, master_faces):  # §14.8
+            slave, patch = parallel.collectively(
+                comm, master_exchange.distribute_pair, self.halo, self.u, pair.slave, slave,
+                master_faces, name,
+            )  # fmt: skip
+            master_faces = patch.faces
+        elif self.halo is not None:
             slave, master_faces = parallel.collectively(
                 comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name
             )
-        if master_faces.faces.shape[0] == 0:
+        if patch is None and master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
-        master = MasterSurface(
+        master = patch or MasterSurface(
             master_faces.face_type,
             master_faces.faces,
             name=f"{name} master",
@@ -497,6 +504,21 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts, then the halo's). Collective."""
         return self._reference + self._displacement()
+
+    def halo_grew(self) -> None:
+        """Nodes were appended to the halo (a master patch grew, docs/method.md §14.8). Collective.
+
+        The scatter, the contact numbering and the increment-start displacement follow.
+        """
+        known = self._increment_start_u.shape[0]
+        self.halo.destroy()  # rebuilt on next use, with the new nodes
+        self._reference = self.halo.reference
+        self.assembler.extend(self.halo, self.u)
+        start = compat.petsc_vector(self.u).duplicate()
+        start.array[:] = self._increment_start_u[: self.halo.num_owned].ravel()
+        extra = self.halo.values(start)[known - self.halo.num_local :]
+        start.destroy()
+        self._increment_start_u = np.vstack([self._increment_start_u, extra])
 
     def _displacement(self) -> np.ndarray:
         """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
@@ -640,6 +662,12 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
         start = previous if self.walk_from_previous_face else None
         face = state.master.locate(points, tolerances, max_depth=self.max_depth, start_faces=start)
+        while master_exchange.enlarge(self, state, face):  # a patch too small somewhere (§14.8)
+            coords = self.current_coordinates()
+            state.master.update(coords)
+            face = state.master.locate(
+                points, tolerances, max_depth=self.max_depth, start_faces=start
+            )
         found = np.flatnonzero(face >= 0)
         evaluation = spring_evaluator(state.master)(
             state.master_faces.face_type,
