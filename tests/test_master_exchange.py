@@ -24,7 +24,9 @@ import dolfinx_ntf as ntf
 from dolfinx_ntf import compat, master_exchange
 from dolfinx_ntf.elasticity import component_bc
 from dolfinx_ntf.faces import FACE_TYPES
+from dolfinx_ntf.parallel import NodeHalo
 from dolfinx_ntf.search import NOT_HELD, MasterSurface
+from dolfinx_ntf.surfaces import resolve_master
 
 pytestmark = pytest.mark.mpi
 
@@ -197,3 +199,35 @@ def test_deck_runner_gives_the_serial_files(exchanges, monkeypatch, name, tmp_pa
     assert error is None, error
     if COMM.size > 1:
         assert exchanges
+
+
+@pytest.mark.parametrize("margin", [0.0, 0.3, 1.0, 10.0])
+def test_nearest_centroid_check(monkeypatch, margin):
+    """On one process: a node whose nearest centroid may lie outside its request box (grown by
+    the margin) is NOT_HELD, the others get the whole surface's face."""
+    monkeypatch.setattr(master_exchange, "MARGIN", margin)
+    problem, _, ft = test_parallel.punch_problem(comm=MPI.COMM_SELF)
+    V = problem.u.function_space
+    state = problem.states[0]
+    own = resolve_master(V, ntf.FacetSurface(ft, LOWER_TOP), what="master")
+    coords = problem.current_coordinates()
+    patch = master_exchange.MasterPatch(
+        NodeHalo(V), own, state.slave.nodes, coords[: V.dofmap.index_map.size_local], "patch"
+    )
+    patch.update(coords)
+    state.master.update(coords)
+    points = coords[state.slave.nodes] + np.array([0.0, 0.0, 0.01])
+    centroids, diagonal = state.master.triangle_centroids, np.sqrt(2) / 4  # 4 x 4 unit squares
+    faces, whole = patch.locate(points, 0.0), state.master.locate(points, 0.0)
+    held = faces != NOT_HELD
+    assert np.array_equal(faces[held], whole[held]) and np.all(whole >= 0)
+    assert patch.complete == (margin >= 1.0)  # the box then holds the whole master surface
+    # margin 0: the box of the flat slave surface has no thickness, no ball fits in it; 0.3 face
+    # diagonals (0.106): only where the nearest centroid is nearer than the node to the box's face
+    radius = np.sqrt(((points[:, None, :] - centroids[None]) ** 2).sum(axis=2)).min(axis=1)
+    room = np.minimum(points - patch._region[0], patch._region[1] - points).min(axis=1)
+    assert np.array_equal(held, radius + 1e-6 < room) and np.isclose(
+        patch.margin, margin * diagonal
+    )
+    assert held.all() if margin >= 1.0 else (held.any() if margin > 0.0 else not held.any())
+    problem.destroy()
