@@ -9,8 +9,8 @@ own slave nodes, and receives them from the processes holding them by one ``Allt
   grown by a margin); the walk of docs/method.md §3.2 runs on core triangles only;
 - a *ring* around it: every face within one face size of the request box, so that every node of a
   core face has all its faces (complete nodal normals, hence exact bounding planes); a walk that
-  steps onto a ring triangle, or onto one of the process's own faces outside the core, ends with
-  ``NOT_HELD``, never with "no face";
+  steps onto a ring triangle ends with ``NOT_HELD``, never with "no face";
+- the process's own faces elsewhere, for the set-up checks only (not searched);
 
 and at every pairing each process checks, for every node whose walk starts at the nearest
 centroid, that no centroid outside its core can be as near (the ball around the node through its
@@ -25,7 +25,6 @@ from __future__ import annotations
 from mpi4py import MPI
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 import dolfinx.fem
 
@@ -113,6 +112,7 @@ class MasterPatch:
         self.faces = SurfaceFaces(own.face_type, own.faces.astype(np.int32), own.facets)
         self._global = self._own_global.astype(np.int64)
         self._core = np.zeros(own.faces.shape[0], dtype=bool)
+        self._received = np.zeros(own.faces.shape[0], dtype=bool)  # core or ring
         self.surface: MasterSurface | None = None
         self.margin = 0.0
         self.complete = False
@@ -185,8 +185,11 @@ class MasterPatch:
         np.logical_or.at(merged, inverse, np.concatenate([self._core, core]))
         held = np.zeros(first.size, dtype=bool)
         held[inverse[:old]] = True
+        got = np.zeros(first.size, dtype=bool)
+        got[inverse[old:]] = True
         new = np.sort(first[~held]) - old  # rows of g, in order of arrival
         self._core = merged[inverse[:old]]
+        self._received |= got[inverse[:old]]
         if new.size:
             local = self._halo.local(g[new], x[new]).astype(np.int32)
             faces = np.vstack([self.faces.faces, local])
@@ -194,18 +197,26 @@ class MasterPatch:
             self.faces = SurfaceFaces(self._face_type, faces, facets)
             self._global = np.vstack([self._global, g[new]])
             self._core = np.concatenate([self._core, merged[inverse[old + new]]])
+            self._received = np.concatenate([self._received, np.ones(new.size, dtype=bool)])
 
     def _build(self) -> None:
-        """The search surface of the patch; triangles outside the core are not walked on."""
+        """The search surface on the core and ring faces; ring triangles are not walked on.
+
+        The process's own faces elsewhere stay out of it (no update, no search).
+        """
         self.surface = None
-        if self.faces.faces.shape[0] == 0:
+        self._held = np.flatnonzero(self._received)  # surface face -> patch face
+        self._surface_face = np.full(self.faces.faces.shape[0], -1, dtype=np.int64)
+        self._surface_face[self._held] = np.arange(self._held.size)
+        if self._held.size == 0:
             return
-        self.surface = MasterSurface(self._face_type, self.faces.faces, name=self.name)
-        if not self.complete:
-            faces = np.flatnonzero(~self._core)
-            per_face = len(self._face_type.triangles)
-            self.surface.mark_not_held((faces[:, None] * per_face + np.arange(per_face)).ravel())
-        self._core_triangle = np.repeat(self._core | self.complete, len(self._face_type.triangles))
+        core = self._core[self._held] | self.complete
+        faces = self.faces.faces[self._held]
+        self.surface = MasterSurface(self._face_type, faces, name=self.name)
+        per_face = len(self._face_type.triangles)
+        ring = np.flatnonzero(~core)
+        self.surface.mark_not_held((ring[:, None] * per_face + np.arange(per_face)).ravel())
+        self._core_triangle = np.repeat(core, per_face)
 
     # -- the MasterSurface interface ---------------------------------------------------------------
 
@@ -225,8 +236,6 @@ class MasterPatch:
         try:  # a degenerate face of one process's patch is an error on all
             if self.surface is not None:
                 self.surface.update(coords, extent=(origin, scale))
-                if not self.complete:
-                    self._tree = cKDTree(self.surface.triangle_centroids)
         except ValueError as exc:
             error = exc
         validation.raise_collectively(self.comm, error)
@@ -248,30 +257,35 @@ class MasterPatch:
         if self.surface is None:
             self._walked_off = n > 0
             return out
+        start = np.full(n, -1, dtype=np.int64)
+        if start_faces is not None:  # a face found before: a core face, in the surface
+            start_faces = np.asarray(start_faces, dtype=np.int64)
+            start = np.where(start_faces >= 0, self._surface_face[np.maximum(start_faces, 0)], -1)
         good = np.ones(n, dtype=bool)
         if not self.complete:
-            pending = np.arange(n) if start_faces is None else np.flatnonzero(start_faces < 0)
+            pending = np.flatnonzero(start < 0)
             if pending.size:
                 p = points[pending]
-                r, t = self._tree.query(p, k=1)
+                r, t = self.surface.nearest_centroid(p)
                 inside = np.minimum(p - self._region[0], self._region[1] - p).min(axis=1)
                 need = r * (1.0 + 1e-12) + 2.0 * self._eps + self._distance
                 bad = ~((need <= inside) & self._core_triangle[t])
                 good[pending[bad]] = False
                 if np.any(bad):
                     self._need = float(need[bad].max())
-        start = None if start_faces is None else np.asarray(start_faces)[good]
-        out[good] = self.surface.locate(
-            points[good], tolerances[good], max_depth=max_depth, start_faces=start
+        found = self.surface.locate(
+            points[good], tolerances[good], max_depth=max_depth, start_faces=start[good]
         )
-        self._walked_off = bool(np.any(out[good] == NOT_HELD))
+        out[good] = np.where(found >= 0, self._held[np.maximum(found, 0)], found)
+        self._walked_off = bool(np.any(found == NOT_HELD))
         return out
 
     def face_patches(self, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """See :meth:`MasterSurface.face_patches`."""
         if self.surface is None:
             return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
-        return self.surface.face_patches(faces)
+        which, patch = self.surface.face_patches(self._surface_face[np.asarray(faces)])
+        return which, self._held[patch]
 
     # -- enlargement -------------------------------------------------------------------------------
 

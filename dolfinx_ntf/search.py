@@ -409,6 +409,12 @@ class MasterSurface:
             result[found[depth > max_depth]] = -1
         return result
 
+    def nearest_centroid(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distance to the nearest triangle centroid, and that triangle, of each point (§14.8)."""
+        self._require_update()
+        distance, triangle = self._tree.query(np.asarray(points, dtype=float).reshape(-1, 3), k=1)
+        return distance, triangle.astype(np.int64)
+
     def _nearest_centroids(self, points: np.ndarray) -> np.ndarray:
         """The triangle with the nearest centroid to each point, ties broken by position.
 
