@@ -320,7 +320,8 @@ def _time_master_distribution(
     out["patch_unresolved"] = comm.allreduce(int(np.count_nonzero(unresolved)))
     out["patch_differs"] = comm.allreduce(int(np.count_nonzero(~unresolved & ~same)))
     out["faces_whole"] = whole.num_faces
-    out["faces_patch"] = comm.allreduce(patch.faces.faces.shape[0], op=MPI.MAX)
+    searched = 0 if patch.surface is None else patch.surface.num_faces  # core and ring
+    out["faces_patch"] = comm.allreduce(searched, op=MPI.MAX)
 
 
 def _global_faces(table: np.ndarray, faces: np.ndarray, halo: parallel.NodeHalo) -> np.ndarray:
@@ -541,8 +542,8 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         text += [
             "Master surface per process (docs/method.md §14.1, §14.8): the whole surface "
             "allgathered, or the patch exchanged by bounding boxes (faces: the most any process "
-            "holds); set-up of each (with its search surface), then one pairing's master update "
-            "and walk on each; slave nodes the patch could not tell / told differently.",
+            "searches, core and ring); set-up of each (with its search surface), then one "
+            "pairing's master update and walk on each; slave nodes the patch could not tell / told differently.",
             _format_table(
                 [
                     "slave nodes",
