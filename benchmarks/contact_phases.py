@@ -543,7 +543,8 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
             "Master surface per process (docs/method.md §14.1, §14.8): the whole surface "
             "allgathered, or the patch exchanged by bounding boxes (faces: the most any process "
             "searches, core and ring); set-up of each (with its search surface), then one "
-            "pairing's master update and walk on each; slave nodes the patch could not tell / told differently.",
+            "pairing's master update and walk on each; slave nodes the patch could not tell / "
+            "told differently.",
             _format_table(
                 [
                     "slave nodes",
