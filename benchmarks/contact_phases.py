@@ -29,7 +29,10 @@ says so. Measured there with MUMPS on 2 shared cores: 66 s per solve, 111 s with
 Under ``mpirun`` (docs/method.md §14) every phase is timed between barriers and the slowest
 process's time is reported; the extra parallel phases are the gather of the surfaces (in the
 set-up, ``ContactProblem`` construction: "gather") and the halo exchange of displacements
-(``current_coordinates``: "exchange"); insertion then includes the off-process rows. GAMG's
+(``current_coordinates``: "exchange"); insertion then includes the off-process rows. A further
+table compares the allgather of the master surface with its exchange by bounding boxes
+(docs/method.md §14.8) at the same size: their set-up, and one pairing's update and walk on the
+whole surface and on the patch. GAMG's
 near-nullspace (one set of 6 rigid modes per plate, ``dolfinx_ntf.nullspace``) works on any number
 of processes. Run::
 
@@ -60,12 +63,14 @@ import dolfinx.mesh
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, master_exchange, parallel
 from dolfinx_ntf.assembly import SpringBlocks
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION, SEARCH_TOLERANCE
+from dolfinx_ntf.search import NOT_HELD, MasterSurface
 from dolfinx_ntf.solver import ITERATIVE_PETSC_OPTIONS, galerkin_products
 from dolfinx_ntf.spring_areas import spring_areas
+from dolfinx_ntf.surfaces import resolve_master
 
 __all__ = ["SOLVERS", "PlateMesh", "build_plates", "build_problem", "main", "report", "run_size"]
 
@@ -85,6 +90,15 @@ SOLVERS: dict[str, dict[str, typing.Any]] = {
     },
     "iterative": dict(ITERATIVE_PETSC_OPTIONS),  # the library's: GMRES + GAMG, rtol 1e-10
 }
+#: Timings of the two ways of distributing the master surface (parallel runs only).
+_DISTRIBUTION = (
+    "master_gather",
+    "master_exchange",
+    "update_whole",
+    "update_patch",
+    "locate_whole",
+    "locate_patch",
+)
 #: Result keys that depend on the linear solver (no scaling exponent across solvers).
 _SOLVER_KEYS = ("newton", "newton_solve")
 
@@ -264,6 +278,59 @@ def _time_search(problem: ntf.ContactProblem, repeat: int, out: dict[str, typing
     out["gap"] = max(out["search"] - out["areas"] - out["update"] - out["locate"], 0.0)
 
 
+def _time_master_distribution(
+    problem: ntf.ContactProblem, repeat: int, out: dict[str, typing.Any]
+) -> None:
+    """Both ways of giving each process its master surface (docs/method.md §14.1, §14.8).
+
+    The allgather of the whole surface with the build of its search surface, against the
+    exchange by bounding boxes with the build of the patch; then one pairing's update and walk on
+    each (what ``pair`` runs), and the faces each process holds (largest over the processes).
+    """
+    comm = MPI.COMM_WORLD
+    halo, state = problem.halo, problem.states[0]
+    if halo is None or isinstance(state.master, master_exchange.MasterPatch):
+        return  # serial, or the problem's own halo lacks the whole surface
+    own = resolve_master(problem.u.function_space, state.pair.master, what="master")
+    coords = problem.current_coordinates()
+    nodes = state.slave.nodes
+
+    def gathered() -> MasterSurface:
+        g, x, _ = parallel._gather_faces(halo, own, "master")
+        faces = halo.local(g, x).astype(np.int32)
+        return MasterSurface(own.face_type, faces, coords=halo.reference)
+
+    def exchanged() -> master_exchange.MasterPatch:
+        return master_exchange.MasterPatch(halo, own, nodes, coords, "master")
+
+    out["master_gather"] = timed(gathered, repeat)
+    out["master_exchange"] = timed(exchanged, repeat)
+    whole, patch = gathered(), exchanged()
+    areas = spring_areas(state.slave.faces.face_type, state.slave.faces.faces, coords, nodes)
+    points = coords[nodes]
+    tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
+    for key, surface in (("whole", whole), ("patch", patch)):
+        out[f"update_{key}"] = timed(lambda s=surface: s.update(coords), repeat)
+        out[f"locate_{key}"] = timed(lambda s=surface: s.locate(points, tolerances), repeat)
+    faces, found = whole.locate(points, tolerances), patch.locate(points, tolerances)
+    unresolved = found == NOT_HELD
+    same = np.all(
+        _global_faces(whole.faces, faces, halo) == _global_faces(patch.faces.faces, found, halo),
+        axis=1,
+    )
+    out["patch_unresolved"] = comm.allreduce(int(np.count_nonzero(unresolved)))
+    out["patch_differs"] = comm.allreduce(int(np.count_nonzero(~unresolved & ~same)))
+    out["faces_whole"] = whole.num_faces
+    searched = 0 if patch.surface is None else patch.surface.num_faces  # core and ring
+    out["faces_patch"] = comm.allreduce(searched, op=MPI.MAX)
+
+
+def _global_faces(table: np.ndarray, faces: np.ndarray, halo: parallel.NodeHalo) -> np.ndarray:
+    """Sorted global nodes of each found face (rows of -1 where none)."""
+    g = np.sort(halo.global_nodes[table[np.maximum(faces, 0)]], axis=1)
+    return np.where(faces[:, None] >= 0, g, -1)
+
+
 def _time_newton(
     problem: ntf.ContactProblem,
     newton: ntf.ContactNewtonSolver,
@@ -362,6 +429,7 @@ def run_size(
         lambda: dolfinx.fem.petsc.create_matrix(problem.a).destroy(), repeat
     )
 
+    _time_master_distribution(problem, repeat, out)
     _time_newton(problem, newton, b, repeat, out)
     return out
 
@@ -465,6 +533,37 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         _format_table(header, rows),
         "",
     ]
+    rows = [
+        [str(r["slave_nodes"]), str(r["faces_whole"]), str(r["faces_patch"])]
+        + [_s(r[k]) for k in _DISTRIBUTION]
+        + [f"{r['patch_unresolved']} / {r['patch_differs']}"]
+        for r in results
+        if "master_gather" in r
+    ]
+    if rows:
+        text += [
+            "Master surface per process (docs/method.md §14.1, §14.8): the whole surface "
+            "allgathered, or the patch exchanged by bounding boxes (faces: the most any process "
+            "searches, core and ring); set-up of each (with its search surface), then one "
+            "pairing's master update and walk on each; slave nodes the patch could not tell / "
+            "told differently.",
+            _format_table(
+                [
+                    "slave nodes",
+                    "faces (whole)",
+                    "faces (patch)",
+                    "allgather",
+                    "exchange",
+                    "update (whole)",
+                    "update (patch)",
+                    "locate (whole)",
+                    "locate (patch)",
+                    "unresolved / differ",
+                ],
+                rows,
+            ),
+            "",
+        ]
     if len(results) > 1:
         keys = [
             *main_keys,

@@ -40,7 +40,7 @@ import dolfinx.fem.petsc
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import contact_phases
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, master_exchange
 from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION
 from dolfinx_ntf.solver import galerkin_products
 
@@ -119,6 +119,8 @@ def worker(slave_nodes: int, layers: int, repeat: int, solver: str) -> dict[str,
     out["end_to_end"] = comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
     out["krylov"] = ksp.getIterationNumber()  # of the last linear solve
     out["mallocs"] = A.getInfo()["mallocs"]
+    if comm.size > 1:  # the allgather of the master against its exchange by boxes (§14.8)
+        contact_phases._time_master_distribution(problem, repeat, out)
     memory = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # MB (Linux: kB)
     out["memory"] = comm.allreduce(memory, op=MPI.MAX)
     out["load"] = os.getloadavg()[0]  # 1-min load average when this run ended
@@ -246,21 +248,41 @@ def _on_paper(results: list[dict]) -> list[str]:
         + ". It grows with the partition cut through the contact surface (about S^(1/2) P^(1/2) "
         "nodes over all processes for a surface cut in P pieces), not with the model: "
         "negligible at any P.",
-        "- The set-up allgather sends every process the whole master surface and the slave "
-        "faces: 16 numbers of 8 bytes per quadrilateral face (4 node numbers, 12 coordinates). "
-        "For 10^7 faces that is 1.3 GB received and stored by every process (0.3 s at 5 GB/s, "
-        "but P times the memory of the surface), and every pairing updates the whole master "
-        "(normals, planes, k-d tree) on every process: up to about "
-        f"{search * s7:.0f} s per pairing whatever P, with the search cost above. It suits "
-        "surfaces up to about 10^6 faces "
-        "(`MAX_GATHERED_FACES` = 2 x 10^6 refuses more) on a few tens of processes.",
-        "- Beyond that the master must be exchanged by bounding boxes: an allgather of one box "
-        "per process (6 P numbers: 6 kB at P = 128), then each process receives, by one "
-        "Alltoallv, the master faces within reach of its own slave nodes' box (grown by the "
-        "search tolerance): O(S/P + boundary) data and work per process, about "
-        f"{search * s7 / p:.1f} s per pairing at P = 128 if the surface is spread evenly. "
-        "Not implemented.",
+        "- The set-up allgather sends every process the whole slave surface and, up to "
+        f"`EXCHANGE_ABOVE_FACES` = {master_exchange.EXCHANGE_ABOVE_FACES} faces, the whole master "
+        "surface: 16 numbers of 8 bytes per quadrilateral face (4 node numbers, 12 coordinates). "
+        "For 10^7 faces that would be 1.3 GB received and stored by every process (0.3 s at 5 "
+        "GB/s, but P times the memory of the surface), and every pairing would update the whole "
+        "master (normals, planes, k-d tree) on every process: up to about "
+        f"{search * s7:.0f} s per pairing whatever P, with the search cost above. Slave surfaces "
+        "are still allgathered (`MAX_GATHERED_FACES` = 2 x 10^6 refuses more).",
+        "- Larger master surfaces are exchanged by bounding boxes (docs/method.md §14.8): an "
+        "allgather of one box per process (6 P numbers: 6 kB at P = 128), then one Alltoallv of "
+        "the master faces near each process's slave nodes (its box grown by 2 face diagonals, "
+        "plus a ring of one face for the nodal normals), and at every pairing one allreduce of 7 "
+        "numbers for the checks: O(S/P + boundary) data and work per process, about "
+        f"{search * s7 / p:.1f} s per pairing at P = 128 if the surface is spread evenly."
+        + _exchange_measured(last),
     ]
+
+
+def _exchange_measured(last: dict) -> str:
+    """The measured allgather and exchange of the master surface, when the run had them."""
+    if "master_exchange" not in last:
+        return ""
+    whole, patch = last["faces_whole"], last["faces_patch"]
+    return (
+        f" Measured here on {last['processes']} processes at {whole} master faces: the exchange "
+        f"takes {last['master_exchange']:.3g} s against {last['master_gather']:.3g} s for the "
+        f"allgather (both with the build of the search surface); the largest patch holds {patch} "
+        f"faces, and one pairing's master update takes {last['update_patch']:.3g} s on the "
+        f"patch against {last['update_whole']:.3g} s on the whole surface (walk: "
+        f"{last['locate_patch']:.3g} s against {last['locate_whole']:.3g} s); "
+        f"{last['patch_unresolved']} slave nodes needed a larger patch and "
+        f"{last['patch_differs']} were paired differently. On a plate spread over 2 processes "
+        "each patch is about half the surface, so the gain is small; it grows with P, as the "
+        "patch stays near S/P faces while the whole surface does not shrink."
+    )
 
 
 def main(argv: typing.Sequence[str] | None = None) -> int:

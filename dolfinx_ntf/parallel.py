@@ -133,6 +133,10 @@ class NodeHalo:
         )
         return self._target.array_r.reshape(-1, 3).copy()
 
+    def values(self, vector: PETSc.Vec) -> np.ndarray:
+        """Values of ``vector`` (V's layout) at the halo nodes, shape (extras, 3). Collective."""
+        return self._scatter_from(vector)
+
     def displacement(self, u: dolfinx.fem.Function) -> np.ndarray:
         """``u`` at every extended node, shape (num_local + extras, 3). Collective."""
         values = u.x.array.reshape(-1, 3)

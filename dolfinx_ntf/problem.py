@@ -22,7 +22,7 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, parallel, serendipity, validation
+from dolfinx_ntf import compat, master_exchange, parallel, serendipity, validation
 from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, LinearConstraintBlock
@@ -376,13 +376,20 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         if self._serendipity:
             master_faces = serendipity.as_quad8(master_faces, self._face_centres)
-        if self.halo is not None:
+        patch = None
+        if self.halo is not None and master_exchange.uses_exchange(comm, master_faces):  # §14.8
+            slave, patch = parallel.collectively(
+                comm, master_exchange.distribute_pair, self.halo, self.u, pair.slave, slave,
+                master_faces, name,
+            )  # fmt: skip
+            master_faces = patch.faces
+        elif self.halo is not None:
             slave, master_faces = parallel.collectively(
                 comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name
             )
-        if master_faces.faces.shape[0] == 0:
+        if patch is None and master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
-        master = MasterSurface(
+        master = patch or MasterSurface(
             master_faces.face_type,
             master_faces.faces,
             name=f"{name} master",
@@ -502,6 +509,21 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts, then the halo's). Collective."""
         return self._reference + self._displacement()
+
+    def halo_grew(self) -> None:
+        """Nodes were appended to the halo (a master patch grew, docs/method.md §14.8). Collective.
+
+        The scatter, the contact numbering and the increment-start displacement follow.
+        """
+        known = self._increment_start_u.shape[0]
+        self.halo.destroy()  # rebuilt on next use, with the new nodes
+        self._reference = self.halo.reference
+        self.assembler.extend(self.halo, self.u)
+        start = compat.petsc_vector(self.u).duplicate()
+        start.array[:] = self._increment_start_u[: self.halo.num_owned].ravel()
+        extra = self.halo.values(start)[known - self.halo.num_local :]
+        start.destroy()
+        self._increment_start_u = np.vstack([self._increment_start_u, extra])
 
     def _displacement(self) -> np.ndarray:
         """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
@@ -646,14 +668,16 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         start, frame = None, None
         if self.walk_from_previous_face:
             start, frame = previous, self._tie_frame(state, points, areas)
+        options = {"tie_frame": frame, "ccx_ties": not self.walk_from_previous_face}
         face = state.master.locate(
-            points,
-            tolerances,
-            max_depth=self.max_depth,
-            start_faces=start,
-            tie_frame=frame,
-            ccx_ties=not self.walk_from_previous_face,
+            points, tolerances, max_depth=self.max_depth, start_faces=start, **options
         )
+        while master_exchange.enlarge(self, state, face):  # a patch too small somewhere (§14.8)
+            coords = self.current_coordinates()
+            state.master.update(coords)
+            face = state.master.locate(
+                points, tolerances, max_depth=self.max_depth, start_faces=start, **options
+            )
         found = np.flatnonzero(face >= 0)
         evaluation = spring_evaluator(state.master)(
             state.master_faces.face_type,
@@ -673,8 +697,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
         Collective: the slave nodes' moments are summed over the processes.
         """
-        if not isinstance(state.master, MasterSurface):
-            return None
+        if not isinstance(state.master, (MasterSurface, master_exchange.MasterPatch)):
+            return None  # a rigid master: one face, no ties
         origin, moments = state.master.surface_moments()
         slave = point_moments(points, areas, origin)
         comm = self.u.function_space.mesh.comm

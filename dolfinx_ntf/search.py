@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 from dolfinx_ntf.faces import FaceType
 from dolfinx_ntf.tie_frame import TieFrame, triangle_moments
 
-__all__ = ["MAX_WALK_STEPS", "MasterSurface"]
+__all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterSurface"]
 
 MAX_WALK_STEPS = 100
 """A walk taking more steps than this finds no face (docs/method.md §3.2)."""
@@ -28,6 +28,8 @@ TIE_DIGITS = 9
 """Centroid distances equal to this many digits of the surface size are ties."""
 TIE_CANDIDATES = 8
 """Nearest centroids compared for ties (the most triangles around a node of a regular mesh)."""
+NOT_HELD = -2
+"""Neighbour and walk result where the surface continues on triangles not held here (§14.8)."""
 
 
 class MasterSurface:
@@ -159,6 +161,13 @@ class MasterSurface:
         position = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
         return which, self._patch_faces[np.repeat(starts, counts) + position].astype(np.int64)
 
+    def mark_not_held(self, triangles: np.ndarray) -> None:
+        """Walks stepping onto ``triangles`` end with :data:`NOT_HELD` (docs/method.md §14.8).
+
+        For a part of a surface whose ``triangles`` are there for the nodal normals only.
+        """
+        self._neighbours[np.isin(self._neighbours, np.asarray(triangles))] = NOT_HELD
+
     @property
     def nodal_normals(self) -> np.ndarray:
         """(M, 3) averaged unit nodal normals, rows aligned with `nodes`."""
@@ -192,11 +201,13 @@ class MasterSurface:
         return origin, triangle_moments(a, b, c, origin)
 
     # ------------------------------------------------------------------ update
-    def update(self, coords: np.ndarray) -> None:
+    def update(self, coords: np.ndarray, *, extent: tuple[np.ndarray, float] | None = None) -> None:
         """Recompute normals, bounding planes and the centroid tree for current coordinates.
 
         Args:
             coords: (num_nodes, 3) current node positions, indexed by node id.
+            extent: (lowest corner, largest side) of the box of the whole surface when this object
+                holds a part of it (docs/method.md §14.8): ties are judged on the whole surface.
 
         Raises:
             ValueError: If `coords` has the wrong shape or non-finite master coordinates, or if a
@@ -249,8 +260,10 @@ class MasterSurface:
         self._plane_normals = sign * p[self._edge_id]  # (T, 3, 3)
         self._plane_points = xs[self._edge_id]  # (T, 3, 3)
         self._tree = cKDTree(self._centroids)
-        self._scale = float(np.ptp(x, axis=0).max()) or 1.0
-        rounded = np.round((self._centroids - x.min(axis=0)) / self._scale, TIE_DIGITS)
+        origin, self._scale = (
+            (x.min(axis=0), float(np.ptp(x, axis=0).max()) or 1.0) if extent is None else extent
+        )
+        rounded = np.round((self._centroids - origin) / self._scale, TIE_DIGITS)
         self._centroid_rank = np.empty(self._centroids.shape[0], dtype=np.int64)
         self._centroid_rank[np.lexsort(rounded.T[::-1])] = np.arange(self._centroids.shape[0])
         self._updated = True
@@ -331,7 +344,8 @@ class MasterSurface:
                 global axes (the stable search, docs/method.md §3.2).
 
         Returns:
-            (N,) face index, or -1 where no face is found.
+            (N,) face index, or -1 where no face is found (:data:`NOT_HELD` where the walk
+            stepped onto a triangle marked by :meth:`mark_not_held`).
         """
         start = None
         if start_faces is not None:
@@ -351,6 +365,7 @@ class MasterSurface:
         out = np.full(tri.shape, -1, dtype=np.int64)
         found = tri >= 0
         out[found] = self._triangle_faces[tri[found]]
+        out[tri == NOT_HELD] = NOT_HELD
         return out
 
     def locate_triangles(
@@ -406,6 +421,7 @@ class MasterSurface:
             result[idx[~moving]] = cur[~moving]
             plane = np.argmax(violated, axis=1)  # first violated plane, in order 1, 2, 3
             nb = self._neighbours[cur, plane]
+            result[idx[moving & (nb == NOT_HELD)]] = NOT_HELD  # the walk leaves what is held
             moving &= nb >= 0  # no neighbour: no face
             back = moving & (nb == prev)  # neighbour is the triangle just left: accept
             result[idx[back]] = cur[back]
@@ -445,6 +461,12 @@ class MasterSurface:
             self._centroids[nearest], distance <= distance[:, :1] + tolerance, tolerance
         )
         return nearest[np.arange(nearest.shape[0]), first].astype(np.int64)
+
+    def nearest_centroid(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distance to the nearest triangle centroid, and that triangle, of each point (§14.8)."""
+        self._require_update()
+        distance, triangle = self._tree.query(np.asarray(points, dtype=float).reshape(-1, 3), k=1)
+        return distance, triangle.astype(np.int64)
 
     def _nearest_centroids(self, points: np.ndarray) -> np.ndarray:
         """The triangle with the nearest centroid to each point, ties broken by position.
