@@ -80,8 +80,8 @@ def test_tetrahedra_cut_through_the_contact_zone(exchanges, monkeypatch):
     test_parallel._assert_same(run, test_parallel._serial("tetrahedron"))
 
 
-def _fine_punch(comm, partition, options):
-    """The punch on a finer master (12 x 12 faces): the default margin leaves patches partial."""
+def _fine_punch_problem(comm, partition, options):
+    """The problem of :func:`_fine_punch` with its load constant; the caller destroys it."""
     lower = ((0, 0, -1), (1, 1, 1), (12, 12, 1))
     mesh, _, ft = blocks(comm, lower=lower, upper=PUNCH, partition=partition)
     V = compat.vector_space(mesh, "Lagrange", 1)
@@ -96,6 +96,13 @@ def _fine_punch(comm, partition, options):
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
     problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs, **options)
+    return problem, pressure
+
+
+def _fine_punch(comm, partition, options):
+    """The punch on a finer master (12 x 12 faces): the default margin leaves patches partial."""
+    problem, pressure = _fine_punch_problem(comm, partition, options)
+    u, V = problem.u, problem.u.function_space
     solver = ntf.ContactNewtonSolver(comm, problem)
     pairings = []
     problem.pairing_callbacks.append(
@@ -130,6 +137,24 @@ def _fine_punch(comm, partition, options):
     solver.destroy()
     problem.destroy()
     return out
+
+
+@pytest.mark.parametrize("partition", ["cut", "empty"])
+def test_tie_frame_is_that_of_the_whole_surface(exchanges, monkeypatch, partition):
+    """The stable search's tie frame (§3.2) from a patch: the moments of the whole master."""
+    monkeypatch.setattr(master_exchange, "MARGIN", 0.0)
+    moments = []
+    for threshold in (0, 10**9):  # exchanged, allgathered
+        monkeypatch.setattr(master_exchange, "EXCHANGE_ABOVE_FACES", threshold)
+        problem, _ = _fine_punch_problem(COMM, PARTITIONS[partition], {})
+        problem.pair()
+        moments.append(problem.states[0].master.surface_moments())
+        problem.destroy()
+    if COMM.size > 1:
+        assert _partial(exchanges)
+    (origin, m), (origin_all, m_all) = moments
+    np.testing.assert_allclose(origin, origin_all, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(m, m_all, rtol=1e-12, atol=1e-14 * np.abs(m_all).max())
 
 
 @pytest.mark.parametrize("partition", ["graph", "cut", "idle"])
