@@ -46,6 +46,14 @@ def _parser() -> argparse.ArgumentParser:
         "search tolerance (no face ping-pong at re-pairings); default: ccx's search",
     )
     run.add_argument(
+        "--tangent",
+        choices=("auto", "ccx", "exact"),
+        default="auto",
+        help="contact tangent: 'ccx' symmetrized like ccx (Cholesky or CG, about half the linear "
+        "solver's work), 'exact' (LU or GMRES; fewer iterations at projections clamped to a face "
+        "edge), 'auto' (default) ccx's from 10000 dofs on, exact below",
+    )
+    run.add_argument(
         "--predictor",
         choices=("guarded", "ccx", "off"),
         default="guarded",
@@ -91,7 +99,10 @@ def main(argv: list[str] | None = None) -> int:
             directory,
             comm=MPI.COMM_WORLD,
             tight=args.tight,
-            problem_options={"walk_from_previous_face": args.stable_pairing},
+            problem_options={
+                "walk_from_previous_face": args.stable_pairing,
+                **({} if args.tangent == "auto" else {"symmetric": args.tangent == "ccx"}),
+            },
             predictor=args.predictor != "off",
             guard_predictor=args.predictor == "guarded",
             pair_after_predictor=args.pair_after_predictor,
