@@ -33,10 +33,14 @@ root::
     .venv/bin/python benchmarks/vs_ccx.py                  # every deck (about 15 minutes)
     .venv/bin/python benchmarks/vs_ccx.py --quick          # the small decks (about 2 minutes)
     .venv/bin/python benchmarks/vs_ccx.py --only tie_punch punch_20 --workdir /tmp/bench
+    .venv/bin/python benchmarks/vs_ccx.py --only punch_20 punch_30 --update
 
 A full run replaces this platform's section of ``docs/performance.md`` (other platforms' sections
 stay); ``--quick`` and ``--only`` runs print their table and write a report only with
-``--output``.
+``--output``, or with ``--update``: then only the rows of the decks run now are replaced in this
+platform's existing section (of ``--output``, default ``docs/performance.md``), the other rows
+stay, and the section says when each row was measured (a ``measured`` column and a note per
+update).
 """
 
 from __future__ import annotations
@@ -125,6 +129,7 @@ class DeckResult:
         comparison_error: Why results could not be compared (empty if they could).
         cel: Both codes' ``.cel`` files compared pairing by pairing (ccx's sets, in order; None
             without both files): :func:`dolfinx_ntf.calculix.cel.compare_cel`.
+        measured: When the deck's runs started (UTC).
     """
 
     name: str
@@ -139,6 +144,7 @@ class DeckResult:
     common_increments: int = 0
     comparison_error: str = ""
     cel: list[typing.Any] | None = None
+    measured: dt.datetime | None = None
 
     def timed(self, code: str) -> list[Measurement]:
         """Timed runs of ``code`` (the warm-up excluded)."""
@@ -387,6 +393,7 @@ def run_deck(
     shutil.copy(ccx_dir / f"{deck.name}.inp", ntf_dir)
     dofs = 3 * int(read_deck(ccx_dir / f"{deck.name}.inp").node_ids.size)
     result = DeckResult(deck.name, deck.description, dofs)
+    result.measured = dt.datetime.now(dt.timezone.utc)
     runners = {"ccx": (_run_ccx, ccx_dir), "dolfinx_ntf": (_run_ntf, ntf_dir)}
     for attempt in range(runs + 1):  # the warm-up, then the timed runs
         for code, (runner, directory) in runners.items():
@@ -513,14 +520,19 @@ def table(results: list[DeckResult]) -> list[str]:
     return lines
 
 
+def _stamp(when: dt.datetime | None) -> str:
+    return "-" if when is None else f"{when:%Y-%m-%d %H:%M}"
+
+
 def _details(results: list[DeckResult]) -> list[str]:
     lines = [
-        "| deck | ccx wall [s] per timed run | mean CPU [s] | dolfinx_ntf wall [s] per timed run "
-        "| mean CPU [s] | of which `run_job` [s] | CPU time ratio |",
-        "|---|---|---|---|---|---|---|",
+        "| deck | measured [UTC] | ccx wall [s] per timed run | mean CPU [s] "
+        "| dolfinx_ntf wall [s] per timed run | mean CPU [s] | of which `run_job` [s] "
+        "| CPU time ratio |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
-        cells = []
+        cells = [_stamp(r.measured)]
         for code in ("ccx", "dolfinx_ntf"):
             runs = r.timed(code)
             cells.append(", ".join(_fmt(m.wall) for m in runs) or "-")
@@ -637,6 +649,118 @@ def write_report(path: Path, key: str, lines: list[str]) -> None:
     path.write_text("\n".join(_HEADER) + "\n" + "\n\n".join(sorted(sections)) + "\n")
 
 
+def read_section(path: Path, key: str) -> list[str] | None:
+    """The lines of section ``key`` of ``path`` (without its markers), None if it has none."""
+    if not path.is_file():
+        return None
+    begin, end = f"<!-- vs_ccx section: {key} -->", f"<!-- /vs_ccx section: {key} -->"
+    text = path.read_text()
+    if begin not in text or end not in text:
+        return None
+    return text.split(begin, 1)[1].split(end, 1)[0].strip("\n").split("\n")
+
+
+_ROW = re.compile(r"^\| `([^`]+)` \|")
+_FAILURE = re.compile(r"^- `([^`]+)`")
+_MEASURED = re.compile(r"^Measured (\d{4}-\d\d-\d\d \d\d:\d\d) UTC")
+_UPDATE_NOTE = "Updated (`--update`): "
+
+
+@dataclass
+class _Section:
+    """A platform section (:func:`section`) split into its parts, rows by deck name."""
+
+    title: str
+    notes: list[str]
+    table_head: list[str]
+    rows: dict[str, str]
+    failures: dict[str, list[str]]
+    details_head: list[str]
+    details: dict[str, str]
+
+
+def _parse_section(lines: list[str]) -> _Section:
+    """Split a section written by :func:`section` (or merged by :func:`merge_section`)."""
+    notes: list[str] = []
+    tables: list[list[str]] = []
+    failures: dict[str, list[str]] = {}
+    current: list[str] | None = None
+    for line in lines[1:]:
+        if line.startswith("|"):
+            if current is None:
+                current = []
+                tables.append(current)
+            current.append(line)
+            continue
+        current = None
+        failure = _FAILURE.match(line)
+        if failure:
+            failures.setdefault(failure.group(1), []).append(line)
+        elif line and line not in ("Failures:", "Timed runs:") and not tables:
+            notes.append(line)
+    if not lines or not lines[0].startswith("## ") or len(tables) != 2:
+        raise ValueError("not a vs_ccx section (a '## ' title and two tables expected)")
+
+    def rows(table: list[str]) -> dict[str, str]:
+        return {m.group(1): line for line in table[2:] if (m := _ROW.match(line))}
+
+    details_head, details = tables[1][:2], rows(tables[1])
+    if "measured" not in details_head[0]:  # written before the column existed: the run's date
+        stamp = next((m.group(1) for m in map(_MEASURED.match, notes) if m), "-")
+        details_head = [
+            details_head[0].replace("| deck |", "| deck | measured [UTC] |", 1),
+            details_head[1] + "---|",
+        ]
+        details = {n: line.replace(" | ", f" | {stamp} | ", 1) for n, line in details.items()}
+    return _Section(lines[0], notes, tables[0][:2], rows(tables[0]), failures, details_head,
+                    details)  # fmt: skip
+
+
+def _update_note_decks(note: str) -> set[str]:
+    return set(re.findall(r"`([^`]+)`", note[len(_UPDATE_NOTE) :].split(" re-measured", 1)[0]))
+
+
+def merge_section(old: list[str], new: list[str], order: typing.Sequence[str] = ()) -> list[str]:
+    """Section ``old`` with the rows of the decks of section ``new`` replaced or added.
+
+    The other rows stay; a note names the re-measured decks with the new run's date, machine and
+    load, and every row of the timed-runs table has its date. Decks are listed in ``order`` (names
+    not in it last).
+
+    Raises:
+        ValueError: The sections are of different versions (titles differ) or not sections.
+    """
+    before, now = _parse_section(old), _parse_section(new)
+    if before.title != now.title:
+        raise ValueError(
+            f"the existing section is {before.title[3:]!r}, this run {now.title[3:]!r}: "
+            "run every deck instead of --update"
+        )
+    names = list(now.rows)
+    rows, details = {**before.rows, **now.rows}, {**before.details, **now.details}
+    failures = {n: v for n, v in before.failures.items() if n not in names}
+    failures.update(now.failures)
+    rank = {name: k for k, name in enumerate(order)}
+    ordered = sorted(rows, key=lambda n: rank.get(n, len(rank)))
+    notes = [
+        n
+        for n in before.notes
+        if not (n.startswith(_UPDATE_NOTE) and _update_note_decks(n) <= set(names))
+    ]
+    measured = next((n for n in now.notes if _MEASURED.match(n)), "")
+    listed = ", ".join(f"`{n}`" for n in names)
+    notes.append(f"{_UPDATE_NOTE}{listed} re-m{measured[1:]}")
+    out = [now.title, ""]
+    for note in notes:
+        out += [note, ""]
+    out += [*now.table_head, *(rows[n] for n in ordered), ""]
+    failed = [line for n in ordered for line in failures.get(n, [])]
+    if failed:
+        out += ["Failures:", "", *failed, ""]
+    out += ["Timed runs:", "", *now.details_head, *(details[n] for n in ordered if n in details)]
+    return [*out, ""]
+
+
 # ----------------------------------------------------------------------------- main
 
 
@@ -647,6 +771,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--workdir", type=Path, help="keep decks and results here")
     parser.add_argument("--output", type=Path, help=f"report (default for full runs: "
                         f"{DEFAULT_OUTPUT.relative_to(ROOT)})")  # fmt: skip
+    parser.add_argument("--update", action="store_true",
+                        help="replace only the rows of the decks run now in this platform's "
+                        "existing section of the report (default docs/performance.md)")  # fmt: skip
     parser.add_argument("--runs", type=int, default=2, help="timed runs per code (at least 2)")
     parser.add_argument("--threads", type=int, default=1, help="threads per code")
     parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per run")
@@ -670,9 +797,16 @@ def main(argv: typing.Sequence[str] | None = None) -> list[DeckResult]:
     except ValueError as error:
         raise SystemExit(str(error)) from None
     output = args.output
-    if output is None and not (args.only or args.quick):
+    if output is None and (args.update or not (args.only or args.quick)):
         output = DEFAULT_OUTPUT
     env = environment()
+    key = f"{env['os']} / dolfinx {env['dolfinx']}"
+    if args.update:  # before the long run: the section must be of these versions
+        old = read_section(output, key)
+        title = section([], env, [], dt.datetime.now(dt.timezone.utc), args.runs, args.threads)[0]
+        if old is not None and old[0] != title:
+            raise SystemExit(f"--update: {output} has {old[0][3:]!r}, this machine is "
+                             f"{title[3:]!r}: run every deck instead")  # fmt: skip
     started = dt.datetime.now(dt.timezone.utc)
     print(f"vs_ccx: {len(decks)} decks; {env['os']}, dolfinx {env['dolfinx']}, PETSc "
           f"{env['petsc']}, ccx {env['ccx']}, {env['cores']} cores", flush=True)  # fmt: skip
@@ -688,7 +822,12 @@ def main(argv: typing.Sequence[str] | None = None) -> list[DeckResult]:
     lines = section(results, env, loads, started, args.runs, args.threads)
     print("\n".join(lines))
     if output is not None:
-        key = f"{env['os']} / dolfinx {env['dolfinx']}"
+        old = read_section(output, key) if args.update else None
+        if old is not None:
+            try:
+                lines = merge_section(old, lines, [d.name for d in ccx_decks.DECKS])
+            except ValueError as error:
+                raise SystemExit(f"--update: {error}") from None
         write_report(output, key, lines)
         print(f"wrote {output}")
     return results

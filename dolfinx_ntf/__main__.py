@@ -49,6 +49,14 @@ def _parser() -> argparse.ArgumentParser:
         "default: ccx's search",
     )
     run.add_argument(
+        "--tangent",
+        choices=("auto", "ccx", "exact"),
+        default="auto",
+        help="contact tangent: 'ccx' symmetrized like ccx (Cholesky or CG, about half the linear "
+        "solver's work), 'exact' (LU or GMRES; fewer iterations at projections clamped to a face "
+        "edge), 'auto' (default) ccx's from 10000 dofs on, exact below",
+    )
+    run.add_argument(
         "--predictor",
         choices=("guarded", "ccx", "off"),
         default="guarded",
@@ -97,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
             problem_options={
                 "walk_from_previous_face": args.stable_pairing,
                 "contact_start_slope": args.stable_pairing,
+                **({} if args.tangent == "auto" else {"symmetric": args.tangent == "ccx"}),
             },
             predictor=args.predictor != "off",
             guard_predictor=args.predictor == "guarded",

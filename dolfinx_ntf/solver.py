@@ -29,6 +29,7 @@ from dolfinx_ntf.problem import ContactProblem
 
 __all__ = [
     "CCX_FIELD_CONTROLS",
+    "CHOLESKY_MAX_DOFS",
     "DIVERGENCE_GROWTH",
     "TIGHT_FIELD_CONTROLS",
     "ContactConvergenceError",
@@ -131,6 +132,10 @@ def galerkin_products(ksp: PETSc.KSP) -> typing.Iterator[None]:
 #: (measured crossover on 2 cores, docs/performance.md "Linear solvers").
 DIRECT_MAX_DOFS = 50_000
 
+#: ... and up to this many dofs when the Jacobian is symmetric: MUMPS Cholesky does about half
+#: the work of LU and beats CG + GAMG at 81k dofs (docs/method.md §7.4).
+CHOLESKY_MAX_DOFS = 100_000
+
 #: Values of ``ContactNewtonSolver(linear_solver=...)``.
 LINEAR_SOLVERS = ("auto", "direct", "iterative")
 
@@ -168,7 +173,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             the problem is ``symmetric`` and its first Jacobian is symmetric), ``"iterative"``
             (GMRES, or CG when symmetric, with GAMG and the rigid-body modes of every body,
             :data:`ITERATIVE_PETSC_OPTIONS`), or ``"auto"``: direct up to
-            :data:`DIRECT_MAX_DOFS` dofs, iterative above (docs/method.md §14.7). Whatever the
+            :data:`DIRECT_MAX_DOFS` dofs (:data:`CHOLESKY_MAX_DOFS` when symmetric), iterative
+            above (docs/method.md §14.7). Whatever the
             choice, a GAMG preconditioner gets the per-body near-nullspace.
         options_prefix: Prefix of the Krylov solver's options. ``petsc_options`` are set under
             it, read once, and removed from PETSc's global options database again; options
@@ -860,7 +866,8 @@ def _default_options(problem: object, linear_solver: object, symmetric: bool) ->
         index_map = problem.u.function_space.dofmap.index_map
         dofs = index_map.size_global * problem.u.function_space.dofmap.index_map_bs
         # linear constraints: the reduced matrix has no rigid modes for GAMG (§14.7)
-        small = dofs <= DIRECT_MAX_DOFS or bool(getattr(problem, "constraints", None))
+        limit = CHOLESKY_MAX_DOFS if symmetric else DIRECT_MAX_DOFS
+        small = dofs <= limit or bool(getattr(problem, "constraints", None))
         linear_solver = "direct" if small else "iterative"
         logger.info(" %d dofs: %s linear solver", dofs, linear_solver)
     if linear_solver == "iterative":

@@ -197,3 +197,73 @@ def test_a_failing_run_is_a_row_of_the_table(tmp_path):
     assert all(m.peak_rss > 0 and m.wall > 0 for m in result.runs)
     (_, _, row) = vs_ccx.table([result])
     assert "**failed**" in row and "| - |" in row
+
+
+def _fake_result(name: str, when, wall: float, *, ccx_fails: bool = False):
+    result = vs_ccx.DeckResult(name, f"deck {name}", 300)
+    result.measured = when
+    for k in range(3):
+        ok = not (ccx_fails and k)
+        error = "" if ok else "*ERROR: diverges"
+        result.runs.append(vs_ccx.Measurement("ccx", 1.0, 0.9, 2**20, ok, error))
+        result.runs.append(vs_ccx.Measurement("dolfinx_ntf", wall, wall, 2**21, True, "", 0.5))
+    result.ccx = vs_ccx.Progress([3], [1])
+    result.ntf = vs_ccx.Progress([3], [1])
+    return result
+
+
+def test_update_replaces_only_the_rows_of_the_decks_run_again(tmp_path):
+    import datetime as dt
+
+    env = {"os": "Debian 12", "dolfinx": "0.5.2", "petsc": "3.18.5", "ccx": "2.20",
+           "python": "3.11", "cpu": "CPU", "cores": "2", "memory": "24 GiB"}  # fmt: skip
+    first = dt.datetime(2026, 11, 29, 5, 43, tzinfo=dt.timezone.utc)
+    later = dt.datetime(2026, 11, 29, 8, 30, tzinfo=dt.timezone.utc)
+    full = vs_ccx.section(
+        [_fake_result(n, first, 2.0, ccx_fails=n == "b") for n in "abc"], env, [0.5], first, 2, 1
+    )
+    path = tmp_path / "performance.md"
+    vs_ccx.write_report(path, "Debian 12 / dolfinx 0.5.2", full)
+    old = vs_ccx.read_section(path, "Debian 12 / dolfinx 0.5.2")
+    assert old == full[:-1]  # the trailing blank line is not kept
+
+    again = vs_ccx.section([_fake_result("b", later, 0.4)], env, [3.0], later, 2, 1)
+    merged = vs_ccx.merge_section(old, again, ["a", "b", "c"])
+    text = "\n".join(merged)
+    assert "| `a` | 300 |" in text and "| `c` | 300 |" in text
+    assert "| 2.00 | 2.00 |" in text  # a and c keep their old wall times
+    assert "| `b` | 2026-11-29 08:30 | 1.00, 1.00 |" in text  # b re-measured, ccx ok now
+    assert "| `a` | 2026-11-29 05:43 |" in text
+    assert "Failures" not in text  # b's old ccx failure went with its old row
+    assert "Updated (`--update`): `b` re-measured 2026-11-29 08:30 UTC" in text
+    assert [line.split(" |")[0] for line in merged if line.startswith("| `")] == [
+        "| `a`", "| `b`", "| `c`"
+    ] * 2  # fmt: skip
+    # Updating again drops the note it supersedes; a section of other versions is refused.
+    twice = vs_ccx.merge_section(merged, again, ["a", "b", "c"])
+    assert "\n".join(twice).count("Updated (`--update`)") == 1
+    other = vs_ccx.section([_fake_result("b", later, 0.4)], {**env, "petsc": "3.22"}, [], later,
+                           2, 1)  # fmt: skip
+    with pytest.raises(ValueError, match=r"PETSc 3.18.5.*PETSc 3.22.*every deck"):
+        vs_ccx.merge_section(old, other)
+
+
+def test_update_dates_the_rows_of_a_section_written_without_dates():
+    import datetime as dt
+
+    env = {"os": "Debian 13", "dolfinx": "0.9.0", "petsc": "3.22.5", "ccx": "2.20",
+           "python": "3.13", "cpu": "CPU", "cores": "2", "memory": "24 GiB"}  # fmt: skip
+    first = dt.datetime(2026, 11, 29, 5, 43, tzinfo=dt.timezone.utc)
+    full = vs_ccx.section([_fake_result(n, first, 2.0) for n in "ab"], env, [0.5], first, 2, 1)
+    undated = [line.replace("| measured [UTC] ", "").replace("| 2026-11-29 05:43 ", "")
+               for line in full]  # fmt: skip
+    undated = [line[:-4] if line.startswith("|---") and line.count("|") == 9 else line
+               for line in undated]  # fmt: skip
+    later = dt.datetime(2026, 11, 29, 8, 30, tzinfo=dt.timezone.utc)
+    merged = vs_ccx.merge_section(undated, vs_ccx.section([_fake_result("b", later, 0.4)], env,
+                                                          [], later, 2, 1))  # fmt: skip
+    text = "\n".join(merged)
+    assert "| `a` | 2026-11-29 05:43 | 1.00, 1.00 |" in text
+    assert "| `b` | 2026-11-29 08:30 | 1.00, 1.00 |" in text
+    head = next(line for line in merged if line.startswith("| deck | measured"))
+    assert merged[merged.index(head) + 1].count("|") == head.count("|")

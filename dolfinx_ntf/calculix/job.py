@@ -81,6 +81,11 @@ logger = logging.getLogger("dolfinx_ntf")
 #: in its convergence test (measured, docs/method.md §7.1); not with ``tight=True``.
 CCX_RESIDUAL_FLOOR = 1e-6
 
+#: From this many dofs on the deck runner uses CalculiX's symmetrized contact tangent, whose
+#: Cholesky factorization costs about half an LU; below, the exact tangent, which converges in fewer
+#: iterations where projections are clamped to a face edge (docs/method.md §7.4).
+SYMMETRIC_MIN_DOFS = 10_000
+
 
 class JobError(RuntimeError):
     """A job that stopped early (e.g. no convergence); files keep the converged increments.
@@ -868,7 +873,9 @@ def run_job(
             force (ccx's criterion with ``R_n = R_p = 1e-10``) instead of the deck's controls.
         progress: Print ccx-like progress (``log_progress``).
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
-            the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``).
+            the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``);
+            the tangent is CalculiX's symmetrized one from :data:`SYMMETRIC_MIN_DOFS` dofs on,
+            the exact one below, unless ``symmetric`` says otherwise (docs/method.md §7.4).
         petsc_options: Linear solver options (default: MUMPS LU).
         predictor: ccx's predictor ``u_n + dt v_prev`` from the second increment of a step (on by
             default, unlike the Python API: see :class:`~dolfinx_ntf.StaticStep`).
@@ -908,6 +915,8 @@ def run_job(
         problem_options={
             "walk_from_previous_face": False,
             "contact_start_slope": False,
+            # ccx's symmetrized tangent on large decks: Cholesky instead of LU (docs/method.md §7.4)
+            "symmetric": 3 * deck.node_ids.size >= SYMMETRIC_MIN_DOFS,
             "small_sliding_rule": "last_pair",
             # ccx's friction (docs/method.md §11): stale state, friction in tension, its tangent
             "reset_friction_on_separation": False,

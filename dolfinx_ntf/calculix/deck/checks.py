@@ -121,7 +121,9 @@ class _Checks(_ReaderState):
                      locations: tuple[Location, ...]) -> None:  # fmt: skip
         if ids.size == 0:
             return
-        ok = np.isin(ids, known)
+        # ``known`` is sorted: a binary search, not np.isin's sort per call (one per *BOUNDARY line)
+        pos = np.minimum(np.searchsorted(known, ids), max(known.size - 1, 0))
+        ok = known[pos] == ids if known.size else np.zeros(ids.shape, dtype=bool)
         if np.all(ok):
             return
         bad = np.argwhere(~ok)[0]
