@@ -98,4 +98,4 @@ def test_tangent_option_of_the_command_line(argv, options, monkeypatch, tmp_path
 
     monkeypatch.setattr(job_module, "run_job", fake_run_job)
     assert cli.main(["run", str(tmp_path / "JOB"), *argv]) == cli.EXIT_INPUT
-    assert calls == [{"walk_from_previous_face": False, **options}]
+    assert calls == [{"walk_from_previous_face": False, "contact_start_slope": False, **options}]
