@@ -166,7 +166,7 @@ def gather_constraints(
     local, error = [], None
     for c in constraints:
         if isinstance(c, GlobalLinearConstraint):  # already global (§14.9)
-            local.append((c.dofs, c.coefficients, c.value, c.name))
+            local.append(("one", c.dofs, c.coefficients, c.value, c.name))
             continue
         if c.dofs.size and c.dofs.max() >= global_dofs.size:
             node = int(c.nodes.max())
