@@ -47,8 +47,11 @@ _FRD_GROUPS: dict[str, tuple[list[int], ...]] = {"CONTACT": ([0, 1, 2], [3, 4, 5
 
 
 def clean(values: np.ndarray, floor: float = 0.0) -> np.ndarray:
-    """A copy of ``values`` with the entries of magnitude at most ``floor`` and at most
-    ``ROUND_OFF`` times the largest finite magnitude set to 0 (non-finite entries kept)."""
+    """A copy of ``values`` with its round-off set to 0.
+
+    Entries of magnitude at most ``max(floor, ROUND_OFF * largest finite magnitude)`` become 0;
+    non-finite entries are kept.
+    """
     values = np.array(values, dtype=np.float64)
     magnitude = np.abs(values)
     finite = np.isfinite(magnitude)
@@ -58,16 +61,22 @@ def clean(values: np.ndarray, floor: float = 0.0) -> np.ndarray:
 
 
 def force_floor(forces: np.ndarray, residual: float) -> float:
-    """The accuracy of a nodal force ``RF``: ``residual`` (the largest residual force of the
-    converged iterate) plus ``ROUND_OFF`` of the largest force."""
+    """The accuracy of a nodal force ``RF``.
+
+    ``residual`` (the largest residual force of the converged iterate) plus ``ROUND_OFF`` times
+    the largest force.
+    """
     finite = np.abs(np.asarray(forces, dtype=np.float64))
     finite = finite[np.isfinite(finite)]
     return residual + ROUND_OFF * float(finite.max(initial=0.0))
 
 
 def clean_totals(blocks: list[DatBlock], count: int, floor: float) -> list[DatBlock]:
-    """``RF_TOTAL`` blocks, sums over ``count`` nodes, with ``count * floor`` (the sum of their
-    terms' accuracies, :func:`force_floor`) as their floor; other blocks unchanged."""
+    """``RF_TOTAL`` blocks cleaned with the sum of their terms' accuracies as floor.
+
+    A total over ``count`` nodes is known to ``count * floor`` (:func:`force_floor`); other blocks
+    are unchanged.
+    """
     return [
         dataclasses.replace(b, values=clean(b.values, count * floor)) if b.name == "RF_TOTAL" else b
         for b in blocks
@@ -75,8 +84,11 @@ def clean_totals(blocks: list[DatBlock], count: int, floor: float) -> list[DatBl
 
 
 def clean_ratio(value: float, scale: float) -> float:
-    """``value / scale`` (``.cvg``: residual per mean force, correction per displacement
-    change), or 0 when ``|value|`` is at most ``ROUND_OFF * scale`` or ``scale`` is not positive."""
+    """``value / scale``, or 0 at round-off level.
+
+    ``.cvg``: residual per mean force, correction per displacement change. 0 when ``|value|`` is
+    at most ``ROUND_OFF * scale`` or ``scale`` is not positive.
+    """
     if not scale > 0.0 or abs(value) <= ROUND_OFF * scale:
         return 0.0
     return value / scale
