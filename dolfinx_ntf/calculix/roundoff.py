@@ -37,10 +37,11 @@ __all__ = [
     "force_floor",
 ]
 
-#: A printed value at most this fraction of its block's largest magnitude is written as 0.
-#: Partition round-off measured: at most 1.4e-13 (dolfinx 0.5) and 7.5e-12 (0.9) of it; the
-#: largest value itself is printed to 5e-7 of it (7 digits).
-ROUND_OFF: float = 1e-9
+#: A printed value at most this fraction of its block's largest magnitude is written as 0: below
+#: the last printed digit of the block's largest value (5e-7 of it, 7 digits). Partition
+#: round-off measured: at most 1.4e-13 (dolfinx 0.5) and 7.5e-12 (0.9) of it; a zero-by-symmetry
+#: shear stress of the converged iterate: 2.4e-9 of it (docs/method.md §14.5).
+ROUND_OFF: float = 1e-7
 
 #: ``.frd`` CONTACT columns by physical unit: clearance and slips (length), pressure and shears.
 _FRD_GROUPS: dict[str, tuple[list[int], ...]] = {"CONTACT": ([0, 1, 2], [3, 4, 5])}
