@@ -8,7 +8,7 @@ processes, so the same deck would print other digits on another number of proces
 applied in serial and in parallel alike, write such values as 0:
 
 - any printed value of magnitude at most :data:`ROUND_OFF` times the largest magnitude of its
-  block (of its column group for the mixed ``.frd`` CONTACT block);
+  block (of its column for contact blocks: clearance, slips, pressure and shears apart);
 - a nodal force ``RF`` component of magnitude at most the largest residual force ``r`` of the
   converged Newton iterate (plus the first rule's bound): at a free node ``RF`` *is* the residual
   the Newton iteration accepted, and every reaction is known only to within ``r``; a total
@@ -21,6 +21,7 @@ first rule with their scale as the block's largest.
 from __future__ import annotations
 
 import dataclasses
+import typing
 
 import numpy as np
 
@@ -43,8 +44,13 @@ __all__ = [
 #: shear stress of the converged iterate: 2.4e-9 of it (docs/method.md §14.5).
 ROUND_OFF: float = 1e-7
 
-#: ``.frd`` CONTACT columns by physical unit: clearance and slips (length), pressure and shears.
-_FRD_GROUPS: dict[str, tuple[list[int], ...]] = {"CONTACT": ([0, 1, 2], [3, 4, 5])}
+#: Column groups cleaned apart: the contact quantities (clearance, slips, pressure, shears) are
+#: separate fields, each column its own (ccx's are compared column by column).
+_GROUPS: dict[str, tuple[list[int], ...]] = {
+    "CONTACT": ([0], [1], [2], [3], [4], [5]),
+    "CDIS": ([0], [1], [2]),
+    "CSTR": ([0], [1], [2]),
+}
 
 
 def clean(values: np.ndarray, floor: float = 0.0) -> np.ndarray:
@@ -97,17 +103,19 @@ def clean_ratio(value: float, scale: float) -> float:
 
 def clean_dat_blocks(blocks: list[DatBlock]) -> list[DatBlock]:
     """``.dat`` blocks with :func:`clean` applied to each (``CNUM`` counts untouched)."""
-    return [
-        block if block.name == "CNUM" else dataclasses.replace(block, values=clean(block.values))
-        for block in blocks
-    ]
+    return [block if block.name == "CNUM" else _clean_groups(block) for block in blocks]
+
+
+def _clean_groups(block: typing.Any) -> typing.Any:
+    """A block (``DatBlock`` or ``FrdBlock``) with :func:`clean` applied per column group."""
+    values = np.array(block.values, dtype=np.float64)
+    if values.ndim != 2 or values.size == 0:  # nothing to clean (e.g. no contact element)
+        return block
+    for columns in _GROUPS.get(block.name, (list(range(values.shape[1])),)):
+        values[:, columns] = clean(values[:, columns])
+    return dataclasses.replace(block, values=values)
 
 
 def clean_frd_block(block: FrdBlock) -> FrdBlock:
     """An ``.frd`` result block with :func:`clean` applied to each column group."""
-    values = np.array(block.values, dtype=np.float64)
-    if values.ndim != 2 or values.size == 0:  # nothing to clean (e.g. no contact element)
-        return block
-    for columns in _FRD_GROUPS.get(block.name, (list(range(values.shape[1])),)):
-        values[:, columns] = clean(values[:, columns])
-    return dataclasses.replace(block, values=values)
+    return _clean_groups(block)
