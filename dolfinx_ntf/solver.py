@@ -277,6 +277,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.increment_start: np.ndarray | None = None
         self._averages: list[float] = []
         self._largest: list[float] = []
+        #: Largest residual force of the last iterate (before ``residual_floor``), all processes.
+        self.largest_residual = 0.0
         #: Mean element force of every converged increment so far (the scale of an unloaded one).
         self.past_averages: list[float] = []
         self.min_iterations = min_iterations
@@ -440,6 +442,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         if self.average_over_step:
             mean = (sum(self.step_forces) + average) / (len(self.step_forces) + 1)
         largest = b.norm(PETSc.NormType.NORM_INFINITY)
+        self.largest_residual = largest
         if largest < self.residual_floor:
             largest = 0.0
         self._largest.append(largest)

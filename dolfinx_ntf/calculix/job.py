@@ -72,6 +72,7 @@ from .frd import FrdBlock, FrdWriter
 from .gather import CcxNumbering, Discard
 from .model import CalculixModel, build_model, friction_of
 from .progress import CvgFile, StaFile
+from .roundoff import clean, clean_dat_blocks, clean_frd_block, clean_totals, force_floor
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -294,6 +295,16 @@ class _Job:
         forces moved to its 20 nodes (docs/method.md §13.5). Collective.
         """
         return self.numbering.nodal_forces(self.problem)
+
+    def printed_forces(self) -> tuple[np.ndarray, float]:
+        """:meth:`internal_forces` with those within their accuracy as 0, and that accuracy.
+
+        The accuracy is the converged iterate's largest residual force plus round-off
+        (docs/method.md §14.5).
+        """
+        forces = self.internal_forces()
+        floor = force_floor(forces, getattr(self.solver, "largest_residual", 0.0))
+        return clean(forces, floor), floor
 
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points.
@@ -610,9 +621,9 @@ class _Job:
         if frequency > 0 and (result.increment % frequency == 0 or last):
             blocks = self._blocks(step, total, contact)
             if self.root:
-                write_dat(self.result.dat, blocks, append=True)
+                write_dat(self.result.dat, clean_dat_blocks(blocks), append=True)
             for block in self._frd_blocks(step, result.increment, total, contact):
-                self.frd.write(block)
+                self.frd.write(clean_frd_block(block))
 
     def _frd_blocks(
         self, step: Step, increment: int, total: float, contact: list[ContactRows]
@@ -643,7 +654,7 @@ class _Job:
                 nodes, values = members[keep], values[pos[keep]]
             blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
         if ("NODE", "RF") in keys:
-            node_block("FORC", keys["NODE", "RF"], self.internal_forces())
+            node_block("FORC", keys["NODE", "RF"], self.printed_forces()[0])
         if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
             nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
             values = np.zeros((nodes.size, 6))
@@ -691,20 +702,21 @@ class _Job:
 
     def _blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
         blocks: list[DatBlock] = []
-        forces = None
+        forces, floor = None, 0.0
         displacement = self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
         for request in step.prints:
             if request.kind == "NODE":
                 ids = self.deck.nsets[request.set]
                 for key in request.keys:
                     if key == "RF" and forces is None:
-                        forces = self.internal_forces()
+                        forces, floor = self.printed_forces()
                     values = (displacement if key == "U" else forces)[self.deck.node_index(ids)]
                     if key == "U":
                         values = self._with_reference(ids, values)
-                    blocks += node_print_blocks(
+                    new = node_print_blocks(
                         key, request.set, total, ids, values, totals=request.totals
                     )
+                    blocks += clean_totals(new, ids.size, floor) if key == "RF" else new
             elif request.kind == "EL":
                 blocks += self._element_blocks(request, total)
             else:

@@ -835,7 +835,8 @@ def _schedules(deck: Deck, block, node_dof: np.ndarray, parts: dict, mesh):
         facets, _ = _element_faces_to_facets(
             deck, parts, block.ids[keys // 6], keys % 6 + 1, "*DLOAD", deck.path
         )
-        inner = (facets >= 0) & ~_exterior(mesh, np.maximum(facets, 0))
+        inner = facets >= 0  # a process without cells has no facet to look at
+        inner[inner] = ~_exterior(mesh, facets[inner])
         if np.any(inner):
             k = int(np.argmax(inner))
             raise ValueError(

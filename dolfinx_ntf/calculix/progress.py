@@ -6,7 +6,7 @@ times at the end of the increment, failed ones at its start. ``JOB.cvg`` has one
 iteration: step, increment, attempt, iteration, contact elements, the largest residual force in %
 of the mean average force and the largest correction in % of the largest displacement change of
 the increment (ccx's convergence quantities, docs/method.md §7.1), then ccx's two thermal columns
-(zero).
+(zero). Ratios at round-off level are written as 0 (``roundoff.clean_ratio``, docs/method.md §14.5).
 """
 
 from __future__ import annotations
@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 import typing
 from pathlib import Path
+
+from .roundoff import clean_ratio
 
 __all__ = ["CvgFile", "StaFile", "fortran_e"]
 
@@ -86,8 +88,8 @@ class CvgFile:
         """Append the iterations of one attempt (``ContactNewtonSolver.history``)."""
         lines = []
         for iteration, springs, largest, mean, correction, change in history:
-            residual = 100.0 * largest / mean if mean > 0 else 0.0
-            corrected = 100.0 * correction / change if change > 0 else 0.0
+            residual = 100.0 * clean_ratio(largest, mean)
+            corrected = 100.0 * clean_ratio(correction, change)
             values = "".join(f"  {fortran_e(v, 4)}" for v in (residual, corrected, 0.0, 0.0))
             lines.append(f"{step:6d}{increment:6d}{attempt:6d}{iteration:6d}{springs:9d}{values}\n")
         with self.path.open("a") as stream:

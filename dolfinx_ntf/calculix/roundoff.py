@@ -1,0 +1,121 @@
+"""Values below their accuracy written as zero in the deck runner's files (docs/method.md §14.5).
+
+ccx prints every value with 7 (``.dat``) or 6 (``.frd``) significant digits, whatever its size,
+so a quantity that is zero in exact arithmetic (a shear stress zero by symmetry, the force at a
+free node) is printed as its round-off, e.g. ``-3.116438E-17``. That round-off comes from the
+linear solver and the assembly, whose rounding depends on how the mesh is distributed over the
+processes, so the same deck would print other digits on another number of processes. Two rules,
+applied in serial and in parallel alike, write such values as 0:
+
+- any printed value of magnitude at most :data:`ROUND_OFF` times the largest magnitude of its
+  block (of its column for contact blocks: clearance, slips, pressure and shears apart);
+- a nodal force ``RF`` component of magnitude at most the largest residual force ``r`` of the
+  converged Newton iterate (plus the first rule's bound): at a free node ``RF`` *is* the residual
+  the Newton iteration accepted, and every reaction is known only to within ``r``; a total
+  ``RF`` over ``n`` nodes is known to within ``n`` times that.
+
+The ``.cvg`` ratios (residual per mean force, correction per displacement change) follow the
+first rule with their scale as the block's largest.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+import numpy as np
+
+from .dat import DatBlock
+from .frd import FrdBlock
+
+__all__ = [
+    "ROUND_OFF",
+    "clean",
+    "clean_dat_blocks",
+    "clean_frd_block",
+    "clean_ratio",
+    "clean_totals",
+    "force_floor",
+]
+
+#: A printed value at most this fraction of its block's largest magnitude is written as 0: below
+#: the last printed digit of the block's largest value (5e-7 of it, 7 digits). Partition
+#: round-off measured: at most 1.4e-13 (dolfinx 0.5) and 7.5e-12 (0.9) of it; a zero-by-symmetry
+#: shear stress of the converged iterate: 2.4e-9 of it (docs/method.md §14.5).
+ROUND_OFF: float = 1e-7
+
+#: Column groups cleaned apart: the contact quantities (clearance, slips, pressure, shears) are
+#: separate fields, each column its own (ccx's are compared column by column).
+_GROUPS: dict[str, tuple[list[int], ...]] = {
+    "CONTACT": ([0], [1], [2], [3], [4], [5]),
+    "CDIS": ([0], [1], [2]),
+    "CSTR": ([0], [1], [2]),
+}
+
+
+def clean(values: np.ndarray, floor: float = 0.0) -> np.ndarray:
+    """A copy of ``values`` with its round-off set to 0.
+
+    Entries of magnitude at most ``max(floor, ROUND_OFF * largest finite magnitude)`` become 0;
+    non-finite entries are kept.
+    """
+    values = np.array(values, dtype=np.float64)
+    magnitude = np.abs(values)
+    finite = np.isfinite(magnitude)
+    largest = float(magnitude[finite].max(initial=0.0))
+    values[finite & (magnitude <= max(floor, ROUND_OFF * largest))] = 0.0
+    return values
+
+
+def force_floor(forces: np.ndarray, residual: float) -> float:
+    """The accuracy of a nodal force ``RF``.
+
+    ``residual`` (the largest residual force of the converged iterate) plus ``ROUND_OFF`` times
+    the largest force.
+    """
+    finite = np.abs(np.asarray(forces, dtype=np.float64))
+    finite = finite[np.isfinite(finite)]
+    return residual + ROUND_OFF * float(finite.max(initial=0.0))
+
+
+def clean_totals(blocks: list[DatBlock], count: int, floor: float) -> list[DatBlock]:
+    """``RF_TOTAL`` blocks cleaned with the sum of their terms' accuracies as floor.
+
+    A total over ``count`` nodes is known to ``count * floor`` (:func:`force_floor`); other blocks
+    are unchanged.
+    """
+    return [
+        dataclasses.replace(b, values=clean(b.values, count * floor)) if b.name == "RF_TOTAL" else b
+        for b in blocks
+    ]
+
+
+def clean_ratio(value: float, scale: float) -> float:
+    """``value / scale``, or 0 at round-off level.
+
+    ``.cvg``: residual per mean force, correction per displacement change. 0 when ``|value|`` is
+    at most ``ROUND_OFF * scale`` or ``scale`` is not positive.
+    """
+    if not scale > 0.0 or abs(value) <= ROUND_OFF * scale:
+        return 0.0
+    return value / scale
+
+
+def clean_dat_blocks(blocks: list[DatBlock]) -> list[DatBlock]:
+    """``.dat`` blocks with :func:`clean` applied to each (``CNUM`` counts untouched)."""
+    return [block if block.name == "CNUM" else _clean_groups(block) for block in blocks]
+
+
+def _clean_groups(block: typing.Any) -> typing.Any:
+    """A block (``DatBlock`` or ``FrdBlock``) with :func:`clean` applied per column group."""
+    values = np.array(block.values, dtype=np.float64)
+    if values.ndim != 2 or values.size == 0:  # nothing to clean (e.g. no contact element)
+        return block
+    for columns in _GROUPS.get(block.name, (list(range(values.shape[1])),)):
+        values[:, columns] = clean(values[:, columns])
+    return dataclasses.replace(block, values=values)
+
+
+def clean_frd_block(block: FrdBlock) -> FrdBlock:
+    """An ``.frd`` result block with :func:`clean` applied to each column group."""
+    return _clean_groups(block)
