@@ -584,16 +584,15 @@ def section(results: list[DeckResult], env: dict[str, str], loads: list[float],
         out += ["Failures:", "", *failures, ""]
     cel = cel_lines(results)
     if cel:
-        out += [
-            "Contact element sets (`.cel`), ccx's pairings against dolfinx_ntf's, iteration by "
-            "iteration (up to ccx's last pairing when it fails):",
-            "",
-            *cel,
-            "",
-        ]
+        out += [_CEL_INTRO, "", *cel, ""]
     out += ["Timed runs:", "", *_details(results), ""]
     return out
 
+
+_CEL_INTRO = (
+    "Contact element sets (`.cel`), ccx's pairings against dolfinx_ntf's, iteration by "
+    "iteration (up to ccx's last pairing when it fails):"
+)
 
 _HEADER = [
     "# Performance: dolfinx_ntf against CalculiX 2.20",
@@ -677,6 +676,8 @@ class _Section:
     failures: dict[str, list[str]]
     details_head: list[str]
     details: dict[str, str]
+    cel_head: list[str]
+    cel: dict[str, str]
 
 
 def _parse_section(lines: list[str]) -> _Section:
@@ -698,13 +699,17 @@ def _parse_section(lines: list[str]) -> _Section:
             failures.setdefault(failure.group(1), []).append(line)
         elif line and line not in ("Failures:", "Timed runs:") and not tables:
             notes.append(line)
-    if not lines or not lines[0].startswith("## ") or len(tables) != 2:
-        raise ValueError("not a vs_ccx section (a '## ' title and two tables expected)")
+    if not lines or not lines[0].startswith("## ") or len(tables) not in (2, 3):
+        raise ValueError(
+            "not a vs_ccx section (a '## ' title and two or three tables expected: results, "
+            "the .cel comparison if any, timed runs)"
+        )
 
     def rows(table: list[str]) -> dict[str, str]:
         return {m.group(1): line for line in table[2:] if (m := _ROW.match(line))}
 
-    details_head, details = tables[1][:2], rows(tables[1])
+    cel_head, cel = (tables[1][:2], rows(tables[1])) if len(tables) == 3 else ([], {})
+    details_head, details = tables[-1][:2], rows(tables[-1])
     if "measured" not in details_head[0]:  # written before the column existed: the run's date
         stamp = next((m.group(1) for m in map(_MEASURED.match, notes) if m), "-")
         details_head = [
@@ -713,7 +718,7 @@ def _parse_section(lines: list[str]) -> _Section:
         ]
         details = {n: line.replace(" | ", f" | {stamp} | ", 1) for n, line in details.items()}
     return _Section(lines[0], notes, tables[0][:2], rows(tables[0]), failures, details_head,
-                    details)  # fmt: skip
+                    details, cel_head, cel)  # fmt: skip
 
 
 def _update_note_decks(note: str) -> set[str]:
@@ -757,6 +762,10 @@ def merge_section(old: list[str], new: list[str], order: typing.Sequence[str] = 
     failed = [line for n in ordered for line in failures.get(n, [])]
     if failed:
         out += ["Failures:", "", *failed, ""]
+    cel = {**before.cel, **now.cel}
+    if cel:
+        head = now.cel_head or before.cel_head
+        out += [_CEL_INTRO, "", *head, *(cel[n] for n in ordered if n in cel), ""]
     out += ["Timed runs:", "", *now.details_head, *(details[n] for n in ordered if n in details)]
     return [*out, ""]
 

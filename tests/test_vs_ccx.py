@@ -267,3 +267,31 @@ def test_update_dates_the_rows_of_a_section_written_without_dates():
     assert "| `b` | 2026-11-29 08:30 | 1.00, 1.00 |" in text
     head = next(line for line in merged if line.startswith("| deck | measured"))
     assert merged[merged.index(head) + 1].count("|") == head.count("|")
+
+
+def test_update_keeps_and_replaces_cel_comparison_rows():
+    """A section with the .cel table merged into one without it, then again (both kept)."""
+    import datetime as dt
+
+    from dolfinx_ntf.calculix.cel import CelDifference
+
+    env = {"os": "Debian 12", "dolfinx": "0.5.2", "petsc": "3.18.5", "ccx": "2.20",
+           "python": "3.11", "cpu": "CPU", "cores": "2", "memory": "24 GiB"}  # fmt: skip
+    first = dt.datetime(2026, 11, 29, 5, 43, tzinfo=dt.timezone.utc)
+    later = dt.datetime(2026, 11, 29, 8, 30, tzinfo=dt.timezone.utc)
+    old = vs_ccx.section([_fake_result(n, first, 2.0) for n in "ab"], env, [0.5], first, 2, 1)
+    assert not any(line.startswith("Contact element sets") for line in old)
+
+    def with_cel(name, differing):
+        result = _fake_result(name, later, 0.4)
+        result.cel = [CelDifference("contactelements_st1_in1_at1_it1", differing, (), ())]
+        return result
+
+    new = vs_ccx.section([with_cel("b", (7,))], env, [0.5], later, 2, 1)
+    merged = vs_ccx.merge_section(old[:-1], new, ["a", "b"])
+    text = "\n".join(merged)
+    assert "| `b` | 1 | in1 it1 | in1 it1: 1/0/0 |" in text
+    again = vs_ccx.section([with_cel("a", ())], env, [0.5], later, 2, 1)
+    text = "\n".join(vs_ccx.merge_section(merged[:-1], again, ["a", "b"]))
+    assert "| `a` | 1 | none | identical |" in text and "| `b` | 1 | in1 it1" in text
+    assert text.index("| `a` | 1 | none") < text.index("Timed runs:")
