@@ -183,6 +183,27 @@ def _check_files(path: Path, serial_dir: Path, round_off_blocks: bool = False) -
     return None
 
 
+def _assert_serial_files(path: Path, *, in_contact: bool = True, round_off_blocks: bool = False):
+    """Run the deck serially and on all processes: same iterations, contact elements, nodes and
+    displacements (1e-10), and the same files (:func:`_check_files`). Returns the parallel result.
+
+    ``in_contact``: the serial run must have contact elements.
+    """
+    serial, parallel, serial_dir = _run_both(path)
+    serial = COMM.bcast(serial and _summary(serial), root=0)
+    assert _summary(parallel)["iterations"] == serial["iterations"]
+    assert _summary(parallel)["contact"] == serial["contact"]
+    u, u_ref = parallel.last.displacement, serial["displacement"]
+    assert np.array_equal(parallel.last.node_ids, serial["node_ids"])
+    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
+    if in_contact:
+        assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
+    files = _check_files(path, serial_dir, round_off_blocks) if COMM.rank == 0 else None
+    files = COMM.bcast(files, root=0)
+    assert files is None, files
+    return parallel
+
+
 DECKS = [
     "two_cubes",  # C3D8, two elements (on 3 processes one holds none), *CONTACT PRINT, TOTALS
     "hex_linear_pressure",  # C3D8 punch, *DLOAD, 3 increments
@@ -196,17 +217,7 @@ DECKS = [
 @pytest.mark.parametrize("name", DECKS)
 def test_deck_gives_the_serial_files(name, shared):
     path = _deck(name, shared)
-    serial, parallel, serial_dir = _run_both(path)
-    serial = COMM.bcast(serial and _summary(serial), root=0)
-    assert _summary(parallel)["iterations"] == serial["iterations"]
-    assert _summary(parallel)["contact"] == serial["contact"]
-    u, u_ref = parallel.last.displacement, serial["displacement"]
-    assert np.array_equal(parallel.last.node_ids, serial["node_ids"])
-    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
-    assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
-    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
-    error = COMM.bcast(error, root=0)
-    assert error is None, error
+    _assert_serial_files(path)
 
 
 def _summary(result) -> dict:
@@ -271,15 +282,7 @@ FRICTION_DECKS = [
 def test_friction_and_adjust_decks_give_the_serial_files(name, shared):
     """Friction state on the slave node's owner, ADJUST moves on every process (§14.6)."""
     path = _deck(name, shared / "friction")
-    serial, parallel, serial_dir = _run_both(path)
-    serial = COMM.bcast(serial and _summary(serial), root=0)
-    assert _summary(parallel)["iterations"] == serial["iterations"]
-    assert _summary(parallel)["contact"] == serial["contact"]
-    u, u_ref = parallel.last.displacement, serial["displacement"]
-    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
-    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
-    error = COMM.bcast(error, root=0)
-    assert error is None, error
+    _assert_serial_files(path, in_contact=False)
 
 
 def _hex20(name: str, directory: Path) -> Path:
@@ -312,18 +315,8 @@ def test_c3d20_deck_gives_the_serial_files(name, shared):
     """Serendipity rows of all processes, a shared face's row once; RF on the 20 nodes (§14.10)."""
     directory = shared / "c3d20"
     path = _hex20(name, directory) if name == "two_cubes_hex20" else _deck(name, directory)
-    serial, parallel, serial_dir = _run_both(path)
+    parallel = _assert_serial_files(path)
     assert parallel.model.element_type.name in ("C3D20", "C3D20R")
-    serial = COMM.bcast(serial and _summary(serial), root=0)
-    assert _summary(parallel)["iterations"] == serial["iterations"]
-    assert _summary(parallel)["contact"] == serial["contact"]
-    u, u_ref = parallel.last.displacement, serial["displacement"]
-    assert np.array_equal(parallel.last.node_ids, serial["node_ids"])
-    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
-    assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
-    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
-    error = COMM.bcast(error, root=0)
-    assert error is None, error
 
 
 def _dynamic(name: str, directory: Path) -> Path:
@@ -365,17 +358,8 @@ def test_dynamic_deck_gives_the_serial_files(name, shared):
     ``.sta`` and ``.cel`` byte-identical; ``.dat``/``.cvg``/``.frd`` too except blocks of round-off.
     """
     path = _dynamic(name, shared / "dynamic")
-    serial, parallel, serial_dir = _run_both(path)
-    serial = COMM.bcast(serial and _summary(serial), root=0)
-    assert _summary(parallel)["iterations"] == serial["iterations"]
-    assert _summary(parallel)["contact"] == serial["contact"]
-    u, u_ref = parallel.last.displacement, serial["displacement"]
-    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
-    assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
     # a body in free flight has stresses of round-off only, whose digits depend on the partition
-    error = _check_files(path, serial_dir, round_off_blocks=True) if COMM.rank == 0 else None
-    error = COMM.bcast(error, root=0)
-    assert error is None, error
+    _assert_serial_files(path, round_off_blocks=True)
 
 
 # ----------------------------------------------------------------------------- *EQUATION
@@ -421,16 +405,7 @@ def test_equation_decks_give_the_serial_files(name, shared):
         model = build_model(read_deck(path), COMM)
         held = COMM.allgather(set(model.dof_node[model.dof_node > 0].tolist()))
         assert not any({3, 10, 14} <= nodes for nodes in held)
-    serial, parallel, serial_dir = _run_both(path)
-    serial = COMM.bcast(serial and _summary(serial), root=0)
-    assert _summary(parallel)["iterations"] == serial["iterations"]
-    assert _summary(parallel)["contact"] == serial["contact"]
-    u, u_ref = parallel.last.displacement, serial["displacement"]
-    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
-    assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
-    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
-    error = COMM.bcast(error, root=0)
-    assert error is None, error
+    _assert_serial_files(path)
 
 
 def _sliced_mesh(deck, block, comm):
@@ -454,12 +429,4 @@ def test_process_without_cells_gives_the_serial_files(name, shared, monkeypatch)
     """The last process holds no cell (a *DLOAD deck and a friction deck)."""
     monkeypatch.setattr(model_module, "_create_mesh", _sliced_mesh)
     path = _deck(name, shared / "empty")
-    serial, parallel, serial_dir = _run_both(path)
-    serial = COMM.bcast(serial and _summary(serial), root=0)
-    assert _summary(parallel)["iterations"] == serial["iterations"]
-    assert _summary(parallel)["contact"] == serial["contact"]
-    u, u_ref = parallel.last.displacement, serial["displacement"]
-    assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
-    error = _check_files(path, serial_dir) if COMM.rank == 0 else None
-    error = COMM.bcast(error, root=0)
-    assert error is None, error
+    _assert_serial_files(path, in_contact=False)
