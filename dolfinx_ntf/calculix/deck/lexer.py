@@ -50,7 +50,10 @@ def _split_keyword_line(text: str, location: Location) -> _Card:
 
 
 def _data_fields(text: str) -> list[str]:
-    fields = _name(text).split(",")
+    if " " not in text and text.isascii() and text.isprintable():  # no blank (most lines)
+        fields = text.upper().split(",")
+    else:
+        fields = _name(text).split(",")
     if fields and fields[-1] == "":
         fields.pop()
     return fields
@@ -107,11 +110,12 @@ def _lines(
     except OSError as exc:
         where = "deck" if include_loc is None else "*INCLUDE file"
         raise DeckError(f"cannot read {where} {path}: {exc.strerror}", include_loc) from None
+    name = str(path)
     for number, line in enumerate(text.splitlines(), start=1):
-        location = Location(str(path), number)
-        stripped = line.strip()
+        location = Location(name, number)
+        stripped = line.lstrip()
         if stripped.startswith("*") and not stripped.startswith("**"):
-            card = _split_keyword_line(stripped, location)
+            card = _split_keyword_line(stripped.rstrip(), location)
             if card.keyword == "INCLUDE":
                 included = _include_path(card, path, main)
                 yield from _lines(included, main, location, (*stack, resolved))

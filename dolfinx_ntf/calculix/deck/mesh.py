@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
@@ -13,6 +14,26 @@ from .lexer import _INT_RE, _Card
 from .state import _ReaderState
 
 
+def _plain_ints(tokens: list[str]) -> list[int] | None:
+    """The tokens as integers if all are plain ASCII digit strings (the common case), else None."""
+    if all(map(str.isdigit, tokens)) and "".join(tokens).isascii():
+        return list(map(int, tokens))
+    return None
+
+
+def _node_line(fields: list[str]) -> tuple[int, float, float, float] | None:
+    """A plain ``n,x,y,z`` line (digits, finite floats without ccx's D exponent), else None."""
+    if len(fields) != 4 or not (fields[0].isdigit() and fields[0].isascii()):
+        return None
+    try:
+        x, y, z = float(fields[1]), float(fields[2]), float(fields[3])
+    except ValueError:
+        return None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        return None
+    return int(fields[0]), x, y, z
+
+
 class _MeshCards(_ReaderState):
     """Handlers of the mesh, set and surface cards."""
 
@@ -20,11 +41,16 @@ class _MeshCards(_ReaderState):
         self._check_params(card, allowed={"NSET"})
         ids: list[int] = []
         for fields, _, loc in card.lines:
-            if not 1 <= len(fields) <= 4:
-                raise DeckError("*NODE data line: node number, x, y, z", loc)
-            ids.append(self._int(fields[0], "node number", loc))
-            xyz = [self._optional_float(fields, i, "a coordinate", loc) or 0.0 for i in (1, 2, 3)]
-            self.node_coords.append((xyz[0], xyz[1], xyz[2]))
+            line = _node_line(fields)
+            if line is None:  # not the plain "n,x,y,z": checked field by field
+                if not 1 <= len(fields) <= 4:
+                    raise DeckError("*NODE data line: node number, x, y, z", loc)
+                xyz = [
+                    self._optional_float(fields, i, "a coordinate", loc) or 0.0 for i in (1, 2, 3)
+                ]
+                line = (self._int(fields[0], "node number", loc), xyz[0], xyz[1], xyz[2])
+            ids.append(line[0])
+            self.node_coords.append(line[1:])
             self.node_locs.append(loc)
         self.node_ids.extend(ids)
         if card.params.get("NSET"):
@@ -57,7 +83,9 @@ class _MeshCards(_ReaderState):
                     f"{etype.num_nodes}",
                     start,
                 )
-            numbers = [self._int(t, "element or node number", start) for t in tokens]
+            numbers = _plain_ints(tokens) or [
+                self._int(t, "element or node number", start) for t in tokens
+            ]
             ids.append(numbers[0])
             self.element_rows[type_name].append(numbers[1:])
             self.element_locs[type_name].append(start)
