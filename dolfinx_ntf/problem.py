@@ -25,6 +25,7 @@ import ufl
 from dolfinx_ntf import compat, master_exchange, parallel, serendipity, validation
 from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
+from dolfinx_ntf.bulk_jacobian import BulkJacobian
 from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
 from dolfinx_ntf.friction_state import FrictionState
@@ -204,6 +205,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             increment's time fraction in the first increment only) or ``"linear"`` (over the whole
             first step, as CalculiX's manual describes), docs/method.md §11.6.
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
+        reuse_bulk_jacobian: When the bulk Jacobian form does not contain ``u`` (a linear material
+            at small strain), assemble it once and copy it at later iterations while its inputs
+            are unchanged (:class:`~dolfinx_ntf.bulk_jacobian.BulkJacobian`; one more matrix in
+            memory). False assembles it at every iteration.
     """
 
     def __init__(
@@ -228,6 +233,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         small_sliding_rule: str = "per_pair",
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
+        reuse_bulk_jacobian: bool = True,
     ) -> None:
         pairs, bcs = validation.check_problem(F, u, pairs, bcs, J, ContactPair, max_depth)
         super().__init__(
@@ -274,6 +280,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         self._element_force_vector = dolfinx.fem.petsc.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
+        self.bulk_jacobian = BulkJacobian(
+            ufl.derivative(F, u, ufl.TrialFunction(V)) if J is None else J,
+            u,
+            enabled=reuse_bulk_jacobian,
+        )
         #: Contact nodes of other processes (docs/method.md §14); None in serial.
         self.halo = parallel.NodeHalo(V) if V.mesh.comm.size > 1 else None
         #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
@@ -945,10 +956,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             self.form(x)
             if self._residual_vector is not None:
                 self.F(x, self._residual_vector)
-        A.zeroEntries()
-        dolfinx.fem.petsc.assemble_matrix(A, self.a, self.bcs)
-        A.assemblyBegin(PETSc.Mat.AssemblyType.FLUSH)
-        A.assemblyEnd(PETSc.Mat.AssemblyType.FLUSH)
+        pattern = (self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
+        self.bulk_jacobian.assemble(A, self.a, self.bcs, pattern)
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
         self._pattern_checked = True
         A.assemble()
@@ -967,6 +976,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.matrix is not None:
             self.matrix.destroy()
             self.matrix = None
+        self.bulk_jacobian.release()
         if self.elimination is not None:
             self.elimination.release()
             self.reduced_matrix = None

@@ -113,9 +113,11 @@ def test_the_jacobian_belongs_to_the_problem():
     problem, pressure = _problem()
     comm = problem.u.function_space.mesh.comm
     solver = ntf.ContactNewtonSolver(comm, problem)
+    ntf.StaticStep(lambda t: setattr(pressure, "value", 0.5 * LOAD * t)).run(solver, problem.u)
+    matrix = problem.matrix
     del solver
     gc.collect()
-    assert problem.matrix is not None and problem.matrix.handle != 0
+    assert problem.matrix is matrix and matrix.handle != 0
     solver = ntf.ContactNewtonSolver(comm, problem)
     ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t)).run(solver, problem.u)
     assert ntf.contact_force(problem)[2] == pytest.approx(LOAD * 0.36, rel=1e-10)
