@@ -25,10 +25,10 @@ from dolfinx_ntf.calculix.roundoff import (
     clean_frd_block,
     clean_ratio,
     clean_totals,
+    element_sizes,
     force_floor,
     largest_modulus,
     law_accuracy,
-    smallest_size,
 )
 
 DYNAMIC = Path(__file__).parent / "data" / "calculix" / "dynamic"
@@ -92,17 +92,20 @@ def test_cvg_ratios_at_round_off_are_zero(tmp_path):
 
 
 def test_field_accuracy_carries_the_displacement_round_off():
-    accuracy = FieldAccuracy.of(coordinates=2.0, displacement=0.01, modulus=1346.0, size=0.5)
+    accuracy = FieldAccuracy.of(coordinates=2.0, displacement=0.01, modulus=1346.0, sizes=(0.5, 3))
     assert accuracy.length == FIELD_ROUND_OFF * 2.01
     assert accuracy.stress == pytest.approx(FIELD_ROUND_OFF * 1346.0 * 0.01 / 0.5, rel=1e-15)
-    assert FieldAccuracy.of(2.0, 0.01, 1346.0, 0.0).stress == 0.0  # no element: no bound
+    assert accuracy.force == pytest.approx(accuracy.stress * 9.0, rel=1e-15)
+    none = FieldAccuracy.of(2.0, 0.01, 1346.0, (0.0, 0.0))  # no element: no bound
+    assert none.stress == 0.0 and none.force == 0.0
     assert largest_modulus([(1000.0, 0.3), (10.0, 0.0)]) == pytest.approx(1000 * 0.7 / 0.52)
     assert largest_modulus([]) == 0.0
     x = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0.3, 0.2, 0.1]])
-    # 0-3 (0.374) lies in no element: 1-3 is the smallest
-    assert smallest_size(x, np.array([[0, 1, 2], [1, 2, 3]])) == pytest.approx(np.sqrt(0.54))
-    assert smallest_size(x, np.array([[0, 1, 2, 3]])) == pytest.approx(np.sqrt(0.14))
-    assert smallest_size(x, np.zeros((0, 4), int)) == 0.0
+    # 0-3 (0.374) lies in no element: 1-3 is the smallest, 0-2 the largest
+    sizes = element_sizes(x, np.array([[0, 1, 2], [1, 2, 3]]))
+    assert sizes == pytest.approx((np.sqrt(0.54), np.sqrt(2.0)))
+    assert element_sizes(x, np.array([[0, 1, 2, 3]]))[0] == pytest.approx(np.sqrt(0.14))
+    assert element_sizes(x, np.zeros((0, 4), int)) == (0.0, 0.0)
 
 
 def test_pressure_and_energy_accuracy_follow_the_law():

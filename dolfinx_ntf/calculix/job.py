@@ -79,10 +79,10 @@ from .roundoff import (
     clean_dat_blocks,
     clean_frd_block,
     clean_totals,
+    element_sizes,
     force_floor,
     largest_modulus,
     law_accuracy,
-    smallest_size,
 )
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
@@ -299,7 +299,7 @@ class _Job:
         self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
         self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
         self._step_time = 0.0
-        self._field_scales: tuple[float, float, float] | None = None
+        self._field_scales: tuple[float, float, tuple[float, float]] | None = None
 
     # -- forces ------------------------------------------------------------------------------------
 
@@ -314,11 +314,12 @@ class _Job:
     def printed_forces(self) -> tuple[np.ndarray, float]:
         """:meth:`internal_forces` with those within their accuracy as 0, and that accuracy.
 
-        The accuracy is the converged iterate's largest residual force plus round-off
-        (docs/method.md §14.5).
+        The accuracy is the converged iterate's largest residual force plus round-off, plus the
+        round-off of the displacement they come from (docs/method.md §14.5). Collective.
         """
         forces = self.internal_forces()
         floor = force_floor(forces, getattr(self.solver, "largest_residual", 0.0))
+        floor += self.field_accuracy().force
         return clean(forces, floor), floor
 
     def field_accuracy(self) -> FieldAccuracy:
@@ -334,11 +335,11 @@ class _Job:
             self._field_scales = (
                 float(np.abs(coords).max(initial=0.0)),
                 largest_modulus(m.elastic for m in deck.materials.values() if m.elastic),
-                smallest_size(coords, deck.node_index(block.connectivity)),
+                element_sizes(coords, deck.node_index(block.connectivity)),
             )
-        coordinates, modulus, size = self._field_scales
+        coordinates, modulus, sizes = self._field_scales
         local = float(np.abs(self.model.u.x.array).max(initial=0.0))
-        return FieldAccuracy.of(coordinates, self.comm.allreduce(local, MPI.MAX), modulus, size)
+        return FieldAccuracy.of(coordinates, self.comm.allreduce(local, MPI.MAX), modulus, sizes)
 
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points.

@@ -19,7 +19,10 @@ rules, applied in serial and in parallel alike, write such values as 0:
   displacement ``u`` and the coordinates are taken as known to :data:`FIELD_ROUND_OFF` of their
   largest magnitudes ``U`` and ``L``, carried through each formula: a stress (a modulus times
   displacement differences over an element) to ``FIELD_ROUND_OFF M U / h`` (``M`` the largest
-  ``lambda + 2 mu``, ``h`` the smallest distance between two nodes of an element); a clearance
+  ``lambda + 2 mu``, ``h`` the smallest distance between two nodes of an element); a nodal force
+  ``RF`` (a stress times a shape function gradient, about ``1/h``, over the volume of the
+  elements at the node) to that times ``d^2`` (``d`` the largest distance between two nodes of
+  an element), added to the second rule's bound; a clearance
   or a slip (a difference of current positions) to ``FIELD_ROUND_OFF (L + U)``; a contact
   pressure and a spring energy to what the pair's law changes over that clearance accuracy
   (:func:`law_accuracy`).
@@ -48,10 +51,10 @@ __all__ = [
     "clean_frd_block",
     "clean_ratio",
     "clean_totals",
+    "element_sizes",
     "force_floor",
     "largest_modulus",
     "law_accuracy",
-    "smallest_size",
 ]
 
 #: A printed value at most this fraction of its block's largest magnitude is written as 0: below
@@ -149,23 +152,31 @@ class FieldAccuracy:
     Attributes:
         length: Of a clearance or a slip: ``FIELD_ROUND_OFF (L + U)``.
         stress: Of a stress: ``FIELD_ROUND_OFF M U / h``.
+        force: Of a nodal force: ``stress d^2``.
     """
 
     length: float
     stress: float
+    force: float
 
     @classmethod
     def of(
-        cls, coordinates: float, displacement: float, modulus: float, size: float
+        cls,
+        coordinates: float,
+        displacement: float,
+        modulus: float,
+        sizes: tuple[float, float],
     ) -> FieldAccuracy:
         """The accuracy of the values of a displacement field.
 
         From the largest coordinate ``L`` and displacement ``U`` magnitudes, the largest modulus
-        ``M`` and the smallest element size ``h`` (no stress bound when ``h`` is 0).
+        ``M`` and the element sizes ``(h, d)`` of :func:`element_sizes` (no stress or force
+        bound when ``h`` is 0).
         """
+        smallest, largest = sizes
         length = FIELD_ROUND_OFF * (coordinates + displacement)
-        stress = FIELD_ROUND_OFF * modulus * displacement / size if size > 0.0 else 0.0
-        return cls(length, stress)
+        stress = FIELD_ROUND_OFF * modulus * displacement / smallest if smallest > 0.0 else 0.0
+        return cls(length, stress, stress * largest**2)
 
 
 def law_accuracy(
@@ -212,18 +223,19 @@ def clean_contact(rows: typing.Any) -> typing.Any:
     )
 
 
-def smallest_size(coordinates: np.ndarray, connectivity: np.ndarray) -> float:
-    """The smallest distance between two nodes of one element; 0 without elements.
+def element_sizes(coordinates: np.ndarray, connectivity: np.ndarray) -> tuple[float, float]:
+    """The smallest and the largest distance between two nodes of one element (0 without).
 
     ``connectivity`` ``(E, n)`` holds row indices into ``coordinates`` ``(N, 3)``.
     """
     if connectivity.size == 0:
-        return 0.0
+        return 0.0, 0.0
     x = coordinates[connectivity]  # (E, n, 3)
-    smallest = np.inf
-    for k in range(1, connectivity.shape[1]):
-        smallest = min(smallest, float(np.linalg.norm(x[:, k:] - x[:, :-k], axis=-1).min()))
-    return smallest
+    smallest, largest = np.inf, 0.0
+    for k in range(1, connectivity.shape[1]):  # node pairs (i, i + k)
+        distance = np.linalg.norm(x[:, k:] - x[:, :-k], axis=-1)
+        smallest, largest = min(smallest, distance.min()), max(largest, distance.max())
+    return float(smallest), float(largest)
 
 
 def largest_modulus(elastic: typing.Iterable[tuple[float, float]]) -> float:
