@@ -29,6 +29,7 @@ from dolfinx_ntf.calculix.roundoff import (
     force_floor,
     largest_modulus,
     law_accuracy,
+    zero_below,
 )
 
 DYNAMIC = Path(__file__).parent / "data" / "calculix" / "dynamic"
@@ -117,6 +118,13 @@ def test_pressure_and_energy_accuracy_follow_the_law():
     assert dp[2] == pytest.approx(slope * length, rel=1e-3)
     assert de[2] == pytest.approx(area[2] * law.pressure(d[2]) * length, rel=1e-3)
     assert np.all(de[:2] > 0.0) and np.all(de[:2] < dp[:2] * length)
+
+
+def test_zero_below_a_floor_without_the_block_rule():
+    values = np.array([[1e-13, 2.0], [3e-12, np.nan]])
+    assert np.array_equal(zero_below(values, 1e-12), [[0.0, 2.0], [3e-12, np.nan]], equal_nan=True)
+    assert np.array_equal(zero_below(values[:, 0], [1e-14, 5e-12]), [1e-13, 0.0])  # per row
+    assert zero_below(np.zeros((0, 3)), 1.0).shape == (0, 3)
 
 
 def test_contact_values_within_their_accuracy_are_zero():

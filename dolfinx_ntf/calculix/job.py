@@ -83,6 +83,7 @@ from .roundoff import (
     force_floor,
     largest_modulus,
     law_accuracy,
+    zero_below,
 )
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
@@ -690,7 +691,7 @@ class _Job:
             )
         if ("EL", "S") in keys:
             nodes, values = self.nodal_stresses()
-            values = clean(values, self.field_accuracy().stress)
+            values = zero_below(values, self.field_accuracy().stress)
             if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
                 members = self.deck.nsets[keys["EL", "S"].set]
                 pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
@@ -775,7 +776,7 @@ class _Job:
                 raise NotImplementedError(
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
                 )
-            stresses = clean(self.stresses(ids), self.field_accuracy().stress)
+            stresses = zero_below(self.stresses(ids), self.field_accuracy().stress)
             blocks += el_print_blocks("S", request.set, total, ids, stresses)
         return blocks
 

@@ -55,6 +55,7 @@ __all__ = [
     "force_floor",
     "largest_modulus",
     "law_accuracy",
+    "zero_below",
 ]
 
 #: A printed value at most this fraction of its block's largest magnitude is written as 0: below
@@ -197,8 +198,11 @@ def law_accuracy(
     return dp, de
 
 
-def _below(values: np.ndarray, floor: typing.Any) -> np.ndarray:
-    """``values`` with the entries of magnitude at most ``floor`` (broadcast) set to 0."""
+def zero_below(values: np.ndarray, floor: typing.Any) -> np.ndarray:
+    """A copy of ``values`` with the entries of magnitude at most ``floor`` set to 0.
+
+    ``floor``: a scalar, or one per row (first axis). Unlike :func:`clean`, no block rule.
+    """
     values = np.array(values, dtype=np.float64)
     floor = np.broadcast_to(np.asarray(floor, dtype=np.float64), values.shape[:1])
     values[np.abs(values) <= floor.reshape(-1, *([1] * (values.ndim - 1)))] = 0.0
@@ -216,10 +220,10 @@ def clean_contact(rows: typing.Any) -> typing.Any:
     length, pressure, energy = rows.accuracy
     return dataclasses.replace(
         rows,
-        clearance=_below(rows.clearance, length),
-        pressure=_below(rows.pressure, pressure),
-        energy=_below(rows.energy, energy),
-        slip=None if rows.slip is None else _below(rows.slip, length),
+        clearance=zero_below(rows.clearance, length),
+        pressure=zero_below(rows.pressure, pressure),
+        energy=zero_below(rows.energy, energy),
+        slip=None if rows.slip is None else zero_below(rows.slip, length),
     )
 
 
