@@ -72,7 +72,19 @@ from .frd import FrdBlock, FrdWriter
 from .gather import CcxNumbering, Discard
 from .model import CalculixModel, build_model, friction_of
 from .progress import CvgFile, StaFile
-from .roundoff import clean, clean_dat_blocks, clean_frd_block, clean_totals, force_floor
+from .roundoff import (
+    FieldAccuracy,
+    clean,
+    clean_contact,
+    clean_dat_blocks,
+    clean_frd_block,
+    clean_totals,
+    element_sizes,
+    force_floor,
+    largest_modulus,
+    law_accuracy,
+    zero_below,
+)
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -119,6 +131,8 @@ class ContactRows:
         slip: ``(k, 2)`` CDIS tangential columns: accumulated tangential relative displacement
             along ccx's output directions t1, t2 (zero without friction).
         shear: ``(k, 2)`` CSTR tangential columns: shear traction along t1, t2.
+        accuracy: ``(length, pressure (k,), energy (k,))``: what each value is known to
+            (``roundoff.clean_contact``, docs/method.md §14.5).
     """
 
     pair: str
@@ -129,6 +143,7 @@ class ContactRows:
     master_faces: np.ndarray
     slip: np.ndarray | None = None
     shear: np.ndarray | None = None
+    accuracy: tuple | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,6 +300,7 @@ class _Job:
         self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
         self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
         self._step_time = 0.0
+        self._field_scales: tuple[float, float, tuple[float, float]] | None = None
 
     # -- forces ------------------------------------------------------------------------------------
 
@@ -299,12 +315,32 @@ class _Job:
     def printed_forces(self) -> tuple[np.ndarray, float]:
         """:meth:`internal_forces` with those within their accuracy as 0, and that accuracy.
 
-        The accuracy is the converged iterate's largest residual force plus round-off
-        (docs/method.md §14.5).
+        The accuracy is the converged iterate's largest residual force plus round-off, plus the
+        round-off of the displacement they come from (docs/method.md §14.5). Collective.
         """
         forces = self.internal_forces()
         floor = force_floor(forces, getattr(self.solver, "largest_residual", 0.0))
+        floor += self.field_accuracy().force
         return clean(forces, floor), floor
+
+    def field_accuracy(self) -> FieldAccuracy:
+        """Accuracy of the stresses and contact values of the current displacement.
+
+        From the largest coordinate and displacement, the largest modulus and the smallest
+        element (docs/method.md §14.5). Collective.
+        """
+        if self._field_scales is None:
+            deck = self.deck
+            block = deck.elements[self.model.element_type.name]
+            coords = np.asarray(deck.node_coords, dtype=np.float64)
+            self._field_scales = (
+                float(np.abs(coords).max(initial=0.0)),
+                largest_modulus(m.elastic for m in deck.materials.values() if m.elastic),
+                element_sizes(coords, deck.node_index(block.connectivity)),
+            )
+        coordinates, modulus, sizes = self._field_scales
+        local = float(np.abs(self.model.u.x.array).max(initial=0.0))
+        return FieldAccuracy.of(coordinates, self.comm.allreduce(local, MPI.MAX), modulus, sizes)
 
     def stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points.
@@ -334,6 +370,7 @@ class _Job:
         """
         rows = []
         numbering = self.numbering
+        length = self.field_accuracy().length
         for state, results, pair in zip(
             self.problem.states, contact_results(self.problem), self.deck.contact_pairs
         ):
@@ -343,7 +380,10 @@ class _Job:
             shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
             # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4)
             energy = results.energy + 2.0 * results.friction_energy
-            nodes, clearance, pressure, energy, faces, slip, shear = numbering.allgather(
+            dp, de = law_accuracy(
+                state.pair.interaction.law, -results.clearance, results.area, length
+            )
+            nodes, clearance, pressure, energy, faces, slip, shear, dp, de = numbering.allgather(
                 numbering.ccx_nodes(self.problem, results.node),
                 results.clearance,
                 results.pressure,
@@ -351,6 +391,8 @@ class _Job:
                 faces,
                 slip.reshape(-1, 2),
                 shear.reshape(-1, 2),
+                dp,
+                de,
             )
             faces = numbering.master_faces(pair.master, faces)
             order = np.argsort(nodes, kind="stable")
@@ -364,6 +406,7 @@ class _Job:
                     faces[order],
                     slip[order],
                     shear[order],
+                    (length, dp[order], de[order]),
                 )
             )
         return rows
@@ -619,6 +662,7 @@ class _Job:
         frequency = step.output_frequency
         last = result.time_fraction >= 1 - 1e-12
         if frequency > 0 and (result.increment % frequency == 0 or last):
+            contact = [clean_contact(rows) for rows in contact]  # printed values (§14.5)
             blocks = self._blocks(step, total, contact)
             if self.root:
                 write_dat(self.result.dat, clean_dat_blocks(blocks), append=True)
@@ -647,6 +691,7 @@ class _Job:
             )
         if ("EL", "S") in keys:
             nodes, values = self.nodal_stresses()
+            values = zero_below(values, self.field_accuracy().stress)
             if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
                 members = self.deck.nsets[keys["EL", "S"].set]
                 pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
@@ -731,7 +776,8 @@ class _Job:
                 raise NotImplementedError(
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
                 )
-            blocks += el_print_blocks("S", request.set, total, ids, self.stresses(ids))
+            stresses = zero_below(self.stresses(ids), self.field_accuracy().stress)
+            blocks += el_print_blocks("S", request.set, total, ids, stresses)
         return blocks
 
     @staticmethod

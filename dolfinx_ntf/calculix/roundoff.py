@@ -4,15 +4,28 @@ ccx prints every value with 7 (``.dat``) or 6 (``.frd``) significant digits, wha
 so a quantity that is zero in exact arithmetic (a shear stress zero by symmetry, the force at a
 free node) is printed as its round-off, e.g. ``-3.116438E-17``. That round-off comes from the
 linear solver and the assembly, whose rounding depends on how the mesh is distributed over the
-processes, so the same deck would print other digits on another number of processes. Two rules,
-applied in serial and in parallel alike, write such values as 0:
+processes, so the same deck would print other digits on another number of processes. Three
+rules, applied in serial and in parallel alike, write such values as 0:
 
 - any printed value of magnitude at most :data:`ROUND_OFF` times the largest magnitude of its
   block (of its column for contact blocks: clearance, slips, pressure and shears apart);
 - a nodal force ``RF`` component of magnitude at most the largest residual force ``r`` of the
   converged Newton iterate (plus the first rule's bound): at a free node ``RF`` *is* the residual
   the Newton iteration accepted, and every reaction is known only to within ``r``; a total
-  ``RF`` over ``n`` nodes is known to within ``n`` times that.
+  ``RF`` over ``n`` nodes is known to within ``n`` times that;
+- a stress or a contact value within the round-off of the displacement it is computed from
+  (:class:`FieldAccuracy`). A block whose values are all round-off (the stresses of a body in
+  free flight) has round-off as its largest, and the first rule cannot clear it. The
+  displacement ``u`` and the coordinates are taken as known to :data:`FIELD_ROUND_OFF` of their
+  largest magnitudes ``U`` and ``L``, carried through each formula: a stress (a modulus times
+  displacement differences over an element) to ``FIELD_ROUND_OFF M U / h`` (``M`` the largest
+  ``lambda + 2 mu``, ``h`` the smallest distance between two nodes of an element); a nodal force
+  ``RF`` (a stress times a shape function gradient, about ``1/h``, over the volume of the
+  elements at the node) to that times ``d^2`` (``d`` the largest distance between two nodes of
+  an element), added to the second rule's bound; a clearance
+  or a slip (a difference of current positions) to ``FIELD_ROUND_OFF (L + U)``; a contact
+  pressure and a spring energy to what the pair's law changes over that clearance accuracy
+  (:func:`law_accuracy`).
 
 The ``.cvg`` ratios (residual per mean force, correction per displacement change) follow the
 first rule with their scale as the block's largest.
@@ -29,13 +42,20 @@ from .dat import DatBlock
 from .frd import FrdBlock
 
 __all__ = [
+    "FIELD_ROUND_OFF",
     "ROUND_OFF",
+    "FieldAccuracy",
     "clean",
+    "clean_contact",
     "clean_dat_blocks",
     "clean_frd_block",
     "clean_ratio",
     "clean_totals",
+    "element_sizes",
     "force_floor",
+    "largest_modulus",
+    "law_accuracy",
+    "zero_below",
 ]
 
 #: A printed value at most this fraction of its block's largest magnitude is written as 0: below
@@ -43,6 +63,11 @@ __all__ = [
 #: round-off measured: at most 1.4e-13 (dolfinx 0.5) and 7.5e-12 (0.9) of it; a zero-by-symmetry
 #: shear stress of the converged iterate: 2.4e-9 of it (docs/method.md §14.5).
 ROUND_OFF: float = 1e-7
+
+#: The displacement and the coordinates are known to this fraction of their largest magnitudes:
+#: 4500 times the machine epsilon (2.2e-16), a margin for the linear solve's error growth. The
+#: stresses of a body in free flight measured: 2.2e-16 of ``M U / h`` (docs/method.md §14.5).
+FIELD_ROUND_OFF: float = 1e-12
 
 #: Column groups cleaned apart: the contact quantities (clearance, slips, pressure, shears) are
 #: separate fields, each column its own (ccx's are compared column by column).
@@ -119,3 +144,105 @@ def _clean_groups(block: typing.Any) -> typing.Any:
 def clean_frd_block(block: FrdBlock) -> FrdBlock:
     """An ``.frd`` result block with :func:`clean` applied to each column group."""
     return _clean_groups(block)
+
+
+@dataclasses.dataclass(frozen=True)
+class FieldAccuracy:
+    """Accuracy of the values computed from the displacement at one time (docs/method.md §14.5).
+
+    Attributes:
+        length: Of a clearance or a slip: ``FIELD_ROUND_OFF (L + U)``.
+        stress: Of a stress: ``FIELD_ROUND_OFF M U / h``.
+        force: Of a nodal force: ``stress d^2``.
+    """
+
+    length: float
+    stress: float
+    force: float
+
+    @classmethod
+    def of(
+        cls,
+        coordinates: float,
+        displacement: float,
+        modulus: float,
+        sizes: tuple[float, float],
+    ) -> FieldAccuracy:
+        """The accuracy of the values of a displacement field.
+
+        From the largest coordinate ``L`` and displacement ``U`` magnitudes, the largest modulus
+        ``M`` and the element sizes ``(h, d)`` of :func:`element_sizes` (no stress or force
+        bound when ``h`` is 0).
+        """
+        smallest, largest = sizes
+        length = FIELD_ROUND_OFF * (coordinates + displacement)
+        stress = FIELD_ROUND_OFF * modulus * displacement / smallest if smallest > 0.0 else 0.0
+        return cls(length, stress, stress * largest**2)
+
+
+def law_accuracy(
+    law: typing.Any, overclosure: np.ndarray, area: np.ndarray, length: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Accuracy of each spring's pressure and energy (``law``: a ``PressureOverclosureLaw``).
+
+    The largest change of ``law.pressure`` and ``law.energy`` when the overclosure moves by
+    ``length`` (the clearance's accuracy) either way.
+    """
+    d = np.asarray(overclosure, dtype=np.float64)
+    area = np.asarray(area, dtype=np.float64)
+    pressure, energy = law.pressure(d), law.energy(d, area)
+    dp, de = np.zeros_like(d), np.zeros_like(d)
+    for shifted in (d - length, d + length):
+        dp = np.maximum(dp, np.abs(law.pressure(shifted) - pressure))
+        de = np.maximum(de, np.abs(law.energy(shifted, area) - energy))
+    return dp, de
+
+
+def zero_below(values: np.ndarray, floor: typing.Any) -> np.ndarray:
+    """A copy of ``values`` with the entries of magnitude at most ``floor`` set to 0.
+
+    ``floor``: a scalar, or one per row (first axis). Unlike :func:`clean`, no block rule.
+    """
+    values = np.array(values, dtype=np.float64)
+    floor = np.broadcast_to(np.asarray(floor, dtype=np.float64), values.shape[:1])
+    values[np.abs(values) <= floor.reshape(-1, *([1] * (values.ndim - 1)))] = 0.0
+    return values
+
+
+def clean_contact(rows: typing.Any) -> typing.Any:
+    """Contact rows (``job.ContactRows``) with values within their accuracy as 0.
+
+    ``rows.accuracy`` holds the length accuracy and each row's pressure and energy accuracies
+    (:func:`law_accuracy`); clearance and slips are lengths. Rows without it are unchanged.
+    """
+    if rows.accuracy is None:
+        return rows
+    length, pressure, energy = rows.accuracy
+    return dataclasses.replace(
+        rows,
+        clearance=zero_below(rows.clearance, length),
+        pressure=zero_below(rows.pressure, pressure),
+        energy=zero_below(rows.energy, energy),
+        slip=None if rows.slip is None else zero_below(rows.slip, length),
+    )
+
+
+def element_sizes(coordinates: np.ndarray, connectivity: np.ndarray) -> tuple[float, float]:
+    """The smallest and the largest distance between two nodes of one element (0 without).
+
+    ``connectivity`` ``(E, n)`` holds row indices into ``coordinates`` ``(N, 3)``.
+    """
+    if connectivity.size == 0:
+        return 0.0, 0.0
+    x = coordinates[connectivity]  # (E, n, 3)
+    smallest, largest = np.inf, 0.0
+    for k in range(1, connectivity.shape[1]):  # node pairs (i, i + k)
+        distance = np.linalg.norm(x[:, k:] - x[:, :-k], axis=-1)
+        smallest, largest = min(smallest, distance.min()), max(largest, distance.max())
+    return float(smallest), float(largest)
+
+
+def largest_modulus(elastic: typing.Iterable[tuple[float, float]]) -> float:
+    """The largest ``lambda + 2 mu = E (1 - nu) / ((1 + nu) (1 - 2 nu))`` of ``(E, nu)`` pairs."""
+    moduli = [e * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) for e, nu in elastic]
+    return max(moduli, default=0.0)
