@@ -129,8 +129,8 @@ def galerkin_products(ksp: PETSc.KSP) -> typing.Iterator[None]:
 
 
 #: ``linear_solver="auto"`` chooses the direct solver up to this many dofs, the iterative one above
-#: (measured crossover on 2 cores, docs/performance.md "Linear solvers").
-DIRECT_MAX_DOFS = 50_000
+#: (about twice the measured crossover on 2 cores, docs/performance.md "Linear solvers").
+DIRECT_MAX_DOFS = 20_000
 
 #: ... and up to this many dofs when the Jacobian is symmetric: MUMPS Cholesky does about half
 #: the work of LU and beats CG + GAMG at 81k dofs (docs/method.md §7.4).
