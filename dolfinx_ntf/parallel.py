@@ -8,7 +8,10 @@ areas) run unchanged on the extended numbering, and the same master surface on e
 the pairing independent of the partition. Halo displacements come from their owners through a
 PETSc scatter; matrix couplings are sent to the owners of their rows before the pattern is grown.
 
-The surfaces are allgathered once, at setup: up to :data:`MAX_GATHERED_FACES` faces per surface.
+The surfaces are distributed once, at setup: the master surface is allgathered (or exchanged by
+bounding boxes, ``master_exchange``); each slave face goes only to the processes owning one of its
+nodes, so a process's share grows with its own part of the slave surface (§14.1, §14.2). An error
+inside a pairing on one process is raised on all (:func:`collective_errors`, §14.4).
 """
 
 from __future__ import annotations
