@@ -874,7 +874,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.matrix is None or not self.assembler.has_pattern(blocks):
             if self.matrix is not None:
                 self.matrix.destroy()
-            self.matrix = self.assembler.create_matrix(blocks + self._reserved_blocks())
+            comm = self.u.function_space.mesh.comm  # a failed patch lookup fails on all (§14.4)
+            reserved = parallel.collectively(comm, self._reserved_blocks)
+            self.matrix = self.assembler.create_matrix(blocks + reserved)
         self._pattern_checked = True
         return self.matrix
 

@@ -147,11 +147,15 @@ FAILING = min(1, COMM.size - 1)  # the one process whose pairing fails
         ("projection", {}),
         ("patch search", {}),  # the master exchanged by boxes (§14.8)
         ("patch enlargement", {}),
+        ("face lookup", {}),  # the faces around a face, reserved in a new matrix
     ],
 )
 def test_a_pairing_error_on_one_process_is_raised_on_all(where, options, monkeypatch, no_hang):
-    """docs/method.md §14.4: the search, the areas, the projection or the master patch failing
-    on one process only makes every process raise it, and the next pairing still runs."""
+    """docs/method.md §14.4: the search, the areas, the projection, the master patch or the
+    lookup of face patches failing on one process only makes every process raise it, and the
+    next pairing still runs."""
+    if where in ("patch search", "patch enlargement") and COMM.size == 1:
+        pytest.skip("a master patch needs several processes")
     if where.startswith("patch"):
         monkeypatch.setattr(master_exchange, "EXCHANGE_ABOVE_FACES", 0)
     problem, _, _ = punch_problem(comm=COMM, **options)
@@ -171,14 +175,24 @@ def test_a_pairing_error_on_one_process_is_raised_on_all(where, options, monkeyp
         "projection": (problem_module, "spring_evaluator"),
         "patch search": (master_exchange.MasterPatch, "locate"),
         "patch enlargement": (master_exchange.MasterPatch, "next_margin"),
+        "face lookup": (MasterSurface, "face_patches"),
     }[where]
+
+    def new_matrix():
+        if problem.matrix is not None:
+            problem.matrix.destroy()
+            problem.matrix = None
+        return problem.ensure_matrix()
+
+    action = new_matrix if where == "face lookup" else problem.pair
     with monkeypatch.context() as patch:
         patch.setattr(*target, failing(getattr(*target)))
         if where == "patch enlargement":  # every process asks for a larger patch
             patch.setattr(master_exchange, "enlarge", _always_enlarge(master_exchange.enlarge))
         with pytest.raises(ArithmeticError, match=f"{where} failed on rank {FAILING}"):
-            problem.pair()
+            action()
     assert problem.pair() == expected  # every process still at the same collective call
+    assert problem.ensure_matrix() is not None
     problem.destroy()
 
 
