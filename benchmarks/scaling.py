@@ -248,14 +248,20 @@ def _on_paper(results: list[dict]) -> list[str]:
         + ". It grows with the partition cut through the contact surface (about S^(1/2) P^(1/2) "
         "nodes over all processes for a surface cut in P pieces), not with the model: "
         "negligible at any P.",
-        "- The set-up allgather sends every process the whole slave surface and, up to "
+        "- The set-up allgather sends every process, up to "
         f"`EXCHANGE_ABOVE_FACES` = {master_exchange.EXCHANGE_ABOVE_FACES} faces, the whole master "
         "surface: 16 numbers of 8 bytes per quadrilateral face (4 node numbers, 12 coordinates). "
         "For 10^7 faces that would be 1.3 GB received and stored by every process (0.3 s at 5 "
         "GB/s, but P times the memory of the surface), and every pairing would update the whole "
         "master (normals, planes, k-d tree) on every process: up to about "
         f"{search * s7:.0f} s per pairing whatever P, with the search cost above. Slave surfaces "
-        "are still allgathered (`MAX_GATHERED_FACES` = 2 x 10^6 refuses more).",
+        "are not allgathered: each process sends each of its slave faces to the other processes "
+        "owning one of the face's nodes (one Alltoallv, after one that sends the ghost slave nodes "
+        "to their owners), so it holds its own slave faces plus its neighbours' faces at the "
+        "partition cut (about S^(1/2) P^(1/2) faces over all processes): O(S/P + cut) data and "
+        "memory per process (`benchmarks/slave_distribution.py`: on 2 processes at 10^5 slave "
+        "nodes 0.04 MB received from the other process instead of 10 MB, 0.09 s against 0.14 s "
+        "for the allgather).",
         "- Larger master surfaces are exchanged by bounding boxes (docs/method.md §14.8): an "
         "allgather of one box per process (6 P numbers: 6 kB at P = 128), then one Alltoallv of "
         "the master faces near each process's slave nodes (its box grown by 2 face diagonals, "

@@ -30,7 +30,7 @@ import dolfinx.fem
 
 from dolfinx_ntf import validation
 from dolfinx_ntf.faces import FaceType
-from dolfinx_ntf.parallel import NodeHalo, distribute_slave
+from dolfinx_ntf.parallel import NodeHalo, alltoallv, checkpoint, distribute_slave
 from dolfinx_ntf.search import NOT_HELD, TIE_DIGITS, MasterSurface
 from dolfinx_ntf.surfaces import SlaveSurface, SurfaceFaces
 from dolfinx_ntf.tie_frame import TieFrame, triangle_moments
@@ -54,16 +54,6 @@ MARGIN = 2.0
 def uses_exchange(comm: MPI.Comm, faces: SurfaceFaces) -> bool:
     """Whether a master surface is exchanged by bounding boxes (above the threshold). Collective."""
     return comm.size > 1 and comm.allreduce(int(faces.faces.shape[0])) > EXCHANGE_ABOVE_FACES
-
-
-def _alltoallv(comm: MPI.Comm, parts: list[np.ndarray], dtype: type, mpi_type: MPI.Datatype):
-    """Send ``parts[q]`` (flat) to process ``q``; the received parts concatenated. Collective."""
-    counts = np.array([p.size for p in parts], dtype=np.int64)
-    received = np.asarray(comm.alltoall(counts.tolist()), dtype=np.int64)
-    out = np.empty(int(received.sum()), dtype=dtype)
-    send = np.concatenate(parts).astype(dtype) if parts else np.empty(0, dtype)
-    comm.Alltoallv([send, counts, mpi_type], [out, received, mpi_type])
-    return out
 
 
 def _largest(comm: MPI.Comm, values: np.ndarray) -> np.ndarray:
@@ -165,8 +155,8 @@ class MasterPatch:
             core = _meets(lo, hi, boxes[q, 0], boxes[q, 1])[near]
             nodes.append(np.column_stack([self._own_global[near], core]).ravel())
             refs.append(reference[self._own[near]].ravel())
-        g = _alltoallv(comm, nodes, np.int64, MPI.INT64_T).reshape(-1, n + 1)
-        xr = _alltoallv(comm, refs, np.float64, MPI.DOUBLE).reshape(-1, n, 3)
+        g = alltoallv(comm, nodes, np.int64, MPI.INT64_T).reshape(-1, n + 1)
+        xr = alltoallv(comm, refs, np.float64, MPI.DOUBLE).reshape(-1, n, 3)
         self._merge(g[:, :n], xr, g[:, n].astype(bool))
         self._region = box
         self._baseline = coords[self._own_nodes].copy()
@@ -351,6 +341,7 @@ def enlarge(problem: object, state: object, face: np.ndarray) -> bool:
     patch = state.master
     if not isinstance(patch, MasterPatch):
         return False
+    checkpoint(patch.comm)  # a search that failed on one process fails on all (§14.4)
     unresolved = bool(np.any(face == NOT_HELD))
     if not patch.comm.allreduce(unresolved, op=MPI.LOR):
         return False
@@ -359,8 +350,10 @@ def enlarge(problem: object, state: object, face: np.ndarray) -> bool:
             f"{patch.name}: the master surface near the slave nodes is still incomplete after "
             f"{patch.exchanges} exchanges (docs/method.md §14.8)"
         )
-    coords = problem.current_coordinates()
-    patch.exchange(coords, patch.next_margin(unresolved))
+    margin = patch.next_margin(unresolved)
+    checkpoint(patch.comm)
+    patch.exchange(problem.current_coordinates(), margin)
+    checkpoint(patch.comm)
     problem.halo_grew()
     state.master_faces = patch.faces
     return True

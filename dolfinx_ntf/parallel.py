@@ -8,11 +8,15 @@ areas) run unchanged on the extended numbering, and the same master surface on e
 the pairing independent of the partition. Halo displacements come from their owners through a
 PETSc scatter; matrix couplings are sent to the owners of their rows before the pattern is grown.
 
-The surfaces are allgathered once, at setup: up to :data:`MAX_GATHERED_FACES` faces per surface.
+The surfaces are distributed once, at setup: the master surface is allgathered (or exchanged by
+bounding boxes, ``master_exchange``); each slave face goes only to the processes owning one of its
+nodes, so a process's share grows with its own part of the slave surface (§14.1, §14.2). An error
+inside a pairing on one process is raised on all (:func:`collective_errors`, §14.4).
 """
 
 from __future__ import annotations
 
+import contextlib
 import typing
 
 from mpi4py import MPI
@@ -33,16 +37,15 @@ from dolfinx_ntf.surfaces import (
 )
 
 __all__ = [
-    "MAX_GATHERED_FACES",
     "NodeHalo",
+    "alltoallv",
+    "checkpoint",
+    "collective_errors",
     "collectively",
     "distribute_pair",
     "distribute_slave",
     "send_to_owners",
 ]
-
-#: Faces of one contact surface (over all processes) that setup allgathers (docs/method.md §14.2).
-MAX_GATHERED_FACES = 2_000_000
 
 
 def collectively(comm: MPI.Comm, function: typing.Callable, *args, **kwargs) -> typing.Any:
@@ -57,6 +60,42 @@ def collectively(comm: MPI.Comm, function: typing.Callable, *args, **kwargs) -> 
         error = exc
     validation.raise_collectively(comm, error)
     return result
+
+
+def checkpoint(comm: MPI.Comm, error: Exception | None = None) -> None:
+    """Raise on every process if any process has an ``error``. Collective.
+
+    One allreduce of a flag; the message goes round only on failure. Inside
+    :func:`collective_errors` every process calls it before each collective call (docs/method.md
+    §14.4).
+    """
+    if comm.size == 1:
+        return
+    flag = np.array([int(error is not None)], dtype=np.int32)
+    comm.Allreduce(MPI.IN_PLACE, flag, op=MPI.MAX)
+    if flag[0]:
+        try:
+            validation.raise_collectively(comm, error)
+        except Exception as exc:
+            exc.raised_collectively = True  # the enclosing blocks do not check it again
+            raise
+
+
+@contextlib.contextmanager
+def collective_errors(comm: MPI.Comm) -> typing.Iterator[None]:
+    """An exception inside the block on any process is raised on all. Collective.
+
+    Collective calls inside the block must be preceded by :func:`checkpoint` on every process: a
+    process that failed leaves the block and meets the others at their next checkpoint (or at the
+    block's end), where all raise.
+    """
+    try:
+        yield
+    except Exception as exc:
+        if not getattr(exc, "raised_collectively", False):
+            checkpoint(comm, exc)
+        raise
+    checkpoint(comm)
 
 
 class NodeHalo:
@@ -75,6 +114,8 @@ class NodeHalo:
             np.arange(self.num_local, dtype=np.int32)
         ).astype(np.int64)
         self.extra = np.empty(0, dtype=np.int64)
+        #: First global node of every process (owned nodes are numbered contiguously).
+        self.first_nodes = np.array(self.comm.allgather(int(index_map.local_range[0])))
         self._reference = reference_coordinates(V)
         self._sort()
         self._scatter: PETSc.Scatter | None = None
@@ -83,6 +124,10 @@ class NodeHalo:
         self._all = np.concatenate([self.local_global, self.extra])
         self._order = np.argsort(self._all, kind="stable")
         self._sorted = self._all[self._order]
+
+    def owner(self, global_nodes: np.ndarray) -> np.ndarray:
+        """Process owning each global node."""
+        return np.searchsorted(self.first_nodes, global_nodes, side="right") - 1
 
     @property
     def reference(self) -> np.ndarray:
@@ -174,12 +219,6 @@ def _gather_faces(
     facet is -1 where the face's cell is not on this process.
     """
     comm = halo.comm
-    total = comm.allreduce(int(faces.faces.shape[0]), op=MPI.SUM)
-    if total > MAX_GATHERED_FACES:
-        raise NotImplementedError(
-            f"{what}: {total} faces over all processes; contact surfaces of more than "
-            f"{MAX_GATHERED_FACES} faces are not supported in parallel yet (docs/method.md §14.2)"
-        )
     g = halo.local_global[faces.faces]
     x = halo.reference[faces.faces]
     parts = comm.allgather((g, x))
@@ -195,17 +234,91 @@ def _gather_faces(
     return all_g[first], all_x[first], facets
 
 
+def alltoallv(comm: MPI.Comm, parts: list[np.ndarray], dtype: type, mpi_type: MPI.Datatype):
+    """Send ``parts[q]`` (flat) to process ``q``; the received parts concatenated. Collective.
+
+    The received parts follow the sending processes' order.
+    """
+    counts = np.array([p.size for p in parts], dtype=np.int64)
+    received = np.asarray(comm.alltoall(counts.tolist()), dtype=np.int64)
+    out = np.empty(int(received.sum()), dtype=dtype)
+    send = np.concatenate(parts).astype(dtype) if parts else np.empty(0, dtype)
+    comm.Alltoallv([send, counts, mpi_type], [out, received, mpi_type])
+    return out
+
+
+def _marked_at_owners(halo: NodeHalo, nodes: np.ndarray) -> np.ndarray:
+    """Which owned nodes any process lists in its ``nodes`` (local indices). Collective.
+
+    Each process sends the global numbers of its listed ghosts to their owners.
+    """
+    nodes = np.asarray(nodes, dtype=np.int64)
+    marked = np.zeros(halo.num_owned, dtype=bool)
+    marked[nodes[nodes < halo.num_owned]] = True
+    ghosts = halo.local_global[nodes[nodes >= halo.num_owned]]
+    received = send_to_owners(halo.comm, ghosts, halo.owner(ghosts))
+    marked[received - halo.first_nodes[halo.comm.rank]] = True
+    return marked
+
+
+def _marked_locally(V: dolfinx.fem.FunctionSpace, halo: NodeHalo, owned: np.ndarray) -> np.ndarray:
+    """``owned`` (a flag per owned node) at every local node (ghosts from owners). Collective."""
+    marker = dolfinx.fem.Function(V)
+    marker.x.array[:] = 0.0
+    marker.x.array[: 3 * halo.num_owned : 3] = owned
+    marker.x.scatter_forward()
+    return marker.x.array[: 3 * halo.num_local : 3] > 0.5
+
+
 def _exterior_faces_touching(
-    V: dolfinx.fem.FunctionSpace, halo: NodeHalo, slave_global: np.ndarray, what: str
+    V: dolfinx.fem.FunctionSpace, marked: np.ndarray, what: str
 ) -> SurfaceFaces:
-    """This process's exterior faces with a corner among the (global) slave nodes."""
+    """This process's exterior faces with a corner among the ``marked`` local nodes."""
     mesh = V.mesh
     mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     faces = boundary_faces(V, exterior, what=what)
-    corners = halo.local_global[faces.faces[:, : faces.face_type.num_corners]]
-    touching = np.isin(corners, slave_global).any(axis=1)
+    touching = marked[faces.faces[:, : faces.face_type.num_corners]].any(axis=1)
     return SurfaceFaces(faces.face_type, faces.faces[touching], faces.facets[touching])
+
+
+def _unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(rows, axis=0, return_index=True, return_inverse=True)[1:]``, by a lexsort.
+
+    The first occurrence of every distinct row, in the rows' lexicographic order, and the index
+    of every row among them.
+    """
+    order = np.lexsort(rows.T[::-1])  # stable: equal rows keep their order
+    ordered = rows[order]
+    new = np.ones(rows.shape[0], dtype=bool)
+    new[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    inverse = np.empty(rows.shape[0], dtype=np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return order[new], inverse
+
+
+def _send_faces_to_owners(halo: NodeHalo, faces: SurfaceFaces) -> tuple[np.ndarray, np.ndarray]:
+    """Send each face to the other processes owning one of its nodes, once each. Collective.
+
+    Sends global node numbers and reference coordinates; returns the faces received, in the
+    order of the sending processes.
+    """
+    comm, n = halo.comm, faces.faces.shape[1]
+    g = halo.local_global[faces.faces].astype(np.int64)
+    owner = np.sort(halo.owner(g), axis=1)
+    once = np.ones(owner.shape, dtype=bool)  # each owner once per face
+    once[:, 1:] = owner[:, 1:] != owner[:, :-1]
+    once &= owner != comm.rank  # this process's own faces stay here
+    to = owner[once]
+    face = np.repeat(np.arange(g.shape[0]), n).reshape(-1, n)[once]
+    order = np.argsort(to, kind="stable")  # by owner, then the faces in their order
+    to, face = to[order], face[order]
+    split = np.searchsorted(to, np.arange(1, comm.size))
+    nodes = [p.ravel() for p in np.split(g[face], split)]
+    x = [p.ravel() for p in np.split(halo.reference[faces.faces[face]], split)]
+    received_g = alltoallv(comm, nodes, np.int64, MPI.INT64_T).reshape(-1, n)
+    received_x = alltoallv(comm, x, np.float64, MPI.DOUBLE).reshape(-1, n, 3)
+    return received_g, received_x
 
 
 def distribute_pair(
@@ -240,28 +353,30 @@ def distribute_slave(
     §14.6).
     """
     comm = halo.comm
-    slave_global = np.unique(
-        np.concatenate(comm.allgather(halo.local_global[slave.nodes])).astype(np.int64)
-    )
+    mine = _marked_at_owners(halo, slave.nodes)  # owned nodes some process lists as slave
     faces = slave.faces
     if isinstance(surface, NodeSurface):  # vertices given on one process touch faces of others
-        faces = _exterior_faces_touching(V, halo, slave_global, f"{what} slave")
+        faces = _exterior_faces_touching(V, _marked_locally(V, halo, mine), f"{what} slave")
         if faces.face_type is not slave.faces.face_type:  # C3D20: quad9 facets as quad8 (§13.5)
             n = slave.faces.face_type.num_nodes
             faces = SurfaceFaces(slave.faces.face_type, faces.faces[:, :n], faces.facets)
-    g, x, facets = _gather_faces(halo, faces, f"{what} slave")
-    owned_global = halo.local_global[: halo.num_owned]
-    mine = np.intersect1d(slave_global, owned_global)
-    keep = np.isin(g, mine).any(axis=1)
+    g, x = _send_faces_to_owners(halo, faces)
+    # the faces received and this process's own (for their facets); duplicates dropped, sorted
+    g = np.vstack([g, halo.local_global[faces.faces]])
+    x = np.vstack([x, halo.reference[faces.faces]])
+    first, inverse = _unique_rows(np.sort(g, axis=1))
+    facets = np.full(first.size, -1, dtype=np.int32)
+    facets[inverse[g.shape[0] - faces.faces.shape[0] :]] = faces.facets
+    g, x = g[first], x[first]
+    keep = np.isin(g, halo.local_global[: halo.num_owned][mine]).any(axis=1)
     slave_faces = SurfaceFaces(
         faces.face_type, halo.local(g[keep], x[keep]).astype(np.int32), facets[keep]
     )
-    nodes = np.sort(halo.find(mine))
+    nodes = np.flatnonzero(mine)
     faceless = None  # midside nodes of a node-based surface (docs/method.md §13.5, §14.10)
     marked = slave.nodes[slave.faceless] if slave.faceless is not None else slave.nodes[:0]
     if comm.allreduce(int(marked.size), op=MPI.MAX):
-        marked = np.concatenate(comm.allgather(halo.local_global[marked]))
-        faceless = np.isin(halo.global_nodes[nodes], marked)
+        faceless = _marked_at_owners(halo, marked)[nodes]
     return SlaveSurface(nodes, slave_faces, faceless)
 
 

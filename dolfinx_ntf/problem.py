@@ -593,15 +593,17 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             The number of springs (over all processes).
         """
         coords = self.current_coordinates()
-        for state in self.states:
-            if large_sliding_only and self._small_sliding(state):
-                continue
-            self._pair_one(state, coords, record_overlap)
-            if record_overlap and state.pair.adjust is not None:  # ADJUST may have moved nodes
-                coords = self.current_coordinates()
+        comm = self.u.function_space.mesh.comm
+        with parallel.collective_errors(comm):  # an error on one process is raised on all (§14.4)
+            for state in self.states:
+                if large_sliding_only and self._small_sliding(state):
+                    continue
+                self._pair_one(state, coords, record_overlap)
+                if record_overlap and state.pair.adjust is not None:  # ADJUST may have moved nodes
+                    parallel.checkpoint(comm)
+                    coords = self.current_coordinates()
         self.pairings += 1
         self._pattern_checked = False
-        comm = self.u.function_space.mesh.comm
         count, changes = (
             int(v) for v in comm.allreduce(np.array([self.num_springs, self.face_changes]))
         )
@@ -632,6 +634,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
         previous[state.spring_slave] = state.spring_face
         found, face, areas, evaluation = self._search(state, coords, previous)
+        if record_overlap and state.pair.adjust is not None:
+            parallel.checkpoint(self.u.function_space.mesh.comm)  # before ADJUST's collectives
         if (
             record_overlap
             and state.pair.adjust is not None
@@ -672,12 +676,16 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         Returns the slave indices with a face, the face of every slave node (-1: none), the spring
         areas of all slave nodes, and the springs' kinematics (no tangent) of the found nodes.
         """
+        comm = self.u.function_space.mesh.comm
         areas = _slave_areas(state.slave, coords)
+        if isinstance(state.master, master_exchange.MasterPatch):
+            parallel.checkpoint(comm)  # the patch's update is collective (§14.4)
         state.master.update(coords)
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
         start, frame = None, None
         if self.walk_from_previous_face:
+            parallel.checkpoint(comm)  # the tie frame sums over the processes
             start, frame = previous, self._tie_frame(state, points, areas)
         options = {"tie_frame": frame, "ccx_ties": not self.walk_from_previous_face}
         face = state.master.locate(
@@ -749,15 +757,17 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """
         coords = self.current_coordinates()
         count = 0
-        for state in self.states:
-            if not state.pair.active:
-                continue
-            current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
-            current[state.spring_slave] = state.spring_face
-            found, _, areas, evaluation = self._search(state, coords, current)
-            create = self._creates_spring(state, found, evaluation.gap, areas)
-            count += int(np.count_nonzero(create & (current[found] < 0)))
-        return self.u.function_space.mesh.comm.allreduce(count)
+        comm = self.u.function_space.mesh.comm
+        with parallel.collective_errors(comm):
+            for state in self.states:
+                if not state.pair.active:
+                    continue
+                current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
+                current[state.spring_slave] = state.spring_face
+                found, _, areas, evaluation = self._search(state, coords, current)
+                create = self._creates_spring(state, found, evaluation.gap, areas)
+                count += int(np.count_nonzero(create & (current[found] < 0)))
+        return comm.allreduce(count)
 
     @staticmethod
     def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:
@@ -875,7 +885,9 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         if self.matrix is None or not self.assembler.has_pattern(blocks):
             if self.matrix is not None:
                 self.matrix.destroy()
-            self.matrix = self.assembler.create_matrix(blocks + self._reserved_blocks())
+            comm = self.u.function_space.mesh.comm  # a failed patch lookup fails on all (§14.4)
+            reserved = parallel.collectively(comm, self._reserved_blocks)
+            self.matrix = self.assembler.create_matrix(blocks + reserved)
         self._pattern_checked = True
         return self.matrix
 

@@ -5,14 +5,16 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_TOP, UPPER, UPPER_BOTTOM, two_blocks
+from conftest import LOWER_TOP, UPPER, UPPER_BOTTOM, punch_problem, two_blocks
 
 import dolfinx.fem
 import dolfinx.mesh
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, master_exchange
+from dolfinx_ntf import problem as problem_module
+from dolfinx_ntf.search import MasterSurface
 from dolfinx_ntf.surfaces import resolve_master, resolve_slave
 from dolfinx_ntf.validation import raise_collectively
 
@@ -121,3 +123,81 @@ def test_sequential_galerkin_products_only_for_serial_gamg(pc_type):
     finally:
         options.delValue("matptap_via")
     ksp.destroy()
+
+
+@pytest.fixture
+def no_hang():
+    """A pairing test that would hang ends the run after a while instead (mpirun stops all)."""
+    import faulthandler
+
+    faulthandler.dump_traceback_later(120, exit=True)
+    yield
+    faulthandler.cancel_dump_traceback_later()
+
+
+FAILING = min(1, COMM.size - 1)  # the one process whose pairing fails
+
+
+@pytest.mark.parametrize(
+    ("where", "options"),
+    [
+        ("search", {}),
+        ("search", {"walk_from_previous_face": False}),  # no collective before the block's end
+        ("areas", {}),
+        ("projection", {}),
+        ("patch search", {}),  # the master exchanged by boxes (§14.8)
+        ("patch enlargement", {}),
+        ("face lookup", {}),  # the faces around a face, reserved in a new matrix
+    ],
+)
+def test_a_pairing_error_on_one_process_is_raised_on_all(where, options, monkeypatch, no_hang):
+    """docs/method.md §14.4: the search, the areas, the projection, the master patch or the
+    lookup of face patches failing on one process only makes every process raise it, and the
+    next pairing still runs."""
+    if where in ("patch search", "patch enlargement") and COMM.size == 1:
+        pytest.skip("a master patch needs several processes")
+    if where.startswith("patch"):
+        monkeypatch.setattr(master_exchange, "EXCHANGE_ABOVE_FACES", 0)
+    problem, _, _ = punch_problem(comm=COMM, **options)
+    expected = problem.pair()
+
+    def failing(function):
+        def wrapper(*args, **kwargs):
+            if COMM.rank == FAILING:
+                raise ArithmeticError(f"{where} failed on rank {FAILING}")
+            return function(*args, **kwargs)
+
+        return wrapper
+
+    target = {
+        "search": (MasterSurface, "locate"),
+        "areas": (problem_module, "_slave_areas"),
+        "projection": (problem_module, "spring_evaluator"),
+        "patch search": (master_exchange.MasterPatch, "locate"),
+        "patch enlargement": (master_exchange.MasterPatch, "next_margin"),
+        "face lookup": (MasterSurface, "face_patches"),
+    }[where]
+
+    def new_matrix():
+        if problem.matrix is not None:
+            problem.matrix.destroy()
+            problem.matrix = None
+        return problem.ensure_matrix()
+
+    action = new_matrix if where == "face lookup" else problem.pair
+    with monkeypatch.context() as patch:
+        patch.setattr(*target, failing(getattr(*target)))
+        if where == "patch enlargement":  # every process asks for a larger patch
+            patch.setattr(master_exchange, "enlarge", _always_enlarge(master_exchange.enlarge))
+        with pytest.raises(ArithmeticError, match=f"{where} failed on rank {FAILING}"):
+            action()
+    assert problem.pair() == expected  # every process still at the same collective call
+    assert problem.ensure_matrix() is not None
+    problem.destroy()
+
+
+def _always_enlarge(enlarge):
+    def wrapper(problem, state, face):
+        return enlarge(problem, state, np.full_like(face, -2))  # search.NOT_HELD everywhere
+
+    return wrapper

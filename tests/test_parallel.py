@@ -29,6 +29,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
+from dolfinx_ntf import problem as problem_module
 from dolfinx_ntf.elasticity import component_bc, small_strain_stress
 
 pytestmark = pytest.mark.mpi
@@ -177,6 +178,31 @@ def test_problem_options_give_the_serial_answer(options):
     run = _solve(COMM, "hexahedron", _cut, **options)
     _assert_same(run, _serial("hexahedron", **options))
     assert run.mallocs == 0
+
+
+@pytest.mark.parametrize("partition", PARTITIONS)
+def test_each_process_receives_the_slave_faces_of_its_nodes(partition):
+    """docs/method.md §14.1: the owned slave nodes and exactly the slave faces (of any process)
+    holding one of them, so that spring areas at partition cuts equal the serial ones."""
+
+    def faces_and_areas(comm, owners):
+        problem, _, _ = punch_problem(comm=comm, partition=owners)
+        slave = problem.states[0].slave
+        x = np.round(problem.current_coordinates(), 9)
+        owned = problem.u.function_space.dofmap.index_map.size_local
+        areas = problem_module._slave_areas(slave, problem.current_coordinates())
+        problem.destroy()
+        assert np.all(slave.nodes < owned)
+        faces = {tuple(sorted(map(tuple, x[f]))) for f in slave.faces.faces}
+        return faces, dict(zip(map(tuple, x[slave.nodes]), areas))
+
+    faces, areas = faces_and_areas(COMM, PARTITIONS[partition])
+    serial_faces, serial_areas = faces_and_areas(MPI.COMM_SELF, None)
+    assert sum(COMM.allgather(len(areas))) == len(serial_areas)  # each slave node once
+    expected = {f for f in serial_faces if any(node in areas for node in f)}
+    assert faces == expected  # no face without an owned slave node, none missing
+    for node, area in areas.items():
+        assert area == pytest.approx(serial_areas[node], rel=1e-12)
 
 
 def test_idle_rank_holds_no_contact_node():
