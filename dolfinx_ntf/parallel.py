@@ -383,11 +383,5 @@ def distribute_slave(
 def send_to_owners(comm: MPI.Comm, keys: np.ndarray, owner: np.ndarray) -> np.ndarray:
     """Send each ``keys[i]`` to process ``owner[i]``; returns the keys received. Collective."""
     order = np.argsort(owner, kind="stable")
-    counts = np.bincount(owner, minlength=comm.size).astype(np.int64)
-    received = np.asarray(comm.alltoall(counts.tolist()), dtype=np.int64)
-    out = np.empty(int(received.sum()), dtype=np.int64)
-    comm.Alltoallv(
-        [np.ascontiguousarray(keys[order], dtype=np.int64), counts, MPI.INT64_T],
-        [out, received, MPI.INT64_T],
-    )
-    return out
+    split = np.searchsorted(np.asarray(owner)[order], np.arange(1, comm.size))
+    return alltoallv(comm, np.split(np.asarray(keys)[order], split), np.int64, MPI.INT64_T)
