@@ -19,6 +19,7 @@ lint: setup
 		$(PY) -m pip install -q "ruff==$(RUFF_VERSION)"
 	.venv/bin/ruff format --check .
 	.venv/bin/ruff check .
+	$(PY) scripts/check_layers.py
 
 test: lint test-here test-other
 

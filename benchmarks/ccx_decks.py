@@ -58,8 +58,8 @@ import dolfinx.mesh
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.writer import BoundarySpec, OutputSpec, StepSpec, write_inp
-from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 from dolfinx_ntf.meshes import hertz
+from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))

@@ -33,7 +33,7 @@ set-up, ``ContactProblem`` construction: "gather") and the halo exchange of disp
 table compares the allgather of the master surface with its exchange by bounding boxes
 (docs/method.md §14.8) at the same size: their set-up, and one pairing's update and walk on the
 whole surface and on the patch. GAMG's
-near-nullspace (one set of 6 rigid modes per plate, ``dolfinx_ntf.nullspace``) works on any number
+near-nullspace (one set of 6 rigid modes per plate, ``solvers.nullspace``) works on any number
 of processes. Run::
 
     .venv/bin/python benchmarks/contact_phases.py                     # 1e3, 1e4, 1e5 slave nodes
@@ -63,14 +63,16 @@ import dolfinx.mesh
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, master_exchange, parallel
-from dolfinx_ntf.assembly import SpringBlocks
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
-from dolfinx_ntf.problem import LAST_REPAIRING_ITERATION, SEARCH_TOLERANCE
-from dolfinx_ntf.search import NOT_HELD, MasterSurface
-from dolfinx_ntf.solver import ITERATIVE_PETSC_OPTIONS, galerkin_products
-from dolfinx_ntf.spring_areas import spring_areas
-from dolfinx_ntf.surfaces import resolve_master
+from dolfinx_ntf import compat
+from dolfinx_ntf.contact.assembly import SpringBlocks
+from dolfinx_ntf.contact.problem import LAST_REPAIRING_ITERATION, SEARCH_TOLERANCE
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.surfaces import resolve_master
+from dolfinx_ntf.kernels.search import NOT_HELD, MasterSurface
+from dolfinx_ntf.kernels.spring_areas import spring_areas
+from dolfinx_ntf.parallel import master_exchange, surface_distribution
+from dolfinx_ntf.parallel.halo import NodeHalo
+from dolfinx_ntf.solvers.newton import ITERATIVE_PETSC_OPTIONS, galerkin_products
 
 __all__ = ["SOLVERS", "PlateMesh", "build_plates", "build_problem", "main", "report", "run_size"]
 
@@ -296,7 +298,7 @@ def _time_master_distribution(
     nodes = state.slave.nodes
 
     def gathered() -> MasterSurface:
-        g, x, _ = parallel._gather_faces(halo, own, "master")
+        g, x, _ = surface_distribution._gather_faces(halo, own, "master")
         faces = halo.local(g, x).astype(np.int32)
         return MasterSurface(own.face_type, faces, coords=halo.reference)
 
@@ -325,7 +327,7 @@ def _time_master_distribution(
     out["faces_patch"] = comm.allreduce(searched, op=MPI.MAX)
 
 
-def _global_faces(table: np.ndarray, faces: np.ndarray, halo: parallel.NodeHalo) -> np.ndarray:
+def _global_faces(table: np.ndarray, faces: np.ndarray, halo: NodeHalo) -> np.ndarray:
     """Sorted global nodes of each found face (rows of -1 where none)."""
     g = np.sort(halo.global_nodes[table[np.maximum(faces, 0)]], axis=1)
     return np.where(faces[:, None] >= 0, g, -1)

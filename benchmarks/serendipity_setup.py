@@ -18,8 +18,8 @@ import numpy as np
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.constraints import ConstraintElimination, num_equations
-from dolfinx_ntf.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.constraints import ConstraintElimination, num_equations
+from dolfinx_ntf.fem.serendipity import serendipity_constraints
 
 
 def main() -> None:

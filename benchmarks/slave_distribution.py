@@ -3,7 +3,7 @@
 docs/method.md §14.1, §14.2. Each process needs its owned slave nodes and every slave face (of any
 process) holding one of them. The former way allgathered the whole slave surface (the node numbers
 of every slave node and every face's node numbers and coordinates) on every process and kept what
-it needed; ``parallel.distribute_slave`` now sends each face only to the owners of its nodes. This
+it needed; ``distribute_slave`` now sends each face only to the owners of its nodes. This
 script times both on the plates of ``benchmarks/contact_phases.py`` (slowest process, median of
 ``--repeat`` runs after a warm-up, each on a fresh halo), checks that they give the same surface,
 and counts the bytes of slave surface each process holds after it and receives from the others
@@ -26,18 +26,20 @@ import numpy as np
 from contact_phases import SLAVE, build_plates
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, parallel
-from dolfinx_ntf.surfaces import SlaveSurface, SurfaceFaces, resolve_slave
+from dolfinx_ntf import compat
+from dolfinx_ntf.fem.surfaces import SlaveSurface, SurfaceFaces, resolve_slave
+from dolfinx_ntf.parallel import collectives, surface_distribution
+from dolfinx_ntf.parallel.halo import NodeHalo
 
 COMM = MPI.COMM_WORLD
 
 
-def allgathered(halo: parallel.NodeHalo, slave: SlaveSurface) -> SlaveSurface:
+def allgathered(halo: NodeHalo, slave: SlaveSurface) -> SlaveSurface:
     """The former way (before the exchange): the whole slave surface on every process."""
     slave_global = np.unique(
         np.concatenate(COMM.allgather(halo.local_global[slave.nodes])).astype(np.int64)
     )
-    g, x, facets = parallel._gather_faces(halo, slave.faces, "slave")
+    g, x, facets = surface_distribution._gather_faces(halo, slave.faces, "slave")
     mine = np.intersect1d(slave_global, halo.local_global[: halo.num_owned])
     keep = np.isin(g, mine).any(axis=1)
     faces = SurfaceFaces(
@@ -46,7 +48,7 @@ def allgathered(halo: parallel.NodeHalo, slave: SlaveSurface) -> SlaveSurface:
     return SlaveSurface(np.sort(halo.find(mine)), faces, None)
 
 
-def received_bytes(halo: parallel.NodeHalo, slave: SlaveSurface) -> tuple[int, ...]:
+def received_bytes(halo: NodeHalo, slave: SlaveSurface) -> tuple[int, ...]:
     """Bytes of slave surface this process holds after the distribution and receives from other
     processes: allgather, then exchange (node numbers and coordinates of faces, node numbers)."""
     n = slave.faces.faces.shape[1]
@@ -54,8 +56,8 @@ def received_bytes(halo: parallel.NodeHalo, slave: SlaveSurface) -> tuple[int, .
     own = slave.faces.faces.shape[0]
     gathered = COMM.allreduce(own) * per_face + 8 * COMM.allreduce(slave.nodes.size)
     ghosts = halo.local_global[slave.nodes[slave.nodes >= halo.num_owned]]
-    keys = parallel.send_to_owners(COMM, ghosts, halo.owner(ghosts)).size
-    got, _ = parallel._send_faces_to_owners(halo, slave.faces)
+    keys = collectives.send_to_owners(COMM, ghosts, halo.owner(ghosts)).size
+    got, _ = surface_distribution._send_faces_to_owners(halo, slave.faces)
     exchanged = 8 * keys + got.shape[0] * per_face + 16 * COMM.size
     return (
         gathered,
@@ -65,14 +67,14 @@ def received_bytes(halo: parallel.NodeHalo, slave: SlaveSurface) -> tuple[int, .
     )
 
 
-def timed(function: typing.Callable[[parallel.NodeHalo], typing.Any], V, repeat: int) -> float:
+def timed(function: typing.Callable[[NodeHalo], typing.Any], V, repeat: int) -> float:
     """Median (over runs) of the slowest process's time, each run on a fresh halo."""
     times = []
     for run in range(repeat + 1):
-        halo = parallel.NodeHalo(V)
+        node_halo = NodeHalo(V)
         COMM.barrier()
         start = time.perf_counter()
-        function(halo)
+        function(node_halo)
         if run:
             times.append(COMM.allreduce(time.perf_counter() - start, op=MPI.MAX))
     return statistics.median(times)
@@ -89,8 +91,8 @@ def main(argv: list[str] | None = None) -> None:
         V = compat.vector_space(plates.mesh, "Lagrange", 1)
         surface = ntf.FacetSurface(plates.facet_tags, SLAVE)
         slave = resolve_slave(V, surface, what="slave")
-        a = allgathered(parallel.NodeHalo(V), slave)
-        b = parallel.distribute_slave(V, parallel.NodeHalo(V), surface, slave, "slave")
+        a = allgathered(NodeHalo(V), slave)
+        b = surface_distribution.distribute_slave(V, NodeHalo(V), surface, slave, "slave")
         same = all(
             np.array_equal(p, q)
             for p, q in [
@@ -100,16 +102,16 @@ def main(argv: list[str] | None = None) -> None:
             ]
         )
         same = COMM.allreduce(same, op=MPI.LAND)
-        received = [
-            max(v) for v in zip(*COMM.allgather(received_bytes(parallel.NodeHalo(V), slave)))
-        ]
+        received = [max(v) for v in zip(*COMM.allgather(received_bytes(NodeHalo(V), slave)))]
         rows.append(
             (
                 COMM.allreduce(slave.nodes.size if COMM.size == 1 else b.nodes.size),
                 COMM.allreduce(slave.faces.faces.shape[0]),
                 timed(lambda halo: allgathered(halo, slave), V, args.repeat),
                 timed(
-                    lambda halo: parallel.distribute_slave(V, halo, surface, slave, "slave"),
+                    lambda halo: surface_distribution.distribute_slave(
+                        V, halo, surface, slave, "slave"
+                    ),
                     V,
                     args.repeat,
                 ),

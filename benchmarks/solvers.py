@@ -50,8 +50,8 @@ from contact_phases import _format_table
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf import solver as ntf_solver
-from dolfinx_ntf.elasticity import component_bc
+from dolfinx_ntf.fem.elasticity import component_bc
+from dolfinx_ntf.solvers import newton as ntf_solver
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Pressure on the punch's top (E = 1000): a few per mille of strain.

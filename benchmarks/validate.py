@@ -62,12 +62,12 @@ from dolfinx_ntf.calculix.writer import (
     StepSpec,
     write_inp,
 )
-from dolfinx_ntf.faces import face_type_from_num_nodes
-from dolfinx_ntf.gmsh_io import mesh_from_gmsh
-from dolfinx_ntf.laws import PressureOverclosureLaw
+from dolfinx_ntf.kernels.faces import face_type_from_num_nodes
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
+from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.meshes import hertz as hz
-from dolfinx_ntf.solver import ContactConvergenceError
-from dolfinx_ntf.spring_areas import spring_areas
+from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
+from dolfinx_ntf.solvers.newton import ContactConvergenceError
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))

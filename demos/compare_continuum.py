@@ -15,7 +15,7 @@ by its flat top onto a rigid plane ``z = 0``; every method uses the same sphere 
 All methods run at the same applied displacement (t^2 in equal increments) and are compared with
 Hertz's solution at their own force (the reaction at the sphere top, from the assembled residual):
 ``a = (3 F R / (4 E*))^(1/3)``, ``p0 = 3 F / (2 pi a^2)``, ``E* = E / (1 - nu^2)`` (rigid plane).
-Every measure is taken the same way for all methods (``dolfinx_ntf.measures``) from the pressure
+Every measure is taken the same way for all methods (``dolfinx_ntf.fem.measures``) from the pressure
 recovered on the contact boundary (``BoundaryPressure``: spring forces, or the continuum pressure,
 turned into a traction field). Contact acts on the potential contact zone ``ZONE`` only. Run it
 with::
@@ -41,12 +41,13 @@ import dolfinx.mesh
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, continuum, measures
-from dolfinx_ntf.active_set import ActiveSetNewtonSolver
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
-from dolfinx_ntf.gmsh_io import mesh_from_gmsh
+from dolfinx_ntf import compat
+from dolfinx_ntf.fem import continuum, measures
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.meshes import hertz as geometry
-from dolfinx_ntf.pressure_recovery import BoundaryPressure
+from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
+from dolfinx_ntf.solvers.active_set import ActiveSetNewtonSolver
 
 __all__ = ["METHODS", "hertz", "main", "make_meshes", "run"]
 

@@ -58,11 +58,11 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
-from dolfinx_ntf.gmsh_io import mesh_from_gmsh
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.kernels.spring_areas import spring_areas
+from dolfinx_ntf.kernels.springs import evaluate_springs
 from dolfinx_ntf.meshes import hertz as geometry
-from dolfinx_ntf.spring_areas import spring_areas
-from dolfinx_ntf.springs import evaluate_springs
+from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 __all__ = ["hertz", "main"]
 

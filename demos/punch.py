@@ -41,9 +41,9 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
-from dolfinx_ntf.gmsh_io import mesh_from_gmsh
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.meshes import punch as geometry
+from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 __all__ = ["main"]
 

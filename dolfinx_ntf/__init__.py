@@ -8,9 +8,45 @@ CalculiX interop). The method is described in ``docs/method.md``, the code in
 
 __version__ = "0.1.0"
 
+from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
-from dolfinx_ntf.active_set import ActiveSetNewtonSolver
-from dolfinx_ntf.analysis import (
+from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
+from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
+from dolfinx_ntf.fem.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.kernels.laws import (
+    DynamicLinearLaw,
+    ExponentialLaw,
+    Friction,
+    LinearLaw,
+    PressureOverclosureLaw,
+    SurfaceInteraction,
+    TabularLaw,
+)
+from dolfinx_ntf.kernels.rigid import (
+    RigidCylinder,
+    RigidPlane,
+    RigidSphere,
+    RigidSurface,
+    SignedDistanceSurface,
+)
+from dolfinx_ntf.logs import log_progress
+from dolfinx_ntf.outputs.postprocess import contact_area, contact_force, reaction
+from dolfinx_ntf.outputs.results import (
+    ContactFields,
+    ContactResults,
+    ContactWriter,
+    contact_results,
+)
+from dolfinx_ntf.parallel.global_constraints import (
+    GlobalLinearConstraint,
+    global_constraints,
+    input_node_ids,
+)
+from dolfinx_ntf.solvers.active_set import ActiveSetNewtonSolver
+from dolfinx_ntf.solvers.analysis import (
     AddPair,
     Amplitude,
     AnalysisStep,
@@ -20,37 +56,8 @@ from dolfinx_ntf.analysis import (
     SetSmallSliding,
     run_steps,
 )
-from dolfinx_ntf.constraints import LinearConstraint, LinearConstraintBlock
-from dolfinx_ntf.dynamics import DynamicStep, kinetic_energy
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
-from dolfinx_ntf.laws import (
-    DynamicLinearLaw,
-    ExponentialLaw,
-    Friction,
-    LinearLaw,
-    PressureOverclosureLaw,
-    SurfaceInteraction,
-    TabularLaw,
-)
-from dolfinx_ntf.logs import log_progress
-from dolfinx_ntf.output import ContactFields, ContactResults, ContactWriter, contact_results
-from dolfinx_ntf.parallel_constraints import (
-    GlobalLinearConstraint,
-    global_constraints,
-    input_node_ids,
-)
-from dolfinx_ntf.postprocess import contact_area, contact_force, reaction
-from dolfinx_ntf.pressure_recovery import BoundaryPressure
-from dolfinx_ntf.problem import ContactPair, ContactProblem
-from dolfinx_ntf.rigid import (
-    RigidCylinder,
-    RigidPlane,
-    RigidSphere,
-    RigidSurface,
-    SignedDistanceSurface,
-)
-from dolfinx_ntf.serendipity import serendipity_constraints
-from dolfinx_ntf.solver import (
+from dolfinx_ntf.solvers.dynamics import DynamicStep, kinetic_energy
+from dolfinx_ntf.solvers.newton import (
     ContactConvergenceError,
     ContactDivergenceError,
     ContactNewtonSolver,
@@ -58,9 +65,9 @@ from dolfinx_ntf.solver import (
     IncrementResult,
     StaticStep,
 )
-from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
 
 _logs.route_compiler_lines()
+_moved.install()
 
 __all__ = [
     "ActiveSetNewtonSolver",

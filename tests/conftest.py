@@ -13,7 +13,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 
 LOWER, UPPER = 1, 2
 LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP = 11, 12, 13, 14

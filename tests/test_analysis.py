@@ -1,4 +1,4 @@
-"""Analyses made of steps (dolfinx_ntf.analysis): loads, Dirichlet and contact changes per step."""
+"""Analyses made of steps (dolfinx_ntf.solvers.analysis): loads, Dirichlet, contact per step."""
 
 from __future__ import annotations
 

@@ -20,7 +20,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import lame_parameters
+from dolfinx_ntf.fem.elasticity import lame_parameters
 
 COMM = MPI.COMM_WORLD
 

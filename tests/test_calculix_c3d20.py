@@ -21,7 +21,7 @@ from dolfinx_ntf.calculix.elements import ELEMENT_TYPES
 from dolfinx_ntf.calculix.frd import read_frd
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.model import build_model
-from dolfinx_ntf.constraints import num_equations
+from dolfinx_ntf.fem.constraints import num_equations
 
 sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "crossval"))
 import cases
@@ -255,14 +255,14 @@ def test_c3d20_node_surface_midside_nodes_take_no_face_area(tmp_path):
     corners = np.isin(model.dof_node[state.slave.nodes], deck.elements["C3D20"].connectivity[:, :8])
     np.testing.assert_array_equal(state.slave.faceless, ~corners)
     assert np.sum(~corners) == 12  # the midside nodes of the punch's bottom
-    from dolfinx_ntf.problem import _slave_areas
+    from dolfinx_ntf.contact.problem import _slave_areas
 
     areas = _slave_areas(state.slave, problem.current_coordinates())
     assert np.all(areas[~corners] == 0.0) and np.all(areas[corners] > 0.0)
 
 
 def test_node_surface_checks_midside_nodes():
-    from dolfinx_ntf.surfaces import NodeSurface
+    from dolfinx_ntf.fem.surfaces import NodeSurface
 
     with pytest.raises(ValueError, match="midside_nodes must be non-negative"):
         NodeSurface(np.array([0, 1]), "s", midside_nodes=np.array([-1]))

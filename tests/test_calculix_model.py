@@ -28,7 +28,7 @@ from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
 from dolfinx_ntf.calculix.job import JobError, run_job
 from dolfinx_ntf.calculix.model import CELL_PERMUTATIONS, INTEGRATION_POINTS, build_model
-from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 
 pytestmark = pytest.mark.serial
 

@@ -30,7 +30,7 @@ from dolfinx_ntf.calculix.writer import (
     _real,
     write_inp,
 )
-from dolfinx_ntf.surfaces import boundary_faces
+from dolfinx_ntf.fem.surfaces import boundary_faces
 
 serial = pytest.mark.serial
 

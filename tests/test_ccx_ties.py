@@ -14,9 +14,9 @@ import pytest
 
 from dolfinx_ntf.calculix.cel import compare_cel
 from dolfinx_ntf.calculix.job import run_job
-from dolfinx_ntf.faces import QUAD4
-from dolfinx_ntf.rigid import RigidPlane, rigid_master
-from dolfinx_ntf.search import MasterSurface
+from dolfinx_ntf.kernels.faces import QUAD4
+from dolfinx_ntf.kernels.rigid import RigidPlane, rigid_master
+from dolfinx_ntf.kernels.search import MasterSurface
 
 TIES = Path(__file__).resolve().parent / "data" / "calculix" / "ties"
 sys.path.insert(0, str(TIES))

@@ -12,10 +12,11 @@ import dolfinx.mesh
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, master_exchange
-from dolfinx_ntf import problem as problem_module
-from dolfinx_ntf.search import MasterSurface
-from dolfinx_ntf.surfaces import resolve_master, resolve_slave
+from dolfinx_ntf import compat
+from dolfinx_ntf.contact import problem as problem_module
+from dolfinx_ntf.fem.surfaces import resolve_master, resolve_slave
+from dolfinx_ntf.kernels.search import MasterSurface
+from dolfinx_ntf.parallel import master_exchange
 from dolfinx_ntf.validation import raise_collectively
 
 pytestmark = pytest.mark.mpi
@@ -104,7 +105,7 @@ def test_sequential_galerkin_products_only_for_serial_gamg(pc_type):
     """The faster PtAP algorithm is set for a serial GAMG solve only, and never over the user's."""
     from petsc4py import PETSc
 
-    from dolfinx_ntf.solver import SEQUENTIAL_PTAP, galerkin_products
+    from dolfinx_ntf.solvers.newton import SEQUENTIAL_PTAP, galerkin_products
 
     ksp = PETSc.KSP().create(COMM)
     ksp.getPC().setType(pc_type)

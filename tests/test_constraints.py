@@ -1,4 +1,4 @@
-"""Linear constraints by elimination (dolfinx_ntf.constraints, *EQUATION; docs/method.md §13.1)."""
+"""Linear constraints by elimination (dolfinx_ntf.fem.constraints, *EQUATION; method §13.1)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ import dolfinx_ntf as ntf
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
 from dolfinx_ntf.calculix.job import run_job
-from dolfinx_ntf.constraints import LinearConstraint, elimination_rows
+from dolfinx_ntf.fem.constraints import LinearConstraint, elimination_rows
 
 pytestmark = pytest.mark.serial
 
@@ -315,7 +315,7 @@ def test_python_tie_matches_ccx_on_the_exported_deck(tmp_path):
 
     from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
     from dolfinx_ntf.calculix.writer import BoundarySpec, PressureSpec, StepSpec, write_inp
-    from dolfinx_ntf.solver import TIGHT_FIELD_CONTROLS
+    from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
 
     _, _, a, b = _two_nodes()
     tie = LinearConstraint([a, b], [2, 2], [1.0, -1.0], name="tie")

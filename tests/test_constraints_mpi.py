@@ -27,8 +27,8 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc
-from dolfinx_ntf.serendipity import serendipity_centres
+from dolfinx_ntf.fem.elasticity import component_bc
+from dolfinx_ntf.fem.serendipity import serendipity_centres
 
 pytestmark = pytest.mark.mpi
 

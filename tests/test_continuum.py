@@ -8,9 +8,10 @@ import dolfinx.fem
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, continuum, measures
-from dolfinx_ntf.elasticity import small_strain_stress
-from dolfinx_ntf.pressure_recovery import BoundaryPressure
+from dolfinx_ntf import compat
+from dolfinx_ntf.fem import continuum, measures
+from dolfinx_ntf.fem.elasticity import small_strain_stress
+from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 
 pytestmark = pytest.mark.mpi  # also on 2 ranks (make test)
 

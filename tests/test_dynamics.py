@@ -17,7 +17,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.dynamics import newmark_parameters
+from dolfinx_ntf.solvers.dynamics import newmark_parameters
 
 E, NU, RHO = 1000.0, 0.3, 1.0
 
@@ -157,7 +157,7 @@ def test_wrong_configuration_is_named():
 @pytest.mark.serial
 def test_impact_energy():
     """A block dropped onto a base: total energy kept within 1 % with ccx's alpha."""
-    from dolfinx_ntf.dynamics import kinetic_energy
+    from dolfinx_ntf.solvers.dynamics import kinetic_energy
 
     mesh, _, ft = two_blocks(
         MPI.COMM_SELF,

@@ -1,9 +1,9 @@
-"""Tests for dolfinx_ntf.faces: shape functions, weights, triangulation, quadrature, clamp."""
+"""dolfinx_ntf.kernels.faces: shape functions, weights, triangulation, quadrature, clamp."""
 
 import numpy as np
 import pytest
 
-from dolfinx_ntf.faces import (
+from dolfinx_ntf.kernels.faces import (
     FACE_TYPES,
     QUAD4,
     QUAD8,

@@ -1,14 +1,14 @@
-"""Friction of the spring elements (dolfinx_ntf.friction through evaluate_springs), pure numpy."""
+"""Friction of the spring elements (kernels.friction through evaluate_springs), pure numpy."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from dolfinx_ntf.faces import FACE_TYPES, face_points, face_tangents
-from dolfinx_ntf.friction import FrictionInput, output_tangents, tangential_forces
-from dolfinx_ntf.laws import ExponentialLaw, LinearLaw
-from dolfinx_ntf.springs import evaluate_springs
+from dolfinx_ntf.kernels.faces import FACE_TYPES, face_points, face_tangents
+from dolfinx_ntf.kernels.friction import FrictionInput, output_tangents, tangential_forces
+from dolfinx_ntf.kernels.laws import ExponentialLaw, LinearLaw
+from dolfinx_ntf.kernels.springs import evaluate_springs
 
 SIZE = 2.0
 LINEAR = LinearLaw(slope=1.0e3, tension=0.5, c0=1e-3)
@@ -196,7 +196,7 @@ def test_bad_parameters():
 
 
 def test_friction_state_commit_and_cutback():
-    from dolfinx_ntf.friction_state import FrictionState
+    from dolfinx_ntf.kernels.friction_state import FrictionState
 
     state = FrictionState(4)
     state.begin_increment()

@@ -16,8 +16,8 @@ import pytest
 import ufl
 from dolfinx import fem
 
-from dolfinx_ntf import compat, gmsh_io
-from dolfinx_ntf.meshes import hertz, punch
+from dolfinx_ntf import compat
+from dolfinx_ntf.meshes import gmsh_io, hertz, punch
 
 pytestmark = pytest.mark.mpi
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from dolfinx_ntf.laws import (
+from dolfinx_ntf.kernels.laws import (
     ExponentialLaw,
     Friction,
     LinearLaw,

@@ -21,12 +21,13 @@ import dolfinx.fem
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, master_exchange
-from dolfinx_ntf.elasticity import component_bc
-from dolfinx_ntf.faces import FACE_TYPES
-from dolfinx_ntf.parallel import NodeHalo
-from dolfinx_ntf.search import NOT_HELD, MasterSurface
-from dolfinx_ntf.surfaces import resolve_master
+from dolfinx_ntf import compat
+from dolfinx_ntf.fem.elasticity import component_bc
+from dolfinx_ntf.fem.surfaces import resolve_master
+from dolfinx_ntf.kernels.faces import FACE_TYPES
+from dolfinx_ntf.kernels.search import NOT_HELD, MasterSurface
+from dolfinx_ntf.parallel import master_exchange
+from dolfinx_ntf.parallel.halo import NodeHalo
 
 pytestmark = pytest.mark.mpi
 

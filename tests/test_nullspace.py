@@ -16,8 +16,9 @@ import dolfinx.fem.petsc
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, nullspace
-from dolfinx_ntf import solver as ntf_solver
+from dolfinx_ntf import compat
+from dolfinx_ntf.solvers import newton as ntf_solver
+from dolfinx_ntf.solvers import nullspace
 
 COMM = MPI.COMM_WORLD
 LOAD = 20.0

@@ -29,8 +29,8 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf import problem as problem_module
-from dolfinx_ntf.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.contact import problem as problem_module
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 
 pytestmark = pytest.mark.mpi
 

@@ -17,7 +17,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import component_bc
+from dolfinx_ntf.fem.elasticity import component_bc
 
 pytestmark = pytest.mark.mpi
 

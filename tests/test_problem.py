@@ -191,7 +191,7 @@ def test_node_based_slave_collects_lateral_area():
     # bottom faces (4) plus lateral faces touching the bottom rim (2 per side)
     assert faces.shape[0] == 4 + 8
     nodal.begin_increment(1.0)
-    from dolfinx_ntf.spring_areas import spring_areas
+    from dolfinx_ntf.kernels.spring_areas import spring_areas
 
     coords = nodal.current_coordinates()
     areas = spring_areas(

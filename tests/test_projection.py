@@ -1,11 +1,20 @@
-"""Tests for dolfinx_ntf.projection: closest point of a face over its closed parametric domain."""
+"""dolfinx_ntf.kernels.projection: closest point of a face over its closed parametric domain."""
 
 import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from dolfinx_ntf.faces import FACE_TYPES, QUAD4, QUAD8, QUAD9, TRI3, TRI6, FaceType, face_points
-from dolfinx_ntf.projection import project_points
+from dolfinx_ntf.kernels.faces import (
+    FACE_TYPES,
+    QUAD4,
+    QUAD8,
+    QUAD9,
+    TRI3,
+    TRI6,
+    FaceType,
+    face_points,
+)
+from dolfinx_ntf.kernels.projection import project_points
 
 ALL = list(FACE_TYPES.values())
 IDS = [ft.name for ft in ALL]

@@ -13,8 +13,8 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.gmsh_io import mesh_from_gmsh
 from dolfinx_ntf.meshes import hertz
+from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 pytestmark = pytest.mark.serial
 

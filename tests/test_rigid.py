@@ -13,8 +13,8 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.elasticity import small_strain_stress
-from dolfinx_ntf.rigid import evaluate_rigid_springs
+from dolfinx_ntf.fem.elasticity import small_strain_stress
+from dolfinx_ntf.kernels.rigid import evaluate_rigid_springs
 
 RNG = np.random.default_rng(12)
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from dolfinx_ntf.faces import FACE_TYPES
-from dolfinx_ntf.search import MasterSurface
+from dolfinx_ntf.kernels.faces import FACE_TYPES
+from dolfinx_ntf.kernels.search import MasterSurface
 
 ALL_TYPES = ["tri3", "quad4", "tri6", "quad8", "quad9"]
 QUAD_TYPES = ["quad4", "quad8", "quad9"]

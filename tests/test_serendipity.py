@@ -1,4 +1,4 @@
-"""C3D20's space as a constrained Q2 space (dolfinx_ntf.serendipity, docs/method.md §13.5)."""
+"""C3D20's space as a constrained Q2 space (dolfinx_ntf.fem.serendipity, docs/method.md §13.5)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.serendipity import serendipity_constraints
 
 pytestmark = pytest.mark.serial
 
@@ -119,7 +119,7 @@ def test_constrained_q2_solves_like_the_serendipity_element():
 
 def test_constraint_blocks_eliminate_like_single_constraints():
     """The vectorized blocks give the rows of one LinearConstraint per row."""
-    from dolfinx_ntf.constraints import LinearConstraintBlock, elimination_rows
+    from dolfinx_ntf.fem.constraints import LinearConstraintBlock, elimination_rows
 
     mesh = dolfinx.mesh.create_box(
         MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 1]], [2, 1, 1], dolfinx.mesh.CellType.hexahedron
@@ -143,7 +143,7 @@ def test_constraint_blocks_eliminate_like_single_constraints():
 
 
 def test_constraint_block_checks_its_arrays():
-    from dolfinx_ntf.constraints import LinearConstraintBlock
+    from dolfinx_ntf.fem.constraints import LinearConstraintBlock
 
     with pytest.raises(ValueError, match=r"'bad'.*do not match"):
         LinearConstraintBlock(np.zeros((2, 3)), 0, np.ones(4), name="bad")
@@ -154,8 +154,8 @@ def test_constraint_block_checks_its_arrays():
 
 
 def test_quad9_faces_with_serendipity_centres_become_quad8():
-    from dolfinx_ntf.serendipity import as_quad8, face_centres
-    from dolfinx_ntf.surfaces import boundary_faces
+    from dolfinx_ntf.fem.serendipity import as_quad8, face_centres
+    from dolfinx_ntf.fem.surfaces import boundary_faces
 
     mesh = dolfinx.mesh.create_box(
         MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 1]], [2, 2, 1], dolfinx.mesh.CellType.hexahedron

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dolfinx_ntf.faces import FACE_TYPES, QUAD4, QUAD8, QUAD9, TRI3, TRI6
-from dolfinx_ntf.spring_areas import (
+from dolfinx_ntf.kernels.faces import FACE_TYPES, QUAD4, QUAD8, QUAD9, TRI3, TRI6
+from dolfinx_ntf.kernels.spring_areas import (
     face_area_gradients,
     face_areas,
     spring_area_gradients,

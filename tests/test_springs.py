@@ -1,13 +1,13 @@
-"""Tests of the spring element residual and tangent (dolfinx_ntf.springs), pure numpy."""
+"""Tests of the spring element residual and tangent (dolfinx_ntf.kernels.springs), pure numpy."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from dolfinx_ntf.faces import FACE_TYPES, FaceType, face_points, face_tangents
-from dolfinx_ntf.laws import ExponentialLaw, LinearLaw
-from dolfinx_ntf.springs import evaluate_springs
+from dolfinx_ntf.kernels.faces import FACE_TYPES, FaceType, face_points, face_tangents
+from dolfinx_ntf.kernels.laws import ExponentialLaw, LinearLaw
+from dolfinx_ntf.kernels.springs import evaluate_springs
 
 SIZE = 2.0  # element size of the test faces
 LINEAR = LinearLaw(slope=1.0e3, tension=0.5, c0=1e-3)

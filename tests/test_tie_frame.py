@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from dolfinx_ntf.faces import QUAD4, TRI3
-from dolfinx_ntf.search import MasterSurface
-from dolfinx_ntf.tie_frame import frame_from_moments, point_moments, triangle_moments
+from dolfinx_ntf.kernels.faces import QUAD4, TRI3
+from dolfinx_ntf.kernels.search import MasterSurface
+from dolfinx_ntf.kernels.tie_frame import frame_from_moments, point_moments, triangle_moments
 
 
 def _grid(nx, ny, h=1.0, skip=()):

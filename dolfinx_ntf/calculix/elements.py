@@ -48,7 +48,7 @@ class ElementType:
         name: ccx type name (``C3D4``, ``C3D8``, ``C3D10``).
         num_nodes: nodes per element.
         num_corners: corner (vertex) nodes per element, listed first.
-        face_type: face type name of ``dolfinx_ntf.faces`` (``tri3``, ``quad4``, ``tri6``).
+        face_type: face type name of ``dolfinx_ntf.kernels.faces`` (``tri3``, ``quad4``, ``tri6``).
         faces: ``(num_faces, face_nodes)`` 0-based element-local node indices of faces S1..Sk,
             corners counter-clockwise seen from outside the element, then midside nodes.
         cell: dolfinx cell name (``tetrahedron``, ``hexahedron``).

@@ -21,8 +21,8 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.problem import ContactProblem
-from dolfinx_ntf.serendipity import element_forces_on_nodes
+from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.fem.serendipity import element_forces_on_nodes
 
 from .deck import Deck
 from .model import CalculixModel

@@ -50,13 +50,14 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, parallel
-from dolfinx_ntf.dynamics import DynamicStep
-from dolfinx_ntf.friction import output_tangents
-from dolfinx_ntf.laws import LinearLaw, SurfaceInteraction
-from dolfinx_ntf.output import ContactWriter, contact_results
-from dolfinx_ntf.problem import ContactProblem
-from dolfinx_ntf.solver import (
+from dolfinx_ntf import compat
+from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.kernels.friction import output_tangents
+from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
+from dolfinx_ntf.outputs.results import ContactWriter, contact_results
+from dolfinx_ntf.parallel import collectives
+from dolfinx_ntf.solvers.dynamics import DynamicStep
+from dolfinx_ntf.solvers.newton import (
     TIGHT_FIELD_CONTROLS,
     ContactConvergenceError,
     ContactNewtonSolver,
@@ -904,7 +905,7 @@ def _read(path: Path, comm: MPI.Comm) -> Deck:
             raise ValueError(f"{path}: the deck has no *STEP: nothing to run")
         return deck
 
-    return parallel.collectively(comm, read)
+    return collectives.collectively(comm, read)
 
 
 def run_job(

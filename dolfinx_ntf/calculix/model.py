@@ -52,12 +52,15 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.constraints import (
+from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
+from dolfinx_ntf.fem.constraints import (
     LinearConstraint,
     LinearConstraintBlock,
     num_equations,
 )
-from dolfinx_ntf.laws import (
+from dolfinx_ntf.fem.serendipity import add_centres, serendipity_constraints
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.kernels.laws import (
     ExponentialLaw,
     Friction,
     LinearLaw,
@@ -65,10 +68,7 @@ from dolfinx_ntf.laws import (
     SurfaceInteraction,
     TabularLaw,
 )
-from dolfinx_ntf.parallel_constraints import global_constraints
-from dolfinx_ntf.problem import ContactPair, ContactProblem
-from dolfinx_ntf.serendipity import add_centres, serendipity_constraints
-from dolfinx_ntf.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.parallel.global_constraints import global_constraints
 
 from .deck import Deck, Step
 from .elements import ELEMENT_TYPES, ElementType

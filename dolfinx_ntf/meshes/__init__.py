@@ -2,7 +2,7 @@
 
 Each module defines the physical-group tags of its geometry, a ``COARSE`` set of mesh sizes for
 tests, builders that create a new current gmsh model (pass them to
-:func:`dolfinx_ntf.gmsh_io.mesh_from_gmsh`), and a command line that writes a ``.msh`` file::
+:func:`dolfinx_ntf.meshes.gmsh_io.mesh_from_gmsh`), and a command line that writes a ``.msh`` file::
 
     python -m dolfinx_ntf.meshes.punch --cell-type tetrahedron -o punch.msh
     python -m dolfinx_ntf.meshes.hertz --coarse -o hertz.msh

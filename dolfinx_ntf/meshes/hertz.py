@@ -28,7 +28,7 @@ from pathlib import Path
 
 import gmsh
 
-from dolfinx_ntf.gmsh_io import gmsh_session, write_msh
+from dolfinx_ntf.meshes.gmsh_io import gmsh_session, write_msh
 
 __all__ = [
     "BLOCK",

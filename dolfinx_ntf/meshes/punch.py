@@ -2,7 +2,7 @@
 
 The block fills ``[0, Lx] x [0, Ly] x [-Lz, 0]``; the punch is a separate body (no shared nodes)
 centred over the block top with its bottom face at ``z = gap``. Both are meshed through the gmsh API
-in a *new* gmsh model that becomes the current one, so that `dolfinx_ntf.gmsh_io.model_to_mesh` can
+in a *new* gmsh model that becomes the current one, so that `gmsh_io.model_to_mesh` can
 read it directly. Hexahedra come from transfinite volumes with recombined faces; tetrahedra from the
 unstructured mesher (`build_punch`) or from split transfinite hexahedra (`build_patch_test`).
 
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import gmsh
 
-from dolfinx_ntf.gmsh_io import gmsh_session, write_msh
+from dolfinx_ntf.meshes.gmsh_io import gmsh_session, write_msh
 
 __all__ = [
     "BLOCK",

@@ -25,8 +25,8 @@ import dolfinx.fem
 import dolfinx.io
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.pressure_recovery import BoundaryPressure
-from dolfinx_ntf.problem import ContactProblem, PairState
+from dolfinx_ntf.contact.problem import ContactProblem, PairState
+from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 
 __all__ = ["ContactFields", "ContactResults", "ContactWriter", "contact_results"]
 

@@ -17,8 +17,8 @@ import numpy as np
 import scipy.sparse
 from scipy.spatial import cKDTree
 
-from dolfinx_ntf.faces import FaceType
-from dolfinx_ntf.tie_frame import TieFrame, triangle_moments
+from dolfinx_ntf.kernels.faces import FaceType
+from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 
 __all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterSurface"]
 
@@ -191,7 +191,7 @@ class MasterSurface:
 
         Returns:
             ``(origin, moments)``: the centroid and the moment vector about it
-            (``dolfinx_ntf.tie_frame``).
+            (``dolfinx_ntf.kernels.tie_frame``).
         """
         self._require_update()
         x = self._current

@@ -24,9 +24,9 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.constraints import LinearConstraintBlock
-from dolfinx_ntf.faces import QUAD8, QUAD9
-from dolfinx_ntf.surfaces import SurfaceFaces
+from dolfinx_ntf.fem.constraints import LinearConstraintBlock
+from dolfinx_ntf.fem.surfaces import SurfaceFaces
+from dolfinx_ntf.kernels.faces import QUAD8, QUAD9
 
 __all__ = [
     "add_centres",

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from dolfinx_ntf.laws import LinearLaw, PressureOverclosureLaw
+from dolfinx_ntf.kernels.laws import LinearLaw, PressureOverclosureLaw
 
 __all__ = ["PenetrationSlopeAtKink", "start_law"]
 

@@ -25,8 +25,8 @@ import typing
 import numpy as np
 import numpy.typing as npt
 
-from dolfinx_ntf.laws import PressureOverclosureLaw
-from dolfinx_ntf.springs import SpringEvaluation, evaluate_springs
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
+from dolfinx_ntf.kernels.springs import SpringEvaluation, evaluate_springs
 
 __all__ = [
     "RigidCylinder",
@@ -226,7 +226,7 @@ class SignedDistanceSurface(RigidSurface):
         step: Finite-difference step for the Hessian (length units).
         motion: Translation ``c(t)``, see :class:`RigidSurface`.
         ufl_distance: Optional ``phi`` as a function of a UFL vector, for the continuum
-            formulations (:mod:`dolfinx_ntf.continuum`); numpy callables cannot enter a form.
+            formulations (:mod:`dolfinx_ntf.fem.continuum`); numpy callables cannot enter a form.
     """
 
     def __init__(
@@ -293,8 +293,9 @@ def evaluate_rigid_springs(
 ) -> SpringEvaluation:
     """Forces and tangent of N one-node springs against a rigid surface (docs/method.md §15.1).
 
-    The result has the layout of :func:`~dolfinx_ntf.springs.evaluate_springs` with no master
-    nodes: ``forces`` (N, 1, 3), ``stiffness`` (N, 3, 3), ``xi`` zeros (N, 2), ``phi`` (N, 0).
+    The result has the layout of :func:`~dolfinx_ntf.kernels.springs.evaluate_springs` with no
+    master nodes: ``forces`` (N, 1, 3), ``stiffness`` (N, 3, 3), ``xi`` zeros (N, 2), ``phi``
+    (N, 0).
 
     Raises:
         ValueError: Wrong shapes, non-finite values, or a zero spring area (a slave node without

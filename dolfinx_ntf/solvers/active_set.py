@@ -15,8 +15,8 @@ from petsc4py import PETSc
 
 import numpy as np
 
-from dolfinx_ntf.problem import ContactProblem
-from dolfinx_ntf.solver import ContactNewtonSolver
+from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 
 __all__ = ["ActiveSetNewtonSolver"]
 

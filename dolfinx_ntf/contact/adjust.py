@@ -13,7 +13,7 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.parallel import NodeHalo
+from dolfinx_ntf.parallel.halo import NodeHalo
 
 __all__ = ["adjusted_nodes", "move_reference_nodes"]
 

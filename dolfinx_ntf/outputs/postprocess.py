@@ -19,9 +19,9 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.output import ContactResults, contact_results
-from dolfinx_ntf.problem import ContactPair, ContactProblem
-from dolfinx_ntf.surfaces import FacetSurface
+from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
+from dolfinx_ntf.fem.surfaces import FacetSurface
+from dolfinx_ntf.outputs.results import ContactResults, contact_results
 
 __all__ = ["contact_area", "contact_force", "reaction"]
 

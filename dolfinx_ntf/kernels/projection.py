@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dolfinx_ntf.faces import FaceType, _face_coords_array
+from dolfinx_ntf.kernels.faces import FaceType, _face_coords_array
 
 __all__ = ["project_points"]
 

@@ -22,21 +22,17 @@ import dolfinx.fem.petsc
 import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat, master_exchange, parallel, serendipity, validation
-from dolfinx_ntf.adjust import adjusted_nodes, move_reference_nodes
-from dolfinx_ntf.assembly import ContactAssembler, SpringBlocks
-from dolfinx_ntf.bulk_jacobian import BulkJacobian
-from dolfinx_ntf.constraints import ConstraintElimination, LinearConstraint, LinearConstraintBlock
-from dolfinx_ntf.friction import TANGENT_MODES, FrictionInput
-from dolfinx_ntf.friction_state import FrictionState
-from dolfinx_ntf.laws import PressureOverclosureLaw, SurfaceInteraction
-from dolfinx_ntf.parallel_constraints import distributed_elimination
-from dolfinx_ntf.rigid import RigidSurface, rigid_master, spring_evaluator
-from dolfinx_ntf.search import MasterSurface
-from dolfinx_ntf.spring_areas import spring_area_gradients, spring_areas
-from dolfinx_ntf.springs import SpringEvaluation
-from dolfinx_ntf.start_slope import start_law
-from dolfinx_ntf.surfaces import (
+from dolfinx_ntf import compat, validation
+from dolfinx_ntf.contact.adjust import adjusted_nodes, move_reference_nodes
+from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
+from dolfinx_ntf.fem import serendipity
+from dolfinx_ntf.fem.bulk_jacobian import BulkJacobian
+from dolfinx_ntf.fem.constraints import (
+    ConstraintElimination,
+    LinearConstraint,
+    LinearConstraintBlock,
+)
+from dolfinx_ntf.fem.surfaces import (
     FacetSurface,
     NodeSurface,
     SlaveSurface,
@@ -45,7 +41,18 @@ from dolfinx_ntf.surfaces import (
     resolve_master,
     resolve_slave,
 )
-from dolfinx_ntf.tie_frame import TieFrame, frame_from_moments, point_moments
+from dolfinx_ntf.kernels.friction import TANGENT_MODES, FrictionInput
+from dolfinx_ntf.kernels.friction_state import FrictionState
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw, SurfaceInteraction
+from dolfinx_ntf.kernels.rigid import RigidSurface, rigid_master, spring_evaluator
+from dolfinx_ntf.kernels.search import MasterSurface
+from dolfinx_ntf.kernels.spring_areas import spring_area_gradients, spring_areas
+from dolfinx_ntf.kernels.springs import SpringEvaluation
+from dolfinx_ntf.kernels.start_slope import start_law
+from dolfinx_ntf.kernels.tie_frame import TieFrame, frame_from_moments, point_moments
+from dolfinx_ntf.parallel import collectives, master_exchange, surface_distribution
+from dolfinx_ntf.parallel.global_constraints import distributed_elimination
+from dolfinx_ntf.parallel.halo import NodeHalo
 
 __all__ = ["ContactPair", "ContactProblem", "PairState"]
 
@@ -207,7 +214,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
         reuse_bulk_jacobian: When the bulk Jacobian form does not contain ``u`` (a linear material
             at small strain), assemble it once and copy it at later iterations while its inputs
-            are unchanged (:class:`~dolfinx_ntf.bulk_jacobian.BulkJacobian`; one more matrix in
+            are unchanged (:class:`~dolfinx_ntf.fem.bulk_jacobian.BulkJacobian`; one more matrix in
             memory). False assembles it at every iteration.
     """
 
@@ -286,7 +293,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             enabled=reuse_bulk_jacobian,
         )
         #: Contact nodes of other processes (docs/method.md §14); None in serial.
-        self.halo = parallel.NodeHalo(V) if V.mesh.comm.size > 1 else None
+        self.halo = NodeHalo(V) if V.mesh.comm.size > 1 else None
         #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
         self._face_centres = serendipity.face_centres(constraints)
         self._serendipity = bool(V.mesh.comm.allreduce(self._face_centres.size, op=MPI.MAX))
@@ -344,11 +351,11 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                     c, (LinearConstraint, LinearConstraintBlock), "ContactProblem: constraints"
                 )
 
-        parallel.collectively(comm, check)
+        collectives.collectively(comm, check)
         prescribed = [bc.dof_indices()[0] for bc in self.bcs]
         prescribed = np.concatenate(prescribed) if prescribed else np.zeros(0, np.int64)
         if comm.size > 1:  # every process's constraints, in the global numbering (§14.6)
-            self.elimination = parallel.collectively(
+            self.elimination = collectives.collectively(
                 comm, distributed_elimination, V, self.constraints, prescribed
             )
             return
@@ -360,7 +367,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         name = pair.name or f"pair {index + 1}"
         V = self.u.function_space
         comm = V.mesh.comm
-        slave = parallel.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
             faces = serendipity.as_quad8(slave.faces, self._face_centres)
             keep = ~np.isin(slave.nodes, self._face_centres)
@@ -373,8 +380,14 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                     "supported yet; use a meshed master"
                 )
             if self.halo is not None:  # the owned slave nodes; no master nodes (§14.6)
-                slave = parallel.collectively(
-                    comm, parallel.distribute_slave, V, self.halo, pair.slave, slave, name
+                slave = collectives.collectively(
+                    comm,
+                    surface_distribution.distribute_slave,
+                    V,
+                    self.halo,
+                    pair.slave,
+                    slave,
+                    name,
                 )
             faces, master = rigid_master(pair.master, lambda: self.time_fraction, f"{name} master")
             friction = FrictionState(slave.nodes.size)  # stays empty: the bookkeeping is shared
@@ -382,21 +395,28 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
                 pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
                 was_active=pair.active,
             )  # fmt: skip
-        master_faces = parallel.collectively(
+        master_faces = collectives.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
         if self._serendipity:
             master_faces = serendipity.as_quad8(master_faces, self._face_centres)
         patch = None
         if self.halo is not None and master_exchange.uses_exchange(comm, master_faces):  # §14.8
-            slave, patch = parallel.collectively(
+            slave, patch = collectives.collectively(
                 comm, master_exchange.distribute_pair, self.halo, self.u, pair.slave, slave,
                 master_faces, name,
             )  # fmt: skip
             master_faces = patch.faces
         elif self.halo is not None:
-            slave, master_faces = parallel.collectively(
-                comm, parallel.distribute_pair, V, self.halo, pair.slave, slave, master_faces, name
+            slave, master_faces = collectives.collectively(
+                comm,
+                surface_distribution.distribute_pair,
+                V,
+                self.halo,
+                pair.slave,
+                slave,
+                master_faces,
+                name,
             )
         if patch is None and master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
@@ -420,7 +440,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         adjust_nodes = None
         if isinstance(pair.adjust, NodeSurface):
-            adjust_nodes = parallel.collectively(
+            adjust_nodes = collectives.collectively(
                 comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
             ).nodes
             if self.halo is not None:  # the union over processes, as extended nodes
@@ -594,13 +614,15 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         """
         coords = self.current_coordinates()
         comm = self.u.function_space.mesh.comm
-        with parallel.collective_errors(comm):  # an error on one process is raised on all (§14.4)
+        with collectives.collective_errors(
+            comm
+        ):  # an error on one process is raised on all (§14.4)
             for state in self.states:
                 if large_sliding_only and self._small_sliding(state):
                     continue
                 self._pair_one(state, coords, record_overlap)
                 if record_overlap and state.pair.adjust is not None:  # ADJUST may have moved nodes
-                    parallel.checkpoint(comm)
+                    collectives.checkpoint(comm)
                     coords = self.current_coordinates()
         self.pairings += 1
         self._pattern_checked = False
@@ -635,7 +657,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         previous[state.spring_slave] = state.spring_face
         found, face, areas, evaluation = self._search(state, coords, previous)
         if record_overlap and state.pair.adjust is not None:
-            parallel.checkpoint(self.u.function_space.mesh.comm)  # before ADJUST's collectives
+            collectives.checkpoint(self.u.function_space.mesh.comm)  # before ADJUST's collectives
         if (
             record_overlap
             and state.pair.adjust is not None
@@ -679,13 +701,13 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         comm = self.u.function_space.mesh.comm
         areas = _slave_areas(state.slave, coords)
         if isinstance(state.master, master_exchange.MasterPatch):
-            parallel.checkpoint(comm)  # the patch's update is collective (§14.4)
+            collectives.checkpoint(comm)  # the patch's update is collective (§14.4)
         state.master.update(coords)
         points = coords[state.slave.nodes]
         tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
         start, frame = None, None
         if self.walk_from_previous_face:
-            parallel.checkpoint(comm)  # the tie frame sums over the processes
+            collectives.checkpoint(comm)  # the tie frame sums over the processes
             start, frame = previous, self._tie_frame(state, points, areas)
         options = {"tie_frame": frame, "ccx_ties": not self.walk_from_previous_face}
         face = state.master.locate(
@@ -758,7 +780,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         coords = self.current_coordinates()
         count = 0
         comm = self.u.function_space.mesh.comm
-        with parallel.collective_errors(comm):
+        with collectives.collective_errors(comm):
             for state in self.states:
                 if not state.pair.active:
                     continue
@@ -886,7 +908,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             if self.matrix is not None:
                 self.matrix.destroy()
             comm = self.u.function_space.mesh.comm  # a failed patch lookup fails on all (§14.4)
-            reserved = parallel.collectively(comm, self._reserved_blocks)
+            reserved = collectives.collectively(comm, self._reserved_blocks)
             self.matrix = self.assembler.create_matrix(blocks + reserved)
         self._pattern_checked = True
         return self.matrix

@@ -23,9 +23,10 @@ import numpy as np
 import dolfinx.fem
 import dolfinx.nls.petsc
 
-from dolfinx_ntf import nullspace, validation
+from dolfinx_ntf import validation
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import log_progress, newton_logger, quiet_dolfinx
-from dolfinx_ntf.problem import ContactProblem
+from dolfinx_ntf.solvers import nullspace
 
 __all__ = [
     "CCX_FIELD_CONTROLS",

@@ -24,8 +24,8 @@ import dolfinx.fem.petsc
 import ufl
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.problem import ContactProblem
-from dolfinx_ntf.solver import (
+from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.solvers.newton import (
     ContactConvergenceError,
     ContactNewtonSolver,
     IncrementResult,

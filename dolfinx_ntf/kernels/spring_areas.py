@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from dolfinx_ntf.faces import FaceType, _face_coords_array
+from dolfinx_ntf.kernels.faces import FaceType, _face_coords_array
 
 __all__ = [
     "face_area_gradients",

@@ -37,10 +37,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dolfinx_ntf.faces import FaceType, _face_coords_array
-from dolfinx_ntf.friction import FrictionInput, TangentialForce, tangential_forces
-from dolfinx_ntf.laws import PressureOverclosureLaw
-from dolfinx_ntf.projection import project_points
+from dolfinx_ntf.kernels.faces import FaceType, _face_coords_array
+from dolfinx_ntf.kernels.friction import FrictionInput, TangentialForce, tangential_forces
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
+from dolfinx_ntf.kernels.projection import project_points
 
 __all__ = ["SpringEvaluation", "evaluate_springs"]
 

@@ -2,7 +2,7 @@
 
 Every measure here reads only what all formulations have: the displacement, the bulk residual form,
 and the recovered contact pressure ``p_h`` on the contact boundary
-(:class:`~dolfinx_ntf.pressure_recovery.BoundaryPressure`):
+(:class:`~dolfinx_ntf.fem.pressure_recovery.BoundaryPressure`):
 
 - reaction on a set of facets: the assembled bulk residual summed over their dofs;
 - contact area: ``∫ [p_h > 0] ds``;
@@ -29,7 +29,7 @@ import dolfinx.fem.petsc
 import ufl
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.rigid import RigidSurface
+from dolfinx_ntf.kernels.rigid import RigidSurface
 
 __all__ = [
     "bracketing_radius",

@@ -27,9 +27,9 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.laws import Friction, SurfaceInteraction
-from dolfinx_ntf.problem import ContactPair
-from dolfinx_ntf.solver import ContactNewtonSolver, IncrementResult, StaticStep
+from dolfinx_ntf.contact.problem import ContactPair
+from dolfinx_ntf.kernels.laws import Friction, SurfaceInteraction
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver, IncrementResult, StaticStep
 
 __all__ = [
     "AddPair",

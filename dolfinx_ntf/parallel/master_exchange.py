@@ -29,11 +29,13 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import validation
-from dolfinx_ntf.faces import FaceType
-from dolfinx_ntf.parallel import NodeHalo, alltoallv, checkpoint, distribute_slave
-from dolfinx_ntf.search import NOT_HELD, TIE_DIGITS, MasterSurface
-from dolfinx_ntf.surfaces import SlaveSurface, SurfaceFaces
-from dolfinx_ntf.tie_frame import TieFrame, triangle_moments
+from dolfinx_ntf.fem.surfaces import SlaveSurface, SurfaceFaces
+from dolfinx_ntf.kernels.faces import FaceType
+from dolfinx_ntf.kernels.search import NOT_HELD, TIE_DIGITS, MasterSurface
+from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
+from dolfinx_ntf.parallel.collectives import alltoallv, checkpoint
+from dolfinx_ntf.parallel.halo import NodeHalo
+from dolfinx_ntf.parallel.surface_distribution import distribute_slave
 
 __all__ = [
     "EXCHANGE_ABOVE_FACES",

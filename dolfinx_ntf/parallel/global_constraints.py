@@ -27,7 +27,7 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.constraints import (
+from dolfinx_ntf.fem.constraints import (
     ConstraintElimination,
     LinearConstraint,
     LinearConstraintBlock,

@@ -25,7 +25,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.faces import FaceType, face_type_from_num_nodes
+from dolfinx_ntf.kernels.faces import FaceType, face_type_from_num_nodes
 
 __all__ = [
     "FacetSurface",
@@ -44,7 +44,7 @@ class FacetSurface:
     """A face-based surface: the facets of ``tags`` whose value is in ``values``.
 
     Args:
-        tags: Facet tags of the mesh (e.g. from :func:`dolfinx_ntf.gmsh_io.mesh_from_gmsh`).
+        tags: Facet tags of the mesh (e.g. from :func:`dolfinx_ntf.meshes.gmsh_io.mesh_from_gmsh`).
         values: One tag value or several; each must occur in ``tags`` (on some process).
     """
 

@@ -1,8 +1,8 @@
 """UFL frictionless contact against rigid surfaces: penalty and Nitsche (docs/method.md §15.2).
 
-The same rigid surfaces as the node-to-face rigid masters (:mod:`dolfinx_ntf.rigid`) become UFL
-expressions of the current position ``x = X + u``: the gap ``g = phi(x - c)`` and the normal
-``n = grad phi``. With ``[a]_+ = (a + |a|)/2`` and ``[a]_- = (a - |a|)/2``:
+The same rigid surfaces as the node-to-face rigid masters (:mod:`~dolfinx_ntf.kernels.rigid`)
+become UFL expressions of the current position ``x = X + u``: the gap ``g = phi(x - c)`` and the
+normal ``n = grad phi``. With ``[a]_+ = (a + |a|)/2`` and ``[a]_- = (a - |a|)/2``:
 
 - penalty: ``F_c(u; v) = -∫ K [-g]_+ n·v ds``, pressure ``K [-g]_+``;
 - Nitsche (theta in {1, 0, -1}, ``gamma = gamma0 E / h``, ``sigma_n(w) = n·sigma(w) n``)::
@@ -33,7 +33,7 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.rigid import (
+from dolfinx_ntf.kernels.rigid import (
     RigidCylinder,
     RigidPlane,
     RigidSphere,
@@ -70,7 +70,7 @@ def _negative_part(a: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
 
 
 class RigidObstacle:
-    """A :class:`~dolfinx_ntf.rigid.RigidSurface` as UFL gap and normal of the displacement ``u``.
+    """A :class:`~dolfinx_ntf.kernels.rigid.RigidSurface` as UFL gap and normal of ``u``.
 
     The surface's translation is a dolfinx Constant: call :meth:`update` with the step time when
     the surface moves (``motion``/``offset``).

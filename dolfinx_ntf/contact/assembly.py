@@ -26,7 +26,9 @@ import scipy.sparse
 import dolfinx.fem
 import dolfinx.fem.petsc
 
-from dolfinx_ntf import compat, parallel
+from dolfinx_ntf import compat
+from dolfinx_ntf.parallel import collectives
+from dolfinx_ntf.parallel.halo import NodeHalo
 
 __all__ = ["ContactAssembler", "SpringBlocks"]
 
@@ -84,7 +86,7 @@ class ContactAssembler:
         )
         self._global_dof = _unblocked(self._global_node[:, None], self._bs).ravel()
         self._first_nodes = np.asarray(self._comm.allgather(int(index_map.local_range[0])))
-        self._halo: parallel.NodeHalo | None = None
+        self._halo: NodeHalo | None = None
         self._u: dolfinx.fem.Function | None = None
         self.set_bcs(bcs)
         self._pattern_keys = np.empty(0, dtype=np.int64)
@@ -102,7 +104,7 @@ class ContactAssembler:
             fixed = self._halo.constrained(self._u, self._bcs).ravel()
             self._global_dof_masked[self._global_dof.size - fixed.size :][fixed] = -1
 
-    def extend(self, halo: parallel.NodeHalo, u: dolfinx.fem.Function) -> None:
+    def extend(self, halo: NodeHalo, u: dolfinx.fem.Function) -> None:
         """Number the halo's nodes too: contact nodes of other processes. Collective.
 
         See docs/method.md §14.
@@ -164,7 +166,7 @@ class ContactAssembler:
         local_keys = keys
         if self._comm.size > 1:  # couplings go to the process owning their row
             owner = np.searchsorted(self._first_nodes, keys // self._num_global, side="right") - 1
-            keys = np.unique(parallel.send_to_owners(self._comm, keys, owner))
+            keys = np.unique(collectives.send_to_owners(self._comm, keys, owner))
         rows = keys // self._num_global
         block = scipy.sparse.csr_matrix(
             (np.ones(keys.size, dtype=np.int8), (rows - first, keys % self._num_global)),

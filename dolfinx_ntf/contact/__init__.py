@@ -1,0 +1,1 @@
+"""Contact pairs, their pairing, the springs' assembly and the nonlinear problem."""

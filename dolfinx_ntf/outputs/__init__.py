@@ -1,0 +1,1 @@
+"""Results of a contact solve: per-spring values, XDMF fields, reactions, contact force and area."""

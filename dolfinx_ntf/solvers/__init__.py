@@ -1,0 +1,1 @@
+"""Solvers and steps: linear-solver choice, Newton, static, dynamic and multi-step runs."""
