@@ -19,7 +19,8 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
+from dolfinx_ntf.contact.pair import ContactPair
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.surfaces import FacetSurface
 from dolfinx_ntf.outputs.results import ContactResults, contact_results
 

@@ -25,10 +25,15 @@ import dolfinx.fem
 import dolfinx.io
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.contact.problem import ContactProblem, PairState
+from dolfinx_ntf.contact.pair import PairState
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 
-__all__ = ["ContactFields", "ContactResults", "ContactWriter", "contact_results"]
+__all__ = ["RECOVERY_FIELDS", "ContactFields", "ContactResults", "ContactWriter", "contact_results"]
+
+#: Key of the :class:`ContactFields` that ``contact_results(recovered=True)`` keeps in the
+#: problem's :attr:`~dolfinx_ntf.ContactProblem.output_cache` (its compiled forms are reused).
+RECOVERY_FIELDS = "recovery_fields"
 
 
 @dataclass(frozen=True)
@@ -136,9 +141,9 @@ def contact_results(problem: ContactProblem, *, recovered: bool = False) -> list
     coords = problem.current_coordinates()
     results = [_pair_results(i, s, coords) for i, s in enumerate(problem.states)]
     if recovered:
-        fields = getattr(problem, "_recovery_fields", None)  # kept with the problem
+        fields = problem.output_cache.get(RECOVERY_FIELDS)
         if fields is None:
-            fields = problem._recovery_fields = ContactFields(problem)
+            fields = problem.output_cache[RECOVERY_FIELDS] = ContactFields(problem)
         else:
             fields.update()
         results = [
