@@ -26,8 +26,9 @@ import ufl
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
+from dolfinx_ntf.contact.evaluation import area_block, evaluate_pair
 from dolfinx_ntf.contact.pair import ContactPair, PairState
-from dolfinx_ntf.contact.pairing import Pairing, slave_areas
+from dolfinx_ntf.contact.pairing import Pairing
 from dolfinx_ntf.fem import serendipity
 from dolfinx_ntf.fem.bulk_jacobian import BulkJacobian
 from dolfinx_ntf.fem.constraints import (
@@ -35,9 +36,7 @@ from dolfinx_ntf.fem.constraints import (
     LinearConstraint,
     LinearConstraintBlock,
 )
-from dolfinx_ntf.kernels.friction import TANGENT_MODES, FrictionInput
-from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
-from dolfinx_ntf.kernels.spring_areas import spring_area_gradients
+from dolfinx_ntf.kernels.friction import TANGENT_MODES
 from dolfinx_ntf.kernels.start_slope import start_law
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import distributed_elimination
@@ -400,92 +399,27 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         blocks = []
         symmetric = self.symmetric and not self.has_friction
         for state in self.states:
-            nodes = state.element_nodes
-            friction = self._friction_input(state, coords, nodes)
-            if self.linearize_area:  # areas follow the deformation between pairings too
-                areas = slave_areas(state.slave, coords)
-                state.spring_area = areas[state.spring_slave]
-            ev = state.master.evaluate_springs(
-                state.master_faces.face_type,
-                coords[nodes[:, :-1]],
-                coords[nodes[:, -1]],
-                state.spring_area,
-                self._tangent_law(state.pair.interaction.law),
+            law = state.pair.interaction.law
+            blocks += evaluate_pair(
+                state,
+                coords,
+                start_law(law) if self.contact_start_slope and self.iteration == 0 else law,
+                reference=self.pairing.reference,
                 gap_shift=self.pairing.gap_shift(state, state.spring_slave),
-                xi0=state.xi,
                 tangent=tangent,
                 symmetric=symmetric,
-                friction=friction,
-            )
-            state.evaluation = ev
-            state.xi = ev.xi
-            if ev.tangential is not None:
-                tf = ev.tangential
-                state.friction.store(state.spring_slave, tf.a, tf.t, tf.slip)
-            blocks.append(
-                SpringBlocks(
-                    nodes,
-                    nodes,
-                    ev.stiffness,
-                    ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1]),
-                )
-            )
-            if tangent and self.linearize_area:
-                blocks.append(self._area_block(state, coords))
+                linearize_area=self.linearize_area,
+                friction_in_tension=self.friction_in_tension,
+                friction_tangent=self.friction_tangent,
+            )  # the start slope: contact_start_slope, docs/method.md §7.1
         return blocks
-
-    def _tangent_law(self, law: PressureOverclosureLaw) -> PressureOverclosureLaw:
-        """The law whose slope the tangent takes (``contact_start_slope``, docs/method.md §7.1)."""
-        return start_law(law) if self.contact_start_slope and self.iteration == 0 else law
-
-    def _friction_input(
-        self, state: PairState, coords: np.ndarray, nodes: np.ndarray
-    ) -> FrictionInput | None:
-        """Friction state and parameters of the pair's springs, None without friction."""
-        friction = state.pair.interaction.friction
-        if friction is None:
-            return None
-        displacements = (coords - self.pairing.reference)[nodes]
-        return FrictionInput(
-            displacements,
-            *state.friction.start_values(state.spring_slave),
-            mu=friction.mu,
-            stick_slope=friction.stick_slope,
-            in_tension=self.friction_in_tension,
-            tangent_mode=self.friction_tangent,
-        )
-
-    def _area_block(
-        self, state: PairState, coords: np.ndarray, *, values: bool = True
-    ) -> SpringBlocks:
-        """Tangent of F_N = A_p p(d) with respect to the slave-face nodes around p (dA_p/du)."""
-        faces = state.slave.faces
-        slave_index, node, gradient = spring_area_gradients(
-            faces.face_type, faces.faces, coords, state.slave.nodes
-        )
-        spring_of_slave = np.full(state.slave.nodes.size, -1, dtype=np.int64)
-        spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
-        spring = spring_of_slave[slave_index]
-        keep = spring >= 0
-        if state.slave.faceless is not None:  # no face area: the fallback, not dA/du
-            keep &= ~state.slave.faceless[slave_index]
-        spring, node, gradient = spring[keep], node[keep], gradient[keep]
-        block_values = None
-        if values:
-            per_area = state.evaluation.force_per_area.reshape(
-                state.num_springs, 3 * state.element_nodes.shape[1]
-            )[spring]
-            block_values = per_area[:, :, None] * gradient[:, None, :]
-        return SpringBlocks(
-            state.element_nodes[spring], node[:, None].astype(np.int64), block_values
-        )
 
     def ensure_matrix(self) -> PETSc.Mat:
         """The Jacobian matrix, recreated when the current springs need couplings it lacks."""
         blocks = [SpringBlocks(s.element_nodes, s.element_nodes) for s in self.states]
         if self.linearize_area:
             coords = self.current_coordinates()
-            blocks += [self._area_block(s, coords, values=False) for s in self.states]
+            blocks += [area_block(s, coords, values=False) for s in self.states]
         if self.matrix is None or not self.assembler.has_pattern(blocks):
             if self.matrix is not None:
                 self.matrix.destroy()
