@@ -145,7 +145,7 @@ def _pair_results(
         return results
     names = [r.pair for r in results]
     if isinstance(pair, ContactPair):
-        index = next((i for i, s in enumerate(problem.states) if s.pair is pair), None)
+        index = next((i for i, s in enumerate(problem.pairing.states) if s.pair is pair), None)
     elif isinstance(pair, str):
         index = names.index(pair) if pair in names else None
     elif isinstance(pair, numbers.Integral) and not isinstance(pair, bool):

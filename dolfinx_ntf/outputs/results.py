@@ -94,7 +94,8 @@ def _evaluated(problem: ContactProblem) -> None:
     Collective: a process with stale springs makes all evaluate (docs/method.md §14).
     """
     stale = any(
-        s.evaluation is None or s.evaluation.xi.shape[0] != s.num_springs for s in problem.states
+        s.evaluation is None or s.evaluation.xi.shape[0] != s.num_springs
+        for s in problem.pairing.states
     )
     if problem.u.function_space.mesh.comm.allreduce(stale, op=MPI.LOR):
         problem.evaluate(tangent=False)
@@ -138,8 +139,8 @@ def contact_results(problem: ContactProblem, *, recovered: bool = False) -> list
     """
     validation.check_type(problem, ContactProblem, "contact_results: problem")
     _evaluated(problem)
-    coords = problem.current_coordinates()
-    results = [_pair_results(i, s, coords) for i, s in enumerate(problem.states)]
+    coords = problem.pairing.current_coordinates()
+    results = [_pair_results(i, s, coords) for i, s in enumerate(problem.pairing.states)]
     if recovered:
         fields = problem.output_cache.get(RECOVERY_FIELDS)
         if fields is None:
@@ -197,7 +198,7 @@ class ContactFields:
         #: Accumulated tangential relative displacement ``t`` (vector, on ``u``'s space).
         self.slip = dolfinx.fem.Function(V, name="contact_slip")
         # -1: a facet of another process (docs/method.md §14.1)
-        slave_facets = [f[f >= 0] for f in (s.slave.faces.facets for s in problem.states)]
+        slave_facets = [f[f >= 0] for f in (s.slave.faces.facets for s in problem.pairing.states)]
         #: Projection of the spring forces onto the slave faces (docs/method.md §15.3).
         self.recovery = BoundaryPressure(
             problem.u.function_space,
