@@ -65,7 +65,8 @@ import ufl
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.assembly import SpringBlocks
-from dolfinx_ntf.contact.problem import LAST_REPAIRING_ITERATION, SEARCH_TOLERANCE
+from dolfinx_ntf.contact.pairing import SEARCH_TOLERANCE
+from dolfinx_ntf.contact.problem import LAST_REPAIRING_ITERATION
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.surfaces import resolve_master
 from dolfinx_ntf.kernels.search import NOT_HELD, MasterSurface

@@ -39,12 +39,9 @@ from dolfinx_ntf import compat
 __all__ = [
     "check_bcs",
     "check_displacement",
-    "check_distinct_pairs",
-    "check_finite_contact_nodes",
     "check_linear_solver",
     "check_petsc_options",
     "check_positive",
-    "check_problem",
     "check_residual",
     "check_sequence",
     "check_solver",
@@ -215,68 +212,6 @@ def check_positive(value: object, what: str, *, allow_none: bool = False) -> Non
         raise ValueError(f"{what} must be a finite number > 0, got {float(value):g}")
 
 
-def check_problem(
-    F: object,
-    u: object,
-    pairs: object,
-    bcs: object,
-    J: object,
-    pair_type: type,
-    max_depth: object,
-) -> tuple[list, list]:
-    """The arguments of :class:`~dolfinx_ntf.ContactProblem`; returns ``(pairs, bcs)`` as lists."""
-    owner = "ContactProblem"
-    check_displacement(u, owner)
-    check_residual(F, u, owner, J)
-    pairs = check_sequence(
-        pairs, pair_type, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
-    )
-    check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
-    return pairs, check_bcs(bcs, owner)
-
-
-def check_distinct_pairs(
-    comm: MPI.Comm,
-    surfaces: typing.Sequence[tuple[str, np.ndarray, np.ndarray]],
-    reference: np.ndarray,
-) -> None:
-    """Two pairs on the same slave nodes and master faces: an error if identical, else a warning.
-
-    A slave node in two pairs that share master faces gets two springs on the same face: double
-    stiffness and, for identical pairs, each pair reporting half the contact pressure. Collective.
-
-    Args:
-        comm: Communicator of the mesh.
-        surfaces: ``(name, slave nodes, master facets)`` of every pair.
-        reference: ``(num_nodes, 3)`` reference coordinates of the nodes.
-    """
-    for i, (name_i, slave_i, master_i) in enumerate(surfaces):
-        for name_j, slave_j, master_j in surfaces[i + 1 :]:
-            same = np.array_equal(slave_i, slave_j) and np.array_equal(
-                np.sort(master_i), np.sort(master_j)
-            )
-            shared = np.intersect1d(slave_i, slave_j)
-            if not np.intersect1d(master_i, master_j).size:
-                shared = shared[:0]
-            if comm.allreduce(bool(same), op=MPI.LAND):
-                raise ValueError(
-                    f"ContactProblem: pairs '{name_i}' and '{name_j}' are the same (identical "
-                    "slave nodes and master faces): every slave node would get two springs and "
-                    "each pair would report half the contact pressure; remove one of them"
-                )
-            count = comm.allreduce(int(shared.size), op=MPI.SUM)
-            if count and comm.rank == 0:
-                where = ""
-                if shared.size:
-                    x = reference[shared[0]]
-                    where = f" (first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
-                warn(
-                    f"ContactProblem: pairs '{name_i}' and '{name_j}' share {count} slave node(s) "
-                    f"and master faces{where}: those nodes can get two springs on the same face "
-                    "(double stiffness and force)"
-                )
-
-
 # -- surfaces --------------------------------------------------------------------------------------
 
 
@@ -322,39 +257,6 @@ def vertex_indices(vertices: object, owner: str) -> np.ndarray:
         i = int(np.argmax(array))
         raise ValueError(f"{owner}: vertex index {int(array[i])} (entry {i}) is too large")
     return array.astype(np.int32)
-
-
-# -- the state during a solve ----------------------------------------------------------------------
-
-
-def check_finite_contact_nodes(
-    comm: MPI.Comm,
-    u: dolfinx.fem.Function,
-    reference: np.ndarray,
-    surfaces: typing.Sequence[tuple[str, np.ndarray]],
-) -> None:
-    """Raise a ``ValueError`` (collectively) if ``u`` is not finite at a node of a surface.
-
-    Args:
-        comm: Communicator of the mesh.
-        u: The displacement.
-        reference: ``(num_nodes, 3)`` reference coordinates of the nodes.
-        surfaces: ``(name, nodes)`` of the contact surfaces, e.g. ``("pair 1 slave", nodes)``.
-    """
-    values = u.x.array.reshape(-1, 3)
-    error = None
-    for name, nodes in surfaces:
-        bad = nodes[~np.all(np.isfinite(values[nodes]), axis=1)]
-        if bad.size:
-            x, d = reference[bad[0]], values[bad[0]]
-            error = ValueError(
-                f"the displacement u is not finite at {bad.size} node(s) of the {name} surface, "
-                f"first at node {int(bad[0])} (reference position ({x[0]:.6g}, {x[1]:.6g}, "
-                f"{x[2]:.6g}), u = ({d[0]:.6g}, {d[1]:.6g}, {d[2]:.6g})); set u to finite values "
-                "before solving"
-            )
-            break
-    raise_collectively(comm, error)
 
 
 # -- solver and step ------------------------------------------------------------------------------

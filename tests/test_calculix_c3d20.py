@@ -255,9 +255,9 @@ def test_c3d20_node_surface_midside_nodes_take_no_face_area(tmp_path):
     corners = np.isin(model.dof_node[state.slave.nodes], deck.elements["C3D20"].connectivity[:, :8])
     np.testing.assert_array_equal(state.slave.faceless, ~corners)
     assert np.sum(~corners) == 12  # the midside nodes of the punch's bottom
-    from dolfinx_ntf.contact.problem import _slave_areas
+    from dolfinx_ntf.contact.pairing import slave_areas
 
-    areas = _slave_areas(state.slave, problem.current_coordinates())
+    areas = slave_areas(state.slave, problem.current_coordinates())
     assert np.all(areas[~corners] == 0.0) and np.all(areas[corners] > 0.0)
 
 

@@ -13,8 +13,9 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.contact import problem as problem_module
+from dolfinx_ntf.contact import pairing as pairing_module
 from dolfinx_ntf.fem.surfaces import resolve_master, resolve_slave
+from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.search import MasterSurface
 from dolfinx_ntf.parallel import master_exchange
 from dolfinx_ntf.validation import raise_collectively
@@ -171,8 +172,8 @@ def test_a_pairing_error_on_one_process_is_raised_on_all(where, options, monkeyp
 
     target = {
         "search": (MasterSurface, "locate"),
-        "areas": (problem_module, "_slave_areas"),
-        "projection": (problem_module, "spring_evaluator"),
+        "areas": (pairing_module, "slave_areas"),
+        "projection": (springs, "evaluate_springs"),
         "patch search": (master_exchange.MasterPatch, "locate"),
         "patch enlargement": (master_exchange.MasterPatch, "next_margin"),
         "face lookup": (MasterSurface, "face_patches"),
@@ -197,7 +198,7 @@ def test_a_pairing_error_on_one_process_is_raised_on_all(where, options, monkeyp
 
 
 def _always_enlarge(enlarge):
-    def wrapper(problem, state, face):
-        return enlarge(problem, state, np.full_like(face, -2))  # search.NOT_HELD everywhere
+    def wrapper(master, face, coordinates):
+        return enlarge(master, np.full_like(face, -2), coordinates)  # search.NOT_HELD everywhere
 
     return wrapper

@@ -29,7 +29,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.contact import problem as problem_module
+from dolfinx_ntf.contact import pairing as pairing_module
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 
 pytestmark = pytest.mark.mpi
@@ -190,7 +190,7 @@ def test_each_process_receives_the_slave_faces_of_its_nodes(partition):
         slave = problem.states[0].slave
         x = np.round(problem.current_coordinates(), 9)
         owned = problem.u.function_space.dofmap.index_map.size_local
-        areas = problem_module._slave_areas(slave, problem.current_coordinates())
+        areas = pairing_module.slave_areas(slave, problem.current_coordinates())
         problem.destroy()
         assert np.all(slave.nodes < owned)
         faces = {tuple(sorted(map(tuple, x[f]))) for f in slave.faces.faces}

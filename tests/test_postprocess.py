@@ -6,6 +6,7 @@ import pytest
 from conftest import LOWER_BOTTOM, UPPER_TOP, punch_problem
 
 import dolfinx_ntf as ntf
+from dolfinx_ntf.outputs.results import RECOVERY_FIELDS
 
 pytestmark = pytest.mark.serial
 
@@ -143,7 +144,7 @@ def test_recovered_pressure_in_the_results(solved):
     (res,) = ntf.contact_results(problem, recovered=True)
     assert res.recovered_pressure.shape == res.node.shape
     # p_h carries the whole normal force, and equals what the writer's field holds at the nodes
-    total = problem._recovery_fields.recovery.total()
+    total = problem.output_cache[RECOVERY_FIELDS].recovery.total()
     assert total == pytest.approx(res.normal_force.sum(), rel=1e-10)
     fields = ntf.ContactFields(problem)
     np.testing.assert_allclose(

@@ -37,7 +37,7 @@ import dolfinx.mesh
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.fem.constraints import LinearConstraint
-from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, facet_cells, resolve_slave
 from dolfinx_ntf.kernels.laws import ExponentialLaw, LinearLaw, TabularLaw
 from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
 
@@ -428,7 +428,7 @@ def _facet_faces(
     """Element ids and ccx face numbers (1-based) of the facets of ``surface`` in owned cells."""
     mesh = V.mesh
     facets = _tagged_facets(mesh.comm, surface, what)
-    cells, local_facet = _facet_cells(mesh, facets, what)
+    cells, local_facet = facet_cells(mesh, facets, what)
     owned = cells < md.num_owned_cells
     cells, local_facet = cells[owned], local_facet[owned]
     faces = md.face_of_facet[md.mirrored[cells].astype(np.int64), local_facet]

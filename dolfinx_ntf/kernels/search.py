@@ -17,7 +17,10 @@ import numpy as np
 import scipy.sparse
 from scipy.spatial import cKDTree
 
+from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
+from dolfinx_ntf.kernels.friction import FrictionInput
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 
 __all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterSurface"]
@@ -47,6 +50,10 @@ class MasterSurface:
             if two faces sharing an edge are oriented inconsistently (edge used twice in the same
             direction).
     """
+
+    #: A search here involves this process only (the :class:`~dolfinx_ntf.kernels.master.
+    #: ContactMaster` role).
+    collective = False
 
     def __init__(
         self,
@@ -199,6 +206,34 @@ class MasterSurface:
         area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
         origin = (area @ self._centroids) / area.sum()
         return origin, triangle_moments(a, b, c, origin)
+
+    def evaluate_springs(
+        self,
+        face_type: FaceType,
+        master_coords: np.ndarray,
+        slave_coords: np.ndarray,
+        areas: np.ndarray,
+        law: PressureOverclosureLaw,
+        *,
+        gap_shift: float | np.ndarray = 0.0,
+        xi0: np.ndarray | None = None,
+        tangent: bool = True,
+        symmetric: bool = False,
+        friction: FrictionInput | None = None,
+    ) -> springs.SpringEvaluation:
+        """:func:`~dolfinx_ntf.kernels.springs.evaluate_springs` on faces of this surface."""
+        return springs.evaluate_springs(
+            face_type,
+            master_coords,
+            slave_coords,
+            areas,
+            law,
+            gap_shift=gap_shift,
+            xi0=xi0,
+            tangent=tangent,
+            symmetric=symmetric,
+            friction=friction,
+        )
 
     # ------------------------------------------------------------------ update
     def update(self, coords: np.ndarray, *, extent: tuple[np.ndarray, float] | None = None) -> None:

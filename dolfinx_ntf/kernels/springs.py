@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dolfinx_ntf.kernels.faces import FaceType, _face_coords_array
+from dolfinx_ntf.kernels.faces import FaceType, face_coords_array
 from dolfinx_ntf.kernels.friction import FrictionInput, TangentialForce, tangential_forces
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.projection import project_points
@@ -227,7 +227,7 @@ def _check_input(
     gap_shift: float | np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Validate shapes and values; return float arrays (master, slave, area, gap_shift)."""
-    master = _face_coords_array(face_type, master_coords, "master_coords", rows="N")
+    master = face_coords_array(face_type, master_coords, "master_coords", rows="N")
     num = master.shape[0]
     slave = np.asarray(slave_coords, dtype=float)
     if slave.shape != (num, 3):

@@ -22,6 +22,8 @@ added, so face numbers held by springs and friction states stay valid.
 
 from __future__ import annotations
 
+import typing
+
 from mpi4py import MPI
 
 import numpy as np
@@ -30,7 +32,11 @@ import dolfinx.fem
 
 from dolfinx_ntf import validation
 from dolfinx_ntf.fem.surfaces import SlaveSurface, SurfaceFaces
+from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
+from dolfinx_ntf.kernels.friction import FrictionInput
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
+from dolfinx_ntf.kernels.master import ContactMaster
 from dolfinx_ntf.kernels.search import NOT_HELD, TIE_DIGITS, MasterSurface
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 from dolfinx_ntf.parallel.collectives import alltoallv, checkpoint
@@ -74,8 +80,8 @@ def _meets(lo: np.ndarray, hi: np.ndarray, box_lo: np.ndarray, box_hi: np.ndarra
 class MasterPatch:
     """The part of a master surface one process searches, with the checks of §14.8.
 
-    Used by :class:`~dolfinx_ntf.ContactProblem` like a :class:`MasterSurface` (``update``,
-    ``locate``, ``face_patches``); ``update`` and :meth:`exchange` are collective.
+    Plays the :class:`~dolfinx_ntf.kernels.master.ContactMaster` role like a
+    :class:`MasterSurface`; ``update``, ``surface_moments`` and :meth:`exchange` are collective.
 
     Args:
         halo: The problem's node halo (received nodes are appended to it).
@@ -84,6 +90,9 @@ class MasterPatch:
         coords: Current coordinates of the local nodes at least.
         name: Surface name for messages.
     """
+
+    #: ``update`` and ``surface_moments`` are collective; a search may need :func:`enlarge`.
+    collective = True
 
     def __init__(
         self,
@@ -301,6 +310,34 @@ class MasterPatch:
         which, patch = self.surface.face_patches(self._surface_face[np.asarray(faces)])
         return which, self._held[patch]
 
+    def evaluate_springs(
+        self,
+        face_type: FaceType,
+        master_coords: np.ndarray,
+        slave_coords: np.ndarray,
+        areas: np.ndarray,
+        law: PressureOverclosureLaw,
+        *,
+        gap_shift: float | np.ndarray = 0.0,
+        xi0: np.ndarray | None = None,
+        tangent: bool = True,
+        symmetric: bool = False,
+        friction: FrictionInput | None = None,
+    ) -> springs.SpringEvaluation:
+        """:func:`~dolfinx_ntf.kernels.springs.evaluate_springs` on faces of this patch."""
+        return springs.evaluate_springs(
+            face_type,
+            master_coords,
+            slave_coords,
+            areas,
+            law,
+            gap_shift=gap_shift,
+            xi0=xi0,
+            tangent=tangent,
+            symmetric=symmetric,
+            friction=friction,
+        )
+
     # -- enlargement -------------------------------------------------------------------------------
 
     def next_margin(self, unresolved: bool) -> float:
@@ -334,15 +371,24 @@ def distribute_pair(
 MAX_EXCHANGES = 64
 
 
-def enlarge(problem: object, state: object, face: np.ndarray) -> bool:
+def enlarge(
+    master: ContactMaster, face: np.ndarray, coordinates: typing.Callable[[], np.ndarray]
+) -> bool:
     """Exchange a pair's master patch again if a search on any process could not tell. Collective.
 
-    ``face``: the search result of this process (``NOT_HELD`` where the patch could not tell).
-    Returns whether the patch grew (search again); always False for a whole master surface.
+    Args:
+        master: The pair's master surface; only a :class:`MasterPatch` can grow.
+        face: The search result of this process (``NOT_HELD`` where the patch could not tell).
+        coordinates: Gives the current node coordinates (a collective call), asked for only when
+            the patch grows.
+
+    Returns:
+        Whether the patch grew: the caller's halo then holds new nodes (its numbering must follow)
+        and ``master.faces`` more faces; search again. Always False for a whole master surface.
     """
-    patch = state.master
-    if not isinstance(patch, MasterPatch):
+    if not isinstance(master, MasterPatch):
         return False
+    patch = master
     checkpoint(patch.comm)  # a search that failed on one process fails on all (§14.4)
     unresolved = bool(np.any(face == NOT_HELD))
     if not patch.comm.allreduce(unresolved, op=MPI.LOR):
@@ -354,8 +400,6 @@ def enlarge(problem: object, state: object, face: np.ndarray) -> bool:
         )
     margin = patch.next_margin(unresolved)
     checkpoint(patch.comm)
-    patch.exchange(problem.current_coordinates(), margin)
+    patch.exchange(coordinates(), margin)
     checkpoint(patch.comm)
-    problem.halo_grew()
-    state.master_faces = patch.faces
     return True
