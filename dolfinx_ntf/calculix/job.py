@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import logging
 import time as _time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,7 +42,6 @@ import numpy as np
 import dolfinx.fem
 import ufl
 
-from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
 from dolfinx_ntf.outputs.results import ContactWriter
@@ -120,7 +120,7 @@ class IncrementOutput:
         """Ccx numbers of the slave nodes that have a contact element (all pairs)."""
         return {int(n) for rows in self.contact for n in rows.nodes}
 
-    def displacement_of(self, node_ids) -> np.ndarray:
+    def displacement_of(self, node_ids: np.ndarray | Sequence[int]) -> np.ndarray:
         """Displacements ``(k, 3)`` of ccx node numbers."""
         ids = np.asarray(node_ids, dtype=np.int64)
         pos = np.searchsorted(self.node_ids, ids)
@@ -332,7 +332,7 @@ class _Job:
         """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
         model = self.model
         if self.velocity is None:
-            self.velocity = _initial_velocity(self.deck, model)
+            self.velocity = model.initial_velocity()
             self.acceleration = dolfinx.fem.Function(model.V, name="acceleration")
         increments = step.static
         period = increments.period
@@ -353,7 +353,7 @@ class _Job:
             self._end_attempt(index, step, result)
 
         driver = DynamicStep(
-            _mass_form(self.deck, model),
+            model.mass_form(),
             set_load,
             period=period,
             initial_increment=initial,
@@ -461,37 +461,6 @@ class _Job:
                 load_time=self._load_time,
                 largest_residual=self.solver.largest_residual,
             )
-
-
-def _mass_form(deck: Deck, model: CalculixModel) -> ufl.Form:
-    """``rho inner(w, v) dx`` with the ``*DENSITY`` of each section's material (ccx quadrature)."""
-    Q = compat.scalar_space(model.mesh, "DG", 0)
-    rho = dolfinx.fem.Function(Q, name="density")
-    block_ids = deck.elements[model.element_type.name].ids
-    for section in deck.sections:
-        density = deck.materials[section.material].extra.get("*DENSITY")
-        if not density or len(density) != 1 or density[0][0] is None or density[0][0] <= 0.0:
-            raise ValueError(
-                f"{section.location}: a *DYNAMIC step needs one positive *DENSITY in material "
-                f"{section.material} (temperature-dependent densities are not supported)"
-            )
-        members = np.unique(deck.elsets[section.elset])
-        cells = model.element_cells(members[np.isin(members, block_ids)])
-        cells = cells[cells >= 0]  # this process's (owned and ghost) cells
-        rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
-    w, v = ufl.TrialFunction(model.V), ufl.TestFunction(model.V)
-    return rho * ufl.inner(w, v) * ufl.dx(domain=model.mesh)  # consistent mass, exact
-
-
-def _initial_velocity(deck: Deck, model: CalculixModel) -> dolfinx.fem.Function:
-    """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
-    velocity = dolfinx.fem.Function(model.V, name="velocity")
-    values = velocity.x.array.reshape(-1, 3)
-    for condition in deck.initial_velocities:
-        dofs = model.node_dofs(condition.nodes)
-        values[dofs[dofs >= 0], condition.dof - 1] = condition.value
-    velocity.x.scatter_forward()
-    return velocity
 
 
 def _read(path: Path, comm: MPI.Comm) -> Deck:

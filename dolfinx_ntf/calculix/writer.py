@@ -38,7 +38,13 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.fem.constraints import LinearConstraint
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, facet_cells, resolve_slave
-from dolfinx_ntf.kernels.laws import ExponentialLaw, LinearLaw, TabularLaw
+from dolfinx_ntf.kernels.laws import (
+    ExponentialLaw,
+    Friction,
+    LinearLaw,
+    PressureOverclosureLaw,
+    TabularLaw,
+)
 
 from .controls import FIELD_CONTROL_NAMES, TIGHT_FIELD_CONTROLS
 from .elements import ELEMENT_TYPES, element_for_cell
@@ -471,7 +477,7 @@ def _components(components: Sequence[int], what: str) -> list[tuple[int, int]]:
 # ----------------------------------------------------------------------------- contact
 
 
-def _law_lines(law: object, what: str) -> list[str]:
+def _law_lines(law: PressureOverclosureLaw, what: str) -> list[str]:
     if isinstance(law, ExponentialLaw):
         return [
             "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=EXPONENTIAL",
@@ -728,7 +734,7 @@ def _write_pair(out: _Out, V, md: _Mesh, k: int, pair: ContactPair) -> None:
     )
 
 
-def _friction_lines(friction: object) -> list[str]:
+def _friction_lines(friction: Friction | None) -> list[str]:
     """``*FRICTION`` card of a :class:`~dolfinx_ntf.Friction` (none for ``None``)."""
     if friction is None:
         return []

@@ -275,6 +275,37 @@ class CalculixModel:
             value[mask] = schedule.ref[mask] * np.interp(t, amp.times, amp.values)
         return value
 
+    # -- dynamics ---------------------------------------------------------------------------------
+
+    def mass_form(self) -> ufl.Form:
+        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (ccx quadrature)."""
+        Q = compat.scalar_space(self.mesh, "DG", 0)
+        rho = dolfinx.fem.Function(Q, name="density")
+        block_ids = self.deck.elements[self.element_type.name].ids
+        for section in self.deck.sections:
+            density = self.deck.materials[section.material].extra.get("*DENSITY")
+            if not density or len(density) != 1 or density[0][0] is None or density[0][0] <= 0.0:
+                raise ValueError(
+                    f"{section.location}: a *DYNAMIC step needs one positive *DENSITY in material "
+                    f"{section.material} (temperature-dependent densities are not supported)"
+                )
+            members = np.unique(self.deck.elsets[section.elset])
+            cells = self.element_cells(members[np.isin(members, block_ids)])
+            cells = cells[cells >= 0]  # this process's (owned and ghost) cells
+            rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
+        w, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+        return rho * ufl.inner(w, v) * ufl.dx(domain=self.mesh)  # consistent mass, exact
+
+    def initial_velocity(self) -> dolfinx.fem.Function:
+        """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
+        velocity = dolfinx.fem.Function(self.V, name="velocity")
+        values = velocity.x.array.reshape(-1, 3)
+        for condition in self.deck.initial_velocities:
+            dofs = self.node_dofs(condition.nodes)
+            values[dofs[dofs >= 0], condition.dof - 1] = condition.value
+        velocity.x.scatter_forward()
+        return velocity
+
     # -- problem -----------------------------------------------------------------------------------
 
     def create_problem(self, bcs: Sequence[compat.DirichletBC] = (), **options) -> ContactProblem:
