@@ -114,7 +114,7 @@ class ReaderState:
         self.node_refs: list[tuple[str, np.ndarray, Location]] = []
         self.element_refs: list[tuple[str, np.ndarray, Location]] = []
 
-    check_params = staticmethod(check_params)
+    _check_params = staticmethod(check_params)
 
     @staticmethod
     def _no_data(card: Card) -> None:
