@@ -25,10 +25,10 @@ import pytest
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.__main__ import EXIT_INPUT, main
-from dolfinx_ntf.calculix import model as model_module
 from dolfinx_ntf.calculix.deck import read_deck
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.model import build_model
+from dolfinx_ntf.calculix.model import calculix_model as model_module
 
 pytestmark = pytest.mark.mpi
 
@@ -369,6 +369,6 @@ def _sliced_mesh(deck, block, comm):
 @pytest.mark.parametrize("name", ["hex_linear_pressure", "hex_stick_punch"])
 def test_process_without_cells_gives_the_serial_files(name, shared, monkeypatch):
     """The last process holds no cell (a *DLOAD deck and a friction deck)."""
-    monkeypatch.setattr(model_module, "_create_mesh", _sliced_mesh)
+    monkeypatch.setattr(model_module, "create_mesh", _sliced_mesh)
     path = _deck(name, shared / "empty")
     _assert_serial_files(path, in_contact=False)
