@@ -54,17 +54,14 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.kernels.friction import output_tangents
 from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
+from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter, contact_results
 from dolfinx_ntf.parallel import collectives
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS
 from dolfinx_ntf.solvers.dynamics import DynamicStep
-from dolfinx_ntf.solvers.newton import (
-    TIGHT_FIELD_CONTROLS,
-    ContactConvergenceError,
-    ContactNewtonSolver,
-    IncrementResult,
-    StaticStep,
-    log_progress,
-)
+from dolfinx_ntf.solvers.errors import ContactConvergenceError
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .cel import ContactElementsFile
 from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat

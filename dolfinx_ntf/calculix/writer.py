@@ -39,7 +39,7 @@ from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.fem.constraints import LinearConstraint
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
 from dolfinx_ntf.kernels.laws import ExponentialLaw, LinearLaw, TabularLaw
-from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS
 
 from .deck import FIELD_CONTROL_NAMES
 from .elements import ELEMENT_TYPES, element_for_cell
@@ -60,8 +60,8 @@ __all__ = [
 NodeTarget = FacetSurface | NodeSurface | np.ndarray | Sequence[int]
 """Nodes of a constraint or load: facets, vertices, or local block dofs of the space."""
 
-# TIGHT_FIELD_CONTROLS (dolfinx_ntf.solvers.newton): ``*CONTROLS, PARAMETERS=FIELD`` values that
-# make ccx converge to round-off level. ccx's defaults stop Newton when the largest residual is
+# TIGHT_FIELD_CONTROLS (dolfinx_ntf.solvers.convergence): ``*CONTROLS, PARAMETERS=FIELD`` values
+# that make ccx converge to round-off level. ccx's defaults stop Newton when the largest residual is
 # 0.5 % of the average nodal force (R_n = 0.005, after I_P = 9 iterations R_p = 0.02), which leaves
 # displacements off by up to 1e-5 and contact stresses by up to 1e-4 of the converged answer
 # (measured on the cross-validation decks). With these values ccx needs zero or one more iteration

@@ -1,0 +1,176 @@
+"""When a Newton iteration has converged or diverged: CalculiX's rules for the mechanical field.
+
+:class:`ForceScaledTest` is the force-scaled test of ``*CONTROLS, PARAMETERS=FIELD``
+(docs/method.md §7.1) with the forces it remembers over an increment and a step;
+:class:`DivergenceRule` gives an increment up when the residual grows. Both only compute: the
+Newton solver measures the iterate (norms, collective) and hands the numbers over.
+"""
+
+from __future__ import annotations
+
+import typing
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dolfinx_ntf.solvers.errors import ContactDivergenceError
+
+__all__ = [
+    "CCX_FIELD_CONTROLS",
+    "DIVERGENCE_GROWTH",
+    "TIGHT_FIELD_CONTROLS",
+    "DivergenceRule",
+    "ForceScaledTest",
+]
+
+#: CalculiX's defaults of ``*CONTROLS, PARAMETERS=FIELD`` (mechanical field).
+CCX_FIELD_CONTROLS: dict[str, float] = {
+    "R_n": 0.005,
+    "C_n": 0.01,
+    "R_p": 0.02,
+    "R_l": 1e-8,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-3,
+}
+#: Field controls that converge to round-off level: the default of
+#: :class:`~dolfinx_ntf.ContactNewtonSolver` and of ``dolfinx-ntf run --tight``.
+TIGHT_FIELD_CONTROLS: dict[str, float] = {
+    "R_n": 1e-10,
+    "C_n": 1e-8,
+    "R_p": 1e-10,
+    "R_l": 1e-12,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-8,
+}
+
+#: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
+#: strict comparison, with a margin for iterations that stagnate at round-off level.
+DIVERGENCE_GROWTH = 1.01
+
+
+@dataclass
+class ForceScaledTest:
+    """CalculiX's force-scaled convergence test and the forces it averages.
+
+    Args:
+        controls: ``R_n``, ``C_n``, ``R_p``, ``R_l``, ``epsilon``, ``C_epsilon`` (see
+            :data:`TIGHT_FIELD_CONTROLS`).
+        relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
+        residual_floor: A largest residual force below this counts as zero.
+        average_over_step: ``q~`` is the mean over the increments of the step (CalculiX's).
+        change_over_iterations: ``du`` is the largest change over the iterations (CalculiX's).
+    """
+
+    controls: dict[str, float]
+    relaxation_iteration: int = 9
+    residual_floor: float = 0.0
+    average_over_step: bool = False
+    change_over_iterations: bool = False
+    #: Mean element force of every converged increment so far (the scale of an unloaded one).
+    past_averages: list[float] = field(default_factory=list)
+    #: Last average force ``q`` of each converged increment of the current step.
+    step_forces: list[float] = field(default_factory=list)
+    #: Largest residual force of the last iterate (before ``residual_floor``).
+    largest_residual: float = 0.0
+    #: ``(r, q~, c, du)`` of the last :meth:`converged` call, as the test used them.
+    last: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    _averages: list[float] = field(default_factory=list, repr=False)
+    _largest: list[float] = field(default_factory=list, repr=False)
+    _largest_change: float = field(default=0.0, repr=False)
+
+    def begin_solve(self, change: float) -> None:
+        """Forget the iterations of the last solve; ``change`` is the predictor's own ``du``."""
+        self._averages, self._largest = [], []
+        self._largest_change = change
+
+    def end_solve(self) -> None:
+        """Remember the forces of a converged increment."""
+        if self._averages:
+            self.past_averages.append(float(np.mean(self._averages)))
+            self.step_forces.append(self._averages[-1])
+
+    def converged(
+        self, updates: int, average: float, largest: float, correction: float, change: float
+    ) -> bool:
+        """The test after Newton update ``updates`` (see ``ContactNewtonSolver.is_converged``).
+
+        Args:
+            updates: Newton updates so far (>= 1).
+            average: ``q``, the average absolute element nodal force of the iterate.
+            largest: ``r``, the largest residual force.
+            correction: ``c``, the largest correction of the update.
+            change: ``du``, the largest displacement change in the increment now.
+        """
+        controls = self.controls
+        self._averages.append(average)
+        mean = float(np.mean(self._averages))
+        if self.average_over_step:
+            mean = (sum(self.step_forces) + average) / (len(self.step_forces) + 1)
+        self.largest_residual = largest
+        if largest < self.residual_floor:
+            largest = 0.0
+        self._largest.append(largest)
+        if self.change_over_iterations:
+            self._largest_change = change = max(self._largest_change, change)
+        past = float(np.mean(self.past_averages)) if self.past_averages else 0.0
+        if mean <= controls["epsilon"] * past:
+            # Unloaded (all forces vanish, e.g. a contact pair removed): CalculiX's zero-flux test
+            # against the forces of the earlier increments (docs/method.md §11.6).
+            mean = past
+        if average <= controls["epsilon"] * mean:
+            c1, c2 = controls["epsilon"], controls["C_epsilon"]
+        else:
+            c1 = controls["R_n"] if updates <= self.relaxation_iteration else controls["R_p"]
+            c2 = controls["C_n"]
+        self.last = (largest, mean, correction, change)
+        estimate = np.inf
+        if updates >= 3 and min(self._largest[-3:-1]) > 0:
+            estimate = largest * correction / min(self._largest[-3:-1])
+        return largest <= c1 * mean and (
+            correction <= c2 * change
+            or estimate < c2 * change
+            or largest <= controls["R_l"] * mean
+            or average <= controls["epsilon"] * mean
+            or correction < 1e-8
+        )
+
+
+class DivergenceRule:
+    """CalculiX's divergence check: a residual larger than the two before it ends the attempt.
+
+    Args:
+        first_iteration: CalculiX's I_0, the first Newton update checked.
+    """
+
+    def __init__(self, first_iteration: int) -> None:
+        self.first_iteration = first_iteration
+        self.first_check = first_iteration
+
+    def reset(self) -> None:
+        """Start a solve: check from ``first_iteration`` on."""
+        self.first_check = self.first_iteration
+
+    def defer(self, updates: int, by: int) -> None:
+        """Check no earlier than ``by`` updates after ``updates`` (the springs changed)."""
+        self.first_check = max(self.first_check, updates + by)
+
+    def check(
+        self,
+        updates: int,
+        norms: typing.Sequence[float],
+        norm: float,
+        hint: typing.Callable[[], str],
+    ) -> None:
+        """Raise :class:`ContactDivergenceError` if ``norm`` outgrows the last two ``norms``.
+
+        ``hint()`` words a likely cause for the message (called only when raising).
+        """
+        if (
+            updates >= self.first_check
+            and len(norms) >= 2
+            and norm > DIVERGENCE_GROWTH * max(norms[-1], norms[-2])
+        ):
+            raise ContactDivergenceError(
+                f"residual grows: {norms[-2]:.3e}, {norms[-1]:.3e}, {norm:.3e} after "
+                f"{updates} Newton updates{hint()}"
+            )

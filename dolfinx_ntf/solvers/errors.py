@@ -1,0 +1,65 @@
+"""The failures of a solve, by what the step driver can do about them.
+
+:class:`ContactConvergenceError` (and its :class:`ContactDivergenceError`) let the step cut the
+increment back; :class:`ContactSolverError` stops at once. The helpers word the messages that
+name the cause (a non-finite input, a body with no support).
+"""
+
+from __future__ import annotations
+
+from petsc4py import PETSc
+
+import numpy as np
+
+from dolfinx_ntf.contact.problem import ContactProblem
+
+__all__ = [
+    "ContactConvergenceError",
+    "ContactDivergenceError",
+    "ContactSolverError",
+    "no_support_hint",
+    "non_finite_input",
+]
+
+
+class ContactConvergenceError(RuntimeError):
+    """A Newton solve or a whole step failed to converge; a smaller increment may succeed."""
+
+
+class ContactDivergenceError(ContactConvergenceError):
+    """The Newton iterates diverge (growing or non-finite residual, failed linear solve)."""
+
+
+class ContactSolverError(RuntimeError):
+    """A failure that no smaller increment can fix; :class:`StaticStep` raises it at once.
+
+    Non-finite input, or a linear solver that cannot factor the first Jacobian.
+    """
+
+
+def non_finite_input(problem: ContactProblem, x: PETSc.Vec) -> str:
+    """Message for a residual that is not finite before any Newton update."""
+    values = problem.u.x.array
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        node = bad[0] // 3
+        position = problem.reference_coordinates[node]
+        return (
+            f"the displacement has {bad.size} non-finite value(s) at the start of the increment "
+            f"(first at node {node}, reference position ({position[0]:.6g}, {position[1]:.6g}, "
+            f"{position[2]:.6g})): check the initial values and prescribed displacements"
+        )
+    return (
+        "the residual is not finite at the start of the increment although the displacement is: "
+        "check the loads, constants and material parameters of the residual form"
+    )
+
+
+def no_support_hint(problem: ContactProblem) -> str:
+    """Why a body may float: contact pairs but no springs."""
+    if problem.total_springs == 0 and problem.states:
+        return (
+            "; there are no contact springs, so a body held only by contact has no support "
+            "(close the initial gap, or start with a prescribed displacement)"
+        )
+    return ""
