@@ -2,8 +2,8 @@
 
 :class:`ForceScaledTest` is the force-scaled test of ``*CONTROLS, PARAMETERS=FIELD``
 (docs/method.md §7.1) with the forces it remembers over an increment and a step;
-:class:`DivergenceRule` gives an increment up when the residual grows. Both only compute: the
-Newton solver measures the iterate (norms, collective) and hands the numbers over.
+:class:`DivergenceRule` gives an increment up when the residual grows. Both only compute, on
+numbers that the Newton solver hands over; :func:`measure_iterate` (collective) measures them.
 """
 
 from __future__ import annotations
@@ -11,8 +11,12 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass, field
 
+from mpi4py import MPI
+from petsc4py import PETSc
+
 import numpy as np
 
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.solvers.errors import ContactDivergenceError
 
 __all__ = [
@@ -21,6 +25,7 @@ __all__ = [
     "TIGHT_FIELD_CONTROLS",
     "DivergenceRule",
     "ForceScaledTest",
+    "measure_iterate",
 ]
 
 #: CalculiX's defaults of ``*CONTROLS, PARAMETERS=FIELD`` (mechanical field).
@@ -48,6 +53,30 @@ TIGHT_FIELD_CONTROLS: dict[str, float] = {
 DIVERGENCE_GROWTH = 1.01
 
 
+def measure_iterate(
+    problem: ContactProblem,
+    x: PETSc.Vec,
+    b: PETSc.Vec,
+    dx: PETSc.Vec,
+    relaxation: float,
+    start: np.ndarray,
+) -> tuple[float, float, float, float]:
+    """What the force-scaled test reads of an iterate ``x`` with residual ``b``. Collective.
+
+    Returns:
+        ``q``, the average element force (:meth:`ContactProblem.average_element_force`);
+        ``r``, the largest residual force; the largest correction ``relaxation * dx`` (before
+        the line search's step); ``du``, the largest change of ``x`` from ``start`` (all
+        processes).
+    """
+    average = problem.average_element_force()
+    largest = b.norm(PETSc.NormType.NORM_INFINITY)
+    correction = relaxation * dx.norm(PETSc.NormType.NORM_INFINITY)
+    change = float(np.abs(x.array - start[: x.array.size]).max(initial=0.0))
+    change = problem.u.function_space.mesh.comm.allreduce(change, op=MPI.MAX)
+    return average, largest, correction, change
+
+
 @dataclass
 class ForceScaledTest:
     """CalculiX's force-scaled convergence test and the forces it averages.
@@ -56,9 +85,15 @@ class ForceScaledTest:
         controls: ``R_n``, ``C_n``, ``R_p``, ``R_l``, ``epsilon``, ``C_epsilon`` (see
             :data:`TIGHT_FIELD_CONTROLS`).
         relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
-        residual_floor: A largest residual force below this counts as zero.
-        average_over_step: ``q~`` is the mean over the increments of the step (CalculiX's).
-        change_over_iterations: ``du`` is the largest change over the iterations (CalculiX's).
+        residual_floor: A largest residual force below this absolute value counts as zero (then
+            the ``R_l`` test holds). CalculiX 2.20 does this with 1e-6 in the deck's force unit
+            (docs/method.md §7.1), which the deck runner reproduces; 0 keeps the test scale-free.
+        average_over_step: ``q~`` is the mean over the increments of the step so far (each by
+            its last ``q``, the current one by its ``q`` now), CalculiX's time-averaged force,
+            which the deck runner reproduces; default: the mean over the iterations of the
+            current increment.
+        change_over_iterations: ``du`` is the largest over the iterations of the increment so
+            far (CalculiX's; the deck runner reproduces it); default: the change now.
     """
 
     controls: dict[str, float]
@@ -92,7 +127,15 @@ class ForceScaledTest:
     def converged(
         self, updates: int, average: float, largest: float, correction: float, change: float
     ) -> bool:
-        """The test after Newton update ``updates`` (see ``ContactNewtonSolver.is_converged``).
+        """The test after Newton update ``updates``.
+
+        With ``r`` the largest residual force, ``c`` the largest correction, ``du`` the largest
+        displacement change in the increment, ``q`` the average absolute element nodal force and
+        ``q~`` its mean over the updates so far: converged when ``r <= c1 q~`` and at least one
+        of ``c <= c2 du``, ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <= R_l q~``,
+        ``q <= epsilon q~``, ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to
+        ``relaxation_iteration`` updates, ``(R_p, C_n)`` beyond, and ``(epsilon, C_epsilon)``
+        under zero flux. Scaled by forces, the test never asks for less than round-off.
 
         Args:
             updates: Newton updates so far (>= 1).

@@ -17,6 +17,7 @@ __all__ = [
     "ContactConvergenceError",
     "ContactDivergenceError",
     "ContactSolverError",
+    "linear_solve_failure",
     "no_support_hint",
     "non_finite_input",
 ]
@@ -63,3 +64,25 @@ def no_support_hint(problem: ContactProblem) -> str:
             "(close the initial gap, or start with a prescribed displacement)"
         )
     return ""
+
+
+def linear_solve_failure(
+    what: str, at_start: bool, updates: int, prefix: str, problem: ContactProblem
+) -> ContactSolverError | ContactDivergenceError:
+    """The error of a failed linear solve (or Newton iteration) after ``updates`` updates.
+
+    Non-retryable (:class:`ContactSolverError`) ``at_start``, the very first Newton iteration of
+    a solver, whose cause is the setup (options under ``prefix``, the residual form); a
+    divergence later.
+    """
+    if at_start:
+        hint = (
+            f"check the PETSc options under the prefix '{prefix}' (petsc_options) and that "
+            "the residual form is built on the unknown Function u"
+        )
+        return ContactSolverError(
+            f"{what} at the first Newton iteration: {hint}{no_support_hint(problem)}"
+        )
+    return ContactDivergenceError(
+        f"{what} at Newton iteration {updates + 1}{no_support_hint(problem)}"
+    )

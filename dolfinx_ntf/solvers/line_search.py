@@ -18,6 +18,9 @@ __all__ = ["LineSearch"]
 class LineSearch:
     """Armijo backtracking (steps 1, 1/2, ...) with the work vectors it needs.
 
+    Steps 1, 1/2, ... down to ``2**-max_halvings`` until the residual of the current pairing
+    decreases (Armijo), else the best step tried.
+
     Args:
         template: A residual vector to copy the layout of.
         max_halvings: The smallest step is 2 to the minus this.

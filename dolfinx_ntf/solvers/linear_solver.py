@@ -15,6 +15,8 @@ import typing
 
 from petsc4py import PETSc
 
+import numpy as np
+
 import dolfinx.fem
 
 from dolfinx_ntf.contact.problem import ContactProblem
@@ -28,8 +30,10 @@ __all__ = [
     "ITERATIVE_PETSC_OPTIONS",
     "LINEAR_SOLVERS",
     "SEQUENTIAL_PTAP",
+    "LinearSolver",
     "configure",
     "default_options",
+    "expects_symmetric",
     "galerkin_products",
     "ksp_reason",
     "unsymmetric",
@@ -107,8 +111,23 @@ def galerkin_products(ksp: PETSc.KSP) -> typing.Iterator[None]:
             options.delValue("matptap_via")
 
 
+def expects_symmetric(problem: object, petsc_options: object) -> bool:
+    """Whether the default options may use Cholesky or CG: a ``symmetric`` frictionless problem."""
+    return (
+        petsc_options is None
+        and getattr(problem, "symmetric", False)
+        and not getattr(problem, "has_friction", False)  # friction: never Cholesky
+    )
+
+
 def default_options(problem: object, linear_solver: object, symmetric: bool) -> dict:
     """PETSc options of ``linear_solver`` for this problem (docs/method.md §14.7).
+
+    ``"direct"``: MUMPS LU (:data:`DEFAULT_PETSC_OPTIONS`), or MUMPS Cholesky
+    (:data:`CHOLESKY_PETSC_OPTIONS`) when ``symmetric`` (the Newton solver swaps it for LU if the
+    first Jacobian is not symmetric after all); ``"iterative"``: GMRES, or CG when symmetric, with
+    GAMG (:data:`ITERATIVE_PETSC_OPTIONS`); ``"auto"``: direct up to :data:`DIRECT_MAX_DOFS` dofs
+    (:data:`CHOLESKY_MAX_DOFS` when symmetric, any size with linear constraints), iterative above.
 
     Args:
         problem: The problem (not checked yet: a :class:`ContactProblem` sizes the "auto" choice).
@@ -165,6 +184,75 @@ def configure(
     if ksp.getPC().getType() == "gamg":
         return nullspace.near_nullspace(space)
     return None
+
+
+class LinearSolver:
+    """The Krylov solver of the Newton corrections, kept in step with the Jacobian.
+
+    Args:
+        ksp: The Newton solver's Krylov solver.
+        options: Checked PETSc options, set under ``prefix`` (:func:`configure`).
+        prefix: Prefix of the Krylov solver's options.
+        space: The displacement space (rigid-body modes of a GAMG preconditioner).
+        symmetric: The options chose Cholesky or CG: the first Jacobian's symmetry is checked.
+    """
+
+    def __init__(
+        self,
+        ksp: PETSc.KSP,
+        options: dict[str, typing.Any],
+        prefix: str,
+        space: dolfinx.fem.FunctionSpace,
+        symmetric: bool,
+    ) -> None:
+        self.ksp = ksp
+        self.check_symmetry = symmetric
+        #: Rigid-body modes of every body, the near-nullspace of a GAMG preconditioner.
+        self.near_nullspace = configure(ksp, options, prefix, space)
+
+    def attach(self, A: PETSc.Mat) -> None:
+        """Give a (new) Jacobian the near-nullspace of a GAMG preconditioner."""
+        if self.near_nullspace is not None:
+            A.setNearNullSpace(self.near_nullspace)
+
+    def update(
+        self, A: PETSc.Mat, *, friction: bool, pattern_grew: bool, reduced: PETSc.Mat | None
+    ) -> None:
+        """After an assembly of ``A``: unsymmetric solvers if needed, a fresh factorization.
+
+        A grown pattern starts the factorization afresh: PETSc 3.22 does not see the pattern
+        change of ``MatAXPY(..., DIFFERENT_NONZERO_PATTERN)`` and would reuse the old symbolic
+        factorization (MUMPS then reports a zero pivot). With linear constraints the reduced
+        matrix is solved.
+        """
+        ksp = self.ksp
+        if friction:
+            unsymmetric(ksp, "friction makes the Jacobian unsymmetric")
+        if self.check_symmetry:  # Cholesky and CG need a symmetric bulk Jacobian too
+            self.check_symmetry = False
+            if not A.isSymmetric(1e-10 * A.norm(PETSc.NormType.NORM_INFINITY)):
+                unsymmetric(ksp, "the Jacobian is not symmetric")
+        if pattern_grew:
+            ksp.getPC().reset()
+            self.attach(A)
+            ksp.setOperators(A, A)
+        if reduced is not None:
+            if reduced.handle != ksp.getOperators()[0].handle:
+                ksp.getPC().reset()
+            ksp.setOperators(reduced, reduced)
+
+    def failure(self, dx: PETSc.Vec) -> str | None:
+        """Why the last solve for ``dx`` failed, or None."""
+        reason = self.ksp.getConvergedReason()
+        if reason < 0 or not np.isfinite(dx.norm()):
+            return f"the linear solver failed ({ksp_reason(reason)})"
+        return None
+
+    def destroy(self) -> None:
+        """Destroy the near-nullspace (a matrix keeps its own reference)."""
+        if self.near_nullspace is not None:
+            self.near_nullspace.destroy()
+            self.near_nullspace = None
 
 
 def unsymmetric(ksp: PETSc.KSP, why: str) -> None:

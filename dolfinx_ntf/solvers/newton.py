@@ -28,11 +28,17 @@ from dolfinx_ntf import validation
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import newton_logger, quiet_dolfinx
 from dolfinx_ntf.solvers import linear_solver as linear
-from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, DivergenceRule, ForceScaledTest
+from dolfinx_ntf.solvers.convergence import (
+    TIGHT_FIELD_CONTROLS,
+    DivergenceRule,
+    ForceScaledTest,
+    measure_iterate,
+)
 from dolfinx_ntf.solvers.errors import (
     ContactConvergenceError,
     ContactDivergenceError,
     ContactSolverError,
+    linear_solve_failure,
     no_support_hint,
     non_finite_input,
 )
@@ -56,56 +62,38 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         problem: The contact problem.
         petsc_options: PETSc options of the linear solver, set under ``options_prefix``
             (default: chosen by ``linear_solver``).
-        linear_solver: Without ``petsc_options``: ``"direct"`` (MUMPS LU, see
-            :data:`DEFAULT_PETSC_OPTIONS`; MUMPS Cholesky, :data:`CHOLESKY_PETSC_OPTIONS`, when
-            the problem is ``symmetric`` and its first Jacobian is symmetric), ``"iterative"``
-            (GMRES, or CG when symmetric, with GAMG and the rigid-body modes of every body,
-            :data:`ITERATIVE_PETSC_OPTIONS`), or ``"auto"``: direct up to
-            :data:`DIRECT_MAX_DOFS` dofs (:data:`CHOLESKY_MAX_DOFS` when symmetric), iterative
-            above (docs/method.md §14.7). Whatever the
-            choice, a GAMG preconditioner gets the per-body near-nullspace.
-        options_prefix: Prefix of the Krylov solver's options. ``petsc_options`` are set under
-            it, read once, and removed from PETSc's global options database again; options
-            already in the database under the prefix (command-line options such as
-            ``-ntf_ksp_view`` or ``-ntf_pc_type gamg``) take precedence over them. Unknown
-            solver names are a ``ValueError`` naming the option.
-        controls: CalculiX's ``*CONTROLS, PARAMETERS=FIELD`` values of the force-scaled
-            convergence test (:meth:`is_converged`): ``R_n``, ``C_n``, ``R_p``, ``R_l``,
-            ``epsilon``, ``C_epsilon``; default :data:`TIGHT_FIELD_CONTROLS` (round-off level,
-            never below it), :data:`CCX_FIELD_CONTROLS` are ccx's defaults.
+        linear_solver: Without ``petsc_options``: ``"direct"`` (MUMPS LU or Cholesky),
+            ``"iterative"`` (GMRES or CG with GAMG) or ``"auto"`` (by size), see
+            :func:`~dolfinx_ntf.solvers.linear_solver.default_options`. Whatever the choice, a
+            GAMG preconditioner gets the rigid-body modes of every body as near-nullspace.
+        options_prefix: Prefix of the Krylov solver's options; options already in PETSc's
+            database under it (``-ntf_ksp_view``, ``-ntf_pc_type gamg``) take precedence over
+            ``petsc_options``, which are removed again once read. Unknown solver names are a
+            ``ValueError`` naming the option.
+        controls: CalculiX's ``*CONTROLS, PARAMETERS=FIELD`` values of the force-scaled test
+            (:meth:`is_converged`); default :data:`TIGHT_FIELD_CONTROLS` (round-off level, never
+            below it), :data:`CCX_FIELD_CONTROLS` are ccx's defaults.
         relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
         max_it: Maximum Newton iterations per increment.
         min_iterations: Newton updates needed before convergence can be declared (ccx: 2).
         divergence_iteration: CalculiX's I_0: from this Newton update on, a residual larger than
-            the two before it means divergence, and the increment is given up at once. Each
-            re-pairing that changes the number of springs defers the check to 4 updates later,
-            as in CalculiX.
-        line_search: Backtrack along each Newton correction (steps 1, 1/2, ... down to
-            ``2**-max_line_search_halvings``) until the residual of the current pairing decreases
-            (Armijo), else take the best step tried. Beyond CalculiX, which always takes the
-            full step; it breaks the cycles of Newton iterates around projections clamped to a
-            face edge, and stops runaway iterates after a re-pairing.
+            the two before it gives the increment up at once (:class:`DivergenceRule`; a
+            re-pairing that changes the number of springs defers it by 4 updates, as in ccx).
+        line_search: Backtrack along each Newton correction until the residual of the current
+            pairing decreases (:class:`LineSearch`, beyond CalculiX).
         max_line_search_halvings: Smallest step of the line search is 2 to the minus this.
+        line_search_from: First Newton update that is line-searched. The first correction of an
+            increment is taken in full: from an unloaded contact it overshoots the residual of
+            the LINEAR law (slope K/2 at zero overclosure, K beyond) and is corrected in one
+            more iteration, which damping would only delay.
         check_unpaired: Before declaring convergence, search for slave nodes that penetrate
             without a spring (CalculiX freezes the pairing after iteration 8, so such nodes can
             remain): if any, pair again and iterate on, at most ``MAX_EXTRA_PAIRINGS`` times per
             increment, then give the increment up (beyond CalculiX; the deck runner reports
             their number instead).
-        line_search_from: First Newton update that is line-searched. The first correction of an
-            increment is taken in full: from an unloaded contact it overshoots the residual of
-            the LINEAR law (slope K/2 at zero overclosure, K beyond) and is corrected in one
-            more iteration, which damping would only delay.
-        residual_floor: A largest residual force below this absolute value counts as zero in
-            :meth:`is_converged` (then the ``R_l`` test holds). CalculiX 2.20 does this with
-            1e-6 in the deck's force unit (docs/method.md §7.1), which the deck runner
-            reproduces; 0 (the default) keeps the test scale-free.
-        average_over_step: ``q~`` of :meth:`is_converged` is the mean over the increments of
-            the step so far (each by its last ``q``, the current one by its ``q`` now),
-            CalculiX's time-averaged force, which the deck runner reproduces; default: the mean
-            over the iterations of the current increment.
-        change_over_iterations: The displacement change ``du`` of :meth:`is_converged` is the
-            largest over the iterations of the increment so far (CalculiX's; the deck runner
-            reproduces it); default: the change now.
+        residual_floor, average_over_step, change_over_iterations: CalculiX's variants of the
+            force-scaled test that the deck runner reproduces (:class:`ForceScaledTest`);
+            the defaults keep the test scale-free and within the increment.
     """
 
     def __init__(
@@ -129,11 +117,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         average_over_step: bool = False,
         change_over_iterations: bool = False,
     ) -> None:
-        symmetric = (
-            petsc_options is None
-            and getattr(problem, "symmetric", False)
-            and not getattr(problem, "has_friction", False)  # friction: never Cholesky
-        )
+        symmetric = linear.expects_symmetric(problem, petsc_options)
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
         options = _check_arguments(
             comm,
@@ -189,13 +173,15 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         #: residual force, mean average force, largest correction, largest displacement change in
         #: the increment).
         self.history: list[tuple[int, int, float, float, float, float]] = []
-        self._check_symmetry = symmetric
-        #: Rigid-body modes of every body, the near-nullspace of a GAMG preconditioner.
-        self.near_nullspace = linear.configure(
-            self.krylov_solver, options, options_prefix, problem.u.function_space
+        self.linear = linear.LinearSolver(
+            self.krylov_solver, options, options_prefix, problem.u.function_space, symmetric
         )
-        if self.near_nullspace is not None:
-            self._A.setNearNullSpace(self.near_nullspace)
+        self.linear.attach(self._A)
+
+    @property
+    def near_nullspace(self) -> PETSc.NullSpace | None:
+        """Rigid-body modes of every body, the near-nullspace of a GAMG preconditioner."""
+        return self.linear.near_nullspace
 
     @property
     def controls(self) -> dict[str, float]:
@@ -232,9 +218,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self._b.destroy()
         self.backtracking.destroy()
         self._destroy_placeholder()
-        if self.near_nullspace is not None:  # the matrix keeps its own reference
-            self.near_nullspace.destroy()
-            self.near_nullspace = None
+        self.linear.destroy()
 
     def __del__(self) -> None:
         # dolfinx 0.9's NewtonSolver.__del__ destroys its matrix, which here is the problem's.
@@ -252,36 +236,21 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.destroy()
 
     def _jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """The problem's Jacobian; a factorization is started afresh when the pattern grew.
-
-        PETSc 3.22 does not see the pattern change of ``MatAXPY(..., DIFFERENT_NONZERO_PATTERN)``
-        and would reuse the old symbolic factorization (MUMPS then reports a zero pivot).
-        """
+        """The problem's Jacobian, with the linear solver kept in step with it."""
         merges = self.problem.assembler.pattern_merges
         self.problem.J(x, A)
-        ksp = self.krylov_solver
-        if self.problem.has_friction:
-            linear.unsymmetric(ksp, "friction makes the Jacobian unsymmetric")
-        if self._check_symmetry:  # Cholesky and CG need a symmetric bulk Jacobian too
-            self._check_symmetry = False
-            if not A.isSymmetric(1e-10 * A.norm(PETSc.NormType.NORM_INFINITY)):
-                linear.unsymmetric(ksp, "the Jacobian is not symmetric")
-        if self.problem.assembler.pattern_merges != merges:
-            ksp.getPC().reset()
-            if self.near_nullspace is not None:
-                A.setNearNullSpace(self.near_nullspace)
-            ksp.setOperators(A, A)
-        reduced = self.problem.reduced_matrix  # constraints: solve the reduced system
-        if reduced is not None:
-            if reduced.handle != ksp.getOperators()[0].handle:
-                ksp.getPC().reset()
-            ksp.setOperators(reduced, reduced)
+        self.linear.update(
+            A,
+            friction=self.problem.has_friction,
+            pattern_grew=self.problem.assembler.pattern_merges != merges,
+            reduced=self.problem.reduced_matrix,
+        )
 
     def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
         """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
-        reason = self.krylov_solver.getConvergedReason()
-        if reason < 0 or not np.isfinite(dx.norm()):
-            self._linear_solve_failed(f"the linear solver failed ({linear.ksp_reason(reason)})")
+        failure = self.linear.failure(dx)
+        if failure is not None:
+            self._linear_solve_failed(failure)
         self.updates += 1
         self.last_correction = dx
         step = 1.0
@@ -303,48 +272,30 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
         """CalculiX's force-scaled test of the mechanical field, after each Newton update.
 
-        With ``r`` the largest residual force, ``c`` the largest correction, ``du`` the largest
-        displacement change in the increment, ``q`` the average absolute element nodal force
-        (:meth:`ContactProblem.average_element_force`) and ``q~`` its mean over the updates so
-        far: converged when ``r <= c1 q~`` and at least one of ``c <= c2 du``,
-        ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <= R_l q~``, ``q <= epsilon q~``,
-        ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to ``relaxation_iteration`` updates,
-        ``(R_p, C_n)`` beyond, and ``(epsilon, C_epsilon)`` under zero flux. Scaled by forces,
-        the test never asks for less than round-off. The caller adds CalculiX's other rules (at
-        least ``min_iterations`` updates, none right after a re-pairing that changed the number
-        of springs). Override for other criteria.
+        Measures the iterate (largest residual force, correction and displacement change in the
+        increment, average element force :meth:`ContactProblem.average_element_force`) for
+        :meth:`ForceScaledTest.converged`. The caller adds CalculiX's other rules (at least
+        ``min_iterations`` updates, none right after a re-pairing that changed the number of
+        springs). Override for other criteria.
         """
         if self.updates == 0:
             return False
-        comm = self.problem.u.function_space.mesh.comm
-        average = self.problem.average_element_force()
-        largest = b.norm(PETSc.NormType.NORM_INFINITY)
-        correction = self.relaxation_parameter * self.last_correction.norm(
-            PETSc.NormType.NORM_INFINITY
-        )
-        correction *= self.step_lengths[-1]
         start = self.increment_start if self.increment_start is not None else self._solve_start
-        change = float(np.abs(x.array - start[: x.array.size]).max(initial=0.0))
-        change = comm.allreduce(change, op=MPI.MAX)
+        measures = measure_iterate(
+            self.problem, x, b, self.last_correction, self.relaxation_parameter, start
+        )
+        average, largest, correction, change = measures
+        correction *= self.step_lengths[-1]
         converged = self.test.converged(self.updates, average, largest, correction, change)
-        springs = comm.allreduce(self.problem.num_springs)
+        springs = self.problem.u.function_space.mesh.comm.allreduce(self.problem.num_springs)
         self.history.append((self.updates, springs, *self.test.last))
         return converged
 
-    def _linear_solve_failed(self, what: str) -> None:
+    def _linear_solve_failed(self, what: str) -> typing.NoReturn:
         """Non-retryable at the very first Newton iteration of a solver, divergence later."""
-        if self.first_solve and self.updates == 0:
-            options = self.krylov_solver.getOptionsPrefix()
-            hint = (
-                f"check the PETSc options under the prefix '{options}' (petsc_options) and that "
-                "the residual form is built on the unknown Function u"
-            )
-            raise ContactSolverError(
-                f"{what} at the first Newton iteration: {hint}{no_support_hint(self.problem)}"
-            )
-        raise ContactDivergenceError(
-            f"{what} at Newton iteration {self.updates + 1}{no_support_hint(self.problem)}"
-        )
+        at_start = self.first_solve and self.updates == 0
+        prefix = self.krylov_solver.getOptionsPrefix()
+        raise linear_solve_failure(what, at_start, self.updates, prefix, self.problem)
 
     def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         if self.backtracking.trial_is_current:  # the accepted trial: same springs, same x
@@ -373,18 +324,17 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             converged = self._all_contacts_paired()
         self.atol = 2.0 * norm + 1e-300 if converged else (1.0 - 1e-9) * norm
         if newton_logger.isEnabledFor(logging.INFO):
-            correction = (
-                self.relaxation_parameter * self.last_correction.norm() if self.updates else 0.0
-            )
+            correction = self.last_correction if self.updates else None
+            springs = self.problem.total_springs
             newton_logger.info(
                 _iteration_line(
                     self.updates,
-                    norm,
-                    self.residual_norms[0],
+                    self.residual_norms,
                     correction,
-                    self.problem.total_springs,
-                    converged,
+                    self.relaxation_parameter,
+                    springs,
                 )
+                + (", converged" if converged else "")
             )
 
     def _all_contacts_paired(self) -> bool:
@@ -411,8 +361,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self._destroy_placeholder()
             self._A = A
             self.setJ(self._jacobian, A)
-            if getattr(self, "near_nullspace", None) is not None:
-                A.setNearNullSpace(self.near_nullspace)
+            if hasattr(self, "linear"):  # not yet while __init__ binds an existing matrix
+                self.linear.attach(A)
 
     def _destroy_placeholder(self) -> None:
         if self._placeholder is not None:
@@ -471,15 +421,22 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
 
 
 def _iteration_line(
-    updates: int, norm: float, first: float, correction: float, springs: int, converged: bool
+    updates: int,
+    norms: list[float],
+    correction: PETSc.Vec | None,
+    relaxation: float,
+    springs: int,
 ) -> str:
-    """One progress line: residual and correction norms, spring count."""
+    """One progress line: residual (``norms[-1]``) and correction norms, spring count.
+
+    Collective with a ``correction`` (its norm).
+    """
+    norm = norms[-1]
     line = f" iteration {updates}: residual {norm:.3e}"
-    if updates:
-        ratio = norm / first if first > 0 else 0.0
-        line += f" ({ratio:.1e} of the first), correction {correction:.3e}"
-    line += f", {springs} contact elements"
-    return line + (", converged" if converged else "")
+    if correction is not None:
+        ratio = norm / norms[0] if norms[0] > 0 else 0.0
+        line += f" ({ratio:.1e} of the first), correction {relaxation * correction.norm():.3e}"
+    return line + f", {springs} contact elements"
 
 
 def _check_arguments(
