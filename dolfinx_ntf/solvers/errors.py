@@ -7,8 +7,6 @@ name the cause (a non-finite input, a body with no support).
 
 from __future__ import annotations
 
-from petsc4py import PETSc
-
 import numpy as np
 
 from dolfinx_ntf.contact.problem import ContactProblem
@@ -20,6 +18,7 @@ __all__ = [
     "linear_solve_failure",
     "no_support_hint",
     "non_finite_input",
+    "non_finite_residual",
 ]
 
 
@@ -38,7 +37,7 @@ class ContactSolverError(RuntimeError):
     """
 
 
-def non_finite_input(problem: ContactProblem, x: PETSc.Vec) -> str:
+def non_finite_input(problem: ContactProblem) -> str:
     """Message for a residual that is not finite before any Newton update."""
     values = problem.u.x.array
     bad = np.flatnonzero(~np.isfinite(values))
@@ -53,6 +52,17 @@ def non_finite_input(problem: ContactProblem, x: PETSc.Vec) -> str:
     return (
         "the residual is not finite at the start of the increment although the displacement is: "
         "check the loads, constants and material parameters of the residual form"
+    )
+
+
+def non_finite_residual(
+    norm: float, updates: int, problem: ContactProblem
+) -> ContactSolverError | ContactDivergenceError:
+    """The error of a residual that is not finite: the input's fault before any update."""
+    if updates == 0:
+        return ContactSolverError(non_finite_input(problem))
+    return ContactDivergenceError(
+        f"residual is not finite (norm {norm}) after {updates} Newton updates"
     )
 
 

@@ -12,6 +12,7 @@ divergence rule (:mod:`~dolfinx_ntf.solvers.convergence`), the line search
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import numbers
 import typing
@@ -36,11 +37,10 @@ from dolfinx_ntf.solvers.convergence import (
 )
 from dolfinx_ntf.solvers.errors import (
     ContactConvergenceError,
-    ContactDivergenceError,
     ContactSolverError,
     linear_solve_failure,
     no_support_hint,
-    non_finite_input,
+    non_finite_residual,
 )
 from dolfinx_ntf.solvers.line_search import LineSearch
 
@@ -305,11 +305,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self.problem.F(x, b)
         norm = b.norm()
         if not np.isfinite(norm):
-            if self.updates == 0:
-                raise ContactSolverError(non_finite_input(self.problem, x))
-            raise ContactDivergenceError(
-                f"residual is not finite (norm {norm}) after {self.updates} Newton updates"
-            )
+            raise non_finite_residual(norm, self.updates, self.problem)
         if self.problem.count_changed:
             self.divergence.defer(self.updates, 4)
         self.divergence.check(
@@ -397,16 +393,12 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self._bind_matrix()
         try:
             # non-convergence is reported below, with the residuals
-            with quiet_dolfinx(), linear.galerkin_products(self.krylov_solver):
+            with (
+                quiet_dolfinx(),
+                linear.galerkin_products(self.krylov_solver),
+                _as_contact_errors(self._linear_solve_failed),
+            ):
                 iterations, converged = super().solve(u)
-        except (ContactConvergenceError, ContactSolverError):
-            raise
-        except PETSc.Error as error:
-            self._linear_solve_failed(
-                f"the Newton iteration failed ({validation.describe_petsc_error(error)})"
-            )
-        except (RuntimeError, ValueError) as error:  # degenerate iterates
-            self._linear_solve_failed(f"the Newton iteration failed ({error})")
         finally:
             self.first_solve = False
             self.max_it = max_it
@@ -418,6 +410,19 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             )
         self.test.end_solve()
         return iterations, True
+
+
+@contextlib.contextmanager
+def _as_contact_errors(fail: typing.Callable[[str], typing.NoReturn]) -> typing.Iterator[None]:
+    """Turn PETSc errors and those of degenerate iterates into a call of ``fail(what)``."""
+    try:
+        yield
+    except (ContactConvergenceError, ContactSolverError):
+        raise
+    except PETSc.Error as error:
+        fail(f"the Newton iteration failed ({validation.describe_petsc_error(error)})")
+    except (RuntimeError, ValueError) as error:  # degenerate iterates
+        fail(f"the Newton iteration failed ({error})")
 
 
 def _iteration_line(

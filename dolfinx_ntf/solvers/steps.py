@@ -149,6 +149,38 @@ class Step:
         """The step's own run, with checked arguments: set up, then :meth:`_increments`."""
         raise NotImplementedError
 
+    def _cut_back(
+        self,
+        error: ContactConvergenceError,
+        first_failure: ContactConvergenceError,
+        dt: float,
+        minimum: float,
+        failed: str,
+    ) -> float:
+        """The increment size after a failed attempt (CalculiX's D_F or D_C); raise if none.
+
+        Args:
+            error: Why the attempt failed.
+            first_failure: Why the increment's first attempt failed.
+            dt: The failed increment size.
+            minimum: The smallest increment size.
+            failed: What failed, the start of the message when the step gives up.
+        """
+        factor = (
+            self.divergence_cutback_factor
+            if isinstance(error, ContactDivergenceError)
+            else self.cutback_factor
+        )
+        if self.fixed or dt * factor < minimum:
+            why = (
+                "fixed increments"
+                if self.fixed
+                else f"increment size {dt:.3e} cannot be cut back below the minimum {minimum:.3e}"
+            )
+            first = "" if first_failure is error else f"; first attempt: {first_failure}"
+            raise ContactConvergenceError(f"{failed} ({why}): {error}{first}") from error
+        return dt * factor
+
     def _increments(
         self,
         solver: ContactNewtonSolver,
@@ -198,28 +230,11 @@ class Step:
                     u.x.array[:] = u_start
                     u.x.scatter_forward()
                     first_failure = first_failure or error
-                    factor = (
-                        self.divergence_cutback_factor
-                        if isinstance(error, ContactDivergenceError)
-                        else self.cutback_factor
+                    failed = (
+                        f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
+                        f"failed after {attempt} attempt(s)"
                     )
-                    if self.fixed or dt * factor < minimum:
-                        why = (
-                            "fixed increments"
-                            if self.fixed
-                            else (
-                                f"increment size {dt:.3e} cannot be cut back below the minimum "
-                                f"{minimum:.3e}"
-                            )
-                        )
-                        first = (
-                            "" if first_failure is error else f"; first attempt: {first_failure}"
-                        )
-                        raise ContactConvergenceError(
-                            f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "
-                            f"failed after {attempt} attempt(s) ({why}): {error}{first}"
-                        ) from error
-                    dt *= factor
+                    dt = self._cut_back(error, first_failure, dt, minimum, failed)
                     fast_in_a_row = 0
                     logger.info(" %s; cutting back to %.6e", error, dt)
             converged(dt, u_start)
