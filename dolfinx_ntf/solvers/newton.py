@@ -28,20 +28,10 @@ import dolfinx.nls.petsc
 from dolfinx_ntf import validation
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import newton_logger, quiet_dolfinx
+from dolfinx_ntf.solvers import convergence, errors
 from dolfinx_ntf.solvers import linear_solver as linear
-from dolfinx_ntf.solvers.convergence import (
-    TIGHT_FIELD_CONTROLS,
-    DivergenceRule,
-    ForceScaledTest,
-    measure_iterate,
-)
-from dolfinx_ntf.solvers.errors import (
-    ContactConvergenceError,
-    ContactSolverError,
-    linear_solve_failure,
-    no_support_hint,
-    non_finite_residual,
-)
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, DivergenceRule, ForceScaledTest
+from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactSolverError
 from dolfinx_ntf.solvers.line_search import LineSearch
 
 __all__ = ["ITERATIONS_PER_EXTRA_PAIRING", "MAX_EXTRA_PAIRINGS", "ContactNewtonSolver"]
@@ -281,7 +271,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         if self.updates == 0:
             return False
         start = self.increment_start if self.increment_start is not None else self._solve_start
-        measures = measure_iterate(
+        measures = convergence.measure_iterate(
             self.problem, x, b, self.last_correction, self.relaxation_parameter, start
         )
         average, largest, correction, change = measures
@@ -295,7 +285,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         """Non-retryable at the very first Newton iteration of a solver, divergence later."""
         at_start = self.first_solve and self.updates == 0
         prefix = self.krylov_solver.getOptionsPrefix()
-        raise linear_solve_failure(what, at_start, self.updates, prefix, self.problem)
+        raise errors.linear_solve_failure(what, at_start, self.updates, prefix, self.problem)
 
     def _residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         if self.backtracking.trial_is_current:  # the accepted trial: same springs, same x
@@ -305,11 +295,11 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             self.problem.F(x, b)
         norm = b.norm()
         if not np.isfinite(norm):
-            raise non_finite_residual(norm, self.updates, self.problem)
+            raise errors.non_finite_residual(norm, self.updates, self.problem)
         if self.problem.count_changed:
             self.divergence.defer(self.updates, 4)
         self.divergence.check(
-            self.updates, self.residual_norms, norm, lambda: no_support_hint(self.problem)
+            self.updates, self.residual_norms, norm, lambda: errors.no_support_hint(self.problem)
         )
         self.residual_norms.append(norm)
         converged = self.is_converged(x, b, norm)  # always called: criteria may keep a history
@@ -406,7 +396,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             raise ContactConvergenceError(
                 f"Newton did not converge in {iterations} iterations "
                 f"(residual {self.residual_norms[-1]:.3e}, "
-                f"first {self.residual_norms[0]:.3e}){no_support_hint(self.problem)}"
+                f"first {self.residual_norms[0]:.3e}){errors.no_support_hint(self.problem)}"
             )
         self.test.end_solve()
         return iterations, True
