@@ -67,10 +67,12 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         max_it: Maximum Newton iterations per increment.
         min_iterations: Newton updates needed before convergence can be declared (ccx: 2).
         divergence_iteration: CalculiX's I_0: from this Newton update on, a residual larger than
-            the two before it gives the increment up at once (:class:`DivergenceRule`; a
-            re-pairing that changes the number of springs defers it by 4 updates, as in ccx).
+            the two before it gives the increment up at once
+            (:class:`~dolfinx_ntf.solvers.convergence.DivergenceRule`; a re-pairing that changes
+            the number of springs defers it by 4 updates, as in ccx).
         line_search: Backtrack along each Newton correction until the residual of the current
-            pairing decreases (:class:`LineSearch`, beyond CalculiX).
+            pairing decreases (:class:`~dolfinx_ntf.solvers.line_search.LineSearch`, beyond
+            CalculiX).
         max_line_search_halvings: Smallest step of the line search is 2 to the minus this.
         line_search_from: First Newton update that is line-searched. The first correction of an
             increment is taken in full: from an unloaded contact it overshoots the residual of
@@ -82,7 +84,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             increment, then give the increment up (beyond CalculiX; the deck runner reports
             their number instead).
         residual_floor, average_over_step, change_over_iterations: CalculiX's variants of the
-            force-scaled test that the deck runner reproduces (:class:`ForceScaledTest`);
+            force-scaled test that the deck runner reproduces
+            (:class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`);
             the defaults keep the test scale-free and within the increment.
     """
 
@@ -264,9 +267,10 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
 
         Measures the iterate (largest residual force, correction and displacement change in the
         increment, average element force :meth:`ContactProblem.average_element_force`) for
-        :meth:`ForceScaledTest.converged`. The caller adds CalculiX's other rules (at least
-        ``min_iterations`` updates, none right after a re-pairing that changed the number of
-        springs). Override for other criteria.
+        :meth:`~dolfinx_ntf.solvers.convergence.ForceScaledTest.converged`, whose docstring states
+        the test. The caller adds CalculiX's other rules (at least ``min_iterations`` updates,
+        none right after a re-pairing that changed the number of springs). Override for other
+        criteria.
         """
         if self.updates == 0:
             return False
