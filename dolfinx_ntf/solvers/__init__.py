@@ -16,6 +16,8 @@ from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.solvers.convergence import (
     CCX_FIELD_CONTROLS,
     DIVERGENCE_GROWTH,
+    ITERATIONS_PER_EXTRA_PAIRING,
+    MAX_EXTRA_PAIRINGS,
     TIGHT_FIELD_CONTROLS,
 )
 from dolfinx_ntf.solvers.errors import (
@@ -33,11 +35,7 @@ from dolfinx_ntf.solvers.linear_solver import (
     SEQUENTIAL_PTAP,
     galerkin_products,
 )
-from dolfinx_ntf.solvers.newton import (
-    ITERATIONS_PER_EXTRA_PAIRING,
-    MAX_EXTRA_PAIRINGS,
-    ContactNewtonSolver,
-)
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, LoadControl, StaticStep, Step
 
 __all__ = [

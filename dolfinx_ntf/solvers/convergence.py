@@ -2,7 +2,8 @@
 
 :class:`ForceScaledTest` is the force-scaled test of ``*CONTROLS, PARAMETERS=FIELD``
 (docs/method.md §7.1) with the forces it remembers over an increment and a step;
-:class:`DivergenceRule` gives an increment up when the residual grows. Both only compute, on
+:class:`DivergenceRule` gives an increment up when the residual grows; :class:`ExtraPairings` counts
+the pairings a solve adds for penetrating slave nodes without a spring. Both only compute, on
 numbers that the Newton solver hands over; :func:`measure_iterate` (collective) measures them.
 """
 
@@ -17,13 +18,16 @@ from petsc4py import PETSc
 import numpy as np
 
 from dolfinx_ntf.contact.problem import ContactProblem
-from dolfinx_ntf.solvers.errors import ContactDivergenceError
+from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenceError
 
 __all__ = [
     "CCX_FIELD_CONTROLS",
     "DIVERGENCE_GROWTH",
+    "ITERATIONS_PER_EXTRA_PAIRING",
+    "MAX_EXTRA_PAIRINGS",
     "TIGHT_FIELD_CONTROLS",
     "DivergenceRule",
+    "ExtraPairings",
     "ForceScaledTest",
     "measure_iterate",
 ]
@@ -51,6 +55,11 @@ TIGHT_FIELD_CONTROLS: dict[str, float] = {
 #: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
 #: strict comparison, with a margin for iterations that stagnate at round-off level.
 DIVERGENCE_GROWTH = 1.01
+
+#: Pairings a solve may add to CalculiX's schedule for slave nodes that penetrate without a spring.
+MAX_EXTRA_PAIRINGS = 3
+#: Newton iterations each extra pairing adds to ``max_it`` (the set changes: Newton starts over).
+ITERATIONS_PER_EXTRA_PAIRING = 10
 
 
 def measure_iterate(
@@ -217,3 +226,29 @@ class DivergenceRule:
                 f"residual grows: {norms[-2]:.3e}, {norms[-1]:.3e}, {norm:.3e} after "
                 f"{updates} Newton updates{hint()}"
             )
+
+
+class ExtraPairings:
+    """Pairings beyond CalculiX's schedule for slave nodes that penetrate without a spring.
+
+    CalculiX freezes the pairing after Newton iteration 8, so such nodes can remain at
+    convergence; a solve pairs again instead and iterates on, at most :data:`MAX_EXTRA_PAIRINGS`
+    times per increment, then gives the increment up.
+    """
+
+    def __init__(self) -> None:
+        self.count = 0
+
+    def take(self, unpaired: int) -> int:
+        """One more pairing for ``unpaired`` nodes; returns the Newton iterations it adds.
+
+        Raises:
+            ContactConvergenceError: The solve has used all its extra pairings.
+        """
+        if self.count >= MAX_EXTRA_PAIRINGS:
+            raise ContactConvergenceError(
+                f"{unpaired} slave node(s) still penetrate the master without a spring after "
+                f"{MAX_EXTRA_PAIRINGS} extra pairings"
+            )
+        self.count += 1
+        return ITERATIONS_PER_EXTRA_PAIRING

@@ -30,18 +30,18 @@ from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import newton_logger, quiet_dolfinx
 from dolfinx_ntf.solvers import convergence, errors
 from dolfinx_ntf.solvers import linear_solver as linear
-from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, DivergenceRule, ForceScaledTest
+from dolfinx_ntf.solvers.convergence import (
+    TIGHT_FIELD_CONTROLS,
+    DivergenceRule,
+    ExtraPairings,
+    ForceScaledTest,
+)
 from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactSolverError
 from dolfinx_ntf.solvers.line_search import LineSearch
 
-__all__ = ["ITERATIONS_PER_EXTRA_PAIRING", "MAX_EXTRA_PAIRINGS", "ContactNewtonSolver"]
+__all__ = ["ContactNewtonSolver"]
 
 logger = logging.getLogger("dolfinx_ntf")
-
-#: Pairings a solve may add to CalculiX's schedule for slave nodes that penetrate without a spring.
-MAX_EXTRA_PAIRINGS = 3
-#: Newton iterations each extra pairing adds to ``max_it`` (the set changes: Newton starts over).
-ITERATIONS_PER_EXTRA_PAIRING = 10
 
 
 class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
@@ -79,10 +79,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             the LINEAR law (slope K/2 at zero overclosure, K beyond) and is corrected in one
             more iteration, which damping would only delay.
         check_unpaired: Before declaring convergence, search for slave nodes that penetrate
-            without a spring (CalculiX freezes the pairing after iteration 8, so such nodes can
-            remain): if any, pair again and iterate on, at most ``MAX_EXTRA_PAIRINGS`` times per
-            increment, then give the increment up (beyond CalculiX; the deck runner reports
-            their number instead).
+            without a spring and pair again if any
+            (:class:`~dolfinx_ntf.solvers.convergence.ExtraPairings`, beyond CalculiX; the deck
+            runner reports their number instead).
         residual_floor, average_over_step, change_over_iterations: CalculiX's variants of the
             force-scaled test that the deck runner reproduces
             (:class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`);
@@ -153,7 +152,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.line_search = line_search
         self.line_search_from = line_search_from
         self.check_unpaired = check_unpaired
-        self.extra_pairings = 0
+        self.extra_pairings = ExtraPairings()
         self.step_lengths: list[float] = []
         self.backtracking = LineSearch(self._b, max_line_search_halvings)
         self.rtol = 0.0
@@ -332,15 +331,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         unpaired = self.problem.unpaired_contacts()
         if unpaired == 0:
             return True
-        if self.extra_pairings >= MAX_EXTRA_PAIRINGS:
-            raise ContactConvergenceError(
-                f"{unpaired} slave node(s) still penetrate the master without a spring after "
-                f"{MAX_EXTRA_PAIRINGS} extra pairings"
-            )
-        self.extra_pairings += 1
+        self.max_it += self.extra_pairings.take(unpaired)
         self.problem.repair_next_iteration = True
         self.divergence.defer(self.updates, 5)  # as after a count change
-        self.max_it += ITERATIONS_PER_EXTRA_PAIRING
         logger.info(" %d slave node(s) penetrate without a spring: pairing again", unpaired)
         return False
 
@@ -373,7 +366,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.residual_norms = []
         self.step_lengths = []
         self.history = []
-        self.extra_pairings = 0
+        self.extra_pairings = ExtraPairings()
         max_it = self.max_it
         self._solve_start = u.x.array.copy()
         self.updates = 0
