@@ -73,7 +73,7 @@ from dolfinx_ntf.kernels.search import NOT_HELD, MasterSurface
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.parallel import master_exchange, surface_distribution
 from dolfinx_ntf.parallel.halo import NodeHalo
-from dolfinx_ntf.solvers.newton import ITERATIVE_PETSC_OPTIONS, galerkin_products
+from dolfinx_ntf.solvers.linear_solver import ITERATIVE_PETSC_OPTIONS, galerkin_products
 
 __all__ = ["SOLVERS", "PlateMesh", "build_plates", "build_problem", "main", "report", "run_size"]
 

@@ -51,7 +51,7 @@ from contact_phases import _format_table
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.elasticity import component_bc
-from dolfinx_ntf.solvers import newton as ntf_solver
+from dolfinx_ntf.solvers import linear_solver
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Pressure on the punch's top (E = 1000): a few per mille of strain.
@@ -238,7 +238,7 @@ def section(results: list[dict], threshold: int) -> list[str]:
         "punch of `tests/conftest.py` refined (hexahedra, LINEAR law, non-matching meshes), one "
         "increment solved to convergence with TIGHT controls, each run in its own `mpirun`. "
         "direct = MUMPS LU; iterative = GMRES (right-preconditioned, true residual reduced by "
-        f"`ksp_rtol` = {ntf_solver.ITERATIVE_PETSC_OPTIONS['ksp_rtol']:g}) with GAMG and the "
+        f"`ksp_rtol` = {linear_solver.ITERATIVE_PETSC_OPTIONS['ksp_rtol']:g}) with GAMG and the "
         "rigid-body modes of each body. Wall and CPU time per Newton iteration include assembly, "
         "contact and the first iteration's MUMPS analysis or GAMG set-up; CPU is summed over "
         "the processes. The machine (2 cores) was shared with other engineers' tests while "
@@ -284,7 +284,7 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
                     result = _run(folder, n, solver, processes)
                     if result is not None:
                         results.append(result)
-    lines = section(results, ntf_solver.DIRECT_MAX_DOFS)
+    lines = section(results, linear_solver.DIRECT_MAX_DOFS)
     print("\n".join(lines))
     if args.write:
         import vs_ccx

@@ -67,7 +67,7 @@ from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.meshes import hertz as hz
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
-from dolfinx_ntf.solvers.newton import ContactConvergenceError
+from dolfinx_ntf.solvers.errors import ContactConvergenceError
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))

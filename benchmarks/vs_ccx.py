@@ -288,7 +288,7 @@ def parse_progress(text: str) -> Progress:
     """Converged increments of dolfinx_ntf's progress lines: iterations and attempts of each.
 
     Reads ``increment N attempt A`` and ``increment N converged: time T, I iterations, ...``
-    (``dolfinx_ntf.solvers.newton.StaticStep``); later fields of the line are ignored.
+    (``dolfinx_ntf.solvers.steps.StaticStep``); later fields of the line are ignored.
     """
     progress = Progress()
     attempt = 1

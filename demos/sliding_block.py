@@ -40,7 +40,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.meshes import punch as geometry
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
-from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS
 
 __all__ = ["main"]
 

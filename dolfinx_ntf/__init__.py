@@ -58,14 +58,13 @@ from dolfinx_ntf.solvers.analysis import (
     run_steps,
 )
 from dolfinx_ntf.solvers.dynamics import DynamicStep, kinetic_energy
-from dolfinx_ntf.solvers.newton import (
+from dolfinx_ntf.solvers.errors import (
     ContactConvergenceError,
     ContactDivergenceError,
-    ContactNewtonSolver,
     ContactSolverError,
-    IncrementResult,
-    StaticStep,
 )
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 _logs.route_compiler_lines()
 _moved.install()

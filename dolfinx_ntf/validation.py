@@ -5,9 +5,9 @@ with a message that says what to do instead, not later inside a Newton iteration
 ``AttributeError``, an ``IndexError`` or a PETSc error code. The constructors and entry methods
 (:class:`~dolfinx_ntf.FacetSurface`, :class:`~dolfinx_ntf.NodeSurface`,
 :class:`~dolfinx_ntf.ContactPair`, :class:`~dolfinx_ntf.ContactProblem`,
-:class:`~dolfinx_ntf.ContactNewtonSolver`, :class:`~dolfinx_ntf.StaticStep`,
-:class:`~dolfinx_ntf.ContactWriter`, the helpers of ``postprocess.py``) call them once; nothing here
-runs on every Newton evaluation.
+:class:`~dolfinx_ntf.ContactNewtonSolver`, the steps, :class:`~dolfinx_ntf.ContactWriter`, the
+helpers of ``postprocess.py``) check their own arguments with these generic helpers, once; nothing
+here runs on every Newton evaluation.
 
 Shared rules:
     - ``TypeError`` for an argument of the wrong kind, ``ValueError`` for a wrong value,
@@ -44,8 +44,6 @@ __all__ = [
     "check_positive",
     "check_residual",
     "check_sequence",
-    "check_solver",
-    "check_step",
     "check_type",
     "check_writable",
     "describe",
@@ -257,82 +255,6 @@ def vertex_indices(vertices: object, owner: str) -> np.ndarray:
         i = int(np.argmax(array))
         raise ValueError(f"{owner}: vertex index {int(array[i])} (entry {i}) is too large")
     return array.astype(np.int32)
-
-
-# -- solver and step ------------------------------------------------------------------------------
-
-
-def check_solver(
-    comm: object,
-    problem: object,
-    problem_type: type,
-    petsc_options: object,
-    options_prefix: object,
-    *,
-    controls: object,
-    required_controls: typing.Iterable[str],
-    max_it: object,
-    min_iterations: object,
-) -> dict[str, typing.Any]:
-    """The arguments of :class:`~dolfinx_ntf.ContactNewtonSolver`; returns the PETSc options."""
-    owner = "ContactNewtonSolver"
-    check_type(comm, MPI.Comm, f"{owner}: comm", "pass mesh.comm")
-    check_type(problem, problem_type, f"{owner}: problem")
-    if MPI.Comm.Compare(comm, problem.u.function_space.mesh.comm) == MPI.UNEQUAL:
-        raise ValueError(f"{owner}: comm must be the communicator of the mesh (mesh.comm)")
-    if not isinstance(options_prefix, str) or not options_prefix or " " in options_prefix:
-        raise ValueError(
-            f"{owner}: options_prefix must be a non-empty string without blanks such as 'ntf_', "
-            f"got {options_prefix!r}"
-        )
-    if not isinstance(controls, typing.Mapping):
-        raise TypeError(
-            f"{owner}: controls must be a mapping of names to numbers, got {describe(controls)}"
-        )
-    missing = sorted(set(required_controls) - set(controls))
-    if missing:
-        raise ValueError(f"{owner}: controls lack {missing}")
-    for name, value in controls.items():
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value > 0:
-            raise ValueError(f"{owner}: controls[{name!r}] must be a number > 0, got {value}")
-    for name, value, least in (("max_it", max_it, 1), ("min_iterations", min_iterations, 0)):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
-            raise ValueError(f"{owner}: {name} must be an integer >= {least}, got {value}")
-    return check_petsc_options(petsc_options, owner)
-
-
-def check_step(step: typing.Any) -> None:
-    """The configuration of a :class:`~dolfinx_ntf.StaticStep`."""
-    owner = "StaticStep"
-    if not callable(step.set_load):
-        raise TypeError(
-            f"{owner}: set_load must be a function of the step time t, got "
-            f"{describe(step.set_load)}"
-        )
-    if step.on_increment is not None and not callable(step.on_increment):
-        raise TypeError(
-            f"{owner}: on_increment must be a function or None, got {describe(step.on_increment)}"
-        )
-    for name in ("period", "initial_increment", "min_increment", "cutback_factor", "growth_factor"):
-        check_positive(getattr(step, name), f"{owner}: {name}")
-    check_positive(step.max_increment, f"{owner}: max_increment", allow_none=True)
-    max_inc = step.period if step.max_increment is None else step.max_increment
-    if not (step.min_increment <= step.initial_increment <= max_inc):
-        raise ValueError(
-            f"{owner}: need 0 < min_increment ({step.min_increment}) <= initial_increment "
-            f"({step.initial_increment}) <= max_increment ({max_inc})"
-        )
-    if not (step.cutback_factor < 1 <= step.growth_factor):
-        raise ValueError(
-            f"{owner}: need 0 < cutback_factor ({step.cutback_factor}) < 1 <= growth_factor "
-            f"({step.growth_factor})"
-        )
-    if isinstance(step.growth_iterations, bool) or not isinstance(
-        step.growth_iterations, numbers.Integral
-    ):
-        raise TypeError(
-            f"{owner}: growth_iterations must be an integer, got {describe(step.growth_iterations)}"
-        )
 
 
 # -- PETSc -----------------------------------------------------------------------------------------

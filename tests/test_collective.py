@@ -106,7 +106,7 @@ def test_sequential_galerkin_products_only_for_serial_gamg(pc_type):
     """The faster PtAP algorithm is set for a serial GAMG solve only, and never over the user's."""
     from petsc4py import PETSc
 
-    from dolfinx_ntf.solvers.newton import SEQUENTIAL_PTAP, galerkin_products
+    from dolfinx_ntf.solvers.linear_solver import SEQUENTIAL_PTAP, galerkin_products
 
     ksp = PETSc.KSP().create(COMM)
     ksp.getPC().setType(pc_type)

@@ -315,7 +315,7 @@ def test_python_tie_matches_ccx_on_the_exported_deck(tmp_path):
 
     from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
     from dolfinx_ntf.calculix.writer import BoundarySpec, PressureSpec, StepSpec, write_inp
-    from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
+    from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS
 
     _, _, a, b = _two_nodes()
     tie = LinearConstraint([a, b], [2, 2], [1.0, -1.0], name="tie")

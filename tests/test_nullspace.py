@@ -17,8 +17,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.solvers import newton as ntf_solver
-from dolfinx_ntf.solvers import nullspace
+from dolfinx_ntf.solvers import linear_solver, nullspace
 
 COMM = MPI.COMM_WORLD
 LOAD = 20.0
@@ -156,7 +155,7 @@ def test_auto_choice_and_prefix_override(monkeypatch):
     solver = ntf.ContactNewtonSolver(COMM, problem)
     assert solver.krylov_solver.getPC().getType() == "lu" and solver.near_nullspace is None
     solver.destroy()
-    monkeypatch.setattr(ntf_solver, "DIRECT_MAX_DOFS", 100)
+    monkeypatch.setattr(linear_solver, "DIRECT_MAX_DOFS", 100)
     solver = ntf.ContactNewtonSolver(COMM, problem)
     assert solver.krylov_solver.getType() == "gmres"
     assert solver.krylov_solver.getPC().getType() == "gamg" and solver.near_nullspace is not None

@@ -15,7 +15,7 @@ criteria 1e-14) no longer changes a printed digit of the ``.dat`` file.
 
 from __future__ import annotations
 
-from dolfinx_ntf.solvers.newton import CCX_FIELD_CONTROLS, TIGHT_FIELD_CONTROLS
+from dolfinx_ntf.solvers.convergence import CCX_FIELD_CONTROLS, TIGHT_FIELD_CONTROLS
 
 from .deck import FIELD_CONTROL_DEFAULTS, FIELD_CONTROL_NAMES, Step
 

@@ -44,16 +44,13 @@ import ufl
 
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
+from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.solvers.dynamics import DynamicStep
-from dolfinx_ntf.solvers.newton import (
-    ContactConvergenceError,
-    ContactNewtonSolver,
-    IncrementResult,
-    StaticStep,
-    log_progress,
-)
+from dolfinx_ntf.solvers.errors import ContactConvergenceError
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
 from .deck import Deck, Step, read_deck

@@ -149,14 +149,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         jit_options: dict | None = None,
         reuse_bulk_jacobian: bool = True,
     ) -> None:
-        owner = "ContactProblem"
-        validation.check_displacement(u, owner)
-        validation.check_residual(F, u, owner, J)
-        pairs = validation.check_sequence(
-            pairs, ContactPair, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
-        )
-        validation.check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
-        bcs = validation.check_bcs(bcs, owner)
+        pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth)
         super().__init__(
             F,
             u,
@@ -547,3 +540,17 @@ def _broken(
     family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
     W = compat.vector_space(mesh, family, compat.space_degree(V))
     return dolfinx.fem.form(ufl.replace(form, {arguments[0]: ufl.TestFunction(W)}), **options), W
+
+
+def _check_arguments(
+    F: object, u: object, pairs: object, bcs: object, J: object, max_depth: object
+) -> tuple[list[ContactPair], list[compat.DirichletBC]]:
+    """The arguments of :class:`ContactProblem`; returns ``(pairs, bcs)`` as lists."""
+    owner = "ContactProblem"
+    validation.check_displacement(u, owner)
+    validation.check_residual(F, u, owner, J)
+    pairs = validation.check_sequence(
+        pairs, ContactPair, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
+    )
+    validation.check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
+    return pairs, validation.check_bcs(bcs, owner)
