@@ -190,8 +190,10 @@ def test_pages_render_in_chromium(site, server, tmp_path):
         assert not broken, f"{page}: images not loaded: {broken}"
 
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
-    for page in PAGES:
-        shot = SCREENSHOTS / (page.replace("/", "_").removesuffix(".html") + ".png")
+    # The demo page twice: its top, and its run (output and figure) by the section anchor.
+    for page in [*PAGES, "demos/hertz_sphere.html#run"]:
+        name = page.replace("/", "_").replace(".html", "").replace("#", "-")
+        shot = SCREENSHOTS / f"{name}.png"
         shot.unlink(missing_ok=True)
         run = _browser(
             tmp_path,
@@ -201,3 +203,63 @@ def test_pages_render_in_chromium(site, server, tmp_path):
             f"{server}/{page}",
         )
         assert shot.exists() and shot.stat().st_size > 20_000, (page, run.stderr[-2000:])
+
+
+def _python_blocks(page: str) -> list[str]:
+    text = (DOCS / page).read_text()
+    return re.findall(r"^```python\n(.*?)^```$", text, flags=re.S | re.M)
+
+
+def test_guide_examples_run(tmp_path, monkeypatch):
+    """The quick start and the guide's examples run in the order a reader meets them."""
+    import logging
+
+    from mpi4py import MPI
+
+    import numpy as np
+
+    from dolfinx_ntf import logs
+    from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
+
+    quick = _python_blocks("quickstart.md")
+    steps = _python_blocks("guide/steps.md")
+    outputs = _python_blocks("guide/outputs.md")
+    order = [
+        ("quickstart.md", quick[0]),
+        ("guide/laws.md", _python_blocks("guide/laws.md")[0]),
+        ("guide/steps.md", steps[0]),
+        *(("guide/outputs.md", block) for block in outputs),
+        ("guide/friction.md", _python_blocks("guide/friction.md")[0]),
+        ("guide/steps.md", steps[1]),
+        ("guide/steps.md", steps[2]),
+        ("guide/surfaces.md", _python_blocks("guide/surfaces.md")[0]),
+    ]
+    monkeypatch.chdir(tmp_path)  # the writer's file goes here
+    monkeypatch.setattr(logs, "_handler", logging.NullHandler())
+    level, propagate = logs.logger.level, logs.logger.propagate
+    namespace: dict = {}
+    try:
+        for page, block in order:
+            exec(compile(block, str(DOCS / page), "exec"), namespace)
+    finally:
+        logs.logger.setLevel(level)
+        logs.logger.propagate = propagate
+    import dolfinx_ntf as ntf
+
+    # Quick start: the block carries the load of 10 on the 0.4 x 0.4 punch.
+    force = ntf.contact_force(namespace["problem"], "punch")
+    assert force[2] == pytest.approx(10.0 * 0.4 * 0.4, rel=1e-8)
+    # Prescribed displacement and outputs: the reactions balance the contact force.
+    problem2 = namespace["problem2"]
+    top = ntf.reaction(problem2, dofs=namespace["top_bc"])
+    assert top[2] == pytest.approx(-ntf.contact_force(problem2)[2], rel=1e-8)
+    assert (tmp_path / "punch.xdmf").exists()
+    # Friction: never beyond mu = 0.5 of the pressure.
+    res3 = namespace["res3"]
+    shear = np.linalg.norm(res3.shear, axis=1)
+    assert np.all(shear <= 0.5 * np.maximum(res3.pressure, 0) * (1 + 1e-10))
+    # Dynamics: four fixed increments.
+    assert [r.increment for r in namespace["dynamic_results"]] == [1, 2, 3, 4]
+    # The gmsh builder of one's own: 3D groups are cell tags, 2D groups facet tags.
+    _, cells, facets = mesh_from_gmsh(namespace["build_two_boxes"], MPI.COMM_SELF, size=0.2)
+    assert set(np.unique(cells.values)) == {1, 2} and set(np.unique(facets.values)) == {11, 12}

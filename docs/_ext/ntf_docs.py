@@ -451,7 +451,11 @@ def _parameters(obj: object) -> list[str]:
     except (TypeError, ValueError):
         return []
     skip = (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
-    return [p.name for p in sig.parameters.values() if p.name != "self" and p.kind not in skip]
+    return [
+        p.name
+        for p in sig.parameters.values()
+        if p.name not in ("self", "cls") and p.kind not in skip
+    ]
 
 
 def _documented_args(obj: object) -> str:
@@ -671,6 +675,33 @@ def unused_known_warnings(app: Sphinx, exception: Exception | None) -> None:
                 logger.warning(f"ntf_known_warnings entry matched nothing: {pattern.pattern}")
 
 
+def _method_labels() -> set[str]:
+    text = (DOCS / "method.md").read_text()
+    labels = {f"method-{m.group(1)}" for m in _SECTION.finditer(text)}
+    return labels | {f"method-{m.group(1)}-{m.group(2)}" for m in _SUBSECTION.finditer(text)}
+
+
+def link_docstring_citations(
+    app: Sphinx, what: str, name: str, obj: object, options: object, lines: list[str]
+) -> None:
+    """Link the "§3.4" citations of a docstring to the method's section (not inside literals)."""
+    labels = getattr(app, "ntf_method_labels", None)
+    if labels is None:
+        labels = app.ntf_method_labels = _method_labels()
+
+    def link(m: re.Match) -> str:
+        label = "method-" + m.group(1).replace(".", "-")
+        return f":ref:`§{m.group(1)} <{label}>`" if label in labels else m.group(0)
+
+    for k, line in enumerate(lines):
+        if "§" not in line:
+            continue
+        pieces = line.split("``")
+        for i in range(0, len(pieces), 2):  # even pieces are outside inline literals
+            pieces[i] = _CITE.sub(link, pieces[i])
+        lines[k] = "``".join(pieces)
+
+
 def prepare(app: Sphinx, config: object) -> None:
     """Write the generated sources before anything reads them."""
     sys.path.insert(0, str(ROOT))
@@ -689,4 +720,5 @@ def setup(app: Sphinx) -> dict:
     app.connect("config-inited", prepare, priority=100)
     app.connect("builder-inited", check_docstrings)
     app.connect("missing-reference", resolve_moved)
+    app.connect("autodoc-process-docstring", link_docstring_citations)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
