@@ -95,6 +95,18 @@ function check(page) {
 """
 
 
+# The page in a frame of the window's size, scrolled so that its first gallery figure is in view.
+FIGURE = """<!DOCTYPE html><html><body style="margin:0"><iframe id="page" src="%s"
+style="border:0;width:1280px;height:1600px"></iframe><script>
+const frame = document.getElementById("page");
+frame.onload = () => {
+  const figure = frame.contentDocument.querySelector("img.sphx-glr-single-img");
+  if (figure) frame.contentWindow.scrollTo(0, figure.getBoundingClientRect().top - 500);
+};
+</script></body></html>
+"""
+
+
 def _chromium() -> str:
     for name in ("chromium", "chromium-browser"):
         if path := shutil.which(name):
@@ -190,9 +202,11 @@ def test_pages_render_in_chromium(site, server, tmp_path):
         assert not broken, f"{page}: images not loaded: {broken}"
 
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
-    # The demo page twice: its top, and its run (output and figure) by the section anchor.
-    for page in [*PAGES, "demos/hertz_sphere.html#run"]:
-        name = page.replace("/", "_").replace(".html", "").replace("#", "-")
+    # The demo page twice: its top, and scrolled to its figure (a frame of the page).
+    (site / "_figure.html").write_text(FIGURE % "demos/hertz_sphere.html")
+    for page in [*PAGES, "_figure.html"]:
+        name = page.replace("/", "_").replace(".html", "")
+        name = "demos_hertz_sphere-figure" if page == "_figure.html" else name
         shot = SCREENSHOTS / f"{name}.png"
         shot.unlink(missing_ok=True)
         run = _browser(
