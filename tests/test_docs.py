@@ -40,7 +40,7 @@ PAGES = {
         "walk_from_previous_face",
         "Nonlinear problem",
     ],
-    "demos/hertz_sphere.html": ["Hertz", "Out:", "Download Python source code"],
+    "demos/hertz_sphere.html": ["Hertz", "Total contact force F", "contact radius, fit"],
 }
 #: What Markdown or MyST left unrendered looks like in a page's text (code blocks excluded).
 RAW_MARKDOWN = re.compile(r"```|\{(ref|doc|class|func|mod)\}`|\]\(|^#{1,4} |\*\*\w", re.M)
