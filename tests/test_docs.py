@@ -95,13 +95,14 @@ function check(page) {
 """
 
 
-# The page in a frame of the window's size, scrolled so that its first gallery figure is in view.
-FIGURE = """<!DOCTYPE html><html><body style="margin:0"><iframe id="page" src="%s"
-style="border:0;width:1280px;height:1600px"></iframe><script>
+# The page in a frame as tall as the page, shifted up so that its first gallery figure is in the
+# window (scrolling inside the frame is not reliable in a headless screenshot).
+FIGURE = """<!DOCTYPE html><html><body style="margin:0;overflow:hidden"><iframe id="page" src="%s"
+style="border:0;width:1280px;height:40000px;display:block"></iframe><script>
 const frame = document.getElementById("page");
 frame.onload = () => {
-  const figure = frame.contentDocument.querySelector("img.sphx-glr-single-img");
-  if (figure) frame.contentWindow.scrollTo(0, figure.getBoundingClientRect().top - 500);
+  const figure = frame.contentDocument.querySelector("img[src*='sphx_glr_']");
+  if (figure) frame.style.marginTop = (400 - figure.getBoundingClientRect().top) + "px";
 };
 </script></body></html>
 """
