@@ -66,6 +66,13 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 __all__ = ["hertz", "main"]
 
+# %%
+# Parameters and Hertz's solution
+# -------------------------------
+# Steel on steel; the penalty slope is 10 E per mm, a fifth of CalculiX's default, which keeps the
+# overlap ``p/K`` small against the contact radius while Newton still converges in a few
+# iterations.
+
 # Units: mm, N, MPa.
 RADIUS = 25.0
 E_SPHERE, NU_SPHERE = 210_000.0, 0.3
@@ -124,6 +131,14 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     )
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
+
+
+# %%
+# The analysis
+# ------------
+# The quarter model of :mod:`dolfinx_ntf.meshes.hertz` with symmetry conditions, the sphere's
+# top pushed down by a prescribed displacement growing as ``t^2`` in equal increments; the
+# sphere's curved surface is the slave, the block top the master.
 
 
 def main(argv: typing.Sequence[str] | None = None) -> dict:
@@ -274,6 +289,14 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     return summary
 
 
+# %%
+# Checks, fit and figure
+# ----------------------
+# Slave nodes inside the master without a spring are counted (CalculiX's pairing schedule can leave
+# some after Newton iteration 8); Hertz's profile is fitted to the nodal pressures; the figure shows
+# the nodal pressures against the radius beside Hertz's curve.
+
+
 def _unpaired_penetrations(problem: ntf.ContactProblem) -> tuple[int, float]:
     """Slave nodes below the master surface that have no spring: their number and largest depth.
 
@@ -398,6 +421,13 @@ def _print_report(s: dict) -> None:
         f"Results: {s['xdmf']}, {s.get('png')}"
     )
 
+
+# %%
+# Run
+# ---
+# The build of this page ran ``demos/hertz_sphere.py --coarse`` (about four elements across the
+# contact radius): the Hertz values for the computed force, the computed ones and their relative
+# errors, then the figure.
 
 if __name__ == "__main__":
     sys.exit(0 if main()["passed"] else 1)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Make a bare Debian 12 (bookworm) or Debian 13 (trixie) machine ready for dolfinx_ntf; idempotent and fast when
 # everything is there. Installs Debian's dolfinx stack, OpenBLAS, CalculiX ccx 2.20 (the cross-validation oracle)
-# and a .venv that sees Debian's packages.
+# and a .venv that sees Debian's packages; Sphinx, its extensions and Chromium for the documentation site.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -10,7 +10,8 @@ sudo_cmd=""
 [ "$(id -u)" = 0 ] || sudo_cmd="sudo"
 
 packages=(python3-dolfinx-real python3-gmsh python3-venv python3-pip python3-pytest python3-scipy
-          python3-matplotlib libopenblas0-pthread openmpi-bin calculix-ccx-test)
+          python3-matplotlib libopenblas0-pthread openmpi-bin calculix-ccx-test
+          python3-sphinx python3-myst-parser furo python3-sphinx-gallery chromium)   # make docs, docs-check
 case "$release" in
   bookworm) packages+=(calculix-ccx) ;;
   trixie) packages+=(libarpack2t64 libgfortran5 liblapack3 libgomp1) ;;   # ccx's libraries, see below
