@@ -90,20 +90,4 @@ html_show_sourcelink = False
 # Docstring faults the site shows but the package has not fixed yet (each a regular expression on
 # "location: message"; dropped warnings go to _build/known-warnings.txt). Fix the docstring, then
 # remove its line: an entry that matches nothing fails the build.
-ntf_known_warnings = [
-    # constants cited with :data: in docstrings but not documented (no #: comment, not public)
-    r"py:data reference target not found: (DEFAULT|CHOLESKY|ITERATIVE)_PETSC_OPTIONS",
-    r"py:data reference target not found: (DIRECT|CHOLESKY|SYMMETRIC)_M(AX|IN)_DOFS",
-    r"py:data reference target not found: (TIGHT|CCX)_FIELD_CONTROLS",
-    # "Returns:" sections whose first words napoleon reads as a type
-    r"ContactNewtonSolver.history.*not found: (Per Newton update|the current solve)",
-    r"ContactProblem.num_springs.*not found: (Contact spring elements|this process|all processes)",
-    # references to modules and attributes that have no page
-    r"py:mod reference target not found: dolfinx_ntf\.(kernels\.rigid|meshes)$",
-    r"py:(attr|func) reference target not found: (overclosures|nodal_extrapolation)$",
-    r"py:class reference target not found: dolfinx_ntf\.fem\.bulk_jacobian\.BulkJacobian",
-    # reStructuredText faults in docstrings
-    # (Sphinx 5.3 reports the class, Sphinx 8.1 the member and its own line numbers)
-    r"ContactProblem(\.nodal_loads)?:\d+: Inline emphasis start-string without end-string",
-    r"ExponentialLaw:\d+: Definition list ends without a blank line",
-]
+ntf_known_warnings: list[str] = []

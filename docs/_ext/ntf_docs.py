@@ -373,6 +373,20 @@ def _hinted_classes(obj: object) -> set[type]:
     return found
 
 
+#: Classes the type hints cannot reveal (public attributes annotated in ``__init__``, hints that
+#: do not resolve at run time) but docstrings of public names refer to; they get a page too.
+EXTRA_TYPES: list[str] = [
+    "dolfinx_ntf.contact.problem.ResidualTerm",
+    "dolfinx_ntf.contact.pairing.Pairing",
+    "dolfinx_ntf.solvers.convergence.ForceScaledTest",
+    "dolfinx_ntf.solvers.convergence.DivergenceRule",
+    "dolfinx_ntf.solvers.convergence.ExtraPairings",
+    "dolfinx_ntf.solvers.line_search.LineSearch",
+    "dolfinx_ntf.calculix.compare.Comparison",
+    "dolfinx_ntf.calculix.compare.IncrementComparison",
+]
+
+
 def auxiliary_types() -> list[type]:
     """Non-public classes that public signatures take or return, transitively (they get a page)."""
     public = {
@@ -387,6 +401,10 @@ def auxiliary_types() -> list[type]:
     ]
     documented = {f"{m}.{n}" for _, m in API_MODULES for n in public_names(m)}
     seen: dict[str, type] = {}
+    for key in EXTRA_TYPES:
+        module, name = key.rsplit(".", 1)
+        seen[key] = getattr(importlib.import_module(module), name)
+        todo.append(seen[key])
     while todo:
         for cls in _hinted_classes(todo.pop()):
             key = f"{cls.__module__}.{cls.__qualname__}"

@@ -63,7 +63,7 @@ class ElementType:
         integration_points: ``(q, 3)`` ccx's integration points in ccx order (``*EL PRINT`` rows).
         frd_type: element type number in ``.frd`` files (cgx manual).
         extrapolation: ``(num_nodes, q)`` integration-point values -> nodal values, as ccx's
-            ``.frd`` stresses (:func:`nodal_extrapolation`).
+            ``.frd`` stresses (``nodal_extrapolation``).
         face_quadrature_degree: face quadrature degree of ``*DLOAD`` pressures (2x2 Gauss on
             quads, 3 points on triangles; C3D20 3x3).
         frd_order: the ccx nodes of an element in ``.frd`` order (ccx order but for C3D20:

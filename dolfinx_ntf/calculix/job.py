@@ -499,7 +499,7 @@ def run_job(
         progress: Print ccx-like progress (``log_progress``).
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
             the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``);
-            the tangent is CalculiX's symmetrized one from :data:`SYMMETRIC_MIN_DOFS` dofs on,
+            the tangent is CalculiX's symmetrized one from ``SYMMETRIC_MIN_DOFS`` dofs on,
             the exact one below, unless ``symmetric`` says otherwise (docs/method.md §7.4).
         petsc_options: Linear solver options (default: MUMPS LU).
         predictor: ccx's predictor ``u_n + dt v_prev`` from the second increment of a step (on by

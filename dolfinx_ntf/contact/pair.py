@@ -116,6 +116,6 @@ class PairState:
 
     @property
     def element_nodes(self) -> np.ndarray:
-        """(N, n+1) spring nodes: master face nodes, then the slave node."""
+        """Spring nodes (N, n+1), the master face's nodes then the slave node."""
         faces = self.master_faces.faces[self.spring_face]
         return np.hstack([faces, self.slave.nodes[self.spring_slave][:, None]])

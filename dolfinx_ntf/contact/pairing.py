@@ -57,10 +57,10 @@ class Pairing:
       collectively, with the check of nodes on both sides), ``extend_numbering``, the check of
       distinct pairs and the increment-start displacement;
     - :meth:`current_coordinates` and :meth:`begin_increment` (halo scatter, the finiteness check);
-    - :meth:`pair` and :meth:`unpaired_contacts`, inside one :func:`~dolfinx_ntf.parallel.
-      collectives.collective_errors` block each: in the search, a checkpoint before the update of a
+    - :meth:`pair` and :meth:`unpaired_contacts`, inside one ``collective_errors`` block each
+      (``parallel/collectives.py``): in the search, a checkpoint before the update of a
       ``collective`` master, a checkpoint before the tie frame (a sum over the processes), the
-      master patch's enlargement (:func:`~dolfinx_ntf.parallel.master_exchange.enlarge`, then the
+      master patch's enlargement (``enlarge`` of ``parallel/master_exchange.py``, then the
       halo's growth and ``extend_numbering``); at the first pairing, a checkpoint before ADJUST,
       ADJUST's node count, and a checkpoint before the coordinates it changed. Then the spring
       counts.

@@ -55,7 +55,7 @@ class ResidualTerm(typing.Protocol):
     """A term added to the residual and the Jacobian after the bulk form and the springs.
 
     For example the inertia of a dynamic step (docs/method.md §12); see
-    :attr:`ContactProblem.extra_terms`.
+    :attr:`~dolfinx_ntf.ContactProblem.extra_terms`.
     """
 
     def add_to_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
@@ -67,7 +67,7 @@ class ResidualTerm(typing.Protocol):
     def force_sum(self) -> tuple[float, int]:
         """Sum of the absolute values of its nodal forces and their count (owned entries).
 
-        Enters :meth:`ContactProblem.average_element_force`.
+        Enters :meth:`~dolfinx_ntf.ContactProblem.average_element_force`.
         """
 
 
@@ -121,7 +121,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
         reuse_bulk_jacobian: When the bulk Jacobian form does not contain ``u`` (a linear material
             at small strain), assemble it once and copy it at later iterations while its inputs
-            are unchanged (:class:`~dolfinx_ntf.fem.bulk_jacobian.BulkJacobian`; one more matrix in
+            are unchanged (``BulkJacobian`` of ``fem/bulk_jacobian.py``; one more matrix in
             memory). False assembles it at every iteration.
     """
 
@@ -183,8 +183,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         )
         #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
         self._face_centres = serendipity.face_centres(constraints)
-        #: The pairs' states, the halo and the search (:class:`~dolfinx_ntf.contact.pairing.
-        #: Pairing`).
+        #: The pairs' states, the halo and the search, in one
+        #: :class:`~dolfinx_ntf.contact.pairing.Pairing`.
         self.pairing = Pairing(
             u,
             pairs,
@@ -207,7 +207,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
-        #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the
+        #: Optional nodal forces (a Function on V, e.g. CalculiX ``*CLOAD``) subtracted from the
         #: residual.
         self.nodal_loads: dolfinx.fem.Function | None = None
         #: Called as ``callback(problem)`` after every pairing (e.g. to write contact-element
@@ -308,7 +308,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
 
     @property
     def num_springs(self) -> int:
-        """Contact spring elements of this process over all pairs (all processes: total_springs)."""
+        """Contact spring elements of this process over all pairs (``total_springs`` counts all)."""
         return self.pairing.num_springs
 
     @property

@@ -1,6 +1,6 @@
 """UFL frictionless contact against rigid surfaces: penalty and Nitsche (docs/method.md §15.2).
 
-The same rigid surfaces as the node-to-face rigid masters (:mod:`~dolfinx_ntf.kernels.rigid`)
+The same rigid surfaces as the node-to-face rigid masters (``dolfinx_ntf.kernels.rigid``)
 become UFL expressions of the current position ``x = X + u``: the gap ``g = phi(x - c)`` and the
 normal ``n = grad phi``. With ``[a]_+ = (a + |a|)/2`` and ``[a]_- = (a - |a|)/2``:
 

@@ -130,7 +130,7 @@ class FaceType:
 
     @property
     def center(self) -> np.ndarray:
-        """Parametric centre of the face: (0, 0) for quads, (1/3, 1/3) for triangles."""
+        """Parametric centre of the face, (0, 0) for quads and (1/3, 1/3) for triangles."""
         return np.array([1.0 / 3.0, 1.0 / 3.0]) if self.is_triangle else np.zeros(2)
 
     def shape_functions(self, xi: np.ndarray) -> np.ndarray:
@@ -155,7 +155,7 @@ class FaceType:
     def shape_function_increments(self, xi: np.ndarray, dxi: np.ndarray) -> np.ndarray:
         """φ(ξ + Δξ) - φ(ξ) for ``xi``, ``dxi`` (..., 2) -> (..., n), without cancellation.
 
-        Accurate relative to |Δξ| even for tiny increments (line searches, projections).
+        Accurate relative to ``|Δξ|`` even for tiny increments (line searches, projections).
         """
         xi = _as_parameters(xi)
         dxi = _as_parameters(dxi)

@@ -173,6 +173,7 @@ class ExponentialLaw(PressureOverclosureLaw):
           At ``g == 0`` (only possible when ``A p0 > exp(23)``) ccx would divide by zero; we return
           ``beta F_N`` there instead.
         - ``p0 < 1e-30`` gives zero force, zero pressure and zero energy.
+
     :meth:`pressure` and :meth:`pressure_derivative` are the uncapped law (they overflow to
     ``inf`` for huge ``beta d``); only spring forces and energies are capped.
     """
@@ -401,7 +402,7 @@ class TabularLaw(PressureOverclosureLaw):
     Choices and ccx quirks:
         - Overclosures must not decrease (``ValueError`` naming the index). Successive values
           closer than ``1e-10`` (including equal ones) are pushed apart to exactly ``1e-10`` as
-          ccx does (docs/method.md §4.3); the nudged values are in :attr:`overclosures`.
+          ccx does (docs/method.md §4.3); the nudged values are in ``overclosures``.
         - At least 2 points are required. Negative pressures are allowed (CalculiX says nothing
           about them).
         - ccx resamples tables longer than 200 points to 200; its rule is not documented, so

@@ -65,7 +65,7 @@ class SpringEvaluation:
     Attributes:
         xi: (N, 2) parametric coordinates of the projection point.
         phi: (N, n) master shape functions at ``xi``.
-        normal: (N, 3) unit master normal n = m/|m| at ``xi`` (out of the master body).
+        normal: (N, 3) unit master normal ``n = m/|m|`` at ``xi`` (out of the master body).
         gap: (N,) clearance g = r·n (negative = penetration), without the gap shift.
         overclosure: (N,) d = −(g − gap_shift).
         normal_force: (N,) F_N (positive = compression).
@@ -142,8 +142,8 @@ def evaluate_springs(
         symmetric: Return (K + Kᵀ)/2, as CalculiX does without friction, instead of the exact
             tangent (which is unsymmetric only for projections clamped to the face boundary).
         area_fallback: Where A_p = 0 (a slave node without slave face), use CalculiX's fallback
-            A_p = |m|/2 for a 3-node master face and 4|m| otherwise, m at the projection point
-            (docs/method.md §2.2). If False, such springs carry no force.
+            ``A_p = |m|/2`` for a 3-node master face and ``4|m|`` otherwise, m at the projection
+            point (docs/method.md §2.2). If False, such springs carry no force.
         friction: Friction state and parameters: adds the tangential force F_T to f_p and its
             derivative to the tangent (docs/method.md §11); the tangent is then never symmetrized.
 

@@ -196,7 +196,7 @@ def mesh_from_gmsh(
 ) -> tuple[Mesh, MeshTags, MeshTags]:
     """Run a gmsh model builder on ``rank`` and distribute its mesh. Collective.
 
-    Typical use with the builders of :mod:`dolfinx_ntf.meshes`:
+    Typical use with the builders of ``dolfinx_ntf.meshes``:
     ``mesh, cell_tags, facet_tags = mesh_from_gmsh(build_punch, comm, cell_type="tetrahedron")``.
 
     Args:

@@ -92,7 +92,7 @@ class ForceScaledTest:
 
     Args:
         controls: ``R_n``, ``C_n``, ``R_p``, ``R_l``, ``epsilon``, ``C_epsilon`` (see
-            :data:`TIGHT_FIELD_CONTROLS`).
+            ``TIGHT_FIELD_CONTROLS``).
         relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
         residual_floor: A largest residual force below this absolute value counts as zero (then
             the ``R_l`` test holds). CalculiX 2.20 does this with 1e-6 in the deck's force unit
@@ -213,7 +213,7 @@ class DivergenceRule:
         norm: float,
         hint: typing.Callable[[], str],
     ) -> None:
-        """Raise :class:`ContactDivergenceError` if ``norm`` outgrows the last two ``norms``.
+        """Raise :class:`~dolfinx_ntf.ContactDivergenceError` if ``norm`` outgrows ``norms[-2:]``.
 
         ``hint()`` words a likely cause for the message (called only when raising).
         """
@@ -232,7 +232,7 @@ class ExtraPairings:
     """Pairings beyond CalculiX's schedule for slave nodes that penetrate without a spring.
 
     CalculiX freezes the pairing after Newton iteration 8, so such nodes can remain at
-    convergence; a solve pairs again instead and iterates on, at most :data:`MAX_EXTRA_PAIRINGS`
+    convergence; a solve pairs again instead and iterates on, at most ``MAX_EXTRA_PAIRINGS``
     times per increment, then gives the increment up.
     """
 

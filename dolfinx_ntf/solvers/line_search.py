@@ -31,7 +31,7 @@ class LineSearch:
         #: Residual at the last trial point.
         self.trial_residual = template.duplicate()
         self._start = template.duplicate()
-        #: The last trial is the new iterate: its springs and :attr:`trial_residual` are reusable.
+        #: Whether the last trial is the new iterate (its springs, :attr:`trial_residual` reusable).
         self.trial_is_current = False
 
     def search(

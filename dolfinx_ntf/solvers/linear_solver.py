@@ -91,7 +91,7 @@ LINEAR_SOLVERS = ("auto", "direct", "iterative")
 
 @contextlib.contextmanager
 def galerkin_products(ksp: PETSc.KSP) -> typing.Iterator[None]:
-    """Use :data:`SEQUENTIAL_PTAP` for GAMG's Galerkin products inside the context.
+    """Use ``SEQUENTIAL_PTAP`` for GAMG's Galerkin products inside the context.
 
     Only if ``ksp`` is GAMG on one process and the user has not chosen ``-matptap_via``; PETSc
     reads the option, without prefix, at each set-up of the hierarchy.
@@ -123,15 +123,15 @@ def expects_symmetric(problem: object, petsc_options: object) -> bool:
 def default_options(problem: object, linear_solver: object, symmetric: bool) -> dict:
     """PETSc options of ``linear_solver`` for this problem (docs/method.md §14.7).
 
-    ``"direct"``: MUMPS LU (:data:`DEFAULT_PETSC_OPTIONS`), or MUMPS Cholesky
-    (:data:`CHOLESKY_PETSC_OPTIONS`) when ``symmetric`` (the Newton solver swaps it for LU if the
+    ``"direct"``: MUMPS LU (``DEFAULT_PETSC_OPTIONS``), or MUMPS Cholesky
+    (``CHOLESKY_PETSC_OPTIONS``) when ``symmetric`` (the Newton solver swaps it for LU if the
     first Jacobian is not symmetric after all); ``"iterative"``: GMRES, or CG when symmetric, with
-    GAMG (:data:`ITERATIVE_PETSC_OPTIONS`); ``"auto"``: direct up to :data:`DIRECT_MAX_DOFS` dofs
-    (:data:`CHOLESKY_MAX_DOFS` when symmetric, any size with linear constraints), iterative above.
+    GAMG (``ITERATIVE_PETSC_OPTIONS``); ``"auto"``: direct up to ``DIRECT_MAX_DOFS`` dofs
+    (``CHOLESKY_MAX_DOFS`` when symmetric, any size with linear constraints), iterative above.
 
     Args:
         problem: The problem (not checked yet: a :class:`ContactProblem` sizes the "auto" choice).
-        linear_solver: One of :data:`LINEAR_SOLVERS` (``ValueError`` otherwise).
+        linear_solver: One of ``LINEAR_SOLVERS`` (``ValueError`` otherwise).
         symmetric: The Jacobian is expected symmetric: Cholesky or CG.
     """
     if not isinstance(linear_solver, str) or linear_solver not in LINEAR_SOLVERS:

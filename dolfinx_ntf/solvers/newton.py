@@ -54,15 +54,15 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             (default: chosen by ``linear_solver``).
         linear_solver: Without ``petsc_options``: ``"direct"`` (MUMPS LU or Cholesky),
             ``"iterative"`` (GMRES or CG with GAMG) or ``"auto"`` (by size), see
-            :func:`~dolfinx_ntf.solvers.linear_solver.default_options`. Whatever the choice, a
+            ``default_options`` in ``solvers/linear_solver.py``. Whatever the choice, a
             GAMG preconditioner gets the rigid-body modes of every body as near-nullspace.
         options_prefix: Prefix of the Krylov solver's options; options already in PETSc's
             database under it (``-ntf_ksp_view``, ``-ntf_pc_type gamg``) take precedence over
             ``petsc_options``, which are removed again once read. Unknown solver names are a
             ``ValueError`` naming the option.
         controls: CalculiX's ``*CONTROLS, PARAMETERS=FIELD`` values of the force-scaled test
-            (:meth:`is_converged`); default :data:`TIGHT_FIELD_CONTROLS` (round-off level, never
-            below it), :data:`CCX_FIELD_CONTROLS` are ccx's defaults.
+            (:meth:`is_converged`); default ``TIGHT_FIELD_CONTROLS`` (round-off level, never
+            below it), ``CCX_FIELD_CONTROLS`` are ccx's defaults (``solvers/convergence.py``).
         relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
         max_it: Maximum Newton iterations per increment.
         min_iterations: Newton updates needed before convergence can be declared (ccx: 2).
@@ -161,7 +161,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.report = False
         self.updates = 0
         self.residual_norms: list[float] = []
-        #: Per Newton update of the current solve: (update, springs (all processes), largest
+        #: One row per Newton update of the current solve, (update, springs (all processes), largest
         #: residual force, mean average force, largest correction, largest displacement change in
         #: the increment).
         self.history: list[tuple[int, int, float, float, float, float]] = []
@@ -186,7 +186,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
 
     @property
     def relaxation_iteration(self) -> int:
-        """CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``."""
+        """CalculiX's I_P, the number of updates after which ``R_p`` replaces ``R_n``."""
         return self.test.relaxation_iteration
 
     @relaxation_iteration.setter

@@ -52,7 +52,7 @@ class Step:
     """A step of ``period`` with CalculiX's automatic incrementation; the base of the steps.
 
     Subclasses are dataclasses with the fields below (see :class:`StaticStep`) and implement
-    :meth:`_run`; they check their own fields in :meth:`_check_own`.
+    ``_run``; they check their own fields in ``_check_own``.
     """
 
     set_load: LoadControl
@@ -271,8 +271,9 @@ class Step:
 class StaticStep(Step):
     """A static step of ``period`` with automatic incrementation (CalculiX ``*STATIC``).
 
-    The step holds configuration only: :meth:`run` returns the results of that run, and the same
-    step can run again (e.g. another load case on a fresh problem).
+    The step holds configuration only: :meth:`~dolfinx_ntf.solvers.steps.Step.run` returns the
+    results of that run, and the same step can run again (e.g. another load case on a fresh
+    problem).
 
     Args:
         set_load: Called with the step time at the end of each increment (before the pairing);

@@ -61,7 +61,8 @@ class StepLoads:
         cload: Force history of those dofs.
         pressure: History of each pressure group's pressure (see ``CalculixModel.pressures``).
         bc_dofs: ``(B,)`` sorted unrolled dofs of ``V`` with a prescribed displacement.
-        bc: Prescribed-value history; ``bc.start`` is filled by :meth:`CalculixModel.begin_step`.
+        bc: Prescribed-value history; ``bc.start`` is filled by
+            :meth:`~dolfinx_ntf.calculix.model.calculix_model.CalculixModel.begin_step`.
         reference_keys: ``(R,)`` keys ``3 node row + component`` of the prescribed components of
             nodes in no element (reference nodes of ``*EQUATION``); ``reference`` their history,
             from their value at the end of the previous step; ``reference_force_keys`` and
