@@ -1,9 +1,9 @@
-"""Command line: ``python -m dolfinx_ntf run JOB [--tight]`` (console script ``dolfinx-ntf``).
+"""Command line: ``python -m dolfinx_ntf run JOB [options]`` (console script ``dolfinx-ntf``).
 
 Runs the CalculiX deck ``JOB.inp`` like ``ccx -i JOB``: ccx-like progress on the screen, results in
-``JOB.dat``, ``JOB.cel`` and ``JOB.xdmf`` next to the deck. Exit status: 0 done, 1 bad or
-unsupported input (the message names ``file:line``), 2 no convergence (files keep the converged
-increments).
+``JOB.dat``, ``JOB.frd``, ``JOB.sta``, ``JOB.cvg``, ``JOB.cel`` and ``JOB.xdmf`` next to the deck.
+Exit status: 0 done, 1 bad or unsupported input or usage (the message names ``file:line``), 2 no
+convergence (files keep the converged increments).
 
 Under ``mpirun -n N`` every process runs the job and rank 0 writes the files and the messages
 (docs/method.md §14.5); an error ends every process with the same status.
@@ -21,16 +21,51 @@ __all__ = ["main"]
 EXIT_OK, EXIT_INPUT, EXIT_NO_CONVERGENCE = 0, 1, 2
 
 
+#: What ``--help`` says about the files, the exit statuses and the documentation.
+_EPILOG = """\
+files written next to JOB.inp (ccx 2.20's formats):
+  JOB.dat   *NODE PRINT, *EL PRINT and *CONTACT PRINT results
+  JOB.frd   *NODE FILE, *EL FILE and *CONTACT FILE results (ASCII, for cgx and converters)
+  JOB.sta   progress, one row per increment attempt
+  JOB.cvg   convergence, one row per Newton iteration
+  JOB.cel   the contact elements of every pairing (when a request has CONTACT ELEMENTS)
+  JOB.xdmf  displacement and contact pressure, clearance and status per increment (ParaView)
+
+exit status:
+  0  done
+  1  bad or unsupported input, or bad usage (the message names file and line)
+  2  no convergence (the files keep the converged increments)
+
+Under mpirun -n N every process runs the job, rank 0 writes the files and the
+messages, and every process ends with the same status.
+
+Documentation: `make docs`, then docs/_build/html/guide/decks.html (the deck runner
+and its options) and guide/calculix.html (what is supported, differences to ccx);
+sources in docs/guide/decks.md and docs/guide/calculix.md.
+"""
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="dolfinx-ntf",
-        description="Node-to-face contact for dolfinx: run CalculiX node-to-surface contact decks.",
+        description="Node-to-face contact for dolfinx: run the CalculiX node-to-surface contact\n"
+        "deck JOB.inp like `ccx -i JOB`, on one process or under mpirun:\n\n"
+        "  dolfinx-ntf run JOB [options]\n"
+        "  python -m dolfinx_ntf run JOB [options]\n"
+        "  mpirun -n N python -m dolfinx_ntf run JOB [options]\n\n"
+        "`dolfinx-ntf run --help` lists the options.",
+        epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     run = commands.add_parser(
         "run",
-        help="run a CalculiX deck JOB.inp like ccx, writing JOB.dat, JOB.cel and JOB.xdmf",
-        description="Run the CalculiX deck JOB.inp (JOB may have a directory and .inp suffix).",
+        usage="dolfinx-ntf run JOB [options]   (or: mpirun -n N python -m dolfinx_ntf run JOB)",
+        help="run a CalculiX deck JOB.inp like ccx, writing JOB.dat, .frd, .sta, .cvg, .cel, .xdmf",
+        description="Run the CalculiX deck JOB.inp like `ccx -i JOB` (JOB may have a directory\n"
+        "and the .inp suffix): ccx-like progress on the screen, ccx's files next to the deck.",
+        epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     run.add_argument("job", metavar="JOB", help="job name: reads JOB.inp")
     run.add_argument(
