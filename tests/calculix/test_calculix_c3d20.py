@@ -6,13 +6,14 @@ The decks are C3D8 decks given midside nodes by ``tests/data/calculix/crossval/h
 from __future__ import annotations
 
 import shutil
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
+import cases
 import numpy as np
 import pytest
+from hex20 import to_hex20
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.dat import read_dat
@@ -22,10 +23,6 @@ from dolfinx_ntf.calculix.frd import read_frd
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.model import build_model
 from dolfinx_ntf.fem.constraints import num_equations
-
-sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "crossval"))
-import cases
-from hex20 import to_hex20
 
 pytestmark = pytest.mark.serial
 

@@ -21,7 +21,7 @@ from dolfinx_ntf.calculix.cel import ContactElementsFile, read_cel
 from dolfinx_ntf.calculix.dat import DatBlock, contact_print_blocks, format_block, read_dat
 from dolfinx_ntf.calculix.deck import ELEMENT_TYPES, face_nodes, read_deck
 
-DATA = Path(__file__).parent / "data" / "calculix"
+DATA = Path(__file__).parents[1] / "data" / "calculix"
 
 needs_ccx = [
     pytest.mark.ccx,

@@ -25,7 +25,7 @@ from dolfinx_ntf.calculix.dat import (
 )
 from dolfinx_ntf.calculix.deck import face_nodes, read_deck
 
-DATA = Path(__file__).parent / "data" / "calculix"
+DATA = Path(__file__).parents[1] / "data" / "calculix"
 CCX_DAT = DATA / "two_cubes.dat"
 
 

@@ -18,7 +18,7 @@ from dolfinx_ntf.calculix.deck import (
     surface_nodes,
 )
 
-DATA = Path(__file__).parent / "data" / "calculix"
+DATA = Path(__file__).parents[1] / "data" / "calculix"
 
 # Reference coordinates of the ccx elements (manual figures: C3D8 fig. 49, C3D10 fig. 55).
 _HEX = np.array(

@@ -22,7 +22,7 @@ from dolfinx_ntf.calculix.model import INTEGRATION_POINTS
 
 pytestmark = pytest.mark.serial
 
-DATA = Path(__file__).parent / "data" / "calculix"
+DATA = Path(__file__).parents[1] / "data" / "calculix"
 # blocks.inp asking for every .frd result, converged tightly by both codes
 _REQUESTS = (
     "*NODE FILE\nU, RF\n*EL FILE\nS\n*CONTACT FILE\nCDIS, CSTR\n"

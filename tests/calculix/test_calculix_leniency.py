@@ -11,7 +11,7 @@ import pytest
 
 from dolfinx_ntf.calculix.deck import LENIENCY, DeckError, read_deck
 
-DATA = Path(__file__).parent / "data" / "calculix"
+DATA = Path(__file__).parents[1] / "data" / "calculix"
 _BASE = (DATA / "two_cubes.inp").read_text()
 CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
 
@@ -170,7 +170,7 @@ def test_ccx_node_to_surface_decks_parse_or_name_a_mechanical_feature(tmp_path):
 def test_ccx_friction_decks_build(tmp_path):
     """ccx's frictional decks parse and build (friction and *CHANGE FRICTION are supported).
 
-    ``tests/test_ccx_friction.py`` runs them against ccx.
+    ``tests/calculix/test_ccx_friction.py`` runs them against ccx.
     """
     from mpi4py import MPI
 

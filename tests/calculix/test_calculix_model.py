@@ -32,7 +32,7 @@ from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 
 pytestmark = pytest.mark.serial
 
-DATA = Path(__file__).parent / "data" / "calculix"
+DATA = Path(__file__).parents[1] / "data" / "calculix"
 MODEL = DATA / "model"
 COMM = MPI.COMM_WORLD
 

@@ -72,7 +72,7 @@ def test_contact1_sta_is_ccx_and_cvg_starts_like_ccx(tmp_path):
 def test_residual_floor_converges_like_ccx(tmp_path):
     """R_n = 1e-30 is below round-off; ccx 2.20 still converges (3, 2, 2, 2 iterations, its
     .sta), because a largest residual force below 1e-6 counts as zero: so does the deck runner."""
-    deck = Path(__file__).parent / "data" / "calculix" / "model" / "diverge.inp"
+    deck = Path(__file__).parents[1] / "data" / "calculix" / "model" / "diverge.inp"
     shutil.copy(deck, tmp_path / "diverge.inp")
     run_job("diverge", tmp_path, progress=False)
     rows = (tmp_path / "diverge.sta").read_text().splitlines()[2:]
@@ -81,7 +81,7 @@ def test_residual_floor_converges_like_ccx(tmp_path):
 
 def test_failed_attempts_are_marked(tmp_path, monkeypatch):
     """A deck whose first attempt cannot converge: a U row in .sta, its iterations in .cvg."""
-    deck = Path(__file__).parent / "data" / "calculix" / "model" / "diverge.inp"
+    deck = Path(__file__).parents[1] / "data" / "calculix" / "model" / "diverge.inp"
     shutil.copy(deck, tmp_path / "diverge.inp")
     monkeypatch.setattr(job_module, "CCX_RESIDUAL_FLOOR", 0.0)  # else R_n = 1e-30 converges
     with pytest.raises(JobError):  # the second step does not converge at its fixed increment

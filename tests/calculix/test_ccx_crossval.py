@@ -23,11 +23,11 @@ from __future__ import annotations
 
 import logging
 import shutil
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
+import cases
 import numpy as np
 import pytest
 
@@ -41,9 +41,6 @@ from dolfinx_ntf.calculix.compare import (
 from dolfinx_ntf.calculix.dat import contact_print_blocks, node_print_blocks, write_dat
 from dolfinx_ntf.calculix.deck import node_surface_faces, read_deck
 from dolfinx_ntf.calculix.job import run_job
-
-sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "crossval"))
-import cases
 
 pytestmark = pytest.mark.serial
 

@@ -11,11 +11,11 @@ from __future__ import annotations
 import gzip
 import logging
 import shutil
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
+import friction_cases
 import numpy as np
 import pytest
 
@@ -23,9 +23,6 @@ from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import compare_job
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.job import run_job
-
-sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "crossval"))
-import friction_cases
 
 pytestmark = [
     pytest.mark.serial,

@@ -4,7 +4,6 @@ ccx 2.20's on a tie deck, and the floating-point nearest centroid of the ccx-mod
 from __future__ import annotations
 
 import shutil
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
@@ -18,8 +17,7 @@ from dolfinx_ntf.kernels.faces import QUAD4
 from dolfinx_ntf.kernels.rigid import RigidPlane, rigid_master
 from dolfinx_ntf.kernels.search import MasterSurface
 
-TIES = Path(__file__).resolve().parent / "data" / "calculix" / "ties"
-sys.path.insert(0, str(TIES))
+TIES = Path(__file__).resolve().parents[1] / "data" / "calculix" / "ties"
 import make_tie_deck  # noqa: E402
 
 pytestmark = pytest.mark.serial

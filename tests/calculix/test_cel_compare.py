@@ -2,16 +2,13 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+import vs_ccx
 
 from dolfinx_ntf.calculix.cel import ContactElementsFile, cel_pairings, compare_cel, read_cel
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-import vs_ccx
 
 QUADS = np.array([[1, 2, 3, 4], [2, 5, 6, 3]])
 TRI = np.array([[1, 2, 3]])

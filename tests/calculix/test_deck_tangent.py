@@ -8,20 +8,17 @@ same displacements, and on these decks the same iterations.
 from __future__ import annotations
 
 import logging
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
+import cases
 import numpy as np
 import pytest
 
 from dolfinx_ntf import __main__ as cli
 from dolfinx_ntf.calculix import job as job_module
 from dolfinx_ntf.calculix.job import run_job
-
-sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "crossval"))
-import cases
 
 pytestmark = pytest.mark.serial
 

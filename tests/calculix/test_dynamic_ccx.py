@@ -12,20 +12,16 @@ from __future__ import annotations
 
 import logging
 import shutil
-import sys
-from pathlib import Path
 
 from mpi4py import MPI
 
 import numpy as np
 import pytest
+from impact_deck import write_impact_deck
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.compare import ccx_increments
 from dolfinx_ntf.calculix.job import run_job
-
-sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "dynamic"))
-from impact_deck import write_impact_deck
 
 pytestmark = [
     pytest.mark.serial,

@@ -9,18 +9,15 @@ from __future__ import annotations
 
 import dataclasses
 import shutil
-import sys
 from pathlib import Path
 
+import ccx_decks
 import numpy as np
 import pytest
+import vs_ccx
 
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.deck import read_deck, surface_nodes
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-import ccx_decks
-import vs_ccx
 
 pytestmark = pytest.mark.serial
 
@@ -140,7 +137,7 @@ def test_pinned_sphere_mesh_is_checked_against_its_sizes(tmp_path, monkeypatch):
     other = dataclasses.replace(ccx_decks.QUARTER_SPHERE_COARSE, size_fine=0.25)
     with pytest.raises(ValueError, match=r"was made for .*size_fine.: 0.3.*remake it"):
         ccx_decks.quarter_sphere_model(other)
-    monkeypatch.setattr(ccx_decks, "DATA", tmp_path)
+    monkeypatch.setattr(ccx_decks, "MESHES", tmp_path)
     with pytest.raises(ValueError, match=r"quarter_sphere_coarse.npz is missing"):
         ccx_decks.quarter_sphere_model(ccx_decks.QUARTER_SPHERE_COARSE)
 
