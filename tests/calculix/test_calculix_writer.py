@@ -10,7 +10,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER, LOWER_BOTTOM, LOWER_TOP, UPPER, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from helpers import LOWER, LOWER_BOTTOM, LOWER_TOP, UPPER, UPPER_BOTTOM, UPPER_TOP, two_blocks
 
 import dolfinx.fem
 import dolfinx.mesh

@@ -6,59 +6,18 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import (
+from helpers import (
     LOWER_BOTTOM,
-    LOWER_TOP,
-    PUNCH,
-    UPPER_BOTTOM,
+    MU,
+    PRESSURE,
+    STICK_SLOPE,
     UPPER_TOP,
-    elastic_residual,
-    two_blocks,
+    drag_problem,
 )
 
-import dolfinx.fem
-import ufl
-
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
 
 pytestmark = pytest.mark.serial
-
-MU, STICK_SLOPE, PRESSURE = 0.2, 500.0, 10.0
-
-
-def drag_problem(mu=MU, stick_slope=STICK_SLOPE, gap=0.0, **options):
-    """The punch of conftest with its top moved horizontally by ``drag`` (a Function's value).
-
-    Returns the problem, the pressure Constant, the drag value setter and the facet tags; the
-    Function of the prescribed x displacement of the top is ``problem.drag``.
-    """
-    mesh, _, ft = two_blocks(MPI.COMM_WORLD, upper=PUNCH, gap=gap)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    F = elastic_residual(u, v, ft, pressure)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), bottom, V)]
-    drag = []
-    for component in (0, 1):
-        Vc, _ = compat.component_space(V, component)
-        dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, ft.find(UPPER_TOP))
-        g = dolfinx.fem.Function(Vc)
-        bcs.append(dolfinx.fem.dirichletbc(g, dofs, V.sub(component)))
-        drag.append(g)
-
-    def set_drag(value):
-        drag[0].x.array[:] = value
-
-    law = ntf.LinearLaw.with_ccx_defaults(1000.0)
-    interaction = ntf.SurfaceInteraction(law, ntf.Friction(mu, stick_slope))
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), interaction
-    )
-    problem = ntf.ContactProblem(F, u, [pair], bcs, **options)
-    problem.drag = drag[0]
-    return problem, pressure, set_drag, ft
 
 
 def _press_and_drag(drag_to, *, increments=2, **options):

@@ -5,9 +5,15 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_TOP, UPPER_BOTTOM, elastic_residual, two_blocks
+from helpers import (
+    LOWER_TOP,
+    UPPER_BOTTOM,
+    elastic_residual,
+    punch_problem,
+    solve_increments,
+    two_blocks,
+)
 from scipy.spatial.transform import Rotation
-from test_problem import _setup, _solve
 
 import dolfinx.fem
 import ufl
@@ -23,10 +29,10 @@ def test_default_search_changes_no_faces_on_a_tie_deck(cell):
     """The punch's slave nodes lie exactly above master nodes and edges (ties)."""
     changes, iterations = {}, {}
     for stable in (True, False):
-        problem, pressure, _ = _setup(cell, walk_from_previous_face=stable)
+        problem, pressure, _ = punch_problem(cell, walk_from_previous_face=stable)
         counts = []
         problem.pairing_callbacks.append(lambda p, counts=counts: counts.append(p.face_changes))
-        _, results = _solve(problem, pressure)
+        _, results = solve_increments(problem, pressure)
         changes[stable] = sum(counts)
         iterations[stable] = [r.iterations for r in results]
     assert changes[True] == 0
@@ -37,7 +43,7 @@ def test_default_search_changes_no_faces_on_a_tie_deck(cell):
 
 
 def test_stable_search_is_the_default():
-    problem, _, _ = _setup("hexahedron")
+    problem, _, _ = punch_problem("hexahedron")
     assert problem.walk_from_previous_face
     assert isinstance(problem.face_changes, int)
     assert ntf.ContactProblem.__init__.__kwdefaults__["walk_from_previous_face"] is True
@@ -48,10 +54,10 @@ def test_stable_mode_converges_a_linear_law_in_three_iterations(cell):
     """The punch touching the master (d = 0 at the start: the LINEAR law's kink, slope K/2) with
     ties: 3 Newton iterations per increment with the penetration slope at the kink (4 without),
     no node changes face."""
-    problem, pressure, _ = _setup(cell, contact_start_slope=True)
+    problem, pressure, _ = punch_problem(cell, contact_start_slope=True)
     counts = []
     problem.pairing_callbacks.append(lambda p: counts.append(p.face_changes))
-    _, results = _solve(problem, pressure, increments=1)
+    _, results = solve_increments(problem, pressure, increments=1)
     assert [r.iterations for r in results] == [3]
     assert sum(counts) == 0
     assert ntf.contact_results(problem)[0].force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)

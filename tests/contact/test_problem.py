@@ -6,12 +6,13 @@ import itertools
 import numpy as np
 import pytest
 import scipy.sparse
-from conftest import (
+from helpers import (
     LOWER_TOP,
     UPPER,
     UPPER_BOTTOM,
     elastic_residual,
     punch_problem,
+    solve_increments,
     two_blocks,
 )
 
@@ -31,22 +32,11 @@ _elastic_residual = elastic_residual
 _setup = punch_problem
 
 
-def _solve(problem, pressure, load=10.0, increments=2):
-    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
-    step = ntf.StaticStep(
-        lambda t: setattr(pressure, "value", load * t),
-        initial_increment=1.0 / increments,
-        fixed=True,
-    )
-    results = step.run(solver, problem.u)
-    return solver, results
-
-
 @pytest.mark.parametrize("cell", ["hexahedron", "tetrahedron"])
 def test_equilibrium_contact_force_equals_load(cell):
     problem, pressure, _ = _setup(cell)
     load = 10.0
-    _solve(problem, pressure, load)
+    solve_increments(problem, pressure, load)
     res = ntf.contact_results(problem)[0]
     punch_area = 0.6 * 0.6
     vertical = res.force[:, 2].sum()  # force of the master on the slave nodes
@@ -61,7 +51,7 @@ def test_equilibrium_contact_force_equals_load(cell):
 def test_patch_test_uniform_pressure(cell):
     full = ((0.0, 0.0, 0.0), (1.0, 1.0, 0.5), (4, 4, 2))
     problem, pressure, _ = _setup(cell, upper=full, rollers=True)
-    _solve(problem, pressure, load=10.0)
+    solve_increments(problem, pressure, load=10.0)
     res = ntf.contact_results(problem)[0]
     assert res.node.size == 25
     # Uniform to 1e-8; its value is the load over the *current* area (spring areas follow the
@@ -73,7 +63,7 @@ def test_patch_test_uniform_pressure(cell):
 
 def test_newton_converges_quadratically():
     problem, pressure, _ = _setup("hexahedron")
-    solver, _ = _solve(problem, pressure, increments=1)
+    solver, _ = solve_increments(problem, pressure, increments=1)
     r = np.array(solver.residual_norms) / solver.residual_norms[0]
     above_roundoff = r[r > 1e-12]
     assert len(above_roundoff) >= 3
@@ -83,7 +73,7 @@ def test_newton_converges_quadratically():
 
 def test_assembled_contact_matrix_matches_element_matrices():
     problem, pressure, _ = _setup("hexahedron")
-    _solve(problem, pressure, increments=1)
+    solve_increments(problem, pressure, increments=1)
     x = compat.petsc_vector(problem.u)
     problem.form(x)
     A_full = problem.ensure_matrix()
@@ -113,14 +103,14 @@ def test_assembled_contact_matrix_matches_element_matrices():
 def test_options_symmetric_and_linearized_area_converge():
     for options in ({"symmetric": True}, {"linearize_area": True}):
         problem, pressure, _ = _setup("hexahedron", **options)
-        _solve(problem, pressure)
+        solve_increments(problem, pressure)
         res = ntf.contact_results(problem)[0]
         assert res.force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)
 
 
 def test_exponential_law_solve():
     problem, pressure, _ = _setup("hexahedron", law=ntf.ExponentialLaw(c0=1e-3, p0=1.0))
-    _solve(problem, pressure)
+    solve_increments(problem, pressure)
     res = ntf.contact_results(problem)[0]
     assert res.force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)
 
@@ -209,7 +199,7 @@ def test_walk_from_previous_face_stops_edge_ping_pong():
     iterations = {}
     for option in (False, True):
         problem, pressure, _ = _setup("tetrahedron", walk_from_previous_face=option)
-        _, results = _solve(problem, pressure)
+        _, results = solve_increments(problem, pressure)
         iterations[option] = [r.iterations for r in results]
         assert ntf.contact_results(problem)[0].force[:, 2].sum() == pytest.approx(3.6, rel=1e-10)
     assert max(iterations[True]) <= 5
@@ -222,7 +212,7 @@ def test_global_jacobian_matches_finite_differences(cell, linearize_area):
     """The assembled Jacobian is the exact derivative of the assembled residual for a fixed pairing:
     areas held at their pairing values (ccx), or recomputed and linearized (linearize_area)."""
     problem, pressure, _ = _setup(cell, linearize_area=linearize_area)
-    _solve(problem, pressure, increments=1)
+    solve_increments(problem, pressure, increments=1)
     problem.iteration = 100  # past the re-pairing schedule: the pairing stays fixed
     x = compat.petsc_vector(problem.u)
     base = x.copy()

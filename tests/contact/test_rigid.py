@@ -5,7 +5,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 import scipy.optimize
-from conftest import BLOCK_CONTACT, rigid_block
+from helpers import BLOCK_CONTACT, rigid_block
 
 import dolfinx.fem
 import dolfinx.mesh

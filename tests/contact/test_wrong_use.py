@@ -10,7 +10,7 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from helpers import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
 
 import dolfinx.fem
 import dolfinx.mesh

@@ -6,7 +6,7 @@ from petsc4py import PETSc
 
 import numpy as np
 import pytest
-from conftest import (
+from helpers import (
     LOWER_TOP,
     POISSON_RATIO,
     UPPER_BOTTOM,
@@ -26,7 +26,7 @@ COMM = MPI.COMM_WORLD
 
 
 def _problem(form, **options):
-    """The conftest punch with the bulk residual ``form(u, v, facet_tags, pressure)``, loaded and
+    """The helpers' punch with the bulk residual ``form(u, v, facet_tags, pressure)``, loaded and
     displaced a little so that springs and stresses are not zero."""
     punch, pressure, ft = punch_problem(comm=COMM)
     u = punch.u

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import LOWER_TOP, UPPER_TOP, punch_problem
+from helpers import LOWER_TOP, UPPER_TOP, punch_problem
+from helpers.decks import reference_node_deck
 
 import dolfinx.fem
 
@@ -221,25 +222,10 @@ def test_dependent_slave_node_with_load_and_chain_matches_ccx(tmp_path):
         assert np.abs(mine.values - reference.values).max() <= 1e-6 * scale, mine.name
 
 
-def _reference_node_deck(boundary: str) -> str:
-    """contact1 whose upper cube's top is tied in z to node 99, in no element, by *EQUATION."""
-    text = (CCX_TESTS / "contact1.inp").read_text()
-    text = text.replace("*ELEMENT, TYPE=C3D8", "      99, 0.5, 0.5, 1.5\n*ELEMENT, TYPE=C3D8", 1)
-    text = text.replace(
-        "*NSET,NSET=Nfix \n1, \n2, \n5, \n6, \n11, \n12, \n15, \n16, \n",
-        "*NSET,NSET=Nfix \n1, \n2, \n5, \n6, \n*NSET,NSET=Ntop\n11,12,15,16\n",
-    )
-    text = text.replace("Nfix,1,3\n", "Nfix,1,3\nNtop,1,2\n")
-    ties = "".join(f"2\n{n},3,1.,99,3,-1.\n" for n in (11, 12, 15, 16))
-    text = text.replace("*MATERIAL,NAME=EL", ties + "*MATERIAL,NAME=EL")
-    text = text.replace("*CLOAD\n10,3,-1.\n", boundary)
-    return text.replace("*STATIC\n", "*STATIC\n0.5,1.\n")
-
-
 @pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
 def test_unsupported_reference_nodes_are_refused(tmp_path):
     # two free reference components in one equation
-    text = _reference_node_deck("*CLOAD\n99,3,-1.\n")
+    text = reference_node_deck("*CLOAD\n99,3,-1.\n")
     text = text.replace(
         "      99, 0.5, 0.5, 1.5\n", "      99, 0.5, 0.5, 1.5\n      98, 0., 0., 2.\n"
     )
@@ -248,7 +234,7 @@ def test_unsupported_reference_nodes_are_refused(tmp_path):
     with pytest.raises(ValueError, match=r"ref.inp:\d+: \*EQUATION: more than one component"):
         run_job("ref", tmp_path, progress=False)
     # a force on a prescribed reference component
-    text = _reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n*CLOAD\n99,3,-1.\n")
+    text = reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n*CLOAD\n99,3,-1.\n")
     (tmp_path / "ref.inp").write_text(text)
     with pytest.raises(ValueError, match=r"node 99 belongs to no element and carries a \*CLOAD"):
         run_job("ref", tmp_path, progress=False)
@@ -282,7 +268,7 @@ def _compare_with_ccx(tmp_path: Path, text: str, *, predictor: bool = True):
 def test_loaded_free_reference_node_matches_ccx(tmp_path):
     """Face nodes tied to a node in no element that carries the load: the first equation gives
     the node's displacement, its force acts on the face by virtual work."""
-    result, ours = _compare_with_ccx(tmp_path, _reference_node_deck("*CLOAD\n99,3,-1.\n"))
+    result, ours = _compare_with_ccx(tmp_path, reference_node_deck("*CLOAD\n99,3,-1.\n"))
     top = result.last.displacement_of([11, 12, 15, 16])[:, 2]
     assert np.all(top == top[0]) and top[0] < 0
     u = next(b for b in ours if b.name == "U" and b.time == 1.0)
@@ -301,7 +287,7 @@ def test_prescribed_reference_node_matches_ccx(tmp_path):
     # (6269 % of the average force), creep down (ccx 11 iterations, we 10) and stop within
     # R_n = 0.005 at states 9e-3 apart (reaction forces); from u_n we converge in 3, closer to
     # the solution than ccx's state. The predictor is not what this test checks.
-    text = _reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n")
+    text = reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n")
     result, ours = _compare_with_ccx(tmp_path, text, predictor=False)
     np.testing.assert_array_equal(result.last.displacement_of([11, 12, 15, 16])[:, 2], -1e-6)
     assert ours[0].rows[-1][1:] == (0.0, 0.0, -5e-7)
@@ -311,7 +297,7 @@ def test_prescribed_reference_node_matches_ccx(tmp_path):
 @pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
 def test_python_tie_matches_ccx_on_the_exported_deck(tmp_path):
     """The punch with a tie solved in Python and by ccx on the deck write_inp exports."""
-    from conftest import LOWER_BOTTOM, POISSON_RATIO, YOUNGS_MODULUS
+    from helpers import LOWER_BOTTOM, POISSON_RATIO, YOUNGS_MODULUS
 
     from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
     from dolfinx_ntf.calculix.writer import BoundarySpec, PressureSpec, StepSpec, write_inp

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import BLOCK_CONTACT, BLOCK_TOP, rigid_block
+from helpers import BLOCK_CONTACT, BLOCK_TOP, rigid_block
 
 import dolfinx.fem
 import ufl

@@ -3,7 +3,7 @@ contact fields as Functions, and the writer (also before the first solve)."""
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, UPPER_TOP, punch_problem
+from helpers import LOWER_BOTTOM, UPPER_TOP, punch_problem
 
 import dolfinx_ntf as ntf
 

@@ -5,7 +5,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_TOP, UPPER, UPPER_BOTTOM, punch_problem, two_blocks
+from helpers import LOWER_TOP, UPPER, UPPER_BOTTOM, punch_problem, two_blocks
 
 import dolfinx.fem
 import dolfinx.mesh

@@ -10,16 +10,16 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import (
+from helpers import (
     LOWER_BOTTOM,
     LOWER_TOP,
     PUNCH,
     UPPER_BOTTOM,
-    _box_grid,
+    box_grid,
     elastic_residual,
     two_blocks,
 )
-from test_parallel import PARTITIONS, _sorted, solve_step
+from helpers.serial_answer import PARTITIONS, solve_step, sorted_rows
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -104,7 +104,7 @@ def _solve(comm, partition, ties=_top_ties):
         elastic_residual(u, v, ft, pressure), u, [pair], bcs, constraints=ties(V)
     )
     increments, nodes, table = solve_step(comm, problem, pressure, u)
-    springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
+    springs = sorted_rows(comm, np.column_stack([table.position, table.area, table.pressure]))
     out = (
         increments,
         nodes,
@@ -138,7 +138,7 @@ def test_tied_punch_gives_the_serial_answer(partition):
 # ----------------------------------------------------------------- nodes no process holds together
 
 #: The points of two_blocks(upper=PUNCH) in input order: a node's id is its row (input index).
-POINTS = np.vstack([_box_grid((0, 0, -1), (1, 1, 1), (4, 4, 2))[0], _box_grid(*PUNCH)[0]])
+POINTS = np.vstack([box_grid((0, 0, -1), (1, 1, 1), (4, 4, 2))[0], box_grid(*PUNCH)[0]])
 
 
 def _id(x, y, z):

@@ -10,12 +10,33 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-import test_parallel
-import test_parallel_deck
-import test_parallel_friction
-from conftest import LOWER_BOTTOM, LOWER_TOP, PUNCH, UPPER_BOTTOM, UPPER_TOP, elastic_residual
-from conftest import two_blocks as blocks
-from test_parallel import PARTITIONS, _cut
+from helpers import (
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    PUNCH,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    elastic_residual,
+    punch_problem,
+)
+from helpers import two_blocks as blocks
+from helpers.decks import (
+    deck_with_requests,
+    first_differing_file,
+    run_serial_and_parallel,
+    run_summary,
+)
+from helpers.serial_answer import (
+    PARTITIONS,
+    assert_same_friction,
+    assert_same_punch,
+    cut_along_x,
+    friction_analysis,
+    serial_friction_analysis,
+    serial_punch,
+    solve_punch,
+    sorted_rows,
+)
 
 import dolfinx.fem
 import ufl
@@ -65,8 +86,8 @@ def _enlarged(calls):
 def test_punch_gives_the_serial_answer(exchanges, monkeypatch, partition, margin):
     """Default margin; no margin (every first search enlarges); idle and empty processes."""
     monkeypatch.setattr(master_exchange, "MARGIN", margin)
-    run = test_parallel._solve(COMM, "hexahedron", PARTITIONS[partition])
-    test_parallel._assert_same(run, test_parallel._serial("hexahedron"))
+    run = solve_punch(COMM, "hexahedron", PARTITIONS[partition])
+    assert_same_punch(run, serial_punch("hexahedron"))
     assert run.mallocs == 0
     if COMM.size > 1:
         assert exchanges
@@ -77,8 +98,8 @@ def test_punch_gives_the_serial_answer(exchanges, monkeypatch, partition, margin
 
 def test_tetrahedra_cut_through_the_contact_zone(exchanges, monkeypatch):
     monkeypatch.setattr(master_exchange, "MARGIN", 0.0)
-    run = test_parallel._solve(COMM, "tetrahedron", _cut)
-    test_parallel._assert_same(run, test_parallel._serial("tetrahedron"))
+    run = solve_punch(COMM, "tetrahedron", cut_along_x)
+    assert_same_punch(run, serial_punch("tetrahedron"))
 
 
 def _fine_punch_problem(comm, partition, options):
@@ -108,7 +129,7 @@ def _fine_punch(comm, partition, options):
     pairings = []
     problem.pairing_callbacks.append(
         lambda p: pairings.append(
-            test_parallel._sorted(
+            sorted_rows(
                 comm,
                 np.hstack(
                     [
@@ -125,13 +146,11 @@ def _fine_punch(comm, partition, options):
     rows = np.hstack([problem.reference_coordinates[:owned], u.x.array.reshape(-1, 3)[:owned]])
     found = problem.states[0].found_face
     faces = problem.states[0].master_faces.faces[found[found >= 0]]
-    located = test_parallel._sorted(
-        comm, np.hstack([problem.reference_coordinates[faces].mean(axis=1)])
-    )
+    located = sorted_rows(comm, np.hstack([problem.reference_coordinates[faces].mean(axis=1)]))
     out = (
         [(r.iterations, r.springs) for r in results],
         pairings,
-        test_parallel._sorted(comm, rows),
+        sorted_rows(comm, rows),
         located,
         problem.matrix.getInfo()["mallocs"],
     )
@@ -184,8 +203,8 @@ def test_partial_patches_give_the_allgather_answer(exchanges, monkeypatch, parti
 def test_sliding_with_friction_gives_the_serial_answer(exchanges, monkeypatch, margin, partition):
     """The punch dragged across the master: nodes leave their boxes, patches are exchanged again."""
     monkeypatch.setattr(master_exchange, "MARGIN", margin)
-    run = test_parallel_friction._analysis(COMM, PARTITIONS[partition])
-    test_parallel_friction._assert_same(run, test_parallel_friction._serial())
+    run = friction_analysis(COMM, PARTITIONS[partition])
+    assert_same_friction(run, serial_friction_analysis())
     assert run.mallocs == 0
     if COMM.size > 1 and margin == 0.0:
         assert _enlarged(exchanges)
@@ -212,15 +231,15 @@ def test_deck_runner_gives_the_serial_files(exchanges, monkeypatch, name, tmp_pa
     """Two pairs, *CLOAD; slip, *CHANGE FRICTION, *MODEL CHANGE; ADJUST: the serial files."""
     monkeypatch.setattr(master_exchange, "MARGIN", 0.0)
     folder = COMM.bcast(tmp_path_factory.mktemp("decks") if COMM.rank == 0 else None)
-    path = test_parallel_deck._deck(name, folder)
-    serial, parallel, serial_dir = test_parallel_deck._run_both(path)
-    serial = COMM.bcast(serial and test_parallel_deck._summary(serial), root=0)
-    summary = test_parallel_deck._summary(parallel)
+    path = deck_with_requests(name, folder)
+    serial, parallel, serial_dir = run_serial_and_parallel(path)
+    serial = COMM.bcast(serial and run_summary(serial), root=0)
+    summary = run_summary(parallel)
     assert summary["iterations"] == serial["iterations"]
     assert summary["contact"] == serial["contact"]
     u, u_ref = parallel.last.displacement, serial["displacement"]
     assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
-    error = test_parallel_deck._check_files(path, serial_dir) if COMM.rank == 0 else None
+    error = first_differing_file(path, serial_dir) if COMM.rank == 0 else None
     error = COMM.bcast(error, root=0)
     assert error is None, error
     if COMM.size > 1:
@@ -232,7 +251,7 @@ def test_nearest_centroid_check(monkeypatch, margin):
     """On one process: a node whose nearest centroid may lie outside its request box (grown by
     the margin) is NOT_HELD, the others get the whole surface's face."""
     monkeypatch.setattr(master_exchange, "MARGIN", margin)
-    problem, _, ft = test_parallel.punch_problem(comm=MPI.COMM_SELF)
+    problem, _, ft = punch_problem(comm=MPI.COMM_SELF)
     V = problem.u.function_space
     state = problem.states[0]
     own = resolve_master(V, ntf.FacetSurface(ft, LOWER_TOP), what="master")

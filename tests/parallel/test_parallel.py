@@ -4,14 +4,11 @@ Every test compares with the same problem solved on ``COMM_SELF`` in the same ru
 test-here`` runs this file on 2 processes and again on 3; in serial the comparisons are trivial.
 """
 
-import functools
-from dataclasses import dataclass
-
 from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import (
+from helpers import (
     LOWER_BOTTOM,
     LOWER_TOP,
     PUNCH,
@@ -21,6 +18,17 @@ from conftest import (
     elastic_residual,
     punch_problem,
     two_blocks,
+)
+from helpers.serial_answer import (
+    LOAD,
+    PARTITIONS,
+    assert_same_punch,
+    by_body,
+    cut_along_x,
+    idle_last,
+    serial_punch,
+    solve_punch,
+    sorted_rows,
 )
 
 import dolfinx.fem
@@ -35,139 +43,20 @@ from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 pytestmark = pytest.mark.mpi
 
 COMM = MPI.COMM_WORLD
-LOAD = 20.0
-
-
-def _bodies(x):
-    """The lower block on rank 0, the upper (slave) block on the others (sliced along x)."""
-    others = max(COMM.size - 1, 1)
-    upper = np.minimum(1 + (x[:, 0] * others).astype(int), COMM.size - 1)
-    return np.where(x[:, 2] > 0.0, upper, 0)
-
-
-def _cut(x):
-    """Slices along x: every cut crosses the contact zone."""
-    return np.minimum((x[:, 0] * COMM.size).astype(int), COMM.size - 1)
-
-
-def _idle(x):
-    """The last rank holds the bottom of the lower block only: no slave or master node."""
-    if COMM.size == 1:
-        return np.zeros(x.shape[0], dtype=int)
-    others = max(COMM.size - 1, 1)
-    return np.where(x[:, 2] < -0.5, COMM.size - 1, np.where(x[:, 2] > 0.0, 1 % others, 0))
-
-
-def _empty(x):
-    """The last rank holds no cell at all (dolfinx 0.5.2's ``collapse`` crashes there)."""
-    others = max(COMM.size - 1, 1)
-    return np.minimum((x[:, 0] * others).astype(int), others - 1)
-
-
-PARTITIONS = {"graph": None, "bodies": _bodies, "cut": _cut, "idle": _idle, "empty": _empty}
-
-
-@dataclass
-class Run:
-    X: np.ndarray  # reference positions of all nodes, sorted
-    u: np.ndarray  # displacements in the same order
-    iterations: list[tuple[int, int]]  # Newton iterations and springs of every increment
-    pairings: list[np.ndarray]  # per pairing: (slave position, master face centre) of every spring
-    springs: np.ndarray  # final springs: slave position, area, pressure, clearance
-    force: np.ndarray
-    mallocs: float
-    rebuilds: int
-
-
-def _sorted(comm, rows):
-    rows = np.vstack(comm.allgather(rows))
-    return rows[np.lexsort(np.round(rows, 9).T[::-1])]
-
-
-def solve_step(comm, problem, pressure, u):
-    """The punch's two increments of ``LOAD``: (iterations and springs per increment, sorted
-    reference positions and displacements of the owned nodes, this process's contact table)."""
-    solver = ntf.ContactNewtonSolver(comm, problem)
-    step = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t), initial_increment=0.5)
-    results = step.run(solver, u)
-    solver.destroy()
-    owned = u.function_space.dofmap.index_map.size_local
-    X = problem.reference_coordinates[:owned]
-    nodes = _sorted(comm, np.hstack([X, u.x.array.reshape(-1, 3)[:owned]]))
-    increments = [(r.iterations, r.springs) for r in results]
-    return increments, nodes, ntf.contact_results(problem)[0]
-
-
-def _solve(comm, cell, partition, degree=1, **options):
-    problem, pressure, _ = punch_problem(
-        cell, comm=comm, partition=partition, degree=degree, **options
-    )
-    pairings = []
-
-    def record(p):
-        x = p.current_coordinates()
-        rows = [
-            np.hstack([x[s.element_nodes[:, -1]], x[s.element_nodes[:, :-1]].mean(axis=1)])
-            for s in p.states
-        ]
-        pairings.append(_sorted(comm, np.vstack(rows)))
-
-    problem.pairing_callbacks.append(record)
-    solver = ntf.ContactNewtonSolver(comm, problem)
-    step = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t), initial_increment=0.5)
-    results = step.run(solver, problem.u)
-    owned = problem.u.function_space.dofmap.index_map.size_local
-    X = problem.reference_coordinates[:owned]
-    nodes = _sorted(comm, np.hstack([X, problem.u.x.array.reshape(-1, 3)[:owned]]))
-    table = ntf.contact_results(problem)[0]
-    springs = _sorted(
-        comm, np.column_stack([table.position, table.area, table.pressure, table.clearance])
-    )
-    run = Run(
-        nodes[:, :3],
-        nodes[:, 3:],
-        [(r.iterations, r.springs) for r in results],
-        pairings,
-        springs,
-        ntf.contact_force(problem),
-        problem.matrix.getInfo()["mallocs"],
-        problem.assembler.matrix_rebuilds,
-    )
-    solver.destroy()
-    problem.destroy()
-    return run
-
-
-@functools.lru_cache
-def _serial(cell, degree=1, **options):
-    return _solve(MPI.COMM_SELF, cell, None, degree, **options)
-
-
-def _assert_same(run, serial):
-    assert run.iterations == serial.iterations
-    assert len(run.pairings) == len(serial.pairings)
-    for i, (a, b) in enumerate(zip(run.pairings, serial.pairings)):
-        assert a.shape == b.shape, f"pairing {i}: {a.shape[0]} springs, serial {b.shape[0]}"
-        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(run.X, serial.X, rtol=0, atol=1e-14)
-    np.testing.assert_allclose(run.u, serial.u, rtol=0, atol=1e-10 * np.abs(serial.u).max())
-    assert run.springs.shape == serial.springs.shape
-    # positions, areas (complete at partition cuts), pressures and clearances of every spring
-    np.testing.assert_allclose(run.springs, serial.springs, rtol=1e-10, atol=1e-12)
-    np.testing.assert_allclose(run.force, serial.force, atol=1e-10 * np.abs(serial.force).max())
-    assert serial.springs.shape[0] > 0 and serial.force[2] > 0
 
 
 @pytest.mark.parametrize("partition", PARTITIONS)
 @pytest.mark.parametrize("cell", ["hexahedron", "tetrahedron"])
 def test_punch_gives_the_serial_answer(cell, partition):
-    run = _solve(COMM, cell, PARTITIONS[partition])
-    _assert_same(run, _serial(cell))
+    run = solve_punch(COMM, cell, PARTITIONS[partition])
+    assert_same_punch(run, serial_punch(cell))
     assert run.mallocs == 0  # every coupling was preallocated, on the process owning its row
 
 
 def test_quadratic_tetrahedra_cut_through_the_contact_zone():
-    _assert_same(_solve(COMM, "tetrahedron", _cut, degree=2), _serial("tetrahedron", 2))
+    assert_same_punch(
+        solve_punch(COMM, "tetrahedron", cut_along_x, degree=2), serial_punch("tetrahedron", 2)
+    )
 
 
 @pytest.mark.parametrize(
@@ -175,8 +64,8 @@ def test_quadratic_tetrahedra_cut_through_the_contact_zone():
 )
 def test_problem_options_give_the_serial_answer(options):
     """Area linearization couples halo slave-face nodes; CalculiX's search and tangent."""
-    run = _solve(COMM, "hexahedron", _cut, **options)
-    _assert_same(run, _serial("hexahedron", **options))
+    run = solve_punch(COMM, "hexahedron", cut_along_x, **options)
+    assert_same_punch(run, serial_punch("hexahedron", **options))
     assert run.mallocs == 0
 
 
@@ -207,7 +96,7 @@ def test_each_process_receives_the_slave_faces_of_its_nodes(partition):
 
 def test_idle_rank_holds_no_contact_node():
     """The partition leaves the last rank owning no contact node (when there are >= 2)."""
-    problem, _, _ = punch_problem(comm=COMM, partition=_idle)
+    problem, _, _ = punch_problem(comm=COMM, partition=idle_last)
     state = problem.states[0]
     owned = problem.u.function_space.dofmap.index_map.size_local
     held = COMM.allgather(
@@ -240,7 +129,7 @@ def test_box_without_pairs():
         rows = np.hstack([problem.reference_coordinates[:owned], u.x.array.reshape(-1, 3)[:owned]])
         solver.destroy()
         problem.destroy()
-        return iterations, converged, _sorted(comm, rows)
+        return iterations, converged, sorted_rows(comm, rows)
 
     parallel, serial = solve(COMM), solve(MPI.COMM_SELF)
     assert parallel[:2] == serial[:2] and parallel[1]
@@ -249,7 +138,7 @@ def test_box_without_pairs():
 
 def test_a_pair_error_found_on_one_rank_fails_on_all():
     """Slave nodes inside the master surface, owned by one rank only: every rank raises."""
-    mesh, _, ft = two_blocks(COMM, partition=_bodies)
+    mesh, _, ft = two_blocks(COMM, partition=by_body)
     V = compat.vector_space(mesh, "Lagrange", 1)
     u = dolfinx.fem.Function(V)
     F = ufl.inner(ufl.grad(u), ufl.grad(ufl.TestFunction(V))) * ufl.dx
@@ -262,7 +151,7 @@ def test_a_pair_error_found_on_one_rank_fails_on_all():
 
 def test_writer_and_fields_in_parallel(tmp_path_factory):
     """The contact fields hold the springs' values at owned and ghost nodes alike."""
-    problem, pressure, _ = punch_problem(comm=COMM, partition=_cut)
+    problem, pressure, _ = punch_problem(comm=COMM, partition=cut_along_x)
     solver = ntf.ContactNewtonSolver(COMM, problem)
     ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t)).run(solver, problem.u)
     folder = COMM.bcast(str(tmp_path_factory.mktemp("out")) if COMM.rank == 0 else None)
@@ -290,7 +179,7 @@ def test_punch_demo_in_parallel(tmp_path_factory):
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "demos" / "punch.py"
+    path = Path(__file__).resolve().parents[2] / "demos" / "punch.py"
     spec = importlib.util.spec_from_file_location("_demo_punch_mpi", path)
     demo = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(demo)
@@ -326,12 +215,12 @@ def test_node_based_slave_gives_the_serial_answer(partition):
         solver = ntf.ContactNewtonSolver(comm, problem)
         results = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t)).run(solver, u)
         owned = V.dofmap.index_map.size_local
-        nodes = _sorted(
+        nodes = sorted_rows(
             comm,
             np.hstack([problem.reference_coordinates[:owned], u.x.array.reshape(-1, 3)[:owned]]),
         )
         table = ntf.contact_results(problem)[0]
-        springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
+        springs = sorted_rows(comm, np.column_stack([table.position, table.area, table.pressure]))
         out = ([(r.iterations, r.springs) for r in results], nodes, springs)
         solver.destroy()
         problem.destroy()

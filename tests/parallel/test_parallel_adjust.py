@@ -10,8 +10,8 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, LOWER_TOP, PUNCH, UPPER_BOTTOM, elastic_residual, two_blocks
-from test_parallel import PARTITIONS, _sorted, solve_step
+from helpers import LOWER_BOTTOM, LOWER_TOP, PUNCH, UPPER_BOTTOM, elastic_residual, two_blocks
+from helpers.serial_answer import PARTITIONS, solve_step, sorted_rows
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -52,8 +52,8 @@ def _solve(comm, partition, kind):
     )
     problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs)
     increments, nodes, table = solve_step(comm, problem, pressure, u)
-    geometry = _sorted(comm, mesh.geometry.x[: mesh.geometry.index_map().size_local])
-    springs = _sorted(
+    geometry = sorted_rows(comm, mesh.geometry.x[: mesh.geometry.index_map().size_local])
+    springs = sorted_rows(
         comm, np.column_stack([table.position, table.area, table.pressure, table.shear])
     )
     out = (increments, nodes, geometry, springs)

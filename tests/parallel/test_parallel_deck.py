@@ -12,9 +12,7 @@ the Newton residual) are written as 0 in serial and in parallel alike
 (slices along x on all processes but the last, which holds no cell).
 """
 
-import re
 import shutil
-import sys
 import tempfile
 from pathlib import Path
 
@@ -22,6 +20,14 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.decks import (
+    REQUESTS,
+    deck_with_requests,
+    first_differing_file,
+    reference_node_deck,
+    run_serial_and_parallel,
+    run_summary,
+)
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.__main__ import EXIT_INPUT, main
@@ -33,15 +39,7 @@ from dolfinx_ntf.calculix.model import build_model
 pytestmark = pytest.mark.mpi
 
 COMM = MPI.COMM_WORLD
-DATA = Path(__file__).parent / "data" / "calculix"
-
-#: Output requests added to every step: all prints and all file outputs.
-REQUESTS = (
-    "*NODE PRINT, NSET=NALL, TOTALS=YES\nRF\n*EL PRINT, ELSET=EALL\nS\n"
-    "*NODE FILE, CONTACT ELEMENTS\nU, RF\n*EL FILE\nS\n*CONTACT FILE\nCDIS, CSTR\n*END STEP"
-)
-
-_CLOCK = re.compile(r"^\s*1U(TIME|DATE)")  # .frd header lines with the wall-clock time
+DATA = Path(__file__).parents[1] / "data" / "calculix"
 
 
 @pytest.fixture(scope="module")
@@ -55,92 +53,23 @@ def shared():
         shutil.rmtree(path, ignore_errors=True)
 
 
-def _crossval(name: str, directory: Path) -> Path:
-    """A cross-validation deck (tests/data/calculix/crossval) written on rank 0."""
-    sys.path.insert(0, str(DATA / "crossval"))
-    try:
-        import cases
-        import friction_cases
-    finally:
-        sys.path.pop(0)
-    (case,) = [c for c in cases.CASES + friction_cases.CASES if c.name == name]
-    case.write(directory)
-    return directory / f"{name}.inp"
-
-
-def _deck(name: str, directory: Path) -> Path:
-    """Deck ``name`` with every output request, on rank 0; its path on every process."""
-    path = directory / name / f"{name}.inp"
-    if COMM.rank == 0:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        source = DATA / f"{name}.inp"
-        if not source.exists():
-            source = _crossval(name, path.parent)
-        path.write_text(source.read_text().replace("*END STEP", REQUESTS))
-    COMM.barrier()
-    return path
-
-
-def _first_difference(serial: str, parallel: str) -> str:
-    """The first line that differs (the .frd clock lines skipped), for the failure message."""
-    a = [x for x in serial.splitlines() if not _CLOCK.match(x)]
-    b = [x for x in parallel.splitlines() if not _CLOCK.match(x)]
-    for k, (x, y) in enumerate(zip(a, b)):
-        if x != y:
-            return f"line {k + 1}: {x!r} != {y!r}"
-    return f"{len(a)} lines in serial, {len(b)} in parallel"
-
-
-def _run_both(path: Path):
-    """The deck on rank 0 alone (in ``serial/``) and on all processes; both results."""
-    serial_dir = path.parent / "serial"
-    serial, error = None, None
-    if COMM.rank == 0:
-        serial_dir.mkdir(exist_ok=True)
-        shutil.copy(path, serial_dir / path.name)
-        try:
-            serial = run_job(path.stem, serial_dir, comm=MPI.COMM_SELF, progress=False)
-        except Exception as exc:  # the other processes would wait in the parallel run
-            error = f"the serial run failed: {exc!r}"
-    error = COMM.bcast(error, root=0)
-    assert error is None, error
-    parallel = run_job(path.stem, path.parent, comm=COMM, progress=False)
-    return serial, parallel, serial_dir
-
-
-def _check_files(path: Path, serial_dir: Path) -> str | None:
-    """Rank 0: the first file that differs from the serial one (None when all are identical)."""
-    for suffix in (".sta", ".cel", ".dat", ".cvg", ".frd"):
-        a, b = serial_dir / (path.stem + suffix), path.with_suffix(suffix)
-        if not (a.exists() or b.exists()):
-            continue
-        if not (a.exists() and b.exists()):
-            return f"{b.name}: written in one run only"
-        serial, parallel = a.read_text(), b.read_text()
-        if suffix == ".frd":  # the header's wall-clock date and time
-            serial = "\n".join(x for x in serial.splitlines() if not _CLOCK.match(x))
-            parallel = "\n".join(x for x in parallel.splitlines() if not _CLOCK.match(x))
-        if serial != parallel:
-            return f"{b.name} differs from the serial file: {_first_difference(serial, parallel)}"
-    return None
-
-
 def _assert_serial_files(path: Path, *, in_contact: bool = True):
     """Run the deck serially and on all processes: same iterations, contact elements, nodes and
-    displacements (1e-10), and the same files (:func:`_check_files`). Returns the parallel result.
+    displacements (1e-10), and the same files (:func:`first_differing_file`). Returns the parallel
+    result.
 
     ``in_contact``: the serial run must have contact elements.
     """
-    serial, parallel, serial_dir = _run_both(path)
-    serial = COMM.bcast(serial and _summary(serial), root=0)
-    assert _summary(parallel)["iterations"] == serial["iterations"]
-    assert _summary(parallel)["contact"] == serial["contact"]
+    serial, parallel, serial_dir = run_serial_and_parallel(path)
+    serial = COMM.bcast(serial and run_summary(serial), root=0)
+    assert run_summary(parallel)["iterations"] == serial["iterations"]
+    assert run_summary(parallel)["contact"] == serial["contact"]
     u, u_ref = parallel.last.displacement, serial["displacement"]
     assert np.array_equal(parallel.last.node_ids, serial["node_ids"])
     assert np.max(np.abs(u - u_ref)) <= 1e-10 * np.max(np.abs(u_ref))
     if in_contact:
         assert any(nodes for increment in serial["contact"] for _, nodes, _ in increment)
-    files = _check_files(path, serial_dir) if COMM.rank == 0 else None
+    files = first_differing_file(path, serial_dir) if COMM.rank == 0 else None
     files = COMM.bcast(files, root=0)
     assert files is None, files
     return parallel
@@ -158,21 +87,8 @@ DECKS = [
 
 @pytest.mark.parametrize("name", DECKS)
 def test_deck_gives_the_serial_files(name, shared):
-    path = _deck(name, shared)
+    path = deck_with_requests(name, shared)
     _assert_serial_files(path)
-
-
-def _summary(result) -> dict:
-    """Iterations, contact elements (slave node, master face) per increment, last displacement."""
-    return {
-        "iterations": [(i.step, i.increment, i.attempt, i.iterations) for i in result.increments],
-        "contact": [
-            [(r.pair, r.nodes.tolist(), r.master_faces.tolist()) for r in i.contact]
-            for i in result.increments
-        ],
-        "node_ids": result.last.node_ids,
-        "displacement": result.last.displacement,
-    }
 
 
 def _interior_face(path: Path) -> tuple[int, int]:
@@ -187,7 +103,7 @@ def _interior_face(path: Path) -> tuple[int, int]:
 
 
 def test_bad_face_found_by_one_process_fails_on_all(shared):
-    path = _deck("hex_linear_pressure", shared / "bad")
+    path = deck_with_requests("hex_linear_pressure", shared / "bad")
     if COMM.rank == 0:
         element, face = _interior_face(path)
         text = path.read_text().replace(
@@ -223,7 +139,7 @@ FRICTION_DECKS = [
 @pytest.mark.parametrize("name", FRICTION_DECKS)
 def test_friction_and_adjust_decks_give_the_serial_files(name, shared):
     """Friction state on the slave node's owner, ADJUST moves on every process (§14.6)."""
-    path = _deck(name, shared / "friction")
+    path = deck_with_requests(name, shared / "friction")
     _assert_serial_files(path, in_contact=False)
 
 
@@ -234,11 +150,8 @@ def _hex20(name: str, directory: Path) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         lines = (DATA / "two_cubes.inp").read_text().replace("*END STEP", REQUESTS).splitlines()
         path.write_text("\n".join(x for x in lines if not x.startswith("**")) + "\n")
-        sys.path.insert(0, str(DATA / "crossval"))
-        try:
-            from hex20 import to_hex20
-        finally:
-            sys.path.pop(0)
+        from hex20 import to_hex20
+
         to_hex20(path)
     COMM.barrier()
     return path
@@ -256,7 +169,11 @@ HEX20_DECKS = [
 def test_c3d20_deck_gives_the_serial_files(name, shared):
     """Serendipity rows of all processes, a shared face's row once; RF on the 20 nodes (§14.10)."""
     directory = shared / "c3d20"
-    path = _hex20(name, directory) if name == "two_cubes_hex20" else _deck(name, directory)
+    path = (
+        _hex20(name, directory)
+        if name == "two_cubes_hex20"
+        else deck_with_requests(name, directory)
+    )
     parallel = _assert_serial_files(path)
     assert parallel.model.element_type.name in ("C3D20", "C3D20R")
 
@@ -276,11 +193,8 @@ def _dynamic(name: str, directory: Path) -> Path:
             text = text.replace("210000., 0.3\n", "210000., 0.3\n*DENSITY\n7.8e-9\n")
             text = text.replace("*STATIC\n0.5, 1.0", "*DYNAMIC, DIRECT\n2e-6, 1e-5")
         else:
-            sys.path.insert(0, str(DATA / "dynamic"))
-            try:
-                from impact_deck import write_impact_deck
-            finally:
-                sys.path.pop(0)
+            from impact_deck import write_impact_deck
+
             direct = name == "impact"
             text = write_impact_deck(
                 path.parent, name, period=0.02, increment=1e-3, direct=direct
@@ -311,7 +225,6 @@ CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
 
 def _equation_deck(name: str) -> str:
     """ccx's *EQUATION decks (§13.1) and variants: a tie across the two cubes, reference nodes."""
-    from test_constraints import _reference_node_deck
 
     if name in ("contact1", "contact3", "contact6"):
         return (CCX_TESTS / f"{name}.inp").read_text()
@@ -319,8 +232,8 @@ def _equation_deck(name: str) -> str:
         text = (CCX_TESTS / "contact1.inp").read_text()
         return text.replace("2\n14,3,1.,10,3,-1.\n", "3\n14,3,1.,10,3,-1.,3,3,0.001\n")
     if name == "reference_prescribed":  # the upper top tied to node 99 (no element), prescribed
-        return _reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n")
-    return _reference_node_deck("*CLOAD\n99,3,-1.\n")  # ... free and loaded
+        return reference_node_deck("*BOUNDARY\n99,3,3,-1.E-6\n")
+    return reference_node_deck("*CLOAD\n99,3,-1.\n")  # ... free and loaded
 
 
 EQUATION_DECKS = [
@@ -370,5 +283,5 @@ def _sliced_mesh(deck, block, comm):
 def test_process_without_cells_gives_the_serial_files(name, shared, monkeypatch):
     """The last process holds no cell (a *DLOAD deck and a friction deck)."""
     monkeypatch.setattr(model_module, "_create_mesh", _sliced_mesh)
-    path = _deck(name, shared / "empty")
+    path = deck_with_requests(name, shared / "empty")
     _assert_serial_files(path, in_contact=False)

@@ -1,6 +1,6 @@
 """Rigid analytical masters on several processes give the serial answer (docs/method.md §14.6).
 
-The punch of conftest pressed onto a rigid sphere under its centre (the lower block takes no part):
+The punch of helpers pressed onto a rigid sphere under its centre (the lower block takes no part):
 the contact spreads from the four middle nodes.
 Compared with the same analysis on ``COMM_SELF`` in the same run.
 """
@@ -9,8 +9,8 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, PUNCH, UPPER_BOTTOM, UPPER_TOP, elastic_residual, two_blocks
-from test_parallel import PARTITIONS, _sorted, solve_step
+from helpers import LOWER_BOTTOM, PUNCH, UPPER_BOTTOM, UPPER_TOP, elastic_residual, two_blocks
+from helpers.serial_answer import PARTITIONS, solve_step, sorted_rows
 
 import dolfinx.fem
 import ufl
@@ -42,7 +42,7 @@ def _solve(comm, partition):
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), sphere, law)
     problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs)
     increments, nodes, table = solve_step(comm, problem, pressure, u)
-    springs = _sorted(comm, np.column_stack([table.position, table.area, table.pressure]))
+    springs = sorted_rows(comm, np.column_stack([table.position, table.area, table.pressure]))
     out = (
         increments,
         nodes,

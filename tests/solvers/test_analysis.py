@@ -6,8 +6,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import UPPER_TOP
-from test_friction_problem import MU, STICK_SLOPE, drag_problem
+from helpers import MU, STICK_SLOPE, UPPER_TOP, drag_problem
 
 import dolfinx.fem
 import dolfinx.fem.petsc

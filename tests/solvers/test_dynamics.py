@@ -8,7 +8,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, two_blocks
+from helpers import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, two_blocks
 
 import dolfinx.fem
 import dolfinx.fem.petsc
@@ -234,13 +234,10 @@ def test_dynamic_step_is_the_same_in_parallel():
 
 @pytest.mark.serial
 def test_dynamic_deck_without_density_is_named(tmp_path):
-    import sys
-    from pathlib import Path
+
+    from impact_deck import write_impact_deck
 
     from dolfinx_ntf.calculix.job import run_job
-
-    sys.path.insert(0, str(Path(__file__).parent / "data" / "calculix" / "dynamic"))
-    from impact_deck import write_impact_deck
 
     path = write_impact_deck(tmp_path, "nodensity", period=0.001)
     path.write_text(path.read_text().replace("*DENSITY\n1.0\n", ""))

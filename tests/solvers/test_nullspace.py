@@ -9,7 +9,7 @@ from petsc4py import PETSc
 
 import numpy as np
 import pytest
-from conftest import LOWER_TOP, elastic_residual, punch_problem
+from helpers import LOWER_TOP, elastic_residual, punch_problem
 
 import dolfinx.fem
 import dolfinx.fem.petsc

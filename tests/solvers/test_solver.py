@@ -3,7 +3,7 @@ cause, a diverging attempt is given up early, and the line search leaves converg
 
 import numpy as np
 import pytest
-from test_problem import _setup
+from helpers import punch_problem
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
@@ -16,7 +16,7 @@ def _step(pressure, load=10.0, **options):
 
 
 def test_nan_displacement_raises_at_once_naming_the_node():
-    problem, pressure, _ = _setup("hexahedron")
+    problem, pressure, _ = punch_problem("hexahedron")
     problem.u.x.array[7] = np.nan
     solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
     with pytest.raises(ntf.ContactSolverError, match=r"non-finite value\(s\).*first at node 2"):
@@ -25,7 +25,7 @@ def test_nan_displacement_raises_at_once_naming_the_node():
 
 
 def test_nan_load_raises_at_once():
-    problem, pressure, _ = _setup("hexahedron")
+    problem, pressure, _ = punch_problem("hexahedron")
     solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
     with pytest.raises(ntf.ContactSolverError, match="loads, constants and material"):
         _step(pressure, load=np.nan).run(solver, problem.u)
@@ -34,7 +34,7 @@ def test_nan_load_raises_at_once():
 def test_diverging_attempt_is_given_up_early():
     """A punch above the block under a load has no support: each attempt diverges and is given
     up after a few updates, not after max_it, and the message says why."""
-    problem, pressure, _ = _setup(gap=0.05)
+    problem, pressure, _ = punch_problem(gap=0.05)
     u = problem.u
     solver = ntf.ContactNewtonSolver(u.function_space.mesh.comm, problem, max_it=30)
     step = _step(pressure, min_increment=0.3)
@@ -44,7 +44,7 @@ def test_diverging_attempt_is_given_up_early():
 
 
 def test_line_search_leaves_a_converging_solve_alone():
-    problem, pressure, _ = _setup("hexahedron")
+    problem, pressure, _ = punch_problem("hexahedron")
     solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
     _step(pressure, initial_increment=0.5, fixed=True).run(solver, problem.u)
     assert solver.step_lengths and all(s == 1.0 for s in solver.step_lengths)
@@ -53,7 +53,7 @@ def test_line_search_leaves_a_converging_solve_alone():
 def test_line_search_halves_an_overshooting_step():
     """In contact, twice the Newton correction overshoots to about the mirror residual; half of
     it is the Newton step, which the line search takes, leaving x unchanged."""
-    problem, pressure, _ = _setup("hexahedron")
+    problem, pressure, _ = punch_problem("hexahedron")
     solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
     _step(pressure, load=5.0, fixed=True).run(solver, problem.u)
     pressure.value = 6.0
