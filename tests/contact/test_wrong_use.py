@@ -10,7 +10,7 @@ import warnings
 
 import numpy as np
 import pytest
-from helpers import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, two_blocks
+from helpers import LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, punch_conditions, two_blocks
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -58,12 +58,7 @@ def _solvable(b):
     F = ufl.inner(ntf.small_strain_stress(u, E, 0.3), ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
         ufl.FacetNormal(mesh), v
     ) * ds(UPPER_TOP)
-    base = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(3), base, V),
-        ntf.component_bc(V, 0, ft.find(UPPER_TOP)),
-        ntf.component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
+    bcs = punch_conditions(V, ft)
     problem = ntf.ContactProblem(F, u, [_pair(b)], bcs)
     return problem, pressure
 

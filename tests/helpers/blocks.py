@@ -135,6 +135,45 @@ def elastic_residual(u, v, facet_tags, pressure, youngs_modulus=YOUNGS_MODULUS):
     ) * ds(UPPER_TOP)
 
 
+def displacement_fields(mesh, degree=1):
+    """The displacement space, the unknown, the test function and a pressure Constant (0)."""
+    V = compat.vector_space(mesh, "Lagrange", degree)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    return V, u, v, pressure
+
+
+def punch_conditions(V, facet_tags, top=None):
+    """The lower block clamped at its bottom; the punch top (or the facets ``top``) moves
+    vertically only."""
+    ft = facet_tags
+    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    top = ft.find(UPPER_TOP) if top is None else top
+    return [
+        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
+        component_bc(V, 0, top),
+        component_bc(V, 1, top),
+    ]
+
+
+def drag_conditions(V, facet_tags):
+    """The lower block clamped at its bottom; the punch top's x and y displacements prescribed.
+
+    Returns the Dirichlet conditions and the two Functions (x, y) that prescribe the drag.
+    """
+    ft = facet_tags
+    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), bottom, V)]
+    drag = []
+    for component in (0, 1):
+        Vc, _ = compat.component_space(V, component)
+        dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, ft.find(UPPER_TOP))
+        g = dolfinx.fem.Function(Vc)
+        bcs.append(dolfinx.fem.dirichletbc(g, dofs, V.sub(component)))
+        drag.append(g)
+    return bcs, drag
+
+
 def punch_problem(
     cell="hexahedron",
     upper=PUNCH,
@@ -158,9 +197,7 @@ def punch_problem(
         The problem, the pressure Constant (0 until set) and the facet tags.
     """
     mesh, _, ft = two_blocks(comm, cell=cell, upper=upper, gap=gap, partition=partition)
-    V = compat.vector_space(mesh, "Lagrange", degree)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    V, u, v, pressure = displacement_fields(mesh, degree)
     F = elastic_residual(u, v, ft, pressure)
     if rollers:
         x0 = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
@@ -171,12 +208,7 @@ def punch_problem(
             component_bc(V, 2, ft.find(LOWER_BOTTOM)),
         ]
     else:
-        bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-        bcs = [
-            dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
-            component_bc(V, 0, ft.find(UPPER_TOP)),
-            component_bc(V, 1, ft.find(UPPER_TOP)),
-        ]
+        bcs = punch_conditions(V, ft)
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, UPPER_BOTTOM),
         ntf.FacetSurface(ft, LOWER_TOP),
@@ -232,19 +264,9 @@ def drag_problem(mu=MU, stick_slope=STICK_SLOPE, gap=0.0, **options):
     Function of the prescribed x displacement of the top is ``problem.drag``.
     """
     mesh, _, ft = two_blocks(MPI.COMM_WORLD, upper=PUNCH, gap=gap)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    V, u, v, pressure = displacement_fields(mesh)
     F = elastic_residual(u, v, ft, pressure)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), bottom, V)]
-    drag = []
-    for component in (0, 1):
-        Vc, _ = compat.component_space(V, component)
-        dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, ft.find(UPPER_TOP))
-        g = dolfinx.fem.Function(Vc)
-        bcs.append(dolfinx.fem.dirichletbc(g, dofs, V.sub(component)))
-        drag.append(g)
+    bcs, drag = drag_conditions(V, ft)
 
     def set_drag(value):
         drag[0].x.array[:] = value

@@ -13,21 +13,17 @@ from mpi4py import MPI
 
 import numpy as np
 
-import dolfinx.fem
-import ufl
-
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
 
 from .blocks import (
-    LOWER_BOTTOM,
     LOWER_TOP,
     MU,
     PRESSURE,
     PUNCH,
     STICK_SLOPE,
     UPPER_BOTTOM,
-    UPPER_TOP,
+    displacement_fields,
+    drag_conditions,
     elastic_residual,
     punch_problem,
     two_blocks,
@@ -199,17 +195,8 @@ def friction_table(comm, problem):
 def friction_analysis(comm, partition, cell="hexahedron", **options):
     """Press, drag (stick, then slip), then drag on with twice the friction coefficient."""
     mesh, _, ft = two_blocks(comm, upper=PUNCH, cell=cell, partition=partition)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), bottom, V)]
-    drag = []
-    for component in (0, 1):
-        Vc, _ = compat.component_space(V, component)
-        dofs = dolfinx.fem.locate_dofs_topological((V.sub(component), Vc), 2, ft.find(UPPER_TOP))
-        drag.append(dolfinx.fem.Function(Vc))
-        bcs.append(dolfinx.fem.dirichletbc(drag[-1], dofs, V.sub(component)))
+    V, u, v, pressure = displacement_fields(mesh)
+    bcs, drag = drag_conditions(V, ft)
     interaction = ntf.SurfaceInteraction(
         ntf.LinearLaw.with_ccx_defaults(1000.0), ntf.Friction(MU, STICK_SLOPE)
     )

@@ -11,12 +11,13 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers import (
-    LOWER_BOTTOM,
     LOWER_TOP,
     PUNCH,
     UPPER_BOTTOM,
     box_grid,
+    displacement_fields,
     elastic_residual,
+    punch_conditions,
     two_blocks,
 )
 from helpers.serial_answer import PARTITIONS, solve_step, sorted_rows
@@ -27,7 +28,6 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc
 from dolfinx_ntf.fem.serendipity import serendipity_centres
 
 pytestmark = pytest.mark.mpi
@@ -88,16 +88,9 @@ def _top_ties(V):
 
 def _solve(comm, partition, ties=_top_ties):
     mesh, _, ft = two_blocks(comm, upper=PUNCH, partition=partition)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    V, u, v, pressure = displacement_fields(mesh)
     top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[2], 0.5))
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
-        component_bc(V, 0, top),
-        component_bc(V, 1, top),
-    ]
+    bcs = punch_conditions(V, ft, top)
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
     problem = ntf.ContactProblem(

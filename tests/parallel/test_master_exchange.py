@@ -11,12 +11,12 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers import (
-    LOWER_BOTTOM,
     LOWER_TOP,
     PUNCH,
     UPPER_BOTTOM,
-    UPPER_TOP,
+    displacement_fields,
     elastic_residual,
+    punch_conditions,
     punch_problem,
 )
 from helpers import two_blocks as blocks
@@ -38,12 +38,7 @@ from helpers.serial_answer import (
     sorted_rows,
 )
 
-import dolfinx.fem
-import ufl
-
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc
 from dolfinx_ntf.fem.surfaces import resolve_master
 from dolfinx_ntf.kernels.faces import FACE_TYPES
 from dolfinx_ntf.kernels.search import NOT_HELD, MasterSurface
@@ -106,15 +101,8 @@ def _fine_punch_problem(comm, partition, options):
     """The problem of :func:`_fine_punch` with its load constant; the caller destroys it."""
     lower = ((0, 0, -1), (1, 1, 1), (12, 12, 1))
     mesh, _, ft = blocks(comm, lower=lower, upper=PUNCH, partition=partition)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
-        component_bc(V, 0, ft.find(UPPER_TOP)),
-        component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
+    V, u, v, pressure = displacement_fields(mesh)
+    bcs = punch_conditions(V, ft)
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
     problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs, **options)

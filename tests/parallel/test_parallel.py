@@ -9,13 +9,13 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers import (
-    LOWER_BOTTOM,
     LOWER_TOP,
     PUNCH,
     UPPER,
     UPPER_BOTTOM,
-    UPPER_TOP,
+    displacement_fields,
     elastic_residual,
+    punch_conditions,
     punch_problem,
     two_blocks,
 )
@@ -38,7 +38,7 @@ import ufl
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact import problem as problem_module
-from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.elasticity import small_strain_stress
 
 pytestmark = pytest.mark.mpi
 
@@ -197,20 +197,13 @@ def test_node_based_slave_gives_the_serial_answer(partition):
 
     def solve(comm, owners):
         mesh, cell_tags, ft = two_blocks(comm, upper=PUNCH, partition=owners)
-        V = compat.vector_space(mesh, "Lagrange", 1)
-        u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-        pressure = dolfinx.fem.Constant(mesh, 0.0)
+        V, u, v, pressure = displacement_fields(mesh)
         upper = compat.incident_entities(mesh, cell_tags.find(UPPER), 3, 0)
         bottom = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.isclose(x[2], 0.0))
         slave = ntf.NodeSurface(np.intersect1d(upper, bottom))
         law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
         pair = ntf.ContactPair(slave, ntf.FacetSurface(ft, LOWER_TOP), law)
-        clamp = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-        bcs = [
-            dolfinx.fem.dirichletbc(np.zeros(3), clamp, V),
-            component_bc(V, 0, ft.find(UPPER_TOP)),
-            component_bc(V, 1, ft.find(UPPER_TOP)),
-        ]
+        bcs = punch_conditions(V, ft)
         problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs)
         solver = ntf.ContactNewtonSolver(comm, problem)
         results = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t)).run(solver, u)

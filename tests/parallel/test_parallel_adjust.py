@@ -10,16 +10,21 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers import LOWER_BOTTOM, LOWER_TOP, PUNCH, UPPER_BOTTOM, elastic_residual, two_blocks
+from helpers import (
+    LOWER_TOP,
+    PUNCH,
+    UPPER_BOTTOM,
+    displacement_fields,
+    elastic_residual,
+    punch_conditions,
+    two_blocks,
+)
 from helpers.serial_answer import PARTITIONS, solve_step, sorted_rows
 
 import dolfinx.fem
 import dolfinx.mesh
-import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc
 
 pytestmark = pytest.mark.mpi
 
@@ -29,16 +34,9 @@ GAP = 0.003
 
 def _solve(comm, partition, kind):
     mesh, _, ft = two_blocks(comm, upper=PUNCH, gap=GAP, partition=partition)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    V, u, v, pressure = displacement_fields(mesh)
     top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[2], 0.5 + GAP))
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
-        component_bc(V, 0, top),
-        component_bc(V, 1, top),
-    ]
+    bcs = punch_conditions(V, ft, top)
     adjust = 0.005
     if kind == "node set":  # the punch bottom's vertices with x < 0.5
         vertices = dolfinx.mesh.locate_entities(

@@ -9,15 +9,17 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers import LOWER_BOTTOM, PUNCH, UPPER_BOTTOM, UPPER_TOP, elastic_residual, two_blocks
+from helpers import (
+    PUNCH,
+    UPPER_BOTTOM,
+    displacement_fields,
+    elastic_residual,
+    punch_conditions,
+    two_blocks,
+)
 from helpers.serial_answer import PARTITIONS, solve_step, sorted_rows
 
-import dolfinx.fem
-import ufl
-
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc
 
 pytestmark = pytest.mark.mpi
 
@@ -27,15 +29,8 @@ RADIUS = 4.0
 
 def _solve(comm, partition):
     mesh, _, ft = two_blocks(comm, upper=PUNCH, partition=partition)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
-        component_bc(V, 0, ft.find(UPPER_TOP)),
-        component_bc(V, 1, ft.find(UPPER_TOP)),
-    ]
+    V, u, v, pressure = displacement_fields(mesh)
+    bcs = punch_conditions(V, ft)
     # the four middle nodes of the punch bottom (0.1 sqrt 2 off the axis) touch the sphere
     sphere = ntf.RigidSphere((0.5, 0.5, -np.sqrt(RADIUS**2 - 0.02)), RADIUS)
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
