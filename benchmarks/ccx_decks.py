@@ -62,7 +62,6 @@ from dolfinx_ntf.meshes import hertz
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))  # helpers, for the crossval cases
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))
 import cases  # noqa: E402
 

@@ -70,7 +70,6 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 from dolfinx_ntf.solvers.newton import ContactConvergenceError
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))  # helpers, for the crossval cases
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))
 import cases  # noqa: E402
 import friction_cases  # noqa: E402

@@ -22,7 +22,6 @@ from pathlib import Path
 from mpi4py import MPI
 
 import numpy as np
-from helpers.blocks import box_grid, hexes_to_tets  # tests/ is on sys.path
 from hex20 import move_nodes, to_hex20  # this directory is on sys.path
 
 import dolfinx.fem
@@ -73,6 +72,35 @@ class Case:
     tolerances: dict[str, float] = field(default_factory=dict)
 
 
+def _box(origin, size, divisions) -> tuple[np.ndarray, np.ndarray]:
+    axes = [np.linspace(o, o + s, n + 1) for o, s, n in zip(origin, size, divisions)]
+    z, y, x = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+    nx, ny, _ = divisions
+    i, j, k = (a.ravel() for a in np.meshgrid(*(np.arange(n) for n in divisions), indexing="ij"))
+
+    def node(i, j, k):
+        return (k * (ny + 1) + j) * (nx + 1) + i
+
+    hexes = np.column_stack(
+        [
+            node(i, j, k),
+            node(i + 1, j, k),
+            node(i, j + 1, k),
+            node(i + 1, j + 1, k),
+            node(i, j, k + 1),
+            node(i + 1, j, k + 1),
+            node(i, j + 1, k + 1),
+            node(i + 1, j + 1, k + 1),
+        ]
+    )
+    return points, hexes
+
+
+# Six tetrahedra around the 0-7 diagonal of a hexahedron in dolfinx tensor order (conforming).
+_TETS = [(0, 1, 3, 7), (0, 1, 5, 7), (0, 4, 5, 7), (0, 2, 3, 7), (0, 2, 6, 7), (0, 4, 6, 7)]
+
+
 def blocks(boxes, *, cell: str = "hexahedron", bump: float = 0.0, degree: int = 1):
     """Boxes ``(origin, size, divisions)`` stacked along z as one mesh (bodies share no nodes).
 
@@ -89,7 +117,7 @@ def blocks(boxes, *, cell: str = "hexahedron", bump: float = 0.0, degree: int = 
     points, cells, marker = [], [], []
     offset = 0
     for body, (origin, size, divisions) in enumerate(boxes):
-        p, c = box_grid(origin, size, divisions)
+        p, c = _box(origin, size, divisions)
         if body == 0 and bump:
             centre = np.array(origin[:2]) + 0.5 * np.array(size[:2])
             r2 = np.sum((p[:, :2] - centre) ** 2, axis=1) / (0.25 * np.sum(np.array(size[:2]) ** 2))
@@ -100,8 +128,8 @@ def blocks(boxes, *, cell: str = "hexahedron", bump: float = 0.0, degree: int = 
         offset += p.shape[0]
     points, cells, marker = np.vstack(points), np.vstack(cells), np.concatenate(marker)
     if cell == "tetrahedron":
-        cells = hexes_to_tets(cells)
-        marker = np.tile(marker, 6)
+        cells = np.vstack([cells[:, t] for t in _TETS])
+        marker = np.tile(marker, len(_TETS))
     domain = compat.coordinate_element(cell, 1)
     mesh = dolfinx.mesh.create_mesh(MPI.COMM_SELF, cells.astype(np.int64), points, domain)
     # create_mesh reorders cells: find each cell's body from its original index.
