@@ -50,7 +50,6 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
-from common import demo_parser
 
 import dolfinx.fem
 import dolfinx.fem.petsc
@@ -96,7 +95,11 @@ def hertz(force: float, radius: float = RADIUS) -> tuple[float, float, float]:
 
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     """Command-line options."""
-    parser = demo_parser(__doc__)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
+    parser.add_argument(
+        "--output", type=Path, default=Path("output"), help="output folder (default: output/)"
+    )
     parser.add_argument("--cell-type", choices=("tetrahedron", "hexahedron"), default="tetrahedron")
     parser.add_argument(
         "--displacement",
@@ -119,6 +122,7 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
         action="store_true",
         help="start the face search at the nearest centroid like CalculiX",
     )
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
 
 

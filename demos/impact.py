@@ -45,7 +45,6 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
-from common import demo_parser
 
 import dolfinx.fem
 import ufl
@@ -76,13 +75,18 @@ ENERGY_TOLERANCE = 0.01
 
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     """Command-line options."""
-    parser = demo_parser(__doc__)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
+    parser.add_argument(
+        "--output", type=Path, default=Path("output"), help="output folder (default: output/)"
+    )
     parser.add_argument(
         "--increment", type=float, default=0.25e-6, help="time increment in s (default 0.25 us)"
     )
     parser.add_argument(
         "--alpha", type=float, default=-0.05, help="HHT alpha (default: ccx's -0.05)"
     )
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
 
 

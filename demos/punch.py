@@ -29,13 +29,19 @@ import argparse
 import sys
 import time
 import typing
+from pathlib import Path
 
 from mpi4py import MPI
+from petsc4py import PETSc
 
 import numpy as np
-from common import clamped_base_held_top, demo_parser, elasticity_with_pressure
+
+import dolfinx.fem
+import ufl
 
 import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.meshes import punch as geometry
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
@@ -57,7 +63,11 @@ PRESSURE_AREA_TOLERANCE = 1e-5
 
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     """Command-line options."""
-    parser = demo_parser(__doc__)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
+    parser.add_argument(
+        "--output", type=Path, default=Path("output"), help="output folder (default: output/)"
+    )
     parser.add_argument("--cell-type", choices=("hexahedron", "tetrahedron"), default="hexahedron")
     parser.add_argument(
         "--increments",
@@ -70,6 +80,7 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
         action="store_true",
         help="start the face search at the nearest centroid like CalculiX (slower Newton)",
     )
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
 
 
@@ -103,14 +114,28 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     # Small-strain elasticity with one material per body. The pressure on the punch top is a
     # Constant that the step scales with the step time; ``n`` is the outward normal, so ``p n·v``
     # in the residual R = f_int - f_ext is a pressure pushing into the punch.
-    u, F, pressure = elasticity_with_pressure(
-        mesh, cell_tags, facet_tags, block=(E_BLOCK, NU_BLOCK), punch=(E_PUNCH, NU_PUNCH)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    F = (
+        ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.BLOCK)
+        + ufl.inner(small_strain_stress(u, E_PUNCH, NU_PUNCH), ufl.grad(v)) * dx(geometry.PUNCH)
+        + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(geometry.PUNCH_TOP)
     )
-    V = u.function_space
 
     # Block bottom clamped. The punch is held vertically by the contact only; its in-plane rigid
     # motions (two translations, rotation about z) are removed by u_x = u_y = 0 on its top face.
-    bcs = clamped_base_held_top(V, facet_tags)
+    bcs = [
+        dolfinx.fem.dirichletbc(
+            np.zeros(3, dtype=PETSc.ScalarType),
+            dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM)),
+            V,
+        ),
+        component_bc(V, 0, facet_tags.find(geometry.PUNCH_TOP)),
+        component_bc(V, 1, facet_tags.find(geometry.PUNCH_TOP)),
+    ]
 
     # --- Contact ----------------------------------------------------------------------------------
     # LINEAR law with CalculiX's defaults from the block's Young's modulus: slope K = 50 E, tension

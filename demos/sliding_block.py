@@ -31,13 +31,13 @@ from pathlib import Path
 from mpi4py import MPI
 
 import numpy as np
-from common import demo_parser, elasticity_with_pressure
 
 import dolfinx.fem
+import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.meshes import punch as geometry
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
@@ -57,7 +57,11 @@ TOLERANCE = 1e-10
 
 
 def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
-    return demo_parser(__doc__, coarse_help="small mesh, fewer increments").parse_args(argv)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--coarse", action="store_true", help="small mesh, fewer increments")
+    parser.add_argument("--output", type=Path, default=Path("output"))
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    return parser.parse_args(argv)
 
 
 def main(argv: typing.Sequence[str] | None = None) -> dict:
@@ -72,10 +76,16 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     )
 
     # --- Bulk: small-strain elasticity, pressure on the block top --------------------------------
-    u, F, pressure = elasticity_with_pressure(
-        mesh, cell_tags, facet_tags, block=(E_BASE, NU_BASE), punch=(E_BLOCK, NU_BLOCK)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V, name="displacement"), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    F = (
+        ufl.inner(small_strain_stress(u, E_BASE, NU_BASE), ufl.grad(v)) * dx(geometry.BLOCK)
+        + ufl.inner(small_strain_stress(u, E_BLOCK, NU_BLOCK), ufl.grad(v)) * dx(geometry.PUNCH)
+        + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(geometry.PUNCH_TOP)
     )
-    V = u.function_space
     # Base bottom clamped; the block top: prescribed x (the drag), y = 0, z free (pressure).
     base = dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(geometry.BLOCK_BOTTOM))
     top = facet_tags.find(geometry.PUNCH_TOP)
