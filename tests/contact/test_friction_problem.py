@@ -6,14 +6,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers import (
-    LOWER_BOTTOM,
-    MU,
-    PRESSURE,
-    STICK_SLOPE,
-    UPPER_TOP,
-    drag_problem,
-)
+from helpers import LOWER_BOTTOM, MU, PRESSURE, STICK_SLOPE, UPPER_TOP, drag_problem
 
 import dolfinx_ntf as ntf
 

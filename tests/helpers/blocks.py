@@ -174,6 +174,18 @@ def drag_conditions(V, facet_tags):
     return bcs, drag
 
 
+def punch_bulk(mesh, facet_tags, top=None):
+    """Elasticity with a pressure on the punch top under ``punch_conditions``: what a test adds its
+    contact pairs to.
+
+    Returns:
+        The displacement, the residual, the pressure Constant (0 until set) and the conditions.
+    """
+    V, u, v, pressure = displacement_fields(mesh)
+    bcs = punch_conditions(V, facet_tags, top)
+    return u, elastic_residual(u, v, facet_tags, pressure), pressure, bcs
+
+
 def punch_problem(
     cell="hexahedron",
     upper=PUNCH,

@@ -102,6 +102,13 @@ def solve_step(comm, problem, pressure, u):
     return increments, nodes, ntf.contact_results(problem)[0]
 
 
+def solve_step_springs(comm, problem, pressure, u):
+    """``solve_step``; the final springs' position, area and pressure sorted over all processes."""
+    increments, nodes, table = solve_step(comm, problem, pressure, u)
+    springs = sorted_rows(comm, np.column_stack([table.position, table.area, table.pressure]))
+    return increments, nodes, springs
+
+
 def solve_punch(comm, cell, partition, degree=1, **options):
     """The punch's two increments of ``LOAD`` on ``comm``, recorded for ``assert_same_punch``."""
     problem, pressure, _ = punch_problem(

@@ -10,15 +10,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers import (
-    LOWER_TOP,
-    PUNCH,
-    UPPER_BOTTOM,
-    displacement_fields,
-    elastic_residual,
-    punch_conditions,
-    punch_problem,
-)
+from helpers import LOWER_TOP, PUNCH, UPPER_BOTTOM, punch_bulk, punch_problem
 from helpers import two_blocks as blocks
 from helpers.decks import (
     deck_with_requests,
@@ -101,11 +93,10 @@ def _fine_punch_problem(comm, partition, options):
     """The problem of :func:`_fine_punch` with its load constant; the caller destroys it."""
     lower = ((0, 0, -1), (1, 1, 1), (12, 12, 1))
     mesh, _, ft = blocks(comm, lower=lower, upper=PUNCH, partition=partition)
-    V, u, v, pressure = displacement_fields(mesh)
-    bcs = punch_conditions(V, ft)
+    u, F, pressure, bcs = punch_bulk(mesh, ft)
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP), law)
-    problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs, **options)
+    problem = ntf.ContactProblem(F, u, [pair], bcs, **options)
     return problem, pressure
 
 

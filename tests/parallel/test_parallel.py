@@ -8,17 +8,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers import (
-    LOWER_TOP,
-    PUNCH,
-    UPPER,
-    UPPER_BOTTOM,
-    displacement_fields,
-    elastic_residual,
-    punch_conditions,
-    punch_problem,
-    two_blocks,
-)
+from helpers import LOWER_TOP, PUNCH, UPPER, UPPER_BOTTOM, punch_bulk, punch_problem, two_blocks
 from helpers.serial_answer import (
     LOAD,
     PARTITIONS,
@@ -197,14 +187,14 @@ def test_node_based_slave_gives_the_serial_answer(partition):
 
     def solve(comm, owners):
         mesh, cell_tags, ft = two_blocks(comm, upper=PUNCH, partition=owners)
-        V, u, v, pressure = displacement_fields(mesh)
+        u, F, pressure, bcs = punch_bulk(mesh, ft)
+        V = u.function_space
         upper = compat.incident_entities(mesh, cell_tags.find(UPPER), 3, 0)
         bottom = dolfinx.mesh.locate_entities(mesh, 0, lambda x: np.isclose(x[2], 0.0))
         slave = ntf.NodeSurface(np.intersect1d(upper, bottom))
         law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(1000.0))
         pair = ntf.ContactPair(slave, ntf.FacetSurface(ft, LOWER_TOP), law)
-        bcs = punch_conditions(V, ft)
-        problem = ntf.ContactProblem(elastic_residual(u, v, ft, pressure), u, [pair], bcs)
+        problem = ntf.ContactProblem(F, u, [pair], bcs)
         solver = ntf.ContactNewtonSolver(comm, problem)
         results = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t)).run(solver, u)
         owned = V.dofmap.index_map.size_local
