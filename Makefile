@@ -35,7 +35,7 @@ test-here: setup
 	@echo "== dolfinx_ntf tests on $$(. /etc/os-release && echo "$$PRETTY_NAME"), dolfinx $$($(PY) -c 'import dolfinx; print(dolfinx.__version__)')"
 	$(PY) -m pytest -q -m "not docs" tests
 	$(MPIRUN) $(PY) -m pytest -q -m mpi tests
-	$(MPIRUN3) $(PY) -m pytest -q -m mpi tests/test_parallel.py tests/test_parallel_friction.py tests/test_parallel_adjust.py tests/test_parallel_rigid.py tests/test_constraints_mpi.py tests/test_collective.py tests/test_parallel_deck.py
+	$(MPIRUN3) $(PY) -m pytest -q -m mpi tests/parallel/test_parallel.py tests/parallel/test_parallel_friction.py tests/parallel/test_parallel_adjust.py tests/parallel/test_parallel_rigid.py tests/parallel/test_constraints_mpi.py tests/parallel/test_collective.py tests/parallel/test_parallel_deck.py
 
 test-other:
 	bash scripts/other_release.sh test-here docs-check

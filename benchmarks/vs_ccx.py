@@ -614,7 +614,7 @@ _HEADER = [
     "- `quarter_sphere`: a C3D4 steel quarter sphere of radius 10 (h = 0.15 at the pole) pushed "
     "0.12 into a steel block in 4 fixed increments (`*STATIC, DIRECT`), same law, ccx's default "
     "controls; `quarter_sphere_coarse`: h = 0.3, pushed 0.14. Their gmsh meshes are pinned in "
-    "`benchmarks/data` (which code converges depends on the mesh, and gmsh 4.8 and 4.13 differ).",
+    "`meshes/` (which code converges depends on the mesh, and gmsh 4.8 and 4.13 differ).",
     "- the cross-validation decks of `tests/data/calculix/crossval/cases.py` (controls "
     "tightened to R_n = 1e-10).",
     "",

@@ -19,8 +19,6 @@ from scipy.spatial import cKDTree
 
 from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
-from dolfinx_ntf.kernels.friction import FrictionInput
-from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 
 __all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterSurface"]
@@ -35,7 +33,7 @@ NOT_HELD = -2
 """Neighbour and walk result where the surface continues on triangles not held here (§14.8)."""
 
 
-class MasterSurface:
+class MasterSurface(springs.MeshedMasterSprings):
     """Triangulated master surface with the search prisms of docs/method.md §2.3.
 
     Args:
@@ -206,34 +204,6 @@ class MasterSurface:
         area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
         origin = (area @ self._centroids) / area.sum()
         return origin, triangle_moments(a, b, c, origin)
-
-    def evaluate_springs(
-        self,
-        face_type: FaceType,
-        master_coords: np.ndarray,
-        slave_coords: np.ndarray,
-        areas: np.ndarray,
-        law: PressureOverclosureLaw,
-        *,
-        gap_shift: float | np.ndarray = 0.0,
-        xi0: np.ndarray | None = None,
-        tangent: bool = True,
-        symmetric: bool = False,
-        friction: FrictionInput | None = None,
-    ) -> springs.SpringEvaluation:
-        """:func:`~dolfinx_ntf.kernels.springs.evaluate_springs` on faces of this surface."""
-        return springs.evaluate_springs(
-            face_type,
-            master_coords,
-            slave_coords,
-            areas,
-            law,
-            gap_shift=gap_shift,
-            xi0=xi0,
-            tangent=tangent,
-            symmetric=symmetric,
-            friction=friction,
-        )
 
     # ------------------------------------------------------------------ update
     def update(self, coords: np.ndarray, *, extent: tuple[np.ndarray, float] | None = None) -> None:

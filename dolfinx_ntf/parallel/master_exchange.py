@@ -34,8 +34,6 @@ from dolfinx_ntf import validation
 from dolfinx_ntf.fem.surfaces import SlaveSurface, SurfaceFaces
 from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
-from dolfinx_ntf.kernels.friction import FrictionInput
-from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.master import ContactMaster
 from dolfinx_ntf.kernels.search import NOT_HELD, TIE_DIGITS, MasterSurface
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
@@ -77,7 +75,7 @@ def _meets(lo: np.ndarray, hi: np.ndarray, box_lo: np.ndarray, box_hi: np.ndarra
     return np.all(hi >= box_lo, axis=1) & np.all(lo <= box_hi, axis=1)
 
 
-class MasterPatch:
+class MasterPatch(springs.MeshedMasterSprings):
     """The part of a master surface one process searches, with the checks of §14.8.
 
     Plays the :class:`~dolfinx_ntf.kernels.master.ContactMaster` role like a
@@ -309,34 +307,6 @@ class MasterPatch:
             return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
         which, patch = self.surface.face_patches(self._surface_face[np.asarray(faces)])
         return which, self._held[patch]
-
-    def evaluate_springs(
-        self,
-        face_type: FaceType,
-        master_coords: np.ndarray,
-        slave_coords: np.ndarray,
-        areas: np.ndarray,
-        law: PressureOverclosureLaw,
-        *,
-        gap_shift: float | np.ndarray = 0.0,
-        xi0: np.ndarray | None = None,
-        tangent: bool = True,
-        symmetric: bool = False,
-        friction: FrictionInput | None = None,
-    ) -> springs.SpringEvaluation:
-        """:func:`~dolfinx_ntf.kernels.springs.evaluate_springs` on faces of this patch."""
-        return springs.evaluate_springs(
-            face_type,
-            master_coords,
-            slave_coords,
-            areas,
-            law,
-            gap_shift=gap_shift,
-            xi0=xi0,
-            tangent=tangent,
-            symmetric=symmetric,
-            friction=friction,
-        )
 
     # -- enlargement -------------------------------------------------------------------------------
 
