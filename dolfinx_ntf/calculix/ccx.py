@@ -147,6 +147,8 @@ def dat_block(
 ) -> DatBlock:
     """The block called ``name`` (at ``time``, for ``set``); the last such one if ``time`` is None.
 
+    ``blocks`` are those :func:`read_ccx_dat` or :func:`read_dat` returned.
+
     Raises:
         ValueError: no such block, or several for the same time and set.
     """
@@ -180,7 +182,7 @@ class StaIncrement:
 
 
 def read_sta(path: str | Path) -> list[StaIncrement]:
-    """Converged increments listed in a ccx ``.sta`` file (iterations per increment)."""
+    """Converged increments listed in the ccx ``.sta`` file at ``path`` (iterations each)."""
     rows: list[StaIncrement] = []
     for line in Path(path).read_text(encoding="latin-1").splitlines():
         fields = line.split()

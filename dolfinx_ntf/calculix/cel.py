@@ -115,7 +115,11 @@ class ContactElementsFile:
         attempt: int,
         iteration: int,
     ) -> np.ndarray:
-        """Append one pairing; return the ``(N,)`` element numbers given to its elements."""
+        """Append one pairing; return the ``(N,)`` element numbers given to its elements.
+
+        ``master_faces``, ``slave_nodes``, ``step``, ``increment``, ``attempt`` and ``iteration``
+        are those of :func:`format_contact_elements`.
+        """
         text = format_contact_elements(
             self.next_number, master_faces, slave_nodes, step=step, increment=increment,
             attempt=attempt, iteration=iteration,
@@ -139,7 +143,7 @@ class CelElement:
 
 
 def read_cel(path: str | Path) -> list[CelElement]:
-    """Read a ``.cel`` file (ccx's or ours) into its elements, in file order.
+    """Read the ``.cel`` file at ``path`` (ccx's or ours) into its elements, in file order.
 
     Raises:
         ValueError: a line that is not an ``*ELEMENT`` line or an element data line.

@@ -76,6 +76,8 @@ SYMMETRIC_MIN_DOFS = 10_000
 class JobError(RuntimeError):
     """A job that stopped early (e.g. no convergence); files keep the converged increments.
 
+    ``message`` says why.
+
     Attributes:
         exit_code: Exit status for the command line (2: no convergence).
         result: The :class:`JobResult` of the converged increments.
@@ -136,7 +138,7 @@ class JobResult:
         jobname, directory: The job.
         model: The dolfinx model of the deck.
         increments: Every converged increment, in order.
-        dat, cel, xdmf: Files written (``cel`` is None without CONTACT ELEMENTS).
+        dat, cel, frd, xdmf: Files written (``cel`` is None without CONTACT ELEMENTS).
         completed: True if every step ran to its end.
         wall_time: Seconds spent in ``run_job``.
     """

@@ -387,7 +387,10 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     # -- springs -----------------------------------------------------------------------------------
 
     def evaluate(self, *, tangent: bool = True) -> list[SpringBlocks]:
-        """Evaluate every spring at the current displacement; returns the blocks to assemble."""
+        """Evaluate every spring at the current displacement; returns the blocks to assemble.
+
+        With ``tangent`` False only the forces are computed (no stiffness blocks).
+        """
         coords = self.current_coordinates()
         blocks = []
         symmetric = self.symmetric and not self.has_friction
@@ -431,7 +434,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     # of the coming solve).
 
     def form(self, x: PETSc.Vec) -> None:
-        """Before F: update ghost values and evaluate the springs of the current pairing."""
+        """Before F: update the ghost values of ``x`` and evaluate the current pairing's springs."""
         if self.elimination is not None:  # before the ghost update: ghosts get the new values
             # Prescribed values first: the reduced Jacobian cannot carry their lifting through
             # the constraints (C3D20's centres move with the prescribed nodes, §13.1, §13.5).
@@ -441,7 +444,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self._blocks = self.evaluate(tangent=True)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """Assemble the bulk residual plus the spring forces into ``b``."""
+        """Assemble the bulk residual plus the spring forces at ``x`` into ``b``."""
         self._residual_vector = b
         self.assemble_residual(x, b)
 
@@ -466,7 +469,8 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """Start Newton iteration ``iteration``: re-pair on schedule, assemble the Jacobian.
 
-        A re-pairing re-assembles the residual vector too.
+        The Jacobian at the iterate ``x`` goes into ``A``. A re-pairing re-assembles the residual
+        vector too.
         """
         self.iteration += 1
         self.count_changed = False
@@ -513,7 +517,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
         self.destroy()
 
     def set_bcs(self, bcs: typing.Sequence[compat.DirichletBC]) -> None:
-        """Replace the Dirichlet conditions (e.g. between steps).
+        """Replace the Dirichlet conditions by ``bcs`` (e.g. between steps).
 
         Contact entries skip the new constrained dofs.
         """

@@ -30,7 +30,10 @@ def lame_parameters(youngs_modulus: float, poisson_ratio: float) -> tuple[float,
 def small_strain_stress(
     u: ufl.core.expr.Expr, youngs_modulus: float, poisson_ratio: float
 ) -> ufl.core.expr.Expr:
-    """Small-strain isotropic linear elastic stress of the displacement ``u`` (3D)."""
+    """Small-strain isotropic linear elastic stress of the displacement ``u`` (3D).
+
+    ``youngs_modulus`` and ``poisson_ratio`` give the Lamé parameters.
+    """
     mu, lmbda = lame_parameters(youngs_modulus, poisson_ratio)
     eps = ufl.sym(ufl.grad(u))
     return 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
@@ -39,7 +42,10 @@ def small_strain_stress(
 def component_bc(
     V: dolfinx.fem.FunctionSpace, component: int, facets: np.ndarray
 ) -> compat.DirichletBC:
-    """Zero displacement component ``component`` on the given facets (rollers, symmetry planes)."""
+    """Zero displacement component ``component`` on the given facets (rollers, symmetry planes).
+
+    ``V`` is the vector displacement space, ``facets`` the (local) facet indices.
+    """
     Vc, _ = compat.component_space(V, component)
     dofs = dolfinx.fem.locate_dofs_topological(
         (V.sub(component), Vc), V.mesh.topology.dim - 1, facets

@@ -152,11 +152,17 @@ class PressureOverclosureLaw(abc.ABC):
 
     @abc.abstractmethod
     def cutoff(self, area: npt.ArrayLike) -> np.ndarray:
-        """Cutoff ``c_cut``: a spring is created iff ``g_eff <= c_cut`` (docs/method.md §3.4)."""
+        """Cutoff ``c_cut``: a spring is created iff ``g_eff <= c_cut`` (docs/method.md §3.4).
+
+        ``area`` is the slave node's spring area ``A``, one per node.
+        """
 
     @abc.abstractmethod
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """Spring energy of ``*CONTACT PRINT, CELS`` without friction (docs/method.md §8.3)."""
+        """Spring energy of ``*CONTACT PRINT, CELS`` without friction (docs/method.md §8.3).
+
+        ``d`` is the overclosure (positive = penetration), ``area`` the spring area ``A``.
+        """
 
 
 class ExponentialLaw(PressureOverclosureLaw):
@@ -246,7 +252,10 @@ class ExponentialLaw(PressureOverclosureLaw):
         return np.full(a_arr.shape, self.c0)
 
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """``F_N/beta`` with the capped force (docs/method.md §8.3)."""
+        """``F_N/beta`` with the capped force (docs/method.md §8.3).
+
+        ``d`` is the overclosure, ``area`` the spring area ``A``.
+        """
         force, _ = self.spring_force(d, area)
         return force / self.beta
 
@@ -346,12 +355,15 @@ class LinearLaw(PressureOverclosureLaw):
         return self.slope * (0.5 + (np.arctan(x) + rational) / math.pi)
 
     def cutoff(self, area: npt.ArrayLike) -> np.ndarray:
-        """``c0 sqrt(A)``, or ``1e-10`` where ``A == 0`` (docs/method.md §3.4)."""
+        """``c0 sqrt(A)``, or ``1e-10`` where ``A == 0`` (docs/method.md §3.4).
+
+        ``area`` is the slave node's spring area ``A``, one per node.
+        """
         a_arr = _check_array("LinearLaw", "area", area, nonnegative=True)
         return np.where(a_arr > 0.0, self.c0 * np.sqrt(a_arr), ZERO_AREA_CUTOFF)
 
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """ccx 2.20's static approximation ``F_N d/2`` (docs/method.md §8.3)."""
+        """ccx 2.20's static approximation ``F_N d/2`` at overclosure ``d``, spring ``area`` A."""
         d_b, a_b = self._d_area(d, area)
         force, _ = self.spring_force(d_b, a_b)
         return 0.5 * force * d_b
@@ -377,7 +389,10 @@ class DynamicLinearLaw(LinearLaw):
         return np.where(d_arr > 0.0, super().pressure_derivative(np.maximum(d_arr, 0.0)), 0.0)
 
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """``A K [d^2/4 + ((d^2 + eps^2) atan(d/eps) - eps d) / (2 pi)]`` for ``d > 0``, else 0."""
+        """``A K [d^2/4 + ((d^2 + eps^2) atan(d/eps) - eps d) / (2 pi)]`` for ``d > 0``, else 0.
+
+        ``d`` is the overclosure, ``area`` the spring area ``A``.
+        """
         d_b, a_b = self._d_area(d, area)
         dp = np.maximum(d_b, 0.0)
         eps = self.epsilon
@@ -471,24 +486,30 @@ class TabularLaw(PressureOverclosureLaw):
         return np.searchsorted(self.overclosures, d_arr, side="right") - 1
 
     def pressure(self, d: npt.ArrayLike) -> np.ndarray:
-        """Piecewise-linear interpolation with constant extrapolation."""
+        """Pressure at overclosure ``d``: piecewise-linear interpolation, constant extrapolation."""
         d_arr = self._d(d)
         return np.interp(d_arr, self.overclosures, self.pressures)
 
     def pressure_derivative(self, d: npt.ArrayLike) -> np.ndarray:
-        """Segment slope (right segment at table points), 0 outside ``[d_1, d_N)``."""
+        """Slope at overclosure ``d`` (right segment at table points), 0 outside ``[d_1, d_N)``."""
         d_arr = self._d(d)
         k = self._segment(d_arr)
         inside = (k >= 0) & (k < self._slopes.size)
         return np.where(inside, self._slopes[np.clip(k, 0, self._slopes.size - 1)], 0.0)
 
     def cutoff(self, area: npt.ArrayLike) -> np.ndarray:
-        """``1e-3 sqrt(A)``, or ``1e-10`` where ``A == 0`` (docs/method.md §3.4)."""
+        """``1e-3 sqrt(A)``, or ``1e-10`` where ``A == 0`` (docs/method.md §3.4).
+
+        ``area`` is the slave node's spring area ``A``, one per node.
+        """
         a_arr = _check_array("TabularLaw", "area", area, nonnegative=True)
         return np.where(a_arr > 0.0, TABULAR_C0 * np.sqrt(a_arr), ZERO_AREA_CUTOFF)
 
     def energy(self, d: npt.ArrayLike, area: npt.ArrayLike) -> np.ndarray:
-        """``A`` times the trapezoidal integral of ``p`` from ``d_1``, ccx quirk beyond ``d_N``."""
+        """``A`` times the trapezoidal integral of ``p`` from ``d_1``, ccx quirk beyond ``d_N``.
+
+        ``d`` is the overclosure, ``area`` the spring area ``A``.
+        """
         d_b, a_b = self._d_area(d, area)
         p_tab, d_tab = self.pressures, self.overclosures
         last = d_tab.size - 1

@@ -93,15 +93,15 @@ class RigidSurface(abc.ABC):
         return c
 
     def distance(self, x: npt.ArrayLike, time: float = 0.0) -> np.ndarray:
-        """Signed distance of points (N, 3) to the surface, positive outside the rigid body."""
+        """Signed distance of points ``x`` (N, 3) at step ``time``, positive outside the body."""
         return self._distance(_points(x) - self.translation(time))
 
     def normal(self, x: npt.ArrayLike, time: float = 0.0) -> np.ndarray:
-        """Unit normal (N, 3) at the points: the gradient of the signed distance."""
+        """Unit normal (N, 3) at points ``x`` at step ``time``: the signed distance's gradient."""
         return self._normal(_points(x) - self.translation(time))
 
     def hessian(self, x: npt.ArrayLike, time: float = 0.0) -> np.ndarray:
-        """Derivative of the normal (N, 3, 3): the Hessian of the signed distance."""
+        """Derivative of the normal (N, 3, 3) at ``x`` and step ``time``: the distance's Hessian."""
         return self._hessian(_points(x) - self.translation(time))
 
     @abc.abstractmethod
@@ -115,7 +115,10 @@ class RigidSurface(abc.ABC):
 
 
 class RigidPlane(RigidSurface):
-    """The plane through ``point`` with unit ``normal`` pointing towards the slave body."""
+    """The plane through ``point`` with unit ``normal`` pointing towards the slave body.
+
+    ``motion``, if given, translates the plane by ``motion(t)`` at relative step time ``t``.
+    """
 
     def __init__(
         self, point: npt.ArrayLike, normal: npt.ArrayLike, motion: Motion | None = None
@@ -149,7 +152,7 @@ class RigidSphere(RigidSurface):
     """A sphere of ``radius`` around ``center``.
 
     The slave body is outside the sphere (a rigid ball), or inside it with ``inside=True`` (a
-    spherical cup).
+    spherical cup). ``motion``, if given, translates the sphere by ``motion(t)`` at step time ``t``.
     """
 
     def __init__(
@@ -181,6 +184,7 @@ class RigidCylinder(RigidSurface):
     """An infinite circular cylinder of ``radius`` around the line through ``point`` along ``axis``.
 
     The slave body is outside (a rigid roller) or, with ``inside=True``, inside it (a bore).
+    ``motion``, if given, translates the cylinder by ``motion(t)`` at step time ``t``.
     """
 
     def __init__(

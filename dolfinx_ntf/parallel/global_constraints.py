@@ -47,7 +47,8 @@ class GlobalLinearConstraint(LinearConstraint):
 
     PETSc's numbering of the displacement space (``index_map.local_to_global``; on one process the
     local block dofs), so any process may give it, whichever processes hold its nodes. Made by
-    :func:`global_constraints` (docs/method.md §14.9).
+    :func:`global_constraints` (docs/method.md §14.9). ``components``, ``coefficients``, ``value``
+    and ``name`` are those of :class:`LinearConstraint`.
     """
 
 

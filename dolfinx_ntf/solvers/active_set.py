@@ -66,7 +66,10 @@ class ActiveSetNewtonSolver(ContactNewtonSolver):
         self.set_changed = bool(comm.allreduce(changed))
 
     def is_converged(self, x: PETSc.Vec, b: PETSc.Vec, norm: float) -> bool:
-        """Spring set unchanged by the last pairing and ``||R|| <= max(rtol ||R_0||, atol)``."""
+        """Spring set unchanged by the last pairing and ``||R|| <= max(rtol ||R_0||, atol)``.
+
+        dolfinx's hook: ``x`` is the iterate, ``b`` its residual and ``norm`` the norm ``||R||``.
+        """
         if self.updates == 0:
             self.set_changed = True
             return False

@@ -147,7 +147,10 @@ class AddPair:
 
 @dataclass(frozen=True)
 class SetSmallSliding:
-    """Small sliding (pairing at increment starts only) on or off for a pair from this step on."""
+    """Small sliding (pairing at increment starts only) on or off for a pair from this step on.
+
+    ``small_sliding`` True pairs ``pair`` only at increment starts, False on ccx's schedule.
+    """
 
     pair: ContactPair
     small_sliding: bool
@@ -168,6 +171,7 @@ class AnalysisStep:
             them.
         changes: Contact changes applied before the step starts.
         name: Label for messages.
+        results: Filled by :func:`run_steps` with the step's increments.
     """
 
     procedure: Step | None = None

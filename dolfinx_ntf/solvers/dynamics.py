@@ -43,9 +43,10 @@ def newmark_parameters(alpha: float) -> tuple[float, float]:
 
 
 def kinetic_energy(mass: ufl.Form, velocity: dolfinx.fem.Function) -> float:
-    """``v^T M v / 2`` for the bilinear mass form ``mass`` (``rho inner(w, v) dx``). Collective.
+    """``v^T M v / 2`` for the mass form ``mass`` (``rho inner(w, v) dx``), v = ``velocity``.
 
-    Compiles the form at every call; in a loop, compile ``rho inner(v, v) dx / 2`` once instead.
+    Collective. Compiles the form at every call; in a loop, compile ``rho inner(v, v) dx / 2``
+    once instead.
     """
     form = dolfinx.fem.form(ufl.action(ufl.action(mass, velocity), velocity))
     comm = velocity.function_space.mesh.comm

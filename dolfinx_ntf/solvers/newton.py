@@ -270,6 +270,9 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         the test. The caller adds CalculiX's other rules (at least ``min_iterations`` updates,
         none right after a re-pairing that changed the number of springs). Override for other
         criteria.
+
+        dolfinx's hook: ``x`` is the iterate, ``b`` its residual and ``norm`` the residual's norm
+        (unused: the test takes the largest residual force).
         """
         if self.updates == 0:
             return False

@@ -37,7 +37,17 @@ IncrementEnd = typing.Callable[[float, np.ndarray], None]
 
 @dataclass
 class IncrementResult:
-    """Summary of a converged increment."""
+    """Summary of a converged increment.
+
+    Attributes:
+        increment: Increment number in the step, from 1.
+        attempt: Attempt that converged, from 1 (more after cutbacks).
+        time: Step time at the end of the increment.
+        time_fraction: ``time`` over the step's period.
+        iterations: Newton iterations of the converged attempt.
+        springs: Contact springs over all processes at the end.
+        residual: Norm of the last residual.
+    """
 
     increment: int
     attempt: int

@@ -304,6 +304,8 @@ class Step:
         output_frequency: effective FREQUENCY (write every N-th increment and the last one).
         controls: effective ``*CONTROLS`` data by PARAMETERS value (``FIELD``, ...).
         friction_changes, model_changes: ``*CHANGE FRICTION`` / ``*MODEL CHANGE`` cards.
+        location: where the ``*STEP`` card is (file and line).
+        dynamic: the ``*DYNAMIC`` parameters, or None for a static step.
     """
 
     number: int
@@ -386,6 +388,7 @@ class Deck:
         ignored: ``(keyword, file, line)`` of output/control keywords that were skipped.
         warnings: every keyword and parameter skipped by ``LENIENCY``, in deck order.
         equations: ``*EQUATION`` constraints (model definition), in deck order.
+        initial_velocities: ``*INITIAL CONDITIONS, TYPE=VELOCITY`` data lines, in deck order.
     """
 
     path: str

@@ -25,7 +25,10 @@ class Location(typing.NamedTuple):
 
 
 class DeckError(ValueError):
-    """Bad or unsupported deck input; the message starts with ``file:line``."""
+    """Bad or unsupported deck input; the message starts with ``file:line``.
+
+    ``location`` (file and line) is prefixed to ``message`` and kept as an attribute.
+    """
 
     def __init__(self, message: str, location: Location | None = None) -> None:
         self.location = location

@@ -23,6 +23,8 @@ def _surface(deck: Deck, surface: Surface | str) -> Surface:
 def face_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
     """Node numbers ``(F, n)`` of the faces of an element-face surface, in CalculiX face order.
 
+    ``surface`` is one of ``deck``'s surfaces or its name.
+
     Faces follow the surface definition order; node order is ccx's outward order (corners
     counter-clockwise seen from outside the element, then midside nodes).
 
@@ -55,7 +57,10 @@ def face_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
 
 
 def surface_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
-    """Sorted unique node numbers of a surface (its listed nodes, or all nodes of its faces)."""
+    """Sorted unique node numbers of a surface (its listed nodes, or all nodes of its faces).
+
+    ``surface`` is one of ``deck``'s surfaces or its name.
+    """
     surf = _surface(deck, surface)
     if surf.type == "NODE":
         return np.unique(surf.nodes)
@@ -63,7 +68,7 @@ def surface_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
 
 
 def external_faces(deck: Deck) -> np.ndarray:
-    """Node numbers ``(F, n)`` of every face that belongs to exactly one element.
+    """Node numbers ``(F, n)`` of every face that belongs to exactly one element of ``deck``.
 
     See docs/method.md §2.1.
 
@@ -90,6 +95,8 @@ def external_faces(deck: Deck) -> np.ndarray:
 
 def node_surface_faces(deck: Deck, surface: Surface | str) -> np.ndarray:
     """Faces ``(F, n)`` that ccx uses as slave faces of a surface (docs/method.md §2.1).
+
+    ``surface`` is one of ``deck``'s surfaces or its name.
 
     Element-face surface: its faces. Nodal surface (``TYPE=NODE``): every external face of the
     whole mesh with at least one *corner* node in the surface.
