@@ -422,7 +422,7 @@ def _create_mesh(deck: Deck, block, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
     else:
         cells = np.zeros((0, 27 if serendipity else block.type.num_nodes), dtype=np.int64)
         x = np.zeros((0, 3))
-    return dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), x, domain)
+    return compat.create_mesh(comm, cells.astype(np.int64), x, domain)
 
 
 def _numbering(deck: Deck, mesh: dolfinx.mesh.Mesh, V: dolfinx.fem.FunctionSpace):

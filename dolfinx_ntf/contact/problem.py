@@ -1,9 +1,9 @@
 """Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual.
 
-:class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides
-assembling the user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule
-(docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The step driver in
-``solver.py`` tells it when an increment starts.
+:class:`ContactProblem` is a :data:`~dolfinx_ntf.compat.NewtonSolverNonlinearProblem` whose
+callbacks, besides assembling the user's UFL forms, (re-)pair slave nodes with master faces on
+CalculiX's schedule (docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The
+step driver in ``solver.py`` tells it when an increment starts.
 """
 
 from __future__ import annotations
@@ -164,7 +164,7 @@ class PairState:
         return np.hstack([faces, self.slave.nodes[self.spring_slave][:, None]])
 
 
-class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
+class ContactProblem(compat.NewtonSolverNonlinearProblem):
     """Nonlinear problem ``F(u) + f_contact(u) = 0`` with node-to-face penalty springs.
 
     Args:
@@ -285,7 +285,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             V,
             compat.jit_keywords(form_compiler_options, jit_options),
         )
-        self._element_force_vector = dolfinx.fem.petsc.create_vector(self._element_forces)
+        self._element_force_vector = compat.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.bulk_jacobian = BulkJacobian(
             ufl.derivative(F, u, ufl.TrialFunction(V)) if J is None else J,
