@@ -188,7 +188,11 @@ def entities_to_geometry(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray
     """Geometry nodes of the closure of each entity, shape (num_entities, nodes per entity)."""
     entities = np.asarray(entities, dtype=np.int32)
     if entities.size == 0:  # dolfinx 0.9 divides by zero on an empty list
-        per_entity = mesh.geometry.cmap.create_dof_layout().num_entity_closure_dofs(dim)
+        layout = mesh.geometry.cmap.create_dof_layout()
+        if _V011:  # no num_entity_closure_dofs
+            per_entity = len(layout.entity_closure_dofs(dim, 0))
+        else:
+            per_entity = layout.num_entity_closure_dofs(dim)
         return np.empty((0, per_entity), dtype=np.int32)
     mesh.topology.create_connectivity(dim, mesh.topology.dim)  # dolfinx 0.9 needs it
     nodes = dolfinx.cpp.mesh.entities_to_geometry(cpp_mesh(mesh), dim, entities, False)
