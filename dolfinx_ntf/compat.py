@@ -188,7 +188,8 @@ def entities_to_geometry(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray
     """Geometry nodes of the closure of each entity, shape (num_entities, nodes per entity)."""
     entities = np.asarray(entities, dtype=np.int32)
     if entities.size == 0:  # dolfinx 0.9 divides by zero on an empty list
-        layout = mesh.geometry.cmap.create_dof_layout()
+        cmap = mesh.geometry.cmaps[0] if _V011 else mesh.geometry.cmap  # 0.11: one per cell type
+        layout = cmap.create_dof_layout()
         if _V011:  # no num_entity_closure_dofs
             per_entity = len(layout.entity_closure_dofs(dim, 0))
         else:
