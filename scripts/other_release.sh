@@ -60,7 +60,9 @@ run_release() {
     touch "$chroot_dir/.complete"
     echo "other_release: $release chroot made in $((SECONDS - start)) s"
   fi
-  mountpoint -q "$chroot_dir/proc" || mount -t proc proc "$chroot_dir/proc"
+  mountpoint -q "$chroot_dir/proc" || mount -t proc proc "$chroot_dir/proc"   # MPI needs /proc
+  # hwloc and sid's Open MPI (UCX) print errors on every process without /sys
+  mountpoint -q "$chroot_dir/sys" || mount -t sysfs -o ro sysfs "$chroot_dir/sys"
   cp /etc/resolv.conf "$chroot_dir/etc/resolv.conf" 2>/dev/null || true
 
   # A fresh clone of this checkout's HEAD plus its uncommitted changes, so the chroot tests what is here.
