@@ -29,8 +29,8 @@ test-here: setup
 	$(MPIRUN) $(PY) -m pytest -q -m mpi tests
 	$(MPIRUN3) $(PY) -m pytest -q -m mpi tests/test_parallel.py tests/test_parallel_friction.py tests/test_parallel_adjust.py tests/test_parallel_rigid.py tests/test_constraints_mpi.py tests/test_collective.py tests/test_parallel_deck.py
 
-# The other releases in cached chroots: bookworm and trixie by default (the machine's own left out);
-# `make test-other RELEASES=sid` (or "trixie sid"...) picks them.
+# The other releases in cached chroots: bookworm, trixie and sid by default (the machine's own left
+# out); `make test-other RELEASES=sid` (or "trixie sid"...) picks some.
 RELEASES ?=
 test-other:
 	bash scripts/other_release.sh $(RELEASES) test-here
