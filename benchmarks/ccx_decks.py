@@ -29,7 +29,7 @@ Each deck is built as a dolfinx problem (mesh, tags, contact pair, constraints, 
   (in increment 3), ccx converging. Whether either code converges here depends on the mesh
   itself: gmsh 4.13 (Debian 13) meshes the same sizes differently, and on its mesh ccx fails and
   dolfinx_ntf converges at 0.12 (and both converge at 0.11, both fail at 0.125). The decks
-  therefore read meshes made once with gmsh 4.8 and kept in ``benchmarks/data``
+  therefore read meshes made once with gmsh 4.8 and kept in ``meshes/``
   (:func:`pin_sphere_mesh`; ``pinned=False`` meshes with this machine's gmsh).
 - **Cross-validation decks**: ``tests/data/calculix/crossval/cases.py`` as they are.
 
@@ -246,7 +246,7 @@ class SphereSpec:
     """Mesh sizes (``dolfinx_ntf.meshes.hertz``) and indentation of the quarter sphere deck.
 
     Attributes:
-        name: Name of the pinned mesh ``benchmarks/data/<name>.npz``.
+        name: Name of the pinned mesh ``meshes/<name>.npz``.
         size_fine: Edge length within ``refine_radius`` of the pole.
         size_coarse: Largest edge length.
         refine_radius: Radius of the fine zone.
@@ -277,8 +277,8 @@ QUARTER_SPHERE = SphereSpec(
 QUARTER_SPHERE_COARSE = SphereSpec(
     "quarter_sphere_coarse", size_fine=0.3, size_coarse=3.0, refine_radius=2.0, indentation=0.14
 )
-#: Pinned meshes of the sphere decks (see :func:`pin_sphere_mesh`).
-DATA = Path(__file__).resolve().parent / "data"
+#: Pinned meshes of the sphere decks (see :func:`pin_sphere_mesh` and meshes/README.md).
+MESHES = ROOT / "meshes"
 
 
 def _hertz_meshes() -> typing.Any:
@@ -324,12 +324,12 @@ def sphere_facet_tags(mesh: dolfinx.mesh.Mesh, body_of_cell: np.ndarray) -> comp
 
 
 def _pinned_sphere(spec: SphereSpec) -> tuple[dolfinx.mesh.Mesh, compat.MeshTags, compat.MeshTags]:
-    """The mesh of ``benchmarks/data/<spec.name>.npz``, with its tags.
+    """The mesh of ``meshes/<spec.name>.npz``, with its tags.
 
     Raises:
         ValueError: The file is missing or was made for other sizes.
     """
-    path = DATA / f"{spec.name}.npz"
+    path = MESHES / f"{spec.name}.npz"
     if not path.is_file():
         raise ValueError(f"pinned mesh {path} is missing: make it with "
                          "`python benchmarks/ccx_decks.py --pin`")  # fmt: skip
@@ -348,7 +348,7 @@ def _pinned_sphere(spec: SphereSpec) -> tuple[dolfinx.mesh.Mesh, compat.MeshTags
     return mesh, cell_tags, sphere_facet_tags(mesh, body_of_cell)
 
 
-def pin_sphere_mesh(spec: SphereSpec, directory: Path = DATA) -> Path:
+def pin_sphere_mesh(spec: SphereSpec, directory: Path = MESHES) -> Path:
     """Mesh ``spec`` with gmsh and save nodes, cells and bodies to ``<directory>/<name>.npz``.
 
     gmsh's unstructured mesher gives different meshes in different versions (4.8 on Debian 12,
@@ -373,7 +373,7 @@ def quarter_sphere_model(
     Args:
         spec: Mesh sizes and indentation.
         increments: Fixed increments of the step (``*STATIC, DIRECT``).
-        pinned: Use the pinned mesh of ``benchmarks/data`` (the same on every machine) instead of
+        pinned: Use the pinned mesh of ``meshes/`` (the same on every machine) instead of
             meshing with this machine's gmsh.
     """
     hz = _hertz_meshes()
@@ -494,7 +494,7 @@ def select_decks(names: Sequence[str] | None = None, *, quick: bool = False) -> 
 def main(argv: Sequence[str] | None = None) -> None:
     """Command line: ``--pin`` remakes the pinned sphere meshes, ``--write DIR`` writes decks."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--pin", action="store_true", help="remake benchmarks/data/*.npz (gmsh)")
+    parser.add_argument("--pin", action="store_true", help="remake meshes/*.npz (gmsh)")
     parser.add_argument("--write", type=Path, metavar="DIR", help="write the decks into DIR")
     parser.add_argument("--only", nargs="+", metavar="DECK", help="decks to write")
     args = parser.parse_args(argv)

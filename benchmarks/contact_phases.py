@@ -65,14 +65,15 @@ import ufl
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.assembly import SpringBlocks
-from dolfinx_ntf.contact.problem import LAST_REPAIRING_ITERATION, SEARCH_TOLERANCE
+from dolfinx_ntf.contact.pairing import SEARCH_TOLERANCE
+from dolfinx_ntf.contact.problem import LAST_REPAIRING_ITERATION
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.surfaces import resolve_master
 from dolfinx_ntf.kernels.search import NOT_HELD, MasterSurface
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.parallel import master_exchange, surface_distribution
 from dolfinx_ntf.parallel.halo import NodeHalo
-from dolfinx_ntf.solvers.newton import ITERATIVE_PETSC_OPTIONS, galerkin_products
+from dolfinx_ntf.solvers.linear_solver import ITERATIVE_PETSC_OPTIONS, galerkin_products
 
 __all__ = ["SOLVERS", "PlateMesh", "build_plates", "build_problem", "main", "report", "run_size"]
 

@@ -43,7 +43,7 @@ import contact_phases
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import LAST_REPAIRING_ITERATION
 from dolfinx_ntf.parallel import master_exchange
-from dolfinx_ntf.solvers.newton import galerkin_products
+from dolfinx_ntf.solvers.linear_solver import galerkin_products
 
 ROOT = Path(__file__).resolve().parents[1]
 SOLVER_NAMES = {

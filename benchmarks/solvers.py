@@ -1,6 +1,6 @@
 """Direct against iterative linear solvers on the punch: the crossover (docs/method.md §14.7).
 
-The punch of ``tests/conftest.py`` (a block pressed onto a larger clamped block, non-matching
+The punch of ``tests/helpers/blocks.py`` (a block pressed onto a larger clamped block, non-matching
 meshes, LINEAR law) refined to ``--sizes`` cells per side of the lower block (the punch is 25 %
 finer), from about 20k to 300k dofs. Every (size, solver, process count) runs in its own
 ``mpirun`` (this script starts them), so that peak memory is that of one solver. Each run solves
@@ -45,13 +45,13 @@ import ufl
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import conftest  # the punch's mesh and residual
+import helpers  # the punch's mesh and residual
 from contact_phases import _format_table
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.elasticity import component_bc
-from dolfinx_ntf.solvers import newton as ntf_solver
+from dolfinx_ntf.solvers import linear_solver
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Pressure on the punch's top (E = 1000): a few per mille of strain.
@@ -59,9 +59,9 @@ PRESSURE = 20.0
 
 
 def punch(n: int, comm: MPI.Comm) -> tuple[ntf.ContactProblem, dolfinx.fem.Constant]:
-    """The conftest punch with ``n`` cells per side of the lower block, the punch 25 % finer."""
+    """The punch of helpers with ``n`` cells per side of the lower block, the punch 25 % finer."""
     k, kz = max(2, round(0.75 * n)), max(2, round(0.625 * n))
-    mesh, _, ft = conftest.two_blocks(
+    mesh, _, ft = helpers.two_blocks(
         comm,
         lower=((0, 0, -1), (1, 1, 1), (n, n, n)),
         upper=((0.2, 0.2, 0.0), (0.6, 0.6, 0.5), (k, k, kz)),
@@ -69,17 +69,17 @@ def punch(n: int, comm: MPI.Comm) -> tuple[ntf.ContactProblem, dolfinx.fem.Const
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
-    F = conftest.elastic_residual(u, v, ft, pressure)
-    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(conftest.LOWER_BOTTOM))
+    F = helpers.elastic_residual(u, v, ft, pressure)
+    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(helpers.LOWER_BOTTOM))
     bcs = [
         dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
-        component_bc(V, 0, ft.find(conftest.UPPER_TOP)),
-        component_bc(V, 1, ft.find(conftest.UPPER_TOP)),
+        component_bc(V, 0, ft.find(helpers.UPPER_TOP)),
+        component_bc(V, 1, ft.find(helpers.UPPER_TOP)),
     ]
     pair = ntf.ContactPair(
-        ntf.FacetSurface(ft, conftest.UPPER_BOTTOM),
-        ntf.FacetSurface(ft, conftest.LOWER_TOP),
-        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(conftest.YOUNGS_MODULUS)),
+        ntf.FacetSurface(ft, helpers.UPPER_BOTTOM),
+        ntf.FacetSurface(ft, helpers.LOWER_TOP),
+        ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(helpers.YOUNGS_MODULUS)),
     )
     return ntf.ContactProblem(F, u, [pair], bcs), pressure
 
@@ -235,10 +235,11 @@ def section(results: list[dict], threshold: int) -> list[str]:
         f"{version})",
         "",
         "Written by `.venv/bin/python benchmarks/solvers.py --write` (docs/method.md §14.7): the "
-        "punch of `tests/conftest.py` refined (hexahedra, LINEAR law, non-matching meshes), one "
+        "punch of `tests/helpers/blocks.py` refined (hexahedra, LINEAR law, non-matching meshes), "
+        "one "
         "increment solved to convergence with TIGHT controls, each run in its own `mpirun`. "
         "direct = MUMPS LU; iterative = GMRES (right-preconditioned, true residual reduced by "
-        f"`ksp_rtol` = {ntf_solver.ITERATIVE_PETSC_OPTIONS['ksp_rtol']:g}) with GAMG and the "
+        f"`ksp_rtol` = {linear_solver.ITERATIVE_PETSC_OPTIONS['ksp_rtol']:g}) with GAMG and the "
         "rigid-body modes of each body. Wall and CPU time per Newton iteration include assembly, "
         "contact and the first iteration's MUMPS analysis or GAMG set-up; CPU is summed over "
         "the processes. The machine (2 cores) was shared with other engineers' tests while "
@@ -284,7 +285,7 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
                     result = _run(folder, n, solver, processes)
                     if result is not None:
                         results.append(result)
-    lines = section(results, ntf_solver.DIRECT_MAX_DOFS)
+    lines = section(results, linear_solver.DIRECT_MAX_DOFS)
     print("\n".join(lines))
     if args.write:
         import vs_ccx

@@ -67,7 +67,7 @@ from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.meshes import hertz as hz
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
-from dolfinx_ntf.solvers.newton import ContactConvergenceError
+from dolfinx_ntf.solvers.errors import ContactConvergenceError
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "data" / "calculix" / "crossval"))
@@ -526,7 +526,8 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
         "",
         "## Cross-checks",
         "",
-        "The decks of `tests/data/calculix/crossval/cases.py`, run by `tests/test_ccx_crossval.py` "
+        "The decks of `tests/data/calculix/crossval/cases.py`, run by "
+        "`tests/calculix/test_ccx_crossval.py` "
         "with the bounds 1e-6 (u) and 1e-5 (p, g, E).",
         "",
         *_cross_table(cross),
@@ -542,7 +543,8 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
             "## Friction and analyses made of steps",
             "",
             "The decks of `tests/data/calculix/crossval/friction_cases.py`, run by "
-            "`tests/test_ccx_friction.py` with the same bounds; slip and τ are the tangential "
+            "`tests/calculix/test_ccx_friction.py` with the same bounds; "
+            "slip and τ are the tangential "
             "columns of CDIS and CSTR (docs/method.md §11.4), E includes ccx 2.20's friction "
             "energy.",
             "",
@@ -553,7 +555,8 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
             *(f"| `{r.name}` | {r.description} |" for r in friction),
             "",
             "CalculiX's own frictional decks (`friction1`, `friction2` of calculix-ccx-test) run "
-            "at ccx's default controls in `tests/test_ccx_friction.py`: `friction2` agrees to the "
+            "at ccx's default controls in `tests/calculix/test_ccx_friction.py`: "
+            "`friction2` agrees to the "
             "printed digits, `friction1` within 6e-5 (normal columns) and 1e-3 (tangential), "
             "both codes being converged to ccx's default R_n = 0.005 only.",
             "",
@@ -581,7 +584,8 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
             "## Dynamic steps",
             "",
             "`impact_dynamic` (`tests/data/calculix/dynamic/impact_deck.py`, also run by "
-            "`tests/test_dynamic_ccx.py`): a C3D8 block moving at 1 onto a clamped base (gap "
+            "`tests/calculix/test_dynamic_ccx.py`): a C3D8 block moving at 1 onto a clamped base "
+            "(gap "
             "0.0102), `*DYNAMIC, DIRECT` with ccx's default ALPHA and increments of 5e-4 over "
             "0.08 (impact, bounce, second contact), LINEAR law with ccx's defaults (no tension in "
             "dynamics), `*INITIAL CONDITIONS, TYPE=VELOCITY`, tight controls (docs/method.md "
@@ -653,7 +657,8 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
         "faces (above a master node or edge) gets the face CalculiX gives it where ccx's "
         "floating-point distances tell the centroids apart (docs/method.md §3.6): on the two "
         "decks of `tests/data/calculix/ties` (21 such nodes each) the first `.cel` set is ccx's "
-        "(`tests/test_ccx_ties.py`). Where the rounded distances are equal too, ccx's choice "
+        "(`tests/calculix/test_ccx_ties.py`). Where the rounded distances are equal too, "
+        "ccx's choice "
         "depends on its element numbering and is not reproduced: on the punch decks of "
         "`benchmarks/vs_ccx.py`, whose `.cel` sets it compares pairing by pairing, 2 of 49 "
         "slave nodes (`tie_punch`), 2 of 121 (`punch_10`), 13 of 441 (`punch_20`) and 5 of 961 "

@@ -288,7 +288,7 @@ def parse_progress(text: str) -> Progress:
     """Converged increments of dolfinx_ntf's progress lines: iterations and attempts of each.
 
     Reads ``increment N attempt A`` and ``increment N converged: time T, I iterations, ...``
-    (``dolfinx_ntf.solvers.newton.StaticStep``); later fields of the line are ignored.
+    (``dolfinx_ntf.solvers.steps.StaticStep``); later fields of the line are ignored.
     """
     progress = Progress()
     attempt = 1
@@ -614,7 +614,7 @@ _HEADER = [
     "- `quarter_sphere`: a C3D4 steel quarter sphere of radius 10 (h = 0.15 at the pole) pushed "
     "0.12 into a steel block in 4 fixed increments (`*STATIC, DIRECT`), same law, ccx's default "
     "controls; `quarter_sphere_coarse`: h = 0.3, pushed 0.14. Their gmsh meshes are pinned in "
-    "`benchmarks/data` (which code converges depends on the mesh, and gmsh 4.8 and 4.13 differ).",
+    "`meshes/` (which code converges depends on the mesh, and gmsh 4.8 and 4.13 differ).",
     "- the cross-validation decks of `tests/data/calculix/crossval/cases.py` (controls "
     "tightened to R_n = 1e-10).",
     "",

@@ -51,6 +51,12 @@ from dolfinx_ntf.solvers.active_set import ActiveSetNewtonSolver
 
 __all__ = ["METHODS", "hertz", "main", "make_meshes", "run"]
 
+# %%
+# Parameters
+# ----------
+# The Hertz sphere of radius 25 mm on the plane ``z = 0``; ``ZONE`` is the potential contact zone
+# (the facets below ``0.2 R``), the only boundary where contact acts in every method.
+
 # Units: mm, N, MPa.
 RADIUS = 25.0
 E, NU = 210_000.0, 0.3
@@ -132,6 +138,18 @@ class _Timer:
 
 def _ksp_time() -> float:
     return PETSc.Log.Event("KSPSolve").getPerfInfo()["time"]
+
+
+# %%
+# One method
+# ----------
+# ``run`` solves the same sphere with one method: node-to-face springs against the rigid plane
+# (:class:`~dolfinx_ntf.RigidPlane`) or against a clamped meshed block, the active-set Newton
+# (:class:`~dolfinx_ntf.ActiveSetNewtonSolver`), or the UFL penalty and Nitsche residuals of
+# :mod:`dolfinx_ntf.fem.continuum` solved by
+# :class:`~dolfinx_ntf.fem.continuum.ContinuumNewton`. Every method's pressure is recovered on the
+# contact boundary by :class:`~dolfinx_ntf.BoundaryPressure` and measured alike
+# (:mod:`dolfinx_ntf.fem.measures`).
 
 
 def run(
@@ -328,6 +346,13 @@ def main(argv: typing.Sequence[str] | None = None) -> list[dict]:
         print_table(rows)
     return rows
 
+
+# %%
+# Run
+# ---
+# The build of this page ran ``demos/compare_continuum.py --coarse``: one row per method. The
+# comparison at three mesh levels, with sweeps over the penalties and Nitsche's parameters, is
+# on the :doc:`comparison page <../comparison>` (``benchmarks/continuum.py``).
 
 if __name__ == "__main__":
     main()

@@ -39,9 +39,14 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.meshes import punch as geometry
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
-from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS
 
 __all__ = ["main"]
+
+# %%
+# Parameters
+# ----------
+# The punch, block and materials of the frictionless punch demo; ``mu = 0.2``.
 
 # Units: mm, N, MPa (the geometry and materials of demos/punch.py).
 BLOCK_SIZE, PUNCH_SIZE = (100.0, 100.0, 50.0), (40.0, 40.0, 30.0)
@@ -58,6 +63,14 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--output", type=Path, default=Path("output"))
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
+
+
+# %%
+# The analysis
+# ------------
+# The pair's :class:`~dolfinx_ntf.SurfaceInteraction` holds a :class:`~dolfinx_ntf.Friction`; the
+# load is one static step. The stick and slip zones are read from the ``sliding`` column of
+# :func:`~dolfinx_ntf.contact_results`.
 
 
 def main(argv: typing.Sequence[str] | None = None) -> dict:
@@ -167,6 +180,13 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     return summary
 
 
+# %%
+# Figure
+# ------
+# Left: the punch bottom's nodes, sticking or slipping, with their shear tractions. Right: the
+# pressure, the shear traction and the limit ``mu p`` along the centre line.
+
+
 def _plot(path: Path, x: np.ndarray, res, limit: np.ndarray, slip: np.ndarray, summary) -> Path:
     """Stick/slip map with shear arrows, and pressure, shear and mu p along the centre line."""
     import matplotlib as mpl
@@ -199,6 +219,11 @@ def _plot(path: Path, x: np.ndarray, res, limit: np.ndarray, slip: np.ndarray, s
     plt.close(fig)
     return path
 
+
+# %%
+# Run
+# ---
+# The build of this page ran ``demos/frictional_punch.py --coarse``.
 
 if __name__ == "__main__":
     sys.exit(0 if main()["passed"] else 1)

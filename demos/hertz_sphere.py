@@ -50,7 +50,6 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
-import scipy.optimize
 
 import dolfinx.fem
 import dolfinx.fem.petsc
@@ -58,6 +57,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem import measures
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.kernels.springs import evaluate_springs
@@ -65,6 +65,13 @@ from dolfinx_ntf.meshes import hertz as geometry
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 __all__ = ["hertz", "main"]
+
+# %%
+# Parameters and Hertz's solution
+# -------------------------------
+# Steel on steel; the penalty slope is 10 E per mm, a fifth of CalculiX's default, which keeps the
+# overlap ``p/K`` small against the contact radius while Newton still converges in a few
+# iterations.
 
 # Units: mm, N, MPa.
 RADIUS = 25.0
@@ -124,6 +131,14 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     )
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
+
+
+# %%
+# The analysis
+# ------------
+# The quarter model of :mod:`dolfinx_ntf.meshes.hertz` with symmetry conditions, the sphere's
+# top pushed down by a prescribed displacement growing as ``t^2`` in equal increments; the
+# sphere's curved surface is the slave, the block top the master.
 
 
 def main(argv: typing.Sequence[str] | None = None) -> dict:
@@ -232,7 +247,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     r_all = np.concatenate(comm.allgather(np.hypot(reference[:, 0], reference[:, 1])))
     p_all = np.concatenate(comm.allgather(pressure))
     closed = np.concatenate(comm.allgather(closed))
-    a_fit, p0_fit = _fit_hertz_profile(r_all, p_all, a_hertz, p0_hertz)
+    a_fit, p0_fit = measures.fit_hertz_profile(r_all, p_all, a_hertz, p0_hertz)
     r_closed, r_open = r_all[closed].max(), _first_open_radius(r_all, closed)
     p_max = float(p_all.max())
     # CalculiX freezes the pairing after Newton iteration 8, so an increment can converge with
@@ -274,6 +289,14 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     return summary
 
 
+# %%
+# Checks, fit and figure
+# ----------------------
+# Slave nodes inside the master without a spring are counted (CalculiX's pairing schedule can leave
+# some after Newton iteration 8); Hertz's profile is fitted to the nodal pressures; the figure shows
+# the nodal pressures against the radius beside Hertz's curve.
+
+
 def _unpaired_penetrations(problem: ntf.ContactProblem) -> tuple[int, float]:
     """Slave nodes below the master surface that have no spring: their number and largest depth.
 
@@ -303,23 +326,6 @@ def _unpaired_penetrations(problem: ntf.ContactProblem) -> tuple[int, float]:
     comm = problem.u.function_space.mesh.comm
     count = comm.allreduce(int(depth.size), op=MPI.SUM)
     return count, comm.allreduce(float(depth.max(initial=0.0)), op=MPI.MAX)
-
-
-def _fit_hertz_profile(r: np.ndarray, p: np.ndarray, a0: float, p0: float) -> tuple[float, float]:
-    """Least-squares fit of ``p0 sqrt(1 - r^2/a^2)`` (zero beyond a) to the nodal pressures.
-
-    Nodes out to 1.5 a0 take part, so the fitted radius is pinned from both sides by nodes with and
-    without pressure.
-    """
-    near = r < 1.5 * a0
-    r, p = r[near], p[near]
-
-    def residual(params: np.ndarray) -> np.ndarray:
-        a, peak = params
-        return peak * np.sqrt(np.clip(1 - (r / a) ** 2, 0, None)) - p
-
-    fit = scipy.optimize.least_squares(residual, x0=[a0, p0], x_scale=[a0, p0])
-    return float(fit.x[0]), float(fit.x[1])
 
 
 def _first_open_radius(r: np.ndarray, closed: np.ndarray) -> float:
@@ -398,6 +404,13 @@ def _print_report(s: dict) -> None:
         f"Results: {s['xdmf']}, {s.get('png')}"
     )
 
+
+# %%
+# Run
+# ---
+# The build of this page ran ``demos/hertz_sphere.py --coarse`` (about four elements across the
+# contact radius): the Hertz values for the computed force, the computed ones and their relative
+# errors, then the figure.
 
 if __name__ == "__main__":
     sys.exit(0 if main()["passed"] else 1)

@@ -57,6 +57,12 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 __all__ = ["main"]
 
+# %%
+# Parameters
+# ----------
+# Millimetres, newtons and tonnes, so that stresses are in MPa and energies in mJ. The penalty
+# slope is 1 E of the base per mm (see above for why not CalculiX's 50 E).
+
 # Units: mm, N, tonne, s (stress in MPa, density in t/mm^3, energy in mJ).
 SCALE = 100.0
 BASE_SIZE = (1.0 * SCALE, 1.0 * SCALE, 0.5 * SCALE)
@@ -88,6 +94,15 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     )
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
+
+
+# %%
+# The analysis
+# ------------
+# Two bodies with gravity, the block given its initial velocity, the tension-free LINEAR law of
+# CalculiX's dynamics (:meth:`LinearLaw.dynamic <dolfinx_ntf.LinearLaw.dynamic>`), and one
+# :class:`~dolfinx_ntf.DynamicStep` of fixed increments; after every increment the energies and the
+# contact force are recorded.
 
 
 def main(argv: typing.Sequence[str] | None = None) -> dict:
@@ -276,6 +291,13 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     return summary
 
 
+# %%
+# Figure and report
+# -----------------
+# The figure shows the block's displacement and the contact force against time; the table the
+# energy balance.
+
+
 def _plot(path: Path, summary: dict) -> Path:
     """Block displacement and contact force against time."""
     import matplotlib as mpl
@@ -327,6 +349,11 @@ def _print_table(rows: list[dict], summary: dict) -> None:
         f"Results: {summary['xdmf']}, {summary.get('png')}"
     )
 
+
+# %%
+# Run
+# ---
+# The build of this page ran ``demos/impact.py --coarse``.
 
 if __name__ == "__main__":
     sys.exit(0 if main()["passed"] else 1)

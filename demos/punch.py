@@ -47,6 +47,12 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 __all__ = ["main"]
 
+# %%
+# Parameters
+# ----------
+# The geometry is the default of :mod:`dolfinx_ntf.meshes.punch` scaled to millimetres, the
+# materials steel on aluminium, and the load a pressure of 100 MPa on the punch top.
+
 # Units: mm, N, MPa. The geometry is the default of ``dolfinx_ntf.meshes.punch`` scaled by 100 (mm).
 SCALE = 100.0
 BLOCK_SIZE = (1.0 * SCALE, 1.0 * SCALE, 0.5 * SCALE)
@@ -82,6 +88,16 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     )
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
+
+
+# %%
+# The analysis
+# ------------
+# ``main`` builds the two-body mesh with gmsh (:func:`~dolfinx_ntf.meshes.gmsh_io.mesh_from_gmsh`),
+# the small-strain residual of both bodies, the contact pair (punch bottom slave, block top master,
+# :meth:`LinearLaw.with_ccx_defaults <dolfinx_ntf.LinearLaw.with_ccx_defaults>`), then solves with
+# :class:`~dolfinx_ntf.ContactNewtonSolver` and :class:`~dolfinx_ntf.StaticStep`, writing every
+# increment with :class:`~dolfinx_ntf.ContactWriter`.
 
 
 def main(argv: typing.Sequence[str] | None = None) -> dict:
@@ -227,6 +243,13 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     return summary
 
 
+# %%
+# Equilibrium checks and the report
+# ----------------------------------
+# The contact force (:func:`~dolfinx_ntf.contact_force`), the reaction of the clamped block bottom
+# (:func:`~dolfinx_ntf.reaction`) and ``sum p A n_z`` must equal the load.
+
+
 def _forces(problem: ntf.ContactProblem, facet_tags: typing.Any, load: float) -> dict:
     """Contact force balance of the current (converged) state.
 
@@ -299,6 +322,12 @@ def _print_table(rows: list[dict], summary: dict) -> None:
         f"Results: {summary['xdmf']}"
     )
 
+
+# %%
+# Run
+# ---
+# The build of this page ran ``demos/punch.py --coarse``: one row per increment, then the
+# equilibrium errors.
 
 if __name__ == "__main__":
     sys.exit(0 if main()["passed"] else 1)

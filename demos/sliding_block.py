@@ -40,9 +40,15 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.meshes import punch as geometry
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
-from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS
 
 __all__ = ["main"]
+
+# %%
+# Parameters
+# ----------
+# The pressure on the block, the amplitude of the drag and a first drag small enough that nothing
+# slips.
 
 # Units: mm, N, MPa.
 BASE_SIZE, BLOCK_SIZE = (100.0, 100.0, 50.0), (40.0, 40.0, 10.0)
@@ -62,6 +68,15 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--output", type=Path, default=Path("output"))
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser.parse_args(argv)
+
+
+# %%
+# The analysis
+# ------------
+# The steps are :class:`~dolfinx_ntf.AnalysisStep` objects run by :func:`~dolfinx_ntf.run_steps`:
+# each has its :class:`~dolfinx_ntf.Load` (pressure, prescribed displacement of the top) and,
+# for the last drag, a :class:`~dolfinx_ntf.ChangeFriction`. After every increment the shear,
+# slip and stick/slip state of every spring are read from :func:`~dolfinx_ntf.contact_results`.
 
 
 def main(argv: typing.Sequence[str] | None = None) -> dict:
@@ -233,6 +248,13 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     return summary
 
 
+# %%
+# Figure
+# ------
+# The shear traction and ``mu p`` of the central node, and the mean shear over all springs, against
+# the analysis time.
+
+
 def _plot(path: Path, history: dict, ends: list[int]) -> Path:
     """Shear traction and mu p of the central node, and the means, against time."""
     import matplotlib as mpl
@@ -261,6 +283,11 @@ def _plot(path: Path, history: dict, ends: list[int]) -> Path:
     plt.close(fig)
     return path
 
+
+# %%
+# Run
+# ---
+# The build of this page ran ``demos/sliding_block.py --coarse``.
 
 if __name__ == "__main__":
     sys.exit(0 if main()["passed"] else 1)

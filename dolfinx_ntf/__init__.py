@@ -10,7 +10,8 @@ __version__ = "0.1.0"
 
 from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
-from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
+from dolfinx_ntf.contact.pair import ContactPair
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
@@ -57,14 +58,13 @@ from dolfinx_ntf.solvers.analysis import (
     run_steps,
 )
 from dolfinx_ntf.solvers.dynamics import DynamicStep, kinetic_energy
-from dolfinx_ntf.solvers.newton import (
+from dolfinx_ntf.solvers.errors import (
     ContactConvergenceError,
     ContactDivergenceError,
-    ContactNewtonSolver,
     ContactSolverError,
-    IncrementResult,
-    StaticStep,
 )
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 _logs.route_compiler_lines()
 _moved.install()

@@ -1,9 +1,10 @@
 """The module paths of dolfinx_ntf before its layers became folders (version 0.2), still importable.
 
 ``import dolfinx_ntf.solver`` or ``from dolfinx_ntf.gmsh_io import mesh_from_gmsh`` in a user's
-script finds the module at its new path (``dolfinx_ntf.solvers.newton``,
-``dolfinx_ntf.meshes.gmsh_io``) and warns once with a :class:`DeprecationWarning` naming it. The
-old ``dolfinx_ntf.parallel`` module is now a package of its own and is not aliased.
+script finds the module at its new path (``dolfinx_ntf.meshes.gmsh_io``) and warns once with a
+:class:`DeprecationWarning` naming it. The old ``solver`` module was split into the modules of
+``dolfinx_ntf.solvers``, whose package re-exports its names. The old ``dolfinx_ntf.parallel``
+module is now a package of its own and is not aliased.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ MOVED_MODULES: dict[str, str] = {
     "rigid": "kernels.rigid",
     "search": "kernels.search",
     "serendipity": "fem.serendipity",
-    "solver": "solvers.newton",
+    "solver": "solvers",  # the package re-exports the names of the split module
     "spring_areas": "kernels.spring_areas",
     "springs": "kernels.springs",
     "start_slope": "kernels.start_slope",

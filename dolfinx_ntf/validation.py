@@ -5,9 +5,9 @@ with a message that says what to do instead, not later inside a Newton iteration
 ``AttributeError``, an ``IndexError`` or a PETSc error code. The constructors and entry methods
 (:class:`~dolfinx_ntf.FacetSurface`, :class:`~dolfinx_ntf.NodeSurface`,
 :class:`~dolfinx_ntf.ContactPair`, :class:`~dolfinx_ntf.ContactProblem`,
-:class:`~dolfinx_ntf.ContactNewtonSolver`, :class:`~dolfinx_ntf.StaticStep`,
-:class:`~dolfinx_ntf.ContactWriter`, the helpers of ``postprocess.py``) call them once; nothing here
-runs on every Newton evaluation.
+:class:`~dolfinx_ntf.ContactNewtonSolver`, the steps, :class:`~dolfinx_ntf.ContactWriter`, the
+helpers of ``postprocess.py``) check their own arguments with these generic helpers, once; nothing
+here runs on every Newton evaluation.
 
 Shared rules:
     - ``TypeError`` for an argument of the wrong kind, ``ValueError`` for a wrong value,
@@ -39,16 +39,11 @@ from dolfinx_ntf import compat
 __all__ = [
     "check_bcs",
     "check_displacement",
-    "check_distinct_pairs",
-    "check_finite_contact_nodes",
     "check_linear_solver",
     "check_petsc_options",
     "check_positive",
-    "check_problem",
     "check_residual",
     "check_sequence",
-    "check_solver",
-    "check_step",
     "check_type",
     "check_writable",
     "describe",
@@ -215,68 +210,6 @@ def check_positive(value: object, what: str, *, allow_none: bool = False) -> Non
         raise ValueError(f"{what} must be a finite number > 0, got {float(value):g}")
 
 
-def check_problem(
-    F: object,
-    u: object,
-    pairs: object,
-    bcs: object,
-    J: object,
-    pair_type: type,
-    max_depth: object,
-) -> tuple[list, list]:
-    """The arguments of :class:`~dolfinx_ntf.ContactProblem`; returns ``(pairs, bcs)`` as lists."""
-    owner = "ContactProblem"
-    check_displacement(u, owner)
-    check_residual(F, u, owner, J)
-    pairs = check_sequence(
-        pairs, pair_type, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
-    )
-    check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
-    return pairs, check_bcs(bcs, owner)
-
-
-def check_distinct_pairs(
-    comm: MPI.Comm,
-    surfaces: typing.Sequence[tuple[str, np.ndarray, np.ndarray]],
-    reference: np.ndarray,
-) -> None:
-    """Two pairs on the same slave nodes and master faces: an error if identical, else a warning.
-
-    A slave node in two pairs that share master faces gets two springs on the same face: double
-    stiffness and, for identical pairs, each pair reporting half the contact pressure. Collective.
-
-    Args:
-        comm: Communicator of the mesh.
-        surfaces: ``(name, slave nodes, master facets)`` of every pair.
-        reference: ``(num_nodes, 3)`` reference coordinates of the nodes.
-    """
-    for i, (name_i, slave_i, master_i) in enumerate(surfaces):
-        for name_j, slave_j, master_j in surfaces[i + 1 :]:
-            same = np.array_equal(slave_i, slave_j) and np.array_equal(
-                np.sort(master_i), np.sort(master_j)
-            )
-            shared = np.intersect1d(slave_i, slave_j)
-            if not np.intersect1d(master_i, master_j).size:
-                shared = shared[:0]
-            if comm.allreduce(bool(same), op=MPI.LAND):
-                raise ValueError(
-                    f"ContactProblem: pairs '{name_i}' and '{name_j}' are the same (identical "
-                    "slave nodes and master faces): every slave node would get two springs and "
-                    "each pair would report half the contact pressure; remove one of them"
-                )
-            count = comm.allreduce(int(shared.size), op=MPI.SUM)
-            if count and comm.rank == 0:
-                where = ""
-                if shared.size:
-                    x = reference[shared[0]]
-                    where = f" (first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
-                warn(
-                    f"ContactProblem: pairs '{name_i}' and '{name_j}' share {count} slave node(s) "
-                    f"and master faces{where}: those nodes can get two springs on the same face "
-                    "(double stiffness and force)"
-                )
-
-
 # -- surfaces --------------------------------------------------------------------------------------
 
 
@@ -322,115 +255,6 @@ def vertex_indices(vertices: object, owner: str) -> np.ndarray:
         i = int(np.argmax(array))
         raise ValueError(f"{owner}: vertex index {int(array[i])} (entry {i}) is too large")
     return array.astype(np.int32)
-
-
-# -- the state during a solve ----------------------------------------------------------------------
-
-
-def check_finite_contact_nodes(
-    comm: MPI.Comm,
-    u: dolfinx.fem.Function,
-    reference: np.ndarray,
-    surfaces: typing.Sequence[tuple[str, np.ndarray]],
-) -> None:
-    """Raise a ``ValueError`` (collectively) if ``u`` is not finite at a node of a surface.
-
-    Args:
-        comm: Communicator of the mesh.
-        u: The displacement.
-        reference: ``(num_nodes, 3)`` reference coordinates of the nodes.
-        surfaces: ``(name, nodes)`` of the contact surfaces, e.g. ``("pair 1 slave", nodes)``.
-    """
-    values = u.x.array.reshape(-1, 3)
-    error = None
-    for name, nodes in surfaces:
-        bad = nodes[~np.all(np.isfinite(values[nodes]), axis=1)]
-        if bad.size:
-            x, d = reference[bad[0]], values[bad[0]]
-            error = ValueError(
-                f"the displacement u is not finite at {bad.size} node(s) of the {name} surface, "
-                f"first at node {int(bad[0])} (reference position ({x[0]:.6g}, {x[1]:.6g}, "
-                f"{x[2]:.6g}), u = ({d[0]:.6g}, {d[1]:.6g}, {d[2]:.6g})); set u to finite values "
-                "before solving"
-            )
-            break
-    raise_collectively(comm, error)
-
-
-# -- solver and step ------------------------------------------------------------------------------
-
-
-def check_solver(
-    comm: object,
-    problem: object,
-    problem_type: type,
-    petsc_options: object,
-    options_prefix: object,
-    *,
-    controls: object,
-    required_controls: typing.Iterable[str],
-    max_it: object,
-    min_iterations: object,
-) -> dict[str, typing.Any]:
-    """The arguments of :class:`~dolfinx_ntf.ContactNewtonSolver`; returns the PETSc options."""
-    owner = "ContactNewtonSolver"
-    check_type(comm, MPI.Comm, f"{owner}: comm", "pass mesh.comm")
-    check_type(problem, problem_type, f"{owner}: problem")
-    if MPI.Comm.Compare(comm, problem.u.function_space.mesh.comm) == MPI.UNEQUAL:
-        raise ValueError(f"{owner}: comm must be the communicator of the mesh (mesh.comm)")
-    if not isinstance(options_prefix, str) or not options_prefix or " " in options_prefix:
-        raise ValueError(
-            f"{owner}: options_prefix must be a non-empty string without blanks such as 'ntf_', "
-            f"got {options_prefix!r}"
-        )
-    if not isinstance(controls, typing.Mapping):
-        raise TypeError(
-            f"{owner}: controls must be a mapping of names to numbers, got {describe(controls)}"
-        )
-    missing = sorted(set(required_controls) - set(controls))
-    if missing:
-        raise ValueError(f"{owner}: controls lack {missing}")
-    for name, value in controls.items():
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not value > 0:
-            raise ValueError(f"{owner}: controls[{name!r}] must be a number > 0, got {value}")
-    for name, value, least in (("max_it", max_it, 1), ("min_iterations", min_iterations, 0)):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
-            raise ValueError(f"{owner}: {name} must be an integer >= {least}, got {value}")
-    return check_petsc_options(petsc_options, owner)
-
-
-def check_step(step: typing.Any) -> None:
-    """The configuration of a :class:`~dolfinx_ntf.StaticStep`."""
-    owner = "StaticStep"
-    if not callable(step.set_load):
-        raise TypeError(
-            f"{owner}: set_load must be a function of the step time t, got "
-            f"{describe(step.set_load)}"
-        )
-    if step.on_increment is not None and not callable(step.on_increment):
-        raise TypeError(
-            f"{owner}: on_increment must be a function or None, got {describe(step.on_increment)}"
-        )
-    for name in ("period", "initial_increment", "min_increment", "cutback_factor", "growth_factor"):
-        check_positive(getattr(step, name), f"{owner}: {name}")
-    check_positive(step.max_increment, f"{owner}: max_increment", allow_none=True)
-    max_inc = step.period if step.max_increment is None else step.max_increment
-    if not (step.min_increment <= step.initial_increment <= max_inc):
-        raise ValueError(
-            f"{owner}: need 0 < min_increment ({step.min_increment}) <= initial_increment "
-            f"({step.initial_increment}) <= max_increment ({max_inc})"
-        )
-    if not (step.cutback_factor < 1 <= step.growth_factor):
-        raise ValueError(
-            f"{owner}: need 0 < cutback_factor ({step.cutback_factor}) < 1 <= growth_factor "
-            f"({step.growth_factor})"
-        )
-    if isinstance(step.growth_iterations, bool) or not isinstance(
-        step.growth_iterations, numbers.Integral
-    ):
-        raise TypeError(
-            f"{owner}: growth_iterations must be an integer, got {describe(step.growth_iterations)}"
-        )
 
 
 # -- PETSc -----------------------------------------------------------------------------------------

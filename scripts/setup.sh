@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Make a bare Debian 12 (bookworm), Debian 13 (trixie) or Debian unstable (sid) machine ready for dolfinx_ntf;
 # idempotent and fast when everything is there. Installs Debian's dolfinx stack (0.5.2, 0.9 or 0.11), OpenBLAS,
-# CalculiX ccx 2.20 (the cross-validation oracle) and a .venv that sees Debian's packages. On PATH, `ccx` is always
-# ccx 2.20; on sid, Debian's ccx 2.23 is also there as `ccx-2.23`.
+# CalculiX ccx 2.20 (the cross-validation oracle) and a .venv that sees Debian's packages; Sphinx, its extensions
+# and Chromium for the documentation site. On PATH, `ccx` is always ccx 2.20; on sid, Debian's ccx 2.23 is also
+# there as `ccx-2.23`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
@@ -11,7 +12,8 @@ sudo_cmd=""
 [ "$(id -u)" = 0 ] || sudo_cmd="sudo"
 
 packages=(python3-dolfinx-real python3-gmsh python3-venv python3-pip python3-pytest python3-scipy
-          python3-matplotlib libopenblas0-pthread openmpi-bin calculix-ccx-test)
+          python3-matplotlib libopenblas0-pthread openmpi-bin calculix-ccx-test
+          python3-sphinx python3-myst-parser furo python3-sphinx-gallery chromium)   # make docs, docs-check
 ccx_libraries=(libarpack2t64 libgfortran5 liblapack3 libgomp1)   # what bookworm's ccx 2.20 needs, see below
 case "$release" in
   bookworm) packages+=(calculix-ccx) ;;

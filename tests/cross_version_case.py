@@ -9,18 +9,15 @@ Nodes are matched by their coordinates, since the two versions number dofs diffe
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
 import numpy as np
+from helpers import punch_problem
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-
-sys.path.insert(0, str(Path(__file__).parent))
-from conftest import punch_problem
 
 DATA = Path(__file__).parent / "data" / "cross_version"
 CASES = {

@@ -1,6 +1,6 @@
 """The demos are tests too: both run on their coarse meshes and their summaries are checked.
 
-Serial here; tests/test_parallel.py runs the punch demo on 2 and 3 processes.
+Serial here; tests/parallel/test_parallel.py runs the punch demo on 2 and 3 processes.
 """
 
 import importlib.util

@@ -1,4 +1,4 @@
-"""The layer check of ``make lint`` (scripts/check_layers.py) on the package and on planted faults."""
+"""The layer check of ``make lint`` (scripts/check_layers.py): the package and planted faults."""
 
 import shutil
 import subprocess

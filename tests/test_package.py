@@ -9,7 +9,7 @@ from petsc4py import PETSc
 
 import numpy as np
 import pytest
-from conftest import punch_problem, two_blocks
+from helpers import punch_problem, two_blocks
 
 import dolfinx.fem
 import ufl

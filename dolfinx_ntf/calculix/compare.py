@@ -27,6 +27,9 @@ import numpy as np
 
 from .dat import DatBlock, read_dat
 
+if typing.TYPE_CHECKING:
+    from .job import JobResult
+
 __all__ = [
     "Comparison",
     "IncrementComparison",
@@ -309,7 +312,7 @@ def ccx_increments(
 # ----------------------------------------------------------------------------- dolfinx_ntf side
 
 
-def job_increments(job: typing.Any) -> list[IncrementResults]:
+def job_increments(job: JobResult) -> list[IncrementResults]:
     """Increments of a :class:`~dolfinx_ntf.calculix.job.JobResult` in the neutral form."""
     results = []
     for inc in job.increments:
@@ -426,7 +429,7 @@ def compare_increments(
 
 
 def compare_job(
-    dat: str | Path | Sequence[DatBlock], job: typing.Any, sta: Sequence | None = None
+    dat: str | Path | Sequence[DatBlock], job: JobResult, sta: Sequence | None = None
 ) -> Comparison:
     """Compare a ccx ``.dat`` file (path or blocks) with a ``JobResult`` of the same deck.
 

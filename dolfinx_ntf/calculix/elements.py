@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = [
     "C3D8_EXTRAPOLATION",
@@ -29,11 +30,12 @@ __all__ = [
     "REFUSED_ELEMENTS",
     "ElementType",
     "element_for_cell",
+    "frozen_array",
     "nodal_extrapolation",
 ]
 
 
-def _frozen_array(values, dtype) -> np.ndarray:
+def frozen_array(values: npt.ArrayLike, dtype: npt.DTypeLike) -> np.ndarray:
     """A read-only copy of ``values``."""
     array = np.array(values, dtype=dtype)
     array.flags.writeable = False
@@ -229,25 +231,25 @@ def _element_type(
     frd_type: int,
     face_quadrature_degree: int = 2,
 ) -> ElementType:
-    points = _frozen_array(_POINTS[name], np.float64)
+    points = frozen_array(_POINTS[name], np.float64)
     midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES}.get(num_nodes, ())
     return ElementType(
         name,
         num_nodes,
         num_corners,
         face_type,
-        _frozen_array(np.asarray(faces) - 1, np.int64),
+        frozen_array(np.asarray(faces) - 1, np.int64),
         cell,
         degree,
-        _frozen_array(to_dolfinx, np.int64),
-        _frozen_array(mirrored_vertices, np.int64),
+        frozen_array(to_dolfinx, np.int64),
+        frozen_array(mirrored_vertices, np.int64),
         midside_edges,
         quadrature_degree,
         points,
         frd_type,
-        _frozen_array(nodal_extrapolation(name, points), np.float64),
+        frozen_array(nodal_extrapolation(name, points), np.float64),
         face_quadrature_degree,
-        _frozen_array([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
+        frozen_array([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
         if num_nodes == 20
         else None,
     )

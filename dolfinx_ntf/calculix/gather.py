@@ -61,7 +61,9 @@ def surface_face_nodes(deck: Deck, block, name: str) -> np.ndarray:
     return block.connectivity[rows[:, None], block.type.faces[surface.faces - 1]]
 
 
-def _broken(form: ufl.Form, V: dolfinx.fem.FunctionSpace) -> typing.Any:
+def _broken(
+    form: ufl.Form, V: dolfinx.fem.FunctionSpace
+) -> tuple[compat.Form, dolfinx.fem.FunctionSpace]:
     """``form`` tested with the discontinuous space of ``V``'s degree: per-element vectors."""
     mesh = V.mesh
     family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
@@ -97,7 +99,7 @@ class CcxNumbering:
         tdim = V.mesh.topology.dim
         self.num_owned_cells = V.mesh.topology.index_map(tdim).size_local
         self._internal = internal
-        self._form: typing.Any = None  # compiled on first use
+        self._form: compat.Form | None = None  # compiled on first use
         self._W: dolfinx.fem.FunctionSpace | None = None
         self.block = self.deck.elements[model.element_type.name]
         self._faces: dict[str, np.ndarray] = {}

@@ -1,30 +1,23 @@
-"""Run a CalculiX deck like ``ccx``: read ``JOB.inp``, solve, write ``JOB.dat``/``.cel``/``.xdmf``.
+"""Run a CalculiX deck like ``ccx``: read ``JOB.inp``, solve, write ccx's files and ``JOB.xdmf``.
 
-``run_job`` builds the model (``model.py``), runs each ``*STEP`` with
+``run_job`` builds the model (``model/``), runs each ``*STEP`` with
 :class:`~dolfinx_ntf.StaticStep` (``*STATIC`` initial increment, period, minimum, maximum;
-``DIRECT`` = fixed increments) and writes, per converged increment that the output FREQUENCY
-selects:
-
-    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S) and ``*CONTACT PRINT`` (CDIS,
-      CSTR, CELS, CNUM) blocks in ccx 2.20's exact format and order (docs/method.md §8.5: contact
-      rows by pair in deck order, slave nodes ascending). RF is the internal force of the bulk
-      elements plus the contact springs at each node, as ccx prints it: the reaction at constrained
-      dofs, the applied load elsewhere.
-    - ``JOB.cel``: every pairing's contact elements when ``CONTACT ELEMENTS`` is requested
-      (docs/method.md §8.5).
-    - ``JOB.xdmf``: displacement, contact pressure, clearance and status (every converged
-      increment).
-    - ``JOB.frd``: the mesh, and the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S) and ``*CONTACT FILE``
-      (CDIS, CSTR) results in ccx 2.20's ASCII layout (docs/method.md §13.2).
-    - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration, in ccx's format
-      (docs/method.md §13.3).
+``DIRECT`` = fixed increments) or :class:`~dolfinx_ntf.DynamicStep` (``*DYNAMIC``), counts steps,
+increments and attempts as ccx does and, per converged increment that the output FREQUENCY
+selects, has :class:`~dolfinx_ntf.calculix.job_files.JobFiles` write ``JOB.dat``, ``.frd``,
+``.cel``, ``.sta`` and ``.cvg`` in ccx 2.20's formats (docs/method.md §8.5, §13.2, §13.3) from the
+values of :class:`~dolfinx_ntf.calculix.output_values.OutputValues`. ``JOB.xdmf`` holds the
+displacement, contact pressure, clearance and status of every converged increment. RF is the
+internal force of the bulk elements plus the contact springs at each node, as ccx prints it: the
+reaction at constrained dofs, the applied load elsewhere.
 
 Newton stops like ccx (manual "Convergence criteria"): the largest residual force component must
 fall below ``R_n`` (``*CONTROLS, PARAMETERS=FIELD``, default 0.005) times the average element force,
 averaged over the iterations of the increment (``R_p`` after ``I_P`` iterations), and the last
 correction must be small against the increment's displacement change (``C_n``), see
 :meth:`ContactNewtonSolver.is_converged`. ``tight=True`` replaces the deck's values by
-``TIGHT_FIELD_CONTROLS`` (``R_n = R_p = 1e-10``), so that converged solutions are compared.
+``TIGHT_FIELD_CONTROLS`` (``R_n = R_p = 1e-10``, ``controls.py``), so that converged solutions are
+compared.
 
 Steps without contact pairs and without NLGEOM are linear: one increment over the whole step, as in
 ccx.
@@ -38,6 +31,7 @@ from __future__ import annotations
 
 import logging
 import time as _time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,46 +40,24 @@ from mpi4py import MPI
 import numpy as np
 
 import dolfinx.fem
-import dolfinx.fem.petsc
-import dolfinx.mesh
 import ufl
 
-from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
-from dolfinx_ntf.kernels.friction import output_tangents
 from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
-from dolfinx_ntf.outputs.results import ContactWriter, contact_results
+from dolfinx_ntf.logs import log_progress
+from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.solvers.dynamics import DynamicStep
-from dolfinx_ntf.solvers.newton import (
-    TIGHT_FIELD_CONTROLS,
-    ContactConvergenceError,
-    ContactNewtonSolver,
-    IncrementResult,
-    StaticStep,
-    log_progress,
-)
+from dolfinx_ntf.solvers.errors import ContactConvergenceError
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
-from .cel import ContactElementsFile
-from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
-from .deck import Deck, PrintRequest, Step, read_deck
-from .frd import FrdBlock, FrdWriter
-from .gather import CcxNumbering, Discard
+from .controls import relaxation_iteration, solver_controls
+from .deck import Deck, Step, read_deck
+from .gather import CcxNumbering
+from .job_files import JobFiles, check_requests
 from .model import CalculixModel, build_model, friction_of
-from .progress import CvgFile, StaFile
-from .roundoff import (
-    FieldAccuracy,
-    clean,
-    clean_contact,
-    clean_dat_blocks,
-    clean_frd_block,
-    clean_totals,
-    element_sizes,
-    force_floor,
-    largest_modulus,
-    law_accuracy,
-    zero_below,
-)
+from .output_values import ContactRows, OutputValues
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -118,36 +90,6 @@ class JobError(RuntimeError):
 
 
 @dataclass(frozen=True, eq=False)
-class ContactRows:
-    """Contact elements of one pair at one increment, slave nodes ascending (the ``.dat`` rows).
-
-    Attributes:
-        pair: ``SLAVE-MASTER`` surface names.
-        nodes: ``(k,)`` ccx slave node numbers.
-        clearance: ``(k,)`` CDIS normal value (negative = penetration).
-        pressure: ``(k,)`` CSTR contact pressure.
-        energy: ``(k,)`` CELS spring energy (with ccx 2.20's friction energy, docs/method.md
-            §11.4).
-        master_faces: ``(k, n)`` ccx node numbers of each element's master face, ccx face order.
-        slip: ``(k, 2)`` CDIS tangential columns: accumulated tangential relative displacement
-            along ccx's output directions t1, t2 (zero without friction).
-        shear: ``(k, 2)`` CSTR tangential columns: shear traction along t1, t2.
-        accuracy: ``(length, pressure (k,), energy (k,))``: what each value is known to
-            (``roundoff.clean_contact``, docs/method.md §14.5).
-    """
-
-    pair: str
-    nodes: np.ndarray
-    clearance: np.ndarray
-    pressure: np.ndarray
-    energy: np.ndarray
-    master_faces: np.ndarray
-    slip: np.ndarray | None = None
-    shear: np.ndarray | None = None
-    accuracy: tuple | None = None
-
-
-@dataclass(frozen=True, eq=False)
 class IncrementOutput:
     """Results of one converged increment.
 
@@ -175,7 +117,7 @@ class IncrementOutput:
         """Ccx numbers of the slave nodes that have a contact element (all pairs)."""
         return {int(n) for rows in self.contact for n in rows.nodes}
 
-    def displacement_of(self, node_ids) -> np.ndarray:
+    def displacement_of(self, node_ids: np.ndarray | Sequence[int]) -> np.ndarray:
         """Displacements ``(k, 3)`` of ccx node numbers."""
         ids = np.asarray(node_ids, dtype=np.int64)
         pos = np.searchsorted(self.node_ids, ids)
@@ -236,7 +178,7 @@ class _Counters:
 
 
 class _Job:
-    """State of one run (the model, problem, solver, writers and counters)."""
+    """The run of one deck: the model, problem, solver, files and the step and attempt counters."""
 
     def __init__(
         self,
@@ -257,20 +199,15 @@ class _Job:
         self.predictor = predictor
         self.guard_predictor = guard_predictor
         self.pair_after_predictor = pair_after_predictor
+        # rank 0 writes the files (docs/method.md §14.5)
+        self.files = JobFiles(jobname, directory, deck, model, root=comm.rank == 0)
         self.result = JobResult(jobname, directory, model)
-        self.result.dat = directory / f"{jobname}.dat"
-        self.root = comm.rank == 0  # writes the files (docs/method.md §14.5)
-        if self.root:
-            write_dat(self.result.dat, [])
-        self.cel: ContactElementsFile | None = None
-        cel = directory / f"{jobname}.cel"
-        if any(step.contact_elements for step in deck.steps):
-            self.result.cel = cel
-            self.cel = ContactElementsFile(cel, deck.num_elements) if self.root else Discard()
-        elif cel.exists() and self.root:  # ccx deletes the file at program start
-            cel.unlink()
+        self.result.dat, self.result.cel, self.result.frd = (
+            self.files.dat,
+            self.files.cel,
+            self.files.frd,
+        )
         self.counters = _Counters()
-        self._cel_overflow = False
 
         v = ufl.TestFunction(model.V)
         internal = ufl.inner(model.first_piola, ufl.grad(v)) * model.dx
@@ -279,7 +216,7 @@ class _Job:
         )
         self.problem.pairing_callbacks.append(self._on_pairing)
         self.numbering = CcxNumbering(model, internal)
-        self._stress = None
+        self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
         self.solver = ContactNewtonSolver(
             comm,
             self.problem,
@@ -294,160 +231,18 @@ class _Job:
         self._static_interactions = [pair.interaction for pair in model.pairs]
         self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
         self.acceleration: dolfinx.fem.Function | None = None
-        self.result.frd = directory / f"{jobname}.frd"
-        self.frd = _frd_writer(self.result.frd, deck, model) if self.root else Discard()
-        self.sta = StaFile(directory / f"{jobname}.sta") if self.root else Discard()
-        self.cvg = CvgFile(directory / f"{jobname}.cvg") if self.root else Discard()
-        self._attempt: tuple | None = None  # (step, increment, attempt, total, step time, dt)
+        self._attempt: tuple | None = None  # (step, increment, attempt, start, dt, step index)
         self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
         self._step_time = 0.0
-        self._field_scales: tuple[float, float, tuple[float, float]] | None = None
-
-    # -- forces ------------------------------------------------------------------------------------
-
-    def internal_forces(self) -> np.ndarray:
-        """``(N, 3)`` internal force of bulk elements plus contact springs at every deck node.
-
-        Summed in ccx order, the same on any number of processes; C3D20's face- and cell-centre
-        forces moved to its 20 nodes (docs/method.md §13.5). Collective.
-        """
-        return self.numbering.nodal_forces(self.problem)
-
-    def printed_forces(self) -> tuple[np.ndarray, float]:
-        """:meth:`internal_forces` with those within their accuracy as 0, and that accuracy.
-
-        The accuracy is the converged iterate's largest residual force plus round-off, plus the
-        round-off of the displacement they come from (docs/method.md §14.5). Collective.
-        """
-        forces = self.internal_forces()
-        floor = force_floor(forces, getattr(self.solver, "largest_residual", 0.0))
-        floor += self.field_accuracy().force
-        return clean(forces, floor), floor
-
-    def field_accuracy(self) -> FieldAccuracy:
-        """Accuracy of the stresses and contact values of the current displacement.
-
-        From the largest coordinate and displacement, the largest modulus and the smallest
-        element (docs/method.md §14.5). Collective.
-        """
-        if self._field_scales is None:
-            deck = self.deck
-            block = deck.elements[self.model.element_type.name]
-            coords = np.asarray(deck.node_coords, dtype=np.float64)
-            self._field_scales = (
-                float(np.abs(coords).max(initial=0.0)),
-                largest_modulus(m.elastic for m in deck.materials.values() if m.elastic),
-                element_sizes(coords, deck.node_index(block.connectivity)),
-            )
-        coordinates, modulus, sizes = self._field_scales
-        local = float(np.abs(self.model.u.x.array).max(initial=0.0))
-        return FieldAccuracy.of(coordinates, self.comm.allreduce(local, MPI.MAX), modulus, sizes)
-
-    def stresses(self, element_ids: np.ndarray) -> np.ndarray:
-        """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points.
-
-        Collective: each element is evaluated by the process owning it.
-        """
-        if self._stress is None:
-            points = self.model.element_type.integration_points
-            self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
-        expression, q = self._stress
-        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
-
-        def evaluate(cells: np.ndarray) -> np.ndarray:
-            values = compat.evaluate_expression(
-                expression, self.model.mesh, cells.astype(np.int32)
-            ).reshape(cells.size, q, 3, 3)
-            return values[:, :, index[0], index[1]]
-
-        return self.numbering.element_values(element_ids, evaluate, (q, 6))
-
-    # -- contact -----------------------------------------------------------------------------------
-
-    def contact_rows(self) -> list[ContactRows]:
-        """Contact rows of every pair at the current springs, slave nodes ascending.
-
-        Collective: the springs of all processes.
-        """
-        rows = []
-        numbering = self.numbering
-        length = self.field_accuracy().length
-        for state, results, pair in zip(
-            self.problem.states, contact_results(self.problem), self.deck.contact_pairs
-        ):
-            faces = numbering.ccx_nodes(self.problem, state.master_faces.faces[state.spring_face])
-            t1, t2 = output_tangents(results.normal)
-            slip = np.column_stack([np.einsum("ni,ni->n", results.slip, t) for t in (t1, t2)])
-            shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
-            # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4)
-            energy = results.energy + 2.0 * results.friction_energy
-            dp, de = law_accuracy(
-                state.pair.interaction.law, -results.clearance, results.area, length
-            )
-            nodes, clearance, pressure, energy, faces, slip, shear, dp, de = numbering.allgather(
-                numbering.ccx_nodes(self.problem, results.node),
-                results.clearance,
-                results.pressure,
-                energy,
-                faces,
-                slip.reshape(-1, 2),
-                shear.reshape(-1, 2),
-                dp,
-                de,
-            )
-            faces = numbering.master_faces(pair.master, faces)
-            order = np.argsort(nodes, kind="stable")
-            rows.append(
-                ContactRows(
-                    results.pair,
-                    nodes[order],
-                    clearance[order],
-                    pressure[order],
-                    energy[order],
-                    faces[order],
-                    slip[order],
-                    shear[order],
-                    (length, dp[order], de[order]),
-                )
-            )
-        return rows
 
     def _on_pairing(self, problem: ContactProblem) -> None:
         """Write this pairing's contact elements to the ``.cel`` file (docs/method.md §8.5)."""
-        step = self.deck.steps[self.counters.step - 1]
-        if self.cel is None or not step.contact_elements or self._cel_overflow:
+        c = self.counters
+        if c.attempt == 0:  # the start-of-step pairing of a *DYNAMIC step (no ccx set)
             return
-        if self.counters.attempt == 0:  # the start-of-step pairing of a *DYNAMIC step (no ccx set)
-            return
-        numbers = (
-            self.counters.step,
-            self.counters.increment,
-            self.counters.attempt,
-            max(problem.iteration, 1),
-        )
-        if max(numbers) > 999:
-            logger.warning(
-                " *WARNING: contact element set numbers above 999 (ccx limit): no more .cel output"
-            )
-            self._cel_overflow = True
-            return
-        numbering = self.numbering
-        for state, pair in zip(problem.states, self.deck.contact_pairs):
-            slaves, faces = numbering.allgather(
-                numbering.ccx_nodes(problem, state.slave.nodes[state.spring_slave]),
-                numbering.ccx_nodes(problem, state.master_faces.faces[state.spring_face]),
-            )
-            faces = numbering.master_faces(pair.master, faces)
-            order = np.argsort(slaves, kind="stable")
-            step_, increment, attempt, iteration = numbers
-            self.cel.write(
-                faces[order],
-                slaves[order],
-                step=step_,
-                increment=increment,
-                attempt=attempt,
-                iteration=iteration,
-            )
+        numbers = (c.step, c.increment, c.attempt, max(problem.iteration, 1))
+        if self.files.wants_contact_elements(self.deck.steps[c.step - 1], numbers):
+            self.files.write_contact_elements(numbers, self.values.contact_elements(problem))
 
     # -- steps -------------------------------------------------------------------------------------
 
@@ -468,7 +263,7 @@ class _Job:
             raise JobError(message, exit_code=2, result=self.result) from error
         finally:
             self.writer.close()
-            self.frd.close()
+            self.files.close()
         return self.result
 
     def _run_step(self, index: int, step: Step) -> None:
@@ -481,17 +276,8 @@ class _Job:
             bcs = model.begin_step(index)
             problem.set_bcs(bcs)
         self._contact_changes(step)
-        controls = step.field_controls()
-        self.solver.controls = {
-            k: float(v)
-            for k, v in (TIGHT_FIELD_CONTROLS if self.tight else controls).items()
-            if v is not None
-        }
-        timing = [v for line in step.controls.get("TIMEINCREMENTATION", ()) for v in line]
-        self.solver.relaxation_iteration = (
-            int(timing[2]) if len(timing) > 2 and timing[2] is not None else 9
-        )
-
+        self.solver.controls = solver_controls(step, tight=self.tight)
+        self.solver.relaxation_iteration = relaxation_iteration(step)
         if step.dynamic is not None:
             self._run_dynamic_step(index, step)
             return
@@ -543,7 +329,7 @@ class _Job:
         """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
         model = self.model
         if self.velocity is None:
-            self.velocity = _initial_velocity(self.deck, model)
+            self.velocity = model.initial_velocity()
             self.acceleration = dolfinx.fem.Function(model.V, name="acceleration")
         increments = step.static
         period = increments.period
@@ -564,7 +350,7 @@ class _Job:
             self._end_attempt(index, step, result)
 
         driver = DynamicStep(
-            _mass_form(self.deck, model),
+            model.mass_form(),
             set_load,
             period=period,
             initial_increment=initial,
@@ -598,9 +384,9 @@ class _Job:
     def _end_attempt(self, index: int, step: Step, result: IncrementResult) -> None:
         """Write the converged attempt's ``.sta``/``.cvg`` rows and its printed results."""
         number, increment, attempt, _, size, _ = self._attempt
-        self.sta.row(number, increment, attempt, True, result.iterations,
-                     self.model.total_time(index, result.time), result.time, size)  # fmt: skip
-        self.cvg.rows(number, increment, attempt, self.solver.history)
+        self.files.attempt((number, increment, attempt), True, result.iterations,
+                           self.model.total_time(index, result.time), result.time, size,
+                           self.solver.history)  # fmt: skip
         self._attempt = None
         self._step_time = result.time
         self._converged(index, step, result)
@@ -613,9 +399,8 @@ class _Job:
             return
         number, increment, attempt, start, size, index = self._attempt
         history = self.solver.history
-        self.sta.row(number, increment, attempt, False, len(history),
-                     self.model.total_time(index, start), start, size)  # fmt: skip
-        self.cvg.rows(number, increment, attempt, history)
+        self.files.attempt((number, increment, attempt), False, len(history),
+                           self.model.total_time(index, start), start, size, history)  # fmt: skip
         self._attempt = None
 
     def _contact_changes(self, step: Step) -> None:
@@ -631,6 +416,7 @@ class _Job:
                     pair.active = change.action == "ADD"
 
     def _converged(self, index: int, step: Step, result: IncrementResult) -> None:
+        """Record a converged increment and write the files its output frequency selects."""
         model = self.model
         unpaired = self.problem.unpaired_contacts() if self.problem.states else 0
         if unpaired:
@@ -644,8 +430,8 @@ class _Job:
         meshed[self.numbering.allgather(self.numbering.owned_rows)[0]] = True
         node_ids = self.deck.node_ids[meshed]
         order = np.argsort(node_ids)
-        displacement = self.numbering.nodal(model.u.x.array.reshape(-1, 3))[meshed]
-        contact = self.contact_rows()
+        displacement = self.values.displacements()[meshed]
+        contact = self.values.contact_rows()
         self.result.increments.append(
             IncrementOutput(
                 step=step.number,
@@ -663,235 +449,15 @@ class _Job:
         frequency = step.output_frequency
         last = result.time_fraction >= 1 - 1e-12
         if frequency > 0 and (result.increment % frequency == 0 or last):
-            contact = [clean_contact(rows) for rows in contact]  # printed values (§14.5)
-            blocks = self._blocks(step, total, contact)
-            if self.root:
-                write_dat(self.result.dat, clean_dat_blocks(blocks), append=True)
-            for block in self._frd_blocks(step, result.increment, total, contact):
-                self.frd.write(clean_frd_block(block))
-
-    def _frd_blocks(
-        self, step: Step, increment: int, total: float, contact: list[ContactRows]
-    ) -> list[FrdBlock]:
-        """The ``.frd`` blocks of the file requests, in ccx's order: DISP, STRESS, FORC, CONTACT."""
-        keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
-        blocks = []
-
-        def node_block(name: str, request, values: np.ndarray) -> None:
-            ids = self.deck.node_ids
-            if request.set is not None:  # in set order, repeats kept, as ccx (docs/method.md §13.2)
-                ids = self.deck.nsets[request.set]
-            values = values[self.deck.node_index(ids)]
-            if name == "DISP":
-                values = self._with_reference(ids, values)
-            blocks.append(FrdBlock(name, (), step.number, increment, total, ids, values))
-
-        if ("NODE", "U") in keys:
-            node_block(
-                "DISP", keys["NODE", "U"], self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
+            self.files.write_increment(
+                step,
+                result.increment,
+                total,
+                contact,
+                self.values,
+                load_time=self._load_time,
+                largest_residual=self.solver.largest_residual,
             )
-        if ("EL", "S") in keys:
-            nodes, values = self.nodal_stresses()
-            values = zero_below(values, self.field_accuracy().stress)
-            if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
-                members = self.deck.nsets[keys["EL", "S"].set]
-                pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
-                keep = nodes[pos] == members
-                nodes, values = members[keep], values[pos[keep]]
-            blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
-        if ("NODE", "RF") in keys:
-            node_block("FORC", keys["NODE", "RF"], self.printed_forces()[0])
-        if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
-            nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
-            values = np.zeros((nodes.size, 6))
-            if contact:
-                values[:, 0] = np.concatenate([r.clearance for r in contact])
-                values[:, 3] = np.concatenate([r.pressure for r in contact])
-            # ccx writes the contact elements in reverse order here (ascending in the .dat file)
-            blocks.append(
-                FrdBlock("CONTACT", (), step.number, increment, total, nodes[::-1], values[::-1])
-            )
-        return blocks
-
-    def _with_reference(self, ids: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """``values (n, 3)`` of nodes ``ids``, reference nodes at their prescribed displacement."""
-        gathered = None  # free reference nodes: from the displacement of all processes
-        if self.model.free_references:
-            gathered = self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
-        keys, known = self.model.reference_displacements(*self._load_time, gathered)
-        if keys.size == 0:
-            return values
-        wanted = 3 * self.deck.node_index(ids)[:, None] + np.arange(3)
-        pos = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
-        hit = keys[pos] == wanted
-        values = values.copy()
-        values[hit] = known[pos[hit]]
-        return values
-
-    def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
-        """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).
-
-        Integration-point values extrapolated to each element's nodes, averaged over the elements
-        around a node (docs/method.md §13.2).
-        """
-        block = self.deck.elements[self.model.element_type.name]
-        extrapolate = self.model.element_type.extrapolation
-        at_nodes = np.einsum("nq,eqk->enk", extrapolate, self.stresses(block.ids))
-        index = self.deck.node_index(block.connectivity)
-        total = np.zeros((self.deck.node_ids.size, 6))
-        count = np.zeros(self.deck.node_ids.size)
-        np.add.at(total, index, at_nodes)
-        np.add.at(count, index, 1.0)
-        used = count > 0
-        values = total[used] / count[used, None]
-        return self.deck.node_ids[used], values[:, [0, 1, 2, 3, 5, 4]]
-
-    def _blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
-        blocks: list[DatBlock] = []
-        forces, floor = None, 0.0
-        displacement = self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
-        for request in step.prints:
-            if request.kind == "NODE":
-                ids = self.deck.nsets[request.set]
-                for key in request.keys:
-                    if key == "RF" and forces is None:
-                        forces, floor = self.printed_forces()
-                    values = (displacement if key == "U" else forces)[self.deck.node_index(ids)]
-                    if key == "U":
-                        values = self._with_reference(ids, values)
-                    new = node_print_blocks(
-                        key, request.set, total, ids, values, totals=request.totals
-                    )
-                    blocks += clean_totals(new, ids.size, floor) if key == "RF" else new
-            elif request.kind == "EL":
-                blocks += self._element_blocks(request, total)
-            else:
-                blocks += self._contact_blocks(request, total, contact)
-        return blocks
-
-    def _element_blocks(self, request: PrintRequest, total: float) -> list[DatBlock]:
-        ids = self.deck.elsets[request.set]
-        blocks = []
-        for key in request.keys:
-            if key != "S":
-                raise NotImplementedError(
-                    f"{request.location}: *EL PRINT key {key} is not supported yet"
-                )
-            stresses = zero_below(self.stresses(ids), self.field_accuracy().stress)
-            blocks += el_print_blocks("S", request.set, total, ids, stresses)
-        return blocks
-
-    @staticmethod
-    def _contact_blocks(
-        request: PrintRequest, total: float, contact: list[ContactRows]
-    ) -> list[DatBlock]:
-        nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, np.int64)
-        zeros = np.zeros(nodes.size)
-        zeros2 = np.zeros((nodes.size, 2))
-
-        def tangential(name: str) -> np.ndarray:
-            return np.concatenate([getattr(r, name) for r in contact]) if contact else zeros2
-
-        columns = {
-            "CDIS": lambda: np.column_stack(
-                [
-                    np.concatenate([r.clearance for r in contact]) if contact else zeros,
-                    tangential("slip"),
-                ]
-            ),
-            "CSTR": lambda: np.column_stack(
-                [
-                    np.concatenate([r.pressure for r in contact]) if contact else zeros,
-                    tangential("shear"),
-                ]
-            ),
-            "CELS": lambda: np.concatenate([r.energy for r in contact]) if contact else zeros,
-            "CNUM": lambda: None,
-        }
-        blocks = []
-        for key in request.keys:
-            if key not in columns:
-                raise NotImplementedError(
-                    f"{request.location}: *CONTACT PRINT key {key} is not supported yet"
-                )
-            blocks += contact_print_blocks(key, total, nodes, columns[key](), totals=request.totals)
-        return blocks
-
-
-def _mass_form(deck: Deck, model: CalculixModel) -> ufl.Form:
-    """``rho inner(w, v) dx`` with the ``*DENSITY`` of each section's material (ccx quadrature)."""
-    Q = compat.scalar_space(model.mesh, "DG", 0)
-    rho = dolfinx.fem.Function(Q, name="density")
-    block_ids = deck.elements[model.element_type.name].ids
-    for section in deck.sections:
-        density = deck.materials[section.material].extra.get("*DENSITY")
-        if not density or len(density) != 1 or density[0][0] is None or density[0][0] <= 0.0:
-            raise ValueError(
-                f"{section.location}: a *DYNAMIC step needs one positive *DENSITY in material "
-                f"{section.material} (temperature-dependent densities are not supported)"
-            )
-        members = np.unique(deck.elsets[section.elset])
-        cells = model.element_cells(members[np.isin(members, block_ids)])
-        cells = cells[cells >= 0]  # this process's (owned and ghost) cells
-        rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
-    w, v = ufl.TrialFunction(model.V), ufl.TestFunction(model.V)
-    return rho * ufl.inner(w, v) * ufl.dx(domain=model.mesh)  # consistent mass, exact
-
-
-def _initial_velocity(deck: Deck, model: CalculixModel) -> dolfinx.fem.Function:
-    """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
-    velocity = dolfinx.fem.Function(model.V, name="velocity")
-    values = velocity.x.array.reshape(-1, 3)
-    for condition in deck.initial_velocities:
-        dofs = model.node_dofs(condition.nodes)
-        values[dofs[dofs >= 0], condition.dof - 1] = condition.value
-    velocity.x.scatter_forward()
-    return velocity
-
-
-def _frd_writer(path: Path, deck: Deck, model: CalculixModel) -> FrdWriter:
-    """The ``.frd`` file with the deck's mesh (ccx writes it for every job)."""
-    block = deck.elements[model.element_type.name]
-    materials = list(deck.materials)
-    index = dict(zip(materials, range(1, len(materials) + 1)))
-    element_material = np.zeros(block.ids.size, dtype=np.int64)
-    position = {int(e): k for k, e in enumerate(block.ids)}
-    for section in deck.sections:
-        for element in deck.elsets[section.elset]:
-            element_material[position[int(element)]] = index[section.material]
-    return FrdWriter(
-        path,
-        deck.node_ids,
-        deck.node_coords,
-        block.ids,
-        model.element_type.name,
-        block.connectivity,
-        element_material,
-        materials + list(deck.interactions),
-    )
-
-
-def _check_requests(deck: Deck) -> None:
-    """Output keys this runner cannot produce: a clear error before anything runs."""
-    supported = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
-    for step in deck.steps:
-        for request in step.prints:
-            for key in request.keys:
-                if key not in supported[request.kind]:
-                    raise NotImplementedError(
-                        f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
-                    )
-    written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
-    for step in deck.steps:
-        for request in step.file_requests:
-            for key in request.keys:
-                if key not in written[request.kind]:
-                    logger.warning(
-                        " *WARNING: %s key %s is not written to the .frd file (%s)",
-                        request.keyword,
-                        key,
-                        request.location,
-                    )
 
 
 def _read(path: Path, comm: MPI.Comm) -> Deck:
@@ -962,7 +528,7 @@ def run_job(
     if comm.rank == 0:
         for warning in deck.warnings:
             logger.warning("%s", warning)
-    _check_requests(deck)
+    check_requests(deck)
     model = build_model(deck, comm)
     job = _Job(
         jobname,

@@ -38,8 +38,13 @@ import typing
 
 import numpy as np
 
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
+
 from .dat import DatBlock
 from .frd import FrdBlock
+
+if typing.TYPE_CHECKING:
+    from .output_values import ContactRows
 
 __all__ = [
     "FIELD_ROUND_OFF",
@@ -57,6 +62,8 @@ __all__ = [
     "law_accuracy",
     "zero_below",
 ]
+
+_Block = typing.TypeVar("_Block", DatBlock, FrdBlock)
 
 #: A printed value at most this fraction of its block's largest magnitude is written as 0: below
 #: the last printed digit of the block's largest value (5e-7 of it, 7 digits). Partition
@@ -131,7 +138,7 @@ def clean_dat_blocks(blocks: list[DatBlock]) -> list[DatBlock]:
     return [block if block.name == "CNUM" else _clean_groups(block) for block in blocks]
 
 
-def _clean_groups(block: typing.Any) -> typing.Any:
+def _clean_groups(block: _Block) -> _Block:
     """A block (``DatBlock`` or ``FrdBlock``) with :func:`clean` applied per column group."""
     values = np.array(block.values, dtype=np.float64)
     if values.ndim != 2 or values.size == 0:  # nothing to clean (e.g. no contact element)
@@ -181,7 +188,7 @@ class FieldAccuracy:
 
 
 def law_accuracy(
-    law: typing.Any, overclosure: np.ndarray, area: np.ndarray, length: float
+    law: PressureOverclosureLaw, overclosure: np.ndarray, area: np.ndarray, length: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Accuracy of each spring's pressure and energy (``law``: a ``PressureOverclosureLaw``).
 
@@ -198,7 +205,7 @@ def law_accuracy(
     return dp, de
 
 
-def zero_below(values: np.ndarray, floor: typing.Any) -> np.ndarray:
+def zero_below(values: np.ndarray, floor: float | np.ndarray) -> np.ndarray:
     """A copy of ``values`` with the entries of magnitude at most ``floor`` set to 0.
 
     ``floor``: a scalar, or one per row (first axis). Unlike :func:`clean`, no block rule.
@@ -209,8 +216,8 @@ def zero_below(values: np.ndarray, floor: typing.Any) -> np.ndarray:
     return values
 
 
-def clean_contact(rows: typing.Any) -> typing.Any:
-    """Contact rows (``job.ContactRows``) with values within their accuracy as 0.
+def clean_contact(rows: ContactRows) -> ContactRows:
+    """Contact rows (``output_values.ContactRows``) with values within their accuracy as 0.
 
     ``rows.accuracy`` holds the length accuracy and each row's pressure and energy accuracies
     (:func:`law_accuracy`); clearance and slips are lengths. Rows without it are unchanged.

@@ -37,11 +37,16 @@ import dolfinx.mesh
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.fem.constraints import LinearConstraint
-from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, _facet_cells, resolve_slave
-from dolfinx_ntf.kernels.laws import ExponentialLaw, LinearLaw, TabularLaw
-from dolfinx_ntf.solvers.newton import TIGHT_FIELD_CONTROLS
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, facet_cells, resolve_slave
+from dolfinx_ntf.kernels.laws import (
+    ExponentialLaw,
+    Friction,
+    LinearLaw,
+    PressureOverclosureLaw,
+    TabularLaw,
+)
 
-from .deck import FIELD_CONTROL_NAMES
+from .controls import FIELD_CONTROL_NAMES, TIGHT_FIELD_CONTROLS
 from .elements import ELEMENT_TYPES, element_for_cell
 
 __all__ = [
@@ -59,14 +64,6 @@ __all__ = [
 
 NodeTarget = FacetSurface | NodeSurface | np.ndarray | Sequence[int]
 """Nodes of a constraint or load: facets, vertices, or local block dofs of the space."""
-
-# TIGHT_FIELD_CONTROLS (dolfinx_ntf.solvers.newton): ``*CONTROLS, PARAMETERS=FIELD`` values that
-# make ccx converge to round-off level. ccx's defaults stop Newton when the largest residual is
-# 0.5 % of the average nodal force (R_n = 0.005, after I_P = 9 iterations R_p = 0.02), which leaves
-# displacements off by up to 1e-5 and contact stresses by up to 1e-4 of the converged answer
-# (measured on the cross-validation decks). With these values ccx needs zero or one more iteration
-# per increment, and tightening further (all criteria 1e-14) no longer changes a printed digit of
-# the ``.dat`` file.
 
 
 @dataclass(frozen=True)
@@ -428,7 +425,7 @@ def _facet_faces(
     """Element ids and ccx face numbers (1-based) of the facets of ``surface`` in owned cells."""
     mesh = V.mesh
     facets = _tagged_facets(mesh.comm, surface, what)
-    cells, local_facet = _facet_cells(mesh, facets, what)
+    cells, local_facet = facet_cells(mesh, facets, what)
     owned = cells < md.num_owned_cells
     cells, local_facet = cells[owned], local_facet[owned]
     faces = md.face_of_facet[md.mirrored[cells].astype(np.int64), local_facet]
@@ -480,7 +477,7 @@ def _components(components: Sequence[int], what: str) -> list[tuple[int, int]]:
 # ----------------------------------------------------------------------------- contact
 
 
-def _law_lines(law: object, what: str) -> list[str]:
+def _law_lines(law: PressureOverclosureLaw, what: str) -> list[str]:
     if isinstance(law, ExponentialLaw):
         return [
             "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=EXPONENTIAL",
@@ -737,7 +734,7 @@ def _write_pair(out: _Out, V, md: _Mesh, k: int, pair: ContactPair) -> None:
     )
 
 
-def _friction_lines(friction: object) -> list[str]:
+def _friction_lines(friction: Friction | None) -> list[str]:
     """``*FRICTION`` card of a :class:`~dolfinx_ntf.Friction` (none for ``None``)."""
     if friction is None:
         return []

@@ -1,16 +1,18 @@
-"""Contact pairs and the nonlinear problem that adds their springs to dolfinx's residual.
+"""The nonlinear problem that adds contact springs to dolfinx's residual: :class:`ContactProblem`.
 
 :class:`ContactProblem` is a :data:`~dolfinx_ntf.compat.NewtonSolverNonlinearProblem` whose
 callbacks, besides assembling the user's UFL forms, (re-)pair slave nodes with master faces on
-CalculiX's schedule (docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The
-step driver in ``solver.py`` tells it when an increment starts.
+CalculiX's schedule (docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The pairing itself
+(pair states, halo, search, ADJUST, friction anchors) is its
+:class:`~dolfinx_ntf.contact.pairing.Pairing`; the problem keeps the forms, the matrix, the
+constraint elimination and the callbacks. The step driver in ``solvers/`` tells it when steps and
+increments start.
 """
 
 from __future__ import annotations
 
 import logging
 import typing
-from dataclasses import dataclass, field
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -23,8 +25,10 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.contact.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
+from dolfinx_ntf.contact.evaluation import area_block, evaluate_pair
+from dolfinx_ntf.contact.pair import ContactPair, PairState
+from dolfinx_ntf.contact.pairing import Pairing
 from dolfinx_ntf.fem import serendipity
 from dolfinx_ntf.fem.bulk_jacobian import BulkJacobian
 from dolfinx_ntf.fem.constraints import (
@@ -32,136 +36,39 @@ from dolfinx_ntf.fem.constraints import (
     LinearConstraint,
     LinearConstraintBlock,
 )
-from dolfinx_ntf.fem.surfaces import (
-    FacetSurface,
-    NodeSurface,
-    SlaveSurface,
-    SurfaceFaces,
-    reference_coordinates,
-    resolve_master,
-    resolve_slave,
-)
-from dolfinx_ntf.kernels.friction import TANGENT_MODES, FrictionInput
-from dolfinx_ntf.kernels.friction_state import FrictionState
-from dolfinx_ntf.kernels.laws import PressureOverclosureLaw, SurfaceInteraction
-from dolfinx_ntf.kernels.rigid import RigidSurface, rigid_master, spring_evaluator
-from dolfinx_ntf.kernels.search import MasterSurface
-from dolfinx_ntf.kernels.spring_areas import spring_area_gradients, spring_areas
-from dolfinx_ntf.kernels.springs import SpringEvaluation
+from dolfinx_ntf.kernels.friction import TANGENT_MODES
 from dolfinx_ntf.kernels.start_slope import start_law
-from dolfinx_ntf.kernels.tie_frame import TieFrame, frame_from_moments, point_moments
-from dolfinx_ntf.parallel import collectives, master_exchange, surface_distribution
+from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import distributed_elimination
 from dolfinx_ntf.parallel.halo import NodeHalo
 
-__all__ = ["ContactPair", "ContactProblem", "PairState"]
+__all__ = ["ContactPair", "ContactProblem", "PairState", "ResidualTerm"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
 #: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION
 #: (docs/method.md §3.1, ccx: iit <= 8).
 LAST_REPAIRING_ITERATION = 8
-#: Relative walk tolerance of the triangle search (docs/method.md §3.2).
-SEARCH_TOLERANCE = 1e-3
 
 
-@dataclass
-class ContactPair:
-    """One node-to-face contact pair (CalculiX ``*CONTACT PAIR, TYPE=NODE TO SURFACE``).
+class ResidualTerm(typing.Protocol):
+    """A term added to the residual and the Jacobian after the bulk form and the springs.
 
-    Args:
-        slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
-            surface.
-        master: Face-based master surface, or a rigid analytical surface (one-node springs,
-            docs/method.md §15.1).
-        interaction: Pressure-overclosure law and optional friction; may be replaced between
-            steps (new mu and lambda act from then on, the friction state is kept).
-        small_sliding: Pair only at increment starts. Per pair by default; with
-            ``ContactProblem(small_sliding_rule="last_pair")`` the flag of the *last* pair decides
-            for all, as in CalculiX.
-        name: Label used in messages and output.
-        active: Inactive pairs generate no springs (``*MODEL CHANGE``); a pair that becomes
-            active again starts with a fresh friction state.
-        adjust: CalculiX's ADJUST at the first pairing of the analysis (docs/method.md §11.5): a
-            distance ``a >= 0`` (slave nodes with clearance ``g <= a`` are moved onto the
-            master) or a :class:`NodeSurface` of the nodes to move; None moves nothing.
+    For example the inertia of a dynamic step (docs/method.md §12); see
+    :attr:`ContactProblem.extra_terms`.
     """
 
-    slave: FacetSurface | NodeSurface
-    master: FacetSurface | RigidSurface
-    interaction: SurfaceInteraction
-    small_sliding: bool = False
-    name: str = ""
-    active: bool = True
-    adjust: float | NodeSurface | None = None
+    def add_to_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """Add the term's residual at ``x`` to ``b``."""
 
-    def __post_init__(self) -> None:
-        """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
-        owner = (
-            f"ContactPair {self.name!r}"
-            if isinstance(self.name, str) and self.name
-            else ("ContactPair")
-        )
-        validation.check_type(self.slave, (FacetSurface, NodeSurface), f"{owner}: slave")
-        if isinstance(self.master, NodeSurface):
-            raise ValueError(
-                f"{owner}: the master surface must be a FacetSurface (face-based), got a "
-                "NodeSurface; only the slave surface may be node-based"
-            )
-        validation.check_type(self.master, (FacetSurface, RigidSurface), f"{owner}: master")
-        validation.check_type(
-            self.interaction,
-            SurfaceInteraction,
-            f"{owner}: interaction",
-            "wrap the law: SurfaceInteraction(law)"
-            if isinstance(self.interaction, PressureOverclosureLaw)
-            else "",
-        )
-        validation.check_type(self.name, str, f"{owner}: name")
-        if self.adjust is not None and not isinstance(self.adjust, NodeSurface):
-            if isinstance(self.adjust, bool) or not isinstance(self.adjust, (int, float)):
-                raise TypeError(
-                    f"{owner}: adjust must be a distance >= 0, a NodeSurface or None, got "
-                    f"{validation.describe(self.adjust)}"
-                )
-            if not (np.isfinite(self.adjust) and self.adjust >= 0):
-                raise ValueError(
-                    f"{owner}: adjust must be a finite distance >= 0, got {self.adjust}"
-                )
+    def add_to_jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """Add the term's Jacobian at ``x`` to the assembled ``A``."""
 
+    def force_sum(self) -> tuple[float, int]:
+        """Sum of the absolute values of its nodal forces and their count (owned entries).
 
-@dataclass
-class PairState:
-    """Numbering-level data of a pair and its springs at the current pairing."""
-
-    pair: ContactPair
-    slave: SlaveSurface
-    master_faces: SurfaceFaces
-    master: MasterSurface
-    overlap: np.ndarray  # (S,) initial overlap g0 per slave node (docs/method.md §3.5)
-    spring_slave: np.ndarray = field(
-        default_factory=lambda: np.empty(0, dtype=np.int64)
-    )  # index into slave.nodes
-    spring_face: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
-    spring_area: np.ndarray = field(default_factory=lambda: np.empty(0))
-    xi: np.ndarray | None = None
-    evaluation: SpringEvaluation | None = None
-    found_face: np.ndarray | None = None  # face of every slave node at the last pairing, -1: none
-    face_changes: int = 0  # slave nodes paired before and after the last pairing, on another face
-    friction: FrictionState | None = None  # friction history per slave node (docs/method.md §11.3)
-    adjust_nodes: np.ndarray | None = None  # ADJUST node set as slave dofs
-    was_active: bool = True  # the pair was active at the previous pairing
-
-    @property
-    def num_springs(self) -> int:
-        """Number of contact spring elements of this pair."""
-        return int(self.spring_slave.size)
-
-    @property
-    def element_nodes(self) -> np.ndarray:
-        """(N, n+1) spring nodes: master face nodes, then the slave node."""
-        faces = self.master_faces.faces[self.spring_face]
-        return np.hstack([faces, self.slave.nodes[self.spring_slave][:, None]])
+        Enters :meth:`ContactProblem.average_element_force`.
+        """
 
 
 class ContactProblem(compat.NewtonSolverNonlinearProblem):
@@ -242,7 +149,7 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         jit_options: dict | None = None,
         reuse_bulk_jacobian: bool = True,
     ) -> None:
-        pairs, bcs = validation.check_problem(F, u, pairs, bcs, J, ContactPair, max_depth)
+        pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth)
         super().__init__(
             F,
             u,
@@ -255,31 +162,13 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
                 f"ContactProblem: friction_tangent must be one of {TANGENT_MODES}, "
                 f"got {friction_tangent!r}"
             )
-        if small_sliding_rule not in ("per_pair", "last_pair"):
-            raise ValueError(
-                "ContactProblem: small_sliding_rule must be 'per_pair' or 'last_pair', "
-                f"got {small_sliding_rule!r}"
-            )
-        if overlap_ramp not in ("first_increment", "linear"):
-            raise ValueError(
-                "ContactProblem: overlap_ramp must be 'first_increment' or 'linear', "
-                f"got {overlap_ramp!r}"
-            )
         V = u.function_space
         self.u = u
         self.symmetric = symmetric
         self.friction_tangent = friction_tangent
-        self.reset_friction_on_separation = bool(reset_friction_on_separation)
         self.friction_in_tension = bool(friction_in_tension)
-        self.overlap_ramp = overlap_ramp
-        self.small_sliding_rule = small_sliding_rule
-        #: Steps begun so far (:meth:`begin_step`); the linear overlap ramp lasts step 1.
-        self.step_count = 0
         self.linearize_area = linearize_area
-        self.max_depth = max_depth
-        self.walk_from_previous_face = walk_from_previous_face
         self.contact_start_slope = contact_start_slope
-        self._reference = reference_coordinates(V)
         self._element_forces, self._element_space = _broken(
             F if element_forces is None else element_forces,
             V,
@@ -292,18 +181,21 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
             u,
             enabled=reuse_bulk_jacobian,
         )
-        #: Contact nodes of other processes (docs/method.md §14); None in serial.
-        self.halo = NodeHalo(V) if V.mesh.comm.size > 1 else None
         #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
         self._face_centres = serendipity.face_centres(constraints)
-        self._serendipity = bool(V.mesh.comm.allreduce(self._face_centres.size, op=MPI.MAX))
-        self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
-        if self.halo is not None:
-            self._reference = self.halo.reference
-            self.assembler.extend(self.halo, u)
-        validation.check_distinct_pairs(V.mesh.comm, self._surfaces(), self._reference)
-        self.time_fraction = 1.0  # relative step time tau at the end of the current increment
-        self.static = True
+        #: The pairs' states, the halo and the search (:class:`~dolfinx_ntf.contact.pairing.
+        #: Pairing`).
+        self.pairing = Pairing(
+            u,
+            pairs,
+            face_centres=self._face_centres,
+            extend_numbering=lambda halo: self.assembler.extend(halo, u),
+            max_depth=max_depth,
+            walk_from_previous_face=walk_from_previous_face,
+            reset_friction_on_separation=reset_friction_on_separation,
+            overlap_ramp=overlap_ramp,
+            small_sliding_rule=small_sliding_rule,
+        )
         self.iteration = 0
         self.count_changed = False
         #: Re-pair at the start of the next Newton iteration even outside the schedule.
@@ -314,7 +206,6 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         self._pattern_checked = False
         self._residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
-        self._increment_start_u = self._displacement().copy()
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX *CLOAD) subtracted from the
         #: residual.
@@ -324,11 +215,11 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         #: increment.
         self.pairing_callbacks: list[typing.Callable[[ContactProblem], None]] = []
         #: Extra terms added to the residual and the Jacobian after the bulk form and the springs
-        #: (e.g. the inertia of a dynamic step, docs/method.md §12): objects with
-        #: ``add_to_residual(x, b)``, ``add_to_jacobian(x, A)`` and ``force_sum()`` (the sum of
-        #: the absolute values of their nodal forces and how many there are, owned entries, for
-        #: :meth:`average_element_force`).
-        self.extra_terms: list[typing.Any] = []
+        #: (e.g. the inertia of a dynamic step, docs/method.md §12).
+        self.extra_terms: list[ResidualTerm] = []
+        #: Objects the outputs derive from this problem and keep with it for later calls, by name
+        #: (e.g. the recovered pressure's compiled forms, ``outputs/results.py``).
+        self.output_cache: dict[str, typing.Any] = {}
         self.constraints = list(constraints)
         self.elimination: ConstraintElimination | None = None
         #: The reduced Jacobian the linear solver uses when there are constraints.
@@ -363,101 +254,6 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
             self.u.x.array.size, self.constraints, prescribed, comm
         )
 
-    def _resolve(self, index: int, pair: ContactPair) -> PairState:
-        name = pair.name or f"pair {index + 1}"
-        V = self.u.function_space
-        comm = V.mesh.comm
-        slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
-        if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
-            faces = serendipity.as_quad8(slave.faces, self._face_centres)
-            keep = ~np.isin(slave.nodes, self._face_centres)
-            faceless = None if slave.faceless is None else slave.faceless[keep]
-            slave = SlaveSurface(slave.nodes[keep], faces, faceless)
-        if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
-            if pair.interaction.friction is not None or pair.adjust is not None:
-                raise NotImplementedError(
-                    f"{name}: friction and ADJUST against a rigid analytical master are not "
-                    "supported yet; use a meshed master"
-                )
-            if self.halo is not None:  # the owned slave nodes; no master nodes (§14.6)
-                slave = collectives.collectively(
-                    comm,
-                    surface_distribution.distribute_slave,
-                    V,
-                    self.halo,
-                    pair.slave,
-                    slave,
-                    name,
-                )
-            faces, master = rigid_master(pair.master, lambda: self.time_fraction, f"{name} master")
-            friction = FrictionState(slave.nodes.size)  # stays empty: the bookkeeping is shared
-            return PairState(
-                pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
-                was_active=pair.active,
-            )  # fmt: skip
-        master_faces = collectives.collectively(
-            comm, resolve_master, V, pair.master, what=f"{name} master"
-        )
-        if self._serendipity:
-            master_faces = serendipity.as_quad8(master_faces, self._face_centres)
-        patch = None
-        if self.halo is not None and master_exchange.uses_exchange(comm, master_faces):  # §14.8
-            slave, patch = collectives.collectively(
-                comm, master_exchange.distribute_pair, self.halo, self.u, pair.slave, slave,
-                master_faces, name,
-            )  # fmt: skip
-            master_faces = patch.faces
-        elif self.halo is not None:
-            slave, master_faces = collectives.collectively(
-                comm,
-                surface_distribution.distribute_pair,
-                V,
-                self.halo,
-                pair.slave,
-                slave,
-                master_faces,
-                name,
-            )
-        if patch is None and master_faces.faces.shape[0] == 0:
-            raise ValueError(f"{name}: the master surface has no faces")
-        master = patch or MasterSurface(
-            master_faces.face_type,
-            master_faces.faces,
-            name=f"{name} master",
-            coords=self._reference if self.halo is None else self.halo.reference,
-        )
-        both = np.intersect1d(slave.nodes, master_faces.nodes)
-        error = None
-        if both.size:
-            x = (self._reference if self.halo is None else self.halo.reference)[both[0]]
-            error = ValueError(
-                f"{name}: {both.size} node(s) belong to both the slave and the master surface "
-                f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
-            )
-        validation.raise_collectively(comm, error)
-        friction = FrictionState(
-            slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
-        )
-        adjust_nodes = None
-        if isinstance(pair.adjust, NodeSurface):
-            adjust_nodes = collectives.collectively(
-                comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
-            ).nodes
-            if self.halo is not None:  # the union over processes, as extended nodes
-                held = self.halo.local_global[adjust_nodes]
-                adjust_nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
-                adjust_nodes = adjust_nodes[adjust_nodes >= 0]
-        return PairState(
-            pair,
-            slave,
-            master_faces,
-            master,
-            np.zeros(slave.nodes.size),
-            friction=friction,
-            was_active=pair.active,
-            adjust_nodes=adjust_nodes,
-        )
-
     # -- state -------------------------------------------------------------------------------------
 
     def average_element_force(self) -> float:
@@ -486,81 +282,55 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         return total / max(count, 1)
 
     @property
+    def states(self) -> list[PairState]:
+        """The state of every pair at the current pairing (:attr:`pairing`'s)."""
+        return self.pairing.states
+
+    @property
+    def halo(self) -> NodeHalo | None:
+        """Contact nodes of other processes (docs/method.md §14); None in serial."""
+        return self.pairing.halo
+
+    @property
     def small_sliding(self) -> bool:
         """True when no pair is re-paired inside increments (all pairs small sliding)."""
-        return all(self._small_sliding(s) for s in self.states)
-
-    def _small_sliding(self, state: PairState) -> bool:
-        """Whether the pair of ``state`` is paired at increment starts only."""
-        if self.small_sliding_rule == "last_pair":
-            return bool(self.states[-1].pair.small_sliding)
-        return bool(state.pair.small_sliding)
+        return self.pairing.small_sliding
 
     @property
     def has_friction(self) -> bool:
         """Whether any pair has friction now (the Jacobian is then unsymmetric)."""
-        return any(s.pair.interaction.friction is not None for s in self.states)
+        return self.pairing.has_friction
 
     @property
     def face_changes(self) -> int:
         """Slave nodes that kept a spring at the last pairing but moved to another master face."""
-        return sum(s.face_changes for s in self.states)
+        return self.pairing.face_changes
 
     @property
     def num_springs(self) -> int:
         """Contact spring elements of this process over all pairs (all processes: total_springs)."""
-        return sum(s.num_springs for s in self.states)
+        return self.pairing.num_springs
+
+    @property
+    def walk_from_previous_face(self) -> bool:
+        """Whether each node's search starts at its current face (the stable search)."""
+        return self.pairing.walk_from_previous_face
 
     @property
     def reference_coordinates(self) -> np.ndarray:
         """Reference coordinates of the nodes (local with ghosts, then the halo's), shape (N, 3)."""
-        return self._reference
-
-    def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
-        """(name, slave nodes, master facets) of every pair, for checks and messages."""
-        return [
-            (
-                s.pair.name or f"pair {i + 1}",
-                s.slave.nodes,
-                s.master_faces.facets[s.master_faces.facets >= 0],  # -1: another process's
-            )
-            for i, s in enumerate(self.states)
-        ]
-
-    def _check_finite(self) -> None:
-        """A non-finite displacement at a contact node: a ValueError naming node and position."""
-        surfaces = []
-        num_local = self.u.x.array.size // 3  # halo nodes are checked by their owners
-        for (name, slave, _), state in zip(self._surfaces(), self.states):
-            master = state.master_faces.nodes
-            surfaces += [(f"{name} slave", slave), (f"{name} master", master[master < num_local])]
-        comm = self.u.function_space.mesh.comm
-        validation.check_finite_contact_nodes(comm, self.u, self._reference, surfaces)
+        return self.pairing.reference
 
     def current_coordinates(self) -> np.ndarray:
         """Node coordinates X + u (local nodes with ghosts, then the halo's). Collective."""
-        return self._reference + self._displacement()
+        return self.pairing.current_coordinates()
 
-    def halo_grew(self) -> None:
-        """Nodes were appended to the halo (a master patch grew, docs/method.md §14.8). Collective.
+    def unpaired_contacts(self) -> int:
+        """Slave nodes that a pairing now would give a spring but that have none. Collective.
 
-        The scatter, the contact numbering and the increment-start displacement follow.
+        For example nodes that penetrated after the pairing froze at iteration 8.
         """
-        known = self._increment_start_u.shape[0]
-        self.halo.destroy()  # rebuilt on next use, with the new nodes
-        self._reference = self.halo.reference
-        self.assembler.extend(self.halo, self.u)
-        start = compat.petsc_vector(self.u).duplicate()
-        start.array[:] = self._increment_start_u[: self.halo.num_owned].ravel()
-        extra = self.halo.values(start)[known - self.halo.num_local :]
-        start.destroy()
-        self._increment_start_u = np.vstack([self._increment_start_u, extra])
-
-    def _displacement(self) -> np.ndarray:
-        """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
-        if self.halo is not None:
-            return self.halo.displacement(self.u)
-        return self.u.x.array.reshape(-1, 3)
+        return self.pairing.unpaired_contacts()
 
     # -- pairing -----------------------------------------------------------------------------------
 
@@ -571,16 +341,8 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
             time_fraction: Relative step time at the end of the increment (tau of the overlap ramp).
             static: Static step (the initial overlap is ramped) or not.
         """
-        self._check_finite()
-        self.time_fraction = float(time_fraction)
-        self.static = static
-        self._increment_start_u = self._displacement().copy()  # halo nodes too: anchors
+        self.pairing.begin_increment(time_fraction, static=static)
         first = not self._first_pairing_done
-        keep = self.overlap_ramp == "linear" and self.step_count <= 1 and static
-        for state in self.states:
-            if not keep:
-                state.overlap[:] = 0.0
-            state.friction.begin_increment()
         self.iteration = 0
         self.count_changed = False
         self.repair_next_iteration = False
@@ -590,17 +352,13 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
 
     def begin_step(self) -> None:
         """Tell the problem that a new step starts (ends the linear overlap ramp of step 1)."""
-        self.step_count += 1
-        if self.step_count > 1:
-            for state in self.states:
-                state.overlap[:] = 0.0
+        self.pairing.begin_step()
 
     def end_increment(self) -> None:
         """Accept the converged increment: commit the friction state (docs/method.md §11.3)."""
         if self.has_friction:
             self.evaluate(tangent=False)
-        for state in self.states:
-            state.friction.commit(state.spring_slave)
+        self.pairing.end_increment()
 
     def pair(self, *, record_overlap: bool = False, large_sliding_only: bool = False) -> int:
         """Pair every slave node with a master face at the current displacement.
@@ -612,23 +370,11 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         Returns:
             The number of springs (over all processes).
         """
-        coords = self.current_coordinates()
-        comm = self.u.function_space.mesh.comm
-        with collectives.collective_errors(
-            comm
-        ):  # an error on one process is raised on all (§14.4)
-            for state in self.states:
-                if large_sliding_only and self._small_sliding(state):
-                    continue
-                self._pair_one(state, coords, record_overlap)
-                if record_overlap and state.pair.adjust is not None:  # ADJUST may have moved nodes
-                    collectives.checkpoint(comm)
-                    coords = self.current_coordinates()
+        count, changes = self.pairing.pair(
+            record_overlap=record_overlap, large_sliding_only=large_sliding_only
+        )
         self.pairings += 1
         self._pattern_checked = False
-        count, changes = (
-            int(v) for v in comm.allreduce(np.array([self.num_springs, self.face_changes]))
-        )
         self.total_springs = count
         if self.iteration >= 1 and changes:
             logger.info(" Number of contact spring elements=%d (%d changed face)", count, changes)
@@ -638,178 +384,6 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
             callback(self)
         return count
 
-    def _pair_one(self, state: PairState, coords: np.ndarray, record_overlap: bool) -> None:
-        empty = np.empty(0, dtype=np.int64)
-        if not state.pair.active:
-            state.spring_slave, state.spring_face, state.spring_area, state.xi = (
-                empty,
-                empty,
-                np.empty(0),
-                None,
-            )
-            state.was_active = False
-            return
-        if not state.was_active:  # reactivated: a fresh friction history (ccx keeps the old one)
-            if self.reset_friction_on_separation:
-                state.friction.reset()
-            state.was_active = True
-        previous = np.full(state.slave.nodes.size, -1, dtype=np.int64)
-        previous[state.spring_slave] = state.spring_face
-        found, face, areas, evaluation = self._search(state, coords, previous)
-        if record_overlap and state.pair.adjust is not None:
-            collectives.checkpoint(self.u.function_space.mesh.comm)  # before ADJUST's collectives
-        if (
-            record_overlap
-            and state.pair.adjust is not None
-            and self._adjust(state, found, evaluation)
-        ):
-            coords = self.current_coordinates()
-            found, face, areas, evaluation = self._search(state, coords, previous)
-        state.found_face = face
-        gap = evaluation.gap
-        if record_overlap:
-            state.overlap[found] = np.minimum(gap, 0.0)
-        create = self._creates_spring(state, found, gap, areas)
-        state.spring_slave = found[create]
-        state.spring_face = face[found][create].astype(np.int64)
-        state.spring_area = areas[found][
-            create
-        ]  # 0 = no slave face: springs.py applies the fallback
-        state.xi = evaluation.xi[create]
-        if state.pair.interaction.friction is not None:
-            fresh = state.friction.fresh(state.spring_slave)
-            if np.any(fresh):  # anchor at the increment start (docs/method.md §11.3)
-                u = self._increment_start_u
-                nodes = state.element_nodes[fresh]
-                phi = evaluation.phi[create][fresh]
-                a = u[nodes[:, -1]] - np.einsum("nj,nji->ni", phi, u[nodes[:, :-1]])
-                state.friction.anchor(state.spring_slave[fresh], a)
-        current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
-        current[state.spring_slave] = state.spring_face
-        state.face_changes = int(
-            np.count_nonzero((previous >= 0) & (current >= 0) & (previous != current))
-        )
-
-    def _search(
-        self, state: PairState, coords: np.ndarray, previous: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, SpringEvaluation]:
-        """Master face of every slave node at ``coords`` (``previous``: current face or -1).
-
-        Returns the slave indices with a face, the face of every slave node (-1: none), the spring
-        areas of all slave nodes, and the springs' kinematics (no tangent) of the found nodes.
-        """
-        comm = self.u.function_space.mesh.comm
-        areas = _slave_areas(state.slave, coords)
-        if isinstance(state.master, master_exchange.MasterPatch):
-            collectives.checkpoint(comm)  # the patch's update is collective (§14.4)
-        state.master.update(coords)
-        points = coords[state.slave.nodes]
-        tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
-        start, frame = None, None
-        if self.walk_from_previous_face:
-            collectives.checkpoint(comm)  # the tie frame sums over the processes
-            start, frame = previous, self._tie_frame(state, points, areas)
-        options = {"tie_frame": frame, "ccx_ties": not self.walk_from_previous_face}
-        face = state.master.locate(
-            points, tolerances, max_depth=self.max_depth, start_faces=start, **options
-        )
-        while master_exchange.enlarge(self, state, face):  # a patch too small somewhere (§14.8)
-            coords = self.current_coordinates()
-            state.master.update(coords)
-            face = state.master.locate(
-                points, tolerances, max_depth=self.max_depth, start_faces=start, **options
-            )
-        found = np.flatnonzero(face >= 0)
-        evaluation = spring_evaluator(state.master)(
-            state.master_faces.face_type,
-            coords[state.master_faces.faces[face[found]]],
-            points[found],
-            areas[found],
-            state.pair.interaction.law,
-            tangent=False,
-            xi0=self._previous_xi(state, found, face),
-        )
-        return found, face, areas, evaluation
-
-    def _tie_frame(
-        self, state: PairState, points: np.ndarray, areas: np.ndarray
-    ) -> TieFrame | None:
-        """Frame of master surface and slave nodes deciding search ties (docs/method.md §3.2).
-
-        Collective: the slave nodes' moments are summed over the processes.
-        """
-        if not isinstance(state.master, (MasterSurface, master_exchange.MasterPatch)):
-            return None  # a rigid master: one face, no ties
-        origin, moments = state.master.surface_moments()
-        slave = point_moments(points, areas, origin)
-        comm = self.u.function_space.mesh.comm
-        return frame_from_moments(moments + comm.allreduce(slave, op=MPI.SUM), origin)
-
-    def _adjust(self, state: PairState, found: np.ndarray, evaluation: SpringEvaluation) -> int:
-        """ADJUST: move the selected slave nodes onto the master (docs/method.md §11.5)."""
-        adjust = state.pair.adjust
-        in_set = None
-        if state.adjust_nodes is not None:
-            in_set = np.isin(state.slave.nodes[found], state.adjust_nodes)
-        move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
-        count = self.u.function_space.mesh.comm.allreduce(int(np.count_nonzero(move)))
-        if count:  # on every process: the moves reach ghost and halo copies (§14.6)
-            delta = -evaluation.gap[move, None] * evaluation.normal[move]
-            move_reference_nodes(
-                self.u.function_space,
-                self._reference,
-                state.slave.nodes[found[move]],
-                delta,
-                self.halo,
-            )
-            logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
-        return count
-
-    def _creates_spring(
-        self, state: PairState, found: np.ndarray, gap: np.ndarray, areas: np.ndarray
-    ) -> np.ndarray:
-        """Which of the found slave nodes get a spring: effective gap within the law's cutoff."""
-        cutoff = state.pair.interaction.law.cutoff(areas[found])
-        return gap - self._gap_shift(state, found) <= cutoff
-
-    def unpaired_contacts(self) -> int:
-        """Slave nodes that a pairing now would give a spring but that have none. Collective.
-
-        For example nodes that penetrated after the pairing froze at iteration 8.
-        """
-        coords = self.current_coordinates()
-        count = 0
-        comm = self.u.function_space.mesh.comm
-        with collectives.collective_errors(comm):
-            for state in self.states:
-                if not state.pair.active:
-                    continue
-                current = np.full(state.slave.nodes.size, -1, dtype=np.int64)
-                current[state.spring_slave] = state.spring_face
-                found, _, areas, evaluation = self._search(state, coords, current)
-                create = self._creates_spring(state, found, evaluation.gap, areas)
-                count += int(np.count_nonzero(create & (current[found] < 0)))
-        return comm.allreduce(count)
-
-    @staticmethod
-    def _previous_xi(state: PairState, found: np.ndarray, face: np.ndarray) -> np.ndarray:
-        """Projection start points: the last one where a node keeps its face, else the centre."""
-        xi0 = np.tile(state.master_faces.face_type.center, (found.size, 1))
-        if state.xi is not None and state.num_springs:
-            previous_face = np.full(state.slave.nodes.size, -1, dtype=np.int64)
-            previous_face[state.spring_slave] = state.spring_face
-            previous_xi = np.zeros((state.slave.nodes.size, 2))
-            previous_xi[state.spring_slave] = state.xi
-            same = previous_face[found] == face[found]
-            xi0[same] = previous_xi[found[same]]
-        return xi0
-
-    def _gap_shift(self, state: PairState, slave_index: np.ndarray) -> np.ndarray | float:
-        """g0 (1 - tau) in static steps, 0 otherwise (docs/method.md §3.5, §11.6)."""
-        if not self.static:
-            return 0.0
-        return state.overlap[slave_index] * (1.0 - self.time_fraction)
-
     # -- springs -----------------------------------------------------------------------------------
 
     def evaluate(self, *, tangent: bool = True) -> list[SpringBlocks]:
@@ -818,119 +392,35 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         blocks = []
         symmetric = self.symmetric and not self.has_friction
         for state in self.states:
-            nodes = state.element_nodes
-            friction = self._friction_input(state, coords, nodes)
-            if self.linearize_area:  # areas follow the deformation between pairings too
-                areas = _slave_areas(state.slave, coords)
-                state.spring_area = areas[state.spring_slave]
-            ev = spring_evaluator(state.master)(
-                state.master_faces.face_type,
-                coords[nodes[:, :-1]],
-                coords[nodes[:, -1]],
-                state.spring_area,
-                self._tangent_law(state.pair.interaction.law),
-                gap_shift=self._gap_shift(state, state.spring_slave),
-                xi0=state.xi,
+            law = state.pair.interaction.law
+            blocks += evaluate_pair(
+                state,
+                coords,
+                start_law(law) if self.contact_start_slope and self.iteration == 0 else law,
+                reference=self.pairing.reference,
+                gap_shift=self.pairing.gap_shift(state, state.spring_slave),
                 tangent=tangent,
                 symmetric=symmetric,
-                friction=friction,
-            )
-            state.evaluation = ev
-            state.xi = ev.xi
-            if ev.tangential is not None:
-                tf = ev.tangential
-                state.friction.store(state.spring_slave, tf.a, tf.t, tf.slip)
-            blocks.append(
-                SpringBlocks(
-                    nodes,
-                    nodes,
-                    ev.stiffness,
-                    ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1]),
-                )
-            )
-            if tangent and self.linearize_area:
-                blocks.append(self._area_block(state, coords))
+                linearize_area=self.linearize_area,
+                friction_in_tension=self.friction_in_tension,
+                friction_tangent=self.friction_tangent,
+            )  # the start slope: contact_start_slope, docs/method.md §7.1
         return blocks
-
-    def _tangent_law(self, law: PressureOverclosureLaw) -> PressureOverclosureLaw:
-        """The law whose slope the tangent takes (``contact_start_slope``, docs/method.md §7.1)."""
-        return start_law(law) if self.contact_start_slope and self.iteration == 0 else law
-
-    def _friction_input(
-        self, state: PairState, coords: np.ndarray, nodes: np.ndarray
-    ) -> FrictionInput | None:
-        """Friction state and parameters of the pair's springs, None without friction."""
-        friction = state.pair.interaction.friction
-        if friction is None:
-            return None
-        displacements = (coords - self._reference)[nodes]
-        return FrictionInput(
-            displacements,
-            *state.friction.start_values(state.spring_slave),
-            mu=friction.mu,
-            stick_slope=friction.stick_slope,
-            in_tension=self.friction_in_tension,
-            tangent_mode=self.friction_tangent,
-        )
-
-    def _area_block(
-        self, state: PairState, coords: np.ndarray, *, values: bool = True
-    ) -> SpringBlocks:
-        """Tangent of F_N = A_p p(d) with respect to the slave-face nodes around p (dA_p/du)."""
-        faces = state.slave.faces
-        slave_index, node, gradient = spring_area_gradients(
-            faces.face_type, faces.faces, coords, state.slave.nodes
-        )
-        spring_of_slave = np.full(state.slave.nodes.size, -1, dtype=np.int64)
-        spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
-        spring = spring_of_slave[slave_index]
-        keep = spring >= 0
-        if state.slave.faceless is not None:  # no face area: the fallback, not dA/du
-            keep &= ~state.slave.faceless[slave_index]
-        spring, node, gradient = spring[keep], node[keep], gradient[keep]
-        block_values = None
-        if values:
-            per_area = state.evaluation.force_per_area.reshape(
-                state.num_springs, 3 * state.element_nodes.shape[1]
-            )[spring]
-            block_values = per_area[:, :, None] * gradient[:, None, :]
-        return SpringBlocks(
-            state.element_nodes[spring], node[:, None].astype(np.int64), block_values
-        )
 
     def ensure_matrix(self) -> PETSc.Mat:
         """The Jacobian matrix, recreated when the current springs need couplings it lacks."""
         blocks = [SpringBlocks(s.element_nodes, s.element_nodes) for s in self.states]
         if self.linearize_area:
             coords = self.current_coordinates()
-            blocks += [self._area_block(s, coords, values=False) for s in self.states]
+            blocks += [area_block(s, coords, values=False) for s in self.states]
         if self.matrix is None or not self.assembler.has_pattern(blocks):
             if self.matrix is not None:
                 self.matrix.destroy()
             comm = self.u.function_space.mesh.comm  # a failed patch lookup fails on all (§14.4)
-            reserved = collectives.collectively(comm, self._reserved_blocks)
+            reserved = collectives.collectively(comm, self.pairing.reserved_blocks)
             self.matrix = self.assembler.create_matrix(blocks + reserved)
         self._pattern_checked = True
         return self.matrix
-
-    def _reserved_blocks(self) -> list[SpringBlocks]:
-        """Couplings a new matrix reserves beyond the current springs.
-
-        Every slave node that the last pairing located, with the faces around its face, so that
-        nodes moving to a neighbouring face or coming into contact need no new pattern (and no
-        new symbolic factorization).
-        """
-        blocks = []
-        for state in self.states:
-            if state.found_face is None:
-                continue
-            located = np.flatnonzero(state.found_face >= 0)
-            which, patch = state.master.face_patches(state.found_face[located])
-            nodes = np.hstack(
-                [state.master_faces.faces[patch], state.slave.nodes[located[which]][:, None]]
-            )
-            blocks.append(SpringBlocks(nodes, nodes))
-        return blocks
 
     # -- dolfinx callbacks -------------------------------------------------------------------------
     #
@@ -1014,8 +504,7 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         if self.elimination is not None:
             self.elimination.release()
             self.reduced_matrix = None
-        if self.halo is not None:
-            self.halo.destroy()
+        self.pairing.destroy()
 
     def __enter__(self) -> ContactProblem:
         return self
@@ -1031,15 +520,6 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         self.bcs = list(bcs)
         self.assembler.set_bcs(self.bcs)
         self._eliminate()
-
-
-def _slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
-    """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
-    faces = slave.faces
-    areas = spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
-    if slave.faceless is not None:
-        areas[slave.faceless] = 0.0
-    return areas
 
 
 def _broken(
@@ -1060,3 +540,17 @@ def _broken(
     family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
     W = compat.vector_space(mesh, family, compat.space_degree(V))
     return dolfinx.fem.form(ufl.replace(form, {arguments[0]: ufl.TestFunction(W)}), **options), W
+
+
+def _check_arguments(
+    F: object, u: object, pairs: object, bcs: object, J: object, max_depth: object
+) -> tuple[list[ContactPair], list[compat.DirichletBC]]:
+    """The arguments of :class:`ContactProblem`; returns ``(pairs, bcs)`` as lists."""
+    owner = "ContactProblem"
+    validation.check_displacement(u, owner)
+    validation.check_residual(F, u, owner, J)
+    pairs = validation.check_sequence(
+        pairs, ContactPair, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
+    )
+    validation.check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
+    return pairs, validation.check_bcs(bcs, owner)

@@ -33,6 +33,7 @@ __all__ = [
     "SlaveSurface",
     "SurfaceFaces",
     "boundary_faces",
+    "facet_cells",
     "reference_coordinates",
     "resolve_master",
     "resolve_slave",
@@ -207,7 +208,7 @@ def boundary_faces(
     if tdim != 3:
         raise ValueError(f"{what}: only 3D meshes are supported, got a {tdim}D mesh")
     facets = np.asarray(facets, dtype=np.int32)
-    cells, local_facet = _facet_cells(mesh, facets, what)
+    cells, local_facet = facet_cells(mesh, facets, what)
 
     cell_nodes, closure = _cell_arrays(V)
     closure_nodes = cell_nodes[cells[:, None], closure[local_facet]]
@@ -235,7 +236,7 @@ def boundary_faces(
     return SurfaceFaces(face_type, np.ascontiguousarray(faces, dtype=np.int32), facets)
 
 
-def _facet_cells(
+def facet_cells(
     mesh: dolfinx.mesh.Mesh, facets: np.ndarray, what: str
 ) -> tuple[np.ndarray, np.ndarray]:
     """The cell of each boundary facet and the facet's local index in it.

@@ -33,6 +33,7 @@ __all__ = [
     "TRI3",
     "TRI6",
     "FaceType",
+    "face_coords_array",
     "face_points",
     "face_tangents",
     "face_type_from_num_nodes",
@@ -345,7 +346,7 @@ def face_type_from_num_nodes(n: int) -> FaceType:
         ) from None
 
 
-def _face_coords_array(
+def face_coords_array(
     face_type: FaceType, face_coords: np.ndarray, what: str = "face_coords", rows: str = "F"
 ) -> np.ndarray:
     """``face_coords`` as a float array of shape (rows, n, 3), else a ValueError naming ``what``."""

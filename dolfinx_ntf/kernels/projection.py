@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dolfinx_ntf.kernels.faces import FaceType, _face_coords_array
+from dolfinx_ntf.kernels.faces import FaceType, face_coords_array
 
 __all__ = ["project_points"]
 
@@ -140,7 +140,7 @@ def _rows(mask: np.ndarray) -> str:
 def _validate(
     face_type: FaceType, face_coords: np.ndarray, points: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    coords = _face_coords_array(face_type, face_coords, rows="N")
+    coords = face_coords_array(face_type, face_coords, rows="N")
     pts = np.asarray(points, dtype=float)
     if pts.shape != (coords.shape[0], 3):
         raise ValueError(f"points must have shape ({coords.shape[0]}, 3), got {pts.shape}")

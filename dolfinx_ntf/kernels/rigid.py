@@ -26,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
-from dolfinx_ntf.kernels.springs import SpringEvaluation, evaluate_springs
+from dolfinx_ntf.kernels.springs import SpringEvaluation
 
 __all__ = [
     "RigidCylinder",
@@ -37,7 +37,6 @@ __all__ = [
     "SignedDistanceSurface",
     "evaluate_rigid_springs",
     "rigid_master",
-    "spring_evaluator",
 ]
 
 Motion = typing.Callable[[float], npt.ArrayLike]
@@ -374,6 +373,10 @@ class RigidMaster:
         self.clock = clock
         self.name = name
 
+    #: Searches involve this process only (the :class:`~dolfinx_ntf.kernels.master.ContactMaster`
+    #: role).
+    collective = False
+
     def update(self, coords: np.ndarray) -> None:
         """Nothing to update: the surface does not follow the mesh."""
 
@@ -395,6 +398,10 @@ class RigidMaster:
         if max_depth is not None and points.shape[0]:
             face[self.surface.distance(points, self.clock()) < -max_depth] = -1
         return face
+
+    def surface_moments(self) -> None:
+        """One face: no search ties, hence no tie frame."""
+        return None
 
     def face_patches(self, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """No master nodes: nothing to reserve in the matrix."""
@@ -438,8 +445,3 @@ def rigid_master(
 ) -> tuple[_RigidFaces, RigidMaster]:
     """The (faces, master) pair a ContactProblem keeps for a rigid master surface."""
     return _RigidFaces(), RigidMaster(surface, clock, name)
-
-
-def spring_evaluator(master: object) -> typing.Callable[..., SpringEvaluation]:
-    """``evaluate_springs`` for meshed masters, the rigid evaluator for a :class:`RigidMaster`."""
-    return master.evaluate_springs if isinstance(master, RigidMaster) else evaluate_springs

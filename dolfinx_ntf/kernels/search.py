@@ -17,6 +17,7 @@ import numpy as np
 import scipy.sparse
 from scipy.spatial import cKDTree
 
+from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 
@@ -32,7 +33,7 @@ NOT_HELD = -2
 """Neighbour and walk result where the surface continues on triangles not held here (§14.8)."""
 
 
-class MasterSurface:
+class MasterSurface(springs.MeshedMasterSprings):
     """Triangulated master surface with the search prisms of docs/method.md §2.3.
 
     Args:
@@ -47,6 +48,10 @@ class MasterSurface:
             if two faces sharing an edge are oriented inconsistently (edge used twice in the same
             direction).
     """
+
+    #: A search here involves this process only (the :class:`~dolfinx_ntf.kernels.master.
+    #: ContactMaster` role).
+    collective = False
 
     def __init__(
         self,

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from dolfinx_ntf.kernels.faces import FaceType, _face_coords_array
+from dolfinx_ntf.kernels.faces import FaceType, face_coords_array
 
 __all__ = [
     "face_area_gradients",
@@ -29,7 +29,7 @@ __all__ = [
 
 def _check_face_coords(face_type: FaceType, face_coords: npt.ArrayLike) -> np.ndarray:
     """Return ``face_coords`` as a finite float array of shape (F, n, 3)."""
-    coords = _face_coords_array(face_type, face_coords)
+    coords = face_coords_array(face_type, face_coords)
     bad = ~np.isfinite(coords)
     if bad.any():
         face = int(np.argwhere(bad)[0][0])

@@ -37,12 +37,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dolfinx_ntf.kernels.faces import FaceType, _face_coords_array
+from dolfinx_ntf.kernels.faces import FaceType, face_coords_array
 from dolfinx_ntf.kernels.friction import FrictionInput, TangentialForce, tangential_forces
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.projection import project_points
 
-__all__ = ["SpringEvaluation", "evaluate_springs"]
+__all__ = ["MeshedMasterSprings", "SpringEvaluation", "evaluate_springs"]
 
 # A parametric constraint counts as active when the projection lies within this distance of it and
 # its Lagrange multiplier (relative to |q_ξ|² + |q_η|²) exceeds _MULTIPLIER_TOL.
@@ -227,7 +227,7 @@ def _check_input(
     gap_shift: float | np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Validate shapes and values; return float arrays (master, slave, area, gap_shift)."""
-    master = _face_coords_array(face_type, master_coords, "master_coords", rows="N")
+    master = face_coords_array(face_type, master_coords, "master_coords", rows="N")
     num = master.shape[0]
     slave = np.asarray(slave_coords, dtype=float)
     if slave.shape != (num, 3):
@@ -438,3 +438,39 @@ def _element_stiffness(
     dphi_dxi = (kin.dphi @ dxi).reshape(num, nodes, nodes, 3)  # (N, k, l, c)
     blocks -= slave_force[:, None, :, None, None] * dphi_dxi[:, :, None, :, :]
     return blocks.reshape(num, 3 * nodes, 3 * nodes)
+
+
+class MeshedMasterSprings:
+    """The springs of a master made of mesh faces: plain :func:`evaluate_springs`.
+
+    Base of the meshed master surfaces (``MasterSurface``, the exchanged ``MasterPatch``), giving
+    them the ``evaluate_springs`` of the :class:`~dolfinx_ntf.kernels.master.ContactMaster` role.
+    """
+
+    def evaluate_springs(
+        self,
+        face_type: FaceType,
+        master_coords: np.ndarray,
+        slave_coords: np.ndarray,
+        areas: np.ndarray,
+        law: PressureOverclosureLaw,
+        *,
+        gap_shift: float | np.ndarray = 0.0,
+        xi0: np.ndarray | None = None,
+        tangent: bool = True,
+        symmetric: bool = False,
+        friction: FrictionInput | None = None,
+    ) -> SpringEvaluation:
+        """:func:`evaluate_springs` on faces of this master."""
+        return evaluate_springs(
+            face_type,
+            master_coords,
+            slave_coords,
+            areas,
+            law,
+            gap_shift=gap_shift,
+            xi0=xi0,
+            tangent=tangent,
+            symmetric=symmetric,
+            friction=friction,
+        )

@@ -19,7 +19,8 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
+from dolfinx_ntf.contact.pair import ContactPair
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.surfaces import FacetSurface
 from dolfinx_ntf.outputs.results import ContactResults, contact_results
 
@@ -144,7 +145,7 @@ def _pair_results(
         return results
     names = [r.pair for r in results]
     if isinstance(pair, ContactPair):
-        index = next((i for i, s in enumerate(problem.states) if s.pair is pair), None)
+        index = next((i for i, s in enumerate(problem.pairing.states) if s.pair is pair), None)
     elif isinstance(pair, str):
         index = names.index(pair) if pair in names else None
     elif isinstance(pair, numbers.Integral) and not isinstance(pair, bool):

@@ -25,10 +25,15 @@ import dolfinx.fem
 import dolfinx.io
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.contact.problem import ContactProblem, PairState
+from dolfinx_ntf.contact.pair import PairState
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 
-__all__ = ["ContactFields", "ContactResults", "ContactWriter", "contact_results"]
+__all__ = ["RECOVERY_FIELDS", "ContactFields", "ContactResults", "ContactWriter", "contact_results"]
+
+#: Key of the :class:`ContactFields` that ``contact_results(recovered=True)`` keeps in the
+#: problem's :attr:`~dolfinx_ntf.ContactProblem.output_cache` (its compiled forms are reused).
+RECOVERY_FIELDS = "recovery_fields"
 
 
 @dataclass(frozen=True)
@@ -89,7 +94,8 @@ def _evaluated(problem: ContactProblem) -> None:
     Collective: a process with stale springs makes all evaluate (docs/method.md §14).
     """
     stale = any(
-        s.evaluation is None or s.evaluation.xi.shape[0] != s.num_springs for s in problem.states
+        s.evaluation is None or s.evaluation.xi.shape[0] != s.num_springs
+        for s in problem.pairing.states
     )
     if problem.u.function_space.mesh.comm.allreduce(stale, op=MPI.LOR):
         problem.evaluate(tangent=False)
@@ -133,12 +139,12 @@ def contact_results(problem: ContactProblem, *, recovered: bool = False) -> list
     """
     validation.check_type(problem, ContactProblem, "contact_results: problem")
     _evaluated(problem)
-    coords = problem.current_coordinates()
-    results = [_pair_results(i, s, coords) for i, s in enumerate(problem.states)]
+    coords = problem.pairing.current_coordinates()
+    results = [_pair_results(i, s, coords) for i, s in enumerate(problem.pairing.states)]
     if recovered:
-        fields = getattr(problem, "_recovery_fields", None)  # kept with the problem
+        fields = problem.output_cache.get(RECOVERY_FIELDS)
         if fields is None:
-            fields = problem._recovery_fields = ContactFields(problem)
+            fields = problem.output_cache[RECOVERY_FIELDS] = ContactFields(problem)
         else:
             fields.update()
         results = [
@@ -192,7 +198,7 @@ class ContactFields:
         #: Accumulated tangential relative displacement ``t`` (vector, on ``u``'s space).
         self.slip = dolfinx.fem.Function(V, name="contact_slip")
         # -1: a facet of another process (docs/method.md §14.1)
-        slave_facets = [f[f >= 0] for f in (s.slave.faces.facets for s in problem.states)]
+        slave_facets = [f[f >= 0] for f in (s.slave.faces.facets for s in problem.pairing.states)]
         #: Projection of the spring forces onto the slave faces (docs/method.md §15.3).
         self.recovery = BoundaryPressure(
             problem.u.function_space,

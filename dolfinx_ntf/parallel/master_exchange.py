@@ -22,6 +22,8 @@ added, so face numbers held by springs and friction states stay valid.
 
 from __future__ import annotations
 
+import typing
+
 from mpi4py import MPI
 
 import numpy as np
@@ -30,7 +32,9 @@ import dolfinx.fem
 
 from dolfinx_ntf import validation
 from dolfinx_ntf.fem.surfaces import SlaveSurface, SurfaceFaces
+from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
+from dolfinx_ntf.kernels.master import ContactMaster
 from dolfinx_ntf.kernels.search import NOT_HELD, TIE_DIGITS, MasterSurface
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 from dolfinx_ntf.parallel.collectives import alltoallv, checkpoint
@@ -71,11 +75,11 @@ def _meets(lo: np.ndarray, hi: np.ndarray, box_lo: np.ndarray, box_hi: np.ndarra
     return np.all(hi >= box_lo, axis=1) & np.all(lo <= box_hi, axis=1)
 
 
-class MasterPatch:
+class MasterPatch(springs.MeshedMasterSprings):
     """The part of a master surface one process searches, with the checks of §14.8.
 
-    Used by :class:`~dolfinx_ntf.ContactProblem` like a :class:`MasterSurface` (``update``,
-    ``locate``, ``face_patches``); ``update`` and :meth:`exchange` are collective.
+    Plays the :class:`~dolfinx_ntf.kernels.master.ContactMaster` role like a
+    :class:`MasterSurface`; ``update``, ``surface_moments`` and :meth:`exchange` are collective.
 
     Args:
         halo: The problem's node halo (received nodes are appended to it).
@@ -84,6 +88,9 @@ class MasterPatch:
         coords: Current coordinates of the local nodes at least.
         name: Surface name for messages.
     """
+
+    #: ``update`` and ``surface_moments`` are collective; a search may need :func:`enlarge`.
+    collective = True
 
     def __init__(
         self,
@@ -334,15 +341,24 @@ def distribute_pair(
 MAX_EXCHANGES = 64
 
 
-def enlarge(problem: object, state: object, face: np.ndarray) -> bool:
+def enlarge(
+    master: ContactMaster, face: np.ndarray, coordinates: typing.Callable[[], np.ndarray]
+) -> bool:
     """Exchange a pair's master patch again if a search on any process could not tell. Collective.
 
-    ``face``: the search result of this process (``NOT_HELD`` where the patch could not tell).
-    Returns whether the patch grew (search again); always False for a whole master surface.
+    Args:
+        master: The pair's master surface; only a :class:`MasterPatch` can grow.
+        face: The search result of this process (``NOT_HELD`` where the patch could not tell).
+        coordinates: Gives the current node coordinates (a collective call), asked for only when
+            the patch grows.
+
+    Returns:
+        Whether the patch grew: the caller's halo then holds new nodes (its numbering must follow)
+        and ``master.faces`` more faces; search again. Always False for a whole master surface.
     """
-    patch = state.master
-    if not isinstance(patch, MasterPatch):
+    if not isinstance(master, MasterPatch):
         return False
+    patch = master
     checkpoint(patch.comm)  # a search that failed on one process fails on all (§14.4)
     unresolved = bool(np.any(face == NOT_HELD))
     if not patch.comm.allreduce(unresolved, op=MPI.LOR):
@@ -354,8 +370,6 @@ def enlarge(problem: object, state: object, face: np.ndarray) -> bool:
         )
     margin = patch.next_margin(unresolved)
     checkpoint(patch.comm)
-    patch.exchange(problem.current_coordinates(), margin)
+    patch.exchange(coordinates(), margin)
     checkpoint(patch.comm)
-    problem.halo_grew()
-    state.master_faces = patch.faces
     return True

@@ -3,8 +3,9 @@
 An analysis is a list of :class:`AnalysisStep` run one after the other on one problem and solver by
 :func:`run_steps` (docs/method.md §11.6). Each step has
 
-- a procedure that does the incrementation: a :class:`~dolfinx_ntf.StaticStep` by default, or any
-  dataclass with a ``set_load`` field and a ``run(solver, u)`` method (a dynamic step, say);
+- a procedure that does the incrementation: a :class:`~dolfinx_ntf.solvers.steps.Step`, the
+  :class:`~dolfinx_ntf.StaticStep` by default or a :class:`~dolfinx_ntf.DynamicStep` (any
+  dataclass with ``set_load`` and ``period`` fields and a ``run(solver, u)`` method will do);
 - loads (:class:`Load`): values of Constants or Functions (pressures, prescribed displacements)
   that ramp linearly over the step from their value at its start, as in CalculiX, or follow an
   :class:`Amplitude`;
@@ -23,13 +24,15 @@ import typing
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 
 import dolfinx.fem
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.kernels.laws import Friction, SurfaceInteraction
-from dolfinx_ntf.solvers.newton import ContactNewtonSolver, IncrementResult, StaticStep
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep, Step
 
 __all__ = [
     "AddPair",
@@ -90,8 +93,8 @@ class Load:
         amplitude: Optional :class:`Amplitude`.
     """
 
-    target: typing.Any
-    value: typing.Any
+    target: dolfinx.fem.Constant | dolfinx.fem.Function
+    value: float | npt.ArrayLike
     amplitude: Amplitude | None = None
 
     def __post_init__(self) -> None:
@@ -167,7 +170,7 @@ class AnalysisStep:
         name: Label for messages.
     """
 
-    procedure: typing.Any = None
+    procedure: Step | None = None
     loads: typing.Sequence[Load] = ()
     bcs: typing.Sequence[compat.DirichletBC] | None = None
     changes: typing.Sequence[ContactChange] = ()

@@ -25,13 +25,9 @@ import ufl
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactProblem
-from dolfinx_ntf.solvers.newton import (
-    ContactConvergenceError,
-    ContactNewtonSolver,
-    IncrementResult,
-    LoadControl,
-    run_increments,
-)
+from dolfinx_ntf.solvers.errors import ContactConvergenceError
+from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.steps import IncrementResult, LoadControl, Step
 
 __all__ = ["CCX_ALPHA", "DynamicStep", "kinetic_energy", "newmark_parameters"]
 
@@ -138,7 +134,7 @@ class _Inertia:
 
 
 @dataclass
-class DynamicStep:
+class DynamicStep(Step):
     """An implicit dynamic step of ``period`` (CalculiX ``*DYNAMIC``), docs/method.md §12.
 
     The HHT alpha method with CalculiX's default ``alpha = -0.05`` (Newmark
@@ -189,71 +185,26 @@ class DynamicStep:
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
 
-    def __post_init__(self) -> None:
-        """Check the configuration (``TypeError``/``ValueError`` naming the field)."""
-        self._check()
-
-    def _check(self) -> None:
-        owner = "DynamicStep"
+    def _check_own(self, owner: str) -> None:
+        """The mass form and ``alpha``."""
         if not isinstance(self.mass, ufl.Form) or len(self.mass.arguments()) != 2:
             raise TypeError(
                 f"{owner}: mass must be a bilinear UFL form such as "
                 "rho*inner(TrialFunction(V), TestFunction(V))*dx, got "
                 f"{validation.describe(self.mass)}"
             )
-        for name in ("set_load", "on_increment"):
-            value = getattr(self, name)
-            if value is not None and not callable(value):
-                raise TypeError(
-                    f"{owner}: {name} must be a function, got {validation.describe(value)}"
-                )
-        for name in ("period", "initial_increment", "cutback_factor"):
-            validation.check_positive(getattr(self, name), f"{owner}: {name}")
-        for name in ("min_increment", "max_increment"):
-            validation.check_positive(getattr(self, name), f"{owner}: {name}", allow_none=True)
-        max_inc = self.period if self.max_increment is None else self.max_increment
-        if not (self._min_increment() <= self.initial_increment <= max_inc):
-            raise ValueError(
-                f"{owner}: need 0 < min_increment ({self._min_increment()}) <= initial_increment "
-                f"({self.initial_increment}) <= max_increment ({max_inc})"
-            )
-        factors = (self.cutback_factor, self.divergence_cutback_factor)
-        if not (all(0 < f < 1 for f in factors) and self.growth_factor >= 1):
-            raise ValueError(
-                f"{owner}: need 0 < cutback_factor ({self.cutback_factor}), "
-                f"divergence_cutback_factor ({self.divergence_cutback_factor}) < 1 <= "
-                f"growth_factor ({self.growth_factor})"
-            )
         if not (isinstance(self.alpha, (int, float)) and -1.0 / 3.0 <= self.alpha <= 0.0):
             raise ValueError(f"{owner}: alpha must be in [-1/3, 0] (ccx), got {self.alpha!r}")
 
-    def _min_increment(self) -> float:
+    def minimum_increment(self) -> float | None:
         """The minimum increment, CalculiX's default when none is given."""
         if self.min_increment is not None:
             return self.min_increment
         return min(self.initial_increment, 1e-5 * self.period)
 
-    def run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
-        """Run the step from the current ``u`` (and ``velocity``).
-
-        Args:
-            solver: The solver of the problem.
-            u: The problem's displacement (the Function the problem was built on).
-
-        Returns:
-            The result of every converged increment of this run.
-
-        Raises:
-            ContactConvergenceError: When an increment fails and cutbacks are exhausted.
-        """
-        self._check()
-        validation.check_type(solver, ContactNewtonSolver, "DynamicStep.run: solver")
+    def _run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+        """Add the inertia terms to the problem for the run, integrate, remove them."""
         problem = solver.problem
-        if u is not problem.u:
-            raise ValueError(
-                "DynamicStep.run: u must be the Function the ContactProblem was built on "
-                f"(got {validation.describe(u)})"
-            )
         V = u.function_space
         velocity = self._state_function(self.velocity, V, "velocity")
         acceleration = self._state_function(self.acceleration, V, "acceleration")
@@ -294,7 +245,7 @@ class DynamicStep:
         u: dolfinx.fem.Function,
         velocity: dolfinx.fem.Function,
         acceleration: dolfinx.fem.Function,
-        mass: typing.Any,
+        mass: compat.Form,
         inertia: _Inertia,
     ) -> list[IncrementResult]:
         x = compat.petsc_vector(u)
@@ -319,7 +270,7 @@ class DynamicStep:
             self._advance(u, velocity, acceleration, inertia, owned)
             _static_residual(problem, inertia, x)
 
-        return run_increments(self, solver, u, self._min_increment(), start, converged)
+        return self._increments(solver, u, start, converged)
 
     @staticmethod
     def _advance(
@@ -367,7 +318,7 @@ def _static_residual(
 
 
 def _initial_acceleration(
-    mass: typing.Any,
+    mass: compat.Form,
     problem: ContactProblem,
     residual: PETSc.Vec,
     acceleration: dolfinx.fem.Function,

@@ -50,7 +50,7 @@ from .data import (
     SurfaceBehavior,
     SurfaceInteraction,
 )
-from .errors import DeckError, DeckWarning, Location
+from .errors import DeckError, DeckWarning, Location, not_supported
 from .faces import external_faces, face_nodes, node_surface_faces, surface_nodes
 from .leniency import LENIENCY
 from .reader import read_deck
@@ -89,6 +89,7 @@ __all__ = [
     "external_faces",
     "face_nodes",
     "node_surface_faces",
+    "not_supported",
     "read_deck",
     "surface_nodes",
 ]

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..elements import ELEMENT_TYPES, _frozen_array
+from ..elements import ELEMENT_TYPES, frozen_array
 from .data import Deck, ElementBlock, Material, SolidSection, SurfaceInteraction
 from .errors import DeckError, Location
-from .state import _ReaderState
+from .state import ReaderState
 
 
-class _Checks(_ReaderState):
+class Checks(ReaderState):
     """Cross-references, numbering and completeness checks; builds the ``Deck``."""
 
     def _finish(self) -> Deck:
@@ -47,8 +47,8 @@ class _Checks(_ReaderState):
             node_ids=node_ids,
             node_coords=node_coords,
             elements=elements,
-            nsets={k: _frozen_array(v, np.int64) for k, v in self.nsets.items()},
-            elsets={k: _frozen_array(v, np.int64) for k, v in self.elsets.items()},
+            nsets={k: frozen_array(v, np.int64) for k, v in self.nsets.items()},
+            elsets={k: frozen_array(v, np.int64) for k, v in self.elsets.items()},
             surfaces=dict(self.surfaces),
             materials=materials,
             sections=tuple(self.sections),

@@ -1,5 +1,7 @@
 """Where a deck line is and what goes wrong there: ``Location``, ``DeckError``, ``DeckWarning``.
 
+``not_supported`` makes the error of a feature the model cannot run yet.
+
 See docs/method.md §8.5.
 """
 
@@ -51,3 +53,8 @@ class DeckWarning:
         return (
             f" *WARNING reading {self.keyword}: {what} ignored ({self.reason}) at {self.location}"
         )
+
+
+def not_supported(what: str, location: Location | str) -> NotImplementedError:
+    """The error for ``what`` (a keyword or parameter at ``location``) not supported yet."""
+    return NotImplementedError(f"{location}: {what} is not supported yet")

@@ -8,13 +8,13 @@ from __future__ import annotations
 import numpy as np
 
 from .data import Deck, Surface
-from .lexer import _name
+from .lexer import normalized_name
 
 
 def _surface(deck: Deck, surface: Surface | str) -> Surface:
     if isinstance(surface, Surface):
         return surface
-    name = _name(surface)
+    name = normalized_name(surface)
     if name not in deck.surfaces:
         raise ValueError(f"surface {name} is not defined in {deck.path}")
     return deck.surfaces[name]

@@ -9,28 +9,28 @@ import re
 
 import numpy as np
 
-from ..elements import _frozen_array
+from ..elements import frozen_array
 from .data import ContactPair, Friction, FrictionChange, SurfaceBehavior
 from .errors import DeckError
-from .lexer import _Card
-from .state import _InteractionBuilder, _ReaderState
+from .lexer import Card
+from .state import InteractionBuilder, ReaderState
 
 
-class _InteractionCards(_ReaderState):
+class InteractionCards(ReaderState):
     """Handlers of the surface interaction and contact pair cards."""
 
-    def _k_SURFACEINTERACTION(self, card: _Card) -> None:
+    def _k_SURFACEINTERACTION(self, card: Card) -> None:
         self._check_params(card, allowed={"NAME"}, required={"NAME"})
         self._no_data(card)
         name = self._new_name(card, self.interactions, "surface interaction")
-        self.context = self.interactions[name] = _InteractionBuilder(name, card.location)
+        self.context = self.interactions[name] = InteractionBuilder(name, card.location)
 
-    def _interaction(self, card: _Card) -> _InteractionBuilder:
-        if not isinstance(self.context, _InteractionBuilder):
+    def _interaction(self, card: Card) -> InteractionBuilder:
+        if not isinstance(self.context, InteractionBuilder):
             raise DeckError(f"{card.name} must follow a *SURFACE INTERACTION card", card.location)
         return self.context
 
-    def _k_SURFACEBEHAVIOR(self, card: _Card) -> None:
+    def _k_SURFACEBEHAVIOR(self, card: Card) -> None:
         interaction = self._interaction(card)
         key = "PRESSURE-OVERCLOSURE"
         self._check_params(card, allowed={key}, required={key})
@@ -64,7 +64,7 @@ class _InteractionCards(_ReaderState):
                 rows.append([self._float(t, "pressure/overclosure", loc) for t in fields])
             if len({len(r) for r in rows}) > 1:
                 raise DeckError(f"{what}: give temperatures on all lines or none", card.location)
-            table = _frozen_array(rows, np.float64)
+            table = frozen_array(rows, np.float64)
         elif law == "TIED":
             raise DeckError(f"{what} is for face-to-face contact: not supported", card.location)
         else:
@@ -76,7 +76,7 @@ class _InteractionCards(_ReaderState):
             )
         interaction.behavior = SurfaceBehavior(law, values, table, card.location)
 
-    def _friction_data(self, card: _Card) -> Friction:
+    def _friction_data(self, card: Card) -> Friction:
         self._check_params(card, allowed=set())
         self._need_data(card)
         fields, _, loc = card.lines[-1]  # several lines: the last one counts (as in ccx)
@@ -87,7 +87,7 @@ class _InteractionCards(_ReaderState):
             raise DeckError(f"*FRICTION needs a friction coefficient > 0, got {mu}", loc)
         return Friction(mu, self._optional_float(fields, 1, "stick slope", loc), card.location)
 
-    def _k_FRICTION(self, card: _Card) -> None:
+    def _k_FRICTION(self, card: Card) -> None:
         if self.step is not None:
             if self.step.pending_friction is None:
                 raise DeckError("*FRICTION in a step must follow *CHANGE FRICTION", card.location)
@@ -98,13 +98,13 @@ class _InteractionCards(_ReaderState):
         interaction = self._interaction(card)
         interaction.friction = self._friction_data(card)
 
-    def _unused_interaction(self, card: _Card) -> None:
+    def _unused_interaction(self, card: Card) -> None:
         interaction = self._interaction(card)
         interaction.extra[card.name] = tuple(
             self._floats_line(f, card.name, loc) for f, _, loc in card.lines
         )
 
-    def _k_CONTACTPAIR(self, card: _Card) -> None:
+    def _k_CONTACTPAIR(self, card: Card) -> None:
         self._check_params(card, allowed={"INTERACTION", "TYPE", "SMALLSLIDING", "ADJUST"},
                            required={"INTERACTION", "TYPE"})  # fmt: skip
         ctype = card.params["TYPE"] or ""

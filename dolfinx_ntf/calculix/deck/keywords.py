@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from .lexer import _name
+from .lexer import normalized_name
 
 # Constraints and kinematic couplings: "not supported yet".
 _UNSUPPORTED_CONSTRAINTS = {
-    _name(k)
+    normalized_name(k)
     for k in (
         "TIE", "RIGID BODY", "MPC", "NETWORK MPC", "COUPLING", "KINEMATIC",
         "DISTRIBUTING", "DISTRIBUTING COUPLING", "PRE-TENSION SECTION", "CLEARANCE", "GAP",
@@ -17,10 +17,12 @@ _UNSUPPORTED_CONSTRAINTS = {
 
 
 # Material data a static step does not use.
-_UNUSED_MATERIAL = {_name(k) for k in ("DENSITY", "EXPANSION", "CONDUCTIVITY", "SPECIFIC HEAT")}
+_UNUSED_MATERIAL = {
+    normalized_name(k) for k in ("DENSITY", "EXPANSION", "CONDUCTIVITY", "SPECIFIC HEAT")
+}
 
 # Interaction data a static mechanical step does not use.
-_UNUSED_INTERACTION = {_name(k) for k in ("CONTACT DAMPING", "GAP CONDUCTANCE")}
+_UNUSED_INTERACTION = {normalized_name(k) for k in ("CONTACT DAMPING", "GAP CONDUCTANCE")}
 
 # Keywords that continue the current *MATERIAL / *SURFACE INTERACTION block.
 _CONTEXT_KEYWORDS = (
@@ -28,7 +30,7 @@ _CONTEXT_KEYWORDS = (
 )
 
 _STEP_KEYWORDS = {
-    _name(k)
+    normalized_name(k)
     for k in (
         "STATIC", "CLOAD", "DLOAD", "NODE PRINT", "EL PRINT", "CONTACT PRINT", "NODE FILE",
         "EL FILE", "CONTACT FILE", "NODE OUTPUT", "ELEMENT OUTPUT", "CONTACT OUTPUT", "CONTROLS",
@@ -37,7 +39,7 @@ _STEP_KEYWORDS = {
 }  # fmt: skip
 
 _MODEL_KEYWORDS = {
-    _name(k)
+    normalized_name(k)
     for k in (
         "NODE", "ELEMENT", "NSET", "ELSET", "SURFACE", "MATERIAL", "ELASTIC", "SOLID SECTION",
         "CONTACT PAIR", "SURFACE INTERACTION", "SURFACE BEHAVIOR", "DENSITY", "EXPANSION",

@@ -5,7 +5,7 @@ See docs/method.md §8.5.
 
 from __future__ import annotations
 
-from .lexer import _name
+from .lexer import normalized_name
 
 # What the reader does with the keywords and parameters it does not use. ccx 2.20 prints a warning
 # for every keyword and parameter it does not recognize and goes on; here a skipped keyword or
@@ -50,10 +50,12 @@ LENIENCY: dict[str, dict[str, tuple[str, str]]] = {
     },
     "*STEP": {"AMPLITUDE": ("refuse", "ramps or steps the loads")},
 }
-_LENIENCY = {
-    _name(k[1:]): {_name(p) if p not in ("", "*") else p: (a, r, p) for p, (a, r) in rules.items()}
+LENIENCY_RULES = {
+    normalized_name(k[1:]): {
+        normalized_name(p) if p not in ("", "*") else p: (a, r, p) for p, (a, r) in rules.items()
+    }
     for k, rules in LENIENCY.items()
 }
 
 # Skipped output keywords whose FREQUENCY still sets the frequency of every output (ccx rule).
-_SETS_FREQUENCY = {"OUTPUT", "FACEPRINT", "SECTIONPRINT"}
+SETS_FREQUENCY = {"OUTPUT", "FACEPRINT", "SECTIONPRINT"}

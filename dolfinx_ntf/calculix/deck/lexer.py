@@ -12,16 +12,18 @@ from pathlib import Path
 
 from .errors import DeckError, Location
 
-_INT_RE = re.compile(r"^[+-]?\d+$")
+INT_RE = re.compile(r"^[+-]?\d+$")
 
 
-def _name(text: str) -> str:
+def normalized_name(text: str) -> str:
     """Ccx name normalization: upper case, blanks removed."""
     return "".join(text.split()).upper()
 
 
 @dataclass
-class _Card:
+class Card:
+    """A keyword line of the deck with its data lines (what the card readers parse)."""
+
     keyword: str  # blank-free upper-case keyword, e.g. "SOLIDSECTION"
     text: str  # keyword as written (upper-case), for messages
     params: dict[str, str | None]
@@ -31,10 +33,11 @@ class _Card:
 
     @property
     def name(self) -> str:
-        return _CANONICAL.get(self.keyword, self.text)
+        """The keyword as ccx spells it (``*SOLID SECTION``), for messages."""
+        return CANONICAL_KEYWORDS.get(self.keyword, self.text)
 
 
-def _split_keyword_line(text: str, location: Location) -> _Card:
+def _split_keyword_line(text: str, location: Location) -> Card:
     fields = text[1:].split(",")
     keyword_text = fields[0].strip().upper()
     params: dict[str, str | None] = {}
@@ -43,17 +46,17 @@ def _split_keyword_line(text: str, location: Location) -> _Card:
         if not item.strip():
             continue
         key, sep, value = item.partition("=")
-        key = _name(key)
-        params[key] = _name(value) if sep else None
+        key = normalized_name(key)
+        params[key] = normalized_name(value) if sep else None
         raw[key] = value.strip() if sep else None
-    return _Card(_name(keyword_text), keyword_text, params, raw, location)
+    return Card(normalized_name(keyword_text), keyword_text, params, raw, location)
 
 
 def _data_fields(text: str) -> list[str]:
     if " " not in text and text.isascii() and text.isprintable():  # no blank (most lines)
         fields = text.upper().split(",")
     else:
-        fields = _name(text).split(",")
+        fields = normalized_name(text).split(",")
     if fields and fields[-1] == "":
         fields.pop()
     return fields
@@ -83,14 +86,15 @@ TEMPERATURE-DISPLACEMENT; USER ELEMENT; USER MATERIAL; USER SECTION; VALUES AT I
 VIEWFACTOR; VISCO; CONSTRAINT; FILTER; GEOMETRIC CONSTRAINT; ROBUSTDESIGN; CRACK PROPAGATION;
 CHANGE CONTACT TYPE; CHANGE KINEMATIC; CHANGE TIE; ELECTROMAGNETICS; EMODAL DAMPING
 """
-_CANONICAL: dict[str, str] = {
-    _name(k): "*" + " ".join(k.split())
+CANONICAL_KEYWORDS: dict[str, str] = {
+    normalized_name(k): "*" + " ".join(k.split())
     for k in _KEYWORDS.replace("\n", " ").split(";")
     if k.strip()
 }
 
 
-def _check_params(card: _Card, allowed: set[str], required: set[str] = frozenset()) -> None:
+def check_params(card: Card, allowed: set[str], required: set[str] = frozenset()) -> None:
+    """A ``DeckError`` for a parameter of ``card`` not in ``allowed`` or a missing ``required``."""
     for key in card.params:
         if key not in allowed:
             raise DeckError(f"parameter {key} of {card.name} is not supported", card.location)
@@ -123,8 +127,8 @@ def _lines(
         yield line, location
 
 
-def _include_path(card: _Card, current: Path, main: Path) -> Path:
-    _check_params(card, allowed={"INPUT"}, required={"INPUT"})
+def _include_path(card: Card, current: Path, main: Path) -> Path:
+    check_params(card, allowed={"INPUT"}, required={"INPUT"})
     name = (card.raw_params["INPUT"] or "").strip().strip('"')
     if not name:
         raise DeckError("*INCLUDE needs INPUT=<file>", card.location)
@@ -137,9 +141,9 @@ def _include_path(card: _Card, current: Path, main: Path) -> Path:
     return candidate
 
 
-def read_cards(path: Path) -> Iterator[_Card]:
+def read_cards(path: Path) -> Iterator[Card]:
     """The cards of deck ``path`` with its ``*INCLUDE`` files, each with its data lines."""
-    card: _Card | None = None
+    card: Card | None = None
     for line, location in _lines(path, path, None, ()):
         stripped = line.strip()
         if not stripped or stripped.startswith("**"):

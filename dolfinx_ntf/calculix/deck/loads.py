@@ -9,17 +9,17 @@ import re
 
 import numpy as np
 
-from ..elements import _frozen_array
+from ..elements import frozen_array
 from .data import Amplitude, Boundary, CLoad, DLoad, Equation, InitialVelocity
 from .errors import DeckError
-from .lexer import _Card
-from .state import _ReaderState
+from .lexer import Card
+from .state import ReaderState
 
 
-class _LoadCards(_ReaderState):
+class LoadCards(ReaderState):
     """Handlers of the load, constraint and initial condition cards."""
 
-    def _k_AMPLITUDE(self, card: _Card) -> None:
+    def _k_AMPLITUDE(self, card: Card) -> None:
         self._check_params(card, allowed={"NAME", "TIME"}, required={"NAME"})
         time = card.params.get("TIME")
         if time not in (None, "TOTALTIME", "STEPTIME"):
@@ -38,19 +38,19 @@ class _LoadCards(_ReaderState):
         name = card.params["NAME"] or ""
         self.amplitudes[name] = Amplitude(
             name,
-            _frozen_array(pairs[:, 0], np.float64),
-            _frozen_array(pairs[:, 1], np.float64),
+            frozen_array(pairs[:, 0], np.float64),
+            frozen_array(pairs[:, 1], np.float64),
             time == "TOTALTIME",
             card.location,
         )
 
-    def _amplitude_param(self, card: _Card) -> str | None:
+    def _amplitude_param(self, card: Card) -> str | None:
         name = card.params.get("AMPLITUDE")
         if name is not None and name not in self.amplitudes:
             raise DeckError(f"amplitude {name} is not defined (before this line)", card.location)
         return name
 
-    def _k_BOUNDARY(self, card: _Card) -> None:
+    def _k_BOUNDARY(self, card: Card) -> None:
         self._check_params(card, allowed={"OP", "AMPLITUDE"})
         op = self._op(card)
         amplitude = self._amplitude_param(card)
@@ -68,7 +68,7 @@ class _LoadCards(_ReaderState):
             value = self._optional_float(fields, 3, "prescribed value", loc) or 0.0
             target_list.append(
                 Boundary(
-                    _frozen_array(nodes, np.int64),
+                    frozen_array(nodes, np.int64),
                     first,
                     last,
                     value,
@@ -79,7 +79,7 @@ class _LoadCards(_ReaderState):
                 )
             )
 
-    def _k_EQUATION(self, card: _Card) -> None:
+    def _k_EQUATION(self, card: Card) -> None:
         """Blocks of a term count line, then that many (node, dof, coefficient) triples."""
         self._check_params(card, allowed=set())
         self._need_data(card)
@@ -118,11 +118,11 @@ class _LoadCards(_ReaderState):
             if coefficients[0] == 0.0:
                 raise DeckError("*EQUATION: the first (dependent) coefficient is zero", loc)
             self.equations.append(Equation(
-                _frozen_array(nodes, np.int64), _frozen_array(dofs, np.int64),
-                _frozen_array(coefficients, np.float64), loc,
+                frozen_array(nodes, np.int64), frozen_array(dofs, np.int64),
+                frozen_array(coefficients, np.float64), loc,
             ))  # fmt: skip
 
-    def _k_INITIALCONDITIONS(self, card: _Card) -> None:
+    def _k_INITIALCONDITIONS(self, card: Card) -> None:
         self._check_params(card, allowed={"TYPE"}, required={"TYPE"})
         if card.params["TYPE"] != "VELOCITY":
             raise DeckError(
@@ -140,11 +140,11 @@ class _LoadCards(_ReaderState):
             nodes = self._nodes_of(fields[0], card, loc)
             value = self._floats_line(fields[2:3], "*INITIAL CONDITIONS", loc)[0]
             self.initial_velocities.append(
-                InitialVelocity(_frozen_array(nodes, np.int64), self._dof(fields[1], loc),
+                InitialVelocity(frozen_array(nodes, np.int64), self._dof(fields[1], loc),
                                 float(value or 0.0), loc)
             )  # fmt: skip
 
-    def _k_CLOAD(self, card: _Card) -> None:
+    def _k_CLOAD(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"OP", "AMPLITUDE"})
         op, amplitude = self._op(card), self._amplitude_param(card)
@@ -154,10 +154,10 @@ class _LoadCards(_ReaderState):
             nodes = self._nodes_of(fields[0], card, loc)
             dof = self._dof(fields[1], loc)
             value = self._float(fields[2], "load", loc)
-            step.cloads.append(CLoad(_frozen_array(nodes, np.int64), dof, value, amplitude, op,
+            step.cloads.append(CLoad(frozen_array(nodes, np.int64), dof, value, amplitude, op,
                                      fields[0], loc))  # fmt: skip
 
-    def _k_DLOAD(self, card: _Card) -> None:
+    def _k_DLOAD(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"OP", "AMPLITUDE"})
         op, amplitude = self._op(card), self._amplitude_param(card)
@@ -173,5 +173,5 @@ class _LoadCards(_ReaderState):
             elements = self._elements_of(fields[0], card, loc)
             self.element_refs.append((f"{card.name} face {label}", elements, loc))
             value = self._float(fields[2], "pressure", loc)
-            step.dloads.append(DLoad(_frozen_array(elements, np.int64), int(label[1]), value,
+            step.dloads.append(DLoad(frozen_array(elements, np.int64), int(label[1]), value,
                                      amplitude, op, fields[0], loc))  # fmt: skip

@@ -4,25 +4,25 @@ from __future__ import annotations
 
 from .data import SolidSection
 from .errors import DeckError
-from .lexer import _Card
-from .state import _MaterialBuilder, _ReaderState
+from .lexer import Card
+from .state import MaterialBuilder, ReaderState
 
 
-class _MaterialCards(_ReaderState):
+class MaterialCards(ReaderState):
     """Handlers of the material and section cards."""
 
-    def _k_MATERIAL(self, card: _Card) -> None:
+    def _k_MATERIAL(self, card: Card) -> None:
         self._check_params(card, allowed={"NAME"}, required={"NAME"})
         self._no_data(card)
         name = self._new_name(card, self.materials, "material")
-        self.context = self.materials[name] = _MaterialBuilder(name, card.location)
+        self.context = self.materials[name] = MaterialBuilder(name, card.location)
 
-    def _material(self, card: _Card) -> _MaterialBuilder:
-        if not isinstance(self.context, _MaterialBuilder):
+    def _material(self, card: Card) -> MaterialBuilder:
+        if not isinstance(self.context, MaterialBuilder):
             raise DeckError(f"{card.name} must follow a *MATERIAL card", card.location)
         return self.context
 
-    def _k_ELASTIC(self, card: _Card) -> None:
+    def _k_ELASTIC(self, card: Card) -> None:
         material = self._material(card)
         self._check_params(card, allowed={"TYPE"})
         etype = card.params.get("TYPE") or "ISO"
@@ -52,13 +52,13 @@ class _MaterialCards(_ReaderState):
         material.elastic = (young, nu)
         material.elastic_location = card.location
 
-    def _unused_material(self, card: _Card) -> None:
+    def _unused_material(self, card: Card) -> None:
         material = self._material(card)
         material.extra[card.name] = tuple(
             self._floats_line(f, card.name, loc) for f, _, loc in card.lines
         )
 
-    def _k_SOLIDSECTION(self, card: _Card) -> None:
+    def _k_SOLIDSECTION(self, card: Card) -> None:
         self._check_params(card, allowed={"ELSET", "MATERIAL"}, required={"ELSET", "MATERIAL"})
         elset = card.params["ELSET"] or ""
         if elset not in self.elsets:

@@ -7,11 +7,11 @@ import re
 
 import numpy as np
 
-from ..elements import ELEMENT_TYPES, REFUSED_ELEMENTS, _frozen_array
+from ..elements import ELEMENT_TYPES, REFUSED_ELEMENTS, frozen_array
 from .data import Surface
 from .errors import DeckError, Location
-from .lexer import _INT_RE, _Card
-from .state import _ReaderState
+from .lexer import INT_RE, Card
+from .state import ReaderState
 
 
 def _plain_ints(tokens: list[str]) -> list[int] | None:
@@ -34,10 +34,10 @@ def _node_line(fields: list[str]) -> tuple[int, float, float, float] | None:
     return int(fields[0]), x, y, z
 
 
-class _MeshCards(_ReaderState):
+class MeshCards(ReaderState):
     """Handlers of the mesh, set and surface cards."""
 
-    def _k_NODE(self, card: _Card) -> None:
+    def _k_NODE(self, card: Card) -> None:
         self._check_params(card, allowed={"NSET"})
         ids: list[int] = []
         for fields, _, loc in card.lines:
@@ -56,7 +56,7 @@ class _MeshCards(_ReaderState):
         if card.params.get("NSET"):
             self._add_set(self.nsets, "node", card.params["NSET"], ids, card.location)
 
-    def _k_ELEMENT(self, card: _Card) -> None:
+    def _k_ELEMENT(self, card: Card) -> None:
         self._check_params(card, allowed={"TYPE", "ELSET"}, required={"TYPE"})
         type_name = card.params["TYPE"] or ""
         if type_name not in ELEMENT_TYPES:
@@ -104,13 +104,13 @@ class _MeshCards(_ReaderState):
         sets.setdefault(name, []).extend(ids)
         self.set_locations.setdefault((kind, name), loc)
 
-    def _k_NSET(self, card: _Card) -> None:
+    def _k_NSET(self, card: Card) -> None:
         self._set_card(card, "NSET", self.nsets, "node")
 
-    def _k_ELSET(self, card: _Card) -> None:
+    def _k_ELSET(self, card: Card) -> None:
         self._set_card(card, "ELSET", self.elsets, "element")
 
-    def _set_card(self, card: _Card, param: str, sets: dict, kind: str) -> None:
+    def _set_card(self, card: Card, param: str, sets: dict, kind: str) -> None:
         self._check_params(card, allowed={param, "GENERATE"}, required={param})
         name = card.params[param] or ""
         members: list[int] = []
@@ -135,7 +135,7 @@ class _MeshCards(_ReaderState):
             for token in fields:
                 if token == "":
                     continue
-                if _INT_RE.match(token):
+                if INT_RE.match(token):
                     self._ref(kind, card, np.array([int(token)], dtype=np.int64), loc)
                     members.append(int(token))
                 elif token in sets:
@@ -144,10 +144,10 @@ class _MeshCards(_ReaderState):
                     raise DeckError(f"{kind} set {token} is not defined (before this line)", loc)
         self._add_set(sets, kind, name, members, card.location)
 
-    def _ref(self, kind: str, card: _Card, ids: np.ndarray, loc: Location) -> None:
+    def _ref(self, kind: str, card: Card, ids: np.ndarray, loc: Location) -> None:
         (self.node_refs if kind == "node" else self.element_refs).append((card.name, ids, loc))
 
-    def _k_SURFACE(self, card: _Card) -> None:
+    def _k_SURFACE(self, card: Card) -> None:
         self._check_params(card, allowed={"NAME", "TYPE"}, required={"NAME"})
         stype = card.params.get("TYPE") or "ELEMENT"
         if stype not in ("ELEMENT", "NODE"):
@@ -176,8 +176,8 @@ class _MeshCards(_ReaderState):
         self.surfaces[name] = Surface(
             name=name,
             type=stype,
-            elements=_frozen_array(np.concatenate(elements) if elements else [], np.int64),
-            faces=_frozen_array(np.concatenate(faces) if faces else [], np.int64),
-            nodes=_frozen_array(np.concatenate(nodes) if nodes else [], np.int64),
+            elements=frozen_array(np.concatenate(elements) if elements else [], np.int64),
+            faces=frozen_array(np.concatenate(faces) if faces else [], np.int64),
+            nodes=frozen_array(np.concatenate(nodes) if nodes else [], np.int64),
             location=card.location,
         )

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from .data import FileRequest, PrintRequest
 from .errors import DeckError
-from .lexer import _Card
-from .state import _ReaderState
+from .lexer import Card
+from .state import ReaderState
 
 _FILE_KEYWORDS = {
     "NODEFILE": "NODE",
@@ -19,10 +19,10 @@ _FILE_KEYWORDS = {
 _PRINT_KEYS = {"NODE": ("U", "RF"), "EL": ("S",), "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM")}
 
 
-class _OutputCards(_ReaderState):
+class OutputCards(ReaderState):
     """Handlers of the print and file request cards."""
 
-    def _print_card(self, card: _Card, kind: str) -> None:
+    def _print_card(self, card: Card, kind: str) -> None:
         step = self._in_step(card)
         set_param = {"NODE": "NSET", "EL": "ELSET", "CONTACT": "NSET"}[kind]
         allowed = {set_param, "TOTALS", "FREQUENCY", "FREQUENCYF", "GLOBAL"}
@@ -59,16 +59,16 @@ class _OutputCards(_ReaderState):
         step.new_prints.append(request)
         self.prints.append(request)
 
-    def _k_NODEPRINT(self, card: _Card) -> None:
+    def _k_NODEPRINT(self, card: Card) -> None:
         self._print_card(card, "NODE")
 
-    def _k_ELPRINT(self, card: _Card) -> None:
+    def _k_ELPRINT(self, card: Card) -> None:
         self._print_card(card, "EL")
 
-    def _k_CONTACTPRINT(self, card: _Card) -> None:
+    def _k_CONTACTPRINT(self, card: Card) -> None:
         self._print_card(card, "CONTACT")
 
-    def _file_card(self, card: _Card) -> None:
+    def _file_card(self, card: Card) -> None:
         step = self._in_step(card)
         kind = _FILE_KEYWORDS[card.keyword]
         self._check_params(card, allowed={"NSET", "FREQUENCY", "FREQUENCYF", "GLOBAL", "OUTPUT",

@@ -8,10 +8,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from .checks import _Checks
+from .checks import Checks
 from .data import Deck
 from .errors import DeckError, DeckWarning
-from .interactions import _InteractionCards
+from .interactions import InteractionCards
 from .keywords import (
     _CONTEXT_KEYWORDS,
     _MODEL_KEYWORDS,
@@ -20,17 +20,17 @@ from .keywords import (
     _UNUSED_INTERACTION,
     _UNUSED_MATERIAL,
 )
-from .leniency import _LENIENCY
-from .lexer import _CANONICAL, _Card, read_cards
-from .loads import _LoadCards
-from .materials import _MaterialCards
-from .mesh import _MeshCards
-from .output import _OutputCards
-from .steps import _StepCards
+from .leniency import LENIENCY_RULES
+from .lexer import CANONICAL_KEYWORDS, Card, read_cards
+from .loads import LoadCards
+from .materials import MaterialCards
+from .mesh import MeshCards
+from .output import OutputCards
+from .steps import StepCards
 
 
 class _Reader(
-    _MeshCards, _MaterialCards, _InteractionCards, _LoadCards, _StepCards, _OutputCards, _Checks
+    MeshCards, MaterialCards, InteractionCards, LoadCards, StepCards, OutputCards, Checks
 ):
     """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""
 
@@ -41,7 +41,7 @@ class _Reader(
             raise DeckError("*STEP without *END STEP", self.step.location)
         return self._finish()
 
-    def _dispatch(self, card: _Card) -> None:
+    def _dispatch(self, card: Card) -> None:
         key = card.keyword
         if key in _STEP_KEYWORDS and key != "ENDSTEP":
             self._in_step(card)
@@ -54,7 +54,7 @@ class _Reader(
             self.context = None
         if self._apply_leniency(card):
             return
-        handler: Callable[[_Card], None] | None = getattr(self, f"_k_{key.replace('-', '_')}", None)
+        handler: Callable[[Card], None] | None = getattr(self, f"_k_{key.replace('-', '_')}", None)
         if handler is not None:
             handler(card)
         elif key in _UNUSED_MATERIAL:
@@ -63,14 +63,14 @@ class _Reader(
             self._unused_interaction(card)
         elif key in _UNSUPPORTED_CONSTRAINTS:
             raise DeckError(f"{card.name} is not supported yet (constraint)", card.location)
-        elif key in _CANONICAL:
+        elif key in CANONICAL_KEYWORDS:
             raise DeckError(f"{card.name} is not supported yet", card.location)
         else:
             raise DeckError(f"unknown keyword *{card.text}", card.location)
 
-    def _apply_leniency(self, card: _Card) -> bool:
+    def _apply_leniency(self, card: Card) -> bool:
         """Apply ``LENIENCY`` to ``card``: warn or refuse; True if the whole card is skipped."""
-        rules = _LENIENCY.get(card.keyword, {})
+        rules = LENIENCY_RULES.get(card.keyword, {})
         for key in list(card.params):
             rule = rules.get(key) or rules.get("*")
             if rule is None:
@@ -91,7 +91,7 @@ class _Reader(
         self._ignore(card, rules[""][1])
         return True
 
-    def _k_HEADING(self, card: _Card) -> None:
+    def _k_HEADING(self, card: Card) -> None:
         self._check_params(card, allowed=set())
         self.heading.extend(raw.strip() for _, raw, _ in card.lines)
 

@@ -29,12 +29,14 @@ from .data import (
     SurfaceBehavior,
 )
 from .errors import DeckError, DeckWarning, Location
-from .leniency import _SETS_FREQUENCY
-from .lexer import _INT_RE, _Card, _check_params
+from .leniency import SETS_FREQUENCY
+from .lexer import INT_RE, Card, check_params
 
 
 @dataclass
-class _StepBuilder:
+class StepBuilder:
+    """A ``*STEP`` being read: its cards so far."""
+
     number: int
     nlgeom: bool
     max_increments: int
@@ -52,7 +54,9 @@ class _StepBuilder:
 
 
 @dataclass
-class _MaterialBuilder:
+class MaterialBuilder:
+    """A ``*MATERIAL`` being read: its cards so far."""
+
     name: str
     location: Location
     elastic: tuple[float, float] | None = None
@@ -61,7 +65,9 @@ class _MaterialBuilder:
 
 
 @dataclass
-class _InteractionBuilder:
+class InteractionBuilder:
+    """A ``*SURFACE INTERACTION`` being read: its cards so far."""
+
     name: str
     location: Location
     behavior: SurfaceBehavior | None = None
@@ -69,7 +75,7 @@ class _InteractionBuilder:
     extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
 
 
-class _ReaderState:
+class ReaderState:
     """What has been read so far, and the helpers that parse and check card fields."""
 
     def __init__(self, path: Path) -> None:
@@ -85,9 +91,9 @@ class _ReaderState:
         self.elsets: dict[str, list[int]] = {}
         self.set_locations: dict[tuple[str, str], Location] = {}
         self.surfaces: dict[str, Surface] = {}
-        self.materials: dict[str, _MaterialBuilder] = {}
+        self.materials: dict[str, MaterialBuilder] = {}
         self.sections: list[SolidSection] = []
-        self.interactions: dict[str, _InteractionBuilder] = {}
+        self.interactions: dict[str, InteractionBuilder] = {}
         self.contact_pairs: list[ContactPair] = []
         self.amplitudes: dict[str, Amplitude] = {}
         self.boundaries: list[Boundary] = []
@@ -96,8 +102,8 @@ class _ReaderState:
         self.steps: list[Step] = []
         self.ignored: list[tuple[str, str, int]] = []
         self.warnings: list[DeckWarning] = []
-        self.step: _StepBuilder | None = None
-        self.context: _MaterialBuilder | _InteractionBuilder | None = None
+        self.step: StepBuilder | None = None
+        self.context: MaterialBuilder | InteractionBuilder | None = None
         # carried over between steps
         self.prints: list[PrintRequest] = []
         self.files: list[FileRequest] = []
@@ -108,20 +114,20 @@ class _ReaderState:
         self.node_refs: list[tuple[str, np.ndarray, Location]] = []
         self.element_refs: list[tuple[str, np.ndarray, Location]] = []
 
-    _check_params = staticmethod(_check_params)
+    _check_params = staticmethod(check_params)
 
     @staticmethod
-    def _no_data(card: _Card) -> None:
+    def _no_data(card: Card) -> None:
         if card.lines:
             raise DeckError(f"{card.name} takes no data lines", card.lines[0][2])
 
     @staticmethod
-    def _need_data(card: _Card) -> None:
+    def _need_data(card: Card) -> None:
         if not card.lines:
             raise DeckError(f"{card.name} needs a data line", card.location)
 
     @staticmethod
-    def _new_name(card: _Card, defined: dict, what: str) -> str:
+    def _new_name(card: Card, defined: dict, what: str) -> str:
         """The NAME parameter of ``card``, which must not name an already defined ``what``."""
         name = card.params["NAME"] or ""
         if name in defined:
@@ -134,7 +140,7 @@ class _ReaderState:
     def _int(token: str, what: str, location: Location) -> int:
         if token.isascii() and token.isdigit():
             return int(token)
-        if not _INT_RE.match(token):
+        if not INT_RE.match(token):
             raise DeckError(f"bad {what} {token!r}: an integer is required", location)
         return int(token)
 
@@ -156,8 +162,8 @@ class _ReaderState:
     def _floats_line(self, fields: list[str], what: str, loc: Location) -> tuple[float | None, ...]:
         return tuple(self._optional_float(fields, i, what, loc) for i in range(len(fields)))
 
-    def _nodes_of(self, token: str, card: _Card, loc: Location) -> np.ndarray:
-        if _INT_RE.match(token):
+    def _nodes_of(self, token: str, card: Card, loc: Location) -> np.ndarray:
+        if INT_RE.match(token):
             ids = np.array([int(token)], dtype=np.int64)
             self.node_refs.append((f"{card.name}", ids, loc))
             return ids
@@ -165,8 +171,8 @@ class _ReaderState:
             raise DeckError(f"node set {token} is not defined (before this line)", loc)
         return np.array(self.nsets[token], dtype=np.int64)
 
-    def _elements_of(self, token: str, card: _Card, loc: Location) -> np.ndarray:
-        if _INT_RE.match(token):
+    def _elements_of(self, token: str, card: Card, loc: Location) -> np.ndarray:
+        if INT_RE.match(token):
             return np.array([int(token)], dtype=np.int64)
         if token not in self.elsets:
             raise DeckError(f"element set {token} is not defined (before this line)", loc)
@@ -180,13 +186,13 @@ class _ReaderState:
             )
         return dof
 
-    def _op(self, card: _Card) -> str:
+    def _op(self, card: Card) -> str:
         op = card.params.get("OP") or "MOD"
         if op not in ("NEW", "MOD"):
             raise DeckError(f"OP={op} of {card.name}: use OP=NEW or OP=MOD", card.location)
         return op
 
-    def _frequency(self, card: _Card) -> int | None:
+    def _frequency(self, card: Card) -> int | None:
         if "FREQUENCY" not in card.params:
             return None
         value = self._int(card.params["FREQUENCY"] or "", "FREQUENCY", card.location)
@@ -195,14 +201,14 @@ class _ReaderState:
         self.frequency = value
         return value
 
-    def _in_step(self, card: _Card) -> _StepBuilder:
+    def _in_step(self, card: Card) -> StepBuilder:
         if self.step is None:
             raise DeckError(f"{card.name} is a step keyword: it must follow *STEP", card.location)
         return self.step
 
-    def _ignore(self, card: _Card, reason: str) -> None:
+    def _ignore(self, card: Card, reason: str) -> None:
         """Skip a keyword, keeping the FREQUENCY it sets for every output (ccx rule)."""
-        if "FREQUENCY" in card.params and card.keyword in _SETS_FREQUENCY:
+        if "FREQUENCY" in card.params and card.keyword in SETS_FREQUENCY:
             self._frequency(card)
         self.ignored.append((card.name, card.location.file, card.location.line))
         self.warnings.append(DeckWarning(card.name, None, reason, card.location))

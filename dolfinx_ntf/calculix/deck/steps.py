@@ -8,14 +8,14 @@ from __future__ import annotations
 
 from .data import Dynamic, ModelChange, Static, Step
 from .errors import DeckError
-from .lexer import _Card
-from .state import _ReaderState, _StepBuilder
+from .lexer import Card
+from .state import ReaderState, StepBuilder
 
 
-class _StepCards(_ReaderState):
+class StepCards(ReaderState):
     """Handlers of the step, procedure and step-change cards."""
 
-    def _k_STEP(self, card: _Card) -> None:
+    def _k_STEP(self, card: Card) -> None:
         if self.step is not None:
             raise DeckError(f"*STEP inside the step started at {self.step.location}", card.location)
         self._check_params(card, allowed={"NLGEOM", "INC", "INCF"})
@@ -29,10 +29,10 @@ class _StepCards(_ReaderState):
             inc = self._int(card.params["INC"] or "", "INC", card.location)
             if inc <= 0:
                 raise DeckError(f"INC must be > 0, got {inc}", card.location)
-        self.step = _StepBuilder(len(self.steps) + 1, self.nlgeom, inc, card.location)
+        self.step = StepBuilder(len(self.steps) + 1, self.nlgeom, inc, card.location)
         self.context = None
 
-    def _k_STATIC(self, card: _Card) -> None:
+    def _k_STATIC(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"DIRECT", "SOLVER", "TIMERESET", "TOTALTIMEATSTART",
                                           "EXPLICIT"})  # fmt: skip
@@ -65,7 +65,7 @@ class _StepCards(_ReaderState):
             total_time_at_start=total_at_start,
         )
 
-    def _k_DYNAMIC(self, card: _Card) -> None:
+    def _k_DYNAMIC(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"DIRECT", "ALPHA", "SOLVER", "EXPLICIT"})
         if "EXPLICIT" in card.params:
@@ -100,7 +100,7 @@ class _StepCards(_ReaderState):
         )
         step.dynamic = Dynamic(alpha=alpha)
 
-    def _k_CONTROLS(self, card: _Card) -> None:
+    def _k_CONTROLS(self, card: Card) -> None:
         self._in_step(card)
         self._check_params(card, allowed={"PARAMETERS", "RESET"})
         if "RESET" in card.params:
@@ -114,7 +114,7 @@ class _StepCards(_ReaderState):
             self._floats_line(fields, "*CONTROLS", loc) for fields, _, loc in card.lines
         )
 
-    def _k_CHANGEFRICTION(self, card: _Card) -> None:
+    def _k_CHANGEFRICTION(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"INTERACTION"}, required={"INTERACTION"})
         self._no_data(card)
@@ -123,7 +123,7 @@ class _StepCards(_ReaderState):
             raise DeckError(f"surface interaction {name} is not defined", card.location)
         step.pending_friction = (name, card.location)
 
-    def _k_MODELCHANGE(self, card: _Card) -> None:
+    def _k_MODELCHANGE(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"TYPE", "ADD", "REMOVE"}, required={"TYPE"})
         if card.params["TYPE"] != "CONTACTPAIR":
@@ -141,7 +141,7 @@ class _StepCards(_ReaderState):
                 raise DeckError("*MODEL CHANGE data line: slave surface, master surface", loc)
             step.model_changes.append(ModelChange(action, fields[0], fields[1], loc))
 
-    def _k_ENDSTEP(self, card: _Card) -> None:
+    def _k_ENDSTEP(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed=set())
         self._no_data(card)

@@ -1,8 +1,8 @@
 """Cross-validation decks: small contact problems built with dolfinx and exported by ``write_inp``.
 
-Each :class:`Case` writes ``<name>.inp`` into a directory; ``tests/test_ccx_crossval.py`` and
-``benchmarks/validate.py`` run ccx and dolfinx_ntf on it and compare. The meshes are structured
-boxes (hexahedra, or each hexahedron split into six tetrahedra) stacked along z, with
+Each :class:`Case` writes ``<name>.inp`` into a directory; ``tests/calculix/test_ccx_crossval.py``
+and ``benchmarks/validate.py`` run ccx and dolfinx_ntf on it and compare. The meshes are
+structured boxes (hexahedra, or each hexahedron split into six tetrahedra) stacked along z, with
 non-matching grids across each contact interface. Together the cases cover C3D8, C3D4,
 C3D10, C3D20 and C3D20R (C3D8 decks given midside nodes by ``hex20.py``); the EXPONENTIAL,
 LINEAR and TABULAR laws; small strain and NLGEOM; several increments; a curved (warped

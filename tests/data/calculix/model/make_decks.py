@@ -1,4 +1,6 @@
-"""Generate the decks of ``tests/test_calculix_model.py`` (run once: ``python make_decks.py``).
+"""Generate the decks of ``tests/calculix/test_calculix_model.py``.
+
+Run once: ``python make_decks.py``.
 
 ``loads_ccx.dat`` is ccx 2.20's output for ``loads.inp`` (``ccx -i loads``), kept as a reference.
 

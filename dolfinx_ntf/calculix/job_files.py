@@ -1,0 +1,331 @@
+"""The ccx files of a deck run: ``.dat``, ``.frd``, ``.cel``, ``.sta`` and ``.cvg``.
+
+:class:`JobFiles` opens them as ccx does at program start and writes, in ccx 2.20's formats:
+
+    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S) and ``*CONTACT PRINT`` (CDIS,
+      CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
+    - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S) and ``*CONTACT
+      FILE`` (CDIS, CSTR) blocks (docs/method.md §13.2).
+    - ``JOB.cel``: the contact elements of every pairing when ``CONTACT ELEMENTS`` is requested.
+    - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration (§13.3).
+
+The values come from :class:`~dolfinx_ntf.calculix.output_values.OutputValues` (collective); only
+rank 0 writes (docs/method.md §14.5), the other processes hold writers that discard.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .cel import ContactElementsFile
+from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
+from .deck import Deck, FileRequest, PrintRequest, Step
+from .frd import FrdBlock, FrdWriter
+from .gather import Discard
+from .model import CalculixModel
+from .output_values import ContactRows, OutputValues
+from .progress import CvgFile, StaFile
+from .roundoff import clean_contact, clean_dat_blocks, clean_frd_block, clean_totals, zero_below
+
+__all__ = ["JobFiles", "check_requests"]
+
+logger = logging.getLogger("dolfinx_ntf")
+
+#: ccx numbers contact element sets with at most three digits per counter.
+MAX_SET_NUMBER = 999
+
+
+class JobFiles:
+    """The ``.dat``, ``.frd``, ``.cel``, ``.sta`` and ``.cvg`` files of one job.
+
+    Opening them empties ``.dat``, starts ``.frd`` with the mesh and deletes a ``.cel`` left from
+    an earlier run when the deck asks for no contact elements, as ccx does.
+
+    Args:
+        jobname: Deck name without ``.inp``.
+        directory: Where the files are written.
+        deck: The deck.
+        model: Its dolfinx model.
+        root: True on the process that writes (rank 0).
+    """
+
+    def __init__(
+        self, jobname: str, directory: Path, deck: Deck, model: CalculixModel, *, root: bool
+    ) -> None:
+        self.deck, self.model, self.root = deck, model, root
+        self.dat = directory / f"{jobname}.dat"
+        if root:
+            write_dat(self.dat, [])
+        self.cel: Path | None = None
+        self._cel: ContactElementsFile | Discard | None = None
+        cel = directory / f"{jobname}.cel"
+        if any(step.contact_elements for step in deck.steps):
+            self.cel = cel
+            self._cel = ContactElementsFile(cel, deck.num_elements) if root else Discard()
+        elif cel.exists() and root:  # ccx deletes the file at program start
+            cel.unlink()
+        self._cel_overflow = False
+        self.frd = directory / f"{jobname}.frd"
+        self._frd = _frd_writer(self.frd, deck, model) if root else Discard()
+        self._sta = StaFile(directory / f"{jobname}.sta") if root else Discard()
+        self._cvg = CvgFile(directory / f"{jobname}.cvg") if root else Discard()
+
+    def close(self) -> None:
+        """Close the ``.frd`` file (the others are appended to row by row)."""
+        self._frd.close()
+
+    # -- .sta, .cvg --------------------------------------------------------------------------------
+
+    def attempt(
+        self,
+        numbers: tuple[int, int, int],
+        converged: bool,
+        iterations: int,
+        total_time: float,
+        step_time: float,
+        size: float,
+        history: Sequence,
+    ) -> None:
+        """The ``.sta`` row and ``.cvg`` rows of an attempt ``(step, increment, attempt)``."""
+        step, increment, attempt = numbers
+        self._sta.row(step, increment, attempt, converged, iterations, total_time, step_time, size)
+        self._cvg.rows(step, increment, attempt, history)
+
+    # -- .cel --------------------------------------------------------------------------------------
+
+    def wants_contact_elements(self, step: Step, numbers: tuple[int, int, int, int]) -> bool:
+        """True if the pairing ``(step, increment, attempt, iteration)`` goes to the ``.cel`` file.
+
+        Set numbers above 999 (ccx's limit) end the ``.cel`` output with a warning.
+        """
+        if self._cel is None or not step.contact_elements or self._cel_overflow:
+            return False
+        if max(numbers) > MAX_SET_NUMBER:
+            logger.warning(
+                " *WARNING: contact element set numbers above 999 (ccx limit): no more .cel output"
+            )
+            self._cel_overflow = True
+            return False
+        return True
+
+    def write_contact_elements(
+        self,
+        numbers: tuple[int, int, int, int],
+        elements: list[tuple[np.ndarray, np.ndarray]],
+    ) -> None:
+        """Write one pairing's ``(master faces, slave nodes)`` per pair (docs/method.md §8.5)."""
+        step, increment, attempt, iteration = numbers
+        for faces, slaves in elements:
+            self._cel.write(
+                faces,
+                slaves,
+                step=step,
+                increment=increment,
+                attempt=attempt,
+                iteration=iteration,
+            )
+
+    # -- .dat, .frd --------------------------------------------------------------------------------
+
+    def write_increment(
+        self,
+        step: Step,
+        increment: int,
+        total: float,
+        contact: list[ContactRows],
+        values: OutputValues,
+        *,
+        load_time: tuple[int, float],
+        largest_residual: float,
+    ) -> None:
+        """The ``.dat`` and ``.frd`` blocks of a printed increment at total time ``total``.
+
+        ``contact`` are the increment's contact rows, ``load_time`` its ``(step index, step
+        time)``, ``largest_residual`` that of its converged iterate. Collective.
+        """
+        contact = [clean_contact(rows) for rows in contact]  # printed values (§14.5)
+        results = _Increment(self.deck, values, load_time, largest_residual)
+        blocks = results.dat_blocks(step, total, contact)
+        if self.root:
+            write_dat(self.dat, clean_dat_blocks(blocks), append=True)
+        for block in results.frd_blocks(step, increment, total, contact):
+            self._frd.write(clean_frd_block(block))
+
+
+class _Increment:
+    """The ``.dat`` and ``.frd`` blocks of one printed increment."""
+
+    def __init__(
+        self,
+        deck: Deck,
+        values: OutputValues,
+        load_time: tuple[int, float],
+        largest_residual: float,
+    ) -> None:
+        self.deck, self.values = deck, values
+        self.load_time, self.largest_residual = load_time, largest_residual
+
+    def frd_blocks(
+        self, step: Step, increment: int, total: float, contact: list[ContactRows]
+    ) -> list[FrdBlock]:
+        """The ``.frd`` blocks of the file requests, in ccx's order: DISP, STRESS, FORC, CONTACT."""
+        keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
+        blocks = []
+
+        def node_block(name: str, request: FileRequest, values: np.ndarray) -> None:
+            ids = self.deck.node_ids
+            if request.set is not None:  # in set order, repeats kept, as ccx (docs/method.md §13.2)
+                ids = self.deck.nsets[request.set]
+            values = values[self.deck.node_index(ids)]
+            if name == "DISP":
+                values = self.values.with_reference(ids, values, self.load_time)
+            blocks.append(FrdBlock(name, (), step.number, increment, total, ids, values))
+
+        if ("NODE", "U") in keys:
+            node_block("DISP", keys["NODE", "U"], self.values.displacements())
+        if ("EL", "S") in keys:
+            nodes, values = self.values.nodal_stresses()
+            values = zero_below(values, self.values.field_accuracy().stress)
+            if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
+                members = self.deck.nsets[keys["EL", "S"].set]
+                pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
+                keep = nodes[pos] == members
+                nodes, values = members[keep], values[pos[keep]]
+            blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
+        if ("NODE", "RF") in keys:
+            node_block(
+                "FORC", keys["NODE", "RF"], self.values.printed_forces(self.largest_residual)[0]
+            )
+        if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
+            nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
+            values = np.zeros((nodes.size, 6))
+            if contact:
+                values[:, 0] = np.concatenate([r.clearance for r in contact])
+                values[:, 3] = np.concatenate([r.pressure for r in contact])
+            # ccx writes the contact elements in reverse order here (ascending in the .dat file)
+            blocks.append(
+                FrdBlock("CONTACT", (), step.number, increment, total, nodes[::-1], values[::-1])
+            )
+        return blocks
+
+    def dat_blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
+        """The ``.dat`` blocks of the print requests, in the deck's order."""
+        blocks: list[DatBlock] = []
+        forces, floor = None, 0.0
+        displacement = self.values.displacements()
+        for request in step.prints:
+            if request.kind == "NODE":
+                ids = self.deck.nsets[request.set]
+                for key in request.keys:
+                    if key == "RF" and forces is None:
+                        forces, floor = self.values.printed_forces(self.largest_residual)
+                    values = (displacement if key == "U" else forces)[self.deck.node_index(ids)]
+                    if key == "U":
+                        values = self.values.with_reference(ids, values, self.load_time)
+                    new = node_print_blocks(
+                        key, request.set, total, ids, values, totals=request.totals
+                    )
+                    blocks += clean_totals(new, ids.size, floor) if key == "RF" else new
+            elif request.kind == "EL":
+                blocks += self._element_blocks(request, total)
+            else:
+                blocks += _contact_blocks(request, total, contact)
+        return blocks
+
+    def _element_blocks(self, request: PrintRequest, total: float) -> list[DatBlock]:
+        ids = self.deck.elsets[request.set]
+        blocks = []
+        for key in request.keys:
+            if key != "S":
+                raise NotImplementedError(
+                    f"{request.location}: *EL PRINT key {key} is not supported yet"
+                )
+            stresses = zero_below(self.values.stresses(ids), self.values.field_accuracy().stress)
+            blocks += el_print_blocks("S", request.set, total, ids, stresses)
+        return blocks
+
+
+def _contact_blocks(
+    request: PrintRequest, total: float, contact: list[ContactRows]
+) -> list[DatBlock]:
+    """The ``*CONTACT PRINT`` blocks of ``request``: rows of all pairs, pairs in deck order."""
+    nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, np.int64)
+    zeros = np.zeros(nodes.size)
+    zeros2 = np.zeros((nodes.size, 2))
+
+    def tangential(name: str) -> np.ndarray:
+        return np.concatenate([getattr(r, name) for r in contact]) if contact else zeros2
+
+    columns = {
+        "CDIS": lambda: np.column_stack(
+            [
+                np.concatenate([r.clearance for r in contact]) if contact else zeros,
+                tangential("slip"),
+            ]
+        ),
+        "CSTR": lambda: np.column_stack(
+            [
+                np.concatenate([r.pressure for r in contact]) if contact else zeros,
+                tangential("shear"),
+            ]
+        ),
+        "CELS": lambda: np.concatenate([r.energy for r in contact]) if contact else zeros,
+        "CNUM": lambda: None,
+    }
+    blocks = []
+    for key in request.keys:
+        if key not in columns:
+            raise NotImplementedError(
+                f"{request.location}: *CONTACT PRINT key {key} is not supported yet"
+            )
+        blocks += contact_print_blocks(key, total, nodes, columns[key](), totals=request.totals)
+    return blocks
+
+
+def _frd_writer(path: Path, deck: Deck, model: CalculixModel) -> FrdWriter:
+    """The ``.frd`` file with the deck's mesh (ccx writes it for every job)."""
+    block = deck.elements[model.element_type.name]
+    materials = list(deck.materials)
+    index = dict(zip(materials, range(1, len(materials) + 1)))
+    element_material = np.zeros(block.ids.size, dtype=np.int64)
+    position = {int(e): k for k, e in enumerate(block.ids)}
+    for section in deck.sections:
+        for element in deck.elsets[section.elset]:
+            element_material[position[int(element)]] = index[section.material]
+    return FrdWriter(
+        path,
+        deck.node_ids,
+        deck.node_coords,
+        block.ids,
+        model.element_type.name,
+        block.connectivity,
+        element_material,
+        materials + list(deck.interactions),
+    )
+
+
+def check_requests(deck: Deck) -> None:
+    """Output keys this runner cannot produce: a clear error before anything runs."""
+    supported = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
+    for step in deck.steps:
+        for request in step.prints:
+            for key in request.keys:
+                if key not in supported[request.kind]:
+                    raise NotImplementedError(
+                        f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
+                    )
+    written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
+    for step in deck.steps:
+        for request in step.file_requests:
+            for key in request.keys:
+                if key not in written[request.kind]:
+                    logger.warning(
+                        " *WARNING: %s key %s is not written to the .frd file (%s)",
+                        request.keyword,
+                        key,
+                        request.location,
+                    )

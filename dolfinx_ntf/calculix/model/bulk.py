@@ -1,0 +1,57 @@
+"""The bulk material of a deck: Lamé parameters per cell and the stresses of its kinematics.
+
+Small-strain isotropic elasticity, or total-Lagrangian St.Venant-Kirchhoff with ``NLGEOM``
+(switched by a Constant when a deck has both kinds of steps).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+
+from dolfinx_ntf import compat
+
+from ..deck import Deck, ElementBlock
+
+__all__ = ["lame", "stresses"]
+
+
+def lame(
+    deck: Deck, block: ElementBlock, mesh: dolfinx.mesh.Mesh, element_cell: np.ndarray
+) -> tuple[dolfinx.fem.Function, dolfinx.fem.Function]:
+    """Lamé parameters ``mu, lambda`` per cell (DG0) from each section's ``*ELASTIC`` material."""
+    Q = compat.scalar_space(mesh, "DG", 0)
+    mu, lmbda = dolfinx.fem.Function(Q, name="mu"), dolfinx.fem.Function(Q, name="lambda")
+    for section in deck.sections:
+        young, nu = deck.materials[section.material].elastic
+        members = np.unique(deck.elsets[section.elset])
+        members = members[np.isin(members, block.ids)]
+        order = np.argsort(block.ids)
+        rows = order[np.searchsorted(block.ids, members, sorter=order)]
+        cells = element_cell[rows]
+        dofs = compat.cell_dofs(Q)[cells[cells >= 0], 0]
+        mu.x.array[dofs] = young / (2 * (1 + nu))
+        lmbda.x.array[dofs] = young * nu / ((1 + nu) * (1 - 2 * nu))
+    return mu, lmbda
+
+
+def stresses(
+    u: dolfinx.fem.Function,
+    mu: dolfinx.fem.Function,
+    lmbda: dolfinx.fem.Function,
+    nlgeom: dolfinx.fem.Constant | float,
+) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr, ufl.core.expr.Expr]:
+    """Deformation gradient, first Piola-Kirchhoff and Cauchy stress.
+
+    ``nlgeom`` 0 gives small-strain elasticity, 1 St.Venant-Kirchhoff.
+    """
+    H = ufl.grad(u)
+    Id = ufl.Identity(3)
+    F = Id + nlgeom * H
+    E = ufl.sym(H) + 0.5 * nlgeom * H.T * H
+    S = 2 * mu * E + lmbda * ufl.tr(E) * Id
+    P = F * S
+    return F, P, P * F.T / ufl.det(F)

@@ -1,0 +1,425 @@
+"""The dolfinx model of a deck (:class:`CalculixModel`) and ``build_model``, which assembles it.
+
+``build_model`` wires the pieces of the package's other modules (mesh and numbering maps,
+surfaces, bulk stresses, load schedules, ``*EQUATION`` constraints, contact pairs) into the UFL
+residual: the bulk stress integrated like ccx (C3D8 2x2x2 Gauss, C3D4 one point, C3D10 four
+points, C3D20 3x3x3, C3D20R 2x2x2) and the ``*DLOAD`` pressures on the reference faces, or as
+follower loads ``p J F^-T N`` with ``NLGEOM``. :class:`CalculixModel` evaluates the loads of a
+step at any time and creates the contact problem.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from mpi4py import MPI
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+
+from dolfinx_ntf import compat, validation
+from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
+from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
+from dolfinx_ntf.fem.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.parallel.global_constraints import global_constraints
+
+from ..deck import Deck
+from ..elements import ElementType
+from .bulk import lame, stresses
+from .contact import contact_pairs
+from .equations import FreeReference, equation_constraints
+from .loads import Schedule, StepLoads, schedules
+from .mesh import create_mesh, element_block, mesh_maps, numbering
+from .surfaces import deck_surfaces
+
+__all__ = ["CalculixModel", "build_model"]
+
+
+@dataclass(eq=False)
+class CalculixModel:
+    """dolfinx objects of a CalculiX deck (see the module docstring).
+
+    Attributes:
+        deck: The parsed deck.
+        element_type: The deck's element type.
+        mesh, V, u: Mesh, vector displacement space (degree of the element) and displacement.
+        node_dof: ``(N,)`` local block dof of each deck node (rows of ``deck.node_ids``), -1 for
+            nodes in no element (and, on several processes, nodes this process does not hold).
+        dof_node: ccx node number of each local block dof.
+        node_vertex: ``(N,)`` local mesh vertex of each deck node, -1 for midside or unused nodes.
+        element_cell: ``(E,)`` local cell of each element (rows of the deck's element block), -1
+            for elements this process does not hold.
+        cell_element: ccx element number of each local cell.
+        surfaces: dolfinx surface of each ccx surface name.
+        surface_tags: facet tags (value 1) of each element-face surface.
+        surface_faces: per element-face surface, ``(facets, nodes)``: its sorted local facets and
+            their ccx node numbers in ccx face order (for contact-element output).
+        pairs: contact pairs in deck order.
+        mu, lmbda: Lamé parameters per cell (DG0).
+        nlgeom: Constant switching the kinematics (0 small strain, 1 St.Venant-Kirchhoff) when the
+            deck has both kinds of steps, else None (the forms then hold one kind only).
+        dx: Volume measure with ccx's quadrature.
+        first_piola: First Piola-Kirchhoff stress (the small-strain stress when ``nlgeom`` is 0).
+        cauchy: Cauchy stress.
+        residual: Bulk residual ``f_int - f_ext(pressures)`` (without concentrated forces).
+        nodal_loads: Concentrated forces (``*CLOAD``) on ``V``.
+        pressures: One Constant per pressure group; ``pressure_tags`` marks each group's facets
+            with value ``group + 1``.
+        steps: Load schedule of every step.
+        amplitude_names: Amplitude names by index.
+        constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1), then
+            for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5).
+        reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
+            in no element, whose prescribed values move to the constraint's right-hand side.
+        free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
+    """
+
+    deck: Deck
+    element_type: ElementType
+    mesh: dolfinx.mesh.Mesh
+    V: dolfinx.fem.FunctionSpace
+    u: dolfinx.fem.Function
+    node_dof: np.ndarray
+    dof_node: np.ndarray
+    node_vertex: np.ndarray
+    element_cell: np.ndarray
+    cell_element: np.ndarray
+    surfaces: dict[str, FacetSurface | NodeSurface]
+    surface_tags: dict[str, compat.MeshTags]
+    surface_faces: dict[str, tuple[np.ndarray, np.ndarray]]
+    pairs: list[ContactPair]
+    mu: dolfinx.fem.Function
+    lmbda: dolfinx.fem.Function
+    nlgeom: dolfinx.fem.Constant | None
+    dx: ufl.Measure
+    first_piola: ufl.core.expr.Expr
+    cauchy: ufl.core.expr.Expr
+    residual: ufl.Form
+    nodal_loads: dolfinx.fem.Function
+    pressures: list[dolfinx.fem.Constant]
+    pressure_tags: compat.MeshTags | None
+    steps: list[StepLoads]
+    amplitude_names: list[str]
+    _bc_spaces: list[tuple[dolfinx.fem.FunctionSpace, np.ndarray, dolfinx.fem.Function]] = field(
+        default_factory=list, repr=False
+    )
+    constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
+    reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
+    free_references: list[FreeReference] = field(default_factory=list)
+
+    # -- numbering ---------------------------------------------------------------------------------
+
+    def node_dofs(self, node_ids: np.ndarray) -> np.ndarray:
+        """Local block dofs of ccx node numbers (any shape); -1 for nodes in no element."""
+        return self.node_dof[self.deck.node_index(node_ids)]
+
+    def element_cells(self, element_ids: np.ndarray) -> np.ndarray:
+        """Local cells of ccx element numbers (-1 for cells of other processes)."""
+        block = self.deck.elements[self.element_type.name]
+        order = np.argsort(block.ids)
+        ids = np.asarray(element_ids, dtype=np.int64)
+        pos = np.minimum(np.searchsorted(block.ids, ids, sorter=order), block.ids.size - 1)
+        rows = order[pos]
+        if np.any(block.ids[rows] != ids):
+            raise ValueError(
+                f"element {int(ids[block.ids[rows] != ids][0])} is not defined in {self.deck.path}"
+            )
+        return self.element_cell[rows]
+
+    def nodal_values(self, node_ids: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Rows of a ``(num_dofs, k)`` per-dof array at ccx nodes (zeros for unused nodes)."""
+        dofs = self.node_dofs(node_ids)
+        out = np.zeros((dofs.size, *values.shape[1:]))
+        out[dofs >= 0] = values[dofs[dofs >= 0]]
+        return out
+
+    def face_nodes_of(self, surface: str, facets: np.ndarray) -> np.ndarray:
+        """Ccx node numbers (ccx face order) of local ``facets`` of an element-face surface."""
+        sorted_facets, nodes = self.surface_faces[surface]
+        pos = np.searchsorted(sorted_facets, facets)
+        return nodes[pos]
+
+    # -- steps -------------------------------------------------------------------------------------
+
+    def total_time(self, step_index: int, step_time: float) -> float:
+        """Total time at ``step_time`` of step ``step_index`` (0-based)."""
+        return self.steps[step_index].total_time_start + step_time
+
+    def begin_step(self, step_index: int) -> list[compat.DirichletBC]:
+        """Start step ``step_index`` (0-based) from the current ``u``: kinematics and constraints.
+
+        Prescribed displacements ramp from their value in ``u`` now. Returns the step's conditions.
+        """
+        loads = self.steps[step_index]
+        if self.nlgeom is not None:
+            self.nlgeom.value = 1.0 if loads.step.nlgeom else 0.0
+        loads.bc.start = self.u.x.array[loads.bc_dofs].copy()
+        bcs = []
+        for component, (Vi, inverse, g) in enumerate(self._bc_spaces):
+            dofs = loads.bc_dofs[loads.bc_dofs % 3 == component].astype(np.int32)
+            if dofs.size:
+                pair = [dofs, inverse[dofs].astype(np.int32)]
+                bcs.append(dolfinx.fem.dirichletbc(g, pair, self.V.sub(component)))
+        return bcs
+
+    def set_time(self, step_index: int, step_time: float, *, ramp: bool = True) -> None:
+        """Set concentrated forces, pressures and prescribed displacements at ``step_time``.
+
+        Without an amplitude they ramp linearly over the step, or (``ramp=False``, ccx's
+        ``*DYNAMIC``) act in full from its start.
+        """
+        loads = self.steps[step_index]
+        total = loads.total_time_start + step_time
+        fraction = step_time / loads.period if ramp else 1.0
+        self.nodal_loads.x.array[:] = 0.0
+        self.nodal_loads.x.array[loads.cload_dofs] = self._evaluate(
+            loads.cload, fraction, step_time, total
+        )
+        if self.free_references and loads.reference_force_keys.size:
+            forces = self._evaluate(loads.reference_force, fraction, step_time, total)
+            by_key = dict(zip(loads.reference_force_keys.tolist(), forces))
+            for ref in self.free_references:  # virtual work of the force on the reference node
+                if ref.key in by_key:  # at the dofs this process holds (owned and ghost)
+                    dofs = 3 * self.node_dof[ref.mesh_keys // 3] + ref.mesh_keys % 3
+                    held = dofs >= 0
+                    np.add.at(
+                        self.nodal_loads.x.array,
+                        dofs[held],
+                        by_key[ref.key] * ref.mesh_weights[held],
+                    )
+        for constant, value in zip(
+            self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
+        ):
+            constant.value = value
+        values = self._evaluate(loads.bc, fraction, step_time, total)
+        for component, (_, inverse, g) in enumerate(self._bc_spaces):
+            mask = loads.bc_dofs % 3 == component
+            g.x.array[inverse[loads.bc_dofs[mask]]] = values[mask]
+
+    def reference_displacements(
+        self, step_index: int, step_time: float, displacement: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Components of nodes in no element at ``step_time``: keys and values.
+
+        Keys are ``3 node row + component``; ccx prints the values as the nodes' displacement.
+        Free components are computed from ``displacement``, ``(N, 3)`` at every deck node (on
+        several processes the gathered one; default this process's ``u``).
+        """
+        loads = self.steps[step_index]
+        keys, values = np.zeros(0, np.int64), np.zeros(0)
+        if loads.reference is not None and loads.reference_keys.size:
+            total = loads.total_time_start + step_time
+            keys = loads.reference_keys
+            values = self._evaluate(loads.reference, step_time / loads.period, step_time, total)
+        if not self.free_references:
+            return keys, values
+        known = dict(zip(keys.tolist(), values))
+        if displacement is None:
+            displacement = np.zeros((self.deck.node_ids.size, 3))
+            held = self.node_dof >= 0
+            displacement[held] = self.u.x.array.reshape(-1, 3)[self.node_dof[held]]
+        free = []
+        for ref in self.free_references:
+            u = float(np.dot(ref.mesh_weights, displacement.ravel()[ref.mesh_keys]))
+            u += sum(
+                w * known.get(int(k), 0.0)
+                for k, w in zip(ref.reference_keys, ref.reference_weights)
+            )
+            free.append((ref.key, u))
+        keys = np.concatenate([keys, np.array([k for k, _ in free], dtype=np.int64)])
+        values = np.concatenate([values, [v for _, v in free]])
+        order = np.argsort(keys)
+        return keys[order], values[order]
+
+    def constraint_values(self, step_index: int, step_time: float) -> np.ndarray | None:
+        """Right-hand sides of ``constraints`` at ``step_time``: minus the reference-node terms.
+
+        None without reference nodes. A reference component without a prescribed value in the
+        step is a ``ValueError`` (it would need a dof outside the mesh).
+        """
+        if not self.reference_terms:
+            return None
+        loads = self.steps[step_index]
+        total = loads.total_time_start + step_time
+        known = self._evaluate(loads.reference, step_time / loads.period, step_time, total)
+        values = np.zeros(num_equations(self.constraints))
+        for k, keys, coefficients in self.reference_terms:
+            given = loads.reference_keys
+            pos = np.minimum(np.searchsorted(given, keys), max(given.size - 1, 0))
+            missing = given[pos] != keys if given.size else np.ones(keys.size, dtype=bool)
+            if np.any(missing):
+                key = int(keys[missing][0])
+                node = int(self.deck.node_ids[key // 3])
+                raise ValueError(
+                    f"{self.constraints[k].name}: node {node} belongs to no element and its "
+                    f"direction {key % 3 + 1} has no *BOUNDARY in step {loads.step.number}: a "
+                    "free reference node is not supported (it needs a dof outside the mesh)"
+                )
+            values[k] = -float(np.dot(coefficients, known[pos]))
+        return values
+
+    def _evaluate(
+        self, schedule: Schedule, fraction: float, step_time: float, total_time: float
+    ) -> np.ndarray:
+        """Values of ``schedule`` at ``fraction`` of the step (amplitudes at step or total time)."""
+        value = schedule.start + (schedule.ref - schedule.start) * fraction
+        for index in np.unique(schedule.amplitude[schedule.amplitude >= 0]):
+            amp = self.deck.amplitudes[self.amplitude_names[index]]
+            t = total_time if amp.total_time else step_time
+            mask = schedule.amplitude == index
+            value[mask] = schedule.ref[mask] * np.interp(t, amp.times, amp.values)
+        return value
+
+    # -- dynamics ---------------------------------------------------------------------------------
+
+    def mass_form(self) -> ufl.Form:
+        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (ccx quadrature)."""
+        Q = compat.scalar_space(self.mesh, "DG", 0)
+        rho = dolfinx.fem.Function(Q, name="density")
+        block_ids = self.deck.elements[self.element_type.name].ids
+        for section in self.deck.sections:
+            density = self.deck.materials[section.material].extra.get("*DENSITY")
+            if not density or len(density) != 1 or density[0][0] is None or density[0][0] <= 0.0:
+                raise ValueError(
+                    f"{section.location}: a *DYNAMIC step needs one positive *DENSITY in material "
+                    f"{section.material} (temperature-dependent densities are not supported)"
+                )
+            members = np.unique(self.deck.elsets[section.elset])
+            cells = self.element_cells(members[np.isin(members, block_ids)])
+            cells = cells[cells >= 0]  # this process's (owned and ghost) cells
+            rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
+        w, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+        return rho * ufl.inner(w, v) * ufl.dx(domain=self.mesh)  # consistent mass, exact
+
+    def initial_velocity(self) -> dolfinx.fem.Function:
+        """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
+        velocity = dolfinx.fem.Function(self.V, name="velocity")
+        values = velocity.x.array.reshape(-1, 3)
+        for condition in self.deck.initial_velocities:
+            dofs = self.node_dofs(condition.nodes)
+            values[dofs[dofs >= 0], condition.dof - 1] = condition.value
+        velocity.x.scatter_forward()
+        return velocity
+
+    # -- problem -----------------------------------------------------------------------------------
+
+    def create_problem(self, bcs: Sequence[compat.DirichletBC] = (), **options) -> ContactProblem:
+        """The :class:`~dolfinx_ntf.ContactProblem` of the deck (bulk only without contact pairs).
+
+        Args:
+            bcs: Initial Dirichlet conditions (usually ``begin_step(0)``).
+            options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_options``).
+        """
+        options.setdefault("constraints", self.constraints)
+        problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
+        problem.nodal_loads = self.nodal_loads
+        return problem
+
+
+def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
+    """Build the dolfinx model of a parsed CalculiX deck (collective).
+
+    Args:
+        deck: The deck (``read_deck``).
+        comm: Communicator. On several processes the mesh is distributed by dolfinx from rank
+            0's cells (docs/method.md §14.5); every process must have read the same deck.
+
+    Returns:
+        The :class:`CalculixModel`.
+
+    Raises:
+        ValueError: mixed element types, faces that are not boundary facets, bad material data.
+        NotImplementedError: features not supported yet,
+            naming the keyword and ``file:line``. Raised on every process.
+    """
+    block = element_block(deck)
+    etype = block.type
+    mesh = create_mesh(deck, block, comm)
+    V = compat.vector_space(mesh, "Lagrange", etype.degree)
+    u = dolfinx.fem.Function(V, name="displacement")
+    node_dof, dof_node, node_vertex, original = numbering(deck, mesh, V)
+    element_cell = np.full(block.ids.size, -1, dtype=np.int64)
+    element_cell[original] = np.arange(original.size)
+    cell_element = block.ids[original]
+
+    maps = mesh_maps(deck, block, mesh, node_vertex, node_dof, element_cell)
+    error = None
+    try:  # local work: a bad face found by one process is an error on all (no collective inside)
+        surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
+        pairs = contact_pairs(deck, surfaces, maps)
+        steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
+    except (ValueError, NotImplementedError) as exc:
+        error = exc
+    validation.raise_collectively(comm, error)
+    mu, lmbda = lame(deck, block, mesh, element_cell)
+
+    kinds = {step.nlgeom for step in deck.steps}
+    nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
+    F, P, sigma = stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
+    v = ufl.TestFunction(V)
+    dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
+    residual = ufl.inner(P, ufl.grad(v)) * dx
+    pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
+    if pressures:
+        ds = ufl.Measure(
+            "ds",
+            domain=mesh,
+            subdomain_data=pressure_tags,
+            metadata={"quadrature_degree": etype.face_quadrature_degree},
+        )
+        N = ufl.FacetNormal(mesh)
+        traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
+        for g, p in enumerate(pressures):
+            residual += p * ufl.inner(traction_map, v) * ds(g + 1)
+    nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
+    constraints, reference_terms, free_references = equation_constraints(deck, maps.meshed)
+    # terms on ccx node numbers, held by any process: global dofs (docs/method.md §14.9)
+    constraints = global_constraints(V, constraints, node_ids=dof_node)
+    if etype.num_nodes == 20:
+        constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
+
+    bc_spaces = []
+    num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
+    for component in range(3):
+        Vi, dof_map = compat.component_space(V, component)
+        inverse = np.full(num_unrolled, -1, dtype=np.int64)
+        inverse[np.asarray(dof_map)] = np.arange(len(dof_map))
+        bc_spaces.append((Vi, inverse, dolfinx.fem.Function(Vi)))
+
+    return CalculixModel(
+        deck=deck,
+        element_type=etype,
+        mesh=mesh,
+        V=V,
+        u=u,
+        node_dof=node_dof,
+        dof_node=dof_node,
+        node_vertex=node_vertex,
+        element_cell=element_cell,
+        cell_element=cell_element,
+        surfaces=surfaces,
+        surface_tags=surface_tags,
+        surface_faces=surface_faces,
+        pairs=pairs,
+        mu=mu,
+        lmbda=lmbda,
+        nlgeom=nlgeom,
+        dx=dx,
+        first_piola=P,
+        cauchy=sigma,
+        residual=residual,
+        nodal_loads=nodal_loads,
+        pressures=pressures,
+        pressure_tags=pressure_tags,
+        steps=steps,
+        amplitude_names=amplitude_names,
+        _bc_spaces=bc_spaces,
+        constraints=constraints,
+        reference_terms=reference_terms,
+        free_references=free_references,
+    )

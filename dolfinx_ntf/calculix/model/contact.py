@@ -1,0 +1,120 @@
+"""The deck's contact pairs with their pressure-overclosure laws, friction and ADJUST."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from dolfinx_ntf.contact.problem import ContactPair
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.kernels.laws import (
+    ExponentialLaw,
+    Friction,
+    LinearLaw,
+    PressureOverclosureLaw,
+    SurfaceInteraction,
+    TabularLaw,
+)
+
+from ..deck import ContactPair as ContactPairCard
+from ..deck import Deck, Location, not_supported
+from ..deck import Friction as FrictionCard
+from .mesh import MeshMaps
+
+__all__ = [
+    "adjust_of",
+    "contact_pairs",
+    "first_youngs_modulus",
+    "friction_of",
+    "pressure_overclosure_law",
+]
+
+
+def pressure_overclosure_law(deck: Deck, interaction_name: str) -> PressureOverclosureLaw:
+    """The ``*SURFACE BEHAVIOR`` of an interaction as a pressure-overclosure law."""
+    behavior = deck.interactions[interaction_name].behavior
+    kind = behavior.pressure_overclosure
+    if kind == "EXPONENTIAL":
+        c0, p0 = behavior.values
+        return ExponentialLaw(c0=c0, p0=p0)
+    if kind in ("LINEAR", "HARD"):
+        elastic = next((m.elastic for m in deck.materials.values() if m.elastic is not None), None)
+        if elastic is None:
+            raise ValueError(
+                f"{behavior.location}: {kind} contact needs an *ELASTIC material for its defaults"
+            )
+        values = tuple(behavior.values) + (None,) * (3 - len(behavior.values))
+        return LinearLaw.with_ccx_defaults(elastic[0], *values[:3])
+    if kind == "TABULAR":
+        table = behavior.table
+        if table.shape[1] != 2:
+            raise not_supported(
+                "temperature-dependent *SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=TABULAR",
+                behavior.location,
+            )
+        return TabularLaw(pressures=table[:, 0], overclosures=table[:, 1])
+    raise not_supported(f"*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE={kind}", behavior.location)
+
+
+def first_youngs_modulus(deck: Deck, location: Location) -> float:
+    """E of the first ``*ELASTIC`` material: ccx's reference for contact defaults."""
+    elastic = next((m.elastic for m in deck.materials.values() if m.elastic is not None), None)
+    if elastic is None:
+        raise ValueError(f"{location}: contact defaults need an *ELASTIC material")
+    return elastic[0]
+
+
+def friction_of(deck: Deck, data: FrictionCard) -> Friction:
+    """A ``*FRICTION`` data line as ccx reads it: a missing or non-positive lambda is ``E/2``.
+
+    The default is announced with a warning, as ccx does (docs/method.md §11.5).
+    """
+    e = first_youngs_modulus(deck, data.location)
+    if data.stick_slope is None or data.stick_slope <= 0.0:
+        logging.getLogger("dolfinx_ntf").warning(
+            " *WARNING in frictions: stick slope (lambda) missing or not positive at %s; "
+            "using E/2 = %g",
+            data.location,
+            0.5 * e,
+        )
+        return Friction(data.mu, 0.5 * e)
+    return Friction(data.mu, data.stick_slope)
+
+
+def adjust_of(deck: Deck, pair: ContactPairCard, maps: MeshMaps) -> float | NodeSurface | None:
+    """The ADJUST of a pair: a distance, the vertices of a node set, or None."""
+    if pair.adjust is None or isinstance(pair.adjust, float):
+        return pair.adjust
+    ids = deck.nsets[pair.adjust]
+    vertices = maps.node_vertex[deck.node_index(ids)]
+    corner = maps.corner[deck.node_index(ids)]
+    if not np.all(corner):
+        node = int(ids[np.argmax(~corner)])
+        raise not_supported(
+            f"ADJUST={pair.adjust} with node {node}, which is not an element corner",
+            pair.location,
+        )
+    return NodeSurface(np.unique(vertices[vertices >= 0]).astype(np.int32), pair.adjust)
+
+
+def contact_pairs(
+    deck: Deck, surfaces: dict[str, FacetSurface | NodeSurface], maps: MeshMaps
+) -> list[ContactPair]:
+    """The deck's ``*CONTACT PAIR`` cards as contact pairs, in deck order."""
+    pairs = []
+    for pair in deck.contact_pairs:
+        law = pressure_overclosure_law(deck, pair.interaction)
+        data = deck.interactions[pair.interaction].friction
+        friction = None if data is None else friction_of(deck, data)
+        pairs.append(
+            ContactPair(
+                surfaces[pair.slave],
+                surfaces[pair.master],
+                SurfaceInteraction(law, friction),
+                small_sliding=pair.small_sliding,
+                name=f"{pair.slave}-{pair.master}",
+                adjust=adjust_of(deck, pair, maps),
+            )
+        )
+    return pairs

@@ -1,0 +1,266 @@
+"""The values a deck's output requests ask for, in ccx numbering and with their accuracy.
+
+Nodal forces (``RF``), stresses at ccx's integration points and extrapolated to the nodes
+(``S``), displacements with the reference nodes of ``*EQUATION`` at their value, and the contact
+rows of every pair (``CDIS``, ``CSTR``, ``CELS``, the ``.cel`` elements). Each is gathered over
+the processes in ccx order (``gather.py``), so that it is the serial run's on any number of
+processes; the accuracy of each value (``roundoff.py``, docs/method.md §14.5) decides which digits
+are printed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from mpi4py import MPI
+
+import numpy as np
+
+import dolfinx.fem
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.kernels.friction import output_tangents
+from dolfinx_ntf.outputs.results import contact_results
+
+from .deck import Deck
+from .gather import CcxNumbering
+from .model import CalculixModel
+from .roundoff import (
+    FieldAccuracy,
+    clean,
+    element_sizes,
+    force_floor,
+    largest_modulus,
+    law_accuracy,
+)
+
+__all__ = ["ContactRows", "OutputValues"]
+
+
+@dataclass(frozen=True, eq=False)
+class ContactRows:
+    """Contact elements of one pair at one increment, slave nodes ascending (the ``.dat`` rows).
+
+    Attributes:
+        pair: ``SLAVE-MASTER`` surface names.
+        nodes: ``(k,)`` ccx slave node numbers.
+        clearance: ``(k,)`` CDIS normal value (negative = penetration).
+        pressure: ``(k,)`` CSTR contact pressure.
+        energy: ``(k,)`` CELS spring energy (with ccx 2.20's friction energy, docs/method.md
+            §11.4).
+        master_faces: ``(k, n)`` ccx node numbers of each element's master face, ccx face order.
+        slip: ``(k, 2)`` CDIS tangential columns: accumulated tangential relative displacement
+            along ccx's output directions t1, t2 (zero without friction).
+        shear: ``(k, 2)`` CSTR tangential columns: shear traction along t1, t2.
+        accuracy: ``(length, pressure (k,), energy (k,))``: what each value is known to
+            (``roundoff.clean_contact``, docs/method.md §14.5).
+    """
+
+    pair: str
+    nodes: np.ndarray
+    clearance: np.ndarray
+    pressure: np.ndarray
+    energy: np.ndarray
+    master_faces: np.ndarray
+    slip: np.ndarray | None = None
+    shear: np.ndarray | None = None
+    accuracy: tuple | None = None
+
+
+class OutputValues:
+    """The output values of a deck's model at its current displacement (all collective).
+
+    Args:
+        deck: The deck.
+        model: Its dolfinx model.
+        problem: The contact problem solved for ``model.u``.
+        numbering: The model's nodes, cells and springs in ccx numbering.
+        comm: The job's communicator.
+    """
+
+    def __init__(
+        self,
+        deck: Deck,
+        model: CalculixModel,
+        problem: ContactProblem,
+        numbering: CcxNumbering,
+        comm: MPI.Comm,
+    ) -> None:
+        self.deck, self.model, self.problem, self.numbering = deck, model, problem, numbering
+        self.comm = comm
+        self._stress: tuple[dolfinx.fem.Expression, int] | None = None
+        self._field_scales: tuple[float, float, tuple[float, float]] | None = None
+
+    # -- forces ------------------------------------------------------------------------------------
+
+    def internal_forces(self) -> np.ndarray:
+        """``(N, 3)`` internal force of bulk elements plus contact springs at every deck node.
+
+        Summed in ccx order, the same on any number of processes; C3D20's face- and cell-centre
+        forces moved to its 20 nodes (docs/method.md §13.5). Collective.
+        """
+        return self.numbering.nodal_forces(self.problem)
+
+    def printed_forces(self, largest_residual: float) -> tuple[np.ndarray, float]:
+        """:meth:`internal_forces` with those within their accuracy as 0, and that accuracy.
+
+        The accuracy is the converged iterate's ``largest_residual`` force plus round-off, plus
+        the round-off of the displacement they come from (docs/method.md §14.5). Collective.
+        """
+        forces = self.internal_forces()
+        floor = force_floor(forces, largest_residual)
+        floor += self.field_accuracy().force
+        return clean(forces, floor), floor
+
+    def field_accuracy(self) -> FieldAccuracy:
+        """Accuracy of the stresses and contact values of the current displacement.
+
+        From the largest coordinate and displacement, the largest modulus and the smallest
+        element (docs/method.md §14.5). Collective.
+        """
+        if self._field_scales is None:
+            deck = self.deck
+            block = deck.elements[self.model.element_type.name]
+            coords = np.asarray(deck.node_coords, dtype=np.float64)
+            self._field_scales = (
+                float(np.abs(coords).max(initial=0.0)),
+                largest_modulus(m.elastic for m in deck.materials.values() if m.elastic),
+                element_sizes(coords, deck.node_index(block.connectivity)),
+            )
+        coordinates, modulus, sizes = self._field_scales
+        local = float(np.abs(self.model.u.x.array).max(initial=0.0))
+        return FieldAccuracy.of(coordinates, self.comm.allreduce(local, MPI.MAX), modulus, sizes)
+
+    # -- displacements -----------------------------------------------------------------------------
+
+    def displacements(self) -> np.ndarray:
+        """``(N, 3)`` displacement of every deck node (rows of ``deck.node_ids``). Collective."""
+        return self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
+
+    def with_reference(
+        self, ids: np.ndarray, values: np.ndarray, load_time: tuple[int, float]
+    ) -> np.ndarray:
+        """``values (n, 3)`` of nodes ``ids``, reference nodes at their prescribed displacement.
+
+        ``load_time`` is ``(step index, step time)`` of the loads applied. Collective when the
+        model has free reference nodes.
+        """
+        gathered = None  # free reference nodes: from the displacement of all processes
+        if self.model.free_references:
+            gathered = self.displacements()
+        keys, known = self.model.reference_displacements(*load_time, gathered)
+        if keys.size == 0:
+            return values
+        wanted = 3 * self.deck.node_index(ids)[:, None] + np.arange(3)
+        pos = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
+        hit = keys[pos] == wanted
+        values = values.copy()
+        values[hit] = known[pos[hit]]
+        return values
+
+    # -- stresses ----------------------------------------------------------------------------------
+
+    def stresses(self, element_ids: np.ndarray) -> np.ndarray:
+        """Cauchy stresses ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz) at ccx's integration points.
+
+        Collective: each element is evaluated by the process owning it.
+        """
+        if self._stress is None:
+            points = self.model.element_type.integration_points
+            self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
+        expression, q = self._stress
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(
+                expression, self.model.mesh, cells.astype(np.int32)
+            ).reshape(cells.size, q, 3, 3)
+            return values[:, :, index[0], index[1]]
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 6))
+
+    def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
+        """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).
+
+        Integration-point values extrapolated to each element's nodes, averaged over the elements
+        around a node (docs/method.md §13.2). Collective.
+        """
+        block = self.deck.elements[self.model.element_type.name]
+        extrapolate = self.model.element_type.extrapolation
+        at_nodes = np.einsum("nq,eqk->enk", extrapolate, self.stresses(block.ids))
+        index = self.deck.node_index(block.connectivity)
+        total = np.zeros((self.deck.node_ids.size, 6))
+        count = np.zeros(self.deck.node_ids.size)
+        np.add.at(total, index, at_nodes)
+        np.add.at(count, index, 1.0)
+        used = count > 0
+        values = total[used] / count[used, None]
+        return self.deck.node_ids[used], values[:, [0, 1, 2, 3, 5, 4]]
+
+    # -- contact -----------------------------------------------------------------------------------
+
+    def contact_rows(self) -> list[ContactRows]:
+        """Contact rows of every pair at the current springs, slave nodes ascending.
+
+        Collective: the springs of all processes.
+        """
+        rows = []
+        numbering = self.numbering
+        length = self.field_accuracy().length
+        for state, results, pair in zip(
+            self.problem.states, contact_results(self.problem), self.deck.contact_pairs
+        ):
+            faces = numbering.ccx_nodes(self.problem, state.master_faces.faces[state.spring_face])
+            t1, t2 = output_tangents(results.normal)
+            slip = np.column_stack([np.einsum("ni,ni->n", results.slip, t) for t in (t1, t2)])
+            shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
+            # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4)
+            energy = results.energy + 2.0 * results.friction_energy
+            dp, de = law_accuracy(
+                state.pair.interaction.law, -results.clearance, results.area, length
+            )
+            nodes, clearance, pressure, energy, faces, slip, shear, dp, de = numbering.allgather(
+                numbering.ccx_nodes(self.problem, results.node),
+                results.clearance,
+                results.pressure,
+                energy,
+                faces,
+                slip.reshape(-1, 2),
+                shear.reshape(-1, 2),
+                dp,
+                de,
+            )
+            faces = numbering.master_faces(pair.master, faces)
+            order = np.argsort(nodes, kind="stable")
+            rows.append(
+                ContactRows(
+                    results.pair,
+                    nodes[order],
+                    clearance[order],
+                    pressure[order],
+                    energy[order],
+                    faces[order],
+                    slip[order],
+                    shear[order],
+                    (length, dp[order], de[order]),
+                )
+            )
+        return rows
+
+    def contact_elements(self, problem: ContactProblem) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Master faces ``(k, n)`` and slave nodes ``(k,)`` of each pair's springs (``.cel``).
+
+        In ccx numbering, slave nodes ascending, pairs in deck order. Collective.
+        """
+        numbering = self.numbering
+        elements = []
+        for state, pair in zip(problem.states, self.deck.contact_pairs):
+            slaves, faces = numbering.allgather(
+                numbering.ccx_nodes(problem, state.slave.nodes[state.spring_slave]),
+                numbering.ccx_nodes(problem, state.master_faces.faces[state.spring_face]),
+            )
+            faces = numbering.master_faces(pair.master, faces)
+            order = np.argsort(slaves, kind="stable")
+            elements.append((faces[order], slaves[order]))
+        return elements

@@ -1,0 +1,133 @@
+"""A pair's springs evaluated at the current displacement, as blocks to assemble (§5, §6, §11).
+
+:func:`evaluate_pair` evaluates the springs of one :class:`~dolfinx_ntf.contact.pair.PairState`
+(forces, tangent, friction) through its master surface and stores the results in the state (the
+projection points and the friction trial state carry over to the next evaluation);
+:func:`area_block` is the tangent of the spring areas when they follow the deformation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dolfinx_ntf.contact.assembly import SpringBlocks
+from dolfinx_ntf.contact.pair import PairState
+from dolfinx_ntf.contact.pairing import slave_areas
+from dolfinx_ntf.kernels.friction import FrictionInput
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
+from dolfinx_ntf.kernels.spring_areas import spring_area_gradients
+
+__all__ = ["area_block", "evaluate_pair"]
+
+
+def evaluate_pair(
+    state: PairState,
+    coords: np.ndarray,
+    law: PressureOverclosureLaw,
+    *,
+    reference: np.ndarray,
+    gap_shift: np.ndarray | float,
+    tangent: bool,
+    symmetric: bool,
+    linearize_area: bool,
+    friction_in_tension: bool,
+    friction_tangent: str,
+) -> list[SpringBlocks]:
+    """Evaluate the springs of one pair at ``coords``; returns the blocks to assemble.
+
+    Args:
+        state: The pair's state at the current pairing (updated: evaluation, projection points,
+            friction trial state, and the areas with ``linearize_area``).
+        coords: (N, 3) current node coordinates.
+        law: The law whose slope the tangent takes.
+        reference: (N, 3) reference node coordinates (friction works on displacements).
+        gap_shift: The springs' ramped initial overlap (docs/method.md §3.5).
+        tangent: Also the tangent (else forces only).
+        symmetric: Symmetrize the spring matrices.
+        linearize_area: Areas follow the deformation, with their derivative in the tangent.
+        friction_in_tension: Friction also where the law gives tension.
+        friction_tangent: ``"consistent"`` or ``"ccx"`` (docs/method.md §11.2).
+    """
+    nodes = state.element_nodes
+    friction = _friction_input(
+        state, coords, nodes, reference, friction_in_tension, friction_tangent
+    )
+    if linearize_area:  # areas follow the deformation between pairings too
+        areas = slave_areas(state.slave, coords)
+        state.spring_area = areas[state.spring_slave]
+    ev = state.master.evaluate_springs(
+        state.master_faces.face_type,
+        coords[nodes[:, :-1]],
+        coords[nodes[:, -1]],
+        state.spring_area,
+        law,
+        gap_shift=gap_shift,
+        xi0=state.xi,
+        tangent=tangent,
+        symmetric=symmetric,
+        friction=friction,
+    )
+    state.evaluation = ev
+    state.xi = ev.xi
+    if ev.tangential is not None:
+        tf = ev.tangential
+        state.friction.store(state.spring_slave, tf.a, tf.t, tf.slip)
+    blocks = [
+        SpringBlocks(
+            nodes,
+            nodes,
+            ev.stiffness,
+            ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1]),
+        )
+    ]
+    if tangent and linearize_area:
+        blocks.append(area_block(state, coords))
+    return blocks
+
+
+def _friction_input(
+    state: PairState,
+    coords: np.ndarray,
+    nodes: np.ndarray,
+    reference: np.ndarray,
+    in_tension: bool,
+    tangent_mode: str,
+) -> FrictionInput | None:
+    """Friction state and parameters of the pair's springs, None without friction."""
+    friction = state.pair.interaction.friction
+    if friction is None:
+        return None
+    displacements = (coords - reference)[nodes]
+    return FrictionInput(
+        displacements,
+        *state.friction.start_values(state.spring_slave),
+        mu=friction.mu,
+        stick_slope=friction.stick_slope,
+        in_tension=in_tension,
+        tangent_mode=tangent_mode,
+    )
+
+
+def area_block(state: PairState, coords: np.ndarray, *, values: bool = True) -> SpringBlocks:
+    """Tangent of F_N = A_p p(d) with respect to the slave-face nodes around p (dA_p/du).
+
+    With ``values=False`` only the couplings (for the matrix pattern).
+    """
+    faces = state.slave.faces
+    slave_index, node, gradient = spring_area_gradients(
+        faces.face_type, faces.faces, coords, state.slave.nodes
+    )
+    spring_of_slave = np.full(state.slave.nodes.size, -1, dtype=np.int64)
+    spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
+    spring = spring_of_slave[slave_index]
+    keep = spring >= 0
+    if state.slave.faceless is not None:  # no face area: the fallback, not dA/du
+        keep &= ~state.slave.faceless[slave_index]
+    spring, node, gradient = spring[keep], node[keep], gradient[keep]
+    block_values = None
+    if values:
+        per_area = state.evaluation.force_per_area.reshape(
+            state.num_springs, 3 * state.element_nodes.shape[1]
+        )[spring]
+        block_values = per_area[:, :, None] * gradient[:, None, :]
+    return SpringBlocks(state.element_nodes[spring], node[:, None].astype(np.int64), block_values)

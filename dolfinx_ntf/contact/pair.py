@@ -1,0 +1,121 @@
+"""A contact pair as the user declares it, and the state the pairing keeps for it.
+
+:class:`ContactPair` is CalculiX's ``*CONTACT PAIR, TYPE=NODE TO SURFACE``; :class:`PairState` is
+what :class:`~dolfinx_ntf.contact.pairing.Pairing` knows about it at the current pairing (slave
+nodes, master faces, springs, friction history), in the numbering of the problem's nodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dolfinx_ntf import validation
+from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, SlaveSurface, SurfaceFaces
+from dolfinx_ntf.kernels.friction_state import FrictionState
+from dolfinx_ntf.kernels.laws import PressureOverclosureLaw, SurfaceInteraction
+from dolfinx_ntf.kernels.master import ContactMaster
+from dolfinx_ntf.kernels.rigid import RigidSurface
+from dolfinx_ntf.kernels.springs import SpringEvaluation
+
+__all__ = ["ContactPair", "PairState"]
+
+
+@dataclass
+class ContactPair:
+    """One node-to-face contact pair (CalculiX ``*CONTACT PAIR, TYPE=NODE TO SURFACE``).
+
+    Args:
+        slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
+            surface.
+        master: Face-based master surface, or a rigid analytical surface (one-node springs,
+            docs/method.md §15.1).
+        interaction: Pressure-overclosure law and optional friction; may be replaced between
+            steps (new mu and lambda act from then on, the friction state is kept).
+        small_sliding: Pair only at increment starts. Per pair by default; with
+            ``ContactProblem(small_sliding_rule="last_pair")`` the flag of the *last* pair decides
+            for all, as in CalculiX.
+        name: Label used in messages and output.
+        active: Inactive pairs generate no springs (``*MODEL CHANGE``); a pair that becomes
+            active again starts with a fresh friction state.
+        adjust: CalculiX's ADJUST at the first pairing of the analysis (docs/method.md §11.5): a
+            distance ``a >= 0`` (slave nodes with clearance ``g <= a`` are moved onto the
+            master) or a :class:`NodeSurface` of the nodes to move; None moves nothing.
+    """
+
+    slave: FacetSurface | NodeSurface
+    master: FacetSurface | RigidSurface
+    interaction: SurfaceInteraction
+    small_sliding: bool = False
+    name: str = ""
+    active: bool = True
+    adjust: float | NodeSurface | None = None
+
+    def __post_init__(self) -> None:
+        """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
+        owner = (
+            f"ContactPair {self.name!r}"
+            if isinstance(self.name, str) and self.name
+            else ("ContactPair")
+        )
+        validation.check_type(self.slave, (FacetSurface, NodeSurface), f"{owner}: slave")
+        if isinstance(self.master, NodeSurface):
+            raise ValueError(
+                f"{owner}: the master surface must be a FacetSurface (face-based), got a "
+                "NodeSurface; only the slave surface may be node-based"
+            )
+        validation.check_type(self.master, (FacetSurface, RigidSurface), f"{owner}: master")
+        validation.check_type(
+            self.interaction,
+            SurfaceInteraction,
+            f"{owner}: interaction",
+            "wrap the law: SurfaceInteraction(law)"
+            if isinstance(self.interaction, PressureOverclosureLaw)
+            else "",
+        )
+        validation.check_type(self.name, str, f"{owner}: name")
+        if self.adjust is not None and not isinstance(self.adjust, NodeSurface):
+            if isinstance(self.adjust, bool) or not isinstance(self.adjust, (int, float)):
+                raise TypeError(
+                    f"{owner}: adjust must be a distance >= 0, a NodeSurface or None, got "
+                    f"{validation.describe(self.adjust)}"
+                )
+            if not (np.isfinite(self.adjust) and self.adjust >= 0):
+                raise ValueError(
+                    f"{owner}: adjust must be a finite distance >= 0, got {self.adjust}"
+                )
+
+
+@dataclass
+class PairState:
+    """Numbering-level data of a pair and its springs at the current pairing."""
+
+    pair: ContactPair
+    slave: SlaveSurface
+    master_faces: SurfaceFaces
+    master: ContactMaster  # meshed, rigid or exchanged (a patch of it)
+    overlap: np.ndarray  # (S,) initial overlap g0 per slave node (docs/method.md §3.5)
+    spring_slave: np.ndarray = field(
+        default_factory=lambda: np.empty(0, dtype=np.int64)
+    )  # index into slave.nodes
+    spring_face: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    spring_area: np.ndarray = field(default_factory=lambda: np.empty(0))
+    xi: np.ndarray | None = None
+    evaluation: SpringEvaluation | None = None
+    found_face: np.ndarray | None = None  # face of every slave node at the last pairing, -1: none
+    face_changes: int = 0  # slave nodes paired before and after the last pairing, on another face
+    friction: FrictionState | None = None  # friction history per slave node (docs/method.md §11.3)
+    adjust_nodes: np.ndarray | None = None  # ADJUST node set as slave dofs
+    was_active: bool = True  # the pair was active at the previous pairing
+
+    @property
+    def num_springs(self) -> int:
+        """Number of contact spring elements of this pair."""
+        return int(self.spring_slave.size)
+
+    @property
+    def element_nodes(self) -> np.ndarray:
+        """(N, n+1) spring nodes: master face nodes, then the slave node."""
+        faces = self.master_faces.faces[self.spring_face]
+        return np.hstack([faces, self.slave.nodes[self.spring_slave][:, None]])

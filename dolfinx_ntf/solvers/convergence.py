@@ -1,0 +1,254 @@
+"""When a Newton iteration has converged or diverged: CalculiX's rules for the mechanical field.
+
+:class:`ForceScaledTest` is the force-scaled test of ``*CONTROLS, PARAMETERS=FIELD``
+(docs/method.md §7.1) with the forces it remembers over an increment and a step;
+:class:`DivergenceRule` gives an increment up when the residual grows; :class:`ExtraPairings` counts
+the pairings a solve adds for penetrating slave nodes without a spring. Both only compute, on
+numbers that the Newton solver hands over; :func:`measure_iterate` (collective) measures them.
+"""
+
+from __future__ import annotations
+
+import typing
+from dataclasses import dataclass, field
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenceError
+
+__all__ = [
+    "CCX_FIELD_CONTROLS",
+    "DIVERGENCE_GROWTH",
+    "ITERATIONS_PER_EXTRA_PAIRING",
+    "MAX_EXTRA_PAIRINGS",
+    "TIGHT_FIELD_CONTROLS",
+    "DivergenceRule",
+    "ExtraPairings",
+    "ForceScaledTest",
+    "measure_iterate",
+]
+
+#: CalculiX's defaults of ``*CONTROLS, PARAMETERS=FIELD`` (mechanical field).
+CCX_FIELD_CONTROLS: dict[str, float] = {
+    "R_n": 0.005,
+    "C_n": 0.01,
+    "R_p": 0.02,
+    "R_l": 1e-8,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-3,
+}
+#: Field controls that converge to round-off level: the default of
+#: :class:`~dolfinx_ntf.ContactNewtonSolver` and of ``dolfinx-ntf run --tight``.
+TIGHT_FIELD_CONTROLS: dict[str, float] = {
+    "R_n": 1e-10,
+    "C_n": 1e-8,
+    "R_p": 1e-10,
+    "R_l": 1e-12,
+    "epsilon": 1e-5,
+    "C_epsilon": 1e-8,
+}
+
+#: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
+#: strict comparison, with a margin for iterations that stagnate at round-off level.
+DIVERGENCE_GROWTH = 1.01
+
+#: Pairings a solve may add to CalculiX's schedule for slave nodes that penetrate without a spring.
+MAX_EXTRA_PAIRINGS = 3
+#: Newton iterations each extra pairing adds to ``max_it`` (the set changes: Newton starts over).
+ITERATIONS_PER_EXTRA_PAIRING = 10
+
+
+def measure_iterate(
+    problem: ContactProblem,
+    x: PETSc.Vec,
+    b: PETSc.Vec,
+    dx: PETSc.Vec,
+    relaxation: float,
+    start: np.ndarray,
+) -> tuple[float, float, float, float]:
+    """What the force-scaled test reads of an iterate ``x`` with residual ``b``. Collective.
+
+    Returns:
+        ``q``, the average element force (:meth:`ContactProblem.average_element_force`);
+        ``r``, the largest residual force; the largest correction ``relaxation * dx`` (before
+        the line search's step); ``du``, the largest change of ``x`` from ``start`` (all
+        processes).
+    """
+    average = problem.average_element_force()
+    largest = b.norm(PETSc.NormType.NORM_INFINITY)
+    correction = relaxation * dx.norm(PETSc.NormType.NORM_INFINITY)
+    change = float(np.abs(x.array - start[: x.array.size]).max(initial=0.0))
+    change = problem.u.function_space.mesh.comm.allreduce(change, op=MPI.MAX)
+    return average, largest, correction, change
+
+
+@dataclass
+class ForceScaledTest:
+    """CalculiX's force-scaled convergence test and the forces it averages.
+
+    Args:
+        controls: ``R_n``, ``C_n``, ``R_p``, ``R_l``, ``epsilon``, ``C_epsilon`` (see
+            :data:`TIGHT_FIELD_CONTROLS`).
+        relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
+        residual_floor: A largest residual force below this absolute value counts as zero (then
+            the ``R_l`` test holds). CalculiX 2.20 does this with 1e-6 in the deck's force unit
+            (docs/method.md §7.1), which the deck runner reproduces; 0 keeps the test scale-free.
+        average_over_step: ``q~`` is the mean over the increments of the step so far (each by
+            its last ``q``, the current one by its ``q`` now), CalculiX's time-averaged force,
+            which the deck runner reproduces; default: the mean over the iterations of the
+            current increment.
+        change_over_iterations: ``du`` is the largest over the iterations of the increment so
+            far (CalculiX's; the deck runner reproduces it); default: the change now.
+    """
+
+    controls: dict[str, float]
+    relaxation_iteration: int = 9
+    residual_floor: float = 0.0
+    average_over_step: bool = False
+    change_over_iterations: bool = False
+    #: Mean element force of every converged increment so far (the scale of an unloaded one).
+    past_averages: list[float] = field(default_factory=list)
+    #: Last average force ``q`` of each converged increment of the current step.
+    step_forces: list[float] = field(default_factory=list)
+    #: Largest residual force of the last iterate (before ``residual_floor``).
+    largest_residual: float = 0.0
+    #: ``(r, q~, c, du)`` of the last :meth:`converged` call, as the test used them.
+    last: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    _averages: list[float] = field(default_factory=list, repr=False)
+    _largest: list[float] = field(default_factory=list, repr=False)
+    _largest_change: float = field(default=0.0, repr=False)
+
+    def begin_solve(self, change: float) -> None:
+        """Forget the iterations of the last solve; ``change`` is the predictor's own ``du``."""
+        self._averages, self._largest = [], []
+        self._largest_change = change
+
+    def end_solve(self) -> None:
+        """Remember the forces of a converged increment."""
+        if self._averages:
+            self.past_averages.append(float(np.mean(self._averages)))
+            self.step_forces.append(self._averages[-1])
+
+    def converged(
+        self, updates: int, average: float, largest: float, correction: float, change: float
+    ) -> bool:
+        """The test after Newton update ``updates``.
+
+        With ``r`` the largest residual force, ``c`` the largest correction, ``du`` the largest
+        displacement change in the increment, ``q`` the average absolute element nodal force and
+        ``q~`` its mean over the updates so far: converged when ``r <= c1 q~`` and at least one
+        of ``c <= c2 du``, ``r c / min(r_{i-1}, r_{i-2}) < c2 du``, ``r <= R_l q~``,
+        ``q <= epsilon q~``, ``c < 1e-8``; ``(c1, c2)`` is ``(R_n, C_n)`` up to
+        ``relaxation_iteration`` updates, ``(R_p, C_n)`` beyond, and ``(epsilon, C_epsilon)``
+        under zero flux. Scaled by forces, the test never asks for less than round-off.
+
+        Args:
+            updates: Newton updates so far (>= 1).
+            average: ``q``, the average absolute element nodal force of the iterate.
+            largest: ``r``, the largest residual force.
+            correction: ``c``, the largest correction of the update.
+            change: ``du``, the largest displacement change in the increment now.
+        """
+        controls = self.controls
+        self._averages.append(average)
+        mean = float(np.mean(self._averages))
+        if self.average_over_step:
+            mean = (sum(self.step_forces) + average) / (len(self.step_forces) + 1)
+        self.largest_residual = largest
+        if largest < self.residual_floor:
+            largest = 0.0
+        self._largest.append(largest)
+        if self.change_over_iterations:
+            self._largest_change = change = max(self._largest_change, change)
+        past = float(np.mean(self.past_averages)) if self.past_averages else 0.0
+        if mean <= controls["epsilon"] * past:
+            # Unloaded (all forces vanish, e.g. a contact pair removed): CalculiX's zero-flux test
+            # against the forces of the earlier increments (docs/method.md §11.6).
+            mean = past
+        if average <= controls["epsilon"] * mean:
+            c1, c2 = controls["epsilon"], controls["C_epsilon"]
+        else:
+            c1 = controls["R_n"] if updates <= self.relaxation_iteration else controls["R_p"]
+            c2 = controls["C_n"]
+        self.last = (largest, mean, correction, change)
+        estimate = np.inf
+        if updates >= 3 and min(self._largest[-3:-1]) > 0:
+            estimate = largest * correction / min(self._largest[-3:-1])
+        return largest <= c1 * mean and (
+            correction <= c2 * change
+            or estimate < c2 * change
+            or largest <= controls["R_l"] * mean
+            or average <= controls["epsilon"] * mean
+            or correction < 1e-8
+        )
+
+
+class DivergenceRule:
+    """CalculiX's divergence check: a residual larger than the two before it ends the attempt.
+
+    Args:
+        first_iteration: CalculiX's I_0, the first Newton update checked.
+    """
+
+    def __init__(self, first_iteration: int) -> None:
+        self.first_iteration = first_iteration
+        self.first_check = first_iteration
+
+    def reset(self) -> None:
+        """Start a solve: check from ``first_iteration`` on."""
+        self.first_check = self.first_iteration
+
+    def defer(self, updates: int, by: int) -> None:
+        """Check no earlier than ``by`` updates after ``updates`` (the springs changed)."""
+        self.first_check = max(self.first_check, updates + by)
+
+    def check(
+        self,
+        updates: int,
+        norms: typing.Sequence[float],
+        norm: float,
+        hint: typing.Callable[[], str],
+    ) -> None:
+        """Raise :class:`ContactDivergenceError` if ``norm`` outgrows the last two ``norms``.
+
+        ``hint()`` words a likely cause for the message (called only when raising).
+        """
+        if (
+            updates >= self.first_check
+            and len(norms) >= 2
+            and norm > DIVERGENCE_GROWTH * max(norms[-1], norms[-2])
+        ):
+            raise ContactDivergenceError(
+                f"residual grows: {norms[-2]:.3e}, {norms[-1]:.3e}, {norm:.3e} after "
+                f"{updates} Newton updates{hint()}"
+            )
+
+
+class ExtraPairings:
+    """Pairings beyond CalculiX's schedule for slave nodes that penetrate without a spring.
+
+    CalculiX freezes the pairing after Newton iteration 8, so such nodes can remain at
+    convergence; a solve pairs again instead and iterates on, at most :data:`MAX_EXTRA_PAIRINGS`
+    times per increment, then gives the increment up.
+    """
+
+    def __init__(self) -> None:
+        self.count = 0
+
+    def take(self, unpaired: int) -> int:
+        """One more pairing for ``unpaired`` nodes; returns the Newton iterations it adds.
+
+        Raises:
+            ContactConvergenceError: The solve has used all its extra pairings.
+        """
+        if self.count >= MAX_EXTRA_PAIRINGS:
+            raise ContactConvergenceError(
+                f"{unpaired} slave node(s) still penetrate the master without a spring after "
+                f"{MAX_EXTRA_PAIRINGS} extra pairings"
+            )
+        self.count += 1
+        return ITERATIONS_PER_EXTRA_PAIRING

@@ -1,0 +1,98 @@
+"""The failures of a solve, by what the step driver can do about them.
+
+:class:`ContactConvergenceError` (and its :class:`ContactDivergenceError`) let the step cut the
+increment back; :class:`ContactSolverError` stops at once. The helpers word the messages that
+name the cause (a non-finite input, a body with no support).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dolfinx_ntf.contact.problem import ContactProblem
+
+__all__ = [
+    "ContactConvergenceError",
+    "ContactDivergenceError",
+    "ContactSolverError",
+    "linear_solve_failure",
+    "no_support_hint",
+    "non_finite_input",
+    "non_finite_residual",
+]
+
+
+class ContactConvergenceError(RuntimeError):
+    """A Newton solve or a whole step failed to converge; a smaller increment may succeed."""
+
+
+class ContactDivergenceError(ContactConvergenceError):
+    """The Newton iterates diverge (growing or non-finite residual, failed linear solve)."""
+
+
+class ContactSolverError(RuntimeError):
+    """A failure that no smaller increment can fix; :class:`StaticStep` raises it at once.
+
+    Non-finite input, or a linear solver that cannot factor the first Jacobian.
+    """
+
+
+def non_finite_input(problem: ContactProblem) -> str:
+    """Message for a residual that is not finite before any Newton update."""
+    values = problem.u.x.array
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        node = bad[0] // 3
+        position = problem.reference_coordinates[node]
+        return (
+            f"the displacement has {bad.size} non-finite value(s) at the start of the increment "
+            f"(first at node {node}, reference position ({position[0]:.6g}, {position[1]:.6g}, "
+            f"{position[2]:.6g})): check the initial values and prescribed displacements"
+        )
+    return (
+        "the residual is not finite at the start of the increment although the displacement is: "
+        "check the loads, constants and material parameters of the residual form"
+    )
+
+
+def non_finite_residual(
+    norm: float, updates: int, problem: ContactProblem
+) -> ContactSolverError | ContactDivergenceError:
+    """The error of a residual that is not finite: the input's fault before any update."""
+    if updates == 0:
+        return ContactSolverError(non_finite_input(problem))
+    return ContactDivergenceError(
+        f"residual is not finite (norm {norm}) after {updates} Newton updates"
+    )
+
+
+def no_support_hint(problem: ContactProblem) -> str:
+    """Why a body may float: contact pairs but no springs."""
+    if problem.total_springs == 0 and problem.states:
+        return (
+            "; there are no contact springs, so a body held only by contact has no support "
+            "(close the initial gap, or start with a prescribed displacement)"
+        )
+    return ""
+
+
+def linear_solve_failure(
+    what: str, at_start: bool, updates: int, prefix: str, problem: ContactProblem
+) -> ContactSolverError | ContactDivergenceError:
+    """The error of a failed linear solve (or Newton iteration) after ``updates`` updates.
+
+    Non-retryable (:class:`ContactSolverError`) ``at_start``, the very first Newton iteration of
+    a solver, whose cause is the setup (options under ``prefix``, the residual form); a
+    divergence later.
+    """
+    if at_start:
+        hint = (
+            f"check the PETSc options under the prefix '{prefix}' (petsc_options) and that "
+            "the residual form is built on the unknown Function u"
+        )
+        return ContactSolverError(
+            f"{what} at the first Newton iteration: {hint}{no_support_hint(problem)}"
+        )
+    return ContactDivergenceError(
+        f"{what} at Newton iteration {updates + 1}{no_support_hint(problem)}"
+    )

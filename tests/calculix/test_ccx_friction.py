@@ -1,0 +1,106 @@
+"""Friction and multi-step decks against CalculiX 2.20 (docs/method.md §11).
+
+Generated decks (``tests/data/calculix/crossval/friction_cases.py``, tight controls): the bounds
+of ``test_ccx_crossval.py``, plus the tangential CDIS and CSTR columns within 1e-5 of their
+largest value. CalculiX's own frictional decks (``friction1``, ``friction2`` of the Debian
+package calculix-ccx-test) run at ccx's default controls.
+"""
+
+from __future__ import annotations
+
+import gzip
+import logging
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+import friction_cases
+import numpy as np
+import pytest
+
+from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
+from dolfinx_ntf.calculix.compare import compare_job
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.job import run_job
+
+pytestmark = [
+    pytest.mark.serial,
+    pytest.mark.ccx,
+    pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed"),
+]
+
+TOLERANCES = {"displacement": 1e-6, "pressure": 1e-5, "clearance": 1e-5, "energy": 1e-5}
+CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
+
+
+def _quiet_run(name: str, directory: Path, **options):
+    logger = logging.getLogger("dolfinx_ntf")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        return run_job(name, directory, comm=MPI.COMM_SELF, progress=False, **options)
+    finally:
+        logger.setLevel(level)
+
+
+@pytest.mark.parametrize("case", friction_cases.CASES, ids=[c.name for c in friction_cases.CASES])
+def test_friction_decks_agree_with_ccx(case, tmp_path: Path):
+    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
+    ccx_dir.mkdir()
+    ntf_dir.mkdir()
+    case.write(ccx_dir)
+    shutil.copy(ccx_dir / f"{case.name}.inp", ntf_dir)
+    run_ccx(ccx_dir, case.name, timeout=300)
+    result = _quiet_run(case.name, ntf_dir, tight=True)
+    assert result.completed
+    comparison = compare_job(
+        ccx_dir / f"{case.name}.dat", result, read_sta(ccx_dir / f"{case.name}.sta")
+    )
+    why = f"{case.name}: {comparison.summary()}"
+    assert comparison.same_increments and comparison.same_contact_elements, why
+    assert comparison.relative_displacement <= TOLERANCES["displacement"], why
+    assert comparison.relative_pressure <= TOLERANCES["pressure"], why
+    assert comparison.relative_clearance <= TOLERANCES["clearance"], why
+    assert comparison.relative_energy <= TOLERANCES["energy"], why
+    assert comparison.relative_slip <= 1e-5 and comparison.relative_shear <= 1e-5, why
+    # friction really acts: shear tractions are printed
+    assert max(c.shear_scale for c in comparison.increments) > 0.01, why
+    if case.name == "hex_sliding_block":
+        counts = [c.ccx_contact.size for c in comparison.increments]
+        assert counts[8:10] == [0, 0] and counts[-1] == 16, counts  # REMOVE, then ADD
+
+
+def _ccx_deck(name: str, directory: Path) -> None:
+    source = CCX_TESTS / f"{name}.inp"
+    if source.exists():
+        shutil.copy(source, directory / f"{name}.inp")
+    else:
+        with gzip.open(f"{source}.gz", "rt", encoding="latin-1") as stream:
+            (directory / f"{name}.inp").write_text(stream.read(), encoding="latin-1")
+
+
+# measured: friction1 (sticking, NLGEOM, one increment) normal columns 6e-5, tangential 1e-3
+# (ccx's default R_n = 0.005 bounds both solutions); friction2 (slipping, CHANGE FRICTION, 4
+# steps) identical to the printed digits
+CCX_DECKS = {"friction1": (2e-4, 3e-3), "friction2": (1e-5, 1e-5)}
+
+
+@pytest.mark.skipif(not CCX_TESTS.is_dir(), reason="needs the package calculix-ccx-test")
+@pytest.mark.parametrize("name", list(CCX_DECKS))
+def test_ccx_own_friction_decks(name, tmp_path: Path):
+    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
+    for d in (ccx_dir, ntf_dir):
+        d.mkdir()
+        _ccx_deck(name, d)
+    run_ccx(ccx_dir, name, timeout=300)
+    assert _quiet_run(name, ntf_dir).completed
+    ccx, ntf = read_dat(ccx_dir / f"{name}.dat"), read_dat(ntf_dir / f"{name}.dat")
+    assert [b.name for b in ccx] == [b.name for b in ntf]
+    np.testing.assert_allclose([b.time for b in ccx], [b.time for b in ntf], rtol=1e-6)
+    normal, tangential = CCX_DECKS[name]
+    for a, b in zip(ccx, ntf):
+        np.testing.assert_array_equal(a.labels, b.labels)
+        scale = np.abs(a.values).max(axis=0)
+        error = np.abs(a.values - b.values).max(axis=0) / np.where(scale > 0, scale, 1.0)
+        assert error[0] <= normal and error[1:].max() <= tangential, (a.name, a.time, error)

@@ -1,0 +1,64 @@
+"""Builders shared by the tests (``pythonpath`` of pyproject.toml puts ``tests`` on the path).
+
+- ``blocks``: two blocks stacked along z without gmsh, the punch and drag problems on them.
+- ``serial_answer``: partitions, and runs on several processes compared with the serial run.
+- ``decks``: decks with every output request, run serially and on all processes.
+
+The names most tests use are imported here: ``from helpers import punch_problem``.
+"""
+
+from .blocks import (
+    BLOCK_CONTACT,
+    BLOCK_TOP,
+    LOWER,
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    MU,
+    POISSON_RATIO,
+    PRESSURE,
+    PUNCH,
+    STICK_SLOPE,
+    UPPER,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    YOUNGS_MODULUS,
+    box_grid,
+    displacement_fields,
+    drag_conditions,
+    drag_problem,
+    elastic_residual,
+    punch_bulk,
+    punch_conditions,
+    punch_problem,
+    rigid_block,
+    solve_increments,
+    two_blocks,
+)
+
+__all__ = [
+    "BLOCK_CONTACT",
+    "BLOCK_TOP",
+    "LOWER",
+    "LOWER_BOTTOM",
+    "LOWER_TOP",
+    "MU",
+    "POISSON_RATIO",
+    "PRESSURE",
+    "PUNCH",
+    "STICK_SLOPE",
+    "UPPER",
+    "UPPER_BOTTOM",
+    "UPPER_TOP",
+    "YOUNGS_MODULUS",
+    "box_grid",
+    "displacement_fields",
+    "drag_conditions",
+    "drag_problem",
+    "elastic_residual",
+    "punch_bulk",
+    "punch_conditions",
+    "punch_problem",
+    "rigid_block",
+    "solve_increments",
+    "two_blocks",
+]

@@ -1,0 +1,122 @@
+"""Decks for the deck runner's tests, and the run of one deck serially and on all processes.
+
+``deck_with_requests`` writes a stored or cross-validation deck with every output request;
+``run_serial_and_parallel`` runs it on rank 0 alone and on ``COMM_WORLD``; ``run_summary`` and
+``first_differing_file`` compare the two (docs/method.md §14.5).
+"""
+
+import re
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+from dolfinx_ntf.calculix.job import run_job
+
+COMM = MPI.COMM_WORLD
+DATA = Path(__file__).parents[1] / "data" / "calculix"
+#: ccx's test decks (Debian package calculix-ccx-test).
+CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
+
+#: Output requests added to every step: all prints and all file outputs.
+REQUESTS = (
+    "*NODE PRINT, NSET=NALL, TOTALS=YES\nRF\n*EL PRINT, ELSET=EALL\nS\n"
+    "*NODE FILE, CONTACT ELEMENTS\nU, RF\n*EL FILE\nS\n*CONTACT FILE\nCDIS, CSTR\n*END STEP"
+)
+
+_CLOCK = re.compile(r"^\s*1U(TIME|DATE)")  # .frd header lines with the wall-clock time
+
+
+def _crossval(name: str, directory: Path) -> Path:
+    """A cross-validation deck (tests/data/calculix/crossval) written on rank 0."""
+    import cases
+    import friction_cases
+
+    (case,) = [c for c in cases.CASES + friction_cases.CASES if c.name == name]
+    case.write(directory)
+    return directory / f"{name}.inp"
+
+
+def deck_with_requests(name: str, directory: Path) -> Path:
+    """Deck ``name`` with every output request, on rank 0; its path on every process."""
+    path = directory / name / f"{name}.inp"
+    if COMM.rank == 0:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        source = DATA / f"{name}.inp"
+        if not source.exists():
+            source = _crossval(name, path.parent)
+        path.write_text(source.read_text().replace("*END STEP", REQUESTS))
+    COMM.barrier()
+    return path
+
+
+def _first_difference(serial: str, parallel: str) -> str:
+    """The first line that differs (the .frd clock lines skipped), for the failure message."""
+    a = [x for x in serial.splitlines() if not _CLOCK.match(x)]
+    b = [x for x in parallel.splitlines() if not _CLOCK.match(x)]
+    for k, (x, y) in enumerate(zip(a, b)):
+        if x != y:
+            return f"line {k + 1}: {x!r} != {y!r}"
+    return f"{len(a)} lines in serial, {len(b)} in parallel"
+
+
+def run_serial_and_parallel(path: Path):
+    """The deck on rank 0 alone (in ``serial/``) and on all processes; both results."""
+    serial_dir = path.parent / "serial"
+    serial, error = None, None
+    if COMM.rank == 0:
+        serial_dir.mkdir(exist_ok=True)
+        shutil.copy(path, serial_dir / path.name)
+        try:
+            serial = run_job(path.stem, serial_dir, comm=MPI.COMM_SELF, progress=False)
+        except Exception as exc:  # the other processes would wait in the parallel run
+            error = f"the serial run failed: {exc!r}"
+    error = COMM.bcast(error, root=0)
+    assert error is None, error
+    parallel = run_job(path.stem, path.parent, comm=COMM, progress=False)
+    return serial, parallel, serial_dir
+
+
+def first_differing_file(path: Path, serial_dir: Path) -> str | None:
+    """Rank 0: the first file that differs from the serial one (None when all are identical)."""
+    for suffix in (".sta", ".cel", ".dat", ".cvg", ".frd"):
+        a, b = serial_dir / (path.stem + suffix), path.with_suffix(suffix)
+        if not (a.exists() or b.exists()):
+            continue
+        if not (a.exists() and b.exists()):
+            return f"{b.name}: written in one run only"
+        serial, parallel = a.read_text(), b.read_text()
+        if suffix == ".frd":  # the header's wall-clock date and time
+            serial = "\n".join(x for x in serial.splitlines() if not _CLOCK.match(x))
+            parallel = "\n".join(x for x in parallel.splitlines() if not _CLOCK.match(x))
+        if serial != parallel:
+            return f"{b.name} differs from the serial file: {_first_difference(serial, parallel)}"
+    return None
+
+
+def run_summary(result) -> dict:
+    """Iterations, contact elements (slave node, master face) per increment, last displacement."""
+    return {
+        "iterations": [(i.step, i.increment, i.attempt, i.iterations) for i in result.increments],
+        "contact": [
+            [(r.pair, r.nodes.tolist(), r.master_faces.tolist()) for r in i.contact]
+            for i in result.increments
+        ],
+        "node_ids": result.last.node_ids,
+        "displacement": result.last.displacement,
+    }
+
+
+def reference_node_deck(boundary: str) -> str:
+    """contact1 whose upper cube's top is tied in z to node 99, in no element, by *EQUATION."""
+    text = (CCX_TESTS / "contact1.inp").read_text()
+    text = text.replace("*ELEMENT, TYPE=C3D8", "      99, 0.5, 0.5, 1.5\n*ELEMENT, TYPE=C3D8", 1)
+    text = text.replace(
+        "*NSET,NSET=Nfix \n1, \n2, \n5, \n6, \n11, \n12, \n15, \n16, \n",
+        "*NSET,NSET=Nfix \n1, \n2, \n5, \n6, \n*NSET,NSET=Ntop\n11,12,15,16\n",
+    )
+    text = text.replace("Nfix,1,3\n", "Nfix,1,3\nNtop,1,2\n")
+    ties = "".join(f"2\n{n},3,1.,99,3,-1.\n" for n in (11, 12, 15, 16))
+    text = text.replace("*MATERIAL,NAME=EL", ties + "*MATERIAL,NAME=EL")
+    text = text.replace("*CLOAD\n10,3,-1.\n", boundary)
+    return text.replace("*STATIC\n", "*STATIC\n0.5,1.\n")

@@ -1,0 +1,72 @@
+"""The Newton solver and step driver on failure: non-retryable errors raise at once with their
+cause, a diverging attempt is given up early, and the line search leaves converging solves alone."""
+
+import numpy as np
+import pytest
+from helpers import punch_problem
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+
+pytestmark = pytest.mark.serial
+
+
+def _step(pressure, load=10.0, **options):
+    return ntf.StaticStep(lambda t: setattr(pressure, "value", load * t), **options)
+
+
+def test_nan_displacement_raises_at_once_naming_the_node():
+    problem, pressure, _ = punch_problem("hexahedron")
+    problem.u.x.array[7] = np.nan
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    with pytest.raises(ntf.ContactSolverError, match=r"non-finite value\(s\).*first at node 2"):
+        _step(pressure).run(solver, problem.u)
+    assert solver.updates == 0
+
+
+def test_nan_load_raises_at_once():
+    problem, pressure, _ = punch_problem("hexahedron")
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    with pytest.raises(ntf.ContactSolverError, match="loads, constants and material"):
+        _step(pressure, load=np.nan).run(solver, problem.u)
+
+
+def test_diverging_attempt_is_given_up_early():
+    """A punch above the block under a load has no support: each attempt diverges and is given
+    up after a few updates, not after max_it, and the message says why."""
+    problem, pressure, _ = punch_problem(gap=0.05)
+    u = problem.u
+    solver = ntf.ContactNewtonSolver(u.function_space.mesh.comm, problem, max_it=30)
+    step = _step(pressure, min_increment=0.3)
+    with pytest.raises(ntf.ContactConvergenceError, match=r"residual grows.*no contact springs"):
+        step.run(solver, u)
+    assert solver.updates <= solver.max_it // 2
+
+
+def test_line_search_leaves_a_converging_solve_alone():
+    problem, pressure, _ = punch_problem("hexahedron")
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    _step(pressure, initial_increment=0.5, fixed=True).run(solver, problem.u)
+    assert solver.step_lengths and all(s == 1.0 for s in solver.step_lengths)
+
+
+def test_line_search_halves_an_overshooting_step():
+    """In contact, twice the Newton correction overshoots to about the mirror residual; half of
+    it is the Newton step, which the line search takes, leaving x unchanged."""
+    problem, pressure, _ = punch_problem("hexahedron")
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    _step(pressure, load=5.0, fixed=True).run(solver, problem.u)
+    pressure.value = 6.0
+    problem.begin_increment(1.0)
+    x = compat.petsc_vector(problem.u)
+    problem.form(x)
+    problem.F(x, solver.b)
+    A = problem.ensure_matrix()
+    problem.J(x, A)
+    dx = x.duplicate()
+    solver.krylov_solver.setOperators(A)
+    solver.krylov_solver.solve(solver.b, dx)
+    dx.scale(2.0)
+    before = x.array.copy()
+    assert solver._line_search(dx, x) == 0.5
+    np.testing.assert_array_equal(x.array, before)
