@@ -2,8 +2,8 @@
 
 :class:`ContactProblem` is a :data:`~dolfinx_ntf.compat.NewtonSolverNonlinearProblem` whose
 callbacks, besides assembling the user's UFL forms, (re-)pair slave nodes with master faces on
-CalculiX's schedule (docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The pairing itself
-(pair states, halo, search, ADJUST, friction anchors) is its
+CalculiX's schedule (docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The
+pairing itself (pair states, halo, search, ADJUST, friction anchors) is its
 :class:`~dolfinx_ntf.contact.pairing.Pairing`; the problem keeps the forms, the matrix, the
 constraint elimination and the callbacks. The step driver in ``solvers/`` tells it when steps and
 increments start.
