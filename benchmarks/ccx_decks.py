@@ -339,8 +339,8 @@ def _pinned_sphere(spec: SphereSpec) -> tuple[dolfinx.mesh.Mesh, compat.MeshTags
         raise ValueError(f"pinned mesh {path} was made for {made_for}, not {spec.mesh_sizes()}: "
                          "remake it with `python benchmarks/ccx_decks.py --pin`")  # fmt: skip
     domain = compat.coordinate_element("tetrahedron", 1)
-    mesh = dolfinx.mesh.create_mesh(MPI.COMM_SELF, data["cells"].astype(np.int64), data["x"],
-                                    domain)  # fmt: skip
+    mesh = compat.create_mesh(MPI.COMM_SELF, data["cells"].astype(np.int64), data["x"],
+                              domain)  # fmt: skip
     body_of_cell = data["body"].astype(np.int32)[mesh.topology.original_cell_index]
     cell_tags = dolfinx.mesh.meshtags(
         mesh, 3, np.arange(body_of_cell.size, dtype=np.int32), body_of_cell

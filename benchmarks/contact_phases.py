@@ -170,7 +170,7 @@ def build_plates(
     if comm.rank != 0:
         points, cells = np.empty((0, 3)), np.empty((0, 8), dtype=np.int64)
     domain = compat.coordinate_element("hexahedron", 1)
-    mesh = dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
+    mesh = compat.create_mesh(comm, cells.astype(np.int64), points, domain)
 
     tdim = 3
     num_cells = mesh.topology.index_map(tdim).size_local
@@ -413,7 +413,7 @@ def run_size(
     problem.iteration = LAST_REPAIRING_ITERATION
     problem.form(x)
     problem.J(x, A)
-    b = dolfinx.fem.petsc.create_vector(problem.L)
+    b = compat.create_vector(problem.L)
     assembler = problem.assembler
 
     def insert_matrix() -> None:

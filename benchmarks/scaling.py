@@ -86,7 +86,7 @@ def worker(slave_nodes: int, layers: int, repeat: int, solver: str) -> dict[str,
     problem.iteration = LAST_REPAIRING_ITERATION
     problem.form(x)
     problem.J(x, A)
-    b = dolfinx.fem.petsc.create_vector(problem.L)
+    b = compat.create_vector(problem.L)
 
     def insert() -> None:
         problem.assembler.add_to_matrix(A, blocks)

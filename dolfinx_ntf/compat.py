@@ -1,25 +1,40 @@
-"""The one place that knows which dolfinx is installed: 0.5.2 (Debian 12) or 0.9 (Debian 13).
+"""The one place that knows which dolfinx is installed: 0.5.2 (Debian 12), 0.9 (Debian 13) or 0.11
+(Debian unstable).
 
 Every other module of dolfinx_ntf, and its demos, tests and benchmarks, call these helpers instead
-of the version-specific dolfinx API, so the code reads the same on both releases. What differs:
+of the version-specific dolfinx API, so the code reads the same on all releases. What differs:
 
-=====================================  ===========================================  ==============================
-what                                   dolfinx 0.5.2                                dolfinx 0.9
-=====================================  ===========================================  ==============================
-vector space                           ``VectorFunctionSpace(mesh, ("P", k))``      ``functionspace(mesh, ("P", k, (3,)))``
-coordinate element of ``create_mesh``  ``ufl.Mesh(ufl.VectorElement(...))``         ``basix.ufl.element(..., shape=(3,))``
-C++ mesh object                        ``mesh._mesh``                               ``mesh._cpp_object``
-PETSc vector of a Function             ``u.vector``                                 ``u.x.petsc_vec``
-cell dofmaps                           ``AdjacencyList`` (``.array``)               2D numpy arrays
-form compiler / JIT option names       ``form_compiler_params``, ``jit_params``     ``..._options``
-class names for type hints             ``DirichletBCMetaClass``, ...                ``DirichletBC``, ...
-sparsity graph                         ``AdjacencyList``                            ``(array, offsets)``
-scalar space of one component          scalar space, same numbering (``collapse``   ``V.sub(i).collapse()``
-                                       crashes on a process without cells)
-=====================================  ===========================================  ==============================
+=====================================  ===============================  ==============================  ==============================
+what                                   dolfinx 0.5.2                    dolfinx 0.9                     dolfinx 0.11
+=====================================  ===============================  ==============================  ==============================
+vector space                           ``VectorFunctionSpace(mesh,      ``functionspace(mesh, ("P", k,  as 0.9
+                                       ("P", k))``                      (3,)))``
+coordinate element of ``create_mesh``  ``ufl.Mesh(ufl.VectorElement(   ``basix.ufl.element(...,        as 0.9
+                                       ...))``                          shape=(3,))``
+``create_mesh`` argument order         ``(comm, cells, x, element)``    as 0.5.2                        ``(comm, cells, element, x)``
+cell partitioner from a graph one      ``create_cell_partitioner(f)``   ``(f, ghost_mode)``             ``(f, ghost_mode, max links)``
+C++ mesh object                        ``mesh._mesh``                   ``mesh._cpp_object``            as 0.9
+PETSc vector of a Function             ``u.vector``                     ``u.x.petsc_vec``               as 0.9
+``fem.petsc.create_vector`` takes      the linear form                  the linear form                 its function space
+Newton solver's problem class          ``NonlinearProblem``             ``NonlinearProblem``            ``NewtonSolverNonlinearProblem``
+                                                                                                        (``NonlinearProblem`` is SNES)
+``LinearProblem``                      no options prefix                no options prefix               ``petsc_options_prefix`` needed
+gmsh reader                            ``io.gmshio``: a tuple           as 0.5.2                        ``io.gmsh``: ``MeshData``
+cell dofmaps                           ``AdjacencyList`` (``.array``)   2D numpy arrays                 as 0.9
+form compiler / JIT option names       ``form_compiler_params``,        ``..._options``                 as 0.9
+                                       ``jit_params``
+class names for type hints             ``DirichletBCMetaClass``, ...    ``DirichletBC``, ...            as 0.9
+sparsity graph                         ``AdjacencyList``                ``(array, offsets)``            as 0.9
+pattern's column map (extra ghosts)    ``column_index_map()``           as 0.5.2                        ``index_map(1)`` once finalized
+geometry dofmap                        ``geometry.dofmap``              as 0.5.2                        ``geometry.dofmaps[0]``
+scalar space of one component          scalar space, same numbering     ``V.sub(i).collapse()``         as 0.9, dof maps per cell type
+                                       (``collapse`` crashes on a
+                                       process without cells)
+=====================================  ===============================  ==============================  ==============================
 
-A user's own UFL code differs the same way (element and space creation); :func:`vector_space`
-and :func:`scalar_space` are public for that reason.
+A user's own UFL code differs the same way (element and space creation, ``LinearProblem``'s
+prefix); :func:`vector_space`, :func:`scalar_space` and :func:`linear_problem` are public for that
+reason.
 """
 
 from __future__ import annotations
@@ -43,17 +58,21 @@ __all__ = [
     "DirichletBC",
     "Form",
     "MeshTags",
+    "NewtonSolverNonlinearProblem",
     "boundary_values",
     "cell_dofs",
     "component_space",
     "coordinate_element",
     "cpp_mesh",
     "create_mesh",
+    "create_vector",
     "entities_to_geometry",
     "evaluate_expression",
     "geometry_dofs",
     "incident_entities",
     "jit_keywords",
+    "linear_problem",
+    "model_to_mesh",
     "petsc_vector",
     "scalar_space",
     "space_degree",
@@ -65,6 +84,11 @@ __all__ = [
 #: (major, minor) of the installed dolfinx.
 DOLFINX_VERSION: tuple[int, int] = tuple(int(p) for p in dolfinx.__version__.split(".")[:2])
 _LEGACY = DOLFINX_VERSION < (0, 7)
+#: dolfinx 0.10 made ``NonlinearProblem`` a SNES wrapper, ``LinearProblem`` need a prefix and
+#: renamed ``io.gmshio`` to ``io.gmsh``.
+_V010 = DOLFINX_VERSION >= (0, 10)
+#: dolfinx 0.11 changed ``create_mesh``'s and ``create_vector``'s arguments.
+_V011 = DOLFINX_VERSION >= (0, 11)
 
 if _LEGACY:
     DirichletBC = dolfinx.fem.DirichletBCMetaClass
@@ -74,6 +98,13 @@ else:
     DirichletBC = dolfinx.fem.DirichletBC
     Form = dolfinx.fem.Form
     MeshTags = dolfinx.mesh.MeshTags
+
+#: The problem class of dolfinx's ``dolfinx.nls.petsc.NewtonSolver`` (deprecated since 0.10):
+#: ``NonlinearProblem`` before 0.10, then ``NewtonSolverNonlinearProblem`` (whose constructor warns
+#: that the Newton solver is deprecated; 0.10's ``NonlinearProblem`` drives a SNES).
+NewtonSolverNonlinearProblem: type = (
+    dolfinx.fem.petsc.NewtonSolverNonlinearProblem if _V010 else dolfinx.fem.petsc.NonlinearProblem
+)
 
 
 def vector_space(
@@ -106,6 +137,8 @@ def component_space(
     """
     if not _LEGACY:
         Q, dofs = V.sub(component).collapse()
+        if _V011:  # a list of dof maps, one per cell type
+            dofs = dofs[0]
         return Q, np.asarray(dofs, dtype=np.int64)
     Q = scalar_space(V.mesh, space_family(V), space_degree(V))
     bs = V.dofmap.index_map_bs
@@ -155,7 +188,12 @@ def entities_to_geometry(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray
     """Geometry nodes of the closure of each entity, shape (num_entities, nodes per entity)."""
     entities = np.asarray(entities, dtype=np.int32)
     if entities.size == 0:  # dolfinx 0.9 divides by zero on an empty list
-        per_entity = mesh.geometry.cmap.create_dof_layout().num_entity_closure_dofs(dim)
+        cmap = mesh.geometry.cmaps[0] if _V011 else mesh.geometry.cmap  # 0.11: one per cell type
+        layout = cmap.create_dof_layout()
+        if _V011:  # no num_entity_closure_dofs
+            per_entity = len(layout.entity_closure_dofs(dim, 0))
+        else:
+            per_entity = layout.num_entity_closure_dofs(dim)
         return np.empty((0, per_entity), dtype=np.int32)
     mesh.topology.create_connectivity(dim, mesh.topology.dim)  # dolfinx 0.9 needs it
     nodes = dolfinx.cpp.mesh.entities_to_geometry(cpp_mesh(mesh), dim, entities, False)
@@ -172,7 +210,7 @@ def cell_dofs(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
 
 def geometry_dofs(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
     """Geometry nodes of every local cell, shape (num_cells, nodes per cell)."""
-    dofs = mesh.geometry.dofmap
+    dofs = mesh.geometry.dofmaps[0] if _V011 else mesh.geometry.dofmap  # 0.11: one per cell type
     if _LEGACY:  # an empty list (a process without cells) has no row width
         return dofs.array.reshape(dofs.num_nodes, mesh.geometry.cmap.create_dof_layout().num_dofs)
     return np.asarray(dofs)
@@ -231,7 +269,8 @@ def sparsity_graph(a: Form) -> tuple[np.ndarray, np.ndarray]:
         columns, offsets = (np.asarray(v) for v in pattern.graph)
     num_rows = pattern.index_map(0).size_local
     offsets = offsets[: num_rows + 1]
-    column_map = pattern.column_index_map()
+    # 0.11 has no column_index_map: a finalized pattern's index_map(1) is that map
+    column_map = pattern.index_map(1) if _V011 else pattern.column_index_map()
     columns = column_map.local_to_global(columns[: offsets[-1]].astype(np.int32))
     return offsets, np.asarray(columns, dtype=np.int64)
 
@@ -246,7 +285,7 @@ def create_mesh(
     """``dolfinx.mesh.create_mesh``; ``owners`` gives the process of each cell passed here (by
     default dolfinx's graph partitioner decides), e.g. to test chosen partitions."""
     if owners is None:
-        return dolfinx.mesh.create_mesh(comm, cells, points, element)
+        return _create_mesh(comm, cells, points, element)
     owners = np.ascontiguousarray(owners, dtype=np.int32)
     everyone = np.concatenate(comm.allgather(owners))
 
@@ -267,8 +306,60 @@ def create_mesh(
 
     if _LEGACY:
         partitioner = dolfinx.cpp.mesh.create_cell_partitioner(partition)
+    elif _V011:  # 2: at most two cells share a facet (no branching manifolds)
+        partitioner = dolfinx.cpp.mesh.create_cell_partitioner(
+            partition, dolfinx.mesh.GhostMode.none, 2
+        )
     else:
         partitioner = dolfinx.cpp.mesh.create_cell_partitioner(
             partition, dolfinx.mesh.GhostMode.none
         )
-    return dolfinx.mesh.create_mesh(comm, cells, points, element, partitioner=partitioner)
+    return _create_mesh(comm, cells, points, element, partitioner=partitioner)
+
+
+def _create_mesh(
+    comm: typing.Any, cells: np.ndarray, points: np.ndarray, element: typing.Any, **options: object
+) -> dolfinx.mesh.Mesh:
+    """``dolfinx.mesh.create_mesh`` with the arguments in the installed version's order."""
+    if _V011:
+        return dolfinx.mesh.create_mesh(comm, cells, element, points, **options)
+    return dolfinx.mesh.create_mesh(comm, cells, points, element, **options)
+
+
+def create_vector(L: Form) -> PETSc.Vec:
+    """A ghosted PETSc vector for a linear form (``dolfinx.fem.petsc.create_vector``)."""
+    if _V011:  # takes the space, no longer the form
+        return dolfinx.fem.petsc.create_vector(L.function_spaces[0])
+    return dolfinx.fem.petsc.create_vector(L)
+
+
+def linear_problem(
+    a: ufl.Form,
+    L: ufl.Form,
+    *,
+    bcs: typing.Sequence[DirichletBC] = (),
+    petsc_options: dict | None = None,
+    petsc_options_prefix: str = "dolfinx_ntf_linear_",
+) -> dolfinx.fem.petsc.LinearProblem:
+    """``dolfinx.fem.petsc.LinearProblem``; the options prefix is needed from dolfinx 0.10 on."""
+    keywords: dict[str, typing.Any] = {"bcs": list(bcs), "petsc_options": petsc_options or {}}
+    if _V010:
+        keywords["petsc_options_prefix"] = petsc_options_prefix
+    return dolfinx.fem.petsc.LinearProblem(a, L, **keywords)
+
+
+def model_to_mesh(
+    model: typing.Any, comm: typing.Any, rank: int, gdim: int
+) -> tuple[dolfinx.mesh.Mesh, MeshTags, MeshTags]:
+    """Mesh, cell tags and facet tags of a gmsh model (``dolfinx.io.gmshio``, ``io.gmsh`` in 0.10).
+
+    Imports gmsh's Python module: call only where gmsh is wanted.
+    """
+    if _V010:
+        import dolfinx.io.gmsh
+
+        data = dolfinx.io.gmsh.model_to_mesh(model, comm, rank, gdim=gdim)
+        return data.mesh, data.cell_tags, data.facet_tags
+    from dolfinx.io import gmshio
+
+    return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)

@@ -290,10 +290,7 @@ def contact_print_blocks(
 
 
 def write_dat(path: str | Path, blocks: Iterable[DatBlock], *, append: bool = False) -> None:
-    """Write ``blocks`` to the ``.dat`` file at ``path`` (``append=False`` truncates it first).
-
-    Truncating first is what ccx does at program start.
-    """
+    """Write blocks to a ``.dat`` file (``append=False`` truncates it first, as ccx does)."""
     with open(path, "a" if append else "w", encoding="ascii", newline="\n") as handle:
         for block in blocks:
             handle.write(format_block(block))
@@ -303,6 +300,9 @@ def write_dat(path: str | Path, blocks: Iterable[DatBlock], *, append: bool = Fa
 
 _TIME_RE = re.compile(r"time\s*(\S+)\s*$")
 _SET_RE = re.compile(r" for set (\S+) and time")
+#: ccx 2.23 (not 2.20) heads each step's and increment's blocks with ``S T E P       1`` and
+#: ``INCREMENT     1`` lines; blocks carry their time, so the reader skips them.
+_STEP_RE = re.compile(r"\s*(S T E P|INCREMENT)\s+\d+\s*$")
 _FORTRAN_EXP_RE = re.compile(r"(\d)([+-]\d{3})$")
 
 
@@ -324,7 +324,7 @@ def _parse_number(token: str, where: str) -> float:
 
 
 def read_dat(path: str | Path) -> list[DatBlock]:
-    """Read every block of the ccx ``.dat`` file at ``path`` (or one written by ``write_dat``).
+    """Read every block of a ccx 2.20 or 2.23 ``.dat`` file (or one written by ``write_dat``).
 
     Raises:
         ValueError: a line that is neither a title nor a row of numbers (message gives file:line).
@@ -363,6 +363,8 @@ def read_dat(path: str | Path) -> list[DatBlock]:
 
     for number, line in enumerate(path.read_text(encoding="latin-1").splitlines(), start=1):
         if not line.strip():
+            continue
+        if _STEP_RE.fullmatch(line):
             continue
         tokens = line.split()
         if re.fullmatch(r"-?\d+", tokens[0]) or re.match(r"-?\d*\.\d", tokens[0]):

@@ -1,9 +1,9 @@
 """The nonlinear problem that adds contact springs to dolfinx's residual: :class:`ContactProblem`.
 
-:class:`ContactProblem` is a :class:`dolfinx.fem.petsc.NonlinearProblem` whose callbacks, besides
-assembling the user's UFL forms, (re-)pair slave nodes with master faces on CalculiX's schedule
-(docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The pairing itself
-(pair states, halo, search, ADJUST, friction anchors) is its
+:class:`ContactProblem` is a :data:`~dolfinx_ntf.compat.NewtonSolverNonlinearProblem` whose
+callbacks, besides assembling the user's UFL forms, (re-)pair slave nodes with master faces on
+CalculiX's schedule (docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The
+pairing itself (pair states, halo, search, ADJUST, friction anchors) is its
 :class:`~dolfinx_ntf.contact.pairing.Pairing`; the problem keeps the forms, the matrix, the
 constraint elimination and the callbacks. The step driver in ``solvers/`` tells it when steps and
 increments start.
@@ -71,7 +71,7 @@ class ResidualTerm(typing.Protocol):
         """
 
 
-class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
+class ContactProblem(compat.NewtonSolverNonlinearProblem):
     """Nonlinear problem ``F(u) + f_contact(u) = 0`` with node-to-face penalty springs.
 
     Args:
@@ -174,7 +174,7 @@ class ContactProblem(dolfinx.fem.petsc.NonlinearProblem):
             V,
             compat.jit_keywords(form_compiler_options, jit_options),
         )
-        self._element_force_vector = dolfinx.fem.petsc.create_vector(self._element_forces)
+        self._element_force_vector = compat.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
         self.bulk_jacobian = BulkJacobian(
             ufl.derivative(F, u, ufl.TrialFunction(V)) if J is None else J,

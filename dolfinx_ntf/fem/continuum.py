@@ -266,7 +266,7 @@ class ContinuumNewton:
         self.L = [dolfinx.fem.form(f, **options) for f in (bulk, contact)]
         self.a = [dolfinx.fem.form(ufl.derivative(f, u, du), **options) for f in (bulk, contact)]
         self.A = dolfinx.fem.petsc.create_matrix(self.a[0])
-        self.b = dolfinx.fem.petsc.create_vector(self.L[0])
+        self.b = compat.create_vector(self.L[0])
         self.dx = self.A.createVecRight()
         self.ksp = PETSc.KSP().create(u.function_space.mesh.comm)
         self.ksp.setOptionsPrefix("ntf_continuum_")

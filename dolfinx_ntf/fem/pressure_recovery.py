@@ -84,7 +84,7 @@ class BoundaryPressure:
         )(tag)
         self._ds_exact = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)(tag)
         q = ufl.TestFunction(Q)
-        self._rhs = dolfinx.fem.petsc.create_vector(dolfinx.fem.form(q * self._ds_exact))
+        self._rhs = compat.create_vector(dolfinx.fem.form(q * self._ds_exact))
         weights = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(q * self._ds_exact))
         weights.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self._weights = weights

@@ -28,9 +28,9 @@ from mpi4py import MPI
 import gmsh
 import numpy as np
 
-from dolfinx.io import gmshio as _gmshio
 from dolfinx.mesh import Mesh
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.compat import MeshTags
 
 __all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh", "write_msh"]
@@ -138,7 +138,7 @@ def model_to_mesh(
         except ValueError as exc:
             error = exc
     _raise_everywhere(comm, rank, error)
-    return _gmshio.model_to_mesh(gmsh.model, comm, rank, gdim=gdim)
+    return compat.model_to_mesh(gmsh.model, comm, rank, gdim)
 
 
 def read_msh(

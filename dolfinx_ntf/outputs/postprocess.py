@@ -121,7 +121,7 @@ def _check_range(indices: np.ndarray, size: int, what: str, kind: str) -> None:
 
 def _unconstrained_residual(problem: ContactProblem) -> np.ndarray:
     """Local values (owned and ghost dofs) of R(u) without Dirichlet conditions."""
-    b = dolfinx.fem.petsc.create_vector(problem.L)
+    b = compat.create_vector(problem.L)
     try:
         with b.localForm() as local:
             local.set(0.0)

@@ -95,6 +95,22 @@ def test_read_ccx_dat_blocks():
     assert cdis.rows[0] == (11, -1.501435e-05, 0.0, 0.0)
 
 
+def test_read_dat_skips_ccx_223_step_headers(tmp_path):
+    """ccx 2.23 heads each step and increment with ``S T E P`` and ``INCREMENT`` lines."""
+    text = CCX_DAT.read_text(encoding="latin-1")
+    second = text.index(" displacements (vx,vy,vz) for set NALL and time  0.1000000E+01")
+    headed = tmp_path / "two_cubes_223.dat"
+    headed.write_text(
+        f"\n{'S T E P       1':>39}\n\n\n{'INCREMENT     1':>47}\n\n{text[:second]}"
+        f"{'INCREMENT     2':>47}\n\n\n{text[second:]}",
+        encoding="latin-1",
+    )
+    expected, got = read_dat(CCX_DAT), read_dat(headed)
+    assert [(b.name, b.time, b.set) for b in got] == [(b.name, b.time, b.set) for b in expected]
+    for a, b in zip(got, expected):
+        assert np.array_equal(a.labels, b.labels) and np.array_equal(a.values, b.values)
+
+
 def test_writer_reproduces_ccx_file_byte_for_byte(tmp_path):
     blocks = read_dat(CCX_DAT)
     write_dat(tmp_path / "copy.dat", blocks)

@@ -77,7 +77,7 @@ def _solve(mesh, V, constraints=None):
         dofs = np.array([d for d in dofs if int(d) not in dependent], dtype=np.int32)
     bc = dolfinx.fem.dirichletbc(dolfinx.fem.Function(V), dofs)
     if constraints is None:
-        problem = dolfinx.fem.petsc.LinearProblem(
+        problem = compat.linear_problem(
             ufl.inner(sigma(ufl.TrialFunction(V)), ufl.grad(v)) * dx,
             load,
             bcs=[bc],

@@ -125,7 +125,7 @@ def create_mesh(deck: Deck, block: ElementBlock, comm: MPI.Comm) -> dolfinx.mesh
     else:
         cells = np.zeros((0, 27 if serendipity else block.type.num_nodes), dtype=np.int64)
         x = np.zeros((0, 3))
-    return dolfinx.mesh.create_mesh(comm, cells.astype(np.int64), x, domain)
+    return compat.create_mesh(comm, cells.astype(np.int64), x, domain)
 
 
 def numbering(

@@ -131,7 +131,7 @@ def blocks(boxes, *, cell: str = "hexahedron", bump: float = 0.0, degree: int = 
         cells = np.vstack([cells[:, t] for t in _TETS])
         marker = np.tile(marker, len(_TETS))
     domain = compat.coordinate_element(cell, 1)
-    mesh = dolfinx.mesh.create_mesh(MPI.COMM_SELF, cells.astype(np.int64), points, domain)
+    mesh = compat.create_mesh(MPI.COMM_SELF, cells.astype(np.int64), points, domain)
     # create_mesh reorders cells: find each cell's body from its original index.
     body_of_cell = marker[mesh.topology.original_cell_index]
     num_cells = body_of_cell.size
