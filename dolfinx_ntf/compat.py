@@ -16,8 +16,8 @@ cell partitioner from a graph one      ``create_cell_partitioner(f)``   ``(f, gh
 C++ mesh object                        ``mesh._mesh``                   ``mesh._cpp_object``            as 0.9
 PETSc vector of a Function             ``u.vector``                     ``u.x.petsc_vec``               as 0.9
 ``fem.petsc.create_vector`` takes      the linear form                  the linear form                 its function space
-Newton solver's problem class          ``NonlinearProblem``             ``NonlinearProblem``            ``NewtonSolverNonlinearProblem``
-                                                                                                        (``NonlinearProblem`` is SNES)
+Newton solver                          ``nls.petsc.NewtonSolver``       as 0.5.2                        deprecated; dolfinx_ntf has
+                                                                                                        its own (``solvers.newton_loop``)
 ``LinearProblem``                      no options prefix                no options prefix               ``petsc_options_prefix`` needed
 gmsh reader                            ``io.gmshio``: a tuple           as 0.5.2                        ``io.gmsh``: ``MeshData``
 cell dofmaps                           ``AdjacencyList`` (``.array``)   2D numpy arrays                 as 0.9
@@ -58,7 +58,6 @@ __all__ = [
     "DirichletBC",
     "Form",
     "MeshTags",
-    "NewtonSolverNonlinearProblem",
     "boundary_values",
     "cell_dofs",
     "component_space",
@@ -98,13 +97,6 @@ else:
     DirichletBC = dolfinx.fem.DirichletBC
     Form = dolfinx.fem.Form
     MeshTags = dolfinx.mesh.MeshTags
-
-#: The problem class of dolfinx's ``dolfinx.nls.petsc.NewtonSolver`` (deprecated since 0.10):
-#: ``NonlinearProblem`` before 0.10, then ``NewtonSolverNonlinearProblem`` (whose constructor warns
-#: that the Newton solver is deprecated; 0.10's ``NonlinearProblem`` drives a SNES).
-NewtonSolverNonlinearProblem: type = (
-    dolfinx.fem.petsc.NewtonSolverNonlinearProblem if _V010 else dolfinx.fem.petsc.NonlinearProblem
-)
 
 
 def vector_space(
@@ -246,7 +238,7 @@ def petsc_vector(u: dolfinx.fem.Function) -> PETSc.Vec:
 def jit_keywords(
     form_compiler_options: dict | None = None, jit_options: dict | None = None
 ) -> dict[str, dict]:
-    """Keyword arguments of ``dolfinx.fem.form`` and ``NonlinearProblem`` for these options."""
+    """Keyword arguments of ``dolfinx.fem.form`` for these options."""
     if _LEGACY:
         return {
             "form_compiler_params": form_compiler_options or {},

@@ -290,7 +290,10 @@ def contact_print_blocks(
 
 
 def write_dat(path: str | Path, blocks: Iterable[DatBlock], *, append: bool = False) -> None:
-    """Write blocks to a ``.dat`` file (``append=False`` truncates it first, as ccx does)."""
+    """Write ``blocks`` to the ``.dat`` file at ``path`` (``append=False`` truncates it first).
+
+    Truncating first is what ccx does at program start.
+    """
     with open(path, "a" if append else "w", encoding="ascii", newline="\n") as handle:
         for block in blocks:
             handle.write(format_block(block))
@@ -324,7 +327,7 @@ def _parse_number(token: str, where: str) -> float:
 
 
 def read_dat(path: str | Path) -> list[DatBlock]:
-    """Read every block of a ccx 2.20 or 2.23 ``.dat`` file (or one written by ``write_dat``).
+    """Read every block of the ccx ``.dat`` file at ``path`` (ccx 2.20 or 2.23, or ``write_dat``'s).
 
     Raises:
         ValueError: a line that is neither a title nor a row of numbers (message gives file:line).

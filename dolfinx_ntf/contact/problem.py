@@ -1,10 +1,12 @@
 """The nonlinear problem that adds contact springs to dolfinx's residual: :class:`ContactProblem`.
 
-:class:`ContactProblem` is a :data:`~dolfinx_ntf.compat.NewtonSolverNonlinearProblem` whose
-callbacks, besides assembling the user's UFL forms, (re-)pair slave nodes with master faces on
-CalculiX's schedule (docs/method.md §3.1) and add the spring elements (docs/method.md §5, §6). The
-pairing itself (pair states, halo, search, ADJUST, friction anchors) is its
-:class:`~dolfinx_ntf.contact.pairing.Pairing`; the problem keeps the forms, the matrix, the
+:class:`ContactProblem` has the shape of dolfinx's ``NonlinearProblem`` (compiled forms ``a`` and
+``L``, callbacks ``form``, ``F``, ``J``: the
+:class:`~dolfinx_ntf.solvers.newton_loop.NonlinearSystem` role) without depending on its
+version-specific class. Its callbacks, besides assembling the user's UFL forms, (re-)pair slave
+nodes with master faces on CalculiX's schedule (docs/method.md §3.1) and add the spring elements
+(docs/method.md §5, §6). The pairing itself (pair states, halo, search, ADJUST, friction anchors) is
+its :class:`~dolfinx_ntf.contact.pairing.Pairing`; the problem keeps the forms, the matrix, the
 constraint elimination and the callbacks. The step driver in ``solvers/`` tells it when steps and
 increments start.
 """
@@ -71,7 +73,7 @@ class ResidualTerm(typing.Protocol):
         """
 
 
-class ContactProblem(compat.NewtonSolverNonlinearProblem):
+class ContactProblem:
     """Nonlinear problem ``F(u) + f_contact(u) = 0`` with node-to-face penalty springs.
 
     Args:
@@ -150,19 +152,18 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         reuse_bulk_jacobian: bool = True,
     ) -> None:
         pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth)
-        super().__init__(
-            F,
-            u,
-            bcs,
-            J,
-            **compat.jit_keywords(form_compiler_options, jit_options),
+        options = compat.jit_keywords(form_compiler_options, jit_options)
+        V = u.function_space
+        self._L = dolfinx.fem.form(F, **options)
+        self._a = dolfinx.fem.form(
+            ufl.derivative(F, u, ufl.TrialFunction(V)) if J is None else J, **options
         )
+        self.bcs = bcs
         if friction_tangent not in TANGENT_MODES:
             raise ValueError(
                 f"ContactProblem: friction_tangent must be one of {TANGENT_MODES}, "
                 f"got {friction_tangent!r}"
             )
-        V = u.function_space
         self.u = u
         self.symmetric = symmetric
         self.friction_tangent = friction_tangent
@@ -170,9 +171,7 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         self.linearize_area = linearize_area
         self.contact_start_slope = contact_start_slope
         self._element_forces, self._element_space = _broken(
-            F if element_forces is None else element_forces,
-            V,
-            compat.jit_keywords(form_compiler_options, jit_options),
+            F if element_forces is None else element_forces, V, options
         )
         self._element_force_vector = compat.create_vector(self._element_forces)
         self.assembler = ContactAssembler(V, self.a, self.bcs)
@@ -253,6 +252,16 @@ class ContactProblem(compat.NewtonSolverNonlinearProblem):
         self.elimination = ConstraintElimination(
             self.u.x.array.size, self.constraints, prescribed, comm
         )
+
+    @property
+    def L(self) -> compat.Form:
+        """The compiled residual form ``F``."""
+        return self._L
+
+    @property
+    def a(self) -> compat.Form:
+        """The compiled Jacobian form (``J``, or the derivative of ``F``)."""
+        return self._a
 
     # -- state -------------------------------------------------------------------------------------
 

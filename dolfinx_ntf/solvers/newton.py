@@ -1,12 +1,12 @@
 """Newton solver with CalculiX's contact convergence rules.
 
-dolfinx 0.5.2's C++ Newton loop has no convergence hook: it compares the residual norm with ``atol``
-right after calling the residual callback. :class:`ContactNewtonSolver` decides convergence in that
-callback (:meth:`ContactNewtonSolver.is_converged` plus CalculiX's rules: at least two Newton
-updates, none right after a re-pairing that changed the number of springs) and sets ``atol`` just
-above or below the norm accordingly. The pieces it wires live in modules of their own: the choice
-of linear solver (:mod:`~dolfinx_ntf.solvers.linear_solver`), the force-scaled test and the
-divergence rule (:mod:`~dolfinx_ntf.solvers.convergence`), the line search
+:class:`ContactNewtonSolver` runs the Newton loop of
+:class:`~dolfinx_ntf.solvers.newton_loop.NewtonSolver` (dolfinx's, without ``dolfinx.nls``). It
+decides convergence in the residual callback (:meth:`ContactNewtonSolver.is_converged` plus
+CalculiX's rules: at least two Newton updates, none right after a re-pairing that changed the number
+of springs); the loop's convergence check returns that decision. The pieces it wires live in modules
+of their own: the choice of linear solver (:mod:`~dolfinx_ntf.solvers.linear_solver`), the
+force-scaled test and the divergence rule (:mod:`~dolfinx_ntf.solvers.convergence`), the line search
 (:mod:`~dolfinx_ntf.solvers.line_search`) and the errors (:mod:`~dolfinx_ntf.solvers.errors`).
 """
 
@@ -23,7 +23,6 @@ from petsc4py import PETSc
 import numpy as np
 
 import dolfinx.fem
-import dolfinx.nls.petsc
 
 from dolfinx_ntf import validation
 from dolfinx_ntf.contact.problem import ContactProblem
@@ -38,14 +37,15 @@ from dolfinx_ntf.solvers.convergence import (
 )
 from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactSolverError
 from dolfinx_ntf.solvers.line_search import LineSearch
+from dolfinx_ntf.solvers.newton_loop import NewtonSolver
 
 __all__ = ["ContactNewtonSolver"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
 
-class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
-    """dolfinx Newton solver driving a :class:`ContactProblem`.
+class ContactNewtonSolver(NewtonSolver):
+    """Newton solver driving a :class:`ContactProblem`.
 
     Args:
         comm: MPI communicator.
@@ -134,6 +134,8 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.setF(self._residual, self._b)
         self.set_form(self._form)
         self.set_update(self._update)
+        self.set_convergence_check(self._decision)
+        self._converged_now = False
         self.convergence_criterion = "residual"
         #: CalculiX's force-scaled test (:meth:`is_converged`) and the forces it remembers.
         self.test = ForceScaledTest(
@@ -155,7 +157,6 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.extra_pairings = ExtraPairings()
         self.step_lengths: list[float] = []
         self.backtracking = LineSearch(self._b, max_line_search_halvings)
-        self.rtol = 0.0
         self.max_it = max_it
         self.error_on_nonconvergence = False
         self.report = False
@@ -203,23 +204,15 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         self.test.step_forces = []
 
     def destroy(self) -> None:
-        """Destroy the PETSc vectors the solver owns (the residual, the line search's). Collective.
+        """Destroy the PETSc objects the solver owns (residual, line search, Krylov solver).
 
-        The Jacobian belongs to the problem (:meth:`ContactProblem.destroy`).
+        Collective. The Jacobian belongs to the problem (:meth:`ContactProblem.destroy`).
         """
         self._b.destroy()
         self.backtracking.destroy()
         self._destroy_placeholder()
         self.linear.destroy()
-
-    def __del__(self) -> None:
-        # dolfinx 0.9's NewtonSolver.__del__ destroys its matrix, which here is the problem's.
-        b = getattr(self, "_b", None)
-        if b is not None:
-            b.destroy()
-        placeholder = getattr(self, "_placeholder", None)
-        if placeholder is not None:
-            placeholder.destroy()
+        super().destroy()
 
     def __enter__(self) -> ContactNewtonSolver:
         return self
@@ -238,7 +231,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
             reduced=self.problem.reduced_matrix,
         )
 
-    def _update(self, solver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
+    def _update(self, solver: NewtonSolver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
         """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
         failure = self.linear.failure(dx)
         if failure is not None:
@@ -314,7 +307,7 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
         )
         if converged and self.check_unpaired:
             converged = self._all_contacts_paired()
-        self.atol = 2.0 * norm + 1e-300 if converged else (1.0 - 1e-9) * norm
+        self._converged_now = converged
         if newton_logger.isEnabledFor(logging.INFO):
             correction = self.last_correction if self.updates else None
             springs = self.problem.total_springs
@@ -328,6 +321,10 @@ class ContactNewtonSolver(dolfinx.nls.petsc.NewtonSolver):
                 )
                 + (", converged" if converged else "")
             )
+
+    def _decision(self, solver: NewtonSolver, b: PETSc.Vec) -> tuple[float, bool]:
+        """The loop's convergence check: what :meth:`_residual` decided for ``b``."""
+        return self.residual_norms[-1], self._converged_now
 
     def _all_contacts_paired(self) -> bool:
         """False (and a re-pairing next iteration) when slave nodes penetrate without a spring."""
