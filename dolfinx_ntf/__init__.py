@@ -64,6 +64,8 @@ from dolfinx_ntf.solvers.errors import (
     ContactSolverError,
 )
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
+from dolfinx_ntf.solvers.newton_loop import NewtonSolver
+from dolfinx_ntf.solvers.snes import ContactSNESSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 _logs.route_compiler_lines()
@@ -83,6 +85,7 @@ __all__ = [
     "ContactPair",
     "ContactProblem",
     "ContactResults",
+    "ContactSNESSolver",
     "ContactSolverError",
     "ContactWriter",
     "DynamicLinearLaw",
@@ -96,6 +99,7 @@ __all__ = [
     "LinearConstraintBlock",
     "LinearLaw",
     "Load",
+    "NewtonSolver",
     "NodeSurface",
     "PressureOverclosureLaw",
     "RemovePair",

@@ -64,6 +64,8 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         "dolfinx_ntf",
         [
             "ContactNewtonSolver",
+            "ContactSNESSolver",
+            "NewtonSolver",
             "ActiveSetNewtonSolver",
             "StaticStep",
             "IncrementResult",

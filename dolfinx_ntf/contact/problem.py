@@ -203,7 +203,10 @@ class ContactProblem:
         #: Springs over all processes at the last pairing (:attr:`num_springs`: this process's).
         self.total_springs = 0
         self._pattern_checked = False
-        self._residual_vector: PETSc.Vec | None = None
+        #: The vector the last :meth:`F` filled; a re-pairing in :meth:`J` re-assembles it (the
+        #: right-hand side of the coming solve). A driver whose last residual went elsewhere (a
+        #: SNES line search's work vector) points it at its own residual vector before :meth:`J`.
+        self.residual_vector: PETSc.Vec | None = None
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX ``*CLOAD``) subtracted from the
@@ -454,7 +457,7 @@ class ContactProblem:
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """Assemble the bulk residual plus the spring forces at ``x`` into ``b``."""
-        self._residual_vector = b
+        self.residual_vector = b
         self.assemble_residual(x, b)
 
     def assemble_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
@@ -479,7 +482,15 @@ class ContactProblem:
         """Start Newton iteration ``iteration``: re-pair on schedule, assemble the Jacobian.
 
         The Jacobian at the iterate ``x`` goes into ``A``. A re-pairing re-assembles the residual
-        vector too.
+        vector too (:meth:`start_iteration`, then :meth:`assemble_jacobian`).
+        """
+        self.start_iteration(x)
+        self.assemble_jacobian(x, A)
+
+    def start_iteration(self, x: PETSc.Vec) -> None:
+        """Count a new Newton iteration at ``x``; re-pair on schedule or when asked.
+
+        A re-pairing evaluates the springs again and re-assembles :attr:`residual_vector`.
         """
         self.iteration += 1
         self.count_changed = False
@@ -491,8 +502,11 @@ class ContactProblem:
             )
             self.repair_next_iteration = False
             self.form(x)
-            if self._residual_vector is not None:
-                self.F(x, self._residual_vector)
+            if self.residual_vector is not None:
+                self.F(x, self.residual_vector)
+
+    def assemble_jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """The Jacobian at ``x`` with the springs last evaluated, into ``A``."""
         pattern = (self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
         self.bulk_jacobian.assemble(A, self.a, self.bcs, pattern)
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)

@@ -3,7 +3,10 @@
 One module per idea: :mod:`~dolfinx_ntf.solvers.linear_solver` (which linear solver, PETSc
 options), :mod:`~dolfinx_ntf.solvers.convergence` (CalculiX's force-scaled test, the divergence
 rule), :mod:`~dolfinx_ntf.solvers.line_search`, :mod:`~dolfinx_ntf.solvers.errors`,
-:mod:`~dolfinx_ntf.solvers.newton` (:class:`ContactNewtonSolver`, which wires them),
+:mod:`~dolfinx_ntf.solvers.newton_loop` (:class:`NewtonSolver`, dolfinx's Newton loop without
+``dolfinx.nls``), :mod:`~dolfinx_ntf.solvers.newton` (:class:`ContactNewtonSolver`, which wires
+them on that loop), :mod:`~dolfinx_ntf.solvers.snes` (:class:`ContactSNESSolver`, PETSc's SNES as
+the driver),
 :mod:`~dolfinx_ntf.solvers.steps` (the step base and :class:`StaticStep`),
 :mod:`~dolfinx_ntf.solvers.dynamics`, :mod:`~dolfinx_ntf.solvers.analysis`,
 :mod:`~dolfinx_ntf.solvers.active_set` and :mod:`~dolfinx_ntf.solvers.nullspace`.
@@ -36,7 +39,15 @@ from dolfinx_ntf.solvers.linear_solver import (
     galerkin_products,
 )
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
-from dolfinx_ntf.solvers.steps import IncrementResult, LoadControl, StaticStep, Step
+from dolfinx_ntf.solvers.newton_loop import NewtonSolver
+from dolfinx_ntf.solvers.snes import ContactSNESSolver
+from dolfinx_ntf.solvers.steps import (
+    IncrementResult,
+    IncrementSolver,
+    LoadControl,
+    StaticStep,
+    Step,
+)
 
 __all__ = [
     "CCX_FIELD_CONTROLS",
@@ -54,9 +65,12 @@ __all__ = [
     "ContactConvergenceError",
     "ContactDivergenceError",
     "ContactNewtonSolver",
+    "ContactSNESSolver",
     "ContactSolverError",
     "IncrementResult",
+    "IncrementSolver",
     "LoadControl",
+    "NewtonSolver",
     "StaticStep",
     "Step",
     "galerkin_products",

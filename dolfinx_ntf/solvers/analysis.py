@@ -31,8 +31,7 @@ import dolfinx.fem
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.kernels.laws import Friction, SurfaceInteraction
-from dolfinx_ntf.solvers.newton import ContactNewtonSolver
-from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep, Step
+from dolfinx_ntf.solvers.steps import IncrementResult, IncrementSolver, StaticStep, Step
 
 __all__ = [
     "AddPair",
@@ -203,7 +202,7 @@ def _apply_change(change: ContactChange, pairs: list[ContactPair], owner: str) -
 
 
 def run_steps(
-    solver: ContactNewtonSolver, steps: typing.Sequence[AnalysisStep]
+    solver: IncrementSolver, steps: typing.Sequence[AnalysisStep]
 ) -> list[list[IncrementResult]]:
     """Run the steps one after the other on ``solver``'s problem (docs/method.md §11.6).
 
@@ -213,7 +212,7 @@ def run_steps(
     Raises:
         ContactConvergenceError: A step failed (earlier steps' results stay in their ``results``).
     """
-    validation.check_type(solver, ContactNewtonSolver, "run_steps: solver")
+    validation.check_type(solver, IncrementSolver, "run_steps: solver")
     problem = solver.problem
     pairs = [s.pair for s in problem.states]
     total = 0.0

@@ -26,8 +26,7 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
-from dolfinx_ntf.solvers.newton import ContactNewtonSolver
-from dolfinx_ntf.solvers.steps import IncrementResult, LoadControl, Step
+from dolfinx_ntf.solvers.steps import IncrementResult, IncrementSolver, LoadControl, Step
 
 __all__ = ["CCX_ALPHA", "DynamicStep", "kinetic_energy", "newmark_parameters"]
 
@@ -203,7 +202,7 @@ class DynamicStep(Step):
             return self.min_increment
         return min(self.initial_increment, 1e-5 * self.period)
 
-    def _run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def _run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
         """Add the inertia terms to the problem for the run, integrate, remove them."""
         problem = solver.problem
         V = u.function_space
@@ -241,7 +240,7 @@ class DynamicStep(Step):
 
     def _integrate(
         self,
-        solver: ContactNewtonSolver,
+        solver: IncrementSolver,
         problem: ContactProblem,
         u: dolfinx.fem.Function,
         velocity: dolfinx.fem.Function,

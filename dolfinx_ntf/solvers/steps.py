@@ -20,10 +20,33 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import validation
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenceError
-from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 
-__all__ = ["IncrementResult", "LoadControl", "StaticStep", "Step"]
+__all__ = ["IncrementResult", "IncrementSolver", "LoadControl", "StaticStep", "Step"]
+
+
+@typing.runtime_checkable
+class IncrementSolver(typing.Protocol):
+    """What a step needs of its solver: one Newton solve per increment attempt.
+
+    :class:`~dolfinx_ntf.ContactNewtonSolver` and :class:`~dolfinx_ntf.ContactSNESSolver` play
+    this role.
+    """
+
+    #: The problem the solver drives.
+    problem: ContactProblem
+    #: Residual norms of the last solve, the first one first.
+    residual_norms: list[float]
+    #: Displacement at the start of the increment (set by the step before each attempt).
+    increment_start: np.ndarray | None
+
+    def begin_step(self) -> None:
+        """A new step starts."""
+
+    def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
+        """Solve one increment attempt into ``u``; raise ``ContactConvergenceError`` on failure."""
+
 
 logger = logging.getLogger("dolfinx_ntf")
 
@@ -133,7 +156,7 @@ class Step:
         """The smallest increment a cutback may reach."""
         return self.min_increment
 
-    def run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
         """Run the step from the current ``u``.
 
         Args:
@@ -147,7 +170,7 @@ class Step:
             ContactConvergenceError: When an increment fails and cutbacks are exhausted.
         """
         owner = type(self).__name__
-        validation.check_type(solver, ContactNewtonSolver, f"{owner}.run: solver")
+        validation.check_type(solver, IncrementSolver, f"{owner}.run: solver")
         if u is not solver.problem.u:
             raise ValueError(
                 f"{owner}.run: u must be the Function the ContactProblem was built on "
@@ -155,7 +178,7 @@ class Step:
             )
         return self._run(solver, u)
 
-    def _run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def _run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
         """The step's own run, with checked arguments: set up, then :meth:`_increments`."""
         raise NotImplementedError
 
@@ -193,7 +216,7 @@ class Step:
 
     def _increments(
         self,
-        solver: ContactNewtonSolver,
+        solver: IncrementSolver,
         u: dolfinx.fem.Function,
         start: IncrementStart,
         converged: IncrementEnd,
@@ -330,7 +353,7 @@ class StaticStep(Step):
     on_increment: typing.Callable[[IncrementResult], None] | None = None
     guard_predictor: bool = False
 
-    def _run(self, solver: ContactNewtonSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def _run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
         """Start each increment from the last one's, or from the predictor."""
         problem = solver.problem
         problem.begin_step()
