@@ -31,7 +31,13 @@ import dolfinx.fem
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.kernels.laws import Friction, SurfaceInteraction
-from dolfinx_ntf.solvers.steps import IncrementResult, IncrementSolver, StaticStep, Step
+from dolfinx_ntf.solvers.steps import (
+    IncrementResult,
+    IncrementSolver,
+    StaticStep,
+    Step,
+    check_solver,
+)
 
 __all__ = [
     "AddPair",
@@ -212,7 +218,7 @@ def run_steps(
     Raises:
         ContactConvergenceError: A step failed (earlier steps' results stay in their ``results``).
     """
-    validation.check_type(solver, IncrementSolver, "run_steps: solver")
+    check_solver(solver, "run_steps: solver")
     problem = solver.problem
     pairs = [s.pair for s in problem.states]
     total = 0.0

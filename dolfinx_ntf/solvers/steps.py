@@ -58,6 +58,15 @@ IncrementStart = typing.Callable[[float, float, np.ndarray], None]
 IncrementEnd = typing.Callable[[float, np.ndarray], None]
 
 
+def check_solver(solver: object, what: str) -> None:
+    """Raise ``TypeError`` naming ``what`` unless ``solver`` plays :class:`IncrementSolver`."""
+    if not isinstance(solver, IncrementSolver):
+        raise TypeError(
+            f"{what} must be a ContactNewtonSolver or ContactSNESSolver (an IncrementSolver), "
+            f"got {validation.describe(solver)}"
+        )
+
+
 @dataclass
 class IncrementResult:
     """Summary of a converged increment.
@@ -170,7 +179,7 @@ class Step:
             ContactConvergenceError: When an increment fails and cutbacks are exhausted.
         """
         owner = type(self).__name__
-        validation.check_type(solver, IncrementSolver, f"{owner}.run: solver")
+        check_solver(solver, f"{owner}.run: solver")
         if u is not solver.problem.u:
             raise ValueError(
                 f"{owner}.run: u must be the Function the ContactProblem was built on "

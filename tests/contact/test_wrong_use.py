@@ -292,7 +292,10 @@ def test_solver_and_step_arguments(blocks):
     step = ntf.StaticStep(lambda t: setattr(pressure, "value", t))
     with pytest.raises(ValueError, match="u must be the Function the ContactProblem was built on"):
         step.run(solver, dolfinx.fem.Function(blocks["V"]))
-    with pytest.raises(TypeError, match=r"StaticStep\.run: solver must be a ContactNewtonSolver"):
+    with pytest.raises(
+        TypeError,
+        match=r"StaticStep\.run: solver must be a ContactNewtonSolver or ContactSNESSolver",
+    ):
         step.run(problem, problem.u)
 
 

@@ -99,5 +99,7 @@ def test_nonconvergence_raises_or_returns_false():
 
 def test_unknown_criterion_is_named():
     _, problem_class = _dolfinx_newton()
-    with pytest.raises(ValueError, match="convergence_criterion must be 'residual' or 'incremental'"):
+    with pytest.raises(
+        ValueError, match="convergence_criterion must be 'residual' or 'incremental'"
+    ):
         _run(NewtonSolver, problem_class, convergence_criterion="energy")
