@@ -6,8 +6,8 @@
 #
 #   bash scripts/other_release.sh [RELEASE ...] [make target ...]
 #
-# RELEASE is bookworm, trixie or sid; by default the releases `make test` checks (bookworm and trixie) other than
-# the machine's own (sid passes test-here; its docs-check, which make test-other also runs, is untried). The make targets default to test-here. Every release is run even when one fails; the exit
+# RELEASE is bookworm, trixie or sid; by default all three but the machine's own (what `make test-all` checks).
+# The make targets default to test-here. Every release is run even when one fails; the exit
 # status says whether all passed. (`set -e` does not act inside run_release, which runs as an `if` condition: its
 # steps say `|| return 1`.)
 set -euo pipefail
@@ -19,7 +19,7 @@ if [ "$(id -u)" != 0 ]; then
   exec sudo --preserve-env=CI bash "$0" "$@"
 fi
 here=$(sh scripts/debian_release.sh)
-default_releases=(bookworm trixie)
+default_releases=(bookworm trixie sid)
 releases=()
 targets=()
 for arg in "$@"; do

@@ -247,6 +247,7 @@ def test_guide_examples_run(tmp_path, monkeypatch):
         ("guide/friction.md", _python_blocks("guide/friction.md")[0]),
         ("guide/steps.md", steps[1]),
         ("guide/steps.md", steps[2]),
+        ("guide/steps.md", steps[3]),
         ("guide/surfaces.md", _python_blocks("guide/surfaces.md")[0]),
     ]
     monkeypatch.chdir(tmp_path)  # the writer's file goes here
@@ -275,6 +276,10 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     assert np.all(shear <= 0.5 * np.maximum(res3.pressure, 0) * (1 + 1e-10))
     # Dynamics: four fixed increments.
     assert [r.increment for r in namespace["dynamic_results"]] == [1, 2, 3, 4]
+    # SNES: the quick start's solution again (the same load, the same pairs).
+    u, u5 = namespace["u"], namespace["u5"]
+    assert [r.time for r in namespace["snes_results"]] == [0.5, 1.0]
+    assert np.abs(u5.x.array - u.x.array).max() <= 1e-8 * np.abs(u.x.array).max()
     # The gmsh builder of one's own: 3D groups are cell tags, 2D groups facet tags.
     _, cells, facets = mesh_from_gmsh(namespace["build_two_boxes"], MPI.COMM_SELF, size=0.2)
     assert set(np.unique(cells.values)) == {1, 2} and set(np.unique(facets.values)) == {11, 12}

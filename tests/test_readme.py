@@ -49,12 +49,17 @@ def test_readme_commands_and_pointers():
     assert [line for line in lines if line] == ["make demo", "make test"]
     makefile = (README.parent / "Makefile").read_text()
     assert re.search(r"^demo:", makefile, flags=re.M) and re.search(r"^test:", makefile, flags=re.M)
+    # CI's command: make test-all, shown in the README beside the two.
+    assert re.search(r"^test-all:", makefile, flags=re.M)
+    assert "make test-all" in (README.parent / ".ci" / "run").read_text()
+    assert "`make test-all`" in README.read_text()
     docs_rule = re.search(r"^docs:.*\n\t(.*)$", makefile, flags=re.M).group(1)
     assert "sphinx" in docs_rule and docs_rule.endswith("docs docs/_build/html")
     text = README.read_text()
     assert "`make docs`" in text and "docs/_build/html/index.html" in text
     assert "Debian 13 (trixie, dolfinx 0.9.0" in text
     assert "Debian 12 (bookworm, dolfinx 0.5.2" in text
+    assert "Debian unstable (sid, dolfinx 0.11" in text
 
 
 def test_cited_method_sections_exist():
