@@ -468,6 +468,8 @@ def _read(path: Path, comm: MPI.Comm) -> Deck:
     def read() -> Deck:
         if not path.is_file():
             raise ValueError(f"deck {path} does not exist")
+        if not path.read_text(encoding="latin-1").strip():
+            raise ValueError(f"{path}: the deck file is empty")
         deck = read_deck(path)
         if not deck.steps:
             raise ValueError(f"{path}: the deck has no *STEP: nothing to run")

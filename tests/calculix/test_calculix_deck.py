@@ -491,3 +491,30 @@ def test_calculix_file_formats_are_pure_python_numpy():
                 assert root not in ("dolfinx", "ufl", "petsc4py", "mpi4py", "dolfinx_ntf"), (
                     f"{path.name} imports {name}"
                 )
+
+
+def test_contact_file_keys_read_as_ccx_reads_them(tmp_path, caplog):
+    """ccx reads the first four characters of *CONTACT FILE keys, as of *CONTACT PRINT's: its
+    own decks spell them CDISP and CSTRESS (cubespring), and the CONTACT block is written."""
+    from dolfinx_ntf.calculix.job_files import check_requests
+
+    text = (DATA / "two_cubes.inp").read_text()
+    text = text.replace("*END STEP", "*CONTACT FILE\nCDISP,CSTRESS\n*END STEP")
+    (tmp_path / "long_keys.inp").write_text(text)
+    deck = read_deck(tmp_path / "long_keys.inp")
+    (request,) = [r for r in deck.steps[0].file_requests if r.kind == "CONTACT"]
+    assert request.keys == ("CDIS", "CSTR")
+    with caplog.at_level("WARNING", logger="dolfinx_ntf"):
+        check_requests(deck)
+    assert "not written to the .frd" not in caplog.text
+
+
+def test_empty_deck_file_is_named_empty(tmp_path):
+    from dolfinx_ntf.calculix.job import run_job
+
+    (tmp_path / "empty.inp").write_text("\n  \n")
+    with pytest.raises(ValueError, match=r"empty\.inp: the deck file is empty"):
+        run_job("empty", tmp_path, progress=False)
+    (tmp_path / "nostep.inp").write_text("*HEADING\nno step here\n")
+    with pytest.raises(ValueError, match=r"nostep\.inp: the deck has no \*STEP"):
+        run_job("nostep", tmp_path, progress=False)

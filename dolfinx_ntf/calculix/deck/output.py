@@ -75,6 +75,8 @@ class OutputCards(ReaderState):
                                           "LASTITERATIONS", "CONTACTELEMENTS",
                                           "SECTIONFORCES"})  # fmt: skip
         keys = tuple(k for fields, _, _ in card.lines for k in fields if k != "")
+        if kind == "CONTACT":  # as for *CONTACT PRINT: ccx reads four characters (CDISP is CDIS)
+            keys = tuple(k[:4] for k in keys)
         set_name = None
         if "NSET" in card.params:  # ccx restricts *NODE/EL FILE to it (docs/method.md §13.2)
             set_name = card.params["NSET"] or ""
