@@ -94,7 +94,7 @@ class NewtonSolver:
         problem: Its residual, Jacobian and pre-evaluation callbacks (:class:`NonlinearSystem`);
             ``setF``, ``setJ`` and ``set_form`` replace them.
 
-    The Krylov solver (:attr:`krylov_solver`) defaults to dolfinx's choice, LU (MUMPS when PETSc
+    The Krylov solver (``krylov_solver``) defaults to dolfinx's choice, LU (MUMPS when PETSc
     has it), and reads PETSc's options under the prefix ``nls_solve_``.
     """
 
@@ -168,7 +168,7 @@ class NewtonSolver:
         self._fn_form = form
 
     def set_update(self, update: Update) -> None:
-        """Apply corrections with ``update(solver, dx, x)`` instead of :func:`relaxed_update`."""
+        """Apply corrections with ``update(solver, dx, x)`` instead of ``x -= relaxation dx``."""
         self._update_solution = update
 
     def set_convergence_check(self, check: ConvergenceCheck) -> None:
