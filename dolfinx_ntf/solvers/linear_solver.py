@@ -172,18 +172,28 @@ def configure(
         ``space``), or None; the caller attaches it to the matrix and destroys it.
     """
     ksp.setOptionsPrefix(prefix)
-    opts = PETSc.Options()
-    options = {k: v for k, v in options.items() if not opts.hasName(f"{prefix}{k}")}
-    for key, value in options.items():
-        opts[f"{prefix}{key}"] = value
-    try:
-        ksp.setFromOptions()
-    finally:
-        for key in options:
-            opts.delValue(f"{prefix}{key}")
+    set_options(ksp, options, prefix)
     if ksp.getPC().getType() == "gamg":
         return nullspace.near_nullspace(space)
     return None
+
+
+def set_options(
+    solver: PETSc.KSP | PETSc.SNES, options: dict[str, typing.Any], prefix: str
+) -> None:
+    """Set ``options`` on ``solver`` under ``prefix``: those already in PETSc's database win.
+
+    The others are put into the database, read by ``setFromOptions`` and removed again.
+    """
+    database = PETSc.Options()
+    own = {k: v for k, v in options.items() if not database.hasName(f"{prefix}{k}")}
+    for key, value in own.items():
+        database[f"{prefix}{key}"] = value
+    try:
+        solver.setFromOptions()
+    finally:
+        for key in own:
+            database.delValue(f"{prefix}{key}")
 
 
 class LinearSolver:

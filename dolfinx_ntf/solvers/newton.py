@@ -111,7 +111,7 @@ class ContactNewtonSolver(NewtonSolver):
     ) -> None:
         symmetric = linear.expects_symmetric(problem, petsc_options)
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
-        options = _check_arguments(
+        options = check_arguments(
             comm,
             problem,
             linear.default_options(problem, linear_solver, symmetric)
@@ -431,7 +431,7 @@ def _iteration_line(
     return line + f", {springs} contact elements"
 
 
-def _check_arguments(
+def check_arguments(
     comm: object,
     problem: object,
     petsc_options: object,
@@ -440,9 +440,13 @@ def _check_arguments(
     controls: object,
     max_it: object,
     min_iterations: object,
+    owner: str = "ContactNewtonSolver",
 ) -> dict[str, typing.Any]:
-    """The arguments of :class:`ContactNewtonSolver`; returns the PETSc options."""
-    owner = "ContactNewtonSolver"
+    """The arguments a contact solver shares with :class:`ContactNewtonSolver`.
+
+    Returns:
+        The checked PETSc options.
+    """
     validation.check_type(comm, MPI.Comm, f"{owner}: comm", "pass mesh.comm")
     validation.check_type(problem, ContactProblem, f"{owner}: problem")
     if MPI.Comm.Compare(comm, problem.u.function_space.mesh.comm) == MPI.UNEQUAL:

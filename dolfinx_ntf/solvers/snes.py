@@ -34,6 +34,7 @@ from dolfinx_ntf.solvers import convergence, errors
 from dolfinx_ntf.solvers import linear_solver as linear
 from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, ForceScaledTest
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
+from dolfinx_ntf.solvers.newton import check_arguments
 
 __all__ = ["ContactSNESSolver"]
 
@@ -95,8 +96,17 @@ class ContactSNESSolver:
         check_unpaired: bool = True,
     ) -> None:
         owner = "ContactSNESSolver"
-        validation.check_type(comm, MPI.Comm, f"{owner}: comm", "pass mesh.comm")
-        validation.check_type(problem, ContactProblem, f"{owner}: problem")
+        controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
+        given = check_arguments(
+            comm,
+            problem,
+            petsc_options or {},
+            options_prefix,
+            controls=controls,
+            max_it=max_it,
+            min_iterations=min_iterations,
+            owner=owner,
+        )
         if convergence not in CONVERGENCE_TESTS:
             raise ValueError(
                 f"{owner}: convergence must be one of {CONVERGENCE_TESTS}, got {convergence!r}"
@@ -106,10 +116,6 @@ class ContactSNESSolver:
                 f"{owner}: the problem has linear constraints (*EQUATION): their reduced "
                 "Jacobian is solved by ContactNewtonSolver only"
             )
-        for name, value, least in (("max_it", max_it, 1), ("min_iterations", min_iterations, 0)):
-            if isinstance(value, bool) or not isinstance(value, int) or value < least:
-                raise ValueError(f"{owner}: {name} must be an integer >= {least}, got {value}")
-        given = validation.check_petsc_options(petsc_options or {}, owner)
         own_linear_solver = any(key.startswith(LINEAR_SOLVER_KEYS) for key in given)
         symmetric = linear.expects_symmetric(problem, given if own_linear_solver else None)
         options = dict(DEFAULT_SNES_OPTIONS)
@@ -125,9 +131,7 @@ class ContactSNESSolver:
         self.min_iterations = min_iterations
         self.check_unpaired = check_unpaired
         #: CalculiX's force-scaled test (``convergence="calculix"``).
-        self.test = ForceScaledTest(
-            dict(TIGHT_FIELD_CONTROLS if controls is None else controls), relaxation_iteration
-        )
+        self.test = ForceScaledTest(controls, relaxation_iteration)
         #: Displacement at the start of the increment; set by the step driver.
         self.increment_start: np.ndarray | None = None
         #: Residual norms of the current solve, one per residual the SNES tested.
@@ -146,7 +150,7 @@ class ContactSNESSolver:
         if convergence == "calculix":
             self.snes.setConvergenceTest(self._converged)
         _check_line_search(options, options_prefix, problem, owner)
-        _set_options(self.snes, options, options_prefix)
+        linear.set_options(self.snes, options, options_prefix)
         #: The SNES's Krylov solver, kept in step with the Jacobian (Cholesky to LU with friction).
         self.linear = linear.LinearSolver(
             self.snes.getKSP(), {}, options_prefix, problem.u.function_space, symmetric
@@ -298,19 +302,6 @@ def _check_line_search(
         f"increments (PETSc {version} keeps the residual norm from before the re-pairing); use "
         "'basic', small sliding pairs, or ContactNewtonSolver(line_search=True)"
     )
-
-
-def _set_options(snes: PETSc.SNES, options: dict[str, typing.Any], prefix: str) -> None:
-    """Set ``options`` under ``prefix`` unless in PETSc's database, read them, remove them."""
-    database = PETSc.Options()
-    own = {k: v for k, v in options.items() if not database.hasName(f"{prefix}{k}")}
-    for key, value in own.items():
-        database[f"{prefix}{key}"] = value
-    try:
-        snes.setFromOptions()
-    finally:
-        for key in own:
-            database.delValue(f"{prefix}{key}")
 
 
 def _snes_reason(reason: int) -> str:
