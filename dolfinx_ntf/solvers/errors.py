@@ -7,9 +7,12 @@ name the cause (a non-finite input, a body with no support).
 
 from __future__ import annotations
 
+from mpi4py import MPI
+
 import numpy as np
 
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.solvers import nullspace
 
 __all__ = [
     "ContactConvergenceError",
@@ -19,6 +22,8 @@ __all__ = [
     "no_support_hint",
     "non_finite_input",
     "non_finite_residual",
+    "singular_hint",
+    "unsupported_bodies",
 ]
 
 
@@ -76,6 +81,57 @@ def no_support_hint(problem: ContactProblem) -> str:
     return ""
 
 
+def unsupported_bodies(problem: ContactProblem) -> list[str]:
+    """The bodies that nothing holds: no Dirichlet condition, no contact spring. Collective.
+
+    A body is a connected component of the mesh. With linear constraints (which may hold a body
+    through another) none is named. Returns one description per body (its node count and
+    centroid), the same on every process.
+    """
+    if problem.constraints:
+        return []
+    V = problem.u.function_space
+    comm = V.mesh.comm
+    num_bodies, body = nullspace.body_numbers(V)
+    owned = V.dofmap.index_map.size_local
+    held = np.zeros(num_bodies, dtype=np.int64)
+    for bc in problem.bcs:
+        dofs = np.asarray(bc.dof_indices()[0])
+        held[body[dofs // 3]] = 1
+    for state in problem.states:
+        nodes = state.element_nodes.ravel()
+        held[body[nodes[nodes < body.size]]] = 1
+    comm.Allreduce(MPI.IN_PLACE, held, op=MPI.MAX)
+    points = V.tabulate_dof_coordinates()[:owned]
+    sums = np.zeros((num_bodies, 4))
+    for k in range(3):
+        sums[:, k] = np.bincount(body[:owned], weights=points[:, k], minlength=num_bodies)
+    sums[:, 3] = np.bincount(body[:owned], minlength=num_bodies)
+    sums = comm.allreduce(sums, op=MPI.SUM)
+    described = []
+    for b in np.flatnonzero(held == 0):
+        centre = sums[b, :3] / max(sums[b, 3], 1.0)
+        described.append(
+            f"body {b + 1} of {num_bodies} ({int(sums[b, 3])} nodes, centroid "
+            f"({centre[0]:.4g}, {centre[1]:.4g}, {centre[2]:.4g}))"
+        )
+    return described
+
+
+def singular_hint(problem: ContactProblem) -> str:
+    """Which bodies make a Jacobian singular, or the usual causes. Collective."""
+    bodies = unsupported_bodies(problem)
+    if bodies:
+        return (
+            f"; {', '.join(bodies)} has no Dirichlet condition and no contact spring: give it a "
+            "Dirichlet condition, or close its gap to a held body so that springs hold it"
+        )
+    return no_support_hint(problem) or (
+        "; a body may be held in too few directions (rigid-body motion left free by the Dirichlet "
+        "conditions and the contact springs)"
+    )
+
+
 def linear_solve_failure(
     what: str, at_start: bool, updates: int, prefix: str, problem: ContactProblem
 ) -> ContactSolverError | ContactDivergenceError:
@@ -83,8 +139,14 @@ def linear_solve_failure(
 
     Non-retryable (:class:`ContactSolverError`) ``at_start``, the very first Newton iteration of
     a solver, whose cause is the setup (options under ``prefix``, the residual form); a
-    divergence later.
+    divergence later. A singular Jacobian's message names the bodies nothing holds.
+    Collective.
     """
+    if "singular" in what:
+        hint = singular_hint(problem)
+        if at_start:
+            return ContactSolverError(f"{what} at the first Newton iteration{hint}")
+        return ContactDivergenceError(f"{what} at Newton iteration {updates + 1}{hint}")
     if at_start:
         hint = (
             f"check the PETSc options under the prefix '{prefix}' (petsc_options) and that "

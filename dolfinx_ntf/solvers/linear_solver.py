@@ -178,6 +178,11 @@ def configure(
     return None
 
 
+#: A direct solve that leaves more than this fraction of the right-hand side (2-norm) unsolved
+#: found a singular matrix (:meth:`LinearSolver.failure`).
+SINGULAR_RESIDUAL = 1e-3
+
+
 def set_options(
     solver: PETSc.KSP | PETSc.SNES, options: dict[str, typing.Any], prefix: str
 ) -> None:
@@ -251,11 +256,31 @@ class LinearSolver:
                 ksp.getPC().reset()
             ksp.setOperators(reduced, reduced)
 
-    def failure(self, dx: PETSc.Vec) -> str | None:
-        """Why the last solve for ``dx`` failed, or None."""
+    def failure(self, dx: PETSc.Vec, b: PETSc.Vec | None = None) -> str | None:
+        """Why the last solve of ``A dx = b`` failed, or None. Collective.
+
+        Besides PETSc's reason and a non-finite ``dx``: a direct solve that leaves more than
+        ``SINGULAR_RESIDUAL`` of ``b`` unsolved, the mark of a singular matrix (a regular one,
+        however ill-conditioned, leaves round-off: about 1e-13 on the demos).
+        """
         reason = self.ksp.getConvergedReason()
         if reason < 0 or not np.isfinite(dx.norm()):
             return f"the linear solver failed ({ksp_reason(reason)})"
+        if b is None or self.ksp.getType() != "preonly":
+            return None
+        size = b.norm()
+        if size == 0:
+            return None
+        left = b.duplicate()
+        self.ksp.getOperators()[0].mult(dx, left)
+        left.aypx(-1.0, b)
+        ratio = left.norm() / size
+        left.destroy()
+        if ratio > SINGULAR_RESIDUAL:
+            return (
+                f"the Jacobian is singular: the direct solve leaves {ratio:.1e} of the "
+                "right-hand side unsolved"
+            )
         return None
 
     def destroy(self) -> None:

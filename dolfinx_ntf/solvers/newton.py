@@ -233,7 +233,7 @@ class ContactNewtonSolver(NewtonSolver):
 
     def _update(self, solver: NewtonSolver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
         """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
-        failure = self.linear.failure(dx)
+        failure = self.linear.failure(dx, self._b)
         if failure is not None:
             self._linear_solve_failed(failure)
         self.updates += 1

@@ -31,16 +31,33 @@ def test_nan_load_raises_at_once():
         _step(pressure, load=np.nan).run(solver, problem.u)
 
 
-def test_diverging_attempt_is_given_up_early():
-    """A punch above the block under a load has no support: each attempt diverges and is given
-    up after a few updates, not after max_it, and the message says why."""
+def test_punch_held_only_by_open_contact_stops_at_once():
+    """A punch above the block under a load has no support in z: the first solve finds the
+    Jacobian singular and the step stops at once, saying why, instead of cutting back."""
     problem, pressure, _ = punch_problem(gap=0.05)
     u = problem.u
     solver = ntf.ContactNewtonSolver(u.function_space.mesh.comm, problem, max_it=30)
     step = _step(pressure, min_increment=0.3)
-    with pytest.raises(ntf.ContactConvergenceError, match=r"residual grows.*no contact springs"):
+    with pytest.raises(ntf.ContactSolverError, match=r"Jacobian is singular.*no contact springs"):
         step.run(solver, u)
-    assert solver.updates <= solver.max_it // 2
+    assert solver.updates == 0
+
+
+def test_divergence_rule_gives_up_a_growing_residual():
+    """CalculiX's rule: from update I_0 on, a residual above the two before it ends the attempt;
+    a change of the spring count defers it."""
+    from dolfinx_ntf.solvers.convergence import DivergenceRule
+
+    rule = DivergenceRule(4)
+    rule.check(3, [1.0, 0.5], 2.0, lambda: "")  # before I_0: no check
+    rule.check(4, [1.0, 0.5], 0.9, lambda: "")  # below the larger of the two before
+    rule.defer(4, 4)
+    rule.check(5, [1.0, 0.5], 2.0, lambda: "")  # deferred to update 8
+    with pytest.raises(ntf.ContactDivergenceError, match=r"residual grows: 1.000e\+00, 5.000e-01"):
+        rule.check(8, [1.0, 0.5], 2.0, lambda: "; why")
+    rule.reset()
+    with pytest.raises(ntf.ContactDivergenceError, match="; why"):
+        rule.check(4, [1.0, 0.5], 2.0, lambda: "; why")
 
 
 def test_line_search_leaves_a_converging_solve_alone():
