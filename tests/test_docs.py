@@ -40,7 +40,12 @@ PAGES = {
         "walk_from_previous_face",
         "Nonlinear problem",
     ],
-    "demos/hertz_sphere.html": ["Hertz", "Total contact force F", "contact radius, fit"],
+    "demos/hertz_sphere.html": [
+        "Hertz",
+        "Total contact force F",
+        "contact radius, fit",
+        "the deformed mesh coloured by the contact pressure",
+    ],
 }
 #: What Markdown or MyST left unrendered looks like in a page's text (code blocks excluded).
 RAW_MARKDOWN = re.compile(r"```|\{(ref|doc|class|func|mod)\}`|\]\(|^#{1,4} |\*\*\w", re.M)
@@ -180,6 +185,13 @@ def test_demo_pages_show_their_figures(site):
         assert figures, f"{demo}: no figure on its page"
         for src in figures:
             assert (site / "demos" / src).stat().st_size > 10_000, src
+    # The Hertz page shows the deformed mesh coloured by the contact pressure: the very PNG the demo
+    # wrote in this build (its first figure), beside the pressure-against-radius plot.
+    page = (site / "demos" / "hertz_sphere.html").read_text()
+    figures = [src for src in re.findall(r'<img[^>]+src="([^"]+)"', page) if "sphx_glr_" in src]
+    written = DOCS / "_build" / "demo-output" / "hertz_sphere"
+    for name, src in zip(("hertz_deformed.png", "hertz_pressure.png"), figures, strict=True):
+        assert (site / "demos" / src).read_bytes() == (written / name).read_bytes(), (name, src)
 
 
 def test_pages_render_in_chromium(site, server, tmp_path):
