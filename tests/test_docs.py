@@ -11,6 +11,7 @@ unrendered. Screenshots go to ``docs/_build/screenshots/``.
 import functools
 import html
 import http.server
+import itertools
 import json
 import re
 import shutil
@@ -302,3 +303,47 @@ def test_continuum_example_runs(tmp_path, monkeypatch):
     # compliance and the coarse mesh (measured 0.322 mm).
     approach = namespace["a"] ** 2 / namespace["R"]
     assert 0.27 < approach < 0.36
+
+
+#: Scripts a newcomer wrote from the site's pages alone (the guide's Nitsche script above is the
+#: third): each asserts its own checks and prints its numbers.
+SITE_SCRIPTS = ROOT / "tests" / "data" / "site"
+
+
+def _run_site_script(name: str, tmp_path: Path) -> str:
+    run = subprocess.run(
+        [sys.executable, str(SITE_SCRIPTS / name)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "checks passed" in run.stdout
+    return run.stdout
+
+
+def test_half_cylinder_script_from_the_site(tmp_path):
+    """Plane-strain line contact: equilibrium, and Hertz's half-width and peak pressure."""
+    out = _run_site_script("half_cylinder_on_block.py", tmp_path)
+    forces = [float(f) for f in re.findall(r"(?:contact force|top|base) ([-\d.e+]+) N", out)]
+    assert len(forces) == 3 and max(forces) - min(forces) < 1e-8 * max(forces)
+    b = float(re.search(r"b = ([\d.]+) mm, p0", out).group(1))
+    closed, first_open = map(float, re.search(r"\|x\| = ([\d.]+) mm.*at ([\d.]+) mm", out).groups())
+    assert closed < b < first_open
+    b_error, p0_error = map(float, re.search(r"\(([-+\d.]+)%\).*\(([-+\d.]+)%\)", out).groups())
+    # measured -0.5 % and +1.7 % on the script's mesh (0.2 mm at the contact, b = 1.26 mm)
+    assert abs(b_error) < 5 and abs(p0_error) < 5
+
+
+def test_press_and_slide_script_from_the_site(tmp_path):
+    """Coulomb friction: the tangential force rises in stick, then stays at mu times the normal."""
+    out = _run_site_script("press_and_slide.py", tmp_path)
+    rows = re.findall(r"^\s+([\d.]+)\s+(-?[\d.]+)\s+([\d.]+)\s+([\d.]+)\s+(\d+)$", out, re.M)
+    ratios = [float(row[3]) for row in rows]
+    sliding = [int(row[4]) for row in rows]
+    springs = int(re.search(r"(\d+) springs", out).group(1))
+    assert len(rows) == 10
+    assert ratios[0] < 0.2 and sliding[0] == 0  # the first drag increment sticks
+    assert all(a <= b + 1e-4 for a, b in itertools.pairwise(ratios))  # it only grows towards mu
+    assert ratios[-1] == pytest.approx(0.3, rel=1e-3) and sliding[-1] == springs
