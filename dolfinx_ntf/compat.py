@@ -9,7 +9,7 @@ what                                   dolfinx 0.5.2                    dolfinx 
 =====================================  ===============================  ==============================  ==============================
 vector space                           ``VectorFunctionSpace(mesh,      ``functionspace(mesh, ("P", k,  as 0.9
                                        ("P", k))``                      (3,)))``
-coordinate element of ``create_mesh``  ``ufl.Mesh(ufl.VectorElement(   ``basix.ufl.element(...,        as 0.9
+coordinate element of ``create_mesh``  ``ufl.Mesh(ufl.VectorElement(    ``basix.ufl.element(...,        as 0.9
                                        ...))``                          shape=(3,))``
 ``create_mesh`` argument order         ``(comm, cells, x, element)``    as 0.5.2                        ``(comm, cells, element, x)``
 cell partitioner from a graph one      ``create_cell_partitioner(f)``   ``(f, ghost_mode)``             ``(f, ghost_mode, max links)``

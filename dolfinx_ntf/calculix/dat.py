@@ -290,7 +290,13 @@ def contact_print_blocks(
 
 
 def write_dat(path: str | Path, blocks: Iterable[DatBlock], *, append: bool = False) -> None:
-    """Write blocks to a ``.dat`` file (``append=False`` truncates it first, as ccx does)."""
+    """Write blocks to a ``.dat`` file (``append=False`` truncates it first, as ccx does).
+
+    Args:
+        path: The ``.dat`` file.
+        blocks: The blocks, in the order to write them.
+        append: Add to the end of an existing file instead.
+    """
     with open(path, "a" if append else "w", encoding="ascii", newline="\n") as handle:
         for block in blocks:
             handle.write(format_block(block))
@@ -325,6 +331,9 @@ def _parse_number(token: str, where: str) -> float:
 
 def read_dat(path: str | Path) -> list[DatBlock]:
     """Read every block of a ccx 2.20 or 2.23 ``.dat`` file (or one written by ``write_dat``).
+
+    Args:
+        path: The ``.dat`` file.
 
     Raises:
         ValueError: a line that is neither a title nor a row of numbers (message gives file:line).
