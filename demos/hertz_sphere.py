@@ -421,7 +421,7 @@ def _plot_deformed(path: Path, faces: dict[str, np.ndarray], summary: dict) -> P
     p_max = max(float(faces["slave_pressure"].max()), summary["p0_hertz"])
     norm = mpl.colors.Normalize(0.0, p_max)
     cmap = plt.get_cmap("viridis")
-    fig = plt.figure(figsize=(11, 4.8))
+    fig = plt.figure(figsize=(10, 4.4))
 
     # Section y = 0 (x, z): the mesh of both bodies, the slave nodes coloured by p_h.
     ax = fig.add_subplot(1, 2, 1)
@@ -469,12 +469,14 @@ def _plot_deformed(path: Path, faces: dict[str, np.ndarray], summary: dict) -> P
     ax2.legend(loc="upper right")
     ax2.set_title("deformed contact surface of the sphere (x, y)", fontsize=10)
 
-    fig.colorbar(dots, ax=[ax, ax2], shrink=0.85, label="recovered contact pressure p_h [MPa]")
+    fig.colorbar(
+        dots, ax=[ax, ax2], shrink=0.9, pad=0.02, label="recovered contact pressure p_h [MPa]"
+    )
     fig.suptitle(
         f"Hertz sphere: F = {summary['force'] / 1e3:.1f} kN, displacement "
         f"{summary['displacement']:g} mm, {summary['dofs']} dofs"
     )
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
 
