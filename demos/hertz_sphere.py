@@ -18,8 +18,10 @@ The demo takes the total force from the contact springs (checked against the rea
 sphere's top), evaluates Hertz's a and p0 for it, and compares them with the computed contact radius
 and peak pressure (a least-squares fit of Hertz's profile to the nodal pressures, the nodal maximum,
 and the last closed / first open node); it also compares the force carried by the fitted profile,
-2/3 pi a^2 p0, with F. It saves ``output/hertz_pressure.png`` (nodal pressure against radius beside
-the analytical curve) and ``output/hertz_sphere.xdmf``.
+2/3 pi a^2 p0, with F. It saves ``output/hertz_deformed.png`` (the deformed mesh in the symmetry
+plane y = 0 and the sphere's deformed contact surface, coloured by the recovered contact pressure),
+``output/hertz_pressure.png`` (nodal pressure against radius beside the analytical curve) and
+``output/hertz_sphere.xdmf``.
 
 What limits the accuracy:
 
@@ -59,6 +61,7 @@ import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem import measures
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.surfaces import boundary_faces, reference_coordinates
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.kernels.springs import evaluate_springs
 from dolfinx_ntf.meshes import hertz as geometry
@@ -242,7 +245,9 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     a_hertz, p0_hertz, _ = hertz(force)
     slave_nodes = problem.states[0].slave.nodes
     reference = V.tabulate_dof_coordinates()[slave_nodes]
-    pressure, _, status = ntf.ContactFields(problem).at_nodes(slave_nodes)
+    fields = ntf.ContactFields(problem)
+    pressure, _, status = fields.at_nodes(slave_nodes)
+    deformed = _deformed_faces(problem, fields, facet_tags)
     closed = status > 0
     r_all = np.concatenate(comm.allgather(np.hypot(reference[:, 0], reference[:, 1])))
     p_all = np.concatenate(comm.allgather(pressure))
@@ -283,6 +288,9 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     summary["passed"] = summary["equilibrium_error"] <= TOLERANCE and unpaired == 0
     if comm.rank == 0:
         summary["png"] = str(_plot(args.output / "hertz_pressure.png", r_all, p_all, summary))
+        summary["deformed_png"] = str(
+            _plot_deformed(args.output / "hertz_deformed.png", deformed, summary)
+        )
     summary["time"] = time.perf_counter() - start
     if comm.rank == 0:
         _print_report(summary)
@@ -290,11 +298,14 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
 
 
 # %%
-# Checks, fit and figure
-# ----------------------
+# Checks, fit and figures
+# -----------------------
 # Slave nodes inside the master without a spring are counted (CalculiX's pairing schedule can leave
-# some after Newton iteration 8); Hertz's profile is fitted to the nodal pressures; the figure shows
-# the nodal pressures against the radius beside Hertz's curve.
+# some after Newton iteration 8); Hertz's profile is fitted to the nodal pressures. The first
+# figure shows the deformed mesh at true scale: the faces of the symmetry plane y = 0 (a section
+# through the contact centre) with the slave nodes coloured by the recovered contact pressure, and
+# the sphere's deformed contact surface in plan view, coloured the same way. The second one
+# shows the nodal pressures against the radius beside Hertz's curve.
 
 
 def _unpaired_penetrations(problem: ntf.ContactProblem) -> tuple[int, float]:
@@ -367,6 +378,109 @@ def _plot(path: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
     return path
 
 
+def _deformed_faces(
+    problem: ntf.ContactProblem, fields: ntf.ContactFields, facet_tags: typing.Any
+) -> dict[str, np.ndarray]:
+    """Deformed faces of the section y = 0 and of the slave surface, gathered on rank 0.
+
+    Returns (rank 0; empty arrays elsewhere) ``section_sphere`` and ``section_block``, the corner
+    coordinates X + u of the symmetry-plane faces of each body, ``slave`` those of the slave faces
+    with ``slave_reference`` (X) and ``slave_pressure`` (the recovered pressure p_h at the corners).
+    """
+    V = problem.u.function_space
+    X = reference_coordinates(V)
+    x = X + problem.u.x.array.reshape(-1, 3)
+    section = boundary_faces(V, facet_tags.find(geometry.SYMMETRY_Y), what="section y = 0").faces
+    sphere = X[section].mean(axis=1)[:, 2] > 0  # the sphere is above z = 0, the block below
+    slave_faces = problem.states[0].slave.faces
+    slave = slave_faces.faces[slave_faces.facets >= 0]  # -1: a face of another process
+    local = {
+        "section_sphere": x[section[sphere]],
+        "section_block": x[section[~sphere]],
+        "slave": x[slave],
+        "slave_reference": X[slave],
+        "slave_pressure": fields.recovery.at_nodes(slave.ravel()).reshape(slave.shape),
+    }
+    comm = V.mesh.comm
+    gathered = {}
+    for key, value in local.items():
+        parts = comm.gather(value, root=0)
+        gathered[key] = np.concatenate(parts) if comm.rank == 0 else value[:0]
+    return gathered
+
+
+def _plot_deformed(path: Path, faces: dict[str, np.ndarray], summary: dict) -> Path:
+    """The deformed section y = 0 and the deformed contact surface, coloured by p_h (true scale)."""
+    import matplotlib as mpl
+
+    mpl.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+
+    a = summary["a_hertz"]
+    p_max = max(float(faces["slave_pressure"].max()), summary["p0_hertz"])
+    norm = mpl.colors.Normalize(0.0, p_max)
+    cmap = plt.get_cmap("viridis")
+    fig = plt.figure(figsize=(10, 4.4))
+
+    # Section y = 0 (x, z): the mesh of both bodies, the slave nodes coloured by p_h.
+    ax = fig.add_subplot(1, 2, 1)
+    for key, colour in (("section_block", "0.85"), ("section_sphere", "#c6dbef")):
+        ax.add_collection(
+            PolyCollection(
+                faces[key][:, :, [0, 2]], facecolors=colour, edgecolors="0.35", linewidths=0.4
+            )
+        )
+    ref, pts = faces["slave_reference"].reshape(-1, 3), faces["slave"].reshape(-1, 3)
+    on_section = np.abs(ref[:, 1]) < 1e-9 * RADIUS
+    p = faces["slave_pressure"].ravel()[on_section]
+    dots = ax.scatter(
+        pts[on_section, 0], pts[on_section, 2], c=p, cmap=cmap, norm=norm, s=18, zorder=3
+    )
+    ax.axvline(a, color="k", ls="--", lw=0.8)
+    ax.annotate(f"Hertz a = {a:.2f} mm", (a, 1.25 * a), xytext=(4, 0), textcoords="offset points")
+    ax.set_xlim(0.0, 3.0 * a)
+    ax.set_ylim(-1.5 * a, 1.5 * a)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("z [mm]")
+    ax.set_title("deformed mesh, section y = 0 (true scale)", fontsize=10)
+
+    # The sphere's deformed contact surface in plan view (its x, y), faces coloured by the mean
+    # p_h of their corners, with Hertz's contact circle.
+    ax2 = fig.add_subplot(1, 2, 2)
+    ref = faces["slave_reference"]
+    near = (np.hypot(ref[..., 0], ref[..., 1]) < 3.0 * a).all(axis=1)
+    ax2.add_collection(
+        PolyCollection(
+            faces["slave"][near][:, :, :2],
+            facecolors=cmap(norm(faces["slave_pressure"][near].mean(axis=1))),
+            edgecolors="0.3",
+            linewidths=0.4,
+        )
+    )
+    angle = np.linspace(0.0, 0.5 * np.pi, 100)
+    ax2.plot(a * np.cos(angle), a * np.sin(angle), "w--", lw=1.2, label="Hertz r = a")
+    ax2.set_xlim(0.0, 2.0 * a)
+    ax2.set_ylim(0.0, 2.0 * a)
+    ax2.set_aspect("equal")
+    ax2.set_xlabel("x [mm]")
+    ax2.set_ylabel("y [mm]")
+    ax2.legend(loc="upper right")
+    ax2.set_title("deformed contact surface of the sphere (x, y)", fontsize=10)
+
+    fig.colorbar(
+        dots, ax=[ax, ax2], shrink=0.9, pad=0.02, label="recovered contact pressure p_h [MPa]"
+    )
+    fig.suptitle(
+        f"Hertz sphere: F = {summary['force'] / 1e3:.1f} kN, displacement "
+        f"{summary['displacement']:g} mm, {summary['dofs']} dofs"
+    )
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
 def _print_report(s: dict) -> None:
     """Final report: computed values against Hertz's, then the checks."""
     print()
@@ -401,7 +515,7 @@ def _print_report(s: dict) -> None:
     verdict = "PASSED" if s["passed"] else "FAILED"
     print(
         f"Checks (equilibrium to {TOLERANCE:.0e}, no unpaired penetration): {verdict}. "
-        f"Results: {s['xdmf']}, {s.get('png')}"
+        f"Results: {s['xdmf']}, {s.get('deformed_png')}, {s.get('png')}"
     )
 
 
@@ -410,7 +524,8 @@ def _print_report(s: dict) -> None:
 # ---
 # The build of this page ran ``demos/hertz_sphere.py --coarse`` (about four elements across the
 # contact radius): the Hertz values for the computed force, the computed ones and their relative
-# errors, then the figure.
+# errors, then the figures: the deformed mesh coloured by the contact pressure, and the pressure
+# against the radius beside Hertz's profile.
 
 if __name__ == "__main__":
     sys.exit(0 if main()["passed"] else 1)

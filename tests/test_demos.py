@@ -61,6 +61,9 @@ def test_hertz_demo_is_close_to_hertz(tmp_path):
     assert summary["increments"] == 8
     assert max(summary["iterations"]) <= 8
     assert Path(summary["xdmf"]).exists() and Path(summary["png"]).exists()
+    assert (
+        Path(summary["deformed_png"]).stat().st_size > 10_000
+    )  # the deformed mesh, coloured by p_h
 
 
 def test_impact_demo_keeps_the_energy(tmp_path):

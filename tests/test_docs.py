@@ -11,6 +11,7 @@ unrendered. Screenshots go to ``docs/_build/screenshots/``.
 import functools
 import html
 import http.server
+import itertools
 import json
 import re
 import shutil
@@ -40,7 +41,12 @@ PAGES = {
         "walk_from_previous_face",
         "Nonlinear problem",
     ],
-    "demos/hertz_sphere.html": ["Hertz", "Total contact force F", "contact radius, fit"],
+    "demos/hertz_sphere.html": [
+        "Hertz",
+        "Total contact force F",
+        "contact radius, fit",
+        "the deformed mesh coloured by the contact pressure",
+    ],
 }
 #: What Markdown or MyST left unrendered looks like in a page's text (code blocks excluded).
 RAW_MARKDOWN = re.compile(r"```|\{(ref|doc|class|func|mod)\}`|\]\(|^#{1,4} |\*\*\w", re.M)
@@ -180,6 +186,13 @@ def test_demo_pages_show_their_figures(site):
         assert figures, f"{demo}: no figure on its page"
         for src in figures:
             assert (site / "demos" / src).stat().st_size > 10_000, src
+    # The Hertz page shows the deformed mesh coloured by the contact pressure: the very PNG the demo
+    # wrote in this build (its first figure), beside the pressure-against-radius plot.
+    page = (site / "demos" / "hertz_sphere.html").read_text()
+    figures = [src for src in re.findall(r'<img[^>]+src="([^"]+)"', page) if "sphx_glr_" in src]
+    written = DOCS / "_build" / "demo-output" / "hertz_sphere"
+    for name, src in zip(("hertz_deformed.png", "hertz_pressure.png"), figures, strict=True):
+        assert (site / "demos" / src).read_bytes() == (written / name).read_bytes(), (name, src)
 
 
 def test_pages_render_in_chromium(site, server, tmp_path):
@@ -295,3 +308,47 @@ def test_continuum_example_runs(tmp_path, monkeypatch):
     # compliance and the coarse mesh (measured 0.322 mm).
     approach = namespace["a"] ** 2 / namespace["R"]
     assert 0.27 < approach < 0.36
+
+
+#: Scripts a newcomer wrote from the site's pages alone (the guide's Nitsche script above is the
+#: third): each asserts its own checks and prints its numbers.
+SITE_SCRIPTS = ROOT / "tests" / "data" / "site"
+
+
+def _run_site_script(name: str, tmp_path: Path) -> str:
+    run = subprocess.run(
+        [sys.executable, str(SITE_SCRIPTS / name)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "checks passed" in run.stdout
+    return run.stdout
+
+
+def test_half_cylinder_script_from_the_site(tmp_path):
+    """Plane-strain line contact: equilibrium, and Hertz's half-width and peak pressure."""
+    out = _run_site_script("half_cylinder_on_block.py", tmp_path)
+    forces = [float(f) for f in re.findall(r"(?:contact force|top|base) ([-\d.e+]+) N", out)]
+    assert len(forces) == 3 and max(forces) - min(forces) < 1e-8 * max(forces)
+    b = float(re.search(r"b = ([\d.]+) mm, p0", out).group(1))
+    closed, first_open = map(float, re.search(r"\|x\| = ([\d.]+) mm.*at ([\d.]+) mm", out).groups())
+    assert closed < b < first_open
+    b_error, p0_error = map(float, re.search(r"\(([-+\d.]+)%\).*\(([-+\d.]+)%\)", out).groups())
+    # measured -0.5 % and +1.7 % on the script's mesh (0.2 mm at the contact, b = 1.26 mm)
+    assert abs(b_error) < 5 and abs(p0_error) < 5
+
+
+def test_press_and_slide_script_from_the_site(tmp_path):
+    """Coulomb friction: the tangential force rises in stick, then stays at mu times the normal."""
+    out = _run_site_script("press_and_slide.py", tmp_path)
+    rows = re.findall(r"^\s+([\d.]+)\s+(-?[\d.]+)\s+([\d.]+)\s+([\d.]+)\s+(\d+)$", out, re.M)
+    ratios = [float(row[3]) for row in rows]
+    sliding = [int(row[4]) for row in rows]
+    springs = int(re.search(r"(\d+) springs", out).group(1))
+    assert len(rows) == 10
+    assert ratios[0] < 0.2 and sliding[0] == 0  # the first drag increment sticks
+    assert all(a <= b + 1e-4 for a, b in itertools.pairwise(ratios))  # it only grows towards mu
+    assert ratios[-1] == pytest.approx(0.3, rel=1e-3) and sliding[-1] == springs

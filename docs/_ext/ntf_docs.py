@@ -569,7 +569,11 @@ class DemoFigures:
         return "DemoFigures"
 
     def __call__(self, block: tuple, block_vars: dict, gallery_conf: dict) -> str:
-        """Copy the PNGs written since the last block next to the page; return their rST."""
+        """Copy the PNGs written since the last block next to the page; return their rST.
+
+        Each figure gets the page's width, one below the other (sphinx-gallery would shrink the
+        figures of one block into a row of thumbnails).
+        """
         from sphinx_gallery.scrapers import figure_rst
 
         out = demo_output(block_vars["src_file"])
@@ -580,7 +584,7 @@ class DemoFigures:
             shutil.copyfile(png, path)
             seen.add(png)
             paths.append(path)
-        return figure_rst(paths, gallery_conf["src_dir"])
+        return "".join(figure_rst([path], gallery_conf["src_dir"]) for path in paths)
 
 
 def _exit_status_as_error() -> None:

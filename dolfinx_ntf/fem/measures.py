@@ -69,7 +69,21 @@ def contact_area(pressure: dolfinx.fem.Function, ds: ufl.Measure, degree: int = 
 
 
 def fit_hertz_profile(r: np.ndarray, p: np.ndarray, a0: float, p0: float) -> tuple[float, float]:
-    """Least-squares fit of ``p0 sqrt(1 - r^2/a^2)`` to nodal pressures within ``1.5 a0``."""
+    """Least-squares fit of ``p0 sqrt(1 - r^2/a^2)`` to nodal pressures within ``1.5 a0``.
+
+    Hertz's profile: ``r`` is the radius of a point contact or the distance ``|x|`` from the
+    centre line of a line contact (same form).
+
+    Args:
+        r: ``(N,)`` distance of each slave node from the contact centre (reference positions).
+        p: ``(N,)`` contact pressure at the nodes, 0 where a node has no spring.
+        a0: Starting guess of the contact radius (half-width), e.g. Hertz's; only nodes with
+            ``r < 1.5 a0`` take part.
+        p0: Starting guess of the peak pressure.
+
+    Returns:
+        ``(a, p0)``: the fitted contact radius and peak pressure.
+    """
     near = r < 1.5 * a0
     r, p = r[near], p[near]
 

@@ -528,9 +528,7 @@ class TabularLaw(PressureOverclosureLaw):
 class Friction:
     """``*FRICTION`` data: Coulomb coefficient ``mu`` and stick slope ``lambda``.
 
-    See docs/method.md §4.5.
-
-    Not used by the solver yet.
+    Used as ``SurfaceInteraction(law, Friction(mu, stick_slope))`` (docs/method.md §4.5, §11).
 
     Attributes:
         mu: Friction coefficient, ``> 0`` (ccx rejects ``mu <= 0``).

@@ -319,7 +319,8 @@ class StaticStep(Step):
 
     Args:
         set_load: Called with the step time at the end of each increment (before the pairing);
-            scales loads and prescribed displacements, e.g. ``lambda t: traction.value = t * p``.
+            scales loads and prescribed displacements, e.g.
+            ``lambda t: setattr(traction, "value", t * p)``.
         period: Step time.
         initial_increment, min_increment, max_increment: Increment sizes.
         fixed: Use ``initial_increment`` throughout (CalculiX DIRECT).
