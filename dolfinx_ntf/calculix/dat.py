@@ -309,7 +309,16 @@ _STEP_RE = re.compile(r"\s*(S T E P|INCREMENT)\s+\d+\s*$")
 _FORTRAN_EXP_RE = re.compile(r"(\d)([+-]\d{3})$")
 
 
+#: Titles of ccx 2.23 that differ from 2.20's (the blocks' rows do not).
+_TITLES_2_23 = {
+    "CELS": " contact spring energy (slave node,energy) for all contact elements and time{time}",
+}
+
+
 def _block_name(title: str) -> str:
+    for name, template in _TITLES_2_23.items():
+        if title.startswith(template.split("{", 1)[0]):
+            return name
     for name, (template, _, _) in _BLOCKS.items():
         prefix = template.split("{", 1)[0]
         if "{set}" in template:
