@@ -111,6 +111,22 @@ def test_read_dat_skips_ccx_223_step_headers(tmp_path):
         assert np.array_equal(a.labels, b.labels) and np.array_equal(a.values, b.values)
 
 
+def test_reader_reads_ccx_2_23_cels_title(tmp_path):
+    """ccx 2.23 titles CELS ``contact spring energy ... for all``; the rows are read as CELS."""
+    text = CCX_DAT.read_text(encoding="latin-1")
+    renamed = tmp_path / "two_cubes_223_cels.dat"
+    renamed.write_text(
+        text.replace(" contact print energy (slave node,energy) forall ",
+                     " contact spring energy (slave node,energy) for all "),
+        encoding="latin-1",
+    )  # fmt: skip
+    expected = [b for b in read_dat(CCX_DAT) if b.name == "CELS"]
+    got = [b for b in read_dat(renamed) if b.name == "CELS"]
+    assert expected and len(got) == len(expected)
+    for a, b in zip(got, expected):
+        assert a.time == b.time and np.array_equal(a.values, b.values)
+
+
 def test_writer_reproduces_ccx_file_byte_for_byte(tmp_path):
     blocks = read_dat(CCX_DAT)
     write_dat(tmp_path / "copy.dat", blocks)
