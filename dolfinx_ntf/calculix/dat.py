@@ -123,13 +123,13 @@ _TITLES_2_23 = {
 
 
 def step_heading(step: int) -> str:
-    """ccx 2.23's line before a step's first printed block (``S T E P       1``), with its blank."""
-    return f"\n{'':24}S T E P{step:8d}\n"
+    """ccx 2.23's line before a step's first printed block (``S T E P       1``), with blanks."""
+    return f"\n{'':24}S T E P{step:8d}\n\n"
 
 
 def increment_heading(increment: int) -> str:
-    """ccx 2.23's line before a printed increment's blocks (``INCREMENT     1``), with its blank."""
-    return f"\n{'':32}INCREMENT{increment:6d}\n"
+    """ccx 2.23's line before a printed increment's blocks (``INCREMENT     1``), with blanks."""
+    return f"\n{'':32}INCREMENT{increment:6d}\n\n"
 
 
 # ----------------------------------------------------------------------------- number formats

@@ -435,7 +435,7 @@ class _Job:
         node_ids = self.deck.node_ids[meshed]
         order = np.argsort(node_ids)
         displacement = self.values.displacements()[meshed]
-        contact = self.values.contact_rows()
+        contact = self.values.contact_rows(self.files.ccx)
         self.result.increments.append(
             IncrementOutput(
                 step=step.number,

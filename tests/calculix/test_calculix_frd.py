@@ -278,13 +278,13 @@ def test_ccx_2_23_format_changes_only_headings_titles_and_contact_records(tmp_pa
         line.split() for line in text.splitlines() if "S T E P" in line or "INCREMENT" in line
     ]
     # the deck's first step prints every second increment (FREQUENCY=2), its second step each one
-    assert text.startswith(f"\n{'':24}S T E P       1\n\n{'':32}INCREMENT     2\n\n")
+    assert text.startswith(f"\n{'':24}S T E P       1\n\n\n{'':32}INCREMENT     2\n\n\n")
     assert [h[-1] for h in headings if h[0] == "S"] == ["1", "2"]
     assert sum(h[0] == "INCREMENT" for h in headings) == len(times) > 2
     cels = " contact spring energy (slave node,energy) for all contact elements and time"
     assert cels in text
     old_title = " contact print energy (slave node,energy) forall contact elements and time"
-    stripped = re.sub(r"\n {24}S T E P +\d+\n|\n {32}INCREMENT +\d+\n", "", text)
+    stripped = re.sub(r"\n {24}S T E P +\d+\n\n|\n {32}INCREMENT +\d+\n\n", "", text)
     stripped = stripped.replace(cels, old_title)
     assert stripped == runs["2.20"].dat.read_text()
 
