@@ -323,7 +323,7 @@ def write_dat(
     """Write ``blocks`` to the ``.dat`` file at ``path`` (``append=False`` truncates it first).
 
     Truncating first is what ccx does at program start. ``ccx`` is the version whose titles are
-    written; ``heading`` goes first (ccx 2.23's :func:`step_heading` and :func:`increment_heading`).
+    written; ``heading`` goes first (ccx 2.23's ``step_heading`` and ``increment_heading``).
     """
     with open(path, "a" if append else "w", encoding="ascii", newline="\n") as handle:
         handle.write(heading)
