@@ -1,4 +1,4 @@
-"""CalculiX's own node-to-surface test decks: ccx 2.20 against ``dolfinx-ntf run``.
+"""CalculiX's own node-to-surface test decks: ccx (2.20, or ``$CCX``) against ``dolfinx-ntf run``.
 
 Every deck of the Debian package ``calculix-ccx-test`` (``/usr/share/doc/calculix-ccx-test/examples
 /test``, ``.inp`` or ``.inp.gz``) that contains ``TYPE=NODE TO SURFACE`` is run by ``ccx`` and by
@@ -9,8 +9,8 @@ lists whether our run completed, the reason it refused the deck or stopped, and 
 iterations of both codes (sum over the converged increments, from the ``.sta`` files, and the
 number of increments).
 
-Serial. Needs ``ccx`` on the PATH. Run from the repository root (``make ccx-suite``, about a
-minute)::
+Serial. Needs ``ccx`` on the PATH (``$CCX`` selects another, e.g. ``CCX=ccx-2.23``). Run from the
+repository root (``make ccx-suite``, about a minute)::
 
     .venv/bin/python benchmarks/ccx_suite.py
     .venv/bin/python benchmarks/ccx_suite.py --only contact1 cubespring --keep /tmp/suite
@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import gzip
 import re
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -31,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dolfinx_ntf.calculix.ccx import read_sta
+from dolfinx_ntf.calculix.ccx import CcxError, ccx_executable, read_sta
 from dolfinx_ntf.calculix.dat import read_dat
 
 SUITE = Path("/usr/share/doc/calculix-ccx-test/examples/test")
@@ -66,6 +65,15 @@ def node_to_surface_decks(only: list[str] | None) -> list[tuple[str, str]]:
         if re.search(r"TYPE\s*=\s*NODE\s*TO\s*SURFACE", text, re.IGNORECASE):
             decks.append((name, text))
     return decks
+
+
+def ccx_version(ccx: str) -> str:
+    """The version ``ccx -v`` prints (``2.20``), or ``unknown``."""
+    try:
+        banner = subprocess.run([ccx, "-v"], capture_output=True, text=True, timeout=30).stdout
+        return banner.split("Version", 1)[1].split()[0]
+    except (OSError, IndexError, subprocess.SubprocessError):
+        return "unknown"
 
 
 def _iterations(path: Path) -> str:
@@ -113,7 +121,9 @@ def run_deck(name: str, text: str, root: Path, timeout: float) -> Row:
         (directory / f"{name}.inp").write_text(text, encoding="latin-1")
     start = time.perf_counter()
     try:
-        subprocess.run(["ccx", "-i", name], cwd=ccx_dir, capture_output=True, timeout=timeout)
+        subprocess.run(
+            [ccx_executable(), "-i", name], cwd=ccx_dir, capture_output=True, timeout=timeout
+        )
     except subprocess.TimeoutExpired:
         pass
     row.ccx_time = time.perf_counter() - start
@@ -158,9 +168,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--keep", type=Path, help="run in this directory and keep the files")
     parser.add_argument("--timeout", type=float, default=300.0, help="seconds per run")
     args = parser.parse_args(argv)
-    if shutil.which("ccx") is None or not SUITE.is_dir():
-        print("needs ccx and the package calculix-ccx-test", file=sys.stderr)
+    try:
+        ccx = ccx_executable()
+    except CcxError:
+        ccx = None
+    if ccx is None or not SUITE.is_dir():
+        print("needs ccx (or $CCX) and the package calculix-ccx-test", file=sys.stderr)
         return 1
+    version = ccx_version(ccx)
     decks = node_to_surface_decks(args.only)
     with tempfile.TemporaryDirectory() as scratch:
         root = args.keep or Path(scratch)
@@ -171,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  {name}: {row.runs} ({row.ccx_time:.1f} s ccx, {row.ntf_time:.1f} s ntf)",
                   file=sys.stderr)  # fmt: skip
     print(
-        f"ccx 2.20 against dolfinx-ntf run on the {len(rows)} node-to-surface decks of "
+        f"ccx {version} against dolfinx-ntf run on the {len(rows)} node-to-surface decks of "
         f"calculix-ccx-test, both at the deck's controls.\nColumns U..CELS: largest |ours - ccx| "
         "over each printed .dat block of that type, relative to the largest |value| of ccx's "
         "block (inf: the blocks have different rows); blocks: number of blocks compared; "

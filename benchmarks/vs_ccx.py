@@ -448,10 +448,13 @@ def _os_name() -> str:
 
 
 def _ccx_version() -> str:
+    from dolfinx_ntf.calculix.ccx import CcxError, ccx_executable
+
     try:
-        banner = subprocess.run(["ccx", "-v"], capture_output=True, text=True, timeout=30).stdout
+        banner = subprocess.run([ccx_executable(), "-v"], capture_output=True, text=True,
+                                timeout=30).stdout  # fmt: skip
         return banner.split("Version", 1)[1].split()[0]
-    except (OSError, IndexError, subprocess.SubprocessError):
+    except (OSError, IndexError, subprocess.SubprocessError, CcxError):
         return "unknown"
 
 

@@ -105,6 +105,14 @@ def _parser() -> argparse.ArgumentParser:
         help="beyond ccx: pair again after the predictor has moved the nodes, so that nodes it "
         "pushes into the master start the increment with a spring; default: ccx's schedule",
     )
+    run.add_argument(
+        "--ccx-format",
+        choices=("2.20", "2.23"),
+        default="2.20",
+        help="write the .dat and .frd files in this ccx version's format: 2.23 adds its "
+        "S T E P / INCREMENT lines, its CELS title and its CONTACT component records; "
+        "the values are ccx 2.20's either way (default 2.20)",
+    )
     return parser
 
 
@@ -145,6 +153,7 @@ def main(argv: list[str] | None = None) -> int:
             predictor=args.predictor != "off",
             guard_predictor=args.predictor == "guarded",
             pair_after_predictor=args.pair_after_predictor,
+            ccx_format=args.ccx_format,
         )
     except JobError as error:
         if root:

@@ -3,7 +3,9 @@
 ``python tests/cross_version_case.py`` (from the repository root, with the project's .venv) writes
 ``tests/data/cross_version/dolfinx-<major>.<minor>.npz`` for the installed dolfinx; the test
 ``test_cross_version.py`` solves the same cases and compares with every stored file, so a run on
-Debian 12 (dolfinx 0.5.2) checks the results of Debian 13 (dolfinx 0.9) and the other way round.
+Debian 12 (dolfinx 0.5.2) checks the results of Debian 13 (dolfinx 0.9) and sid (dolfinx 0.11), and
+each of those checks the others. In a chroot of another release (``scripts/other_release.sh``), run
+it with that release's .venv and copy the file back.
 Nodes are matched by their coordinates, since the two versions number dofs differently.
 """
 

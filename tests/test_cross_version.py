@@ -1,4 +1,4 @@
-"""The same contact solves give the same results on dolfinx 0.5.2 (Debian 12) and 0.9 (Debian 13).
+"""Contact solves give the same results on dolfinx 0.5.2, 0.9 and 0.11 (Debian 12, 13 and sid).
 
 Each supported version's results are stored by ``tests/cross_version_case.py``; this test solves
 the cases on the installed version and compares with all stored files to 1e-10.
@@ -10,7 +10,7 @@ from cross_version_case import CASES, reference_path, solve
 
 pytestmark = pytest.mark.serial
 
-SUPPORTED = [(0, 5), (0, 9)]
+SUPPORTED = [(0, 5), (0, 9), (0, 11)]
 
 
 @pytest.fixture(scope="module", params=sorted(CASES))

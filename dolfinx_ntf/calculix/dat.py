@@ -33,6 +33,7 @@ import numpy as np
 
 __all__ = [
     "BLOCK_NAMES",
+    "CCX_FORMATS",
     "DatBlock",
     "blocks_named",
     "contact_print_blocks",
@@ -40,8 +41,10 @@ __all__ = [
     "format_block",
     "format_e13",
     "format_time",
+    "increment_heading",
     "node_print_blocks",
     "read_dat",
+    "step_heading",
     "write_dat",
 ]
 
@@ -110,6 +113,24 @@ _BLOCKS: dict[str, tuple[str, int, int]] = {
 BLOCK_NAMES: tuple[str, ...] = tuple(_BLOCKS)
 """Names of the blocks this module writes."""
 
+CCX_FORMATS: tuple[str, ...] = ("2.20", "2.23")
+"""The ccx versions whose ``.dat`` format is written (docs/method.md §13.6)."""
+
+#: Titles of ccx 2.23 that differ from 2.20's (the blocks' rows do not).
+_TITLES_2_23 = {
+    "CELS": " contact spring energy (slave node,energy) for all contact elements and time{time}",
+}
+
+
+def step_heading(step: int) -> str:
+    """ccx 2.23's line before a step's first printed block (``S T E P       1``), with blanks."""
+    return f"\n{'':24}S T E P{step:8d}\n\n"
+
+
+def increment_heading(increment: int) -> str:
+    """ccx 2.23's line before a printed increment's blocks (``INCREMENT     1``), with blanks."""
+    return f"\n{'':32}INCREMENT{increment:6d}\n\n"
+
 
 # ----------------------------------------------------------------------------- number formats
 
@@ -146,15 +167,15 @@ def format_time(value: float) -> str:
 # ----------------------------------------------------------------------------- writer
 
 
-def _title(name: str, time: float, set_name: str | None) -> str:
-    template = _BLOCKS[name][0]
+def _title(name: str, time: float, set_name: str | None, ccx: str = "2.20") -> str:
+    template = _TITLES_2_23.get(name, _BLOCKS[name][0]) if ccx == "2.23" else _BLOCKS[name][0]
     if "{set}" in template and not set_name:
         raise ValueError(f"block {name} needs a set name")
     return template.format(set=set_name, time=format_time(time))
 
 
-def format_block(block: DatBlock) -> str:
-    """The text of one block exactly as ccx 2.20 writes it (starting with its blank line).
+def format_block(block: DatBlock, ccx: str = "2.20") -> str:
+    """The text of one block exactly as ccx 2.20 (or ``ccx="2.23"``) writes it, blank line first.
 
     Raises:
         ValueError: unknown block name, or labels/values of the wrong shape.
@@ -168,7 +189,9 @@ def format_block(block: DatBlock) -> str:
         raise ValueError(
             f"block {block.name}: values must have shape (n, {num_values}), got {values.shape}"
         )
-    lines = ["", _title(block.name, block.time, block.set), ""]
+    if ccx not in CCX_FORMATS:
+        raise ValueError(f"ccx format {ccx!r}: one of {', '.join(CCX_FORMATS)}")
+    lines = ["", _title(block.name, block.time, block.set, ccx), ""]
     if num_labels == 0:
         if values.shape[0] != 1:
             raise ValueError(f"block {block.name} has one row, got {values.shape[0]}")
@@ -289,14 +312,23 @@ def contact_print_blocks(
     raise ValueError(f"*CONTACT PRINT key must be CDIS, CSTR, CELS or CNUM, got {key!r}")
 
 
-def write_dat(path: str | Path, blocks: Iterable[DatBlock], *, append: bool = False) -> None:
+def write_dat(
+    path: str | Path,
+    blocks: Iterable[DatBlock],
+    *,
+    append: bool = False,
+    ccx: str = "2.20",
+    heading: str = "",
+) -> None:
     """Write ``blocks`` to the ``.dat`` file at ``path`` (``append=False`` truncates it first).
 
-    Truncating first is what ccx does at program start.
+    Truncating first is what ccx does at program start. ``ccx`` is the version whose titles are
+    written; ``heading`` goes first (ccx 2.23's ``step_heading`` and ``increment_heading``).
     """
     with open(path, "a" if append else "w", encoding="ascii", newline="\n") as handle:
+        handle.write(heading)
         for block in blocks:
-            handle.write(format_block(block))
+            handle.write(format_block(block, ccx))
 
 
 # ----------------------------------------------------------------------------- reader
@@ -310,6 +342,9 @@ _FORTRAN_EXP_RE = re.compile(r"(\d)([+-]\d{3})$")
 
 
 def _block_name(title: str) -> str:
+    for name, template in _TITLES_2_23.items():
+        if title.startswith(template.split("{", 1)[0]):
+            return name
     for name, (template, _, _) in _BLOCKS.items():
         prefix = template.split("{", 1)[0]
         if "{set}" in template:

@@ -136,6 +136,8 @@ class FrdWriter:
         connectivity: ``(E, n)`` ccx node numbers, ccx order.
         element_materials: ``(E,)`` 1-based material index of each element.
         materials: Material names in index order (the ``1UMAT`` lines).
+        ccx: The ccx version whose records are written: ``"2.23"`` declares the CONTACT block's
+            components scalars (``1    1    0    0``), 2.20 tensor components as STRESS's.
     """
 
     def __init__(
@@ -148,8 +150,12 @@ class FrdWriter:
         connectivity: np.ndarray,
         element_materials: np.ndarray,
         materials: typing.Sequence[str],
+        ccx: str = "2.20",
     ) -> None:
+        if ccx not in ("2.20", "2.23"):
+            raise ValueError(f"ccx format {ccx!r}: one of 2.20, 2.23")
         self.path = Path(path)
+        self.ccx = ccx
         self._blocks = 0
         self._outputs = 0
         self._increment_key: tuple[int, int] | None = None
@@ -161,7 +167,7 @@ class FrdWriter:
             ("TIME", now.strftime("%H:%M:%S")),
             ("HOST", ""),
             ("PGM", "dolfinx_ntf"),
-            ("VERSION", "CalculiX 2.20 format"),
+            ("VERSION", f"CalculiX {ccx} format"),
             ("DIR", ""),
             ("DBN", ""),
         ):
@@ -202,6 +208,8 @@ class FrdWriter:
             f"{'':20}{0:2d}{self._outputs:5d}{'':10}{1:2d}",
             f" -4  {block.name:<8}{len(components) + with_all:5d}{1:5d}",
         ]
+        if block.name == "CONTACT" and self.ccx == "2.23":
+            components = tuple((name, 1, 0, 0) for name, _, _, _ in components)
         lines += [
             f" -5  {name:<8}{1:5d}{kind:5d}{row:5d}{column:5d}"
             for name, kind, row, column in components

@@ -53,6 +53,7 @@ from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
+from .dat import CCX_FORMATS
 from .deck import Deck, Step, read_deck
 from .gather import CcxNumbering
 from .job_files import JobFiles, check_requests
@@ -196,13 +197,14 @@ class _Job:
         predictor: bool = False,
         pair_after_predictor: bool = False,
         guard_predictor: bool = True,
+        ccx_format: str = "2.20",
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
         self.predictor = predictor
         self.guard_predictor = guard_predictor
         self.pair_after_predictor = pair_after_predictor
         # rank 0 writes the files (docs/method.md §14.5)
-        self.files = JobFiles(jobname, directory, deck, model, root=comm.rank == 0)
+        self.files = JobFiles(jobname, directory, deck, model, root=comm.rank == 0, ccx=ccx_format)
         self.result = JobResult(jobname, directory, model)
         self.result.dat, self.result.cel, self.result.frd = (
             self.files.dat,
@@ -433,7 +435,7 @@ class _Job:
         node_ids = self.deck.node_ids[meshed]
         order = np.argsort(node_ids)
         displacement = self.values.displacements()[meshed]
-        contact = self.values.contact_rows()
+        contact = self.values.contact_rows(self.files.ccx)
         self.result.increments.append(
             IncrementOutput(
                 step=step.number,
@@ -490,6 +492,7 @@ def run_job(
     predictor: bool = True,
     pair_after_predictor: bool = False,
     guard_predictor: bool = True,
+    ccx_format: str = "2.20",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -513,6 +516,9 @@ def run_job(
         guard_predictor: Start from ``u_n`` instead when the predicted displacement brings slave
             nodes into contact that the increment-start pairing gave no spring (beyond ccx, see
             :class:`~dolfinx_ntf.StaticStep`); False is ccx's predictor everywhere.
+        ccx_format: The ccx version whose ``.dat`` and ``.frd`` formats are written, ``"2.20"``
+            or ``"2.23"`` (step and increment lines, CELS title, CONTACT records; the values are
+            2.20's either way: docs/method.md §13.6).
 
     Returns:
         The :class:`JobResult`.
@@ -523,6 +529,8 @@ def run_job(
         JobError: the analysis stopped (no convergence); files keep the converged increments and
             ``error.result`` holds them.
     """
+    if ccx_format not in CCX_FORMATS:
+        raise ValueError(f"ccx_format {ccx_format!r}: one of {', '.join(CCX_FORMATS)}")
     start = _time.perf_counter()
     if progress:
         log_progress()
@@ -557,6 +565,7 @@ def run_job(
         predictor=predictor,
         pair_after_predictor=pair_after_predictor,
         guard_predictor=guard_predictor,
+        ccx_format=ccx_format,
     )
     try:
         return job.run()

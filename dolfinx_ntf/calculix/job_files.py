@@ -22,7 +22,15 @@ from pathlib import Path
 import numpy as np
 
 from .cel import ContactElementsFile
-from .dat import DatBlock, contact_print_blocks, el_print_blocks, node_print_blocks, write_dat
+from .dat import (
+    DatBlock,
+    contact_print_blocks,
+    el_print_blocks,
+    increment_heading,
+    node_print_blocks,
+    step_heading,
+    write_dat,
+)
 from .deck import Deck, FileRequest, PrintRequest, Step
 from .frd import FrdBlock, FrdWriter
 from .gather import Discard
@@ -51,12 +59,23 @@ class JobFiles:
         deck: The deck.
         model: Its dolfinx model.
         root: True on the process that writes (rank 0).
+        ccx: The ccx version whose ``.dat`` and ``.frd`` formats are written (docs/method.md
+            §13.6): ``"2.23"`` adds its step and increment lines, its CELS title and its CONTACT
+            component records.
     """
 
     def __init__(
-        self, jobname: str, directory: Path, deck: Deck, model: CalculixModel, *, root: bool
+        self,
+        jobname: str,
+        directory: Path,
+        deck: Deck,
+        model: CalculixModel,
+        *,
+        root: bool,
+        ccx: str = "2.20",
     ) -> None:
-        self.deck, self.model, self.root = deck, model, root
+        self.deck, self.model, self.root, self.ccx = deck, model, root, ccx
+        self._printed_step: Step | None = None
         self.dat = directory / f"{jobname}.dat"
         if root:
             write_dat(self.dat, [])
@@ -70,7 +89,7 @@ class JobFiles:
             cel.unlink()
         self._cel_overflow = False
         self.frd = directory / f"{jobname}.frd"
-        self._frd = _frd_writer(self.frd, deck, model) if root else Discard()
+        self._frd = _frd_writer(self.frd, deck, model, ccx) if root else Discard()
         self._sta = StaFile(directory / f"{jobname}.sta") if root else Discard()
         self._cvg = CvgFile(directory / f"{jobname}.cvg") if root else Discard()
 
@@ -151,7 +170,15 @@ class JobFiles:
         results = _Increment(self.deck, values, load_time, largest_residual)
         blocks = results.dat_blocks(step, total, contact)
         if self.root:
-            write_dat(self.dat, clean_dat_blocks(blocks), append=True)
+            heading = ""
+            if self.ccx == "2.23" and blocks:
+                if step is not self._printed_step:
+                    self._printed_step = step
+                    number = next(k for k, s in enumerate(self.deck.steps, 1) if s is step)
+                    heading = step_heading(number)
+                heading += increment_heading(increment)
+            write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx,
+                      heading=heading)  # fmt: skip
         for block in results.frd_blocks(step, increment, total, contact):
             self._frd.write(clean_frd_block(block))
 
@@ -286,7 +313,7 @@ def _contact_blocks(
     return blocks
 
 
-def _frd_writer(path: Path, deck: Deck, model: CalculixModel) -> FrdWriter:
+def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWriter:
     """The ``.frd`` file with the deck's mesh (ccx writes it for every job)."""
     block = deck.elements[model.element_type.name]
     materials = list(deck.materials)
@@ -305,6 +332,7 @@ def _frd_writer(path: Path, deck: Deck, model: CalculixModel) -> FrdWriter:
         block.connectivity,
         element_material,
         materials + list(deck.interactions),
+        ccx=ccx,
     )
 
 

@@ -200,10 +200,12 @@ class OutputValues:
 
     # -- contact -----------------------------------------------------------------------------------
 
-    def contact_rows(self) -> list[ContactRows]:
+    def contact_rows(self, ccx: str = "2.20") -> list[ContactRows]:
         """Contact rows of every pair at the current springs, slave nodes ascending.
 
-        Collective: the springs of all processes.
+        ``ccx`` is the version whose CELS is printed: 2.20 adds twice the tangential spring
+        energy, 2.23 the energy itself (docs/method.md §13.6). Collective: the springs of all
+        processes.
         """
         rows = []
         numbering = self.numbering
@@ -215,8 +217,8 @@ class OutputValues:
             t1, t2 = output_tangents(results.normal)
             slip = np.column_stack([np.einsum("ni,ni->n", results.slip, t) for t in (t1, t2)])
             shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
-            # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4)
-            energy = results.energy + 2.0 * results.friction_energy
+            # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4), 2.23 not
+            energy = results.energy + (2.0 if ccx == "2.20" else 1.0) * results.friction_energy
             dp, de = law_accuracy(
                 state.pair.interaction.law, -results.clearance, results.area, length
             )

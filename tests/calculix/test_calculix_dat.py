@@ -19,8 +19,10 @@ from dolfinx_ntf.calculix.dat import (
     format_block,
     format_e13,
     format_time,
+    increment_heading,
     node_print_blocks,
     read_dat,
+    step_heading,
     write_dat,
 )
 from dolfinx_ntf.calculix.deck import face_nodes, read_deck
@@ -109,6 +111,41 @@ def test_read_dat_skips_ccx_223_step_headers(tmp_path):
     assert [(b.name, b.time, b.set) for b in got] == [(b.name, b.time, b.set) for b in expected]
     for a, b in zip(got, expected):
         assert np.array_equal(a.labels, b.labels) and np.array_equal(a.values, b.values)
+
+
+def test_reader_reads_ccx_2_23_cels_title(tmp_path):
+    """ccx 2.23 titles CELS ``contact spring energy ... for all``; the rows are read as CELS."""
+    text = CCX_DAT.read_text(encoding="latin-1")
+    renamed = tmp_path / "two_cubes_223_cels.dat"
+    renamed.write_text(
+        text.replace(" contact print energy (slave node,energy) forall ",
+                     " contact spring energy (slave node,energy) for all "),
+        encoding="latin-1",
+    )  # fmt: skip
+    expected = [b for b in read_dat(CCX_DAT) if b.name == "CELS"]
+    got = [b for b in read_dat(renamed) if b.name == "CELS"]
+    assert expected and len(got) == len(expected)
+    for a, b in zip(got, expected):
+        assert a.time == b.time and np.array_equal(a.values, b.values)
+
+
+def test_ccx_2_23_format_round_trips(tmp_path):
+    """``write_dat(..., ccx="2.23")`` with 2.23's step and increment lines reads back the blocks."""
+    blocks = read_dat(CCX_DAT)
+    path = tmp_path / "two_cubes_223.dat"
+    first = [b for b in blocks if b.time == 0.5]
+    write_dat(path, first, ccx="2.23", heading=step_heading(1) + increment_heading(1))
+    write_dat(path, blocks[len(first) :], append=True, ccx="2.23", heading=increment_heading(2))
+    text = path.read_text()
+    # the lines as ccx 2.23 writes them (``S T E P`` ends column 39, ``INCREMENT`` column 47)
+    assert text.startswith(f"\n{'S T E P       1':>39}\n\n\n{'INCREMENT     1':>47}\n\n\n ")
+    assert f"\n\n{'INCREMENT     2':>47}\n\n\n " in text
+    assert "contact spring energy (slave node,energy) for all" in text
+    assert "contact print energy" not in text
+    again = read_dat(path)
+    assert [(b.name, b.time, b.set) for b in again] == [(b.name, b.time, b.set) for b in blocks]
+    with pytest.raises(ValueError, match="ccx format"):
+        write_dat(path, blocks, ccx="2.22")
 
 
 def test_writer_reproduces_ccx_file_byte_for_byte(tmp_path):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -258,3 +259,43 @@ def test_ccx_error_block_is_what_docs_method_13_2_says(tmp_path):
     per_element = 100 * np.ptp(worst, axis=1) / (3.14 * np.abs(worst).max(axis=1))
     expected = np.where(x[:, 0] >= 1, per_element[1], per_element[0])  # x = 1: both, the larger
     np.testing.assert_allclose(error.values[:, 0], expected, rtol=1e-3)
+
+
+def test_ccx_2_23_format_changes_only_headings_titles_and_contact_records(tmp_path):
+    """``ccx_format="2.23"`` (docs/method.md §13.6): the same values, 2.23's lines around them."""
+    runs = {}
+    for version in ("2.20", "2.23"):
+        (tmp_path / version).mkdir()
+        name = _deck(tmp_path / version)
+        runs[version] = run_job(name, tmp_path / version, progress=False, ccx_format=version)
+    old, new = (read_dat(runs[v].dat) for v in ("2.20", "2.23"))
+    assert [(b.name, b.set, b.time) for b in new] == [(b.name, b.set, b.time) for b in old]
+    for a, b in zip(new, old):
+        assert np.array_equal(a.labels, b.labels) and np.array_equal(a.values, b.values)
+    text = runs["2.23"].dat.read_text()
+    times = sorted({b.time for b in old})
+    headings = [
+        line.split() for line in text.splitlines() if "S T E P" in line or "INCREMENT" in line
+    ]
+    # the deck's first step prints every second increment (FREQUENCY=2), its second step each one
+    assert text.startswith(f"\n{'':24}S T E P       1\n\n\n{'':32}INCREMENT     2\n\n\n")
+    assert [h[-1] for h in headings if h[0] == "S"] == ["1", "2"]
+    assert sum(h[0] == "INCREMENT" for h in headings) == len(times) > 2
+    cels = " contact spring energy (slave node,energy) for all contact elements and time"
+    assert cels in text
+    old_title = " contact print energy (slave node,energy) forall contact elements and time"
+    stripped = re.sub(r"\n {24}S T E P +\d+\n\n|\n {32}INCREMENT +\d+\n\n", "", text)
+    stripped = stripped.replace(cels, old_title)
+    assert stripped == runs["2.20"].dat.read_text()
+
+    frd = {v: runs[v].frd.read_text().splitlines() for v in runs}
+    assert len(frd["2.20"]) == len(frd["2.23"])
+    differing = [(a, b) for a, b in zip(frd["2.20"], frd["2.23"]) if a != b]
+    contact = [b for _, b in differing if b.startswith(" -5  C")]
+    assert len(contact) == 6 * len(read_frd(runs["2.23"].frd).blocks_named("CONTACT")) > 0
+    assert all(line.endswith("    1    1    0    0") for line in contact)
+    others = [b for _, b in differing if not b.startswith(" -5  C")]
+    assert all(line.startswith(("    1UDATE", "    1UTIME", "    1UVERSION")) for line in others)
+    assert any("CalculiX 2.23 format" in line for line in others)
+    with pytest.raises(ValueError, match="ccx_format"):
+        run_job(name, tmp_path / "2.23", progress=False, ccx_format="2.22")

@@ -71,6 +71,28 @@ def test_friction_decks_agree_with_ccx(case, tmp_path: Path):
         assert counts[8:10] == [0, 0] and counts[-1] == 16, counts  # REMOVE, then ADD
 
 
+@pytest.mark.skipif(
+    shutil.which("ccx-2.23") is None, reason="ccx 2.23 (Debian sid) is not installed"
+)
+@pytest.mark.parametrize("case", friction_cases.CASES, ids=[c.name for c in friction_cases.CASES])
+def test_friction_decks_agree_with_ccx_2_23_in_its_format(case, tmp_path: Path):
+    """``ccx_format="2.23"``: CELS with the tangential spring energy once, as ccx 2.23 prints it."""
+    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
+    ccx_dir.mkdir()
+    ntf_dir.mkdir()
+    case.write(ccx_dir)
+    shutil.copy(ccx_dir / f"{case.name}.inp", ntf_dir)
+    run_ccx(ccx_dir, case.name, timeout=300, ccx="ccx-2.23")
+    result = _quiet_run(case.name, ntf_dir, tight=True, ccx_format="2.23")
+    comparison = compare_job(
+        ccx_dir / f"{case.name}.dat", result, read_sta(ccx_dir / f"{case.name}.sta")
+    )
+    why = f"{case.name}: {comparison.summary()}"
+    assert comparison.same_increments and comparison.same_contact_elements, why
+    assert comparison.relative_energy <= TOLERANCES["energy"], why
+    assert comparison.relative_displacement <= TOLERANCES["displacement"], why
+
+
 def _ccx_deck(name: str, directory: Path) -> None:
     source = CCX_TESTS / f"{name}.inp"
     if source.exists():
