@@ -170,9 +170,7 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     increments = (3, 6) if args.coarse else (10, 20)
 
     def step(n: int, loads, changes=()) -> ntf.AnalysisStep:
-        procedure = ntf.StaticStep(
-            lambda t: None, initial_increment=1 / n, fixed=True, on_increment=record
-        )
+        procedure = ntf.StaticStep(initial_increment=1 / n, fixed=True, on_increment=record)
         return ntf.AnalysisStep(procedure, loads, changes=changes)
 
     plan = [

@@ -575,9 +575,22 @@ def _check_arguments(
     """The arguments of :class:`ContactProblem`; returns ``(pairs, bcs)`` as lists."""
     owner = "ContactProblem"
     validation.check_displacement(u, owner)
+    collectives.collectively(u.function_space.mesh.comm, _check_geometry, u.function_space.mesh)
     validation.check_residual(F, u, owner, J)
     pairs = validation.check_sequence(
         pairs, ContactPair, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
     )
     validation.check_positive(max_depth, f"{owner}: max_depth", allow_none=True)
     return pairs, validation.check_bcs(bcs, owner)
+
+
+def _check_geometry(mesh: dolfinx.mesh.Mesh) -> None:
+    """Raise ``ValueError`` naming the first node whose coordinates are not finite."""
+    x = mesh.geometry.x
+    bad = np.flatnonzero(~np.isfinite(x).all(axis=1))
+    if bad.size:
+        raise ValueError(
+            f"ContactProblem: the mesh has {bad.size} node(s) with non-finite coordinates (first: "
+            f"geometry node {bad[0]} of process {mesh.comm.rank}, {x[bad[0]].tolist()}): check "
+            "the mesh file or the gmsh model"
+        )

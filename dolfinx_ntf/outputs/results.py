@@ -269,7 +269,10 @@ class ContactWriter:
         comm = comm or mesh.comm
         path = validation.check_writable(path, comm, "ContactWriter")
         self.problem = problem
+        #: The ``.xdmf`` file written.
+        self.path = path
         self.fields = ContactFields(problem)
+        self._closed = False
         try:
             self._file = dolfinx.io.XDMFFile(comm, str(path), "w")
         except RuntimeError as error:
@@ -296,7 +299,13 @@ class ContactWriter:
         self.fields.update()
 
     def write(self, t: float) -> None:
-        """Write the displacement and the contact fields at time ``t``."""
+        """Write the displacement and the contact fields at time ``t``.
+
+        Raises:
+            ValueError: The writer is closed.
+        """
+        if self._closed:
+            raise ValueError(f"ContactWriter.write: the writer of {self.path} is closed")
         self.fields.update()
         fields = self.fields
         for f in (
@@ -309,8 +318,10 @@ class ContactWriter:
             self._file.write_function(f, t)
 
     def close(self) -> None:
-        """Close the file."""
-        self._file.close()
+        """Close the file (a second call does nothing)."""
+        if not self._closed:
+            self._file.close()
+            self._closed = True
 
     def __enter__(self) -> ContactWriter:
         return self

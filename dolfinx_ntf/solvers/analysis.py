@@ -252,7 +252,13 @@ def run_steps(
             own(t)
 
         runner = dataclasses.replace(procedure, set_load=set_load)
-        step.results = runner.run(solver, problem.u)
+        if isinstance(runner, Step):
+            step.results = runner.run(solver, problem.u, start_time=start_total)
+        else:  # a procedure of the user's own: the results are shifted afterwards
+            step.results = [
+                dataclasses.replace(result, total_time=start_total + result.time)
+                for result in runner.run(solver, problem.u)
+            ]
         out.append(step.results)
         total += period
     return out

@@ -26,7 +26,13 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
-from dolfinx_ntf.solvers.steps import IncrementResult, IncrementSolver, LoadControl, Step
+from dolfinx_ntf.solvers.steps import (
+    IncrementResult,
+    IncrementSolver,
+    LoadControl,
+    Step,
+    no_load,
+)
 
 __all__ = ["CCX_ALPHA", "DynamicStep", "kinetic_energy", "newmark_parameters"]
 
@@ -50,10 +56,6 @@ def kinetic_energy(mass: ufl.Form, velocity: dolfinx.fem.Function) -> float:
     form = dolfinx.fem.form(ufl.action(ufl.action(mass, velocity), velocity))
     comm = velocity.function_space.mesh.comm
     return 0.5 * comm.allreduce(dolfinx.fem.assemble_scalar(form))
-
-
-def _no_load(t: float) -> None:
-    """No time-dependent load."""
 
 
 class _Inertia:
@@ -169,7 +171,7 @@ class DynamicStep(Step):
     """
 
     mass: ufl.Form
-    set_load: LoadControl = _no_load
+    set_load: LoadControl = no_load
     period: float = 1.0
     initial_increment: float = 0.01
     min_increment: float | None = None
@@ -202,7 +204,9 @@ class DynamicStep(Step):
             return self.min_increment
         return min(self.initial_increment, 1e-5 * self.period)
 
-    def _run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def _run(
+        self, solver: IncrementSolver, u: dolfinx.fem.Function, start_time: float
+    ) -> list[IncrementResult]:
         """Add the inertia terms to the problem for the run, integrate, remove them."""
         problem = solver.problem
         V = u.function_space
@@ -218,7 +222,9 @@ class DynamicStep(Step):
             matrix.assemble()
         problem.extra_terms.append(inertia)
         try:
-            return self._integrate(solver, problem, u, velocity, acceleration, mass, inertia)
+            return self._integrate(
+                solver, problem, u, velocity, acceleration, mass, inertia, start_time
+            )
         finally:
             problem.extra_terms.remove(inertia)
             inertia.destroy()
@@ -247,6 +253,7 @@ class DynamicStep(Step):
         acceleration: dolfinx.fem.Function,
         mass: compat.Form,
         inertia: _Inertia,
+        start_time: float,
     ) -> list[IncrementResult]:
         x = compat.petsc_vector(u)
         owned = x.getLocalSize()
@@ -270,7 +277,7 @@ class DynamicStep(Step):
             self._advance(u, velocity, acceleration, inertia, owned)
             _static_residual(problem, inertia, x)
 
-        return self._increments(solver, u, start, converged)
+        return self._increments(solver, u, start, converged, start_time)
 
     @staticmethod
     def _advance(

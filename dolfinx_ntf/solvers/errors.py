@@ -11,6 +11,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.solvers import nullspace
 
@@ -54,10 +55,28 @@ def non_finite_input(problem: ContactProblem) -> str:
             f"(first at node {node}, reference position ({position[0]:.6g}, {position[1]:.6g}, "
             f"{position[2]:.6g})): check the initial values and prescribed displacements"
         )
+    for number, bc in enumerate(problem.bcs):
+        prescribed = _prescribed_values(bc)
+        if not np.isfinite(prescribed).all():
+            bad = int(np.count_nonzero(~np.isfinite(prescribed)))
+            return (
+                f"Dirichlet condition {number} (of {len(problem.bcs)}) prescribes {bad} "
+                "non-finite value(s): check the values it was made with and what set_load "
+                "writes into them"
+            )
     return (
-        "the residual is not finite at the start of the increment although the displacement is: "
-        "check the loads, constants and material parameters of the residual form"
+        "the residual is not finite at the start of the increment although the displacement and "
+        "the prescribed values are: check the loads, constants and material parameters of the "
+        "residual form"
     )
+
+
+def _prescribed_values(bc: object) -> np.ndarray:
+    """The values a Dirichlet condition prescribes (its Function's or Constant's)."""
+    values = compat.boundary_values(bc)
+    if hasattr(values, "x"):
+        return np.asarray(values.x.array)
+    return np.asarray(getattr(values, "value", values), dtype=float)
 
 
 def non_finite_residual(

@@ -9,6 +9,7 @@ time integration.
 
 from __future__ import annotations
 
+import inspect
 import logging
 import numbers
 import time
@@ -52,6 +53,11 @@ logger = logging.getLogger("dolfinx_ntf")
 
 LoadControl = typing.Callable[[float], None]
 
+
+def no_load(t: float) -> None:
+    """No time-dependent load: the increments only advance the step time ``t``."""
+
+
 #: The step's own start of an attempt, ``start(t_new, dt, u_start)``, after its loads are set.
 IncrementStart = typing.Callable[[float, float, np.ndarray], None]
 #: The step's own update after a converged increment, ``converged(dt, u_start)``.
@@ -79,6 +85,8 @@ class IncrementResult:
         iterations: Newton iterations of the converged attempt.
         springs: Contact springs over all processes at the end.
         residual: Norm of the last residual.
+        total_time: Time since the start of the analysis: ``time`` for a step run alone, plus
+            the periods of the steps before it in :func:`~dolfinx_ntf.run_steps`.
     """
 
     increment: int
@@ -88,6 +96,20 @@ class IncrementResult:
     iterations: int
     springs: int
     residual: float
+    total_time: float = 0.0
+
+
+def _takes_one_argument(function: typing.Callable) -> bool:
+    """Whether ``function(t)`` binds (True when Python cannot tell, e.g. for some builtins)."""
+    try:
+        signature = inspect.signature(function)
+    except (TypeError, ValueError):
+        return True
+    try:
+        signature.bind(0.0)
+    except TypeError:
+        return False
+    return True
 
 
 class Step:
@@ -120,9 +142,9 @@ class Step:
         """
         owner = type(self).__name__
         self._check_own(owner)
-        if not callable(self.set_load):
+        if not callable(self.set_load) or not _takes_one_argument(self.set_load):
             raise TypeError(
-                f"{owner}: set_load must be a function of the step time t, got "
+                f"{owner}: set_load must be a function of the step time t (one argument), got "
                 f"{validation.describe(self.set_load)}"
             )
         if self.on_increment is not None and not callable(self.on_increment):
@@ -165,12 +187,16 @@ class Step:
         """The smallest increment a cutback may reach."""
         return self.min_increment
 
-    def run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def run(
+        self, solver: IncrementSolver, u: dolfinx.fem.Function, *, start_time: float = 0.0
+    ) -> list[IncrementResult]:
         """Run the step from the current ``u``.
 
         Args:
             solver: The solver of the problem.
             u: The problem's displacement (the Function the problem was built on).
+            start_time: Total time at the start of the step (``IncrementResult.total_time`` is
+                this plus the step time; :func:`~dolfinx_ntf.run_steps` passes it).
 
         Returns:
             The result of every converged increment of this run.
@@ -185,9 +211,11 @@ class Step:
                 f"{owner}.run: u must be the Function the ContactProblem was built on "
                 f"(got {validation.describe(u)})"
             )
-        return self._run(solver, u)
+        return self._run(solver, u, float(start_time))
 
-    def _run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def _run(
+        self, solver: IncrementSolver, u: dolfinx.fem.Function, start_time: float
+    ) -> list[IncrementResult]:
         """The step's own run, with checked arguments: set up, then :meth:`_increments`."""
         raise NotImplementedError
 
@@ -229,6 +257,7 @@ class Step:
         u: dolfinx.fem.Function,
         start: IncrementStart,
         converged: IncrementEnd,
+        start_time: float,
     ) -> list[IncrementResult]:
         """CalculiX's increment control over the step time (docs/method.md §7.2).
 
@@ -289,6 +318,7 @@ class Step:
                 iterations,
                 problem.total_springs,
                 solver.residual_norms[-1],
+                start_time + t,
             )
             results.append(result)
             logger.info(
@@ -320,7 +350,8 @@ class StaticStep(Step):
     Args:
         set_load: Called with the step time at the end of each increment (before the pairing);
             scales loads and prescribed displacements, e.g.
-            ``lambda t: setattr(traction, "value", t * p)``.
+            ``lambda t: setattr(traction, "value", t * p)``. Default: no load (the increments
+            advance the time only, e.g. for loads that :func:`~dolfinx_ntf.run_steps` sets).
         period: Step time.
         initial_increment, min_increment, max_increment: Increment sizes.
         fixed: Use ``initial_increment`` throughout (CalculiX DIRECT).
@@ -348,7 +379,7 @@ class StaticStep(Step):
             §7.2).
     """
 
-    set_load: LoadControl
+    set_load: LoadControl = no_load
     period: float = 1.0
     initial_increment: float = 1.0
     min_increment: float = 1e-5
@@ -363,7 +394,9 @@ class StaticStep(Step):
     on_increment: typing.Callable[[IncrementResult], None] | None = None
     guard_predictor: bool = False
 
-    def _run(self, solver: IncrementSolver, u: dolfinx.fem.Function) -> list[IncrementResult]:
+    def _run(
+        self, solver: IncrementSolver, u: dolfinx.fem.Function, start_time: float
+    ) -> list[IncrementResult]:
         """Start each increment from the last one's, or from the predictor."""
         problem = solver.problem
         problem.begin_step()
@@ -389,4 +422,4 @@ class StaticStep(Step):
             nonlocal velocity
             velocity = (u.x.array - u_start) / dt
 
-        return self._increments(solver, u, start, converged)
+        return self._increments(solver, u, start, converged, start_time)

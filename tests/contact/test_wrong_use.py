@@ -316,3 +316,49 @@ def test_writer_on_paths_that_cannot_be_written(blocks, tmp_path):
     # Root writes anywhere permissions would stop others, but not into /proc.
     with pytest.raises(OSError, match=r"ContactWriter: cannot write '/proc/out\.xdmf'"):
         ntf.ContactWriter(problem, "/proc/out.xdmf")
+
+
+def test_writer_refuses_to_write_after_close(blocks, tmp_path):
+    problem, _ = _solvable(blocks)
+    writer = ntf.ContactWriter(problem, tmp_path / "out.xdmf")
+    writer.write(0.0)
+    writer.close()
+    writer.close()  # a second close does nothing
+    with pytest.raises(
+        ValueError, match=r"ContactWriter.write: the writer of .*out\.xdmf is closed"
+    ):
+        writer.write(1.0)
+
+
+def test_load_callback_of_the_wrong_shape_is_refused_at_once():
+    with pytest.raises(
+        TypeError, match=r"StaticStep: set_load must be a function of the step time"
+    ):
+        ntf.StaticStep(lambda: None)
+    with pytest.raises(TypeError, match=r"set_load must be a function of the step time t \(one"):
+        ntf.StaticStep(lambda t, scale: None)
+    ntf.StaticStep(lambda t, scale=2.0: None)  # defaults are fine
+    ntf.StaticStep(print)  # builtins whose signature Python cannot always read are accepted
+    assert ntf.StaticStep().set_load(0.5) is None  # no load: increments advance the time only
+
+
+def test_nan_in_a_prescribed_displacement_is_named(blocks):
+    problem, pressure = _solvable(blocks)
+    solver = ntf.ContactNewtonSolver(blocks["mesh"].comm, problem)
+    compat.boundary_values(problem.bcs[1]).x.array[:] = np.nan  # the punch top's u_x
+    with pytest.raises(
+        ntf.ContactSolverError, match=r"Dirichlet condition 1 \(of 3\) prescribes \d+ non-finite"
+    ):
+        ntf.StaticStep(lambda t: setattr(pressure, "value", t)).run(solver, problem.u)
+
+
+def test_nan_in_the_mesh_geometry_is_named(blocks):
+    mesh, _, _ = two_blocks()
+    mesh.geometry.x[5, 1] = np.nan
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    F = ufl.inner(ntf.small_strain_stress(u, E, 0.3), ufl.grad(v)) * ufl.dx
+    with pytest.raises(
+        ValueError, match=r"1 node\(s\) with non-finite coordinates \(first: geometry node 5"
+    ):
+        ntf.ContactProblem(F, u, [], [])

@@ -18,11 +18,11 @@ pytestmark = pytest.mark.serial
 
 
 def _fixed(increments, **kwargs):
-    return ntf.StaticStep(lambda t: None, initial_increment=1 / increments, fixed=True, **kwargs)
+    return ntf.StaticStep(initial_increment=1 / increments, fixed=True, **kwargs)
 
 
 def _automatic(**kwargs):
-    return ntf.StaticStep(lambda t: None, initial_increment=0.5, **kwargs)
+    return ntf.StaticStep(initial_increment=0.5, **kwargs)
 
 
 def test_amplitude_and_load_rules():
@@ -97,6 +97,10 @@ def test_steps_change_friction_remove_and_add_a_pair():
     ]
     results = ntf.run_steps(solver, steps)
     assert len(results[0]) == 1 and steps[1].results is results[1]
+    # the total time runs on over the steps (each of period 1), the step time restarts
+    assert [r.total_time for r in results[0]] == [1.0]
+    assert [r.total_time - r.time for r in results[1]] == [1.0] * len(results[1])
+    assert [r.total_time for r in results[1]][-1] == 2.0
     assert [n for n, _ in seen["removed"]] == [0]
     assert seen["added"][-1][0] >= 8  # pressed again (the punch top is held tilted)
     # a re-added pair starts afresh (Python default): no slip carried over from before
