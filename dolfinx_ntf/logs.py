@@ -1,10 +1,12 @@
 """Progress output through Python's ``logging``, and the log lines of the libraries below.
 
-dolfinx_ntf writes to the logger ``"dolfinx_ntf"``: increments, attempts, pairings (spring counts)
-and convergence at ``INFO``, in CalculiX's words; and one line per Newton iteration (residual norm,
-correction norm, spring count) to its child ``"dolfinx_ntf.newton"``, which is quiet unless asked
-for. Nothing is printed until :func:`log_progress` adds a handler (or the application configures
-``logging`` itself).
+dolfinx_ntf writes to the logger ``"dolfinx_ntf"`` at ``INFO``: one line per converged increment
+(iterations, springs, face changes, residual, time), cutbacks and their reasons, warnings. Two
+children carry more, quiet unless asked for: ``"dolfinx_ntf.details"`` has CalculiX's lines (each
+attempt's increment size and step time, the spring count of every pairing, ADJUST, solver swaps;
+the deck runner prints them as ccx does), ``"dolfinx_ntf.newton"`` one line per Newton iteration
+(residual norm, correction norm, spring count). Nothing is printed until :func:`log_progress` adds a
+handler (or the application configures ``logging`` itself and sets the children's levels).
 
 Two libraries below print on their own, and are kept out of the way:
     - dolfinx's C++ log prints ``Newton solver did not converge`` warnings; the contact solver
@@ -26,6 +28,7 @@ from mpi4py import MPI
 import dolfinx.log
 
 __all__ = [
+    "details_logger",
     "jit_logger",
     "log_progress",
     "logger",
@@ -36,6 +39,10 @@ __all__ = [
 
 #: Increments, attempts, pairings and convergence (``INFO``).
 logger = logging.getLogger("dolfinx_ntf")
+#: CalculiX's lines: attempts, the spring count of each pairing, ADJUST, solver swaps (``INFO``);
+#: quiet (``WARNING``) unless :func:`log_progress` is called with ``details=True``.
+details_logger = logging.getLogger("dolfinx_ntf.details")
+details_logger.setLevel(logging.WARNING)
 #: One line per Newton iteration (``INFO``); quiet (``WARNING``) unless :func:`log_progress` is
 #: called with ``iterations=True``.
 newton_logger = logging.getLogger("dolfinx_ntf.newton")
@@ -48,14 +55,18 @@ jit_logger.setLevel(logging.WARNING)
 _handler: logging.Handler | None = None
 
 
-def log_progress(level: int = logging.INFO, *, iterations: bool = False) -> None:
-    """Print dolfinx_ntf's CalculiX-like progress lines on rank 0.
+def log_progress(
+    level: int = logging.INFO, *, iterations: bool = False, details: bool = False
+) -> None:
+    """Print dolfinx_ntf's progress lines on rank 0: one per increment.
 
     Args:
         level: Level of the ``"dolfinx_ntf"`` logger (``logging.INFO`` shows increments and
-            pairings; ``logging.WARNING`` only problems).
+            cutbacks; ``logging.WARNING`` only problems).
         iterations: Also print one line per Newton iteration: residual norm (and its ratio to the
             first one), correction norm, number of contact springs.
+        details: Also print CalculiX's lines: each attempt's increment size and step time, the
+            spring count of every pairing, ADJUST moves, linear-solver swaps.
     """
     global _handler
     if _handler is None and MPI.COMM_WORLD.rank == 0:
@@ -65,6 +76,7 @@ def log_progress(level: int = logging.INFO, *, iterations: bool = False) -> None
     logger.setLevel(level)
     logger.propagate = False
     newton_logger.setLevel(level if iterations else logging.WARNING)
+    details_logger.setLevel(level if details else logging.WARNING)
 
 
 @contextlib.contextmanager

@@ -134,13 +134,43 @@ def progress_lines(monkeypatch):
 
     handler = Keep()
     monkeypatch.setattr(logs, "_handler", handler)
-    saved = logs.logger.level, logs.logger.propagate, logs.newton_logger.level
+    saved = (
+        logs.logger.level,
+        logs.logger.propagate,
+        logs.newton_logger.level,
+        logs.details_logger.level,
+    )
     logs.logger.addHandler(handler)
     yield records
     logs.logger.removeHandler(handler)
     logs.logger.setLevel(saved[0])
     logs.logger.propagate = saved[1]
     logs.newton_logger.setLevel(saved[2])
+    logs.details_logger.setLevel(saved[3])
+
+
+def test_one_progress_line_per_increment_by_default(progress_lines):
+    """A Python user sees one line per increment; CalculiX's per-attempt and per-pairing lines
+    only with details=True (the deck runner's choice)."""
+    ntf.log_progress()
+    problem, pressure = _problem()
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t), initial_increment=0.5)
+    results = step.run(solver, problem.u)
+    assert len(results) == 2
+    increments = [line for line in progress_lines if " converged: time " in line]
+    assert [line.split(" converged")[0] for line in increments] == [" increment 1", " increment 2"]
+    assert all("iterations" in line and "contact elements" in line for line in increments)
+    assert not [line for line in progress_lines if "Number of contact spring elements" in line]
+    assert not [line for line in progress_lines if "increment size=" in line]
+    progress_lines.clear()
+    ntf.log_progress(details=True)
+    problem, pressure = _problem()
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    step = ntf.StaticStep(lambda t: setattr(pressure, "value", LOAD * t), initial_increment=0.5)
+    step.run(solver, problem.u)
+    assert [line for line in progress_lines if "Number of contact spring elements" in line]
+    assert len([line for line in progress_lines if "increment size=" in line]) == 2
 
 
 def test_one_progress_line_per_newton_iteration(progress_lines):

@@ -533,7 +533,7 @@ def run_job(
         raise ValueError(f"ccx_format {ccx_format!r}: one of {', '.join(CCX_FORMATS)}")
     start = _time.perf_counter()
     if progress:
-        log_progress()
+        log_progress(details=True)  # ccx's lines: attempts, pairings
     directory = Path(directory)
     path = directory / f"{jobname}.inp"
     deck = _read(path, comm)

@@ -36,6 +36,7 @@ from dolfinx_ntf.kernels.search import MasterSurface
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.kernels.springs import SpringEvaluation
 from dolfinx_ntf.kernels.tie_frame import TieFrame, frame_from_moments, point_moments
+from dolfinx_ntf.logs import details_logger
 from dolfinx_ntf.parallel import collectives, master_exchange, surface_distribution
 from dolfinx_ntf.parallel.halo import NodeHalo
 
@@ -570,7 +571,7 @@ class Pairing:
                 delta,
                 self.halo,
             )
-            logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
+            details_logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
         return count
 
     def _creates_spring(

@@ -40,6 +40,7 @@ from dolfinx_ntf.fem.constraints import (
 )
 from dolfinx_ntf.kernels.friction import TANGENT_MODES
 from dolfinx_ntf.kernels.start_slope import start_law
+from dolfinx_ntf.logs import details_logger
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import distributed_elimination
 from dolfinx_ntf.parallel.halo import NodeHalo
@@ -202,6 +203,8 @@ class ContactProblem:
         self.pairings = 0
         #: Springs over all processes at the last pairing (:attr:`num_springs`: this process's).
         self.total_springs = 0
+        #: Slave nodes over all processes that moved to another master face at the last pairing.
+        self.total_face_changes = 0
         self._pattern_checked = False
         #: The vector the last :meth:`F` filled; a re-pairing in :meth:`J` re-assembles it (the
         #: right-hand side of the coming solve). A driver whose last residual went elsewhere (a
@@ -388,10 +391,13 @@ class ContactProblem:
         self.pairings += 1
         self._pattern_checked = False
         self.total_springs = count
+        self.total_face_changes = changes
         if self.iteration >= 1 and changes:
-            logger.info(" Number of contact spring elements=%d (%d changed face)", count, changes)
+            details_logger.info(
+                " Number of contact spring elements=%d (%d changed face)", count, changes
+            )
         else:
-            logger.info(" Number of contact spring elements=%d", count)
+            details_logger.info(" Number of contact spring elements=%d", count)
         for callback in self.pairing_callbacks:
             callback(self)
         return count

@@ -20,6 +20,7 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.logs import details_logger
 from dolfinx_ntf.solvers import nullspace
 
 __all__ = [
@@ -146,7 +147,7 @@ def default_options(problem: object, linear_solver: object, symmetric: bool) -> 
         limit = CHOLESKY_MAX_DOFS if symmetric else DIRECT_MAX_DOFS
         small = dofs <= limit or bool(getattr(problem, "constraints", None))
         linear_solver = "direct" if small else "iterative"
-        logger.info(" %d dofs: %s linear solver", dofs, linear_solver)
+        details_logger.info(" %d dofs: %s linear solver", dofs, linear_solver)
     if linear_solver == "iterative":
         if not symmetric:
             return dict(ITERATIVE_PETSC_OPTIONS)
@@ -293,10 +294,10 @@ class LinearSolver:
 def unsymmetric(ksp: PETSc.KSP, why: str) -> None:
     """Swap the symmetric solvers of ``ksp``: Cholesky for LU, CG for right-preconditioned GMRES."""
     if ksp.getPC().getType() == "cholesky":
-        logger.info(" %s: LU instead of Cholesky", why)
+        details_logger.info(" %s: LU instead of Cholesky", why)
         ksp.getPC().setType("lu")
     if ksp.getType() == "cg":
-        logger.info(" %s: GMRES instead of CG", why)
+        details_logger.info(" %s: GMRES instead of CG", why)
         ksp.setType("gmres")
         ksp.setPCSide(PETSc.PC.Side.RIGHT)
 

@@ -22,6 +22,7 @@ import dolfinx.fem
 
 from dolfinx_ntf import validation
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.logs import details_logger
 from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenceError
 
 __all__ = ["IncrementResult", "IncrementSolver", "LoadControl", "StaticStep", "Step"]
@@ -283,7 +284,7 @@ class Step:
                 attempt += 1
                 dt = min(dt, self.period - t)
                 t_new = t + dt
-                logger.info(
+                details_logger.info(
                     " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
                     increment,
                     attempt,
@@ -321,13 +322,15 @@ class Step:
                 start_time + t,
             )
             results.append(result)
+            changes = problem.total_face_changes
             logger.info(
-                " increment %d converged: time %.6g, %d iterations, %d contact elements, "
+                " increment %d converged: time %.6g, %d iterations, %d contact elements%s, "
                 "residual %.3e (%.2f s)",
                 increment,
                 t,
                 iterations,
                 result.springs,
+                f" ({changes} changed face)" if changes else "",
                 result.residual,
                 time.perf_counter() - clock,
             )
