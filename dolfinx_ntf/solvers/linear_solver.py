@@ -284,6 +284,22 @@ class LinearSolver:
             )
         return None
 
+    def fall_back_to_direct(self) -> bool:
+        """After a failed iterative solve: MUMPS LU for this and every later solve.
+
+        Returns:
+            True, or False when the solver is direct already (nothing to fall back to).
+        """
+        if self.ksp.getType() == "preonly":
+            return False
+        A, P = self.ksp.getOperators()
+        self.ksp.reset()
+        self.ksp.setType("preonly")
+        self.ksp.getPC().setType("lu")
+        self.ksp.getPC().setFactorSolverType("mumps")
+        self.ksp.setOperators(A, P)
+        return True
+
     def destroy(self) -> None:
         """Destroy the near-nullspace (a matrix keeps its own reference)."""
         if self.near_nullspace is not None:

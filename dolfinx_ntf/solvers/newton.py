@@ -232,8 +232,16 @@ class ContactNewtonSolver(NewtonSolver):
         )
 
     def _update(self, solver: NewtonSolver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
-        """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here."""
+        """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here.
+
+        An iterative solve that failed is done again by MUMPS LU, which the solver keeps for the
+        rest of the run (a singular Jacobian is not retried).
+        """
         failure = self.linear.failure(dx, self._b)
+        if failure is not None and "singular" not in failure and self.linear.fall_back_to_direct():
+            logger.info(" %s: solving again with MUMPS LU, kept for the rest of the run", failure)
+            self.krylov_solver.solve(self._b, dx)
+            failure = self.linear.failure(dx, self._b)
         if failure is not None:
             self._linear_solve_failed(failure)
         self.updates += 1

@@ -87,3 +87,25 @@ def test_line_search_halves_an_overshooting_step():
     before = x.array.copy()
     assert solver._line_search(dx, x) == 0.5
     np.testing.assert_array_equal(x.array, before)
+
+
+def test_failed_iterative_solve_falls_back_to_direct_in_the_same_iteration():
+    """An iterative solve that does not converge is done again by MUMPS LU in the same Newton
+    iteration (no cutback), and LU stays: the run is the direct solver's."""
+    runs = {}
+    for name, options in (
+        ("direct", None),
+        ("failing", {"ksp_type": "gmres", "pc_type": "jacobi", "ksp_max_it": 3}),
+    ):
+        problem, pressure, _ = punch_problem("hexahedron")
+        solver = ntf.ContactNewtonSolver(
+            problem.u.function_space.mesh.comm, problem, petsc_options=options
+        )
+        results = _step(pressure, initial_increment=0.5).run(solver, problem.u)
+        runs[name] = [(r.attempt, r.iterations) for r in results], problem.u.x.array.copy()
+        assert solver.krylov_solver.getType() == "preonly"
+    assert runs["failing"][0] == runs["direct"][0] == [(1, 3), (1, 3)]
+    assert (
+        np.abs(runs["failing"][1] - runs["direct"][1]).max()
+        <= 1e-12 * np.abs(runs["direct"][1]).max()
+    )
