@@ -226,6 +226,7 @@ class _Job:
             self.problem,
             petsc_options=petsc_options,
             check_unpaired=False,
+            roundoff_floor=False,
             residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
             average_over_step=not tight,
             change_over_iterations=not tight,

@@ -86,6 +86,26 @@ def measure_iterate(
     return average, largest, correction, change
 
 
+#: Round-off of a residual force, in units of machine epsilon times the Jacobian's largest row sum
+#: and the largest coordinate (:func:`roundoff_floor`).
+ROUNDOFF_FACTOR = 10.0
+
+
+def roundoff_floor(problem: ContactProblem, A: PETSc.Mat, x: PETSc.Vec) -> float:
+    """The round-off of the residual forces at ``x``: ``10 eps ||A||_inf max |X + u|``. Collective.
+
+    A spring force is a stiffness times a gap taken between current coordinates, so it carries
+    about ``eps K A |x|`` of round-off: with a stiff penalty that can exceed what the force-scaled
+    test asks (``R_n`` times the mean element force, which small bulk elements pull down). A
+    largest residual below this floor is round-off and counts as zero.
+    """
+    comm = problem.u.function_space.mesh.comm
+    local = float(np.abs(problem.reference_coordinates).max(initial=0.0))
+    local += float(np.abs(x.array_r).max(initial=0.0))
+    scale = comm.allreduce(local, op=MPI.MAX)
+    return ROUNDOFF_FACTOR * np.finfo(float).eps * A.norm(PETSc.NormType.NORM_INFINITY) * scale
+
+
 @dataclass
 class ForceScaledTest:
     """CalculiX's force-scaled convergence test and the forces it averages.

@@ -78,6 +78,8 @@ class ContactSNESSolver:
         min_iterations: Newton updates needed before the force-scaled test may pass.
         check_unpaired: Before accepting convergence, pair again if slave nodes penetrate without
             a spring (as ContactNewtonSolver does).
+        roundoff_floor: A largest residual force below the round-off of the forces counts as
+            zero, as for ContactNewtonSolver.
     """
 
     def __init__(
@@ -94,6 +96,7 @@ class ContactSNESSolver:
         max_it: int = 30,
         min_iterations: int = 2,
         check_unpaired: bool = True,
+        roundoff_floor: bool = True,
     ) -> None:
         owner = "ContactSNESSolver"
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
@@ -130,6 +133,7 @@ class ContactSNESSolver:
         self.convergence = convergence
         self.min_iterations = min_iterations
         self.check_unpaired = check_unpaired
+        self.roundoff_floor = roundoff_floor
         #: CalculiX's force-scaled test (``convergence="calculix"``).
         self.test = ForceScaledTest(controls, relaxation_iteration)
         #: Displacement at the start of the increment; set by the step driver.
@@ -239,6 +243,8 @@ class ContactSNESSolver:
         """The Jacobian with the springs of this iteration's pairing."""
         merges = self.problem.assembler.pattern_merges
         self.problem.assemble_jacobian(self._u_vector, A)
+        if self.roundoff_floor:
+            self.test.residual_floor = convergence.roundoff_floor(self.problem, A, self._u_vector)
         self.linear.update(
             A,
             friction=self.problem.has_friction,

@@ -109,3 +109,26 @@ def test_failed_iterative_solve_falls_back_to_direct_in_the_same_iteration():
         np.abs(runs["failing"][1] - runs["direct"][1]).max()
         <= 1e-12 * np.abs(runs["direct"][1]).max()
     )
+
+
+def test_a_stiff_penalty_converges_to_its_round_off():
+    """With K = 5e5 E the spring forces carry more round-off than the force-scaled test allows
+    (R_n times the mean element force): without the round-off floor every attempt stalls and the
+    step gives up; with it (the default) each increment converges in a few iterations."""
+    from helpers.blocks import YOUNGS_MODULUS
+
+    outcomes = {}
+    for floor in (False, True):
+        law = ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS, slope=5e5 * YOUNGS_MODULUS)
+        problem, pressure, _ = punch_problem("hexahedron", law=law)
+        solver = ntf.ContactNewtonSolver(
+            problem.u.function_space.mesh.comm, problem, roundoff_floor=floor
+        )
+        try:
+            results = _step(pressure, initial_increment=0.5).run(solver, problem.u)
+            outcomes[floor] = [(r.attempt, r.iterations) for r in results]
+        except ntf.ContactConvergenceError as error:
+            outcomes[floor] = str(error)
+    assert "cannot be cut back below the minimum" in outcomes[False]
+    assert [attempt for attempt, _ in outcomes[True]] == [1, 1]
+    assert all(iterations <= 5 for _, iterations in outcomes[True])
