@@ -82,11 +82,11 @@ class ContactNewtonSolver(NewtonSolver):
             without a spring and pair again if any
             (:class:`~dolfinx_ntf.solvers.convergence.ExtraPairings`, beyond CalculiX; the deck
             runner reports their number instead).
-        roundoff_floor: Count a largest residual force below the round-off of evaluating the
-            forces (:func:`~dolfinx_ntf.solvers.convergence.roundoff_floor`: 10 eps times the
-            Jacobian's largest row sum and the largest coordinate) as zero, beyond CalculiX: a
-            stiff penalty's spring forces carry that much round-off, which the force-scaled test
-            can otherwise ask to go below (the deck runner keeps CalculiX's test).
+        roundoff_floor: Leave the residual forces of spring nodes below their round-off
+            (:func:`~dolfinx_ntf.solvers.convergence.roundoff_floor`: 10 eps times the Jacobian's
+            largest row sum and the largest coordinate) out of the test, beyond CalculiX: a stiff
+            penalty's spring forces carry that much round-off, which the force-scaled test can
+            otherwise ask to go below (the deck runner keeps CalculiX's test).
         residual_floor, average_over_step, change_over_iterations: CalculiX's variants of the
             force-scaled test that the deck runner reproduces
             (:class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`);
@@ -156,7 +156,6 @@ class ContactNewtonSolver(NewtonSolver):
         self.increment_start: np.ndarray | None = None
         self.min_iterations = min_iterations
         self.roundoff_floor = roundoff_floor
-        self._given_floor = residual_floor
         self._roundoff = 0.0
         self.divergence = DivergenceRule(divergence_iteration)
         self.first_solve = True
@@ -294,7 +293,8 @@ class ContactNewtonSolver(NewtonSolver):
         )
         average, largest, correction, change = measures
         correction *= self.step_lengths[-1]
-        self.test.residual_floor = max(self._given_floor, self._roundoff)
+        if self.roundoff_floor:
+            largest = convergence.largest_beyond_roundoff(self.problem, b, self._roundoff)
         converged = self.test.converged(self.updates, average, largest, correction, change)
         springs = self.problem.u.function_space.mesh.comm.allreduce(self.problem.num_springs)
         self.history.append((self.updates, springs, *self.test.last))

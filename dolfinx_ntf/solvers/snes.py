@@ -134,6 +134,7 @@ class ContactSNESSolver:
         self.min_iterations = min_iterations
         self.check_unpaired = check_unpaired
         self.roundoff_floor = roundoff_floor
+        self._roundoff = 0.0
         #: CalculiX's force-scaled test (``convergence="calculix"``).
         self.test = ForceScaledTest(controls, relaxation_iteration)
         #: Displacement at the start of the increment; set by the step driver.
@@ -244,7 +245,7 @@ class ContactSNESSolver:
         merges = self.problem.assembler.pattern_merges
         self.problem.assemble_jacobian(self._u_vector, A)
         if self.roundoff_floor:
-            self.test.residual_floor = convergence.roundoff_floor(self.problem, A, self._u_vector)
+            self._roundoff = convergence.roundoff_floor(self.problem, A, self._u_vector)
         self.linear.update(
             A,
             friction=self.problem.has_friction,
@@ -267,6 +268,8 @@ class ContactSNESSolver:
         average, largest, correction, change = convergence.measure_iterate(
             self.problem, x, b, self._step, 1.0, start
         )
+        if self.roundoff_floor:
+            largest = convergence.largest_beyond_roundoff(self.problem, b, self._roundoff)
         converged = self.test.converged(iteration, average, largest, correction, change)
         converged = (
             converged and iteration >= self.min_iterations and not self.problem.count_changed
