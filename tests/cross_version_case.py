@@ -44,7 +44,8 @@ def solve(case: str) -> dict[str, np.ndarray]:
     )
     u = problem.u
     V = u.function_space
-    solver = ntf.ContactNewtonSolver(V.mesh.comm, problem)
+    # The stored results were made before the round-off floor (issue 21): the same test here.
+    solver = ntf.ContactNewtonSolver(V.mesh.comm, problem, roundoff_floor=False)
     step = ntf.StaticStep(
         lambda t: setattr(pressure, "value", LOAD * t), initial_increment=0.5, fixed=True
     )
