@@ -17,6 +17,7 @@ from the ``newton`` run over its largest displacement.
 
     .venv/bin/python benchmarks/snes_vs_newton.py              # coarse demos (about 1 minute)
     .venv/bin/python benchmarks/snes_vs_newton.py --sphere     # and the 26k-dof Hertz sphere
+    .venv/bin/python benchmarks/snes_vs_newton.py --only --sphere   # the 26k-dof Hertz sphere alone
 """
 
 from __future__ import annotations
@@ -104,7 +105,8 @@ def main() -> None:
     drivers = ["newton", "snes basic"]
     if PETSc.Sys.getVersion() >= (3, 21, 0):
         drivers.append("snes bt")
-    runs = [(n, [] if args.full else ["--coarse"]) for n in (args.only or NAMES)]
+    names = NAMES if args.only is None else args.only
+    runs = [(n, [] if args.full else ["--coarse"]) for n in names]
     if args.sphere:
         runs.append(("hertz_sphere", []))
     comm = MPI.COMM_WORLD
