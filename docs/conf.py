@@ -45,7 +45,10 @@ templates_path = ["_templates"]
 nitpicky = True
 nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|np|npt|numpy\.typing|dolfinx|ufl|basix|petsc4py|PETSc|mpi4py|MPI)(\..*)?"),
-    (r"py:.*", r"(collections\.abc|typing|pathlib|logging|os|io|enum|dataclasses|subprocess)\..*"),
+    (
+        r"py:.*",
+        r"(collections\.abc|typing|pathlib|logging|os|io|enum|dataclasses|subprocess|types)\..*",
+    ),
     (r"py:.*", r"(NDArray|ArrayLike|Callable|Sequence|Iterable|Mapping|Path|Any|NoneType)"),
 ]
 

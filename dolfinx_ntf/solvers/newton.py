@@ -83,7 +83,7 @@ class ContactNewtonSolver(NewtonSolver):
             (:class:`~dolfinx_ntf.solvers.convergence.ExtraPairings`, beyond CalculiX; the deck
             runner reports their number instead).
         roundoff_floor: Leave the residual forces of spring nodes below their round-off
-            (:func:`~dolfinx_ntf.solvers.convergence.roundoff_floor`: 10 eps times the Jacobian's
+            (``solvers.convergence.roundoff_floor``: 10 eps times the Jacobian's
             largest row sum and the largest coordinate) out of the test, beyond CalculiX: a stiff
             penalty's spring forces carry that much round-off, which the force-scaled test can
             otherwise ask to go below (the deck runner keeps CalculiX's test).

@@ -13,9 +13,10 @@ u_y = 0 on both end faces of both bodies: plane strain, so that Hertz's line con
     E* = E / (2 (1 - nu^2)),   b = sqrt(4 P R / (pi E*)),   p0 = 2 P / (pi b),   P = F / L.
 
 Checks that can fail: the contact force equals the force that holds the cylinder's top and the
-reaction of the clamped block bottom (equilibrium, 1e-8); the contact half-width lies between the
-last closed and the first open slave node and the fitted profile is within 5 % of Hertz's b and
-p0. Run: ``.venv/bin/python tests/data/site/half_cylinder_on_block.py`` (or under ``mpirun``).
+reaction of the clamped block bottom (equilibrium, 1e-8); Hertz's half-width b is the edge of the
+closed zone to one node spacing (the penalty overlap may close a node just beyond b) and the fitted
+profile is within 5 % of Hertz's b and p0. Run: ``.venv/bin/python
+tests/data/site/half_cylinder_on_block.py`` (or under ``mpirun``).
 """
 
 import math
@@ -158,7 +159,11 @@ if mesh.comm.rank == 0:
     )
 
 assert abs(force / top_force - 1) < 1e-8 and abs(base_force / force - 1) < 1e-8
-assert last_closed < b < first_open
+# The edge of the closed zone is b to one node spacing: the penalty lets the bodies overlap by p/K,
+# so a node just beyond b may touch (measured: none on Debian 12's mesh, one 0.7 % beyond b with
+# sid's gmsh, whose mesh differs).
+spacing = first_open - last_closed
+assert last_closed - spacing < b < first_open
 assert abs(b_fit / b - 1) < 0.05 and abs(p0_fit / p0 - 1) < 0.05  # measured -0.5 %, +1.7 %
 if mesh.comm.rank == 0:
     print("checks passed")
