@@ -44,20 +44,25 @@ def _quiet_run(name: str, directory: Path, **options):
         logger.setLevel(level)
 
 
-@pytest.mark.parametrize("case", friction_cases.CASES, ids=[c.name for c in friction_cases.CASES])
-def test_friction_decks_agree_with_ccx(case, tmp_path: Path):
+def _compare_with_ccx(case, tmp_path: Path, ccx: str = "ccx", **options):
+    """Run ``case``'s deck by ``ccx`` and by the runner (tight controls); compare the two."""
     ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
     ccx_dir.mkdir()
     ntf_dir.mkdir()
     case.write(ccx_dir)
     shutil.copy(ccx_dir / f"{case.name}.inp", ntf_dir)
-    run_ccx(ccx_dir, case.name, timeout=300)
-    result = _quiet_run(case.name, ntf_dir, tight=True)
+    run_ccx(ccx_dir, case.name, timeout=300, ccx=ccx)
+    result = _quiet_run(case.name, ntf_dir, tight=True, **options)
     assert result.completed
     comparison = compare_job(
         ccx_dir / f"{case.name}.dat", result, read_sta(ccx_dir / f"{case.name}.sta")
     )
-    why = f"{case.name}: {comparison.summary()}"
+    return comparison, f"{case.name}: {comparison.summary()}"
+
+
+@pytest.mark.parametrize("case", friction_cases.CASES, ids=[c.name for c in friction_cases.CASES])
+def test_friction_decks_agree_with_ccx(case, tmp_path: Path):
+    comparison, why = _compare_with_ccx(case, tmp_path)
     assert comparison.same_increments and comparison.same_contact_elements, why
     assert comparison.relative_displacement <= TOLERANCES["displacement"], why
     assert comparison.relative_pressure <= TOLERANCES["pressure"], why
@@ -77,17 +82,7 @@ def test_friction_decks_agree_with_ccx(case, tmp_path: Path):
 @pytest.mark.parametrize("case", friction_cases.CASES, ids=[c.name for c in friction_cases.CASES])
 def test_friction_decks_agree_with_ccx_2_23_in_its_format(case, tmp_path: Path):
     """``ccx_format="2.23"``: CELS with the tangential spring energy once, as ccx 2.23 prints it."""
-    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
-    ccx_dir.mkdir()
-    ntf_dir.mkdir()
-    case.write(ccx_dir)
-    shutil.copy(ccx_dir / f"{case.name}.inp", ntf_dir)
-    run_ccx(ccx_dir, case.name, timeout=300, ccx="ccx-2.23")
-    result = _quiet_run(case.name, ntf_dir, tight=True, ccx_format="2.23")
-    comparison = compare_job(
-        ccx_dir / f"{case.name}.dat", result, read_sta(ccx_dir / f"{case.name}.sta")
-    )
-    why = f"{case.name}: {comparison.summary()}"
+    comparison, why = _compare_with_ccx(case, tmp_path, ccx="ccx-2.23", ccx_format="2.23")
     assert comparison.same_increments and comparison.same_contact_elements, why
     assert comparison.relative_energy <= TOLERANCES["energy"], why
     assert comparison.relative_displacement <= TOLERANCES["displacement"], why
