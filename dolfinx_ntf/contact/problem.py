@@ -13,6 +13,7 @@ increments start.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import typing
 
@@ -483,6 +484,21 @@ class ContactProblem:
             self.elimination.reduce_vector(
                 b, lambda r: dolfinx.fem.petsc.set_bc(r, self.bcs, x, -1.0)
             )
+
+    def spring_force_sizes(self, out: PETSc.Vec) -> None:
+        """The sum of the absolute spring forces at every dof, into ``out``. Collective.
+
+        The springs last evaluated by :meth:`form`, Dirichlet rows included; ``out`` has the
+        layout of the residual vector (each owner gets its rows, from every process's springs).
+        """
+        with out.localForm() as local:
+            local.set(0.0)
+        blocks = [
+            dataclasses.replace(block, vector=np.abs(block.vector))
+            for block in self._blocks
+            if block.vector is not None
+        ]
+        self.assembler.add_to_vector(out, blocks, dirichlet_rows=True)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """Start Newton iteration ``iteration``: re-pair on schedule, assemble the Jacobian.

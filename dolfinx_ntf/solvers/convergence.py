@@ -108,17 +108,18 @@ def roundoff_floor(problem: ContactProblem, A: PETSc.Mat, x: PETSc.Vec) -> float
 
 
 def largest_beyond_roundoff(problem: ContactProblem, b: PETSc.Vec, floor: float) -> float:
-    """The largest residual force of ``b``, the spring nodes' entries below ``floor`` left out.
+    """The largest residual force of ``b``, the entries below ``floor`` where springs act left out.
 
-    Collective. The entries of nodes without springs count in full: their forces come from
-    displacement gradients, whose round-off is far smaller.
+    Collective. The rows come from every process's springs (the same on any partition); rows
+    without spring forces count in full: their forces come from displacement gradients, whose
+    round-off is far smaller.
     """
+    sizes = b.duplicate()
+    problem.spring_force_sizes(sizes)
     values = np.abs(b.array_r)
-    owned = values.size // 3
-    nodes = [state.element_nodes.ravel() for state in problem.states]
-    nodes = np.unique(np.concatenate(nodes)) if nodes else np.zeros(0, dtype=np.int64)
-    rows = (3 * nodes[nodes < owned][:, None] + np.arange(3)).ravel()
-    values[rows] = np.where(values[rows] < floor, 0.0, values[rows])
+    spring_rows = sizes.array_r > 0.0
+    sizes.destroy()
+    values[spring_rows & (values < floor)] = 0.0
     comm = problem.u.function_space.mesh.comm
     return comm.allreduce(float(values.max(initial=0.0)), op=MPI.MAX)
 
