@@ -12,8 +12,9 @@ The package's folders are its layers, lowest first::
     dolfinx_ntf (__init__, __main__)      the public API and the command line
 
 A module may import its own layer and any lower one; ``solvers`` and ``outputs`` share a rank
-but do not import each other. Imports inside functions count too (a lazy import is still an
-import). Exit status 1 and one line per offending import otherwise::
+but do not import each other. No layer imports ``dolfinx.nls``, which dolfinx deprecated in 0.10
+and removed after 0.11. Imports inside functions count too (a lazy import is still an import).
+Exit status 1 and one line per offending import otherwise::
 
     python scripts/check_layers.py [PACKAGE_DIR]
 """
@@ -44,6 +45,9 @@ RANK = {
 SIBLINGS = {frozenset({"solvers", "outputs"})}
 #: Third-party packages the numpy kernels must not import.
 NOT_IN_KERNELS = ("dolfinx", "ufl", "basix", "ffcx", "mpi4py", "petsc4py", "gmsh")
+#: Modules no layer may import: dolfinx deprecated its Newton solver in 0.10 and removed it after
+#: 0.11 (solvers/newton_loop.py is the package's own).
+NOWHERE = ("dolfinx.nls",)
 
 
 def layer_of(module: str) -> str | None:
@@ -90,6 +94,9 @@ def violations(package_dir: Path) -> list[str]:
             continue
         for line, imported in imported_modules(path, package):
             top = imported.split(".")[0]
+            if any(imported == gone or imported.startswith(gone + ".") for gone in NOWHERE):
+                messages.append(f"{path}:{line}: imports {imported}, which dolfinx has removed")
+                continue
             if own == "kernels" and top in NOT_IN_KERNELS:
                 messages.append(f"{path}:{line}: the numpy kernels import {imported}")
                 continue

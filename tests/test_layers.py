@@ -41,6 +41,12 @@ def test_package_imports_only_downwards():
             "parallel (layer 3) imports dolfinx_ntf.calculix",
         ),
         ("solvers/newton.py", "import dolfinx_ntf.outputs.results", "sibling layer"),
+        (
+            "solvers/newton_loop.py",
+            "import dolfinx.nls.petsc",
+            "imports dolfinx.nls.petsc, which dolfinx has removed",
+        ),
+        ("compat.py", "from dolfinx.nls import petsc", "imports dolfinx.nls, which dolfinx has"),
     ],
 )
 def test_planted_upward_import_fails(tmp_path, module, planted, message):
