@@ -335,7 +335,7 @@ def test_half_cylinder_script_from_the_site(tmp_path):
     assert len(forces) == 3 and max(forces) - min(forces) < 1e-8 * max(forces)
     b = float(re.search(r"b = ([\d.]+) mm, p0", out).group(1))
     closed, first_open = map(float, re.search(r"\|x\| = ([\d.]+) mm.*at ([\d.]+) mm", out).groups())
-    assert closed < b < first_open
+    assert closed - (first_open - closed) < b < first_open  # the edge to one node spacing
     b_error, p0_error = map(float, re.search(r"\(([-+\d.]+)%\).*\(([-+\d.]+)%\)", out).groups())
     # measured -0.5 % and +1.7 % on the script's mesh (0.2 mm at the contact, b = 1.26 mm)
     assert abs(b_error) < 5 and abs(p0_error) < 5
