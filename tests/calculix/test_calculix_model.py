@@ -115,9 +115,12 @@ def _midside_mismatch(model, deck, cells_nodes):
     midpoints = np.array([(corners[a] + corners[b]) / 2 for a, b in TET_EDGES])
     block = deck.elements["C3D10"]
     worst = 0.0
+    geometry_of_mesh = model.mesh.geometry
+    # dolfinx 0.11 keeps one coordinate map per cell type (cmap is deprecated there)
+    cmap = geometry_of_mesh.cmaps[0] if compat.DOLFINX_VERSION >= (0, 11) else geometry_of_mesh.cmap
     for cell, element in zip(model.element_cell, block.connectivity):  # 48 cells: a small loop
-        geometry = model.mesh.geometry.x[cells_nodes[cell]]
-        mapped = model.mesh.geometry.cmap.push_forward(midpoints, geometry)
+        geometry = geometry_of_mesh.x[cells_nodes[cell]]
+        mapped = cmap.push_forward(midpoints, geometry)
         expected = deck.node_coords[deck.node_index(element[4:])]
         worst = max(worst, float(np.abs(mapped - expected).max()))
     return worst
