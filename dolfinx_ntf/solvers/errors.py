@@ -8,6 +8,7 @@ name the cause (a non-finite input, a body with no support).
 from __future__ import annotations
 
 from mpi4py import MPI
+from petsc4py import PETSc
 
 import numpy as np
 
@@ -19,6 +20,7 @@ __all__ = [
     "ContactConvergenceError",
     "ContactDivergenceError",
     "ContactSolverError",
+    "free_rigid_motion",
     "linear_solve_failure",
     "no_support_hint",
     "non_finite_input",
@@ -100,6 +102,22 @@ def no_support_hint(problem: ContactProblem) -> str:
     return ""
 
 
+def _unheld_bodies(problem: ContactProblem) -> tuple[int, np.ndarray, np.ndarray]:
+    """Number of bodies, the body of each local node of ``u``'s space, and the bodies with no
+    Dirichlet condition and no contact spring (the same on every process). Collective."""
+    V = problem.u.function_space
+    num_bodies, body = nullspace.body_numbers(V)
+    held = np.zeros(num_bodies, dtype=np.int64)
+    for bc in problem.bcs:
+        dofs = np.asarray(bc.dof_indices()[0])
+        held[body[dofs // 3]] = 1
+    for state in problem.states:
+        nodes = state.element_nodes.ravel()
+        held[body[nodes[nodes < body.size]]] = 1
+    V.mesh.comm.Allreduce(MPI.IN_PLACE, held, op=MPI.MAX)
+    return num_bodies, body, np.flatnonzero(held == 0)
+
+
 def unsupported_bodies(problem: ContactProblem) -> list[str]:
     """The bodies that nothing holds: no Dirichlet condition, no contact spring. Collective.
 
@@ -109,32 +127,73 @@ def unsupported_bodies(problem: ContactProblem) -> list[str]:
     """
     if problem.constraints:
         return []
+    num_bodies, body, unheld = _unheld_bodies(problem)
+    return _describe_bodies(problem, num_bodies, body, unheld)
+
+
+def _describe_bodies(
+    problem: ContactProblem, num_bodies: int, body: np.ndarray, which: np.ndarray
+) -> list[str]:
+    """``body B of N (n nodes, centroid (x, y, z))`` for each body in ``which``. Collective."""
     V = problem.u.function_space
-    comm = V.mesh.comm
-    num_bodies, body = nullspace.body_numbers(V)
     owned = V.dofmap.index_map.size_local
-    held = np.zeros(num_bodies, dtype=np.int64)
-    for bc in problem.bcs:
-        dofs = np.asarray(bc.dof_indices()[0])
-        held[body[dofs // 3]] = 1
-    for state in problem.states:
-        nodes = state.element_nodes.ravel()
-        held[body[nodes[nodes < body.size]]] = 1
-    comm.Allreduce(MPI.IN_PLACE, held, op=MPI.MAX)
     points = V.tabulate_dof_coordinates()[:owned]
     sums = np.zeros((num_bodies, 4))
     for k in range(3):
         sums[:, k] = np.bincount(body[:owned], weights=points[:, k], minlength=num_bodies)
     sums[:, 3] = np.bincount(body[:owned], minlength=num_bodies)
-    sums = comm.allreduce(sums, op=MPI.SUM)
+    sums = V.mesh.comm.allreduce(sums, op=MPI.SUM)
     described = []
-    for b in np.flatnonzero(held == 0):
+    for b in which:
         centre = sums[b, :3] / max(sums[b, 3], 1.0)
         described.append(
             f"body {b + 1} of {num_bodies} ({int(sums[b, 3])} nodes, centroid "
             f"({centre[0]:.4g}, {centre[1]:.4g}, {centre[2]:.4g}))"
         )
     return described
+
+
+#: A rigid-body mode ``z`` of a body is free when ``|A z| <= FREE_MOTION |A|_inf |z|``: round-off
+#: of a singular Jacobian (a regular one leaves at least its smallest stiffness).
+FREE_MOTION = 1e-10
+
+
+def free_rigid_motion(problem: ContactProblem, A: PETSc.Mat) -> str | None:
+    """Why ``A`` is singular, if a body that nothing holds moves rigidly at no force. Collective.
+
+    The candidates are the bodies with no Dirichlet condition and no contact spring; a candidate
+    is free when one of its rigid-body modes (translations, rotations about its centroid) is a
+    null vector of ``A``. Other terms of the residual form (an elastic foundation, inertia) hold a
+    body too: then no mode is null and nothing is reported. This finds a singular system that
+    a zero right-hand side hides from the solve's residual. Returns the message, or None
+    (:func:`linear_solve_failure` adds the bodies' names).
+    """
+    if problem.constraints:
+        return None
+    num_bodies, body, unheld = _unheld_bodies(problem)
+    if unheld.size == 0:
+        return None
+    V = problem.u.function_space
+    comm = V.mesh.comm
+    owned = V.dofmap.index_map.size_local
+    points = V.tabulate_dof_coordinates()[:owned]
+    modes = nullspace.rigid_body_modes(points, body[:owned], num_bodies, comm)
+    modes = modes.reshape(modes.shape[0], num_bodies, -1)[:, unheld].reshape(modes.shape[0], -1)
+    scale = A.norm(PETSc.NormType.NORM_INFINITY)
+    z, Az = A.createVecs()
+    forces = []
+    for mode in modes.T:
+        z.array[:] = mode
+        A.mult(z, Az)
+        forces.append(Az.norm() / z.norm())
+    z.destroy()
+    Az.destroy()
+    if min(forces) > FREE_MOTION * scale:
+        return None
+    return (
+        "the Jacobian is singular (a body can move as a rigid body at no force; with a zero "
+        "load the solve would return u = 0, one of infinitely many solutions)"
+    )
 
 
 def singular_hint(problem: ContactProblem) -> str:

@@ -245,13 +245,16 @@ class ContactNewtonSolver(NewtonSolver):
         """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here.
 
         An iterative solve that failed is done again by MUMPS LU, which the solver keeps for the
-        rest of the run (a singular Jacobian is not retried).
+        rest of the run (a singular Jacobian is not retried). A zero first right-hand side cannot
+        show a singular Jacobian: the rigid-body modes of the bodies nothing holds are tried.
         """
         failure = self.linear.failure(dx, self._b)
         if failure is not None and "singular" not in failure and self.linear.fall_back_to_direct():
             logger.info(" %s: solving again with MUMPS LU, kept for the rest of the run", failure)
             self.krylov_solver.solve(self._b, dx)
             failure = self.linear.failure(dx, self._b)
+        if failure is None and self.first_solve and self.updates == 0 and self._b.norm() == 0:
+            failure = errors.free_rigid_motion(self.problem, self._A)  # no residual to judge by
         if failure is not None:
             self._linear_solve_failed(failure)
         self.updates += 1
