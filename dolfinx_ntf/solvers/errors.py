@@ -103,8 +103,11 @@ def no_support_hint(problem: ContactProblem) -> str:
 
 
 def _unheld_bodies(problem: ContactProblem) -> tuple[int, np.ndarray, np.ndarray]:
-    """Number of bodies, the body of each local node of ``u``'s space, and the bodies with no
-    Dirichlet condition and no contact spring (the same on every process). Collective."""
+    """The bodies, and those with no Dirichlet condition and no contact spring. Collective.
+
+    Returns the number of bodies, the body of each local node of ``u``'s space and the unheld
+    bodies' numbers (the same on every process).
+    """
     V = problem.u.function_space
     num_bodies, body = nullspace.body_numbers(V)
     held = np.zeros(num_bodies, dtype=np.int64)
