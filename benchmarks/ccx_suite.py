@@ -9,6 +9,10 @@ lists whether our run completed, the reason it refused the deck or stopped, and 
 iterations of both codes (sum over the converged increments, from the ``.sta`` files, and the
 number of increments).
 
+dolfinx_ntf runs every deck in one process (``python -m dolfinx_ntf run JOB1 JOB2 ...``, each job
+in its own directory), so that its start-up is paid once; its time per deck is the span of that
+job's output, and ``--separate`` runs one process per deck instead (start-up included per deck).
+
 Serial. Needs ``ccx`` on the PATH (``$CCX`` selects another, e.g. ``CCX=ccx-2.23``). Run from the
 repository root (``make ccx-suite``, about a minute)::
 
@@ -24,6 +28,7 @@ import re
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -112,13 +117,19 @@ def compare(ccx_dat: Path, ntf_dat: Path) -> tuple[dict[str, float], int]:
     return differences, compared
 
 
-def run_deck(name: str, text: str, root: Path, timeout: float) -> Row:
-    """Run one deck with both codes and compare."""
-    row = Row(name)
+def _prepare(name: str, text: str, root: Path) -> tuple[Path, Path]:
+    """The deck's ccx and ntf directories, each with its copy of the deck."""
     ccx_dir, ntf_dir = root / name / "ccx", root / name / "ntf"
     for directory in (ccx_dir, ntf_dir):
         directory.mkdir(parents=True, exist_ok=True)
         (directory / f"{name}.inp").write_text(text, encoding="latin-1")
+    return ccx_dir, ntf_dir
+
+
+def run_ccx_deck(name: str, text: str, root: Path, timeout: float) -> Row:
+    """Run one deck with ccx: the row with ccx's time and iterations."""
+    row = Row(name)
+    ccx_dir, _ = _prepare(name, text, root)
     start = time.perf_counter()
     try:
         subprocess.run(
@@ -128,11 +139,28 @@ def run_deck(name: str, text: str, root: Path, timeout: float) -> Row:
         pass
     row.ccx_time = time.perf_counter() - start
     row.ccx_iterations = _iterations(ccx_dir / f"{name}.sta")
+    return row
+
+
+def _finish(row: Row, root: Path, output: str, code: int) -> None:
+    """Our side of ``row`` from the job's output and exit status, and the .dat comparison."""
+    ccx_dir, ntf_dir = root / row.deck / "ccx", root / row.deck / "ntf"
+    row.runs = {0: "yes"}.get(code, "stopped" if code == 2 else "refused")
+    if code != 0:
+        row.reason = _reason(output)
+    row.ntf_iterations = _iterations(ntf_dir / f"{row.deck}.sta")
+    ccx_dat, ntf_dat = ccx_dir / f"{row.deck}.dat", ntf_dir / f"{row.deck}.dat"
+    if ccx_dat.is_file() and ntf_dat.is_file():
+        row.differences, row.compared = compare(ccx_dat, ntf_dat)
+
+
+def run_ntf_deck(row: Row, root: Path, timeout: float) -> None:
+    """Run one deck with ``python -m dolfinx_ntf run`` in its own process (``--separate``)."""
     start = time.perf_counter()
     try:
         done = subprocess.run(
-            [sys.executable, "-m", "dolfinx_ntf", "run", name],
-            cwd=ntf_dir,
+            [sys.executable, "-m", "dolfinx_ntf", "run", row.deck],
+            cwd=root / row.deck / "ntf",
             capture_output=True,
             text=True,
             timeout=timeout,
@@ -141,13 +169,63 @@ def run_deck(name: str, text: str, root: Path, timeout: float) -> Row:
     except subprocess.TimeoutExpired:
         output, code = f"*ERROR: timed out after {timeout:.0f} s", -1
     row.ntf_time = time.perf_counter() - start
-    row.runs = {0: "yes"}.get(code, "stopped" if code == 2 else "refused")
-    if code != 0:
-        row.reason = _reason(output)
-    row.ntf_iterations = _iterations(ntf_dir / f"{name}.sta")
-    if (ccx_dir / f"{name}.dat").is_file() and (ntf_dir / f"{name}.dat").is_file():
-        row.differences, row.compared = compare(ccx_dir / f"{name}.dat", ntf_dir / f"{name}.dat")
-    return row
+    _finish(row, root, output, code)
+
+
+_JOB = re.compile(r"^ Job \d+/\d+: (\S+)$")
+_SUMMARY = re.compile(r"^ \d+ jobs, \d+ done:$")
+_STATUS = re.compile(r"^   (\S+): .* \(exit (-?\d+)\)$")
+
+
+def run_ntf_batch(rows: list[Row], root: Path, timeout: float) -> float:
+    """Run every deck in one ``python -m dolfinx_ntf run JOB1 JOB2 ...`` (start-up paid once).
+
+    Each row gets its job's status, output (from its ``Job`` line to the next one) and time (the
+    same span). Returns the wall time of the whole process.
+    """
+    jobs = [str(root / r.deck / "ntf" / r.deck) for r in rows]
+    by_job = dict(zip(jobs, rows))
+    outputs: dict[str, list[str]] = {job: [] for job in jobs}
+    started: dict[str, float] = {}
+    codes: dict[str, int] = {}
+    current: str | None = None
+    start = time.perf_counter()
+    # unbuffered, stderr into stdout: every line lands under its job's header
+    with subprocess.Popen(
+        [sys.executable, "-u", "-m", "dolfinx_ntf", "run", *jobs],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    ) as process:
+        timer = threading.Timer(timeout * max(len(jobs), 1), process.kill)
+        timer.start()
+        try:
+            for line in process.stdout:
+                line = line.rstrip("\n")
+                now = time.perf_counter()
+                job = _JOB.match(line)
+                if job or _SUMMARY.match(line):
+                    if current is not None:
+                        by_job[current].ntf_time = now - started[current]
+                    current = job.group(1) if job else None
+                    if current is not None:
+                        started[current] = now
+                    continue
+                status = _STATUS.match(line)
+                if current is None and status and status.group(1) in by_job:
+                    codes[status.group(1)] = int(status.group(2))
+                elif current is not None:
+                    outputs[current].append(line)
+        finally:
+            timer.cancel()
+    wall = time.perf_counter() - start
+    if current is not None:  # killed or crashed within a job
+        by_job[current].ntf_time = time.perf_counter() - started[current]
+    for job, row in by_job.items():
+        code = codes.get(job, -1)
+        text = "\n".join(outputs[job]) or f"*ERROR: no status (the batch stopped, exit {code})"
+        _finish(row, root, text, code)
+    return wall
 
 
 def table(rows: list[Row]) -> str:
@@ -167,6 +245,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", nargs="*", help="deck names (default: all)")
     parser.add_argument("--keep", type=Path, help="run in this directory and keep the files")
     parser.add_argument("--timeout", type=float, default=300.0, help="seconds per run")
+    parser.add_argument(
+        "--separate",
+        action="store_true",
+        help="one dolfinx_ntf process per deck (default: one `run JOB1 JOB2 ...` for all)",
+    )
     args = parser.parse_args(argv)
     try:
         ccx = ccx_executable()
@@ -179,12 +262,19 @@ def main(argv: list[str] | None = None) -> int:
     decks = node_to_surface_decks(args.only)
     with tempfile.TemporaryDirectory() as scratch:
         root = args.keep or Path(scratch)
-        rows = []
-        for name, text in decks:
-            row = run_deck(name, text, root, args.timeout)
-            rows.append(row)
-            print(f"  {name}: {row.runs} ({row.ccx_time:.1f} s ccx, {row.ntf_time:.1f} s ntf)",
+        rows = [run_ccx_deck(name, text, root, args.timeout) for name, text in decks]
+        if args.separate:
+            for row in rows:
+                run_ntf_deck(row, root, args.timeout)
+            wall = sum(row.ntf_time for row in rows)
+        else:
+            wall = run_ntf_batch(rows, root, args.timeout)
+        for row in rows:
+            print(f"  {row.deck}: {row.runs} ({row.ccx_time:.2f} s ccx, {row.ntf_time:.2f} s ntf)",
                   file=sys.stderr)  # fmt: skip
+        how = "one process per deck" if args.separate else "one process for all decks"
+        print(f"  ccx {sum(r.ccx_time for r in rows):.1f} s, dolfinx_ntf {wall:.1f} s ({how})",
+              file=sys.stderr)  # fmt: skip
     print(
         f"ccx {version} against dolfinx-ntf run on the {len(rows)} node-to-surface decks of "
         f"calculix-ccx-test, both at the deck's controls.\nColumns U..CELS: largest |ours - ccx| "

@@ -1,9 +1,14 @@
-"""Command line: ``python -m dolfinx_ntf run JOB [options]`` (console script ``dolfinx-ntf``).
+"""Command line: ``python -m dolfinx_ntf run JOB [JOB ...] [options]`` (script ``dolfinx-ntf``).
 
 Runs the CalculiX deck ``JOB.inp`` like ``ccx -i JOB``: ccx-like progress on the screen, results in
 ``JOB.dat``, ``JOB.frd``, ``JOB.sta``, ``JOB.cvg``, ``JOB.cel`` and ``JOB.xdmf`` next to the deck.
 Exit status: 0 done, 1 bad or unsupported input or usage (the message names ``file:line``), 2 no
 convergence (files keep the converged increments).
+
+Several jobs run one after the other in one process, so that Python, the imports and the form
+compiler's cache are paid for once (a parameter study, CalculiX's test suite): each job writes its
+own files and gets its own status, a failing job does not stop the next one, and a summary lists
+every job's status; the exit status is the largest of them (0 only if every job is done).
 
 Under ``mpirun -n N`` every process runs the job and rank 0 writes the files and the messages
 (docs/method.md §14.5); an error ends every process with the same status.
@@ -12,8 +17,10 @@ Under ``mpirun -n N`` every process runs the job and rank 0 writes the files and
 from __future__ import annotations
 
 import argparse
+import gc
 import logging
 import sys
+import traceback
 from pathlib import Path
 
 __all__ = ["main"]
@@ -35,6 +42,7 @@ exit status:
   0  done
   1  bad or unsupported input, or bad usage (the message names file and line)
   2  no convergence (the files keep the converged increments)
+  several JOBs: the largest status of the jobs (each job's status is listed at the end)
 
 Under mpirun -n N every process runs the job, rank 0 writes the files and the
 messages, and every process ends with the same status.
@@ -50,7 +58,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="dolfinx-ntf",
         description="Node-to-face contact for dolfinx: run the CalculiX node-to-surface contact\n"
         "deck JOB.inp like `ccx -i JOB`, on one process or under mpirun:\n\n"
-        "  dolfinx-ntf run JOB [options]\n"
+        "  dolfinx-ntf run JOB [JOB ...] [options]\n"
         "  python -m dolfinx_ntf run JOB [options]\n"
         "  mpirun -n N python -m dolfinx_ntf run JOB [options]\n\n"
         "`dolfinx-ntf run --help` lists the options.",
@@ -60,14 +68,17 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     run = commands.add_parser(
         "run",
-        usage="dolfinx-ntf run JOB [options]   (or: mpirun -n N python -m dolfinx_ntf run JOB)",
+        usage="dolfinx-ntf run JOB [JOB ...] [options]   "
+        "(or: mpirun -n N python -m dolfinx_ntf run JOB)",
         help="run a CalculiX deck JOB.inp like ccx, writing JOB.dat, .frd, .sta, .cvg, .cel, .xdmf",
         description="Run the CalculiX deck JOB.inp like `ccx -i JOB` (JOB may have a directory\n"
-        "and the .inp suffix): ccx-like progress on the screen, ccx's files next to the deck.",
+        "and the .inp suffix): ccx-like progress on the screen, ccx's files next to the deck.\n"
+        "Several JOBs run one after the other in one process (start-up paid once), each with\n"
+        "its own files and status.",
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    run.add_argument("job", metavar="JOB", help="job name: reads JOB.inp")
+    run.add_argument("jobs", nargs="+", metavar="JOB", help="job name: reads JOB.inp")
     run.add_argument(
         "--tight",
         action="store_true",
@@ -123,7 +134,7 @@ def _job_path(job: str) -> tuple[str, Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit status."""
+    """Entry point; returns the exit status (several jobs: the largest of theirs)."""
     try:
         args = _parser().parse_args(argv)
     except (
@@ -135,15 +146,42 @@ def main(argv: list[str] | None = None) -> int:
     )  # keep the JIT compiler's INFO lines off the screen
     from mpi4py import MPI
 
+    root = MPI.COMM_WORLD.rank == 0
+    if len(args.jobs) == 1:
+        return _run_one(args.jobs[0], args, MPI.COMM_WORLD)
+    statuses = []
+    for number, job in enumerate(args.jobs, start=1):
+        if root:
+            print(f"\n Job {number}/{len(args.jobs)}: {job}", flush=True)
+        try:
+            statuses.append(_run_one(job, args, MPI.COMM_WORLD))
+        except Exception:  # an unexpected error of one job must not stop the others
+            if root:
+                traceback.print_exc()
+            statuses.append(EXIT_INPUT)
+        gc.collect()  # free this job's PETSc matrices and solvers before the next one
+    if root:
+        print(f"\n {len(args.jobs)} jobs, {statuses.count(EXIT_OK)} done:", flush=True)
+        for job, status in zip(args.jobs, statuses):
+            print(f"   {job}: {_STATUS_NAMES.get(status, 'failed')} (exit {status})")
+    return max(statuses)
+
+
+#: What each exit status of a job means, for the summary of several jobs.
+_STATUS_NAMES = {EXIT_OK: "done", EXIT_INPUT: "bad input", EXIT_NO_CONVERGENCE: "no convergence"}
+
+
+def _run_one(job: str, args: argparse.Namespace, comm: object) -> int:
+    """Run one deck with the command line's options; its exit status (messages on rank 0)."""
     from dolfinx_ntf.calculix.job import JobError, run_job
 
-    jobname, directory = _job_path(args.job)
-    root = MPI.COMM_WORLD.rank == 0
+    jobname, directory = _job_path(job)
+    root = comm.rank == 0
     try:
         result = run_job(
             jobname,
             directory,
-            comm=MPI.COMM_WORLD,
+            comm=comm,
             tight=args.tight,
             problem_options={
                 "walk_from_previous_face": args.stable_pairing,

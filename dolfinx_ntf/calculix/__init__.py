@@ -12,32 +12,43 @@ dolfinx glue:
     - ``writer``: ``write_inp`` exports a problem built in Python as an equivalent ccx deck.
 """
 
-from .ccx import CcxError, dat_block, dat_times, read_ccx_dat, read_sta, run_ccx
-from .cel import ContactElementsFile, format_contact_elements, read_cel
-from .compare import compare_job
-from .dat import (
-    DatBlock,
-    contact_print_blocks,
-    el_print_blocks,
-    format_block,
-    node_print_blocks,
-    read_dat,
-    write_dat,
-)
-from .deck import (
-    ELEMENT_TYPES,
-    Deck,
-    DeckError,
-    Step,
-    external_faces,
-    face_nodes,
-    node_surface_faces,
-    read_deck,
-    surface_nodes,
-)
-from .job import JobError, JobResult, run_job
-from .model import build_model
-from .writer import write_inp
+import importlib
+
+#: Where each public name lives: the submodules are imported on first use (PEP 562), so that
+#: ``run_job`` does not pay for the deck writer, the ccx runner or the comparisons it never uses.
+_LAZY = {
+    "CcxError": "ccx",
+    "ContactElementsFile": "cel",
+    "DatBlock": "dat",
+    "Deck": "deck",
+    "DeckError": "deck",
+    "ELEMENT_TYPES": "deck",
+    "JobError": "job",
+    "JobResult": "job",
+    "Step": "deck",
+    "build_model": "model",
+    "compare_job": "compare",
+    "contact_print_blocks": "dat",
+    "dat_block": "ccx",
+    "dat_times": "ccx",
+    "el_print_blocks": "dat",
+    "external_faces": "deck",
+    "face_nodes": "deck",
+    "format_block": "dat",
+    "format_contact_elements": "cel",
+    "node_print_blocks": "dat",
+    "node_surface_faces": "deck",
+    "read_ccx_dat": "ccx",
+    "read_cel": "cel",
+    "read_dat": "dat",
+    "read_deck": "deck",
+    "read_sta": "ccx",
+    "run_ccx": "ccx",
+    "run_job": "job",
+    "surface_nodes": "deck",
+    "write_dat": "dat",
+    "write_inp": "writer",
+}
 
 __all__ = [
     "ELEMENT_TYPES",
@@ -72,3 +83,17 @@ __all__ = [
     "write_dat",
     "write_inp",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """Import the submodule of a public name on first access (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

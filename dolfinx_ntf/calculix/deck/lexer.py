@@ -53,8 +53,8 @@ def _split_keyword_line(text: str, location: Location) -> Card:
 
 
 def _data_fields(text: str) -> list[str]:
-    if " " not in text and text.isascii() and text.isprintable():  # no blank (most lines)
-        fields = text.upper().split(",")
+    if text.isascii() and text.isprintable():  # most lines: the blank is the only white space
+        fields = text.replace(" ", "").upper().split(",")
     else:
         fields = normalized_name(text).split(",")
     if fields and fields[-1] == "":
