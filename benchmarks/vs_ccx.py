@@ -1,7 +1,9 @@
 """dolfinx_ntf against CalculiX 2.20, side by side on the same decks; writes docs/performance.md.
 
 The decks come from ``benchmarks/ccx_decks.py`` (flat punch at several sizes, the tie punch, the
-fixed-increment quarter sphere, the cross-validation decks). Each is written once, then run by
+fixed-increment quarter sphere, the cross-validation decks) and from CalculiX's own test suite
+(the node-to-surface decks of ``calculix-ccx-test`` that dolfinx_ntf reads, :func:`suite_decks`;
+they count as quick decks). Each is written once, then run by
 ``ccx`` (through ``dolfinx_ntf.calculix.run_ccx``) and by ``python -m dolfinx_ntf run JOB``, each
 in its own directory and its own process: one untimed warm-up of each code (it also fills the
 form-compiler cache), then ``--runs`` timed runs of each, alternating ccx and dolfinx_ntf so that
@@ -11,7 +13,8 @@ and its row shows the failure.
 Per deck and code:
 
 - wall time: from process start to exit (for dolfinx_ntf this includes Python start-up, imports,
-  mesh and form set-up); the mean over the timed runs, and the CPU time (user + system) of the
+  mesh and form set-up), split for dolfinx_ntf into start-up (outside ``run_job``) and job (the
+  ``run_job`` time it prints); the mean over the timed runs, and the CPU time (user + system) of the
   same runs, which a loaded machine inflates less;
 - peak memory: the largest resident set size of the process (``ru_maxrss``);
 - increments and Newton iterations per converged increment: ccx's from its ``.sta`` file
@@ -170,6 +173,12 @@ class DeckResult:
         """Mean ``run_job`` time of dolfinx_ntf's timed runs (NaN without any)."""
         runs = self.timed("dolfinx_ntf")
         return statistics.fmean(m.job_time for m in runs) if runs else float("nan")
+
+    def mean_startup(self) -> float:
+        """Mean start-up of dolfinx_ntf's timed runs: wall time outside ``run_job`` (Python,
+        imports, and the exit), NaN without any."""
+        runs = self.timed("dolfinx_ntf")
+        return statistics.fmean(m.wall - m.job_time for m in runs) if runs else float("nan")
 
     def peak_memory(self, code: str) -> int:
         """Largest peak RSS over all runs of ``code`` [bytes]."""
@@ -500,7 +509,8 @@ def table(results: list[DeckResult]) -> list[str]:
     """The Markdown table of the report (also printed)."""
     lines = [
         "| deck | dofs | increments ccx / dolfinx_ntf | Newton iterations per increment: ccx "
-        "| dolfinx_ntf | wall [s] ccx | dolfinx_ntf | time ratio | peak memory [MB] ccx "
+        "| dolfinx_ntf | wall [s] ccx | dolfinx_ntf (start-up + job) | time ratio "
+        "| peak memory [MB] ccx "
         "| dolfinx_ntf | max Δu / max u | max Δp / max p | same contact elements |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
@@ -515,7 +525,8 @@ def table(results: list[DeckResult]) -> list[str]:
             f"| `{r.name}` | {r.dofs} | {len(r.ccx.iterations)} / {len(r.ntf.iterations)} "
             f"| {_cell(r, 'ccx', _iterations(r.ccx))} "
             f"| {_cell(r, 'dolfinx_ntf', _iterations(r.ntf))} "
-            f"| {_fmt(ccx_wall)} | {_fmt(ntf_wall)} "
+            f"| {_fmt(ccx_wall)} | {_fmt(ntf_wall)} ({_fmt(r.mean_startup())} + "
+            f"{_fmt(r.mean_job_time())}) "
             f"| {'-' if ratio is None else _fmt(ratio)} "
             f"| {r.peak_memory('ccx') / 2**20:.0f} | {r.peak_memory('dolfinx_ntf') / 2**20:.0f} "
             f"| {_fmt(r.displacement, '.1e')} | {_fmt(r.pressure, '.1e')} | {same} |"
@@ -530,9 +541,9 @@ def _stamp(when: dt.datetime | None) -> str:
 def _details(results: list[DeckResult]) -> list[str]:
     lines = [
         "| deck | measured [UTC] | ccx wall [s] per timed run | mean CPU [s] "
-        "| dolfinx_ntf wall [s] per timed run | mean CPU [s] | of which `run_job` [s] "
-        "| CPU time ratio |",
-        "|---|---|---|---|---|---|---|---|",
+        "| dolfinx_ntf wall [s] per timed run | mean CPU [s] | of which start-up [s] "
+        "| `run_job` [s] | CPU time ratio |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         cells = [_stamp(r.measured)]
@@ -540,6 +551,7 @@ def _details(results: list[DeckResult]) -> list[str]:
             runs = r.timed(code)
             cells.append(", ".join(_fmt(m.wall) for m in runs) or "-")
             cells.append(_fmt(r.mean_cpu(code)))
+        cells.append(_fmt(r.mean_startup()))
         cells.append(_fmt(r.mean_job_time()))
         both = not (r.failure("ccx") or r.failure("dolfinx_ntf"))
         cells.append(_fmt(r.mean_cpu("dolfinx_ntf") / r.mean_cpu("ccx")) if both else "-")
@@ -620,14 +632,19 @@ _HEADER = [
     "`meshes/` (which code converges depends on the mesh, and gmsh 4.8 and 4.13 differ).",
     "- the cross-validation decks of `tests/data/calculix/crossval/cases.py` (controls "
     "tightened to R_n = 1e-10).",
+    "- the node-to-surface decks of CalculiX's own test suite (Debian package "
+    "`calculix-ccx-test`, as `make ccx-suite` runs them) that dolfinx_ntf reads, at their own "
+    "controls.",
     "",
     "Both codes run the same `.inp` file on one thread: ccx 2.20 as `ccx -i JOB` "
     "(`dolfinx_ntf.calculix.run_ccx`), dolfinx_ntf as `python -m dolfinx_ntf run JOB` with the "
     "deck's controls. Columns: Newton iterations of each converged increment (ccx's `.sta` file, "
     "dolfinx_ntf's progress lines; a failed run lists its converged increments); mean wall time "
     "of the timed runs from process start to exit (dolfinx_ntf's includes Python start-up, "
-    "imports and form loading, with the form cache warm; the `run_job` column below leaves them "
-    "out); the time ratio dolfinx_ntf / ccx; peak resident memory of each process; "
+    "imports and form loading, with the form cache warm), and for dolfinx_ntf how it splits "
+    "into start-up (everything outside `run_job`: Python, imports, the exit) and the job "
+    "(`run_job`: deck, model, forms, solution, files); the time ratio dolfinx_ntf / ccx; "
+    "peak resident memory of each process; "
     "the largest difference over the increments both codes converged, displacements over ccx's "
     "largest displacement and contact pressures over ccx's largest pressure "
     "(`dolfinx_ntf.calculix.compare`), and whether the same slave nodes carry contact elements. "
@@ -776,6 +793,37 @@ def merge_section(old: list[str], new: list[str], order: typing.Sequence[str] = 
 # ----------------------------------------------------------------------------- main
 
 
+def suite_decks() -> list[typing.Any]:
+    """CalculiX's own node-to-surface test decks that dolfinx_ntf reads (``calculix-ccx-test``,
+    as ``benchmarks/ccx_suite.py`` finds them), as quick decks of the benchmark; none without the
+    package. The refused ones are left out (``make ccx-suite`` lists them and why)."""
+    import ccx_decks
+    import ccx_suite
+
+    from dolfinx_ntf.calculix.deck import read_deck
+
+    if not ccx_suite.SUITE.is_dir():
+        return []
+    known = {d.name for d in ccx_decks.DECKS}
+    decks = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, text in ccx_suite.node_to_surface_decks(None):
+            path = Path(tmp) / f"{name}.inp"
+            path.write_text(text, encoding="latin-1")
+            try:
+                read_deck(path)
+            except (ValueError, NotImplementedError):
+                continue
+            if name in known:
+                raise ValueError(f"suite deck {name} has the name of a benchmark deck")
+
+            def write(directory: Path, name: str = name, text: str = text) -> None:
+                (directory / f"{name}.inp").write_text(text, encoding="latin-1")
+
+            decks.append(ccx_decks.BenchDeck(name, f"calculix-ccx-test: {name}", write, True))
+    return decks
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", nargs="+", metavar="DECK", help="run these decks only")
@@ -804,10 +852,15 @@ def main(argv: typing.Sequence[str] | None = None) -> list[DeckResult]:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import ccx_decks
 
+    suite = suite_decks()
+    by_name = {d.name: d for d in suite}
     try:
-        decks = ccx_decks.select_decks(args.only, quick=args.quick)
+        decks = ccx_decks.select_decks(
+            [n for n in args.only if n not in by_name] if args.only else None, quick=args.quick
+        )
     except ValueError as error:
-        raise SystemExit(str(error)) from None
+        raise SystemExit(f"{error}, {', '.join(by_name)}") from None
+    decks += [d for d in suite if args.only is None or d.name in args.only]
     output = args.output
     if output is None and (args.update or not (args.only or args.quick)):
         output = DEFAULT_OUTPUT
@@ -837,7 +890,8 @@ def main(argv: typing.Sequence[str] | None = None) -> list[DeckResult]:
         old = read_section(output, key) if args.update else None
         if old is not None:
             try:
-                lines = merge_section(old, lines, [d.name for d in ccx_decks.DECKS])
+                order = [d.name for d in (*ccx_decks.DECKS, *suite)]
+                lines = merge_section(old, lines, order)
             except ValueError as error:
                 raise SystemExit(f"--update: {error}") from None
         write_report(output, key, lines)

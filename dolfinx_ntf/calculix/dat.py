@@ -209,10 +209,26 @@ def format_block(block: DatBlock, ccx: str = "2.20") -> str:
             f"block {block.name}: labels must have shape ({values.shape[0]}"
             f"{', 2' if num_labels == 2 else ''}), got {np.asarray(block.labels).shape}"
         )
-    for label, row in zip(labels.tolist(), values):
-        head = f"{label[0]:10d}" + (f" {label[1]:3d}" if num_labels == 2 else "")
-        lines.append(head + "".join(" " + format_e13(v) for v in row))
+    lines += _labelled_rows(labels, values)
     return "\n".join(lines) + "\n"
+
+
+def _labelled_rows(labels: np.ndarray, values: np.ndarray) -> list[str]:
+    """Rows ``I10[ I3]``, then `` 1PE13.6`` per value, as :func:`format_e13` writes them.
+
+    Python's ``%13.6E`` is that format for finite values with a two-digit exponent: one format
+    for all rows, :func:`format_e13` for the other rows.
+    """
+    head = "%10d" + (" %3d" if labels.shape[1] == 2 else "")
+    rows = list(map((head + " %13.6E" * values.shape[1]).__mod__,
+                    zip(*labels.T.tolist(), *values.T.tolist())))  # fmt: skip
+    size = np.abs(values)
+    plain = np.isfinite(values) & (size < 9.9e99) & ((size >= 1.1e-99) | (values == 0))
+    for i in np.flatnonzero(~plain.all(axis=1)).tolist():
+        label = labels[i].tolist()
+        head_text = f"{label[0]:10d}" + (f" {label[1]:3d}" if len(label) == 2 else "")
+        rows[i] = head_text + "".join(" " + format_e13(v) for v in values[i])
+    return rows
 
 
 def _totals(totals: str) -> str:

@@ -114,8 +114,11 @@ def format_frd_time(value: float) -> str:
     return f"{value:12.{max(10 - digits, 1)}f}"
 
 
-def _e(values: np.ndarray) -> str:
-    return "".join(f"{v:12.5E}" for v in values)
+def _rows(ids: np.ndarray, values: np.ndarray) -> list[str]:
+    """`` -1`` rows: the number (I10), then its values (E12.5); one format for all rows."""
+    values = np.asarray(values, dtype=float)
+    row = " -1%10d" + "%12.5E" * values.shape[1]
+    return list(map(row.__mod__, zip(np.asarray(ids).tolist(), *values.T.tolist())))
 
 
 def _line72(text: str) -> str:
@@ -176,18 +179,19 @@ class FrdWriter:
         ids = np.asarray(node_ids)
         coords = np.asarray(node_coords)
         lines.append(f"    2C{'':18}{ids.size:12d}{'':37}1")
-        lines += [f" -1{i:10d}{_e(x)}" for i, x in zip(ids.tolist(), coords)]
+        lines += _rows(ids, coords)
         lines.append(" -3")
         frd_type = FRD_ELEMENT_TYPES[element_type]
         element_ids = np.asarray(element_ids)
         lines.append(f"    3C{'':18}{element_ids.size:12d}{'':37}1")
         connectivity = np.asarray(connectivity)[:, ELEMENT_TYPES[element_type].frd_nodes]
-        for e, nodes, material in zip(
-            element_ids.tolist(), connectivity.tolist(), np.asarray(element_materials)
-        ):
-            lines.append(f" -1{e:10d}{frd_type:5d}{0:5d}{int(material):5d}")
-            for start in range(0, len(nodes), 10):
-                lines.append(" -2" + "".join(f"{n:10d}" for n in nodes[start : start + 10]))
+        # per element: its " -1" line, then " -2" lines of up to 10 node numbers
+        width = connectivity.shape[1]
+        record = f" -1%10d{frd_type:5d}{0:5d}%5d" + "".join(
+            "\n -2" + "%10d" * min(10, width - start) for start in range(0, width, 10)
+        )
+        columns = [np.asarray(element_materials).astype(np.int64).tolist()]
+        lines += map(record.__mod__, zip(element_ids.tolist(), *columns, *connectivity.T.tolist()))
         lines.append(" -3")
         self.path.write_text("\n".join(lines) + "\n")
 
@@ -217,7 +221,7 @@ class FrdWriter:
         if with_all:
             lines.append(f" -5  {'ALL':<8}{1:5d}{2:5d}{0:5d}{0:5d}{1:5d}ALL")
         values = np.asarray(block.values, dtype=float).reshape(nodes.size, len(components))
-        lines += [f" -1{n:10d}{_e(v)}" for n, v in zip(nodes.tolist(), values)]
+        lines += _rows(nodes, values)
         lines.append(" -3")
         with self.path.open("a") as stream:
             stream.write("\n".join(lines) + "\n")

@@ -12,6 +12,7 @@ import shutil
 from pathlib import Path
 
 import ccx_decks
+import ccx_suite
 import numpy as np
 import pytest
 import vs_ccx
@@ -292,3 +293,31 @@ def test_update_keeps_and_replaces_cel_comparison_rows():
     text = "\n".join(vs_ccx.merge_section(merged[:-1], again, ["a", "b"]))
     assert "| `a` | 1 | none | identical |" in text and "| `b` | 1 | in1 it1" in text
     assert text.index("| `a` | 1 | none") < text.index("Timed runs:")
+
+
+def test_table_splits_dolfinx_ntf_wall_time_into_start_up_and_job():
+    """Wall 2.0 s of which ``run_job`` 0.5 s: 1.5 s start-up, in the table and the details."""
+    result = _fake_result("punch_20", None, 2.0)
+    assert result.mean_startup() == pytest.approx(1.5)
+    (_, _, row) = vs_ccx.table([result])
+    assert "| 2.00 (1.50 + 0.50) |" in row
+    (_, _, details) = vs_ccx._details([result])
+    assert "| 1.50 | 0.50 |" in details
+
+
+@pytest.mark.skipif(not ccx_suite.SUITE.is_dir(), reason="calculix-ccx-test is not installed")
+def test_suite_decks_are_the_node_to_surface_decks_dolfinx_ntf_reads(tmp_path):
+    decks = vs_ccx.suite_decks()
+    names = [d.name for d in decks]
+    everything = [name for name, _ in ccx_suite.node_to_surface_decks(None)]
+    assert names and set(names) < set(everything)  # some are refused (e.g. *TIE, C3D8I)
+    assert not set(names) & {d.name for d in ccx_decks.DECKS}
+    for deck in decks:
+        assert deck.quick
+        deck.write(tmp_path)
+        assert read_deck(tmp_path / f"{deck.name}.inp").steps
+    for name in set(everything) - set(names):
+        text = dict(ccx_suite.node_to_surface_decks([name]))[name]
+        (tmp_path / f"{name}.inp").write_text(text, encoding="latin-1")
+        with pytest.raises((ValueError, NotImplementedError)):
+            read_deck(tmp_path / f"{name}.inp")
