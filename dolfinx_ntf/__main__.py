@@ -19,8 +19,10 @@ from __future__ import annotations
 import argparse
 import gc
 import logging
+import os
 import sys
 import traceback
+import typing
 from pathlib import Path
 
 __all__ = ["main"]
@@ -214,5 +216,24 @@ def _run_one(job: str, args: argparse.Namespace, comm: object) -> int:
     return EXIT_OK
 
 
+def _exit(status: int) -> typing.NoReturn:
+    """End the process with ``status``: PETSc and MPI finalized, Python's teardown skipped.
+
+    The teardown (module clean-up, garbage collection) takes about 0.15 s after a deck. Every
+    file of the job is closed by then; the standard streams and the logging handlers are flushed.
+    PETSc's finalization still prints what its options ask for (``-log_view``).
+    """
+    logging.shutdown()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    petsc = sys.modules.get("petsc4py.PETSc")
+    if petsc is not None:
+        petsc._finalize()
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None and mpi.Is_initialized() and not mpi.Is_finalized():
+        mpi.Finalize()
+    os._exit(status)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    _exit(main())
