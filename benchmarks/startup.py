@@ -20,7 +20,7 @@ cache matters: with ``PYTHONDONTWRITEBYTECODE`` set and no ``__pycache__`` in th
 module of the package is compiled again at each start (about 0.1 s); run ``python -m compileall
 dolfinx_ntf`` first to measure what an installed package does.
 
-    .venv/bin/python benchmarks/startup.py DECK.inp [DECK.inp ...] [--runs 7]
+    .venv/bin/python benchmarks/startup.py DECK.inp [DECK.inp ...] [--runs 7] [--checkout DIR]
 """
 
 from __future__ import annotations
@@ -95,12 +95,12 @@ def _floor(python: str) -> tuple[float, float]:
     return wall - start, cpu
 
 
-def _run(deck: Path, workdir: Path) -> dict[str, tuple[float, float]]:
+def _run(deck: Path, workdir: Path, checkout: Path) -> dict[str, tuple[float, float]]:
     """One timed run of ``deck`` in ``workdir``: the end of each phase, wall seconds after
     spawning and CPU seconds of the process."""
     shutil.copy(deck, workdir / deck.name)
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(checkout), env.get("PYTHONPATH")]))
     start = time.time()
     done = subprocess.run(
         [sys.executable, __file__, "--driver", deck.stem],
@@ -122,17 +122,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=7, help="timed runs per deck (median)")
     parser.add_argument("--python", default="/usr/bin/python3", help="python of the floor")
     parser.add_argument("--json", type=Path, help="also write every measurement here")
+    parser.add_argument("--checkout", type=Path, default=ROOT,
+                        help="checkout whose dolfinx_ntf runs (default: this one)")  # fmt: skip
     args = parser.parse_args(argv)
     results = {}
     with tempfile.TemporaryDirectory() as scratch:
         for deck in args.decks:
             workdir = Path(scratch) / deck.stem
             workdir.mkdir()
-            _run(deck.resolve(), workdir)  # warm-up: JIT cache
+            _run(deck.resolve(), workdir, args.checkout)  # warm-up: JIT cache
             runs, floors, loads = [], [], []
             for _ in range(args.runs):
                 floors.append(_floor(args.python))
-                runs.append(_run(deck.resolve(), workdir))
+                runs.append(_run(deck.resolve(), workdir, args.checkout))
                 loads.append(os.getloadavg()[0])
             results[deck.stem] = {"runs": runs, "floors": floors, "loads": loads}
     print(f"| deck | clock | floor | {' | '.join(PHASES)} | first assembly | above floor | load |")

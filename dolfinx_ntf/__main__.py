@@ -235,5 +235,18 @@ def _exit(status: int) -> typing.NoReturn:
     os._exit(status)
 
 
-if __name__ == "__main__":
+def _program() -> typing.NoReturn:
+    """``python -m dolfinx_ntf``: :func:`main` in a process of its own, then :func:`_exit`.
+
+    What the imports made stays for good, so it is moved out of the garbage collector's sight
+    (``gc.freeze``): its full passes then walk the job's objects only.
+    """
+    if sys.argv[1:2] == ["run"]:
+        import dolfinx_ntf.calculix.job  # noqa: F401
+
+        gc.freeze()
     _exit(main())
+
+
+if __name__ == "__main__":
+    _program()
