@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import shutil
+import sys
 from pathlib import Path
 
 from petsc4py import PETSc
@@ -33,6 +34,24 @@ def _deck(directory: Path, name: str, source: Path) -> Path:
 def _handlers() -> list[list[logging.Handler]]:
     names = ("", "dolfinx_ntf", "dolfinx_ntf.newton", "dolfinx_ntf.details")
     return [list(logging.getLogger(name).handlers) for name in names]
+
+
+class _CurrentStderr:
+    """Writes to whatever ``sys.stderr`` is at the time (capsys swaps it per test phase)."""
+
+    def write(self, text: str) -> int:
+        return sys.stderr.write(text)
+
+    def flush(self) -> None:
+        sys.stderr.flush()
+
+
+@pytest.fixture(autouse=True)
+def _progress_to_current_stderr(monkeypatch):
+    """The progress handler is made once per process, bound to the stderr of that moment."""
+    for handler in logging.getLogger("dolfinx_ntf").handlers:
+        if isinstance(handler, logging.StreamHandler):
+            monkeypatch.setattr(handler, "stream", _CurrentStderr())
 
 
 def test_batch_runs_every_job_with_its_own_files_and_status(tmp_path, capsys, monkeypatch):

@@ -345,3 +345,30 @@ def test_cel_triangles_and_limits(tmp_path):
     ]
     ContactElementsFile(tmp_path / "j.cel", 10)  # a new run truncates the file
     assert read_cel(tmp_path / "j.cel") == []
+
+
+def _awkward_values(rows: int, columns: int) -> np.ndarray:
+    """Random magnitudes from 1e-110 to 1e110, with NaN, infinities, -0 and rounding edges."""
+    rng = np.random.default_rng(7)
+    values = rng.standard_normal((rows, columns)) * 10.0 ** rng.integers(-110, 110, (rows, columns))
+    edges = [np.nan, np.inf, -np.inf, -0.0, 0.0, 9.99999951e99, 9.9999994e99, 1e-99,
+             9.9999996e-100, 5e-324, 1e100, -1.0000005e-5]  # fmt: skip
+    values[: len(edges), 0] = edges
+    return values
+
+
+@pytest.mark.parametrize(
+    "name, set_name, labels, columns",
+    [("CELS", None, 1, 1), ("U", "ALL", 1, 3), ("S", "ALL", 2, 6)],
+)
+def test_block_rows_are_formatted_value_by_value(name, set_name, labels, columns):
+    """The one-format-per-block rows equal ``I10[ I3]`` + `` 1PE13.6`` per value (format_e13)."""
+    values = _awkward_values(2000, columns)
+    ids = np.random.default_rng(8).integers(0, 10**9, (2000, labels))
+    block = DatBlock(name, 1.0, set_name, ids if labels == 2 else ids[:, 0], values)
+    expected = [
+        f"{row_ids[0]:10d}" + (f" {row_ids[1]:3d}" if labels == 2 else "")
+        + "".join(" " + format_e13(v) for v in row)
+        for row_ids, row in zip(ids.tolist(), values)
+    ]  # fmt: skip
+    assert format_block(block).splitlines()[3:] == expected

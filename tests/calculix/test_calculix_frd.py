@@ -14,6 +14,7 @@ from dolfinx_ntf.calculix.deck import read_deck
 from dolfinx_ntf.calculix.frd import (
     FrdBlock,
     FrdWriter,
+    _rows,
     format_frd_time,
     nodal_extrapolation,
     read_frd,
@@ -299,3 +300,13 @@ def test_ccx_2_23_format_changes_only_headings_titles_and_contact_records(tmp_pa
     assert any("CalculiX 2.23 format" in line for line in others)
     with pytest.raises(ValueError, match="ccx_format"):
         run_job(name, tmp_path / "2.23", progress=False, ccx_format="2.22")
+
+
+def test_frd_rows_are_formatted_value_by_value():
+    """`` -1`` rows of one format per block equal I10 + E12.5 per value, NaN and Inf included."""
+    rng = np.random.default_rng(3)
+    values = rng.standard_normal((3000, 6)) * 10.0 ** rng.integers(-300, 300, (3000, 6))
+    values[0] = [np.nan, np.inf, -np.inf, -0.0, 5e-324, 1.7976931348623157e308]
+    ids = rng.integers(1, 10**9, 3000)
+    expected = [f" -1{i:10d}" + "".join(f"{v:12.5E}" for v in row) for i, row in zip(ids, values)]
+    assert _rows(ids, values) == expected
