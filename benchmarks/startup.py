@@ -20,12 +20,14 @@ cache matters: with ``PYTHONDONTWRITEBYTECODE`` set and no ``__pycache__`` in th
 module of the package is compiled again at each start (about 0.1 s); run ``python -m compileall
 dolfinx_ntf`` first to measure what an installed package does.
 
-    .venv/bin/python benchmarks/startup.py DECK.inp [DECK.inp ...] [--runs 7] [--checkout DIR]
+    .venv/bin/python benchmarks/startup.py [DECK.inp ...] [--runs 7] [--baseline DIR]
+    .venv/bin/python benchmarks/startup.py --baseline DIR --batch --write   # docs/performance.md
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import os
 import shutil
@@ -51,6 +53,7 @@ def _driver(argv: list[str]) -> int:
     import dolfinx_ntf  # noqa: F401
     from dolfinx_ntf.calculix import job
 
+    gc.freeze()  # as python -m dolfinx_ntf run does after its imports
     marks["imports"] = (time.time(), time.process_time())
 
     def after(name: str, function):
@@ -116,31 +119,16 @@ def _run(deck: Path, workdir: Path, checkout: Path) -> dict[str, tuple[float, fl
     return {name: (t - start, cpu) for name, (t, cpu) in json.loads(lines[-1][6:]).items()}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("decks", nargs="+", type=Path, metavar="DECK.inp")
-    parser.add_argument("--runs", type=int, default=7, help="timed runs per deck (median)")
-    parser.add_argument("--python", default="/usr/bin/python3", help="python of the floor")
-    parser.add_argument("--json", type=Path, help="also write every measurement here")
-    parser.add_argument("--checkout", type=Path, default=ROOT,
-                        help="checkout whose dolfinx_ntf runs (default: this one)")  # fmt: skip
-    args = parser.parse_args(argv)
-    results = {}
-    with tempfile.TemporaryDirectory() as scratch:
-        for deck in args.decks:
-            workdir = Path(scratch) / deck.stem
-            workdir.mkdir()
-            _run(deck.resolve(), workdir, args.checkout)  # warm-up: JIT cache
-            runs, floors, loads = [], [], []
-            for _ in range(args.runs):
-                floors.append(_floor(args.python))
-                runs.append(_run(deck.resolve(), workdir, args.checkout))
-                loads.append(os.getloadavg()[0])
-            results[deck.stem] = {"runs": runs, "floors": floors, "loads": loads}
-    print(f"| deck | clock | floor | {' | '.join(PHASES)} | first assembly | above floor | load |")
-    print("|---" * (len(PHASES) + 6) + "|")
-    for name, data in results.items():
-        for clock, k in (("wall", 0), ("cpu", 1)):
+def _table(results: dict[str, dict], runs: int) -> list[str]:
+    """Median phase durations per checkout, deck and clock (Markdown)."""
+    lines = [
+        f"| checkout | deck | clock | floor | {' | '.join(PHASES)} | first assembly "
+        "| above floor | load |",
+        "|---" * (len(PHASES) + 8) + "|",
+    ]
+    for label, data in results.items():
+        checkout, name = label.split(" ", 1)
+        for clock, k in (("wall", 0), ("CPU", 1)):
             ends = {p: statistics.median(r[p][k] for r in data["runs"]) for p in PHASES}
             floor = statistics.median(f[k] for f in data["floors"])
             steps, previous = [], 0.0
@@ -148,13 +136,154 @@ def main(argv: list[str] | None = None) -> int:
                 steps.append(f"{ends[phase] - previous:.3f}")
                 previous = ends[phase]
             first = statistics.median(r["set-up"][k] for r in data["runs"])
-            print(f"| {name} | {clock} | {floor:.3f} | {' | '.join(steps)} | {first:.3f} | "
-                  f"{first - floor:+.3f} | {statistics.median(data['loads']):.1f} |")  # fmt: skip
-    print(f"\nmedians of {args.runs} runs in seconds: each phase's own duration; first assembly "
-          "from spawn (wall) or the process's CPU time by then; floor: python -c 'import "
-          "dolfinx', alternating with the runs; load: 1-minute load average")  # fmt: skip
+            lines.append(f"| {checkout} | `{name}` | {clock} | {floor:.3f} | {' | '.join(steps)} "
+                         f"| {first:.3f} | {first - floor:+.3f} "
+                         f"| {statistics.median(data['loads']):.1f} |")  # fmt: skip
+    return lines
+
+
+def _suite_decks(directory: Path) -> list[str]:
+    """Write the suite decks dolfinx_ntf reads (``vs_ccx.suite_decks``) into ``directory``."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import vs_ccx
+
+    names = []
+    for deck in vs_ccx.suite_decks():
+        (directory / deck.name).mkdir()
+        deck.write(directory / deck.name)
+        names.append(str(directory / deck.name / deck.name))
+    return names
+
+
+def _timed(command: list[str], env: dict[str, str]) -> tuple[float, float, int]:
+    """Wall and CPU seconds (children's user + system) of ``command``, and its exit status."""
+    before = os.times()
+    start = time.perf_counter()
+    done = subprocess.run(command, env=env, capture_output=True, check=False)
+    wall = time.perf_counter() - start
+    after = os.times()
+    cpu = after.children_user + after.children_system - before.children_user
+    return wall, cpu - before.children_system, done.returncode
+
+
+def _batch(checkout: Path, runs: int) -> list[str]:
+    """The suite decks one process each against one ``run JOB1 JOB2 ...`` (Markdown lines)."""
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(checkout), env.get("PYTHONPATH")]))
+    command = [sys.executable, "-m", "dolfinx_ntf", "run"]
+    with tempfile.TemporaryDirectory() as scratch:
+        jobs = _suite_decks(Path(scratch))
+        if not jobs:
+            return []
+        _timed([*command, *jobs], env)  # warm-up: JIT cache
+        separate, batch = [], []
+        for _ in range(runs):
+            walls, cpus = [], []
+            for job in jobs:
+                wall, cpu, _ = _timed([*command, job], env)
+                walls.append(wall)
+                cpus.append(cpu)
+            separate.append((sum(walls), sum(cpus)))
+            wall, cpu, _ = _timed([*command, *jobs], env)
+            batch.append((wall, cpu))
+    names = ", ".join(f"`{Path(j).name}`" for j in jobs)
+    median = statistics.median
+    return [
+        f"CalculiX's test-suite decks that dolfinx_ntf reads ({names}): one process per deck "
+        f"against one `python -m dolfinx_ntf run JOB1 JOB2 ...` (medians of {runs} alternating "
+        "runs, load as above):",
+        "",
+        "| how | wall [s] | CPU [s] | per deck wall [s] |",
+        "|---|---|---|---|",
+        f"| one process per deck | {median(w for w, _ in separate):.2f} "
+        f"| {median(c for _, c in separate):.2f} "
+        f"| {median(w for w, _ in separate) / len(jobs):.2f} |",
+        f"| one process, {len(jobs)} jobs | {median(w for w, _ in batch):.2f} "
+        f"| {median(c for _, c in batch):.2f} | {median(w for w, _ in batch) / len(jobs):.2f} |",
+    ]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("decks", nargs="*", type=Path, metavar="DECK.inp",
+                        help="decks (default: two_cubes and punch_20)")  # fmt: skip
+    parser.add_argument("--runs", type=int, default=7, help="timed runs per deck (median)")
+    parser.add_argument("--python", default="/usr/bin/python3", help="python of the floor")
+    parser.add_argument("--json", type=Path, help="also write every measurement here")
+    parser.add_argument("--checkout", type=Path, default=ROOT,
+                        help="checkout whose dolfinx_ntf runs (default: this one)")  # fmt: skip
+    parser.add_argument("--baseline", type=Path,
+                        help="a checkout to compare (before), alternately")  # fmt: skip
+    parser.add_argument("--batch", action="store_true",
+                        help="also time the suite decks: one process each, one batch")  # fmt: skip
+    parser.add_argument("--write", nargs="?", const=ROOT / "docs" / "performance.md", type=Path,
+                        help="write the section of docs/performance.md (or this file)")  # fmt: skip
+    args = parser.parse_args(argv)
+    checkouts = {"this": args.checkout.resolve()}
+    if args.baseline:
+        checkouts = {"before": args.baseline.resolve(), "after": args.checkout.resolve()}
+    results: dict[str, dict] = {}
+    with tempfile.TemporaryDirectory() as scratch:
+        decks = [d.resolve() for d in args.decks]
+        if not decks:
+            sys.path.insert(0, str(ROOT / "benchmarks"))
+            import ccx_decks
+
+            (punch,) = ccx_decks.select_decks(["punch_20"])
+            punch.write(Path(scratch))
+            decks = [ROOT / "tests" / "data" / "calculix" / "two_cubes.inp",
+                     Path(scratch) / "punch_20.inp"]  # fmt: skip
+        for deck in decks:
+            for label, checkout in checkouts.items():
+                workdir = Path(scratch) / label / deck.stem
+                workdir.mkdir(parents=True)
+                _run(deck, workdir, checkout)  # warm-up: JIT cache
+                results[f"{label} {deck.stem}"] = {"runs": [], "floors": [], "loads": []}
+            for _ in range(args.runs):
+                for label, checkout in checkouts.items():
+                    data = results[f"{label} {deck.stem}"]
+                    data["floors"].append(_floor(args.python))
+                    data["runs"].append(_run(deck, Path(scratch) / label / deck.stem, checkout))
+                    data["loads"].append(os.getloadavg()[0])
+    lines = _table(results, args.runs)
+    notes = (
+        f"Medians of {args.runs} runs in seconds, after one warm-up run (the JIT cache is warm): "
+        "each phase's own duration; `first assembly`: from spawning the process (wall) or the "
+        "process's CPU time by then; `floor`: `python -c 'import dolfinx'` "
+        f"(`{args.python}`), run alternately with the decks; load: 1-minute load average."
+    )
+    print("\n".join([*lines, "", notes]))
+    batch = _batch(args.checkout.resolve(), max(1, args.runs // 2)) if args.batch else []
+    if batch:
+        print("\n" + "\n".join(batch))
     if args.json:
         args.json.write_text(json.dumps(results, indent=1))
+    if args.write:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        import vs_ccx
+
+        env = vs_ccx.environment()
+        section = [
+            f"## Start-up and batch runs ({env['os']}, dolfinx {env['dolfinx']}, PETSc "
+            f"{env['petsc']})",
+            "",
+            f"Written by `.venv/bin/python benchmarks/startup.py` on {env['cpu']} "
+            f"({env['cores']} cores), {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC. "
+            "Phases of `python -m dolfinx_ntf run JOB` (`benchmarks/startup.py`): `python` the "
+            "interpreter up, `import dolfinx` as the floor does, `imports` dolfinx_ntf and its "
+            "deck runner, `deck` read_deck, `model` build_model, `set-up` the job's files, "
+            "problem, solver and writer up to the first assembly (forms from the JIT cache), "
+            "`job` the rest of the run to the end of `main` (the exit is not included).",
+            "",
+            *lines,
+            "",
+            notes,
+            "",
+        ]
+        if batch:
+            section += [*batch, ""]
+        vs_ccx.write_report(args.write, "Start-up and batch runs", section)
+        print(f"wrote {args.write}")
     return 0
 
 
