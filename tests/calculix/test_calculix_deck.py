@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from dolfinx_ntf.calculix.deck import (
     read_deck,
     surface_nodes,
 )
+from dolfinx_ntf.calculix.deck import mesh as mesh_cards
 
 DATA = Path(__file__).parents[1] / "data" / "calculix"
 
@@ -518,3 +520,44 @@ def test_empty_deck_file_is_named_empty(tmp_path):
     (tmp_path / "nostep.inp").write_text("*HEADING\nno step here\n")
     with pytest.raises(ValueError, match=r"nostep\.inp: the deck has no \*STEP"):
         run_job("nostep", tmp_path, progress=False)
+
+
+def _same(a: object, b: object) -> bool:
+    """Equal values of the same types, arrays by dtype, shape and content."""
+    if isinstance(a, np.ndarray):
+        return a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a, b)
+    if dataclasses.is_dataclass(a):
+        return type(a) is type(b) and all(
+            _same(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a)
+        )
+    if isinstance(a, dict):
+        return list(a) == list(b) and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and not hasattr(a, "_fields"):
+        return type(a) is type(b) and len(a) == len(b) and all(map(_same, a, b))
+    return type(a) is type(b) and a == b
+
+
+def test_mesh_cards_read_card_wide_as_line_by_line(tmp_path, monkeypatch):
+    """Plain *NODE and *ELEMENT cards are read card-wide; the deck is the line-by-line one.
+
+    C3D20 elements span two lines; a D exponent, a blank field and an element split after its
+    first node are not plain: their cards are read line by line.
+    """
+    nodes = "\n".join(f"{n}, {n % 3}., {n // 3 % 3}.0, {n // 9}" for n in range(1, 28))
+    c3d20 = [1, 3, 9, 7, 19, 21, 27, 25, 2, 6, 8, 4, 20, 24, 26, 22, 10, 12, 18, 16]
+    deck = (
+        f"*NODE, NSET=ALL\n{nodes}\n*NODE\n28, 1.0D0, , 3.\n"
+        f"*ELEMENT, TYPE=C3D20, ELSET=E1\n1, {', '.join(map(str, c3d20[:15]))},\n"
+        f"{', '.join(map(str, c3d20[15:]))}\n"
+        f"*ELEMENT, TYPE=C3D20, ELSET=E2\n2,\n{', '.join(map(str, c3d20))}\n"
+        "*MATERIAL, NAME=STEEL\n*ELASTIC\n210000., 0.3\n*SOLID SECTION, ELSET=E1, MATERIAL=STEEL\n"
+        "*SOLID SECTION, ELSET=E2, MATERIAL=STEEL\n*STEP\n*STATIC\n*END STEP\n"
+    )
+    path = tmp_path / "mesh.inp"
+    path.write_text(deck)
+    card_wide = read_deck(path)
+    monkeypatch.setattr(mesh_cards, "_plain_nodes", lambda lines: None)
+    monkeypatch.setattr(mesh_cards, "_plain_elements", lambda lines, needed: None)
+    line_by_line = read_deck(path)
+    assert card_wide.node_ids.size == 28 and card_wide.node_coords[-1].tolist() == [1.0, 0.0, 3.0]
+    assert _same(card_wide, line_by_line)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 
@@ -34,11 +35,72 @@ def _node_line(fields: list[str]) -> tuple[int, float, float, float] | None:
     return int(fields[0]), x, y, z
 
 
+def _plain_nodes(
+    lines: list[tuple[list[str], str, Location]],
+) -> tuple[list[int], list[tuple[float, float, float]]] | None:
+    """Numbers and coordinates of a ``*NODE`` card whose lines are all plain, or None.
+
+    Plain as :func:`_node_line` takes a line (``n,x,y,z``, digits, finite floats), converted
+    card-wide rather than line by line; otherwise the line-by-line reading checks each line.
+    """
+    fields = [f for f, _, _ in lines]
+    if not all(len(f) == 4 for f in fields):
+        return None
+    numbers = [f[0] for f in fields]
+    if not ("".join(numbers).isascii() and all(map(str.isdigit, numbers))):
+        return None
+    try:
+        values = list(map(float, itertools.chain.from_iterable(f[1:] for f in fields)))
+    except ValueError:
+        return None
+    if not np.isfinite(values).all():
+        return None
+    return list(map(int, numbers)), list(zip(values[0::3], values[1::3], values[2::3]))
+
+
+def _plain_elements(
+    lines: list[tuple[list[str], str, Location]], needed: int
+) -> tuple[list[list[int]], list[Location]] | None:
+    """Rows (element number, then nodes) of a plain ``*ELEMENT`` card, and each row's first line.
+
+    Plain: digit strings only, every element ending where a line ends, as the line-by-line
+    reading takes them; None otherwise (that reading then finds what is wrong).
+    """
+    starts: list[Location] = []
+    count = 0
+    for fields, _, location in lines:
+        if not fields:
+            return None
+        if count == 0:
+            starts.append(location)
+        count += len(fields)
+        if count == needed:
+            count = 0
+        elif count > needed:
+            return None
+    if count:
+        return None
+    tokens = list(itertools.chain.from_iterable(f for f, _, _ in lines))
+    if not ("".join(tokens).isascii() and all(map(str.isdigit, tokens))):
+        return None
+    numbers = list(map(int, tokens))
+    return [numbers[k : k + needed] for k in range(0, len(numbers), needed)], starts
+
+
 class MeshCards(ReaderState):
     """Handlers of the mesh, set and surface cards."""
 
     def _k_NODE(self, card: Card) -> None:
         self._check_params(card, allowed={"NSET"})
+        plain = _plain_nodes(card.lines)
+        if plain is not None:  # the common case, read card-wide
+            ids, coords = plain
+            self.node_coords.extend(coords)
+            self.node_locs.extend(loc for _, _, loc in card.lines)
+            self.node_ids.extend(ids)
+            if card.params.get("NSET"):
+                self._add_set(self.nsets, "node", card.params["NSET"], ids, card.location)
+            return
         ids: list[int] = []
         for fields, _, loc in card.lines:
             line = _node_line(fields)
@@ -69,9 +131,18 @@ class MeshCards(ReaderState):
         etype = ELEMENT_TYPES[type_name]
         needed = etype.num_nodes + 1
         ids: list[int] = []
+        plain = _plain_elements(card.lines, needed)
+        if plain is not None:  # the common case, read card-wide
+            rows, starts = plain
+            ids = [row[0] for row in rows]
+            self.element_rows[type_name].extend(row[1:] for row in rows)
+            self.element_locs[type_name].extend(starts)
+            card_lines: list = []
+        else:
+            card_lines = card.lines
         tokens: list[str] = []
         start: Location | None = None
-        for fields, raw, loc in card.lines:
+        for fields, _, loc in card_lines:
             if not tokens:
                 start = loc
             tokens.extend(fields)
