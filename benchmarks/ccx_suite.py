@@ -14,7 +14,7 @@ in its own directory), so that its start-up is paid once; its time per deck is t
 job's output, and ``--separate`` runs one process per deck instead (start-up included per deck).
 
 Serial. Needs ``ccx`` on the PATH (``$CCX`` selects another, e.g. ``CCX=ccx-2.23``). Run from the
-repository root (``make ccx-suite``, about a minute)::
+repository root (``make ccx-suite``, about 15 s)::
 
     .venv/bin/python benchmarks/ccx_suite.py
     .venv/bin/python benchmarks/ccx_suite.py --only contact1 cubespring --keep /tmp/suite
