@@ -137,6 +137,11 @@ def _job_path(job: str) -> tuple[str, Path]:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit status (several jobs: the largest of theirs)."""
+    return _main(argv)
+
+
+def _main(argv: list[str] | None, *, program: bool = False) -> int:
+    """:func:`main`; ``program``: the process is this run's own (``python -m dolfinx_ntf``)."""
     try:
         args = _parser().parse_args(argv)
     except (
@@ -148,6 +153,11 @@ def main(argv: list[str] | None = None) -> int:
     )  # keep the JIT compiler's INFO lines off the screen
     from mpi4py import MPI
 
+    if program:
+        import dolfinx_ntf.calculix.job  # noqa: F401
+
+        # what the imports made stays for good: the collector's full passes need not walk it
+        gc.freeze()
     root = MPI.COMM_WORLD.rank == 0
     if len(args.jobs) == 1:
         return _run_one(args.jobs[0], args, MPI.COMM_WORLD)
@@ -236,16 +246,8 @@ def _exit(status: int) -> typing.NoReturn:
 
 
 def _program() -> typing.NoReturn:
-    """``python -m dolfinx_ntf``: :func:`main` in a process of its own, then :func:`_exit`.
-
-    What the imports made stays for good, so it is moved out of the garbage collector's sight
-    (``gc.freeze``): its full passes then walk the job's objects only.
-    """
-    if sys.argv[1:2] == ["run"]:
-        import dolfinx_ntf.calculix.job  # noqa: F401
-
-        gc.freeze()
-    _exit(main())
+    """``python -m dolfinx_ntf``: :func:`main` in a process of its own, then :func:`_exit`."""
+    _exit(_main(None, program=True))
 
 
 if __name__ == "__main__":
