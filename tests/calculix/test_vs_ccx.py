@@ -229,7 +229,7 @@ def test_update_replaces_only_the_rows_of_the_decks_run_again(tmp_path):
     merged = vs_ccx.merge_section(old, again, ["a", "b", "c"])
     text = "\n".join(merged)
     assert "| `a` | 300 |" in text and "| `c` | 300 |" in text
-    assert "| 2.00 | 2.00 |" in text  # a and c keep their old wall times
+    assert "| 2.00 (1.50 + 0.50) | 2.00 |" in text  # a and c keep their old wall times
     assert "| `b` | 2026-11-29 08:30 | 1.00, 1.00 |" in text  # b re-measured, ccx ok now
     assert "| `a` | 2026-11-29 05:43 |" in text
     assert "Failures" not in text  # b's old ccx failure went with its old row
