@@ -227,6 +227,7 @@ class _Job:
             petsc_options=petsc_options,
             check_unpaired=False,
             roundoff_floor=False,
+            bounded_scale=False,
             residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
             average_over_step=not tight,
             change_over_iterations=not tight,

@@ -87,6 +87,9 @@ class ContactNewtonSolver(NewtonSolver):
             largest row sum and the largest coordinate) out of the test, beyond CalculiX: a stiff
             penalty's spring forces carry that much round-off, which the force-scaled test can
             otherwise ask to go below (the deck runner keeps CalculiX's test).
+        bounded_scale: A force-scaled test that runaway iterates cannot pass, beyond CalculiX
+            (``bounded`` of :class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`; the deck
+            runner keeps CalculiX's test).
         residual_floor, average_over_step, change_over_iterations: CalculiX's variants of the
             force-scaled test that the deck runner reproduces
             (:class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`);
@@ -111,6 +114,7 @@ class ContactNewtonSolver(NewtonSolver):
         line_search_from: int = 2,
         check_unpaired: bool = True,
         roundoff_floor: bool = True,
+        bounded_scale: bool = True,
         residual_floor: float = 0.0,
         average_over_step: bool = False,
         change_over_iterations: bool = False,
@@ -150,6 +154,7 @@ class ContactNewtonSolver(NewtonSolver):
             residual_floor,
             average_over_step,
             change_over_iterations,
+            bounded_scale,
         )
         #: Displacement at the start of the increment (before the predictor); set by the step
         #: driver, else the displacement when :meth:`solve` starts.
@@ -289,6 +294,9 @@ class ContactNewtonSolver(NewtonSolver):
         (unused: the test takes the largest residual force).
         """
         if self.updates == 0:
+            self.test.begin_iterations(
+                self.problem.average_element_force(), b.norm(PETSc.NormType.NORM_INFINITY)
+            )
             return False
         start = self.increment_start if self.increment_start is not None else self._solve_start
         measures = convergence.measure_iterate(

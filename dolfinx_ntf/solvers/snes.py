@@ -136,7 +136,7 @@ class ContactSNESSolver:
         self.roundoff_floor = roundoff_floor
         self._roundoff = 0.0
         #: CalculiX's force-scaled test (``convergence="calculix"``).
-        self.test = ForceScaledTest(controls, relaxation_iteration)
+        self.test = ForceScaledTest(controls, relaxation_iteration, bounded=True)
         #: Displacement at the start of the increment; set by the step driver.
         self.increment_start: np.ndarray | None = None
         #: Residual norms of the current solve, one per residual the SNES tested.
@@ -260,9 +260,12 @@ class ContactSNESSolver:
         self, snes: PETSc.SNES, iteration: int, norms: tuple[float, float, float]
     ) -> int:
         """CalculiX's test after Newton update ``iteration`` (a SNES convergence test)."""
-        if iteration == 0:
-            return PETSc.SNES.ConvergedReason.ITERATING
         x, b = snes.getSolution(), snes.getFunction()[0]
+        if iteration == 0:
+            self.test.begin_iterations(
+                self.problem.average_element_force(), b.norm(PETSc.NormType.NORM_INFINITY)
+            )
+            return PETSc.SNES.ConvergedReason.ITERATING
         self._step.waxpy(-1.0, self._previous, x)
         start = self.increment_start if self.increment_start is not None else self._solve_start
         average, largest, correction, change = convergence.measure_iterate(
