@@ -20,6 +20,7 @@ import pytest
 from dolfinx_ntf import __main__ as cli
 from dolfinx_ntf.calculix import job as job_module
 from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.logs import details_logger
 
 pytestmark = pytest.mark.serial
 
@@ -45,14 +46,16 @@ def test_ccx_tangent_is_factored_by_cholesky_and_converges_to_the_same_state(nam
     case.write(tmp_path)
     exact = _run(name, tmp_path, tight=True, problem_options={"symmetric": False})
     logger, lines = logging.getLogger("dolfinx_ntf"), _Lines()
-    level = logger.level
+    levels = logger.level, details_logger.level
     logger.addHandler(lines)
     logger.setLevel(logging.INFO)
+    details_logger.setLevel(logging.INFO)  # the solver line, whatever tests ran before
     try:
         ccx = _run(name, tmp_path, tight=True, problem_options={"symmetric": True})
     finally:
         logger.removeHandler(lines)
-        logger.setLevel(level)
+        logger.setLevel(levels[0])
+        details_logger.setLevel(levels[1])
     assert "direct linear solver" in lines.text  # INFO lines are seen
     assert "instead of Cholesky" not in lines.text  # the Jacobian is symmetric: Cholesky kept
     assert [i.iterations for i in ccx.increments] == [i.iterations for i in exact.increments]
