@@ -112,6 +112,9 @@ class ContactProblem:
             forces only).
         friction_tangent: ``"consistent"`` (exact derivative of the friction force) or ``"ccx"``
             (CalculiX's, projection point frozen in the slip increment), docs/method.md §11.2.
+        projection_tangent: ``"exact"`` (a projection clamped to a face edge or corner is
+            differentiated as such) or ``"ccx"`` (the interior formula everywhere, CalculiX's
+            Newton path), docs/method.md §6.1.
         reset_friction_on_separation: A slave node that was not in contact at the last converged
             increment starts with a fresh friction state when it touches (default). False keeps
             CalculiX's stale state (docs/method.md §11.3).
@@ -152,6 +155,7 @@ class ContactProblem:
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
         reuse_bulk_jacobian: bool = True,
+        projection_tangent: str = "exact",
     ) -> None:
         pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth)
         options = compat.jit_keywords(form_compiler_options, jit_options)
@@ -166,6 +170,12 @@ class ContactProblem:
                 f"ContactProblem: friction_tangent must be one of {TANGENT_MODES}, "
                 f"got {friction_tangent!r}"
             )
+        if projection_tangent not in ("exact", "ccx"):
+            raise ValueError(
+                "ContactProblem: projection_tangent must be 'exact' or 'ccx', "
+                f"got {projection_tangent!r}"
+            )
+        self.projection_tangent = projection_tangent
         self.u = u
         self.symmetric = symmetric
         self.friction_tangent = friction_tangent
@@ -426,6 +436,7 @@ class ContactProblem:
                 linearize_area=self.linearize_area,
                 friction_in_tension=self.friction_in_tension,
                 friction_tangent=self.friction_tangent,
+                projection_tangent=self.projection_tangent,
             )  # the start slope: contact_start_slope, docs/method.md §7.1
         return blocks
 
