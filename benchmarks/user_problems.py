@@ -18,12 +18,16 @@ equilibrium that can fail:
   stop with a ``ContactSolverError`` that names the body.
 
 A cutback on a problem that converges without one at half the increment is a defect (issue 21).
-Run: ``.venv/bin/python benchmarks/user_problems.py [--only NAME ...]`` (serial or under mpirun).
+Run: ``.venv/bin/python benchmarks/user_problems.py [--only NAME ...] [--linear-solver direct]
+[--size 0.5]`` (serial or under mpirun); ``--linear-solver`` and ``--size`` measure the direct and
+iterative solvers on these problem types at other sizes (LU fallbacks: iterative solves that
+failed and were done again by MUMPS LU).
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import math
 import time
 import typing
@@ -45,6 +49,28 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 E, NU = 210e3, 0.3  # MPa, steel
 COMM = MPI.COMM_WORLD
+#: Set by the command line: the solvers' ``linear_solver`` and a factor on every mesh size.
+SETTINGS = {"linear_solver": "auto", "size": 1.0}
+
+
+class _Fallbacks(logging.Handler):
+    """Counts the iterative solves that the Newton solver did again with MUMPS LU."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.INFO)
+        self.count = 0
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.count += "solving again with MUMPS LU" in record.getMessage()
+
+
+FALLBACKS = _Fallbacks()
+logging.getLogger("dolfinx_ntf").addHandler(FALLBACKS)
+logging.getLogger("dolfinx_ntf").setLevel(logging.INFO)
+
+
+def _solver(mesh: dolfinx.mesh.Mesh, problem: ntf.ContactProblem) -> ntf.ContactNewtonSolver:
+    return ntf.ContactNewtonSolver(mesh.comm, problem, linear_solver=SETTINGS["linear_solver"])
 
 
 class Row(typing.NamedTuple):
@@ -119,7 +145,9 @@ def build_half_cylinder(size_fine: float = 0.2, size_coarse: float = 1.0) -> Non
 def cylinder(by_force: bool) -> Row:
     """The half-cylinder pressed by a pressure (``by_force``) or a displacement of its top."""
     start = time.perf_counter()
-    mesh, _, tags = mesh_from_gmsh(build_half_cylinder, COMM)
+    mesh, _, tags = mesh_from_gmsh(
+        build_half_cylinder, COMM, size_fine=0.2 * SETTINGS["size"], size_coarse=SETTINGS["size"]
+    )
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     F = ufl.inner(ntf.small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
@@ -152,7 +180,7 @@ def cylinder(by_force: bool) -> Row:
         name="line",
     )
     problem = ntf.ContactProblem(F, u, [pair], bcs)
-    with ntf.ContactNewtonSolver(mesh.comm, problem) as solver:
+    with _solver(mesh, problem) as solver:
         step = ntf.StaticStep(initial_increment=0.25, max_increment=0.25)
         results = ntf.run_steps(solver, [ntf.AnalysisStep(step, loads=[load])])
     force = ntf.contact_force(problem, "line")[2]
@@ -177,7 +205,12 @@ def cylinder(by_force: bool) -> Row:
 def press_friction() -> Row:
     """A punch pressed 5 um into a block by its top, then its top dragged 20 um along x (mu 0.3)."""
     start = time.perf_counter()
-    mesh, _, tags = mesh_from_gmsh(punch.build_punch, COMM, mesh_size_block=0.05)
+    mesh, _, tags = mesh_from_gmsh(
+        punch.build_punch,
+        COMM,
+        mesh_size_block=0.05 * SETTINGS["size"],
+        mesh_size_punch=0.04 * SETTINGS["size"],
+    )
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     F = ufl.inner(ntf.small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
@@ -200,7 +233,7 @@ def press_friction() -> Row:
         name="press",
     )
     problem = ntf.ContactProblem(F, u, [pair], bcs)
-    with ntf.ContactNewtonSolver(mesh.comm, problem) as solver:
+    with _solver(mesh, problem) as solver:
         steps = [
             ntf.AnalysisStep(loads=[ntf.Load(moved[2], -0.005)]),
             ntf.AnalysisStep(
@@ -224,6 +257,8 @@ def sphere(kind: str) -> Row:
     """The quarter hemisphere pressed by its top: ``p2``, ``nlgeom`` or ``rigid``."""
     start = time.perf_counter()
     sizes = {key: value * R_SPHERE for key, value in hertz.COARSE.items()}
+    sizes["size_fine"] *= SETTINGS["size"]
+    sizes["size_coarse"] *= SETTINGS["size"]
     builder = hertz.build_hertz_sphere if kind == "rigid" else hertz.build_hertz
     order = 2 if kind == "p2" else 1
     mesh, _, tags = mesh_from_gmsh(builder, COMM, radius=R_SPHERE, order=order, **sizes)
@@ -261,7 +296,7 @@ def sphere(kind: str) -> Row:
         name="ball",
     )
     problem = ntf.ContactProblem(F, u, [pair], bcs)
-    with ntf.ContactNewtonSolver(mesh.comm, problem) as solver:
+    with _solver(mesh, problem) as solver:
         step = ntf.StaticStep(initial_increment=0.25, max_increment=0.25)
         results = ntf.run_steps(
             solver, [ntf.AnalysisStep(step, loads=[ntf.Load(top_uz, -SPHERE_DISPLACEMENT)])]
@@ -302,7 +337,7 @@ def free_punch() -> Row:
     )
     problem = ntf.ContactProblem(F, u, [pair], [dolfinx.fem.dirichletbc(np.zeros(3), base, V)])
     message = "no error"
-    with ntf.ContactNewtonSolver(mesh.comm, problem) as solver:
+    with _solver(mesh, problem) as solver:
         try:
             ntf.run_steps(solver, [ntf.AnalysisStep(loads=[ntf.Load(pressure, 10.0)])])
         except ntf.ContactSolverError as error:
@@ -334,23 +369,40 @@ PROBLEMS: dict[str, typing.Callable[[], Row]] = {
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", choices=sorted(PROBLEMS), help="problems to run")
+    parser.add_argument(
+        "--linear-solver",
+        default="auto",
+        choices=("auto", "direct", "iterative"),
+        help="the solvers' linear_solver (default: auto)",
+    )
+    parser.add_argument(
+        "--size", type=float, default=1.0, help="factor on every mesh size (0.5: finer meshes)"
+    )
     args = parser.parse_args(argv)
-    rows = []
+    SETTINGS.update(linear_solver=args.linear_solver, size=args.size)
+    rows, fallbacks = [], []
     for name in args.only or PROBLEMS:
-        start = time.perf_counter()
+        start, before = time.perf_counter(), FALLBACKS.count
         try:
             rows.append(PROBLEMS[name]())
         except ntf.ContactConvergenceError as error:
             rows.append(Row(name, 0, [], 0, time.perf_counter() - start, str(error)[:200], False))
+        fallbacks.append(FALLBACKS.count - before)
     if COMM.rank == 0:
-        print(f"{COMM.size} process(es)")
-        print("| problem | dofs | Newton iterations per increment | cutbacks | time [s] | check |")
-        print("|---|---|---|---|---|---|")
-        for row in rows:
+        print(
+            f"{COMM.size} process(es), linear_solver={args.linear_solver!r}, "
+            f"mesh sizes x {args.size:g}"
+        )
+        print(
+            "| problem | dofs | Newton iterations per increment | cutbacks | LU fallbacks "
+            "| time [s] | check |"
+        )
+        print("|---|---|---|---|---|---|---|")
+        for row, fallback in zip(rows, fallbacks):
             iterations = ", ".join(map(str, row.iterations)) or "-"
             verdict = "" if row.passed else " FAILED"
             print(
-                f"| {row.name} | {row.dofs} | {iterations} | {row.cutbacks} | "
+                f"| {row.name} | {row.dofs} | {iterations} | {row.cutbacks} | {fallback} | "
                 f"{row.seconds:.1f} | {row.check}{verdict} |"
             )
     return 0 if all(row.passed for row in rows) else 1

@@ -221,6 +221,11 @@ class ContactProblem:
         #: right-hand side of the coming solve). A driver whose last residual went elsewhere (a
         #: SNES line search's work vector) points it at its own residual vector before :meth:`J`.
         self.residual_vector: PETSc.Vec | None = None
+        #: Whether :meth:`assemble_jacobian` measures :attr:`bulk_norm` (a solver's round-off
+        #: floor asks for it).
+        self.measure_bulk_norm = False
+        #: Largest row sum of the last bulk Jacobian, before the springs were added.
+        self.bulk_norm = 0.0
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX ``*CLOAD``) subtracted from the
@@ -542,6 +547,8 @@ class ContactProblem:
         """The Jacobian at ``x`` with the springs last evaluated, into ``A``."""
         pattern = (self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
         self.bulk_jacobian.assemble(A, self.a, self.bcs, pattern)
+        if self.measure_bulk_norm:
+            self.bulk_norm = A.norm(PETSc.NormType.NORM_INFINITY)
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
         self._pattern_checked = True
         A.assemble()

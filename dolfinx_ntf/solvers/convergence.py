@@ -30,6 +30,7 @@ __all__ = [
     "DivergenceRule",
     "ExtraPairings",
     "ForceScaledTest",
+    "RoundoffFloor",
     "measure_iterate",
 ]
 
@@ -97,35 +98,51 @@ def measure_iterate(
 ROUNDOFF_FACTOR = 10.0
 
 
-def roundoff_floor(problem: ContactProblem, A: PETSc.Mat, x: PETSc.Vec) -> float:
-    """The round-off of the spring forces at ``x``: ``10 eps ||A||_inf max |X + u|``. Collective.
+class RoundoffFloor(typing.NamedTuple):
+    """Round-off of the residual forces: of the spring rows and of the others (bulk rows)."""
+
+    springs: float
+    bulk: float
+
+
+def roundoff_floor(problem: ContactProblem, A: PETSc.Mat, x: PETSc.Vec) -> RoundoffFloor:
+    """The round-off of the residual forces at ``x``. Collective.
 
     A spring force is a stiffness times a gap taken between current coordinates, so it carries
-    about ``eps K A |x|`` of round-off (the Jacobian's largest row sum bounds ``K A``): with a stiff
-    penalty that can exceed what the force-scaled test asks (``R_n`` times the mean element force,
-    which small bulk elements pull down). :func:`largest_beyond_roundoff` leaves spring residuals
-    below it out.
+    about ``eps K A |x|`` of round-off: ``10 eps ||A||_inf max |X + u|`` (the Jacobian's largest
+    row sum bounds ``K A``). A bulk force ``K u`` computed in floating point carries about
+    ``eps ||K||_inf max |u|``: ``10 eps`` times the bulk Jacobian's largest row sum
+    (:attr:`ContactProblem.bulk_norm`) and the largest displacement. Either can exceed what the
+    force-scaled test asks (``R_n`` times the mean element force, which small elements far from
+    the contact pull down), e.g. the large element forces under a contact with a
+    St.Venant-Kirchhoff bulk. :func:`largest_beyond_roundoff` leaves residuals below them out.
     """
     comm = problem.u.function_space.mesh.comm
-    local = float(np.abs(problem.reference_coordinates).max(initial=0.0))
-    local += float(np.abs(x.array_r).max(initial=0.0))
-    scale = comm.allreduce(local, op=MPI.MAX)
-    return ROUNDOFF_FACTOR * np.finfo(float).eps * A.norm(PETSc.NormType.NORM_INFINITY) * scale
+    displacement = float(np.abs(x.array_r).max(initial=0.0))
+    coordinates = float(np.abs(problem.reference_coordinates).max(initial=0.0)) + displacement
+    sizes = np.array([coordinates, displacement])
+    comm.Allreduce(MPI.IN_PLACE, sizes, op=MPI.MAX)
+    coordinates, displacement = sizes
+    epsilon = ROUNDOFF_FACTOR * np.finfo(float).eps
+    return RoundoffFloor(
+        epsilon * A.norm(PETSc.NormType.NORM_INFINITY) * coordinates,
+        epsilon * problem.bulk_norm * displacement,
+    )
 
 
-def largest_beyond_roundoff(problem: ContactProblem, b: PETSc.Vec, floor: float) -> float:
-    """The largest residual force of ``b``, the entries below ``floor`` where springs act left out.
+def largest_beyond_roundoff(problem: ContactProblem, b: PETSc.Vec, floor: RoundoffFloor) -> float:
+    """The largest residual force of ``b``, the entries below their round-off ``floor`` left out.
 
-    Collective. The rows come from every process's springs (the same on any partition); rows
-    without spring forces count in full: their forces come from displacement gradients, whose
-    round-off is far smaller.
+    Collective. Rows where springs act (from every process's springs: the same on any
+    partition) take the springs' floor, the others the bulk's.
     """
     sizes = b.duplicate()
     problem.spring_force_sizes(sizes)
     values = np.abs(b.array_r)
     spring_rows = sizes.array_r > 0.0
     sizes.destroy()
-    values[spring_rows & (values < floor)] = 0.0
+    values[spring_rows & (values < floor.springs)] = 0.0
+    values[~spring_rows & (values < floor.bulk)] = 0.0
     comm = problem.u.function_space.mesh.comm
     return comm.allreduce(float(values.max(initial=0.0)), op=MPI.MAX)
 

@@ -34,6 +34,7 @@ from dolfinx_ntf.solvers.convergence import (
     DivergenceRule,
     ExtraPairings,
     ForceScaledTest,
+    RoundoffFloor,
 )
 from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactSolverError
 from dolfinx_ntf.solvers.line_search import LineSearch
@@ -82,11 +83,13 @@ class ContactNewtonSolver(NewtonSolver):
             without a spring and pair again if any
             (:class:`~dolfinx_ntf.solvers.convergence.ExtraPairings`, beyond CalculiX; the deck
             runner reports their number instead).
-        roundoff_floor: Leave the residual forces of spring nodes below their round-off
-            (``solvers.convergence.roundoff_floor``: 10 eps times the Jacobian's
-            largest row sum and the largest coordinate) out of the test, beyond CalculiX: a stiff
-            penalty's spring forces carry that much round-off, which the force-scaled test can
-            otherwise ask to go below (the deck runner keeps CalculiX's test).
+        roundoff_floor: Leave residual forces below their round-off out of the test, beyond
+            CalculiX (``solvers.convergence.roundoff_floor``: at spring nodes 10 eps times the
+            Jacobian's largest row sum and the largest coordinate, elsewhere 10 eps times the
+            bulk Jacobian's largest row sum and the largest displacement): a stiff penalty's
+            spring forces, or the large element forces under a contact, carry that much
+            round-off, which the force-scaled test can otherwise ask to go below (the deck
+            runner keeps CalculiX's test).
         bounded_scale: A force-scaled test that runaway iterates cannot pass, beyond CalculiX
             (``bounded`` of :class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`; the deck
             runner keeps CalculiX's test).
@@ -161,7 +164,8 @@ class ContactNewtonSolver(NewtonSolver):
         self.increment_start: np.ndarray | None = None
         self.min_iterations = min_iterations
         self.roundoff_floor = roundoff_floor
-        self._roundoff = 0.0
+        self._roundoff = RoundoffFloor(0.0, 0.0)
+        problem.measure_bulk_norm = roundoff_floor
         self.divergence = DivergenceRule(divergence_iteration)
         self.first_solve = True
         self.line_search = line_search

@@ -32,7 +32,7 @@ from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import newton_logger
 from dolfinx_ntf.solvers import convergence, errors
 from dolfinx_ntf.solvers import linear_solver as linear
-from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, ForceScaledTest
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, ForceScaledTest, RoundoffFloor
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
 from dolfinx_ntf.solvers.newton import check_arguments
 
@@ -134,7 +134,8 @@ class ContactSNESSolver:
         self.min_iterations = min_iterations
         self.check_unpaired = check_unpaired
         self.roundoff_floor = roundoff_floor
-        self._roundoff = 0.0
+        self._roundoff = RoundoffFloor(0.0, 0.0)
+        problem.measure_bulk_norm = roundoff_floor
         #: CalculiX's force-scaled test (``convergence="calculix"``).
         self.test = ForceScaledTest(controls, relaxation_iteration, bounded=True)
         #: Displacement at the start of the increment; set by the step driver.
