@@ -55,7 +55,7 @@ class ContinuumProblem:
         self.obstacles = list(obstacles)
         for obstacle in self.obstacles:
             validation.check_type(obstacle, RigidObstacle, "ContinuumIncrementSolver: obstacles")
-        #: No contact pairs: run_steps' contact changes name none of them.
+        #: The contact pairs, none (so run_steps' contact changes cannot name one).
         self.states: list = []
 
     @property

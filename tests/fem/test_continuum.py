@@ -15,6 +15,7 @@ from dolfinx_ntf import compat, logs
 from dolfinx_ntf.fem import continuum, measures, pressure_recovery
 from dolfinx_ntf.fem.elasticity import small_strain_stress
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
+from dolfinx_ntf.solvers import continuum as continuum_steps
 from dolfinx_ntf.solvers.continuum import ContinuumIncrementSolver
 
 pytestmark = pytest.mark.mpi  # also on 2 ranks (make test)
@@ -274,7 +275,7 @@ def test_run_steps_moves_the_obstacle_and_drives_loads():
     newton.destroy()
 
 
-@pytest.mark.parametrize("module", [continuum, measures, pressure_recovery])
+@pytest.mark.parametrize("module", [continuum, measures, pressure_recovery, continuum_steps])
 def test_every_public_argument_is_documented(module):
     """Each public function, class and method of the module names each argument in its docstring."""
     missing = []
