@@ -115,9 +115,9 @@ class MasterCurve:
         self._corner_x = x[self._nodes]
         a, b = x[self.faces[:, 0]], x[self.faces[:, 1]]
         chord = b - a
-        self._chord_normal = np.stack([chord[:, 1], -chord[:, 0]], axis=1) / np.linalg.norm(
-            chord, axis=1
-        )[:, None]
+        self._chord_normal = (
+            np.stack([chord[:, 1], -chord[:, 0]], axis=1) / np.linalg.norm(chord, axis=1)[:, None]
+        )
         self._tree = cKDTree(0.5 * (a + b))
         self._updated = True
 
