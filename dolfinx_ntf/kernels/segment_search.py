@@ -177,7 +177,7 @@ class MasterCurve:
         return result
 
     def face_patches(self, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(which, patch)``: each edge and its neighbours (``patch[k]`` near ``faces[which[k]]``)."""
+        """``(which, patch)``: each edge and its neighbours, ``patch[k]`` by ``faces[which[k]]``."""
         faces = np.asarray(faces, dtype=np.int64)
         around = np.stack([self.neighbours[faces, 0], faces, self.neighbours[faces, 1]], axis=1)
         which = np.repeat(np.arange(faces.size), 3)

@@ -27,7 +27,7 @@ LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, LOWER_BOTTOM, SYMMETRY = 3, 4, 5, 6, 7
 
 
 def _rectangle(x0: float, y0: float, x1: float, y1: float, nx: int, ny: int) -> tuple:
-    """A structured (transfinite) triangulated rectangle: surface and lines bottom, right, top, left."""
+    """A structured triangulated rectangle: its surface and lines (bottom, right, top, left)."""
     g = gmsh.model.geo
     p = [g.addPoint(x0, y0, 0), g.addPoint(x1, y0, 0), g.addPoint(x1, y1, 0), g.addPoint(x0, y1, 0)]
     lines = [g.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
