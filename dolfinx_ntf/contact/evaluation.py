@@ -81,7 +81,7 @@ def evaluate_pair(
             nodes,
             nodes,
             ev.stiffness,
-            ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1]),
+            ev.forces.reshape(nodes.shape[0], ev.forces.shape[-1] * nodes.shape[1]),
         )
     ]
     if tangent and linearize_area:
