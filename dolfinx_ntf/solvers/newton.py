@@ -298,9 +298,10 @@ class ContactNewtonSolver(NewtonSolver):
         (unused: the test takes the largest residual force).
         """
         if self.updates == 0:
-            self.test.begin_iterations(
-                self.problem.average_element_force(), b.norm(PETSc.NormType.NORM_INFINITY)
-            )
+            if self.test.bounded:  # the forces the bounded test starts from
+                self.test.begin_iterations(
+                    self.problem.average_element_force(), b.norm(PETSc.NormType.NORM_INFINITY)
+                )
             return False
         start = self.increment_start if self.increment_start is not None else self._solve_start
         measures = convergence.measure_iterate(
