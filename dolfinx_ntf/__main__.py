@@ -98,19 +98,33 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--tangent",
-        choices=("auto", "ccx", "exact"),
-        default="auto",
-        help="contact tangent: 'ccx' symmetrized like ccx (Cholesky or CG, about half the linear "
-        "solver's work), 'exact' (LU or GMRES; fewer iterations at projections clamped to a face "
-        "edge), 'auto' (default) ccx's from 10000 dofs on, exact below",
+        choices=("ccx", "exact", "auto"),
+        default="ccx",
+        help="contact tangent: 'ccx' (default) ccx's: symmetrized (Cholesky or CG, about half the "
+        "linear solver's work), interior-projection formula at projections clamped to a face "
+        "edge, so that the iterations follow ccx's; 'exact' (LU or GMRES; fewer iterations at "
+        "clamped projections); 'auto' ccx's symmetrized one from 10000 dofs on, exact below",
     )
     run.add_argument(
         "--predictor",
-        choices=("guarded", "ccx", "off"),
-        default="guarded",
-        help="start each increment from ccx's extrapolation u_n + dt v_prev: 'guarded' (default) "
-        "unless it brings slave nodes into contact that have no spring yet (then from u_n, which "
-        "converges more often on growing contact zones), 'ccx' always, 'off' never",
+        choices=("ccx", "guarded", "off"),
+        default="ccx",
+        help="start each increment from ccx's extrapolation u_n + dt v_prev: 'ccx' (default) "
+        "always, 'guarded' unless it brings slave nodes into contact that have no spring yet "
+        "(then from u_n, which converges more often on growing contact zones), 'off' never",
+    )
+    run.add_argument(
+        "--line-search",
+        action="store_true",
+        help="beyond ccx: backtrack along each Newton correction until the residual decreases "
+        "(the Python API's default); default: ccx's full steps",
+    )
+    run.add_argument(
+        "--robust",
+        action="store_true",
+        help="beyond ccx: the Python API's path, i.e. --tangent auto --predictor guarded "
+        "--line-search (converges more often; iterations and contact elements then differ from "
+        "ccx's)",
     )
     run.add_argument(
         "--pair-after-predictor",
@@ -198,10 +212,11 @@ def _run_one(job: str, args: argparse.Namespace, comm: object) -> int:
             problem_options={
                 "walk_from_previous_face": args.stable_pairing,
                 "contact_start_slope": args.stable_pairing,
-                **({} if args.tangent == "auto" else {"symmetric": args.tangent == "ccx"}),
             },
+            tangent="auto" if args.robust else args.tangent,
+            line_search=args.line_search or args.robust,
             predictor=args.predictor != "off",
-            guard_predictor=args.predictor == "guarded",
+            guard_predictor=args.predictor == "guarded" or args.robust,
             pair_after_predictor=args.pair_after_predictor,
             ccx_format=args.ccx_format,
         )

@@ -142,24 +142,25 @@ def raise_collectively(comm: MPI.Comm, error: Exception | None) -> None:
 
 
 def check_displacement(u: object, owner: str) -> None:
-    """``u`` must be a Function on a 3D vector continuous Lagrange space of degree 1 or 2."""
-    expected = "a dolfinx.fem.Function on a 3D vector Lagrange space (P1 or P2)"
+    """``u``: a Function on a vector continuous Lagrange space (P1, P2) of a 2D or 3D mesh."""
+    expected = "a dolfinx.fem.Function on a vector Lagrange space (P1 or P2) of a 2D or 3D mesh"
     if not isinstance(u, dolfinx.fem.Function):
         raise TypeError(f"{owner}: u must be {expected}, got {describe(u)}")
     V = u.function_space
     mesh = V.mesh
-    if mesh.topology.dim != 3 or mesh.geometry.dim != 3:
+    tdim = mesh.topology.dim
+    if tdim not in (2, 3) or mesh.geometry.dim != tdim:
         raise ValueError(
-            f"{owner}: u must be {expected}; its mesh is {mesh.topology.dim}D in "
-            f"{mesh.geometry.dim}D space (contact needs a 3D mesh)"
+            f"{owner}: u must be {expected}; its mesh is {tdim}D in "
+            f"{mesh.geometry.dim}D space (contact needs a 3D mesh, or a 2D mesh in the plane)"
         )
     family, degree = compat.space_family(V), compat.space_degree(V)
     bs = V.dofmap.index_map_bs
     space = f"{family} degree {degree}, block size {bs}"
-    if bs != 3:
+    if bs != tdim:
         raise ValueError(
-            f"{owner}: u must be {expected} (a 3D vector displacement space, block size 3), "
-            f"got {space}"
+            f"{owner}: u must be {expected} (a {tdim}D vector displacement space, block size "
+            f"{tdim}), got {space}"
         )
     if family not in _LAGRANGE_FAMILIES:
         raise ValueError(

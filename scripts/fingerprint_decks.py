@@ -17,7 +17,7 @@ without its date and time header lines, ``.sta``, ``.cvg``) and of its ``.inp`` 
   calculix-ccx-test), refused ones included (their message is recorded);
 - ``bench/``: the decks of ``benchmarks/ccx_decks.py`` but ``SLOW_BENCH`` (its cross-validation
   decks are the ``crossval/`` ones and are not repeated): the ``quick`` ones and ``punch_20``,
-  ``quarter_sphere`` (above 10000 dofs: the default tangent is ccx's there);
+  ``quarter_sphere`` (above 10000 dofs: ``--tangent auto`` takes ccx's symmetrized one there);
 - ``options/``: two decks again with each non-default option of ``dolfinx_ntf run``.
 
 Every demo of ``demos/`` runs with the tests' settings (``--coarse --quiet``, tests/test_demos.py);
@@ -59,10 +59,12 @@ OUTPUTS = (".dat", ".cel", ".frd", ".sta", ".cvg")
 #: Options of ``dolfinx_ntf run`` other than the defaults, each run on the ``options/`` decks.
 OPTION_SETS = {
     "stable_pairing": ["--stable-pairing"],
-    "tangent_ccx": ["--tangent", "ccx"],
+    "tangent_auto": ["--tangent", "auto"],
     "tangent_exact": ["--tangent", "exact"],
-    "predictor_ccx": ["--predictor", "ccx"],
+    "predictor_guarded": ["--predictor", "guarded"],
     "predictor_off": ["--predictor", "off"],
+    "line_search": ["--line-search"],
+    "robust": ["--robust"],
     "pair_after_predictor": ["--pair-after-predictor"],
 }
 OPTION_DECKS = ("data/two_cubes", "crossval/hex_two_pairs")

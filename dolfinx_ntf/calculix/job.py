@@ -68,10 +68,14 @@ logger = logging.getLogger("dolfinx_ntf")
 #: in its convergence test (measured, docs/method.md §7.1); not with ``tight=True``.
 CCX_RESIDUAL_FLOOR = 1e-6
 
-#: From this many dofs on the deck runner uses CalculiX's symmetrized contact tangent, whose
-#: Cholesky factorization costs about half an LU; below, the exact tangent, which converges in fewer
-#: iterations where projections are clamped to a face edge (docs/method.md §7.4).
+#: With ``tangent="auto"``, from this many dofs on the deck runner uses CalculiX's symmetrized
+#: contact tangent, whose Cholesky factorization costs about half an LU; below, the exact tangent,
+#: which converges in fewer iterations where projections are clamped to a face edge
+#: (docs/method.md §7.4).
 SYMMETRIC_MIN_DOFS = 10_000
+
+#: The deck runner's spring tangents (``run_job(tangent=...)``, ``--tangent``).
+TANGENTS: tuple[str, ...] = ("ccx", "exact", "auto")
 
 
 class JobError(RuntimeError):
@@ -198,6 +202,7 @@ class _Job:
         pair_after_predictor: bool = False,
         guard_predictor: bool = True,
         ccx_format: str = "2.20",
+        solver_options: dict | None = None,
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
         self.predictor = predictor
@@ -227,9 +232,11 @@ class _Job:
             petsc_options=petsc_options,
             check_unpaired=False,
             roundoff_floor=False,
+            bounded_scale=False,
             residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
             average_over_step=not tight,
             change_over_iterations=not tight,
+            **(solver_options or {}),
         )
         self.result.xdmf = directory / f"{jobname}.xdmf"
         self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
@@ -492,8 +499,11 @@ def run_job(
     petsc_options: dict | None = None,
     predictor: bool = True,
     pair_after_predictor: bool = False,
-    guard_predictor: bool = True,
+    guard_predictor: bool = False,
     ccx_format: str = "2.20",
+    tangent: str = "ccx",
+    line_search: bool = False,
+    solver_options: dict | None = None,
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -506,9 +516,8 @@ def run_job(
             force (ccx's criterion with ``R_n = R_p = 1e-10``) instead of the deck's controls.
         progress: Print ccx-like progress (``log_progress``).
         problem_options: Extra :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ...);
-            the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``);
-            the tangent is CalculiX's symmetrized one from ``SYMMETRIC_MIN_DOFS`` dofs on,
-            the exact one below, unless ``symmetric`` says otherwise (docs/method.md §7.4).
+            the search is CalculiX's unless ``walk_from_previous_face=True`` (``--stable-pairing``).
+            They override those that ``tangent`` sets.
         petsc_options: Linear solver options (default: MUMPS LU).
         predictor: ccx's predictor ``u_n + dt v_prev`` from the second increment of a step (on by
             default, unlike the Python API: see :class:`~dolfinx_ntf.StaticStep`).
@@ -516,10 +525,18 @@ def run_job(
             :class:`~dolfinx_ntf.StaticStep`).
         guard_predictor: Start from ``u_n`` instead when the predicted displacement brings slave
             nodes into contact that the increment-start pairing gave no spring (beyond ccx, see
-            :class:`~dolfinx_ntf.StaticStep`); False is ccx's predictor everywhere.
+            :class:`~dolfinx_ntf.StaticStep`); False (default) is ccx's predictor everywhere.
         ccx_format: The ccx version whose ``.dat`` and ``.frd`` formats are written, ``"2.20"``
             or ``"2.23"`` (step and increment lines, CELS title, CONTACT records; the values are
             2.20's either way: docs/method.md §13.6).
+        tangent: The spring tangent. ``"ccx"`` (default): CalculiX's, symmetrized (without
+            friction) and with the interior-projection formula at projections clamped to a face
+            edge, so that the iterates follow ccx's (docs/method.md §7.4); ``"exact"``: the exact
+            unsymmetric one; ``"auto"``: CalculiX's symmetrized one (exact at clamped
+            projections) from ``SYMMETRIC_MIN_DOFS`` dofs on, the exact one below.
+        line_search: Line-search the Newton corrections (beyond ccx, the Python API's default:
+            :class:`~dolfinx_ntf.ContactNewtonSolver`); off by default, as in ccx.
+        solver_options: Extra :class:`~dolfinx_ntf.ContactNewtonSolver` options.
 
     Returns:
         The :class:`JobResult`.
@@ -532,6 +549,8 @@ def run_job(
     """
     if ccx_format not in CCX_FORMATS:
         raise ValueError(f"ccx_format {ccx_format!r}: one of {', '.join(CCX_FORMATS)}")
+    if tangent not in TANGENTS:
+        raise ValueError(f"tangent {tangent!r}: one of {', '.join(TANGENTS)}")
     start = _time.perf_counter()
     if progress:
         log_progress(details=True)  # ccx's lines: attempts, pairings
@@ -553,8 +572,10 @@ def run_job(
         problem_options={
             "walk_from_previous_face": False,
             "contact_start_slope": False,
-            # ccx's symmetrized tangent on large decks: Cholesky instead of LU (docs/method.md §7.4)
-            "symmetric": 3 * deck.node_ids.size >= SYMMETRIC_MIN_DOFS,
+            # ccx's tangent, or its symmetrized one on large decks only (docs/method.md §7.4)
+            "symmetric": tangent == "ccx"
+            or (tangent == "auto" and 3 * deck.node_ids.size >= SYMMETRIC_MIN_DOFS),
+            "projection_tangent": "ccx" if tangent == "ccx" else "exact",
             "small_sliding_rule": "last_pair",
             # ccx's friction (docs/method.md §11): stale state, friction in tension, its tangent
             "reset_friction_on_separation": False,
@@ -567,6 +588,7 @@ def run_job(
         pair_after_predictor=pair_after_predictor,
         guard_predictor=guard_predictor,
         ccx_format=ccx_format,
+        solver_options={"line_search": line_search, **(solver_options or {})},
     )
     try:
         return job.run()

@@ -71,9 +71,10 @@ class ContactAssembler:
             bcs: Dirichlet conditions on ``V``; their dofs receive no contact entries.
         """
         self._bs = V.dofmap.index_map_bs
-        if self._bs != 3:
+        if self._bs != V.mesh.topology.dim or self._bs not in (2, 3):
             raise ValueError(
-                f"contact needs a 3D vector displacement space, got block size {self._bs}"
+                "contact needs a vector displacement space with one component per dimension of "
+                f"the mesh, got block size {self._bs} on a {V.mesh.topology.dim}D mesh"
             )
         self._form = jacobian_form
         index_map = V.dofmap.index_map

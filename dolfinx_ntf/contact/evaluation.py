@@ -32,6 +32,7 @@ def evaluate_pair(
     linearize_area: bool,
     friction_in_tension: bool,
     friction_tangent: str,
+    projection_tangent: str = "exact",
 ) -> list[SpringBlocks]:
     """Evaluate the springs of one pair at ``coords``; returns the blocks to assemble.
 
@@ -47,6 +48,8 @@ def evaluate_pair(
         linearize_area: Areas follow the deformation, with their derivative in the tangent.
         friction_in_tension: Friction also where the law gives tension.
         friction_tangent: ``"consistent"`` or ``"ccx"`` (docs/method.md §11.2).
+        projection_tangent: ``"exact"`` or ``"ccx"`` (the interior-projection formula also at
+            projections clamped to the face boundary, docs/method.md §6.1).
     """
     nodes = state.element_nodes
     friction = _friction_input(
@@ -66,6 +69,7 @@ def evaluate_pair(
         tangent=tangent,
         symmetric=symmetric,
         friction=friction,
+        **({"interior_projection": True} if projection_tangent == "ccx" else {}),
     )
     state.evaluation = ev
     state.xi = ev.xi
@@ -77,7 +81,7 @@ def evaluate_pair(
             nodes,
             nodes,
             ev.stiffness,
-            ev.forces.reshape(nodes.shape[0], 3 * nodes.shape[1]),
+            ev.forces.reshape(nodes.shape[0], ev.forces.shape[-1] * nodes.shape[1]),
         )
     ]
     if tangent and linearize_area:

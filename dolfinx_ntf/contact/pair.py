@@ -42,6 +42,9 @@ class ContactPair:
         adjust: CalculiX's ADJUST at the first pairing of the analysis (docs/method.md §11.5): a
             distance ``a >= 0`` (slave nodes with clearance ``g <= a`` are moved onto the
             master) or a :class:`NodeSurface` of the nodes to move; None moves nothing.
+        thickness: On a 2D mesh, the out-of-plane thickness the tributary edge lengths are
+            multiplied by to give the spring areas (1: plane strain per unit thickness, like a
+            residual form per unit thickness); it must be 1 on a 3D mesh.
     """
 
     slave: FacetSurface | NodeSurface
@@ -51,6 +54,7 @@ class ContactPair:
     name: str = ""
     active: bool = True
     adjust: float | NodeSurface | None = None
+    thickness: float = 1.0
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -75,6 +79,7 @@ class ContactPair:
             else "",
         )
         validation.check_type(self.name, str, f"{owner}: name")
+        validation.check_positive(self.thickness, f"{owner}: thickness")
         if self.adjust is not None and not isinstance(self.adjust, NodeSurface):
             if isinstance(self.adjust, bool) or not isinstance(self.adjust, (int, float)):
                 raise TypeError(

@@ -9,6 +9,7 @@ increments and steps start and when to pair; it reads the springs back from :att
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import typing
 
@@ -30,9 +31,11 @@ from dolfinx_ntf.fem.surfaces import (
     resolve_master,
     resolve_slave,
 )
+from dolfinx_ntf.kernels.edges import EdgeType, edge_spring_areas
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.rigid import RigidSurface, rigid_master
 from dolfinx_ntf.kernels.search import MasterSurface
+from dolfinx_ntf.kernels.segment_search import MasterCurve
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.kernels.springs import SpringEvaluation
 from dolfinx_ntf.kernels.tie_frame import TieFrame, frame_from_moments, point_moments
@@ -130,6 +133,12 @@ class Pairing:
         name = pair.name or f"pair {index + 1}"
         V = self.u.function_space
         comm = V.mesh.comm
+        if V.mesh.topology.dim == 2:
+            return self._resolve_2d(name, pair)
+        if pair.thickness != 1.0:
+            raise ValueError(
+                f"{name}: thickness = {pair.thickness:g} is for 2D meshes; a 3D mesh has its own"
+            )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
             faces = serendipity.as_quad8(slave.faces, self._face_centres)
@@ -221,6 +230,50 @@ class Pairing:
             adjust_nodes=adjust_nodes,
         )
 
+    def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
+        """A pair on a 2D mesh: node-to-segment springs on master edges (serial, frictionless)."""
+        V = self.u.function_space
+        missing = [
+            feature
+            for feature, used in (
+                ("several processes (MPI)", V.mesh.comm.size > 1),
+                ("a rigid analytical master", isinstance(pair.master, RigidSurface)),
+                ("friction", pair.interaction.friction is not None),
+                ("ADJUST", pair.adjust is not None),
+            )
+            if used
+        ]
+        if missing:
+            raise NotImplementedError(
+                f"{name}: 2D contact does not support {', '.join(missing)} yet (2D meshes have "
+                "frictionless node-to-segment springs between meshed surfaces, on one process)"
+            )
+        slave = resolve_slave(V, pair.slave, what=f"{name} slave")
+        slave = dataclasses.replace(slave, thickness=pair.thickness)
+        master_faces = resolve_master(V, pair.master, what=f"{name} master")
+        if master_faces.faces.shape[0] == 0:
+            raise ValueError(f"{name}: the master surface has no edges")
+        master = MasterCurve(
+            master_faces.face_type,
+            master_faces.faces,
+            name=f"{name} master",
+            coords=self._reference,
+        )
+        both = np.intersect1d(slave.nodes, master_faces.nodes)
+        if both.size:
+            x = self._reference[both[0]]
+            raise ValueError(
+                f"{name}: {both.size} node(s) belong to both the slave and the master surface "
+                f"(first at ({x[0]:.6g}, {x[1]:.6g}))"
+            )
+        friction = FrictionState(
+            slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
+        )
+        return PairState(
+            pair, slave, master_faces, master, np.zeros(slave.nodes.size), friction=friction,
+            was_active=pair.active,
+        )  # fmt: skip
+
     # -- checks ------------------------------------------------------------------------------------
 
     def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
@@ -275,11 +328,12 @@ class Pairing:
         Collective: every process raises or none does.
         """
         surfaces = []
-        num_local = self.u.x.array.size // 3  # halo nodes are checked by their owners
+        bs = self.u.function_space.dofmap.index_map_bs
+        num_local = self.u.x.array.size // bs  # halo nodes are checked by their owners
         for (name, slave, _), state in zip(self._surfaces(), self.states):
             master = state.master_faces.nodes
             surfaces += [(f"{name} slave", slave), (f"{name} master", master[master < num_local])]
-        values = self.u.x.array.reshape(-1, 3)
+        values = self.u.x.array.reshape(-1, bs)
         error = None
         for name, nodes in surfaces:
             bad = nodes[~np.all(np.isfinite(values[nodes]), axis=1)]
@@ -335,6 +389,9 @@ class Pairing:
         """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
         if self.halo is not None:
             return self.halo.displacement(self.u)
+        bs = self.u.function_space.dofmap.index_map_bs
+        if bs == 2:  # a 2D mesh: coordinates keep z = 0
+            return np.pad(self.u.x.array.reshape(-1, 2), ((0, 0), (0, 1)))
         return self.u.x.array.reshape(-1, 3)
 
     def _halo_grew(self) -> None:
@@ -607,7 +664,7 @@ class Pairing:
         if state.xi is not None and state.num_springs:
             previous_face = np.full(state.slave.nodes.size, -1, dtype=np.int64)
             previous_face[state.spring_slave] = state.spring_face
-            previous_xi = np.zeros((state.slave.nodes.size, 2))
+            previous_xi = np.zeros((state.slave.nodes.size, xi0.shape[1]))
             previous_xi[state.spring_slave] = state.xi
             same = previous_face[found] == face[found]
             xi0[same] = previous_xi[found[same]]
@@ -617,7 +674,12 @@ class Pairing:
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
     """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
     faces = slave.faces
-    areas = spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    if isinstance(faces.face_type, EdgeType):  # 2D: tributary length times the thickness
+        areas = slave.thickness * edge_spring_areas(
+            faces.face_type, faces.faces, coords, slave.nodes
+        )
+    else:
+        areas = spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
     if slave.faceless is not None:
         areas[slave.faceless] = 0.0
     return areas

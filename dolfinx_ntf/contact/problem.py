@@ -112,6 +112,9 @@ class ContactProblem:
             forces only).
         friction_tangent: ``"consistent"`` (exact derivative of the friction force) or ``"ccx"``
             (CalculiX's, projection point frozen in the slip increment), docs/method.md §11.2.
+        projection_tangent: ``"exact"`` (a projection clamped to a face edge or corner is
+            differentiated as such) or ``"ccx"`` (the interior formula everywhere, CalculiX's
+            Newton path), docs/method.md §6.1.
         reset_friction_on_separation: A slave node that was not in contact at the last converged
             increment starts with a fresh friction state when it touches (default). False keeps
             CalculiX's stale state (docs/method.md §11.3).
@@ -152,8 +155,13 @@ class ContactProblem:
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
         reuse_bulk_jacobian: bool = True,
+        projection_tangent: str = "exact",
     ) -> None:
         pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth)
+        if linearize_area and u.function_space.mesh.topology.dim == 2:
+            raise NotImplementedError(
+                "ContactProblem: 2D contact does not support linearize_area yet"
+            )
         options = compat.jit_keywords(form_compiler_options, jit_options)
         V = u.function_space
         self._L = dolfinx.fem.form(F, **options)
@@ -166,6 +174,12 @@ class ContactProblem:
                 f"ContactProblem: friction_tangent must be one of {TANGENT_MODES}, "
                 f"got {friction_tangent!r}"
             )
+        if projection_tangent not in ("exact", "ccx"):
+            raise ValueError(
+                "ContactProblem: projection_tangent must be 'exact' or 'ccx', "
+                f"got {projection_tangent!r}"
+            )
+        self.projection_tangent = projection_tangent
         self.u = u
         self.symmetric = symmetric
         self.friction_tangent = friction_tangent
@@ -211,6 +225,11 @@ class ContactProblem:
         #: right-hand side of the coming solve). A driver whose last residual went elsewhere (a
         #: SNES line search's work vector) points it at its own residual vector before :meth:`J`.
         self.residual_vector: PETSc.Vec | None = None
+        #: Whether :meth:`assemble_jacobian` measures :attr:`bulk_norm` (a solver's round-off
+        #: floor asks for it).
+        self.measure_bulk_norm = False
+        #: Largest row sum of the last bulk Jacobian, before the springs were added.
+        self.bulk_norm = 0.0
         self._first_pairing_done = False
         self.matrix: PETSc.Mat | None = None
         #: Optional nodal forces (a Function on V, e.g. CalculiX ``*CLOAD``) subtracted from the
@@ -426,6 +445,7 @@ class ContactProblem:
                 linearize_area=self.linearize_area,
                 friction_in_tension=self.friction_in_tension,
                 friction_tangent=self.friction_tangent,
+                projection_tangent=self.projection_tangent,
             )  # the start slope: contact_start_slope, docs/method.md §7.1
         return blocks
 
@@ -531,6 +551,8 @@ class ContactProblem:
         """The Jacobian at ``x`` with the springs last evaluated, into ``A``."""
         pattern = (self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
         self.bulk_jacobian.assemble(A, self.a, self.bcs, pattern)
+        if self.measure_bulk_norm:
+            self.bulk_norm = A.norm(PETSc.NormType.NORM_INFINITY)
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
         self._pattern_checked = True
         A.assemble()

@@ -14,11 +14,14 @@ normal ``n = grad phi``. With ``[a]_+ = (a + |a|)/2`` and ``[a]_- = (a - |a|)/2`
 
 Both are added to the bulk residual; :class:`ContinuumNewton` solves with a tolerance relative to
 the first residual and records iterations and the time split (bulk assembly, contact assembly,
-linear solve).
+linear solve). :class:`~dolfinx_ntf.solvers.continuum.ContinuumIncrementSolver` lets the step
+drivers (``StaticStep(set_load, ...).run(...)``, :func:`~dolfinx_ntf.run_steps`) load it by
+increments, cut back after a failed solve and log a line per increment like for the springs.
 """
 
 from __future__ import annotations
 
+import logging
 import time
 import typing
 from dataclasses import dataclass, field
@@ -40,9 +43,12 @@ from dolfinx_ntf.kernels.rigid import (
     RigidSurface,
     SignedDistanceSurface,
 )
+from dolfinx_ntf.logs import newton_logger
 
 __all__ = [
     "ContinuumNewton",
+    "ContinuumNewtonError",
+    "NewtonRecord",
     "RigidObstacle",
     "contact_measure",
     "macaulay",
@@ -61,7 +67,11 @@ DEFAULT_QUADRATURE_DEGREE = 8
 
 
 def macaulay(a: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-    """``[a]_+ = max(a, 0)`` as ``(a + |a|)/2`` (differentiable by UFL almost everywhere)."""
+    """``[a]_+ = max(a, 0)`` as ``(a + |a|)/2`` (differentiable by UFL almost everywhere).
+
+    Args:
+        a: A scalar UFL expression, e.g. the negative gap ``-g``.
+    """
     return 0.5 * (a + abs(a))
 
 
@@ -73,7 +83,9 @@ class RigidObstacle:
     """A :class:`~dolfinx_ntf.kernels.rigid.RigidSurface` as UFL gap and normal of ``u``.
 
     The surface's translation is a dolfinx Constant: call :meth:`update` with the step time when
-    the surface moves (``motion``/``offset``).
+    the surface moves (``motion``/``offset``), or list the obstacle in
+    ``ContinuumIncrementSolver(newton, obstacles)`` and the steps do it
+    (:mod:`dolfinx_ntf.solvers.continuum`).
 
     Args:
         surface: Plane, sphere, cylinder, or a :class:`~dolfinx_ntf.SignedDistanceSurface` with a
@@ -95,7 +107,11 @@ class RigidObstacle:
         self.update(0.0)
 
     def update(self, time: float) -> None:
-        """Move the surface to its position at relative step time ``time``."""
+        """Move the surface to its position at relative step time ``time``.
+
+        Args:
+            time: Relative step time, 0 to 1 (the steps pass the end of the increment).
+        """
         self.translation.value[:] = self.surface.translation(time)
 
     def _local(self, u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
@@ -104,7 +120,14 @@ class RigidObstacle:
     def gap_and_normal(
         self, u: ufl.core.expr.Expr
     ) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr]:
-        """UFL ``(g, n)`` at the current position ``X + u``."""
+        """UFL ``(g, n)`` at the current position ``X + u``.
+
+        Args:
+            u: The displacement (a Function, or any vector expression of it).
+
+        Returns:
+            The signed gap (negative inside the surface) and the outward unit normal.
+        """
         y = self._local(u)
         s = self.surface
         if isinstance(s, RigidPlane):
@@ -133,7 +156,15 @@ def contact_measure(
     tag: int,
     degree: int = DEFAULT_QUADRATURE_DEGREE,
 ) -> ufl.Measure:
-    """``ds(tag)`` with the contact quadrature degree (docs/method.md §15.2)."""
+    """``ds(tag)`` with the contact quadrature degree (docs/method.md §15.2).
+
+    Args:
+        mesh: The mesh of ``u``.
+        facet_tags: Facet tags that mark the potential contact boundary.
+        tag: The tag of the contact boundary in ``facet_tags``.
+        degree: Quadrature degree (high: the Macaulay bracket has a kink inside the facets at the
+            contact edge, docs/method.md §15.2).
+    """
     ds = ufl.Measure(
         "ds", domain=mesh, subdomain_data=facet_tags, metadata={"quadrature_degree": degree}
     )
@@ -143,7 +174,13 @@ def contact_measure(
 def penalty_pressure(
     u: ufl.core.expr.Expr, obstacle: RigidObstacle, penalty: float
 ) -> ufl.core.expr.Expr:
-    """Penalty contact pressure ``K [-g(u)]_+``."""
+    """Penalty contact pressure ``K [-g(u)]_+`` (e.g. for :class:`~dolfinx_ntf.BoundaryPressure`).
+
+    Args:
+        u: The displacement.
+        obstacle: The rigid surface.
+        penalty: The penalty stiffness ``K`` (pressure per penetration).
+    """
     g, _ = obstacle.gap_and_normal(u)
     return penalty * macaulay(-g)
 
@@ -155,7 +192,15 @@ def penalty_residual(
     ds: ufl.Measure,
     penalty: float,
 ) -> ufl.Form:
-    """Penalty contact residual ``-∫ K [-g]_+ n·v ds`` (add it to the bulk residual)."""
+    """Penalty contact residual ``-∫ K [-g]_+ n·v ds`` (add it to the bulk residual).
+
+    Args:
+        u: The displacement.
+        v: The test function.
+        obstacle: The rigid surface.
+        ds: Measure of the contact boundary (:func:`contact_measure`).
+        penalty: The penalty stiffness ``K`` (pressure per penetration).
+    """
     _, n = obstacle.gap_and_normal(u)
     return -penalty_pressure(u, obstacle, penalty) * ufl.dot(n, v) * ds
 
@@ -163,7 +208,16 @@ def penalty_residual(
 def nitsche_gamma(
     gamma0: float, youngs_modulus: float, mesh: dolfinx.mesh.Mesh
 ) -> ufl.core.expr.Expr:
-    """Nitsche's parameter ``gamma0 E / h`` with ``h`` the diameter of the facet's cell."""
+    """Nitsche's parameter ``gamma0 E / h`` with ``h`` the diameter of the facet's cell.
+
+    Args:
+        gamma0: Dimensionless factor (> 0); too small loses stability (no convergence).
+        youngs_modulus: Young's modulus ``E`` of the body (> 0).
+        mesh: The mesh of ``u`` (for ``h``).
+
+    Raises:
+        ValueError: ``gamma0`` or ``youngs_modulus`` not positive.
+    """
     if not (gamma0 > 0 and youngs_modulus > 0):
         raise ValueError(f"need gamma0 > 0 and E > 0, got {gamma0} and {youngs_modulus}")
     return gamma0 * youngs_modulus / ufl.CellDiameter(mesh)
@@ -179,7 +233,14 @@ def nitsche_pressure(
     stress: typing.Callable[[ufl.core.expr.Expr], ufl.core.expr.Expr],
     gamma: ufl.core.expr.Expr,
 ) -> ufl.core.expr.Expr:
-    """Nitsche's contact pressure ``-[sigma_n(u) + gamma g]_-`` (the multiplier it enforces)."""
+    """Nitsche's contact pressure ``-[sigma_n(u) + gamma g]_-`` (the multiplier it enforces).
+
+    Args:
+        u: The displacement.
+        obstacle: The rigid surface.
+        stress: ``stress(w)``, the stress of a displacement.
+        gamma: Nitsche parameter (:func:`nitsche_gamma`).
+    """
     g, n = obstacle.gap_and_normal(u)
     return -_negative_part(_sigma_n(stress(u), n) + gamma * g)
 
@@ -203,6 +264,9 @@ def nitsche_residual(
         stress: ``stress(w)``, the (linear) stress of a displacement, used for ``u`` and ``v``.
         gamma: Nitsche parameter (:func:`nitsche_gamma`).
         theta: 1 (symmetric), 0 (incomplete), -1 (skew-symmetric).
+
+    Raises:
+        ValueError: ``theta`` not 1, 0 or -1.
     """
     if theta not in (1, 0, -1):
         raise ValueError(f"nitsche_residual: theta must be 1, 0 or -1, got {theta!r}")
@@ -217,13 +281,39 @@ def nitsche_residual(
 
 @dataclass
 class NewtonRecord:
-    """Iterations and time split of one solve."""
+    """Iterations and time split of one :meth:`ContinuumNewton.solve`.
+
+    Attributes:
+        iterations: Newton updates until convergence.
+        residual_norms: ``||R_k||`` of every iterate, the first one first.
+        bulk_assembly: Seconds spent assembling the bulk residual and Jacobian.
+        contact_assembly: Seconds spent assembling the contact residual and Jacobian.
+        linear_solve: Seconds spent in the linear solver.
+    """
 
     iterations: int = 0
     residual_norms: list[float] = field(default_factory=list)
     bulk_assembly: float = 0.0
     contact_assembly: float = 0.0
     linear_solve: float = 0.0
+
+
+class ContinuumNewtonError(RuntimeError):
+    """A failed :meth:`ContinuumNewton.solve`; ``kind`` says what a step can do about it.
+
+    Args:
+        message: What failed, with the residuals.
+        kind: ``"convergence"`` (no convergence in ``max_it`` updates: a smaller increment may
+            converge), ``"divergence"`` (non-finite residual or failed linear solve after an
+            update: cut back further) or ``"input"`` (a non-finite residual before any update,
+            or the solver's first linear solve failed: no smaller increment helps).
+    """
+
+    def __init__(self, message: str, kind: str) -> None:
+        if kind not in ("convergence", "divergence", "input"):
+            raise ValueError(f"ContinuumNewtonError: unknown kind {kind!r}")
+        super().__init__(message)
+        self.kind = kind
 
 
 class ContinuumNewton:
@@ -234,13 +324,22 @@ class ContinuumNewton:
     separately (the contact form's couplings lie inside the bulk pattern) so that their times can
     be told apart; the linear solver is MUMPS LU by default.
 
+    The step drivers (:class:`~dolfinx_ntf.StaticStep`, :func:`~dolfinx_ntf.run_steps`) drive it
+    by increments with cutbacks through
+    :class:`~dolfinx_ntf.solvers.continuum.ContinuumIncrementSolver`. Each iteration logs a line
+    on ``"dolfinx_ntf.newton"`` (:func:`~dolfinx_ntf.log_progress` with ``iterations=True``).
+
     Args:
         bulk: Bulk residual (UFL, linear in the test function).
         contact: Contact residual (UFL), e.g. :func:`penalty_residual`.
-        u: The displacement.
+        u: The displacement, the unknown of both forms.
         bcs: Dirichlet conditions.
-        rtol, atol, max_it: Convergence controls.
-        petsc_options: Linear solver options (prefix ``ntf_continuum_``).
+        rtol: Convergence when the residual norm falls to ``rtol`` times the first one.
+        atol: Or below ``atol`` (absolute, e.g. for a solve that starts converged).
+        max_it: Newton updates before the solve gives up (a step then cuts back).
+        petsc_options: Linear solver options (prefix ``ntf_continuum_``); default MUMPS LU.
+        form_compiler_options: Options of the form compiler (FFCx), e.g. for the quadrature.
+        jit_options: Options of the JIT compilation of the forms.
     """
 
     def __init__(
@@ -267,6 +366,7 @@ class ContinuumNewton:
         self.a = [dolfinx.fem.form(ufl.derivative(f, u, du), **options) for f in (bulk, contact)]
         self.A = dolfinx.fem.petsc.create_matrix(self.a[0])
         self.b = compat.create_vector(self.L[0])
+        self._contact_force = compat.create_vector(self.L[1])
         self.dx = self.A.createVecRight()
         self.ksp = PETSc.KSP().create(u.function_space.mesh.comm)
         self.ksp.setOptionsPrefix("ntf_continuum_")
@@ -282,7 +382,13 @@ class ContinuumNewton:
         for key in settings:
             opts.delValue(f"ntf_continuum_{key}")
         self.ksp.setOperators(self.A)
+        #: One record per converged solve.
         self.records: list[NewtonRecord] = []
+        #: Residual norms of the last solve (also a failed one), the first one first.
+        self.residual_norms: list[float] = []
+        #: Nodes with a non-zero contact force after the last converged solve, all processes.
+        self.contact_nodes = 0
+        self._first_solve = True
 
     def _assemble(self, record: NewtonRecord) -> None:
         x = compat.petsc_vector(self.u)
@@ -307,40 +413,116 @@ class ContinuumNewton:
         record.bulk_assembly += middle - start
         record.contact_assembly += end - middle
 
-    def solve(self) -> NewtonRecord:
-        """Solve from the current ``u``; a failure raises ``RuntimeError`` with the residuals."""
-        record = NewtonRecord()
-        x = compat.petsc_vector(self.u)
-        for _ in range(self.max_it + 1):
-            self._assemble(record)
-            norm = self.b.norm()
-            record.residual_norms.append(norm)
-            if not np.isfinite(norm):
-                raise RuntimeError(
-                    f"ContinuumNewton: residual not finite after {record.iterations} iterations"
-                )
-            if norm <= max(self.rtol * record.residual_norms[0], self.atol):
-                self.records.append(record)
-                return record
-            if record.iterations == self.max_it:
-                break
-            start = time.perf_counter()
+    def _count_contact_nodes(self) -> int:
+        """Owned nodes with a non-zero contact residual, summed over the processes. Collective."""
+        f = self._contact_force
+        with f.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(f, self.L[1])
+        f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        bs = self.u.function_space.dofmap.index_map_bs
+        local = int(np.count_nonzero(np.any(f.array.reshape(-1, bs) != 0, axis=1)))
+        return self.u.function_space.mesh.comm.allreduce(local)
+
+    def _not_finite(self, norm: float, updates: int) -> ContinuumNewtonError:
+        """A non-finite residual: the input's fault before any update, a divergence after."""
+        if updates:
+            return ContinuumNewtonError(
+                f"ContinuumNewton: residual not finite (norm {norm}) after {updates} updates",
+                "divergence",
+            )
+        comm = self.u.function_space.mesh.comm
+        bad_u = comm.allreduce(int(np.count_nonzero(~np.isfinite(self.u.x.array))))
+        what = (
+            f"the displacement has {bad_u} non-finite value(s) at the start of the solve (check "
+            "the initial values and the prescribed displacements that set_load writes)"
+            if bad_u
+            else "the displacement is finite: check the loads, constants and material "
+            "parameters of the residual forms and the obstacles' positions"
+        )
+        return ContinuumNewtonError(
+            f"ContinuumNewton: residual not finite at the start; {what}", "input"
+        )
+
+    def _linear_solve(self, record: NewtonRecord) -> None:
+        """``dx = J^{-1} R``; a failure: the setup's at the very first solve, a divergence later."""
+        start = time.perf_counter()
+        try:
             self.ksp.solve(self.b, self.dx)
-            record.linear_solve += time.perf_counter() - start
-            if self.ksp.getConvergedReason() < 0:
-                raise RuntimeError(
-                    f"ContinuumNewton: linear solve failed (reason {self.ksp.getConvergedReason()})"
-                )
-            x.axpy(-1.0, self.dx)
-            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            record.iterations += 1
-        raise RuntimeError(
+            reason = self.ksp.getConvergedReason()
+            what = f"linear solve failed (KSP reason {reason})" if reason < 0 else ""
+        except PETSc.Error as error:
+            what = f"linear solve failed (PETSc error {getattr(error, 'ierr', error)})"
+        record.linear_solve += time.perf_counter() - start
+        if not what and not np.isfinite(self.dx.norm()):
+            what = "linear solve gave a non-finite correction (a singular Jacobian?)"
+        if not what:
+            return
+        if self._first_solve and record.iterations == 0:
+            raise ContinuumNewtonError(
+                f"ContinuumNewton: {what} at the first Newton iteration: check the PETSc options "
+                "(petsc_options, prefix 'ntf_continuum_'), the Dirichlet conditions (every body "
+                "held) and that the forms are built on u",
+                "input",
+            )
+        raise ContinuumNewtonError(
+            f"ContinuumNewton: {what} at Newton iteration {record.iterations + 1}", "divergence"
+        )
+
+    def solve(self) -> NewtonRecord:
+        """Solve from the current ``u``.
+
+        Returns:
+            The record of the solve (also appended to ``records``).
+
+        Raises:
+            ContinuumNewtonError: No convergence in ``max_it`` updates, a non-finite residual or
+                a failed linear solve; its ``kind`` tells whether a smaller increment may help.
+        """
+        record = NewtonRecord()
+        self.residual_norms = record.residual_norms
+        x = compat.petsc_vector(self.u)
+        verbose = newton_logger.isEnabledFor(logging.INFO)
+        try:
+            for _ in range(self.max_it + 1):
+                self._assemble(record)
+                norm = self.b.norm()
+                record.residual_norms.append(norm)
+                if not np.isfinite(norm):
+                    raise self._not_finite(norm, record.iterations)
+                converged = norm <= max(self.rtol * record.residual_norms[0], self.atol)
+                if verbose:
+                    newton_logger.info(_iteration_line(record, self.dx, converged))
+                if converged:
+                    self.records.append(record)
+                    self.contact_nodes = self._count_contact_nodes()
+                    return record
+                if record.iterations == self.max_it:
+                    break
+                self._linear_solve(record)
+                x.axpy(-1.0, self.dx)
+                x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+                record.iterations += 1
+        finally:
+            self._first_solve = False
+        raise ContinuumNewtonError(
             f"ContinuumNewton: no convergence in {self.max_it} iterations (residuals "
             f"{', '.join(f'{r:.3e}' for r in record.residual_norms[-4:])}; first "
-            f"{record.residual_norms[0]:.3e})"
+            f"{record.residual_norms[0]:.3e})",
+            "convergence",
         )
 
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.A, self.b, self.dx, self.ksp):
+        for obj in (self.A, self.b, self._contact_force, self.dx, self.ksp):
             obj.destroy()
+
+
+def _iteration_line(record: NewtonRecord, correction: PETSc.Vec, converged: bool) -> str:
+    """The springs' per-iteration line: residual, its ratio to the first, correction. Collective."""
+    norms = record.residual_norms
+    line = f" iteration {record.iterations}: residual {norms[-1]:.3e}"
+    if record.iterations:
+        ratio = norms[-1] / norms[0] if norms[0] > 0 else 0.0
+        line += f" ({ratio:.1e} of the first), correction {correction.norm():.3e}"
+    return line + (", converged" if converged else "")

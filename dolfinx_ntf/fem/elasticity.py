@@ -30,13 +30,14 @@ def lame_parameters(youngs_modulus: float, poisson_ratio: float) -> tuple[float,
 def small_strain_stress(
     u: ufl.core.expr.Expr, youngs_modulus: float, poisson_ratio: float
 ) -> ufl.core.expr.Expr:
-    """Small-strain isotropic linear elastic stress of the displacement ``u`` (3D).
+    """Small-strain isotropic linear elastic stress of the displacement ``u``.
 
-    ``youngs_modulus`` and ``poisson_ratio`` give the Lamé parameters.
+    ``youngs_modulus`` and ``poisson_ratio`` give the Lamé parameters; for a 2D ``u`` this is
+    plane strain (the in-plane stresses, per unit thickness).
     """
     mu, lmbda = lame_parameters(youngs_modulus, poisson_ratio)
     eps = ufl.sym(ufl.grad(u))
-    return 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(3)
+    return 2 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(ufl.shape(u)[0])
 
 
 def component_bc(

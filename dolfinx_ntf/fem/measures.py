@@ -47,6 +47,16 @@ def facet_reaction(
     """``(3,)`` sum of the assembled residual (no Dirichlet conditions) over the dofs of facets.
 
     At prescribed dofs this is the force the support exerts on the body. Collective.
+
+    Args:
+        residual: The residual form whose assembled vector holds the nodal forces (e.g. the bulk
+            residual, or bulk plus contact where the facets carry contact too).
+        u: The displacement (its space locates the facets' dofs).
+        facet_tags: Facet tags.
+        tag: The tag of the facets.
+
+    Returns:
+        The summed force components, the same on every process.
     """
     V = u.function_space
     form = dolfinx.fem.form(residual)
@@ -60,7 +70,14 @@ def facet_reaction(
 
 
 def contact_area(pressure: dolfinx.fem.Function, ds: ufl.Measure, degree: int = 8) -> float:
-    """``∫ [p_h > 0] ds``: the area where the recovered pressure is positive. Collective."""
+    """``∫ [p_h > 0] ds``: the area where the recovered pressure is positive. Collective.
+
+    Args:
+        pressure: The recovered pressure ``p_h`` (``pressure`` of a
+            :class:`~dolfinx_ntf.BoundaryPressure`).
+        ds: Measure of the contact boundary.
+        degree: Quadrature degree of the indicator (discontinuous inside the facets at the edge).
+    """
     mesh = pressure.function_space.mesh
     indicator = ufl.conditional(ufl.gt(pressure, 0.0), 1.0, 0.0)
     measure = ds(metadata={"quadrature_degree": degree})
@@ -96,12 +113,25 @@ def fit_hertz_profile(r: np.ndarray, p: np.ndarray, a0: float, p0: float) -> tup
 
 
 def radius_from_area(area: float, fraction: float = 1.0) -> float:
-    """Radius of a disc whose ``fraction`` (1/4 for a quarter model) has the area ``area``."""
+    """Radius of a disc whose ``fraction`` (1/4 for a quarter model) has the area ``area``.
+
+    Args:
+        area: The contact area of the model.
+        fraction: The part of the disc the model holds (1/4 for a quarter model).
+    """
     return math.sqrt(area / (fraction * math.pi))
 
 
 def bracketing_radius(r: np.ndarray, p: np.ndarray, threshold: float = 0.0) -> tuple[float, float]:
-    """``(last r with p > threshold, first larger r with p <= threshold)`` (nan if none)."""
+    """``(last r with p > threshold, first larger r with p <= threshold)`` (nan if none).
+
+    The contact edge lies between the two: a bracket that needs no fit.
+
+    Args:
+        r: ``(N,)`` distance of each node from the contact centre.
+        p: ``(N,)`` pressure at the nodes.
+        threshold: Pressures above it count as closed.
+    """
     closed = p > threshold
     if not closed.any():
         return math.nan, math.nan
@@ -111,7 +141,13 @@ def bracketing_radius(r: np.ndarray, p: np.ndarray, threshold: float = 0.0) -> t
 
 
 def largest_penetration(surface: RigidSurface, positions: np.ndarray, time: float = 0.0) -> float:
-    """Largest depth of the points below the rigid surface (0 if none penetrates)."""
+    """Largest depth of the points below the rigid surface (0 if none penetrates).
+
+    Args:
+        surface: The rigid surface.
+        positions: ``(N, 3)`` current positions of the points (e.g. contact nodes, ``X + u``).
+        time: Relative step time of the surface's position.
+    """
     if positions.shape[0] == 0:
         return 0.0
     return float(max(0.0, -surface.distance(positions, time).min()))

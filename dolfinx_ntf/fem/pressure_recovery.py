@@ -127,7 +127,17 @@ class BoundaryPressure:
     def from_forces(self, nodes: np.ndarray, forces: np.ndarray) -> dolfinx.fem.Function:
         """Recover from normal forces ``forces`` at ``nodes`` (block indices of ``u``'s space).
 
-        Forces at ghost nodes are ignored (their owner has them).
+        Forces at ghost nodes are ignored (their owner has them). Collective.
+
+        Args:
+            nodes: ``(N,)`` local block indices of ``u``'s space (e.g. ``ContactResults.node``).
+            forces: ``(N,)`` normal force at each node (e.g. the springs').
+
+        Returns:
+            ``self.pressure``, updated.
+
+        Raises:
+            ValueError: A node outside the displacement space (on every process).
         """
         rhs = self._rhs
         with rhs.localForm() as local:
@@ -140,7 +150,17 @@ class BoundaryPressure:
         return self._solve(rhs)
 
     def from_expression(self, pressure: ufl.core.expr.Expr) -> dolfinx.fem.Function:
-        """L2-project a UFL pressure expression (e.g. ``K [-g]_+``) onto the trace space."""
+        """L2-project a UFL pressure expression (e.g. ``K [-g]_+``) onto the trace space.
+
+        Collective.
+
+        Args:
+            pressure: Scalar UFL expression of the contact pressure, e.g.
+                :func:`~dolfinx_ntf.fem.continuum.penalty_pressure`.
+
+        Returns:
+            ``self.pressure``, updated.
+        """
         rhs = self._rhs
         with rhs.localForm() as local:
             local.set(0.0)
@@ -150,7 +170,7 @@ class BoundaryPressure:
         return self._solve(rhs)
 
     def total(self) -> float:
-        """``∫_Γ p_h ds``: the total normal force the recovered field carries."""
+        """``∫_Γ p_h ds``: the total normal force the recovered field carries. Collective."""
         value = dolfinx.fem.assemble_scalar(dolfinx.fem.form(self.pressure * self._ds_exact))
         return float(self.space.mesh.comm.allreduce(value))
 
@@ -159,7 +179,11 @@ class BoundaryPressure:
         return self._node_of_q[self.dofs], self.pressure.x.array[self.dofs].copy()
 
     def at_nodes(self, nodes: np.ndarray) -> np.ndarray:
-        """``p_h`` at nodes given as block indices of ``u``'s space (local, with ghosts)."""
+        """``p_h`` at nodes given as block indices of ``u``'s space (local, with ghosts).
+
+        Args:
+            nodes: ``(N,)`` local block indices of ``u``'s space on the contact boundary.
+        """
         return self.pressure.x.array[self._q_of_node[np.asarray(nodes, dtype=np.int64)]].copy()
 
     def destroy(self) -> None:

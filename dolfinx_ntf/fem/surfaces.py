@@ -25,6 +25,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat, validation
+from dolfinx_ntf.kernels.edges import EdgeType, edge_type_from_num_nodes
 from dolfinx_ntf.kernels.faces import FaceType, face_type_from_num_nodes
 
 __all__ = [
@@ -131,7 +132,7 @@ class NodeSurface:
 class SurfaceFaces:
     """Faces of one face type as node (block dof) connectivity in CalculiX order."""
 
-    face_type: FaceType
+    face_type: FaceType | EdgeType
     faces: np.ndarray  # (F, n) local block dofs
     facets: np.ndarray  # (F,) local facet index of each face
 
@@ -143,7 +144,7 @@ class SurfaceFaces:
 
 @dataclass(frozen=True)
 class SlaveSurface:
-    """Slave nodes and the faces that give them spring area (docs/method.md §2.1).
+    """Slave nodes and the faces (edges of a 2D mesh) that give them spring area (§2.1).
 
     ``faceless`` marks slave nodes that take no share of the faces' area and get CalculiX's
     fallback area instead (ccx: the midside nodes of a node-based surface, §13.5); None: none.
@@ -152,6 +153,7 @@ class SlaveSurface:
     nodes: np.ndarray  # (S,) sorted local block dofs
     faces: SurfaceFaces
     faceless: np.ndarray | None = None  # (S,) bool
+    thickness: float = 1.0  # 2D meshes: the spring areas are tributary lengths times this
 
 
 def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
@@ -205,14 +207,16 @@ def boundary_faces(
     """
     mesh = V.mesh
     tdim = mesh.topology.dim
-    if tdim != 3:
-        raise ValueError(f"{what}: only 3D meshes are supported, got a {tdim}D mesh")
+    if tdim not in (2, 3):
+        raise ValueError(f"{what}: only 2D and 3D meshes are supported, got a {tdim}D mesh")
     facets = np.asarray(facets, dtype=np.int32)
     cells, local_facet = facet_cells(mesh, facets, what)
 
     cell_nodes, closure = _cell_arrays(V)
     closure_nodes = cell_nodes[cells[:, None], closure[local_facet]]
     X = reference_coordinates(V)
+    if tdim == 2:
+        return _boundary_edges(X, cell_nodes[cells], closure_nodes, facets)
     face_type = face_type_from_num_nodes(closure.shape[1])
     num_corners = face_type.num_corners
     corners = closure_nodes[:, :num_corners]
@@ -234,6 +238,20 @@ def boundary_faces(
     if face_type.num_nodes > num_corners:
         faces = np.hstack([corners, _midside_nodes(X, corners, closure_nodes[:, num_corners:])])
     return SurfaceFaces(face_type, np.ascontiguousarray(faces, dtype=np.int32), facets)
+
+
+def _boundary_edges(
+    X: np.ndarray, cell_nodes: np.ndarray, closure_nodes: np.ndarray, facets: np.ndarray
+) -> SurfaceFaces:
+    """Boundary edges of a 2D mesh: corners with the body on the left, then the midside node."""
+    edge_type = edge_type_from_num_nodes(closure_nodes.shape[1])
+    corners = closure_nodes[:, :2].copy()
+    tangent = X[corners[:, 1], :2] - X[corners[:, 0], :2]
+    outward = X[corners, :2].mean(axis=1) - X[cell_nodes, :2].mean(axis=1)
+    flip = tangent[:, 1] * outward[:, 0] - tangent[:, 0] * outward[:, 1] < 0  # (t_y, -t_x)·o
+    corners[flip] = corners[flip, ::-1]
+    faces = np.hstack([corners, closure_nodes[:, 2:]])
+    return SurfaceFaces(edge_type, np.ascontiguousarray(faces, dtype=np.int32), facets)
 
 
 def facet_cells(

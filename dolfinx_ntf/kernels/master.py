@@ -67,5 +67,10 @@ class ContactMaster(typing.Protocol):
         tangent: bool = True,
         symmetric: bool = False,
         friction: object | None = None,
+        interior_projection: bool = False,
     ) -> SpringEvaluation:
-        """Forces (and tangent) of springs between slave nodes and this surface (§5, §6)."""
+        """Forces (and tangent) of springs between slave nodes and this surface (§5, §6).
+
+        ``interior_projection``: CalculiX's tangent at projections clamped to a face boundary
+        (meshed masters; a rigid master has no face boundary).
+        """

@@ -425,8 +425,12 @@ class RigidMaster:
         tangent: bool = True,
         symmetric: bool = False,
         friction: object | None = None,
+        interior_projection: bool = False,
     ) -> SpringEvaluation:
-        """:func:`evaluate_rigid_springs` with the signature of ``evaluate_springs``."""
+        """:func:`evaluate_rigid_springs` with the signature of ``evaluate_springs``.
+
+        ``interior_projection`` has no effect: the surface has no face boundary.
+        """
         if friction is not None:
             raise NotImplementedError(
                 f"{self.name}: friction against a rigid analytical master is not supported yet; "

@@ -22,8 +22,9 @@ Clamped projections: when the closest point lies on an edge of the parametric do
 node is beside the face) the edge constraint is treated as active and ∂ξ/∂x is the exact
 derivative of the constrained closest point (the parameter along the edge moves, the other is
 fixed); at a corner ∂ξ/∂x = 0. There r is not ∥ n and the exact tangent is unsymmetric. CalculiX
-instead uses the interior-projection formula everywhere (docs/method.md §6.1); both coincide
-for interior projections, the normal contact situation.
+instead uses the interior-projection formula everywhere (docs/method.md §6.1,
+``interior_projection=True``); both coincide for interior projections, the normal contact
+situation.
 
 Friction (docs/method.md §11): the kinematics and their derivatives (``_Kinematics``: ∂ξ/∂x,
 ∂m/∂x, ∂n/∂x, ∂g/∂x) are computed once, ``friction.tangential_forces`` adds the tangential force
@@ -126,6 +127,7 @@ def evaluate_springs(
     symmetric: bool = False,
     area_fallback: bool = True,
     friction: FrictionInput | None = None,
+    interior_projection: bool = False,
 ) -> SpringEvaluation:
     """Evaluate internal forces and tangent of N node-to-face springs (docs/method.md §5, §6).
 
@@ -146,6 +148,8 @@ def evaluate_springs(
             point (docs/method.md §2.2). If False, such springs carry no force.
         friction: Friction state and parameters: adds the tangential force F_T to f_p and its
             derivative to the tangent (docs/method.md §11); the tangent is then never symmetrized.
+        interior_projection: Differentiate every projection as an interior one, also where it is
+            clamped to the face boundary, as CalculiX does (its Newton path; docs/method.md §6.1).
 
     Returns:
         The evaluation; ``stiffness`` is None if ``tangent`` is False.
@@ -158,7 +162,14 @@ def evaluate_springs(
         face_type, master_coords, slave_coords, areas, gap_shift
     )
     xi = project_points(face_type, master, slave, xi0=xi0)
-    kin = _kinematics(face_type, master, slave, np.asarray(xi, dtype=float), derivatives=tangent)
+    kin = _kinematics(
+        face_type,
+        master,
+        slave,
+        np.asarray(xi, dtype=float),
+        derivatives=tangent,
+        interior_projection=interior_projection,
+    )
 
     if area_fallback:
         zero = area == 0.0
@@ -292,6 +303,7 @@ def _kinematics(
     xi: np.ndarray,
     *,
     derivatives: bool,
+    interior_projection: bool = False,
 ) -> _Kinematics:
     """Projection-point kinematics and (optionally) their exact derivatives w.r.t. the nodes."""
     num = master.shape[0]
@@ -325,7 +337,7 @@ def _kinematics(
     # with H_αβ = q_α·q_β − r·q_αβ and b_kα = w_k q_α + φ_k,α r; δξ = G b_k with G = H⁻¹ inside the
     # domain, restricted to the free direction on an edge and zero at a corner.
     hessian = tangents @ tangents.transpose(0, 2, 1) - (second @ r[:, None, :, None])[..., 0]
-    compliance = _projection_compliance(face_type, xi, hessian, r, tangents)
+    compliance = _projection_compliance(face_type, xi, hessian, r, tangents, interior_projection)
     rhs = weights[:, :, None, None] * tangents[:, None] + dphi[..., None] * r[:, None, None, :]
     dxi = compliance[:, None] @ rhs  # (N, n+1, 2, 3)
 
@@ -356,8 +368,11 @@ def _projection_compliance(
     hessian: np.ndarray,
     r: np.ndarray,
     tangents: np.ndarray,
+    interior_only: bool = False,
 ) -> np.ndarray:
     """The (N, 2, 2) map G with δξ = G b: H⁻¹, t⊗t/(t·H t) on an active edge, 0 at a corner.
+
+    With ``interior_only`` every point takes H⁻¹ (CalculiX's tangent at clamped projections).
 
     An edge constraint c·ξ <= o is active when ξ lies on it and its Lagrange multiplier is
     positive (the unconstrained closest point is outside the domain). With γ_α = r·q_α, the
@@ -379,7 +394,7 @@ def _projection_compliance(
             lam_b = (normals[a][0] * g[:, 1] - normals[a][1] * g[:, 0]) / det
             active[a][corner] = lam_a > tol[corner]
             active[b][corner] = lam_b > tol[corner]
-    num_active = np.sum(active, axis=0)
+    num_active = np.zeros(len(xi), dtype=int) if interior_only else np.sum(active, axis=0)
     edge_normal = np.zeros((len(xi), 2))
     for c, active_i in zip(normals, active):
         edge_normal[active_i] = c
@@ -460,6 +475,7 @@ class MeshedMasterSprings:
         tangent: bool = True,
         symmetric: bool = False,
         friction: FrictionInput | None = None,
+        interior_projection: bool = False,
     ) -> SpringEvaluation:
         """:func:`evaluate_springs` on faces of this master."""
         return evaluate_springs(
@@ -473,4 +489,5 @@ class MeshedMasterSprings:
             tangent=tangent,
             symmetric=symmetric,
             friction=friction,
+            interior_projection=interior_projection,
         )

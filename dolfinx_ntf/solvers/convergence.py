@@ -25,10 +25,12 @@ __all__ = [
     "DIVERGENCE_GROWTH",
     "ITERATIONS_PER_EXTRA_PAIRING",
     "MAX_EXTRA_PAIRINGS",
+    "SCALE_GROWTH",
     "TIGHT_FIELD_CONTROLS",
     "DivergenceRule",
     "ExtraPairings",
     "ForceScaledTest",
+    "RoundoffFloor",
     "measure_iterate",
 ]
 
@@ -55,6 +57,11 @@ TIGHT_FIELD_CONTROLS: dict[str, float] = {
 #: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
 #: strict comparison, with a margin for iterations that stagnate at round-off level.
 DIVERGENCE_GROWTH = 1.01
+
+#: With a bounded scale (:class:`ForceScaledTest`), an iterate's average force counts in the mean
+#: up to this multiple of the forces known to be sound: the predictor's, the first update's and
+#: those of the converged increments.
+SCALE_GROWTH = 1e3
 
 #: Pairings a solve may add to CalculiX's schedule for slave nodes that penetrate without a spring.
 MAX_EXTRA_PAIRINGS = 3
@@ -91,35 +98,51 @@ def measure_iterate(
 ROUNDOFF_FACTOR = 10.0
 
 
-def roundoff_floor(problem: ContactProblem, A: PETSc.Mat, x: PETSc.Vec) -> float:
-    """The round-off of the spring forces at ``x``: ``10 eps ||A||_inf max |X + u|``. Collective.
+class RoundoffFloor(typing.NamedTuple):
+    """Round-off of the residual forces: of the spring rows and of the others (bulk rows)."""
+
+    springs: float
+    bulk: float
+
+
+def roundoff_floor(problem: ContactProblem, A: PETSc.Mat, x: PETSc.Vec) -> RoundoffFloor:
+    """The round-off of the residual forces at ``x``. Collective.
 
     A spring force is a stiffness times a gap taken between current coordinates, so it carries
-    about ``eps K A |x|`` of round-off (the Jacobian's largest row sum bounds ``K A``): with a stiff
-    penalty that can exceed what the force-scaled test asks (``R_n`` times the mean element force,
-    which small bulk elements pull down). :func:`largest_beyond_roundoff` leaves spring residuals
-    below it out.
+    about ``eps K A |x|`` of round-off: ``10 eps ||A||_inf max |X + u|`` (the Jacobian's largest
+    row sum bounds ``K A``). A bulk force ``K u`` computed in floating point carries about
+    ``eps ||K||_inf max |u|``: ``10 eps`` times the bulk Jacobian's largest row sum
+    (:attr:`ContactProblem.bulk_norm`) and the largest displacement. Either can exceed what the
+    force-scaled test asks (``R_n`` times the mean element force, which small elements far from
+    the contact pull down), e.g. the large element forces under a contact with a
+    St.Venant-Kirchhoff bulk. :func:`largest_beyond_roundoff` leaves residuals below them out.
     """
     comm = problem.u.function_space.mesh.comm
-    local = float(np.abs(problem.reference_coordinates).max(initial=0.0))
-    local += float(np.abs(x.array_r).max(initial=0.0))
-    scale = comm.allreduce(local, op=MPI.MAX)
-    return ROUNDOFF_FACTOR * np.finfo(float).eps * A.norm(PETSc.NormType.NORM_INFINITY) * scale
+    displacement = float(np.abs(x.array_r).max(initial=0.0))
+    coordinates = float(np.abs(problem.reference_coordinates).max(initial=0.0)) + displacement
+    sizes = np.array([coordinates, displacement])
+    comm.Allreduce(MPI.IN_PLACE, sizes, op=MPI.MAX)
+    coordinates, displacement = sizes
+    epsilon = ROUNDOFF_FACTOR * np.finfo(float).eps
+    return RoundoffFloor(
+        epsilon * A.norm(PETSc.NormType.NORM_INFINITY) * coordinates,
+        epsilon * problem.bulk_norm * displacement,
+    )
 
 
-def largest_beyond_roundoff(problem: ContactProblem, b: PETSc.Vec, floor: float) -> float:
-    """The largest residual force of ``b``, the entries below ``floor`` where springs act left out.
+def largest_beyond_roundoff(problem: ContactProblem, b: PETSc.Vec, floor: RoundoffFloor) -> float:
+    """The largest residual force of ``b``, the entries below their round-off ``floor`` left out.
 
-    Collective. The rows come from every process's springs (the same on any partition); rows
-    without spring forces count in full: their forces come from displacement gradients, whose
-    round-off is far smaller.
+    Collective. Rows where springs act (from every process's springs: the same on any
+    partition) take the springs' floor, the others the bulk's.
     """
     sizes = b.duplicate()
     problem.spring_force_sizes(sizes)
     values = np.abs(b.array_r)
     spring_rows = sizes.array_r > 0.0
     sizes.destroy()
-    values[spring_rows & (values < floor)] = 0.0
+    values[spring_rows & (values < floor.springs)] = 0.0
+    values[~spring_rows & (values < floor.bulk)] = 0.0
     comm = problem.u.function_space.mesh.comm
     return comm.allreduce(float(values.max(initial=0.0)), op=MPI.MAX)
 
@@ -141,6 +164,13 @@ class ForceScaledTest:
             current increment.
         change_over_iterations: ``du`` is the largest over the iterations of the increment so
             far (CalculiX's; the deck runner reproduces it); default: the change now.
+        bounded: Beyond CalculiX, a test that runaway iterates cannot pass: in the mean ``q~``
+            each ``q`` counts up to ``SCALE_GROWTH`` times the largest sound force (the
+            predictor's, the first update's, the converged increments' means), and a residual
+            larger than the increment's first one (:meth:`begin_iterations`) converges only
+            if it passes on the converged increments' scale. CalculiX's scale grows with a
+            diverging iterate, so that a residual 46 times the first passed its ``R_l`` test on a
+            body with no support (the deck runner keeps CalculiX's test).
     """
 
     controls: dict[str, float]
@@ -148,6 +178,7 @@ class ForceScaledTest:
     residual_floor: float = 0.0
     average_over_step: bool = False
     change_over_iterations: bool = False
+    bounded: bool = False
     #: Mean element force of every converged increment so far (the scale of an unloaded one).
     past_averages: list[float] = field(default_factory=list)
     #: Last average force ``q`` of each converged increment of the current step.
@@ -159,11 +190,17 @@ class ForceScaledTest:
     _averages: list[float] = field(default_factory=list, repr=False)
     _largest: list[float] = field(default_factory=list, repr=False)
     _largest_change: float = field(default=0.0, repr=False)
+    _start: tuple[float, float] = field(default=(0.0, 0.0), repr=False)
 
     def begin_solve(self, change: float) -> None:
         """Forget the iterations of the last solve; ``change`` is the predictor's own ``du``."""
         self._averages, self._largest = [], []
         self._largest_change = change
+        self._start = (0.0, 0.0)
+
+    def begin_iterations(self, average: float, largest: float) -> None:
+        """The average and largest residual force of the solve's first iterate (no update yet)."""
+        self._start = (average, largest)
 
     def end_solve(self) -> None:
         """Remember the forces of a converged increment."""
@@ -192,7 +229,13 @@ class ForceScaledTest:
             change: ``du``, the largest displacement change in the increment now.
         """
         controls = self.controls
-        self._averages.append(average)
+        past = float(np.mean(self.past_averages)) if self.past_averages else 0.0
+        if self.bounded:
+            sound = max(self._start[0], self._averages[0] if self._averages else average)
+            sound = max(sound, max(self.past_averages, default=0.0))
+            self._averages.append(min(average, SCALE_GROWTH * sound))
+        else:
+            self._averages.append(average)
         mean = float(np.mean(self._averages))
         if self.average_over_step:
             mean = (sum(self.step_forces) + average) / (len(self.step_forces) + 1)
@@ -202,7 +245,6 @@ class ForceScaledTest:
         self._largest.append(largest)
         if self.change_over_iterations:
             self._largest_change = change = max(self._largest_change, change)
-        past = float(np.mean(self.past_averages)) if self.past_averages else 0.0
         if mean <= controls["epsilon"] * past:
             # Unloaded (all forces vanish, e.g. a contact pair removed): CalculiX's zero-flux test
             # against the forces of the earlier increments (docs/method.md §11.6).
@@ -216,6 +258,8 @@ class ForceScaledTest:
         estimate = np.inf
         if updates >= 3 and min(self._largest[-3:-1]) > 0:
             estimate = largest * correction / min(self._largest[-3:-1])
+        if self.bounded and largest > max(self._start[1], c1 * past):
+            return False
         return largest <= c1 * mean and (
             correction <= c2 * change
             or estimate < c2 * change

@@ -128,7 +128,8 @@ def default_options(problem: object, linear_solver: object, symmetric: bool) -> 
     (``CHOLESKY_PETSC_OPTIONS``) when ``symmetric`` (the Newton solver swaps it for LU if the
     first Jacobian is not symmetric after all); ``"iterative"``: GMRES, or CG when symmetric, with
     GAMG (``ITERATIVE_PETSC_OPTIONS``); ``"auto"``: direct up to ``DIRECT_MAX_DOFS`` dofs
-    (``CHOLESKY_MAX_DOFS`` when symmetric, any size with linear constraints), iterative above.
+    (``CHOLESKY_MAX_DOFS`` when symmetric, any size with linear constraints or on a 2D mesh),
+    iterative above.
 
     Args:
         problem: The problem (not checked yet: a :class:`ContactProblem` sizes the "auto" choice).
@@ -146,6 +147,9 @@ def default_options(problem: object, linear_solver: object, symmetric: bool) -> 
         # linear constraints: the reduced matrix has no rigid modes for GAMG (§14.7)
         limit = CHOLESKY_MAX_DOFS if symmetric else DIRECT_MAX_DOFS
         small = dofs <= limit or bool(getattr(problem, "constraints", None))
+        small |= (
+            problem.u.function_space.dofmap.index_map_bs == 2
+        )  # 2D: no rigid modes for GAMG yet
         linear_solver = "direct" if small else "iterative"
         details_logger.info(" %d dofs: %s linear solver", dofs, linear_solver)
     if linear_solver == "iterative":

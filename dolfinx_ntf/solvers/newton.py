@@ -34,6 +34,7 @@ from dolfinx_ntf.solvers.convergence import (
     DivergenceRule,
     ExtraPairings,
     ForceScaledTest,
+    RoundoffFloor,
 )
 from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactSolverError
 from dolfinx_ntf.solvers.line_search import LineSearch
@@ -82,11 +83,16 @@ class ContactNewtonSolver(NewtonSolver):
             without a spring and pair again if any
             (:class:`~dolfinx_ntf.solvers.convergence.ExtraPairings`, beyond CalculiX; the deck
             runner reports their number instead).
-        roundoff_floor: Leave the residual forces of spring nodes below their round-off
-            (``solvers.convergence.roundoff_floor``: 10 eps times the Jacobian's
-            largest row sum and the largest coordinate) out of the test, beyond CalculiX: a stiff
-            penalty's spring forces carry that much round-off, which the force-scaled test can
-            otherwise ask to go below (the deck runner keeps CalculiX's test).
+        roundoff_floor: Leave residual forces below their round-off out of the test, beyond
+            CalculiX (``solvers.convergence.roundoff_floor``: at spring nodes 10 eps times the
+            Jacobian's largest row sum and the largest coordinate, elsewhere 10 eps times the
+            bulk Jacobian's largest row sum and the largest displacement): a stiff penalty's
+            spring forces, or the large element forces under a contact, carry that much
+            round-off, which the force-scaled test can otherwise ask to go below (the deck
+            runner keeps CalculiX's test).
+        bounded_scale: A force-scaled test that runaway iterates cannot pass, beyond CalculiX
+            (``bounded`` of :class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`; the deck
+            runner keeps CalculiX's test).
         residual_floor, average_over_step, change_over_iterations: CalculiX's variants of the
             force-scaled test that the deck runner reproduces
             (:class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`);
@@ -111,6 +117,7 @@ class ContactNewtonSolver(NewtonSolver):
         line_search_from: int = 2,
         check_unpaired: bool = True,
         roundoff_floor: bool = True,
+        bounded_scale: bool = True,
         residual_floor: float = 0.0,
         average_over_step: bool = False,
         change_over_iterations: bool = False,
@@ -150,13 +157,15 @@ class ContactNewtonSolver(NewtonSolver):
             residual_floor,
             average_over_step,
             change_over_iterations,
+            bounded_scale,
         )
         #: Displacement at the start of the increment (before the predictor); set by the step
         #: driver, else the displacement when :meth:`solve` starts.
         self.increment_start: np.ndarray | None = None
         self.min_iterations = min_iterations
         self.roundoff_floor = roundoff_floor
-        self._roundoff = 0.0
+        self._roundoff = RoundoffFloor(0.0, 0.0)
+        problem.measure_bulk_norm = roundoff_floor
         self.divergence = DivergenceRule(divergence_iteration)
         self.first_solve = True
         self.line_search = line_search
@@ -289,6 +298,10 @@ class ContactNewtonSolver(NewtonSolver):
         (unused: the test takes the largest residual force).
         """
         if self.updates == 0:
+            if self.test.bounded:  # the forces the bounded test starts from
+                self.test.begin_iterations(
+                    self.problem.average_element_force(), b.norm(PETSc.NormType.NORM_INFINITY)
+                )
             return False
         start = self.increment_start if self.increment_start is not None else self._solve_start
         measures = convergence.measure_iterate(

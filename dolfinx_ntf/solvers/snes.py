@@ -32,7 +32,7 @@ from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import newton_logger
 from dolfinx_ntf.solvers import convergence, errors
 from dolfinx_ntf.solvers import linear_solver as linear
-from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, ForceScaledTest
+from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS, ForceScaledTest, RoundoffFloor
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
 from dolfinx_ntf.solvers.newton import check_arguments
 
@@ -134,9 +134,10 @@ class ContactSNESSolver:
         self.min_iterations = min_iterations
         self.check_unpaired = check_unpaired
         self.roundoff_floor = roundoff_floor
-        self._roundoff = 0.0
+        self._roundoff = RoundoffFloor(0.0, 0.0)
+        problem.measure_bulk_norm = roundoff_floor
         #: CalculiX's force-scaled test (``convergence="calculix"``).
-        self.test = ForceScaledTest(controls, relaxation_iteration)
+        self.test = ForceScaledTest(controls, relaxation_iteration, bounded=True)
         #: Displacement at the start of the increment; set by the step driver.
         self.increment_start: np.ndarray | None = None
         #: Residual norms of the current solve, one per residual the SNES tested.
@@ -260,9 +261,13 @@ class ContactSNESSolver:
         self, snes: PETSc.SNES, iteration: int, norms: tuple[float, float, float]
     ) -> int:
         """CalculiX's test after Newton update ``iteration`` (a SNES convergence test)."""
-        if iteration == 0:
-            return PETSc.SNES.ConvergedReason.ITERATING
         x, b = snes.getSolution(), snes.getFunction()[0]
+        if iteration == 0:
+            if self.test.bounded:  # the forces the bounded test starts from
+                self.test.begin_iterations(
+                    self.problem.average_element_force(), b.norm(PETSc.NormType.NORM_INFINITY)
+                )
+            return PETSc.SNES.ConvergedReason.ITERATING
         self._step.waxpy(-1.0, self._previous, x)
         start = self.increment_start if self.increment_start is not None else self._solve_start
         average, largest, correction, change = convergence.measure_iterate(

@@ -150,7 +150,7 @@ def test_discontinuous_space(blocks):
     F = ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx
     with pytest.raises(
         ValueError,
-        match=r"u must be a dolfinx.fem.Function on a 3D vector Lagrange space .* got "
+        match=r"u must be a dolfinx.fem.Function on a vector Lagrange space .* got "
         r"(Discontinuous Lagrange|DQ) degree 1",
     ):
         ntf.ContactProblem(F, w, [_pair(blocks)])

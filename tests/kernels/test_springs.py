@@ -247,6 +247,24 @@ def test_clamped_projection_tangent(name: str, where: str) -> None:
     np.testing.assert_allclose(ev0.stiffness, ev.stiffness, rtol=1e-9, atol=1e-9 * scale)
 
 
+@pytest.mark.parametrize("where", ["edge", "corner"])
+@pytest.mark.parametrize("name", ["tri3", "quad4", "quad8"])
+def test_interior_projection_tangent_is_calculix_s(name: str, where: str) -> None:
+    """``interior_projection``: the forces stay; the tangent changes only at clamped projections,
+    where it takes the interior formula (CalculiX's) instead of the exact constrained one."""
+    ft = FACE_TYPES[name]
+    coords, slave, areas, _, _ = _outside(ft, where, 6, seed=5)
+    exact = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL)
+    ccx = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL, interior_projection=True)
+    np.testing.assert_array_equal(ccx.forces, exact.forces)
+    fd = _finite_difference(ft, coords, slave, areas, EXPONENTIAL, h=1e-7 * SIZE)
+    assert _relative_error(ccx.stiffness, fd).min() > 1e-3  # not the derivative there
+    inside, other, inside_areas, _ = _penetrating(ft, 0.0, 6, seed=7)[:4]
+    exact = evaluate_springs(ft, inside, other, inside_areas, EXPONENTIAL)
+    ccx = evaluate_springs(ft, inside, other, inside_areas, EXPONENTIAL, interior_projection=True)
+    np.testing.assert_array_equal(ccx.stiffness, exact.stiffness)
+
+
 def test_tangent_flag_and_area_fallback() -> None:
     ft = FACE_TYPES["quad4"]
     coords, slave, areas, _, depth = _penetrating(ft, 0.0, 4, seed=6)

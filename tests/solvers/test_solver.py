@@ -1,6 +1,8 @@
 """The Newton solver and step driver on failure: non-retryable errors raise at once with their
 cause, a diverging attempt is given up early, and the line search leaves converging solves alone."""
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
 from helpers import punch_problem
@@ -132,3 +134,51 @@ def test_a_stiff_penalty_converges_to_its_round_off():
     assert "cannot be cut back below the minimum" in outcomes[False]
     assert [attempt for attempt, _ in outcomes[True]] == [1, 1]
     assert all(iterations <= 5 for _, iterations in outcomes[True])
+
+
+def test_bulk_round_off_under_a_contact_does_not_stall_the_test():
+    """A St.Venant-Kirchhoff hemisphere pressed onto a block: its element forces under the contact
+    carry more round-off than R_n times the mean element force. With the bulk rows' round-off floor
+    (10 eps |K_bulk|_inf max|u|, the default) the first increment converges when the residual
+    reaches round-off (6 iterations measured); without any floor it iterates on (14 measured)."""
+    import dolfinx.fem
+    import ufl
+
+    from dolfinx_ntf.meshes import hertz
+    from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
+
+    radius, E, nu = 25.0, 210e3, 0.3
+    sizes = {key: value * radius for key, value in hertz.COARSE.items()}
+    mesh, _, tags = mesh_from_gmsh(hertz.build_hertz, MPI.COMM_WORLD, radius=radius, **sizes)
+    first = {}
+    for floor in (True, False):
+        V = compat.vector_space(mesh, "Lagrange", 1)
+        u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+        lame, shear = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+        deformation = ufl.Identity(3) + ufl.grad(u)
+        strain = 0.5 * (deformation.T * deformation - ufl.Identity(3))
+        stress = lame * ufl.tr(strain) * ufl.Identity(3) + 2 * shear * strain
+        residual = ufl.inner(deformation * stress, ufl.grad(v)) * ufl.dx
+        Vz, _ = V.sub(2).collapse()
+        top_uz = dolfinx.fem.Function(Vz)
+        top = dolfinx.fem.locate_dofs_topological((V.sub(2), Vz), 2, tags.find(hertz.SPHERE_TOP))
+        base = dolfinx.fem.locate_dofs_topological(V, 2, tags.find(hertz.BLOCK_BOTTOM))
+        bcs = [
+            dolfinx.fem.dirichletbc(top_uz, top, V.sub(2)),
+            dolfinx.fem.dirichletbc(np.zeros(3), base, V),
+            ntf.component_bc(V, 0, tags.find(hertz.SYMMETRY_X)),
+            ntf.component_bc(V, 1, tags.find(hertz.SYMMETRY_Y)),
+        ]
+        law = ntf.LinearLaw.with_ccx_defaults(youngs_modulus=E, slope=10 * E)
+        pair = ntf.ContactPair(
+            ntf.FacetSurface(tags, hertz.SPHERE_CONTACT),
+            ntf.FacetSurface(tags, hertz.BLOCK_TOP),
+            ntf.SurfaceInteraction(law),
+        )
+        problem = ntf.ContactProblem(residual, u, [pair], bcs)
+        with ntf.ContactNewtonSolver(mesh.comm, problem, roundoff_floor=floor) as solver:
+            step = ntf.StaticStep(
+                lambda t: top_uz.x.array.fill(-0.3 * t), initial_increment=0.25, period=0.25
+            )
+            first[floor] = step.run(solver, u)[0].iterations
+    assert first[True] <= 8 < first[False]
