@@ -63,6 +63,7 @@ from dolfinx_ntf.solvers.errors import (
     ContactDivergenceError,
     ContactSolverError,
 )
+from dolfinx_ntf.solvers.modes import Modes, contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.newton_loop import NewtonSolver
 from dolfinx_ntf.solvers.snes import ContactSNESSolver
@@ -99,6 +100,7 @@ __all__ = [
     "LinearConstraintBlock",
     "LinearLaw",
     "Load",
+    "Modes",
     "NewtonSolver",
     "NodeSurface",
     "PressureOverclosureLaw",
@@ -116,6 +118,7 @@ __all__ = [
     "component_bc",
     "contact_area",
     "contact_force",
+    "contact_modes",
     "contact_results",
     "global_constraints",
     "input_node_ids",

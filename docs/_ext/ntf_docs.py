@@ -71,6 +71,8 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
             "IncrementResult",
             "DynamicStep",
             "kinetic_energy",
+            "contact_modes",
+            "Modes",
             "ContactSolverError",
             "ContactConvergenceError",
             "ContactDivergenceError",

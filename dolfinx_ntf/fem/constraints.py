@@ -410,6 +410,21 @@ class ConstraintElimination:
         self._reduced.zeroRowsColumns(self._eliminated, diag=1.0)
         return self._reduced
 
+    def project(self, A: PETSc.Mat, *, diagonal: float) -> PETSc.Mat:
+        """A new ``T'^T A T'`` with ``diagonal`` at dependent and Dirichlet dofs (rows, columns).
+
+        For example a mass matrix with zero there (a modal analysis, docs/method.md §16).
+        """
+        reduced = A.PtAP(self._Tp)
+        reduced.zeroRowsColumns(self._eliminated, diag=diagonal)
+        return reduced
+
+    def expand(self, x: PETSc.Vec) -> None:
+        """Dependent dofs of ``x`` from the independent ones without the offsets: ``x = T x``."""
+        self._T.mult(x, self._work)
+        rows = self._local_slaves
+        x.array[rows] = self._work.array[rows]
+
     def release(self) -> None:
         """Free the reduced matrix (made again when needed)."""
         if self._reduced is not None:

@@ -1,0 +1,147 @@
+"""Natural frequencies with contact (solvers/modes.py) against closed forms, serial and 2 ranks."""
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.solvers.modes import contact_modes, tangent_stiffness
+
+
+def _facets(mesh, where):
+    return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
+
+
+@pytest.mark.mpi
+def test_axial_bar_frequencies_and_participation_match_the_closed_form():
+    """A clamped-free bar held to axial motion (nu = 0): omega_n = (2n - 1) pi c / (2 L)."""
+    length, E, rho, area = 1.0, 1000.0, 2.0, 0.01
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD,
+        [[0, 0, 0], [length, 0.1, 0.1]],
+        [16, 1, 1],
+        dolfinx.mesh.CellType.hexahedron,
+    )
+    V = compat.vector_space(mesh, "Lagrange", 2)
+    u, v, w = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx
+    every = dolfinx.mesh.locate_entities(mesh, 2, lambda x: np.full(x.shape[1], True))
+    bcs = [
+        component_bc(V, 0, _facets(mesh, lambda x: np.isclose(x[0], 0.0))),
+        component_bc(V, 1, every),
+        component_bc(V, 2, every),
+    ]
+    problem = ntf.ContactProblem(F, u, [], bcs)
+    modes = contact_modes(problem, rho * ufl.inner(w, v) * ufl.dx, 3)
+    exact = (2 * np.arange(1, 4) - 1) * np.pi / (2 * length) * np.sqrt(E / rho)
+    # P2 along 16 elements: measured 6e-8, 5e-6, 4e-5
+    assert modes.angular_frequencies == pytest.approx(exact, rel=1e-4)
+    assert modes.frequencies == pytest.approx(exact / (2 * np.pi), rel=1e-4)
+    # Zero at the clamped end (Dirichlet rows: no spurious modes there) and in the held
+    # directions (up to round-off at the free cell-centre dofs of Q2).
+    values = modes.modes[0].x.array
+    assert np.all(values[bcs[0].dof_indices()[0]] == 0.0)
+    assert np.abs(values.reshape(-1, 3)[:, 1:]).max() < 1e-12 * np.abs(values).max()
+    # phi_1 = sqrt(2 / (rho A L)) sin(pi x / 2L): Gamma_x = rho A int phi = sqrt(2 rho A L) 2/pi
+    factors = modes.participation_factors()
+    gamma = np.sqrt(2 * rho * area * length) * 2 / np.pi
+    assert abs(factors[0, 0]) == pytest.approx(gamma, rel=1e-4)
+    assert np.abs(factors[:, 1:4]).max() < 1e-12
+    modes.destroy()
+    problem.destroy()
+
+
+def _block_on_springs(K: float, height: float, E: float):
+    """A block [0,1]^2 x [0,H] on rollers (x = 0, y = 0) pressed onto the rigid plane z = 0."""
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD, [[0, 0, 0], [1, 1, height]], [2, 2, 4], dolfinx.mesh.CellType.hexahedron
+    )
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    bottom = _facets(mesh, lambda x: np.isclose(x[2], 0.0))
+    top = _facets(mesh, lambda x: np.isclose(x[2], height))
+    entities = np.concatenate([bottom, top])
+    values = np.concatenate([np.full(bottom.size, 1), np.full(top.size, 2)]).astype(np.int32)
+    order = np.argsort(entities)
+    tags = dolfinx.mesh.meshtags(mesh, 2, entities[order], values[order])
+    bcs = [
+        component_bc(V, 0, _facets(mesh, lambda x: np.isclose(x[0], 0.0))),
+        component_bc(V, 1, _facets(mesh, lambda x: np.isclose(x[1], 0.0))),
+    ]
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)
+    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx + pressure * v[2] * ds(2)
+    law = ntf.LinearLaw(slope=K, tension=1e-6 * K)
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(tags, 1), ntf.RigidPlane((0, 0, 0), (0, 0, 1)), ntf.SurfaceInteraction(law)
+    )
+    return ntf.ContactProblem(F, u, [pair], bcs), pressure, law
+
+
+@pytest.mark.mpi
+def test_block_on_contact_springs_bounces_at_the_springs_frequency():
+    """The closed springs (stiffness p'(d) A) carry a block: a rod on an end spring.
+
+    Exact (nu = 0, free top): E beta tan(beta H) = k / A with omega = beta sqrt(E / rho); nearly
+    the rigid block's sqrt(k / m) for a stiff block. Without the springs the block would be free
+    (no finite lowest frequency).
+    """
+    K, height, E, rho, load = 1e3, 0.2, 1e5, 3.0, 5.0
+    problem, pressure, law = _block_on_springs(K, height, E)
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    ntf.StaticStep(lambda t: setattr(pressure, "value", load * t)).run(solver, problem.u)
+    (result,) = ntf.contact_results(problem)
+    comm = MPI.COMM_WORLD
+    overclosure = -comm.allreduce(float(result.clearance.sum())) / comm.allreduce(
+        result.clearance.size
+    )
+    assert overclosure == pytest.approx(load / K, rel=1e-3)  # the block sits on the springs
+    k = float(law.pressure_derivative(overclosure))  # times the unit area
+    v, w = ufl.TestFunction(problem.u.function_space), ufl.TrialFunction(problem.u.function_space)
+    modes = contact_modes(problem, rho * ufl.inner(w, v) * ufl.dx, 2)
+    beta = scipy.optimize.brentq(
+        lambda b: E * b * np.tan(b * height) - k, 1e-9, np.pi / (2 * height) - 1e-9
+    )
+    bounce = beta * np.sqrt(E / rho)
+    # 4 linear elements over the height: measured 5.2e-6 above the rod's value
+    assert modes.angular_frequencies[0] == pytest.approx(bounce, rel=1e-4)
+    assert modes.angular_frequencies[0] != pytest.approx(np.sqrt(k / (rho * height)), rel=1e-4)
+    assert modes.angular_frequencies[1] > 2 * bounce  # the rollers hold the other motions
+    # The bounce carries (nearly) the whole mass along z: Gamma_z^2 ~ m.
+    factors = modes.participation_factors()
+    assert factors[0, 2] ** 2 == pytest.approx(rho * height, rel=1e-3)
+    modes.destroy()
+    solver.destroy()
+    problem.destroy()
+
+
+@pytest.mark.mpi
+def test_the_tangent_includes_the_springs_and_asks_for_a_solved_problem():
+    problem, pressure, _ = _block_on_springs(1e3, 0.2, 1e5)
+    with pytest.raises(ValueError, match="never paired"):
+        tangent_stiffness(problem)
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    ntf.StaticStep(lambda t: setattr(pressure, "value", 5.0 * t)).run(solver, problem.u)
+    K = tangent_stiffness(problem)
+    # Rigid motion along z: only the springs resist it, sum of all entries = k = K * A (= 1e3).
+    ones = K.createVecRight()
+    V = problem.u.function_space
+    rigid = dolfinx.fem.Function(V)
+    rigid.interpolate(lambda x: np.vstack([0 * x[0], 0 * x[0], 1 + 0 * x[0]]))
+    rigid.x.array[np.concatenate([bc.dof_indices()[0] for bc in problem.bcs])] = 0.0
+    K.mult(compat.petsc_vector(rigid), ones)
+    assert compat.petsc_vector(rigid).dot(ones) == pytest.approx(1e3, rel=1e-6)
+    for obj in (K, ones):
+        obj.destroy()
+    with pytest.raises(TypeError, match="bilinear"):
+        contact_modes(problem, ufl.inner(rigid, ufl.TestFunction(V)) * ufl.dx)
+    solver.destroy()
+    problem.destroy()
