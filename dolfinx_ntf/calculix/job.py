@@ -49,6 +49,7 @@ from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.solvers.dynamics import DynamicStep
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
+from dolfinx_ntf.solvers.modes import contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
@@ -57,6 +58,7 @@ from .dat import CCX_FORMATS
 from .deck import Deck, Step, read_deck
 from .gather import CcxNumbering
 from .job_files import JobFiles, check_requests
+from .modal_dat import frequency_output
 from .model import CalculixModel, build_model, friction_of
 from .output_values import ContactRows, OutputValues
 
@@ -146,6 +148,7 @@ class JobResult:
         dat, cel, frd, xdmf: Files written (``cel`` is None without CONTACT ELEMENTS).
         completed: True if every step ran to its end.
         wall_time: Seconds spent in ``run_job``.
+        eigenvalues: ``omega^2`` of the last ``*FREQUENCY`` step's modes (None without one).
     """
 
     jobname: str
@@ -158,6 +161,7 @@ class JobResult:
     frd: Path | None = None
     completed: bool = False
     wall_time: float = 0.0
+    eigenvalues: np.ndarray | None = None
 
     def increment(self, step: int, increment: int) -> IncrementOutput:
         """The output of ``increment`` of ``step`` (1-based)."""
@@ -282,6 +286,8 @@ class _Job:
         model, problem = self.model, self.problem
         self.counters = _Counters(step=step.number)
         kind = "Static" if step.dynamic is None else "Dynamic"
+        if step.frequency is not None:
+            kind = "Frequency"
         logger.info("\n STEP %d\n\n %s analysis was selected\n", step.number, kind)
         self._set_laws(dynamic=step.dynamic is not None)
         if index > 0:
@@ -292,6 +298,9 @@ class _Job:
         self.solver.relaxation_iteration = relaxation_iteration(step)
         if step.dynamic is not None:
             self._run_dynamic_step(index, step)
+            return
+        if step.frequency is not None:
+            self._run_frequency_step(step)
             return
         static = step.static
         period = static.period
@@ -375,6 +384,22 @@ class _Job:
             on_increment=on_increment,
         )
         driver.run(self.solver, model.u)
+
+    def _run_frequency_step(self, step: Step) -> None:
+        """A ``*FREQUENCY`` step: the modes at the converged state (docs/method.md §16)."""
+        problem = self.problem
+        if problem.states and problem.pairings == 0:  # a first step: pair the undeformed model
+            problem.begin_increment(1.0)
+        # ccx 2.20 has no contact elements in a *FREQUENCY step: the bulk stiffness alone
+        modes = contact_modes(
+            problem, self.model.mass_form(), step.frequency.num_eigenvalues, springs=False
+        )
+        try:
+            factors, totals = modes.participation_factors(), modes.total_effective_mass()
+            self.files.write_dat_text(frequency_output(modes.eigenvalues, factors, totals))
+        finally:
+            modes.destroy()
+        self.result.eigenvalues = modes.eigenvalues
 
     def _begin_attempt(self, index: int, step: Step, t: float, *, ramp: bool = True) -> None:
         """Count an attempt at step time ``t``, set its loads and open its ``.sta`` row."""

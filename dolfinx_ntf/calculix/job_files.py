@@ -93,6 +93,12 @@ class JobFiles:
         self._sta = StaFile(directory / f"{jobname}.sta") if root else Discard()
         self._cvg = CvgFile(directory / f"{jobname}.cvg") if root else Discard()
 
+    def write_dat_text(self, text: str) -> None:
+        """Append ``text`` to the ``.dat`` file (rank 0), e.g. a frequency step's blocks."""
+        if self.root:
+            with open(self.dat, "a") as handle:
+                handle.write(text)
+
     def close(self) -> None:
         """Close the ``.frd`` file (the others are appended to row by row)."""
         self._frd.close()

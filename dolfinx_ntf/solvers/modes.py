@@ -29,7 +29,14 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.solvers.errors import ContactSolverError
 
-__all__ = ["Modes", "contact_modes", "mass_matrix", "solve_modes", "tangent_stiffness"]
+__all__ = [
+    "Modes",
+    "bulk_stiffness",
+    "contact_modes",
+    "mass_matrix",
+    "solve_modes",
+    "tangent_stiffness",
+]
 
 
 @dataclasses.dataclass
@@ -64,22 +71,31 @@ class Modes:
         axes through the origin (CalculiX's ``P A R T I C I P A T I O N   F A C T O R S``); the
         effective modal masses are their squares.
         """
-        if self.mass is None:
-            raise ValueError("Modes.participation_factors: the mass matrix was not kept")
-        if not self.modes:
-            return np.zeros((0, 6))
+        return self._rigid_products()[0]
+
+    def total_effective_mass(self) -> np.ndarray:
+        """``r_k^T M r_k`` of the six rigid motions: the sums of all modes' effective masses.
+
+        CalculiX's ``T O T A L   E F F E C T I V E   M A S S`` (free dofs only).
+        """
+        return self._rigid_products()[1]
+
+    def _rigid_products(self) -> tuple[np.ndarray, np.ndarray]:
+        """``phi_i^T M r_k`` (modes, 6) and ``r_k^T M r_k`` (6). Collective."""
+        if self.mass is None or not self.modes:
+            raise ValueError("Modes: no mass matrix or no modes kept")
         V = self.modes[0].function_space
-        rigid = [dolfinx.fem.Function(V) for _ in range(6)]
-        for k, r in enumerate(rigid):
-            r.interpolate(_rigid_motion(k))
         work = self.mass.createVecLeft()
-        factors = np.zeros((len(self.modes), 6))
-        for k, r in enumerate(rigid):
+        factors, totals = np.zeros((len(self.modes), 6)), np.zeros(6)
+        r = dolfinx.fem.Function(V)
+        for k in range(6):
+            r.interpolate(_rigid_motion(k))
             self.mass.mult(compat.petsc_vector(r), work)
+            totals[k] = compat.petsc_vector(r).dot(work)
             for i, mode in enumerate(self.modes):
                 factors[i, k] = compat.petsc_vector(mode).dot(work)
         work.destroy()
-        return factors
+        return factors, totals
 
     def destroy(self) -> None:
         """Free the kept mass matrix. Collective."""
@@ -102,6 +118,25 @@ def _rigid_motion(k: int):
         return values
 
     return motion
+
+
+def bulk_stiffness(problem: ContactProblem) -> PETSc.Mat:
+    """The tangent of ``problem``'s bulk form alone at the current displacement. Collective.
+
+    No contact springs (CalculiX 2.20's ``*FREQUENCY`` step has no contact elements, docs/method.md
+    §16); Dirichlet and dependent dofs as in :func:`tangent_stiffness`. The caller destroys it.
+
+    Args:
+        problem: The problem whose Jacobian form, conditions and constraints apply.
+    """
+    validation.check_type(problem, ContactProblem, "bulk_stiffness: problem")
+    A = dolfinx.fem.petsc.assemble_matrix(problem.a, problem.bcs)
+    A.assemble()
+    if problem.elimination is None:
+        return A
+    K = problem.elimination.project(A, diagonal=1.0)
+    A.destroy()
+    return K
 
 
 def tangent_stiffness(problem: ContactProblem) -> PETSc.Mat:
@@ -254,10 +289,11 @@ def contact_modes(
     mass: ufl.Form,
     num_modes: int = 10,
     *,
-    shift: float = 0.0,
+    shift: float | None = None,
     tolerance: float = 1e-10,
     symmetric: bool | None = None,
     options_prefix: str = "ntf_modes_",
+    springs: bool = True,
 ) -> Modes:
     """The lowest natural frequencies and modes of ``problem``'s structure at its converged state.
 
@@ -270,19 +306,29 @@ def contact_modes(
             :meth:`StaticStep.run`).
         mass: Bilinear mass form on the displacement space, e.g. ``rho * inner(u, v) * dx``.
         num_modes: How many modes, lowest first.
-        shift: Target of the shift-invert transform (below the lowest eigenvalue).
+        shift: Target of the shift-invert transform (below the lowest eigenvalue); by default
+            just below zero, ``-1e-8 |K| / |M|`` (infinity norms), so that a free body (a zero
+            eigenvalue) still factors.
         tolerance: SLEPc's relative residual tolerance.
         symmetric: Solve as a symmetric problem; by default when ``K`` is symmetric to round-off.
         options_prefix: PETSc options prefix of the eigensolver.
+        springs: Include the contact springs' tangent (False: the bulk alone,
+            :func:`bulk_stiffness`, as CalculiX 2.20's ``*FREQUENCY`` step).
 
     Returns:
         The :class:`Modes`; their mode Functions are mass-normalized and zero at Dirichlet dofs.
     """
     validation.check_type(problem, ContactProblem, "contact_modes: problem")
-    K = tangent_stiffness(problem)
+    K = tangent_stiffness(problem) if springs else bulk_stiffness(problem)
     M, full = mass_matrix(problem, mass, keep_full=True)
     if symmetric is None:
         symmetric = _is_symmetric(K)
+    if shift is None:
+        shift = (
+            -1e-8
+            * K.norm(PETSc.NormType.NORM_INFINITY)
+            / max(M.norm(PETSc.NormType.NORM_INFINITY), 1e-300)
+        )
     V = problem.u.function_space
     try:
         values, modes = solve_modes(

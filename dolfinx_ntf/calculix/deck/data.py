@@ -195,6 +195,20 @@ class Dynamic:
     alpha: float = -0.05
 
 
+@dataclass(frozen=True)
+class Frequency:
+    """``*FREQUENCY`` parameters and data line: the lowest ``num_eigenvalues`` modes.
+
+    ``lower``/``upper`` bound the frequencies [cycles/time] (None: not given); ``storage`` is
+    STORAGE=YES (ccx keeps the modes for a later modal step, no effect on the ``.dat``).
+    """
+
+    num_eigenvalues: int = 10
+    lower: float | None = None
+    upper: float | None = None
+    storage: bool = False
+
+
 @dataclass(frozen=True, eq=False)
 class InitialVelocity:
     """``*INITIAL CONDITIONS, TYPE=VELOCITY`` data line: ``value`` along ``dof`` of ``nodes``."""
@@ -306,6 +320,8 @@ class Step:
         friction_changes, model_changes: ``*CHANGE FRICTION`` / ``*MODEL CHANGE`` cards.
         location: where the ``*STEP`` card is (file and line).
         dynamic: the ``*DYNAMIC`` parameters, or None for a static step.
+        frequency: the ``*FREQUENCY`` procedure (a modal step; ``static`` is then unused), or
+            None.
     """
 
     number: int
@@ -323,6 +339,7 @@ class Step:
     model_changes: tuple[ModelChange, ...]
     location: Location
     dynamic: Dynamic | None = None
+    frequency: Frequency | None = None
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

@@ -12,6 +12,7 @@ from pathlib import Path
 from .checks import Checks
 from .data import Deck
 from .errors import DeckError, DeckWarning
+from .frequency import FrequencyCards
 from .interactions import InteractionCards
 from .keywords import (
     _CONTEXT_KEYWORDS,
@@ -31,7 +32,14 @@ from .steps import StepCards
 
 
 class _Reader(
-    MeshCards, MaterialCards, InteractionCards, LoadCards, StepCards, OutputCards, Checks
+    MeshCards,
+    MaterialCards,
+    InteractionCards,
+    LoadCards,
+    StepCards,
+    FrequencyCards,
+    OutputCards,
+    Checks,
 ):
     """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""
 

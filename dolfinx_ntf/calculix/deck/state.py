@@ -17,6 +17,7 @@ from .data import (
     Dynamic,
     Equation,
     FileRequest,
+    Frequency,
     Friction,
     FrictionChange,
     InitialVelocity,
@@ -43,6 +44,7 @@ class StepBuilder:
     location: Location
     static: Static | None = None
     dynamic: Dynamic | None = None
+    frequency: Frequency | None = None
     boundaries: list[Boundary] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)

@@ -36,8 +36,8 @@ class StepCards(ReaderState):
         step = self._in_step(card)
         self._check_params(card, allowed={"DIRECT", "SOLVER", "TIMERESET", "TOTALTIMEATSTART",
                                           "EXPLICIT"})  # fmt: skip
-        if step.static is not None:
-            raise DeckError("a step can have only one *STATIC card", card.location)
+        if step.static is not None or step.frequency is not None:
+            raise DeckError("a step can have only one procedure card", card.location)
         values: tuple[float | None, ...] = ()
         if card.lines:
             fields, _, loc = card.lines[0]
@@ -72,8 +72,8 @@ class StepCards(ReaderState):
             raise DeckError(
                 "*DYNAMIC, EXPLICIT is not supported yet (implicit only)", card.location
             )
-        if step.static is not None:
-            raise DeckError("a step can have only one *STATIC or *DYNAMIC card", card.location)
+        if step.static is not None or step.frequency is not None:
+            raise DeckError("a step can have only one procedure card", card.location)
         alpha = -0.05
         if "ALPHA" in card.params:
             alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
@@ -145,9 +145,10 @@ class StepCards(ReaderState):
         step = self._in_step(card)
         self._check_params(card, allowed=set())
         self._no_data(card)
-        if step.static is None:
+        if step.static is None and step.frequency is None:
             raise DeckError(
-                "the step has no *STATIC or *DYNAMIC procedure (the only ones supported)",
+                "the step has no *STATIC, *DYNAMIC or *FREQUENCY procedure (the only ones "
+                "supported)",
                 step.location,
             )
         if step.pending_friction is not None:
@@ -158,7 +159,7 @@ class StepCards(ReaderState):
                 number=step.number,
                 nlgeom=step.nlgeom,
                 max_increments=step.max_increments,
-                static=step.static,
+                static=step.static if step.static is not None else Static(),
                 boundaries=tuple(step.boundaries),
                 cloads=tuple(step.cloads),
                 dloads=tuple(step.dloads),
@@ -170,6 +171,7 @@ class StepCards(ReaderState):
                 model_changes=tuple(step.model_changes),
                 location=step.location,
                 dynamic=step.dynamic,
+                frequency=step.frequency,
             )
         )
         self.step = None
