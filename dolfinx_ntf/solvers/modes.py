@@ -46,8 +46,9 @@ class Modes:
     Attributes:
         eigenvalues: ``lambda = omega^2`` [rad^2/time^2], ascending.
         modes: Mode shapes, normalized to unit generalized mass ``phi^T M phi = 1``.
-        mass: The mass matrix ``M`` (zero Dirichlet rows and columns, no constraint reduction),
-            kept for :meth:`participation_factors`; :meth:`destroy` frees it.
+        mass: The mass matrix ``M`` of the eigenproblem (zero rows and columns at Dirichlet and
+            dependent dofs: the products below are over the free dofs, as CalculiX's), kept for
+            :meth:`participation_factors`; :meth:`destroy` frees it.
     """
 
     eigenvalues: np.ndarray
@@ -162,16 +163,15 @@ def tangent_stiffness(problem: ContactProblem) -> PETSc.Mat:
     return (A if problem.elimination is None else problem.reduced_matrix).copy()
 
 
-def mass_matrix(problem: ContactProblem, mass: ufl.Form, *, keep_full: bool = False):
-    """The mass matrix of the bilinear form ``mass`` with zero Dirichlet (and dependent) rows.
+def mass_matrix(problem: ContactProblem, mass: ufl.Form) -> PETSc.Mat:
+    """The mass matrix of the bilinear form ``mass``, zero at Dirichlet and dependent dofs.
+
+    Reduced like the problem's Jacobian (``T'^T M T'``) when there are constraints; zero rows and
+    columns (diagonal too) at the removed dofs. The caller destroys it. Collective.
 
     Args:
         problem: The problem whose space, Dirichlet conditions and constraints apply.
         mass: A bilinear form on the displacement space, e.g. ``rho * inner(u, v) * dx``.
-        keep_full: Also return the matrix before the constraint reduction.
-
-    Returns:
-        ``M`` (reduced like the problem's Jacobian), or ``(M, M_full)`` with ``keep_full``.
     """
     owner = "mass_matrix"
     if not isinstance(mass, ufl.Form) or len(mass.arguments()) != 2:
@@ -186,10 +186,8 @@ def mass_matrix(problem: ContactProblem, mass: ufl.Form, *, keep_full: bool = Fa
     full = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(mass), problem.bcs, 0.0)
     full.assemble()
     if problem.elimination is None:
-        return (full, full.copy()) if keep_full else full
+        return full
     M = problem.elimination.project(full, diagonal=0.0)
-    if keep_full:
-        return M, full
     full.destroy()
     return M
 
@@ -320,7 +318,7 @@ def contact_modes(
     """
     validation.check_type(problem, ContactProblem, "contact_modes: problem")
     K = tangent_stiffness(problem) if springs else bulk_stiffness(problem)
-    M, full = mass_matrix(problem, mass, keep_full=True)
+    M = mass_matrix(problem, mass)
     if symmetric is None:
         symmetric = _is_symmetric(K)
     if shift is None:
@@ -341,15 +339,17 @@ def contact_modes(
             symmetric=symmetric,
             options_prefix=options_prefix,
         )
+    except Exception:
+        M.destroy()
+        raise
     finally:
         K.destroy()
-        M.destroy()
     if problem.elimination is not None:
         for phi in modes:  # dependent dofs from the independent ones: phi = T phi
             problem.elimination.expand(compat.petsc_vector(phi))
     for phi in modes:
         phi.x.scatter_forward()
-    return Modes(values, modes, full)
+    return Modes(values, modes, M)
 
 
 def _is_symmetric(K: PETSc.Mat) -> bool:

@@ -1,0 +1,155 @@
+"""A ``*FREQUENCY`` step after a static contact step, run by ccx 2.20 and the deck runner.
+
+The deck is the cross-validation case ``hex_linear_pressure`` (a C3D8 punch pressed onto a block)
+with densities and a ``*FREQUENCY`` step appended. ccx 2.20 has no contact elements in that step
+(its ``.dat`` prints 0 of them and the punch floats: a zero eigenvalue), so the runner uses the
+bulk stiffness alone (docs/method.md §16). Measured: the nonzero eigenvalues, effective modal masses
+and total effective masses agree in all 7 printed digits; participation factors up to the sign.
+"""
+
+from __future__ import annotations
+
+import gzip
+import logging
+import re
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+import cases
+import numpy as np
+import pytest
+
+from dolfinx_ntf.calculix.ccx import run_ccx
+from dolfinx_ntf.calculix.deck import DeckError, read_deck
+from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.calculix.modal_dat import format_e16
+
+pytestmark = [
+    pytest.mark.serial,
+    pytest.mark.ccx,
+    pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed"),
+]
+
+TITLES = ("E I G E N V A L U E", "P A R T I C I P A T I O N", "E F F E C T I V E   M O D A L")
+
+
+def _frequency_deck(directory: Path) -> None:
+    """``modes.inp``: the punch deck with densities 2.5 and 1.5 and a 6-mode *FREQUENCY step."""
+    cases._hex_linear_pressure(directory)
+    text = (directory / "hex_linear_pressure.inp").read_text()
+    text = text.replace("*MATERIAL, NAME=M_E1\n", "*MATERIAL, NAME=M_E1\n*DENSITY\n2.5\n")
+    text = text.replace("*MATERIAL, NAME=M_E2\n", "*MATERIAL, NAME=M_E2\n*DENSITY\n1.5\n")
+    text = text.rstrip("\n") + "\n*STEP\n*FREQUENCY,STORAGE=YES\n6\n*END STEP\n"
+    (directory / "modes.inp").write_text(text)
+
+
+def _block(path: Path, title: str) -> np.ndarray:
+    """The numeric rows (mode number dropped) of the block whose title contains ``title``."""
+    lines = path.read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if title in line)
+    rows, seen = [], False
+    for line in lines[start + 1 :]:
+        fields = line.split()
+        if fields and re.fullmatch(r"\d+", fields[0]):
+            rows.append([float(f) for f in fields[1:]])
+            seen = True
+        elif seen:
+            break
+    return np.array(rows)
+
+
+def test_frequency_step_after_contact_matches_ccx(tmp_path):
+    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
+    ccx_dir.mkdir()
+    ntf_dir.mkdir()
+    _frequency_deck(ccx_dir)
+    shutil.copy(ccx_dir / "modes.inp", ntf_dir)
+    run_ccx(ccx_dir, "modes", timeout=120)
+    logger = logging.getLogger("dolfinx_ntf")
+    level = logger.level
+    logger.setLevel(logging.WARNING)
+    try:
+        result = run_job("modes", ntf_dir, comm=MPI.COMM_SELF)
+    finally:
+        logger.setLevel(level)
+    assert result.completed and result.eigenvalues.size == 6
+    ccx_dat, ntf_dat = ccx_dir / "modes.dat", ntf_dir / "modes.dat"
+    a, b = _block(ccx_dat, TITLES[0]), _block(ntf_dat, TITLES[0])
+    assert a.shape == b.shape == (6, 4)
+    scale = np.abs(a[:, 0]).max()
+    floating = np.abs(a[:, 0]) < 1e-9 * scale  # the punch's free motion along z
+    assert floating.tolist() == [True] + [False] * 5
+    assert np.abs(b[floating, 0]).max() < 1e-9 * scale
+    np.testing.assert_allclose(b[~floating], a[~floating], rtol=1e-6)  # 7 printed digits
+    factors_a, factors_b = _block(ccx_dat, TITLES[1]), _block(ntf_dat, TITLES[1])
+    np.testing.assert_allclose(np.abs(factors_b), np.abs(factors_a), rtol=1e-5, atol=1e-9)
+    mass_a, mass_b = _block(ccx_dat, TITLES[2]), _block(ntf_dat, TITLES[2])
+    np.testing.assert_allclose(mass_b, mass_a, rtol=1e-5, atol=1e-12)
+    total = "T O T A L   E F F E C T I V E   M A S S"
+    assert (
+        ccx_dat.read_text().split(total)[1].split("\n")[4]
+        == (ntf_dat.read_text().split(total)[1].split("\n")[4])
+    )
+
+
+@pytest.mark.parametrize(
+    "value, text",
+    [(13102.19, "   0.1310219E+05"), (-1.950676e-4, "  -0.1950676E-03"), (0.0, "   0.0000000E+00"),
+     (0.99999999, "   0.1000000E+01")],
+)  # fmt: skip
+def test_e16_format_is_fortrans(value, text):
+    assert format_e16(value) == text
+
+
+def test_modal_dynamic_and_frequency_ranges_are_refused(tmp_path):
+    _frequency_deck(tmp_path)
+    deck = (tmp_path / "modes.inp").read_text()
+    (tmp_path / "range.inp").write_text(
+        deck.replace("*FREQUENCY,STORAGE=YES\n6", "*FREQUENCY\n6,1.,5.")
+    )
+    with pytest.raises(DeckError, match="frequency range"):
+        read_deck(tmp_path / "range.inp")
+    modal = deck + "*STEP\n*MODAL DYNAMIC\n1e-3,1.\n*END STEP\n"
+    (tmp_path / "modal.inp").write_text(modal)
+    with pytest.raises(DeckError, match=r"modal\.inp:\d+: \*MODAL DYNAMIC is not supported yet"):
+        read_deck(tmp_path / "modal.inp")
+    assert read_deck(tmp_path / "modes.inp").steps[-1].frequency.num_eigenvalues == 6
+
+
+CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
+
+
+@pytest.mark.skipif(
+    not (CCX_TESTS / "contact5.inp.gz").exists(), reason="calculix-ccx-test is not installed"
+)
+def test_contact5_frequency_step_matches_its_reference(tmp_path):
+    """ccx's own deck contact5 (C3D20, two cantilevers, contact pair): its *FREQUENCY step.
+
+    The deck's second step (*MODAL DYNAMIC) is cut off (refused). The modes come in degenerate
+    groups (two equal beams, two bending planes): participation factors differ inside a group (any
+    basis of it is right), the effective masses summed over a group do not.
+    """
+    text = gzip.decompress((CCX_TESTS / "contact5.inp.gz").read_bytes()).decode()
+    (tmp_path / "c5.inp").write_text(text[: text.index("*STEP,INC=1000000")])
+    result = run_job("c5", tmp_path, comm=MPI.COMM_SELF)
+    assert result.completed
+    reference = tmp_path / "reference.dat"
+    reference.write_bytes(gzip.decompress((CCX_TESTS / "contact5.dat.ref.gz").read_bytes()))
+    ours = tmp_path / "c5.dat"
+    a, b = _block(reference, TITLES[0]), _block(ours, TITLES[0])
+    assert a.shape == b.shape == (20, 4)
+    np.testing.assert_allclose(b, a, rtol=1e-6)  # measured: all 7 printed digits equal
+    groups = np.unique(np.round(a[:, 0] / a[0, 0], 5), return_inverse=True)[1]
+    mass_a, mass_b = _block(reference, TITLES[2]), _block(ours, TITLES[2])
+    for group in np.unique(groups):
+        in_group = groups == group
+        np.testing.assert_allclose(
+            mass_b[in_group].sum(axis=0), mass_a[in_group].sum(axis=0), rtol=1e-4, atol=1e-12
+        )
+    total = "T O T A L   E F F E C T I V E   M A S S"
+    assert (
+        ours.read_text().split(total)[1].split("\n")[4]
+        == (reference.read_text().split(total)[1].split("\n")[4])
+    )
