@@ -354,6 +354,9 @@ _SET_RE = re.compile(r" for set (\S+) and time")
 #: ccx 2.23 (not 2.20) heads each step's and increment's blocks with ``S T E P       1`` and
 #: ``INCREMENT     1`` lines; blocks carry their time, so the reader skips them.
 _STEP_RE = re.compile(r"\s*(S T E P|INCREMENT)\s+\d+\s*$")
+#: A ``*FREQUENCY`` step's first table title, and the heading of each mode's print blocks.
+_MODAL_TABLES = "E I G E N V A L U E   O U T P U T"
+_MODE_HEADING = "E I G E N V A L U E    N U M B E R"
 _FORTRAN_EXP_RE = re.compile(r"(\d)([+-]\d{3})$")
 
 
@@ -380,10 +383,15 @@ def _parse_number(token: str, where: str) -> float:
 def read_dat(path: str | Path) -> list[DatBlock]:
     """Read every block of the ccx ``.dat`` file at ``path`` (ccx 2.20 or 2.23, or ``write_dat``'s).
 
+    A ``*FREQUENCY`` step's tables (eigenvalues to total effective mass) are skipped (read them
+    with ``calculix.modal_dat``'s functions); its modes' print blocks are read like the others,
+    all at the step's time.
+
     Raises:
         ValueError: a line that is neither a title nor a row of numbers (message gives file:line).
     """
     path = Path(path)
+    modal = False  # inside a frequency step's tables
     blocks: list[DatBlock] = []
     current: dict | None = None
 
@@ -420,6 +428,16 @@ def read_dat(path: str | Path) -> list[DatBlock]:
             continue
         if _STEP_RE.fullmatch(line):
             continue
+        if _MODAL_TABLES in line:
+            close()
+            current, modal = None, True
+            continue
+        if _MODE_HEADING in line:
+            modal = False
+            continue
+        if modal and _TIME_RE.search(line) is None:
+            continue
+        modal = False
         tokens = line.split()
         if re.fullmatch(r"-?\d+", tokens[0]) or re.match(r"-?\d*\.\d", tokens[0]):
             if current is None:

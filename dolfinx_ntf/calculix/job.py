@@ -300,7 +300,7 @@ class _Job:
             self._run_dynamic_step(index, step)
             return
         if step.frequency is not None:
-            self._run_frequency_step(step)
+            self._run_frequency_step(index, step)
             return
         static = step.static
         period = static.period
@@ -385,7 +385,7 @@ class _Job:
         )
         driver.run(self.solver, model.u)
 
-    def _run_frequency_step(self, step: Step) -> None:
+    def _run_frequency_step(self, index: int, step: Step) -> None:
         """A ``*FREQUENCY`` step: the modes at the converged state (docs/method.md §16)."""
         problem = self.problem
         if problem.states and problem.pairings == 0:  # a first step: pair the undeformed model
@@ -400,6 +400,16 @@ class _Job:
         finally:
             modes.destroy()
         self.result.eigenvalues = modes.eigenvalues
+        total = self.model.total_time(index, step.static.period)
+        if step.prints and step.output_frequency > 0:
+            u = self.model.u
+            state = u.x.array.copy()
+            try:
+                for number, mode in enumerate(modes.modes, 1):
+                    u.x.array[:] = mode.x.array
+                    self.files.write_mode(step, number, total, self.values.displacements())
+            finally:
+                u.x.array[:] = state
 
     def _begin_attempt(self, index: int, step: Step, t: float, *, ramp: bool = True) -> None:
         """Count an attempt at step time ``t``, set its loads and open its ``.sta`` row."""

@@ -96,8 +96,27 @@ class JobFiles:
     def write_dat_text(self, text: str) -> None:
         """Append ``text`` to the ``.dat`` file (rank 0), e.g. a frequency step's blocks."""
         if self.root:
-            with open(self.dat, "a") as handle:
+            with open(self.dat, "a", encoding="ascii", newline="\n") as handle:
                 handle.write(text)
+
+    def write_mode(self, step: Step, number: int, total: float, displacement: np.ndarray) -> None:
+        """The print blocks of mode ``number`` of a ``*FREQUENCY`` step (rank 0 writes).
+
+        ``displacement`` (N, 3) is the mode at every deck node. As ccx 2.20, which has no contact
+        elements in the step, the contact prints are empty (docs/method.md §16.2).
+        """
+        blocks: list[DatBlock] = []
+        for request in step.prints:
+            if request.kind == "NODE":
+                ids = self.deck.nsets[request.set]
+                values = displacement[self.deck.node_index(ids)]
+                blocks += node_print_blocks("U", request.set, total, ids, values)
+            else:  # CONTACT (check_requests refuses the others)
+                blocks += _contact_blocks(request, total, [])
+        if self.root:
+            heading = f"{' ' * 20}E I G E N V A L U E    N U M B E R{number:6d}\n\n"
+            write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx,
+                      heading=heading)  # fmt: skip
 
     def close(self) -> None:
         """Close the ``.frd`` file (the others are appended to row by row)."""
@@ -352,6 +371,22 @@ def check_requests(deck: Deck) -> None:
                     raise NotImplementedError(
                         f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
                     )
+    for step in deck.steps:
+        if step.frequency is None:
+            continue
+        for request in step.prints:
+            if request.kind == "EL" or (request.kind == "NODE" and set(request.keys) != {"U"}):
+                raise NotImplementedError(
+                    f"{request.location}: *{request.kind} PRINT {', '.join(request.keys)} in the "
+                    f"*FREQUENCY step at {step.location} is not supported yet (modes print U and "
+                    "the contact keys only)"
+                )
+        if step.file_requests:
+            logger.warning(
+                " *WARNING: the modes of the *FREQUENCY step at %s are not written to the .frd "
+                "file",
+                step.location,
+            )
     written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
     for step in deck.steps:
         for request in step.file_requests:

@@ -4,7 +4,8 @@ The deck is the cross-validation case ``hex_linear_pressure`` (a C3D8 punch pres
 with densities and a ``*FREQUENCY`` step appended. ccx 2.20 has no contact elements in that step
 (its ``.dat`` prints 0 of them and the punch floats: a zero eigenvalue), so the runner uses the
 bulk stiffness alone (docs/method.md §16). Measured: the nonzero eigenvalues, effective modal masses
-and total effective masses agree in all 7 printed digits; participation factors up to the sign.
+and total effective masses agree in all 7 printed digits; participation factors and the modes'
+printed displacements up to the sign.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 import pytest
 
 from dolfinx_ntf.calculix.ccx import run_ccx
+from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.modal_dat import format_e16
@@ -92,6 +94,19 @@ def test_frequency_step_after_contact_matches_ccx(tmp_path):
         ccx_dat.read_text().split(total)[1].split("\n")[4]
         == (ntf_dat.read_text().split(total)[1].split("\n")[4])
     )
+    # Each mode's *NODE PRINT (carried over from the static step) up to the mode's sign
+    # (ARPACK's and SLEPc's are arbitrary); measured within 2e-13 of the largest value.
+    modes_a, modes_b = (
+        [b for b in read_dat(path) if b.name == "U" and b.time == pytest.approx(2.0)]
+        for path in (ccx_dat, ntf_dat)
+    )
+    assert len(modes_a) == len(modes_b) == 6
+    for a_mode, b_mode in zip(modes_a, modes_b):
+        np.testing.assert_array_equal(a_mode.labels, b_mode.labels)
+        sign = np.sign((a_mode.values * b_mode.values).sum())
+        scale = np.abs(a_mode.values).max()
+        assert np.abs(a_mode.values - sign * b_mode.values).max() <= 1e-6 * scale
+    assert ccx_dat.read_text().count("N U M B E R") == ntf_dat.read_text().count("N U M B E R")
 
 
 @pytest.mark.parametrize(
@@ -153,3 +168,12 @@ def test_contact5_frequency_step_matches_its_reference(tmp_path):
         ours.read_text().split(total)[1].split("\n")[4]
         == (reference.read_text().split(total)[1].split("\n")[4])
     )
+
+
+def test_stress_prints_of_modes_are_refused_before_running(tmp_path):
+    _frequency_deck(tmp_path)
+    deck = (tmp_path / "modes.inp").read_text()
+    deck = deck.replace("*FREQUENCY,STORAGE=YES\n6\n", "*FREQUENCY\n6\n*EL PRINT, ELSET=E1\nS\n")
+    (tmp_path / "stress.inp").write_text(deck)
+    with pytest.raises(NotImplementedError, match=r"\*EL PRINT S in the \*FREQUENCY step"):
+        run_job("stress", tmp_path, comm=MPI.COMM_SELF)

@@ -48,7 +48,6 @@ class FrequencyCards(ReaderState):
 
     def _k_MODALDYNAMIC(self, card: Card) -> None:
         raise DeckError(
-            "*MODAL DYNAMIC is not supported yet (modal superposition with contact forces); "
-            "a *FREQUENCY step runs, *DYNAMIC integrates directly",
+            "*MODAL DYNAMIC is not supported yet (modal superposition with contact forces)",
             card.location,
         )
