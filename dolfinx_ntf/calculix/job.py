@@ -386,30 +386,36 @@ class _Job:
         driver.run(self.solver, model.u)
 
     def _run_frequency_step(self, index: int, step: Step) -> None:
-        """A ``*FREQUENCY`` step: the modes at the converged state (docs/method.md §16)."""
-        problem = self.problem
-        if problem.states and problem.pairings == 0:  # a first step: pair the undeformed model
-            problem.begin_increment(1.0)
-        # ccx 2.20 has no contact elements in a *FREQUENCY step: the bulk stiffness alone
+        """A ``*FREQUENCY`` step: the modes at the current state (docs/method.md §16).
+
+        As ccx 2.20, whose step has no contact elements: the bulk stiffness alone. Each mode's
+        sign is fixed by the deck's node order (its first component above 1e-3 of its largest is
+        positive), so that serial and parallel runs print the same modes.
+        """
         modes = contact_modes(
-            problem, self.model.mass_form(), step.frequency.num_eigenvalues, springs=False
+            self.problem, self.model.mass_form(), step.frequency.num_eigenvalues, springs=False
         )
+        u = self.model.u
+        state = u.x.array.copy()
         try:
+            shapes = []
+            for mode in modes.modes:
+                u.x.array[:] = mode.x.array
+                shape = self.values.displacements()
+                if _first_large(shape) < 0.0:
+                    mode.x.array[:] *= -1.0
+                    shape = -shape
+                shapes.append(shape)
             factors, totals = modes.participation_factors(), modes.total_effective_mass()
             self.files.write_dat_text(frequency_output(modes.eigenvalues, factors, totals))
+            if step.prints and step.output_frequency > 0:
+                total = self.model.total_time(index, step.static.period)
+                for number, shape in enumerate(shapes, 1):
+                    self.files.write_mode(step, number, total, shape)
         finally:
+            u.x.array[:] = state
             modes.destroy()
         self.result.eigenvalues = modes.eigenvalues
-        total = self.model.total_time(index, step.static.period)
-        if step.prints and step.output_frequency > 0:
-            u = self.model.u
-            state = u.x.array.copy()
-            try:
-                for number, mode in enumerate(modes.modes, 1):
-                    u.x.array[:] = mode.x.array
-                    self.files.write_mode(step, number, total, self.values.displacements())
-            finally:
-                u.x.array[:] = state
 
     def _begin_attempt(self, index: int, step: Step, t: float, *, ramp: bool = True) -> None:
         """Count an attempt at step time ``t``, set its loads and open its ``.sta`` row."""
@@ -505,6 +511,12 @@ class _Job:
                 load_time=self._load_time,
                 largest_residual=self.solver.largest_residual,
             )
+
+
+def _first_large(values: np.ndarray) -> float:
+    """The first entry of ``values`` (row-major) above 1e-3 of its largest magnitude."""
+    flat = values.ravel()
+    return float(flat[np.argmax(np.abs(flat) > 1e-3 * np.abs(flat).max())])
 
 
 def _read(path: Path, comm: MPI.Comm) -> Deck:

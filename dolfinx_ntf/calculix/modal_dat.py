@@ -6,11 +6,12 @@ totals, and the total effective mass; rows ``I7`` then ``E16.7`` values (Fortran
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
-__all__ = ["format_e16", "frequency_output"]
+__all__ = ["FrequencyTables", "format_e16", "frequency_output", "read_frequency_output"]
 
 _COMPONENTS = (
     "MODE NO.   X-COMPONENT     Y-COMPONENT     Z-COMPONENT     X-ROTATION      Y-ROTATION"
@@ -74,4 +75,50 @@ def frequency_output(
         + "\n"
         + _rows(["       "], np.asarray(total_mass, dtype=float).reshape(1, 6))
         + "\n\n"
+    )
+
+
+@dataclasses.dataclass
+class FrequencyTables:
+    """The tables of a frequency step read back from a ``.dat`` text (mode numbers dropped).
+
+    Attributes:
+        eigenvalues: (modes, 4): eigenvalue, rad/time, cycles/time, imaginary part.
+        participation: (modes, 6) participation factors.
+        effective_mass: (modes, 6) effective modal masses.
+        total_text: The total effective mass row as printed.
+    """
+
+    eigenvalues: np.ndarray
+    participation: np.ndarray
+    effective_mass: np.ndarray
+    total_text: str
+
+
+def read_frequency_output(text: str) -> FrequencyTables:
+    """The first frequency step's tables of the ``.dat`` ``text`` (ccx's or ours).
+
+    Args:
+        text: The ``.dat`` file's content.
+    """
+    lines = text.splitlines()
+
+    def table(title: str) -> np.ndarray:
+        start = next(i for i, line in enumerate(lines) if title in line)
+        rows = []
+        for line in lines[start + 1 :]:
+            fields = line.split()
+            if fields and fields[0].isdigit():
+                rows.append([float(f) for f in fields[1:]])
+            elif rows:
+                break
+        return np.array(rows)
+
+    total = "T O T A L   E F F E C T I V E   M A S S"
+    start = next(i for i, line in enumerate(lines) if total in line)
+    return FrequencyTables(
+        table("E I G E N V A L U E   O U T P U T"),
+        table("P A R T I C I P A T I O N   F A C T O R S"),
+        table("E F F E C T I V E   M O D A L   M A S S"),
+        next(line for line in lines[start + 1 :] if line.strip() and line[0] == " "),
     )

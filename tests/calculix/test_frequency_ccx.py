@@ -10,7 +10,6 @@ printed displacements up to the sign.
 
 from __future__ import annotations
 
-import gzip
 import logging
 import re
 import shutil
@@ -131,43 +130,6 @@ def test_modal_dynamic_and_frequency_ranges_are_refused(tmp_path):
     with pytest.raises(DeckError, match=r"modal\.inp:\d+: \*MODAL DYNAMIC is not supported yet"):
         read_deck(tmp_path / "modal.inp")
     assert read_deck(tmp_path / "modes.inp").steps[-1].frequency.num_eigenvalues == 6
-
-
-CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
-
-
-@pytest.mark.skipif(
-    not (CCX_TESTS / "contact5.inp.gz").exists(), reason="calculix-ccx-test is not installed"
-)
-def test_contact5_frequency_step_matches_its_reference(tmp_path):
-    """ccx's own deck contact5 (C3D20, two cantilevers, contact pair): its *FREQUENCY step.
-
-    The deck's second step (*MODAL DYNAMIC) is cut off (refused). The modes come in degenerate
-    groups (two equal beams, two bending planes): participation factors differ inside a group (any
-    basis of it is right), the effective masses summed over a group do not.
-    """
-    text = gzip.decompress((CCX_TESTS / "contact5.inp.gz").read_bytes()).decode()
-    (tmp_path / "c5.inp").write_text(text[: text.index("*STEP,INC=1000000")])
-    result = run_job("c5", tmp_path, comm=MPI.COMM_SELF)
-    assert result.completed
-    reference = tmp_path / "reference.dat"
-    reference.write_bytes(gzip.decompress((CCX_TESTS / "contact5.dat.ref.gz").read_bytes()))
-    ours = tmp_path / "c5.dat"
-    a, b = _block(reference, TITLES[0]), _block(ours, TITLES[0])
-    assert a.shape == b.shape == (20, 4)
-    np.testing.assert_allclose(b, a, rtol=1e-6)  # measured: all 7 printed digits equal
-    groups = np.unique(np.round(a[:, 0] / a[0, 0], 5), return_inverse=True)[1]
-    mass_a, mass_b = _block(reference, TITLES[2]), _block(ours, TITLES[2])
-    for group in np.unique(groups):
-        in_group = groups == group
-        np.testing.assert_allclose(
-            mass_b[in_group].sum(axis=0), mass_a[in_group].sum(axis=0), rtol=1e-4, atol=1e-12
-        )
-    total = "T O T A L   E F F E C T I V E   M A S S"
-    assert (
-        ours.read_text().split(total)[1].split("\n")[4]
-        == (reference.read_text().split(total)[1].split("\n")[4])
-    )
 
 
 def test_stress_prints_of_modes_are_refused_before_running(tmp_path):
