@@ -254,6 +254,7 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     outputs = _python_blocks("guide/outputs.md")
     order = [
         ("quickstart.md", quick[0]),
+        ("guide/modes.md", _python_blocks("guide/modes.md")[0]),
         ("guide/laws.md", _python_blocks("guide/laws.md")[0]),
         ("guide/steps.md", steps[0]),
         *(("guide/outputs.md", block) for block in outputs),
@@ -278,6 +279,10 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     # Quick start: the block carries the load of 10 on the 0.4 x 0.4 punch.
     force = ntf.contact_force(namespace["problem"], "punch")
     assert force[2] == pytest.approx(10.0 * 0.4 * 0.4, rel=1e-8)
+    # Modes: the springs carry the punch, which floats without them (docs/guide/modes.md).
+    frequencies, floating = namespace["modes"].frequencies, namespace["floating"].frequencies
+    assert np.all(np.diff(frequencies) >= 0) and frequencies[0] > 0
+    assert abs(floating[0]) < 1e-3 * frequencies[0]
     # Prescribed displacement and outputs: the reactions balance the contact force.
     problem2 = namespace["problem2"]
     top = ntf.reaction(problem2, dofs=namespace["top_bc"])

@@ -18,7 +18,7 @@ class FrequencyCards(ReaderState):
 
     def _k_FREQUENCY(self, card: Card) -> None:
         step = self._in_step(card)
-        self._check_params(card, allowed={"STORAGE", "SOLVER", "GLOBAL", "CYCMPC"})
+        self._check_params(card, allowed={"STORAGE", "SOLVER"})
         if step.static is not None or step.frequency is not None:
             raise DeckError("a step can have only one procedure card", card.location)
         storage = (card.params.get("STORAGE") or "NO") == "YES"
