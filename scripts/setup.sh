@@ -11,9 +11,10 @@ release=$(sh scripts/debian_release.sh)
 sudo_cmd=""
 [ "$(id -u)" = 0 ] || sudo_cmd="sudo"
 
-packages=(python3-dolfinx-real python3-gmsh python3-venv python3-pip python3-pytest python3-scipy
+packages=(python3-dolfinx-real python3-slepc4py python3-gmsh python3-venv python3-pip python3-pytest python3-scipy
           python3-matplotlib libopenblas0-pthread openmpi-bin calculix-ccx-test
           python3-sphinx python3-myst-parser furo python3-sphinx-gallery chromium)   # make docs, docs-check
+# python3-slepc4py: the eigensolver of solvers/modes.py (dolfinx depends on it today; named so that it stays)
 ccx_libraries=(libarpack2t64 libgfortran5 liblapack3 libgomp1)   # what bookworm's ccx 2.20 needs, see below
 case "$release" in
   bookworm) packages+=(calculix-ccx) ;;
