@@ -20,10 +20,12 @@ def _facets(mesh, where):
     return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
 
 
-@pytest.mark.mpi
-def test_axial_bar_frequencies_and_participation_match_the_closed_form():
-    """A clamped-free bar held to axial motion (nu = 0): omega_n = (2n - 1) pi c / (2 L)."""
-    length, E, rho, area = 1.0, 1000.0, 2.0, 0.01
+def _axial_bar(length: float, E: float, *, tie_end: bool = False):
+    """A clamped-free bar (Q2, nu = 0) held to axial motion; optionally its free end's u_x tied.
+
+    The ties (u_x of every end node equal to the corner's, the end cell's nodes: one process)
+    change no axial mode: they exercise the elimination of constraints.
+    """
     mesh = dolfinx.mesh.create_box(
         MPI.COMM_WORLD,
         [[0, 0, 0], [length, 0.1, 0.1]],
@@ -31,7 +33,7 @@ def test_axial_bar_frequencies_and_participation_match_the_closed_form():
         dolfinx.mesh.CellType.hexahedron,
     )
     V = compat.vector_space(mesh, "Lagrange", 2)
-    u, v, w = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx
     every = dolfinx.mesh.locate_entities(mesh, 2, lambda x: np.full(x.shape[1], True))
     bcs = [
@@ -39,7 +41,27 @@ def test_axial_bar_frequencies_and_participation_match_the_closed_form():
         component_bc(V, 1, every),
         component_bc(V, 2, every),
     ]
-    problem = ntf.ContactProblem(F, u, [], bcs)
+    constraints = []
+    if tie_end:
+        x = V.tabulate_dof_coordinates()
+        end = np.flatnonzero(np.isclose(x[:, 0], length))
+        corner = end[np.isclose(x[end, 1], 0.0) & np.isclose(x[end, 2], 0.0)][:1]
+        constraints = [  # none on a process without the end cell
+            ntf.LinearConstraint([node, corner[0]], [0, 0], [1.0, -1.0], name=f"tie {node}")
+            for node in end
+            if node != corner[0]
+        ]
+    return ntf.ContactProblem(F, u, [], bcs, constraints=constraints), end if tie_end else None
+
+
+@pytest.mark.mpi
+def test_axial_bar_frequencies_and_participation_match_the_closed_form():
+    """A clamped-free bar held to axial motion (nu = 0): omega_n = (2n - 1) pi c / (2 L)."""
+    length, E, rho, area = 1.0, 1000.0, 2.0, 0.01
+    problem, _ = _axial_bar(length, E)
+    bcs = problem.bcs
+    V = problem.u.function_space
+    v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
     modes = contact_modes(problem, rho * ufl.inner(w, v) * ufl.dx, 3)
     exact = (2 * np.arange(1, 4) - 1) * np.pi / (2 * length) * np.sqrt(E / rho)
     # P2 along 16 elements: measured 6e-8, 5e-6, 4e-5
@@ -55,8 +77,35 @@ def test_axial_bar_frequencies_and_participation_match_the_closed_form():
     gamma = np.sqrt(2 * rho * area * length) * 2 / np.pi
     assert abs(factors[0, 0]) == pytest.approx(gamma, rel=1e-4)
     assert np.abs(factors[:, 1:4]).max() < 1e-12
+    # The total effective mass along x: the bar's mass on the free dofs (less than rho A L).
+    assert 0.9 * rho * area * length < modes.total_effective_mass()[0] < rho * area * length
     modes.destroy()
     problem.destroy()
+
+
+@pytest.mark.mpi
+def test_constraints_are_eliminated_from_both_matrices_and_expanded_in_the_modes():
+    length, E, rho = 1.0, 1000.0, 2.0
+    plain, _ = _axial_bar(length, E)
+    tied, end = _axial_bar(length, E, tie_end=True)
+    assert MPI.COMM_WORLD.allreduce(len(tied.constraints)) == 8  # 9 end nodes, one corner
+
+    def mass(problem):
+        V = problem.u.function_space
+        return rho * ufl.inner(ufl.TrialFunction(V), ufl.TestFunction(V)) * ufl.dx
+
+    with pytest.raises(ValueError, match="arguments must be on the problem's space"):
+        contact_modes(plain, mass(tied))
+    expected = contact_modes(plain, mass(plain), 3)
+    modes = contact_modes(tied, mass(tied), 3)
+    assert modes.eigenvalues == pytest.approx(expected.eigenvalues, rel=1e-9)
+    for mode in modes.modes:  # the dependent dofs carry the corner's value
+        values = mode.x.array.reshape(-1, 3)[end, 0]
+        if values.size:  # the process of the end cell
+            assert np.abs(values - values[0]).max() <= 1e-12 * np.abs(mode.x.array).max()
+            assert abs(values[0]) > 0.0
+    for obj in (expected, modes, plain, tied):
+        obj.destroy()
 
 
 def _block_on_springs(K: float, height: float, E: float):
