@@ -4,6 +4,7 @@ Serial here; tests/parallel/test_parallel.py runs the punch demo on 2 and 3 proc
 """
 
 import importlib.util
+import itertools
 from pathlib import Path
 
 import pytest
@@ -136,3 +137,23 @@ def test_compare_continuum_demo(tmp_path):
         assert len(row["iterations"]) == 4 and max(row["iterations"]) <= 8, row["method"]
     # Penalties penetrate (~p0/K), Nitsche much less.
     assert by["nitsche"]["penetration"] < 0.5 * by["penalty"]["penetration"]
+
+
+def test_preloaded_modes_demo_bounces_on_the_joint_stiffness():
+    summary = _demo("preloaded_modes").main(["--coarse", "--quiet"])
+    rows = summary["rows"]
+    assert [r["load"] for r in rows] == pytest.approx([400.0, 800.0, 1200.0, 1600.0])
+    for row in rows:
+        # The springs carry the load exactly; their stiffness is beta F (EXPONENTIAL law).
+        assert row["contact_force"] == pytest.approx(row["load"], rel=1e-7)  # measured 1.2e-8
+        # The bounce is the rigid punch on the springs, lowered by the bodies' compliance
+        # (measured 0.04 % to 0.15 % below, growing with the joint's stiffness), and it moves the
+        # punch's mass along z (measured 1.0008 to 1.0032 of it: the block moves with it).
+        ratio = row["bounce"] / row["rigid_estimate"]
+        assert 0.995 < ratio < 1.0
+        assert row["bounce_mass"] == pytest.approx(summary["punch_mass"], rel=5e-3)
+    ratios = [r["bounce"] / r["rigid_estimate"] for r in rows]
+    assert all(later < earlier for earlier, later in itertools.pairwise(ratios))
+    # Frequency as the square root of the preload.
+    assert rows[-1]["bounce"] / rows[0]["bounce"] == pytest.approx(2.0, rel=5e-3)
+    assert abs(summary["floating"]) < 1e-3 * rows[0]["bounce"]  # no springs: the punch floats
