@@ -224,7 +224,8 @@ def solve_modes(
         The eigenvalues and the modes (the vectors, unit ``phi^T M phi``).
 
     Raises:
-        ContactSolverError: When fewer than ``num_modes`` pairs converge.
+        ContactSolverError: When fewer than ``num_modes`` pairs converge or one of them is
+            complex (an unsymmetric ``K``).
     """
     from slepc4py import SLEPc  # imported here: only the modal analysis needs SLEPc
 
@@ -256,8 +257,17 @@ def solve_modes(
             f"solve_modes: {converged} of {num_modes} eigenpairs converged (is K - shift M "
             "singular, e.g. a free body with shift 0?)"
         )
-    values = np.array([eps.getEigenvalue(i).real for i in range(converged)])
+    eigenvalues = np.array([complex(eps.getEigenvalue(i)) for i in range(converged)])
+    values = eigenvalues.real
     order = np.argsort(values)[:num_modes]
+    complex_pairs = np.abs(eigenvalues.imag[order]) > 1e-8 * np.abs(values[order]).max()
+    if np.any(complex_pairs):
+        eps.destroy()
+        raise ContactSolverError(
+            f"solve_modes: eigenvalue {eigenvalues[order][complex_pairs][0]} of the lowest "
+            f"{num_modes} is complex (an unsymmetric tangent, e.g. sliding friction, has no real "
+            "modes there)"
+        )
     modes = []
     for i in order:
         phi = dolfinx.fem.Function(V)

@@ -4,7 +4,9 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+import scipy.linalg
 import scipy.optimize
+from helpers import drag_problem
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -13,7 +15,7 @@ import ufl
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
-from dolfinx_ntf.solvers.modes import contact_modes, tangent_stiffness
+from dolfinx_ntf.solvers.modes import _is_symmetric, contact_modes, mass_matrix, tangent_stiffness
 
 
 def _facets(mesh, where):
@@ -194,3 +196,37 @@ def test_the_tangent_includes_the_springs_and_asks_for_a_solved_problem():
         contact_modes(problem, ufl.inner(rigid, ufl.TestFunction(V)) * ufl.dx)
     solver.destroy()
     problem.destroy()
+
+
+@pytest.mark.serial
+def test_unsymmetric_tangent_with_friction_matches_a_dense_eigensolver():
+    """Sliding friction makes K unsymmetric: SLEPc's non-Hermitian path against scipy's eig."""
+    problem, pressure, set_drag, _ = drag_problem()
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+
+    def load(t):
+        pressure.value = 10.0 * t
+        set_drag(0.02 * t)
+
+    ntf.StaticStep(load).run(solver, problem.u)
+    assert problem.has_friction
+    K = tangent_stiffness(problem)
+    assert not _is_symmetric(K)
+    V = problem.u.function_space
+    mass = ufl.inner(ufl.TrialFunction(V), ufl.TestFunction(V)) * ufl.dx
+    M = mass_matrix(problem, mass)
+    dense_k, dense_m = (A.convert("dense").getDenseArray() for A in (K, M))
+    free = np.flatnonzero(np.diag(dense_m) != 0.0)
+    values = scipy.linalg.eigvals(dense_k[np.ix_(free, free)], dense_m[np.ix_(free, free)])
+    lowest = values[np.argsort(values.real)[:4]]
+    assert np.abs(lowest.imag).max() <= 1e-8 * lowest.real.max()  # (higher pairs may be complex)
+    modes = contact_modes(problem, mass, 4)
+    # measured: equal to the last digits
+    assert modes.eigenvalues == pytest.approx(lowest.real, rel=1e-8)
+    # Asked for modes up to the first complex pair, it refuses (no real modes there).
+    ordered = values[np.argsort(values.real)]
+    first_complex = int(np.flatnonzero(np.abs(ordered.imag) > 1e-8 * np.abs(ordered.real))[0])
+    with pytest.raises(ntf.ContactSolverError, match="is complex"):
+        contact_modes(problem, mass, first_complex + 1)
+    for obj in (K, M, modes, solver, problem):
+        obj.destroy()
