@@ -139,3 +139,11 @@ def test_stress_prints_of_modes_are_refused_before_running(tmp_path):
     (tmp_path / "stress.inp").write_text(deck)
     with pytest.raises(NotImplementedError, match=r"\*EL PRINT S in the \*FREQUENCY step"):
         run_job("stress", tmp_path, comm=MPI.COMM_SELF)
+
+
+def test_frequency_under_nlgeom_is_refused(tmp_path):
+    _frequency_deck(tmp_path)
+    deck = (tmp_path / "modes.inp").read_text().replace("*STEP, NLGEOM=NO", "*STEP, NLGEOM")
+    (tmp_path / "nlgeom.inp").write_text(deck)
+    with pytest.raises(DeckError, match=r"\*FREQUENCY with NLGEOM .* is not supported yet"):
+        read_deck(tmp_path / "nlgeom.inp")

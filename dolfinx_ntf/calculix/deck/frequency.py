@@ -21,6 +21,12 @@ class FrequencyCards(ReaderState):
         self._check_params(card, allowed={"STORAGE", "SOLVER"})
         if step.static is not None or step.frequency is not None:
             raise DeckError("a step can have only one procedure card", card.location)
+        if step.nlgeom:
+            raise DeckError(
+                "*FREQUENCY with NLGEOM (in this step or an earlier one) is not supported yet "
+                "(ccx's base state and stress stiffness there were not measured)",
+                card.location,
+            )
         storage = (card.params.get("STORAGE") or "NO") == "YES"
         values: tuple[float | None, ...] = ()
         if card.lines:
