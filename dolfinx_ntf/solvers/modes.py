@@ -183,7 +183,7 @@ def mass_matrix(problem: ContactProblem, mass: ufl.Form) -> PETSc.Mat:
     for argument in mass.arguments():
         if argument.ufl_function_space() != V:
             raise ValueError(f"{owner}: the mass form's arguments must be on the problem's space")
-    full = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(mass), problem.bcs, diagonal=0.0)
+    full = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(mass), problem.bcs, 0.0)
     full.assemble()
     if problem.elimination is None:
         return full
