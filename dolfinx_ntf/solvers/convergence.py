@@ -166,7 +166,10 @@ class ForceScaledTest:
             far (CalculiX's; the deck runner reproduces it); default: the change now.
         bounded: Beyond CalculiX, a test that runaway iterates cannot pass: in the mean ``q~``
             each ``q`` counts up to ``SCALE_GROWTH`` times the largest sound force (the
-            predictor's, the first update's, the converged increments' means), and a residual
+            predictor's, the first update's, the converged increments' means); once an iterate's
+            residual is back at or below the increment's first, only such settled iterates'
+            ``q`` make the mean (a solve that ran away and came back is judged by the forces
+            it came back to); and a residual
             larger than the increment's first one (:meth:`begin_iterations`) converges only
             if it passes on the converged increments' scale. CalculiX's scale grows with a
             diverging iterate, so that a residual 46 times the first passed its ``R_l`` test on a
@@ -188,13 +191,15 @@ class ForceScaledTest:
     #: ``(r, q~, c, du)`` of the last :meth:`converged` call, as the test used them.
     last: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     _averages: list[float] = field(default_factory=list, repr=False)
+    #: ``q`` of the iterates whose residual is at most the increment's first (bounded test).
+    _settled_averages: list[float] = field(default_factory=list, repr=False)
     _largest: list[float] = field(default_factory=list, repr=False)
     _largest_change: float = field(default=0.0, repr=False)
     _start: tuple[float, float] = field(default=(0.0, 0.0), repr=False)
 
     def begin_solve(self, change: float) -> None:
         """Forget the iterations of the last solve; ``change`` is the predictor's own ``du``."""
-        self._averages, self._largest = [], []
+        self._averages, self._largest, self._settled_averages = [], [], []
         self._largest_change = change
         self._start = (0.0, 0.0)
 
@@ -205,7 +210,7 @@ class ForceScaledTest:
     def end_solve(self) -> None:
         """Remember the forces of a converged increment."""
         if self._averages:
-            self.past_averages.append(float(np.mean(self._averages)))
+            self.past_averages.append(float(np.mean(self._settled_averages or self._averages)))
             self.step_forces.append(self._averages[-1])
 
     def converged(
@@ -234,9 +239,11 @@ class ForceScaledTest:
             sound = max(self._start[0], self._averages[0] if self._averages else average)
             sound = max(sound, max(self.past_averages, default=0.0))
             self._averages.append(min(average, SCALE_GROWTH * sound))
+            if largest <= self._start[1]:
+                self._settled_averages.append(average)
         else:
             self._averages.append(average)
-        mean = float(np.mean(self._averages))
+        mean = float(np.mean(self._settled_averages or self._averages))
         if self.average_over_step:
             mean = (sum(self.step_forces) + average) / (len(self.step_forces) + 1)
         self.largest_residual = largest

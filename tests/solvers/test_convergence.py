@@ -32,6 +32,27 @@ def test_ordinary_solve_converges_either_way(bounded):
     assert decisions == [False, False, True]
 
 
+#: (q, r, c, du) of a soft exponential joint's first increment (a punch, p0 = 0.01 MPa): the first
+#: update overshoots into the exponential branch, forces run to 1e10 and come back; at the last
+#: the residual is 0.7 of the first while the contact force is still 45 % off the load.
+RETURNING = [(1e9, 7e10, 26.0, 26.0), (1e8, 2e9, 1.1, 26.0), (1e5, 2e3, 1.0, 26.0)] + [
+    (100.0, 61.0, 0.69, 26.0)
+]
+
+
+def test_a_solve_that_ran_away_and_came_back_is_judged_by_the_forces_it_came_back_to():
+    controls = dict(TIGHT_FIELD_CONTROLS)
+    start = (80.0, 87.7)
+    assert _decisions(ForceScaledTest(controls), RETURNING, start)[-1]  # R_n q~ = 5e5 > 61
+    bounded = ForceScaledTest(controls, bounded=True)
+    assert not any(_decisions(bounded, RETURNING, start))  # q~ = 100: 61 > R_n q~
+    settled = [(100.0, 0.1, 1e-3, 26.0), (100.0, 1e-9, 1e-7, 26.0)]
+    assert [bounded.converged(5 + k, *iterate) for k, iterate in enumerate(settled)] == [
+        False,
+        True,
+    ]
+
+
 def test_residual_above_the_first_passes_only_on_the_converged_scale():
     """A residual above the increment's first converges only if it is small on the scale of the
     converged increments: an increment that starts in equilibrium (first residual 0) still ends."""
