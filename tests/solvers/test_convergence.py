@@ -35,8 +35,11 @@ def test_ordinary_solve_converges_either_way(bounded):
 #: (q, r, c, du) of a soft exponential joint's first increment (a punch, p0 = 0.01 MPa): the first
 #: update overshoots into the exponential branch, forces run to 1e10 and come back; at the last
 #: the residual is 0.7 of the first while the contact force is still 45 % off the load.
-RETURNING = [(1e9, 7e10, 26.0, 26.0), (1e8, 2e9, 1.1, 26.0), (1e5, 2e3, 1.0, 26.0)] + [
-    (100.0, 61.0, 0.69, 26.0)
+RETURNING = [
+    (1e9, 7e10, 26.0, 26.0),
+    (1e8, 2e9, 1.1, 26.0),
+    (1e5, 2e3, 1.0, 26.0),
+    (100.0, 61.0, 0.69, 26.0),
 ]
 
 
