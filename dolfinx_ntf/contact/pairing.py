@@ -41,7 +41,7 @@ from dolfinx_ntf.kernels.springs import SpringEvaluation
 from dolfinx_ntf.kernels.tie_frame import TieFrame, frame_from_moments, point_moments
 from dolfinx_ntf.logs import details_logger
 from dolfinx_ntf.parallel import collectives, master_exchange, surface_distribution
-from dolfinx_ntf.parallel.halo import NodeHalo
+from dolfinx_ntf.parallel.halo import NodeHalo, planar_padded
 
 __all__ = ["SEARCH_TOLERANCE", "Pairing", "slave_areas"]
 
@@ -231,12 +231,17 @@ class Pairing:
         )
 
     def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
-        """A pair on a 2D mesh: node-to-segment springs on master edges (serial, frictionless)."""
+        """A pair on a 2D mesh: node-to-segment springs on master edges (frictionless).
+
+        On several processes the surfaces are distributed as in 3D (docs/method.md §14.1): the
+        master edges of every process are gathered on each, the slave nodes go to their owners
+        with every slave edge holding one of them. Collective.
+        """
         V = self.u.function_space
+        comm = V.mesh.comm
         missing = [
             feature
             for feature, used in (
-                ("several processes (MPI)", V.mesh.comm.size > 1),
                 ("a rigid analytical master", isinstance(pair.master, RigidSurface)),
                 ("friction", pair.interaction.friction is not None),
                 ("ADJUST", pair.adjust is not None),
@@ -246,26 +251,33 @@ class Pairing:
         if missing:
             raise NotImplementedError(
                 f"{name}: 2D contact does not support {', '.join(missing)} yet (2D meshes have "
-                "frictionless node-to-segment springs between meshed surfaces, on one process)"
+                "frictionless node-to-segment springs between meshed surfaces)"
             )
-        slave = resolve_slave(V, pair.slave, what=f"{name} slave")
+        slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        master_faces = collectives.collectively(
+            comm, resolve_master, V, pair.master, what=f"{name} master"
+        )
+        if self.halo is not None:  # every master edge; the owned slave nodes and their edges
+            slave, master_faces = collectives.collectively(
+                comm, surface_distribution.distribute_pair, V, self.halo, pair.slave, slave,
+                master_faces, name,
+            )  # fmt: skip
         slave = dataclasses.replace(slave, thickness=pair.thickness)
-        master_faces = resolve_master(V, pair.master, what=f"{name} master")
-        if master_faces.faces.shape[0] == 0:
+        if master_faces.faces.shape[0] == 0:  # the gathered surface: the same on every process
             raise ValueError(f"{name}: the master surface has no edges")
+        reference = self._reference if self.halo is None else self.halo.reference
         master = MasterCurve(
-            master_faces.face_type,
-            master_faces.faces,
-            name=f"{name} master",
-            coords=self._reference,
+            master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference
         )
         both = np.intersect1d(slave.nodes, master_faces.nodes)
+        error = None
         if both.size:
-            x = self._reference[both[0]]
-            raise ValueError(
+            x = reference[both[0]]
+            error = ValueError(
                 f"{name}: {both.size} node(s) belong to both the slave and the master surface "
                 f"(first at ({x[0]:.6g}, {x[1]:.6g}))"
             )
+        validation.raise_collectively(comm, error)
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
@@ -389,10 +401,7 @@ class Pairing:
         """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
         if self.halo is not None:
             return self.halo.displacement(self.u)
-        bs = self.u.function_space.dofmap.index_map_bs
-        if bs == 2:  # a 2D mesh: coordinates keep z = 0
-            return np.pad(self.u.x.array.reshape(-1, 2), ((0, 0), (0, 1)))
-        return self.u.x.array.reshape(-1, 3)
+        return planar_padded(self.u.x.array.reshape(-1, self.u.function_space.dofmap.index_map_bs))
 
     def _halo_grew(self) -> None:
         """Nodes were appended to the halo (a master patch grew, docs/method.md §14.8). Collective.
