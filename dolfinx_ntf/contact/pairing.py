@@ -33,7 +33,13 @@ from dolfinx_ntf.fem.surfaces import (
 )
 from dolfinx_ntf.kernels.edges import EdgeType, edge_spring_areas
 from dolfinx_ntf.kernels.friction_state import FrictionState
-from dolfinx_ntf.kernels.rigid import RigidSurface, rigid_master
+from dolfinx_ntf.kernels.rigid import (
+    RigidCylinder,
+    RigidPlane,
+    RigidSphere,
+    RigidSurface,
+    rigid_master,
+)
 from dolfinx_ntf.kernels.search import MasterSurface
 from dolfinx_ntf.kernels.segment_search import MasterCurve
 from dolfinx_ntf.kernels.spring_areas import spring_areas
@@ -231,7 +237,7 @@ class Pairing:
         )
 
     def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
-        """A pair on a 2D mesh: node-to-segment springs on master edges (frictionless).
+        """A pair on a 2D mesh: springs on master edges, rigid lines or circles (frictionless).
 
         On several processes the surfaces are distributed as in 3D (docs/method.md §14.1): the
         master edges of every process are gathered on each, the slave nodes go to their owners
@@ -242,7 +248,6 @@ class Pairing:
         missing = [
             feature
             for feature, used in (
-                ("a rigid analytical master", isinstance(pair.master, RigidSurface)),
                 ("friction", pair.interaction.friction is not None),
                 ("ADJUST", pair.adjust is not None),
             )
@@ -251,9 +256,24 @@ class Pairing:
         if missing:
             raise NotImplementedError(
                 f"{name}: 2D contact does not support {', '.join(missing)} yet (2D meshes have "
-                "frictionless node-to-segment springs between meshed surfaces)"
+                "frictionless springs against meshed edges, rigid lines and circles)"
             )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        if isinstance(pair.master, RigidSurface):  # a line or a circle in the plane (§15.1)
+            _check_in_plane(pair.master, f"{name} master")
+            if self.halo is not None:  # the owned slave nodes and their edges
+                slave = collectives.collectively(
+                    comm, surface_distribution.distribute_slave, V, self.halo, pair.slave, slave,
+                    name,
+                )  # fmt: skip
+            slave = dataclasses.replace(slave, thickness=pair.thickness)
+            faces, master = rigid_master(
+                pair.master, lambda: self.time_fraction, f"{name} master", dim=2
+            )
+            return PairState(
+                pair, slave, faces, master, np.zeros(slave.nodes.size),
+                friction=FrictionState(slave.nodes.size), was_active=pair.active,
+            )  # fmt: skip
         master_faces = collectives.collectively(
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
@@ -678,6 +698,27 @@ class Pairing:
             same = previous_face[found] == face[found]
             xi0[same] = previous_xi[found[same]]
         return xi0
+
+
+def _check_in_plane(surface: RigidSurface, what: str) -> None:
+    """A rigid master of a 2D mesh must not depend on z (a line or a circle in the xy-plane).
+
+    Planes, cylinders and spheres are checked here, when the pair is set up; a
+    :class:`~dolfinx_ntf.SignedDistanceSurface` and moving surfaces are checked by their normal
+    at every evaluation (``kernels.rigid.in_plane``).
+    """
+    tilt = None
+    if isinstance(surface, RigidPlane) and surface.unit_normal[2] != 0.0:
+        tilt = f"the plane's normal {tuple(surface.unit_normal)} is not in the xy-plane"
+    elif isinstance(surface, RigidCylinder) and abs(abs(surface.axis[2]) - 1.0) > 1e-12:
+        tilt = f"the cylinder's axis {tuple(surface.axis)} is not along z"
+    elif isinstance(surface, RigidSphere) and surface.center[2] != 0.0:
+        tilt = f"the sphere's centre {tuple(surface.center)} is not in the plane z = 0"
+    if tilt is not None:
+        raise ValueError(
+            f"{what}: on a 2D mesh a rigid surface must be a line or a circle of the xy-plane: "
+            f"{tilt}"
+        )
 
 
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:

@@ -51,6 +51,7 @@ def build_cylinder_on_block(
     refine_distance: float | None = None,
     coarse_distance: float | None = None,
     order: int = 1,
+    bodies: str = "both",
 ) -> None:
     """Mesh the half model (x >= 0) of a cylinder section on a block in a new gmsh model.
 
@@ -63,43 +64,61 @@ def build_cylinder_on_block(
             (default ``0.125 R``).
         coarse_distance: Distance from which the size is ``size_coarse`` (default ``1.5 R``).
         order: 1 (3-node triangles) or 2 (6-node triangles).
+        bodies: ``"both"``, or ``"cylinder"`` or ``"block"`` alone (against a rigid master:
+            a rigid line under the cylinder, a rigid circle on the block); the groups of the
+            missing body are left out.
 
     Raises:
-        ValueError: A size, the radius or the block is not positive, or ``order`` is not 1 or 2.
+        ValueError: A size, the radius or the block is not positive, ``order`` is not 1 or 2, or
+            ``bodies`` is none of the three.
     """
     for value, what in ((radius, "radius"), (block, "block"), (size_fine, "size_fine")):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise ValueError(f"build_cylinder_on_block: {what} must be positive, got {value!r}")
     if order not in (1, 2):
         raise ValueError(f"build_cylinder_on_block: order must be 1 or 2, got {order!r}")
+    if bodies not in ("both", "cylinder", "block"):
+        raise ValueError(
+            f"build_cylinder_on_block: bodies must be 'both', 'cylinder' or 'block', got {bodies!r}"
+        )
+    with_block, with_cylinder = bodies != "cylinder", bodies != "block"
     r, w = float(radius), float(block) * radius
     size_coarse = 0.3 * r if size_coarse is None else size_coarse
     refine_distance = 0.125 * r if refine_distance is None else refine_distance
     coarse_distance = 1.5 * r if coarse_distance is None else coarse_distance
     gmsh.model.add("cylinder_on_block")
     g = gmsh.model.geo
-    p = [g.addPoint(x, y, 0) for x, y in ((0, -w), (w, -w), (w, 0), (0, 0))]
-    edges = [g.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]  # bottom, right, top, axis
-    lower = g.addPlaneSurface([g.addCurveLoop(edges)])
-    bottom, right, centre = g.addPoint(0, 0, 0), g.addPoint(r, r, 0), g.addPoint(0, r, 0)
-    arc, top, axis = (
-        g.addCircleArc(bottom, centre, right),
-        g.addLine(right, centre),
-        g.addLine(centre, bottom),
-    )
-    upper = g.addPlaneSurface([g.addCurveLoop([arc, top, axis])])
-    g.synchronize()
     model = gmsh.model
-    model.addPhysicalGroup(2, [lower], BLOCK)
-    model.addPhysicalGroup(2, [upper], CYLINDER)
-    model.addPhysicalGroup(1, [edges[0]], BLOCK_BOTTOM)
-    model.addPhysicalGroup(1, [edges[2]], BLOCK_TOP)
-    model.addPhysicalGroup(1, [arc], CYLINDER_CONTACT)
-    model.addPhysicalGroup(1, [top], CYLINDER_TOP)
-    model.addPhysicalGroup(1, [edges[3], axis], SYMMETRY)
+    points, symmetry = [], []
+    if with_block:
+        p = [g.addPoint(x, y, 0) for x, y in ((0, -w), (w, -w), (w, 0), (0, 0))]
+        edges = [g.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]  # bottom, right, top, axis
+        lower = g.addPlaneSurface([g.addCurveLoop(edges)])
+        points.append(p[3])
+        symmetry.append(edges[3])
+    if with_cylinder:
+        bottom, right, centre = g.addPoint(0, 0, 0), g.addPoint(r, r, 0), g.addPoint(0, r, 0)
+        arc, top, axis = (
+            g.addCircleArc(bottom, centre, right),
+            g.addLine(right, centre),
+            g.addLine(centre, bottom),
+        )
+        upper = g.addPlaneSurface([g.addCurveLoop([arc, top, axis])])
+        points.append(bottom)
+        symmetry.append(axis)
+    g.synchronize()
+    if with_block:
+        model.addPhysicalGroup(2, [lower], BLOCK)
+        model.addPhysicalGroup(1, [edges[0]], BLOCK_BOTTOM)
+        model.addPhysicalGroup(1, [edges[2]], BLOCK_TOP)
+    if with_cylinder:
+        model.addPhysicalGroup(2, [upper], CYLINDER)
+        model.addPhysicalGroup(1, [arc], CYLINDER_CONTACT)
+        model.addPhysicalGroup(1, [top], CYLINDER_TOP)
+    model.addPhysicalGroup(1, symmetry, SYMMETRY)
     field = model.mesh.field
     distance = field.add("Distance")
-    field.setNumbers(distance, "PointsList", [p[3], bottom])
+    field.setNumbers(distance, "PointsList", points)
     threshold = field.add("Threshold")
     field.setNumber(threshold, "InField", distance)
     field.setNumber(threshold, "SizeMin", size_fine)

@@ -82,9 +82,19 @@ def two_rectangles(comm=MPI.COMM_WORLD, *, upper_divisions=4, partition=None):
 
 
 def patch_problem(
-    comm=MPI.COMM_WORLD, *, degree=1, thickness=1.0, upper_divisions=4, partition=None
+    comm=MPI.COMM_WORLD,
+    *,
+    degree=1,
+    thickness=1.0,
+    upper_divisions=4,
+    partition=None,
+    rigid=False,
 ):
-    """The blocks' contact problem: (problem, pressure Constant, facet tags)."""
+    """The blocks' contact problem: (problem, pressure Constant, facet tags).
+
+    ``rigid``: the upper block's bottom against the rigid line y = 0 instead of the lower block
+    (which then carries nothing).
+    """
     mesh, ft = two_rectangles(comm, upper_divisions=upper_divisions, partition=partition)
     V = compat.vector_space(mesh, "Lagrange", degree)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
@@ -96,9 +106,10 @@ def patch_problem(
         + pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(UPPER_TOP)
     )
     law = ntf.LinearLaw(slope=1e4 * YOUNGS_MODULUS, tension=YOUNGS_MODULUS / 70000)
+    master = ntf.RigidPlane((0.0, 0.0, 0.0), (0.0, 1.0, 0.0)) if rigid else None
     pair = ntf.ContactPair(
         ntf.FacetSurface(ft, UPPER_BOTTOM),
-        ntf.FacetSurface(ft, LOWER_TOP),
+        master or ntf.FacetSurface(ft, LOWER_TOP),
         ntf.SurfaceInteraction(law),
         thickness=thickness,
     )
