@@ -67,6 +67,24 @@ def test_hertz_demo_is_close_to_hertz(tmp_path):
     )  # the deformed mesh, coloured by p_h
 
 
+def test_hertz_cylinder_2d_demo_is_close_to_hertz(tmp_path):
+    summary = _demo("hertz_cylinder_2d").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # The springs carry F'/2 and the block's bottom reacts with it (measured 2e-13 both).
+    assert summary["load_error"] < 1e-8 and summary["equilibrium_error"] < 1e-8
+    # Measured on the coarse mesh (five elements across b): b -1.2 % and p0 +0.8 % (fit), peak
+    # nodal pressure -0.5 %; on the default mesh b -0.2 %, p0 +0.7 %.
+    assert abs(summary["b_error"]) < 0.02
+    assert abs(summary["p0_error"]) < 0.02
+    assert abs(summary["p_max_error"]) < 0.03
+    # Hertz's half-width falls between the last closed node and the first open one.
+    assert summary["b_last_closed"] < summary["b_hertz"] < summary["b_first_open"]
+    # Measured 8, 7, 5, 7 Newton iterations, no cutback.
+    assert summary["increments"] == 4
+    assert max(summary["iterations"]) <= 10
+    assert Path(summary["xdmf"]).exists() and Path(summary["png"]).stat().st_size > 10_000
+
+
 def test_impact_demo_keeps_the_energy(tmp_path):
     summary = _demo("impact").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]

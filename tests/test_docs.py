@@ -179,7 +179,13 @@ def test_every_public_name_has_an_api_page(site):
 
 
 def test_demo_pages_show_their_figures(site):
-    for demo in ("hertz_sphere", "impact", "sliding_block", "frictional_punch"):
+    for demo in (
+        "hertz_sphere",
+        "hertz_cylinder_2d",
+        "impact",
+        "sliding_block",
+        "frictional_punch",
+    ):
         page = (site / "demos" / f"{demo}.html").read_text()
         images = re.findall(r'<img[^>]+src="([^"]+)"', page)
         figures = [src for src in images if f"sphx_glr_{demo}_" in src]

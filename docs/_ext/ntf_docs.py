@@ -173,6 +173,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
     ("The Hertz geometry of the demos", "dolfinx_ntf.meshes.hertz"),
+    ("The plane-strain Hertz geometry of the demos", "dolfinx_ntf.meshes.cylinder"),
     ("dolfinx 0.5.2 / 0.9 helpers", "dolfinx_ntf.compat"),
 ]
 

@@ -33,7 +33,13 @@ from dolfinx_ntf.fem.surfaces import (
 )
 from dolfinx_ntf.kernels.edges import EdgeType, edge_spring_areas
 from dolfinx_ntf.kernels.friction_state import FrictionState
-from dolfinx_ntf.kernels.rigid import RigidSurface, rigid_master
+from dolfinx_ntf.kernels.rigid import (
+    RigidCylinder,
+    RigidPlane,
+    RigidSphere,
+    RigidSurface,
+    rigid_master,
+)
 from dolfinx_ntf.kernels.search import MasterSurface
 from dolfinx_ntf.kernels.segment_search import MasterCurve
 from dolfinx_ntf.kernels.spring_areas import spring_areas
@@ -41,7 +47,7 @@ from dolfinx_ntf.kernels.springs import SpringEvaluation
 from dolfinx_ntf.kernels.tie_frame import TieFrame, frame_from_moments, point_moments
 from dolfinx_ntf.logs import details_logger
 from dolfinx_ntf.parallel import collectives, master_exchange, surface_distribution
-from dolfinx_ntf.parallel.halo import NodeHalo
+from dolfinx_ntf.parallel.halo import NodeHalo, planar_padded
 
 __all__ = ["SEARCH_TOLERANCE", "Pairing", "slave_areas"]
 
@@ -231,13 +237,17 @@ class Pairing:
         )
 
     def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
-        """A pair on a 2D mesh: node-to-segment springs on master edges (serial, frictionless)."""
+        """A pair on a 2D mesh: springs on master edges, rigid lines or circles (frictionless).
+
+        On several processes the surfaces are distributed as in 3D (docs/method.md §14.1): the
+        master edges of every process are gathered on each, the slave nodes go to their owners
+        with every slave edge holding one of them. Collective.
+        """
         V = self.u.function_space
+        comm = V.mesh.comm
         missing = [
             feature
             for feature, used in (
-                ("several processes (MPI)", V.mesh.comm.size > 1),
-                ("a rigid analytical master", isinstance(pair.master, RigidSurface)),
                 ("friction", pair.interaction.friction is not None),
                 ("ADJUST", pair.adjust is not None),
             )
@@ -246,26 +256,48 @@ class Pairing:
         if missing:
             raise NotImplementedError(
                 f"{name}: 2D contact does not support {', '.join(missing)} yet (2D meshes have "
-                "frictionless node-to-segment springs between meshed surfaces, on one process)"
+                "frictionless springs against meshed edges, rigid lines and circles)"
             )
-        slave = resolve_slave(V, pair.slave, what=f"{name} slave")
+        slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        if isinstance(pair.master, RigidSurface):  # a line or a circle in the plane (§15.1)
+            _check_in_plane(pair.master, f"{name} master")
+            if self.halo is not None:  # the owned slave nodes and their edges
+                slave = collectives.collectively(
+                    comm, surface_distribution.distribute_slave, V, self.halo, pair.slave, slave,
+                    name,
+                )  # fmt: skip
+            slave = dataclasses.replace(slave, thickness=pair.thickness)
+            faces, master = rigid_master(
+                pair.master, lambda: self.time_fraction, f"{name} master", dim=2
+            )
+            return PairState(
+                pair, slave, faces, master, np.zeros(slave.nodes.size),
+                friction=FrictionState(slave.nodes.size), was_active=pair.active,
+            )  # fmt: skip
+        master_faces = collectives.collectively(
+            comm, resolve_master, V, pair.master, what=f"{name} master"
+        )
+        if self.halo is not None:  # every master edge; the owned slave nodes and their edges
+            slave, master_faces = collectives.collectively(
+                comm, surface_distribution.distribute_pair, V, self.halo, pair.slave, slave,
+                master_faces, name,
+            )  # fmt: skip
         slave = dataclasses.replace(slave, thickness=pair.thickness)
-        master_faces = resolve_master(V, pair.master, what=f"{name} master")
-        if master_faces.faces.shape[0] == 0:
+        if master_faces.faces.shape[0] == 0:  # the gathered surface: the same on every process
             raise ValueError(f"{name}: the master surface has no edges")
+        reference = self._reference if self.halo is None else self.halo.reference
         master = MasterCurve(
-            master_faces.face_type,
-            master_faces.faces,
-            name=f"{name} master",
-            coords=self._reference,
+            master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference
         )
         both = np.intersect1d(slave.nodes, master_faces.nodes)
+        error = None
         if both.size:
-            x = self._reference[both[0]]
-            raise ValueError(
+            x = reference[both[0]]
+            error = ValueError(
                 f"{name}: {both.size} node(s) belong to both the slave and the master surface "
                 f"(first at ({x[0]:.6g}, {x[1]:.6g}))"
             )
+        validation.raise_collectively(comm, error)
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
@@ -389,10 +421,7 @@ class Pairing:
         """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
         if self.halo is not None:
             return self.halo.displacement(self.u)
-        bs = self.u.function_space.dofmap.index_map_bs
-        if bs == 2:  # a 2D mesh: coordinates keep z = 0
-            return np.pad(self.u.x.array.reshape(-1, 2), ((0, 0), (0, 1)))
-        return self.u.x.array.reshape(-1, 3)
+        return planar_padded(self.u.x.array.reshape(-1, self.u.function_space.dofmap.index_map_bs))
 
     def _halo_grew(self) -> None:
         """Nodes were appended to the halo (a master patch grew, docs/method.md §14.8). Collective.
@@ -669,6 +698,27 @@ class Pairing:
             same = previous_face[found] == face[found]
             xi0[same] = previous_xi[found[same]]
         return xi0
+
+
+def _check_in_plane(surface: RigidSurface, what: str) -> None:
+    """A rigid master of a 2D mesh must not depend on z (a line or a circle in the xy-plane).
+
+    Planes, cylinders and spheres are checked here, when the pair is set up; a
+    :class:`~dolfinx_ntf.SignedDistanceSurface` and moving surfaces are checked by their normal
+    at every evaluation (``kernels.rigid.in_plane``).
+    """
+    tilt = None
+    if isinstance(surface, RigidPlane) and surface.unit_normal[2] != 0.0:
+        tilt = f"the plane's normal {tuple(surface.unit_normal)} is not in the xy-plane"
+    elif isinstance(surface, RigidCylinder) and abs(abs(surface.axis[2]) - 1.0) > 1e-12:
+        tilt = f"the cylinder's axis {tuple(surface.axis)} is not along z"
+    elif isinstance(surface, RigidSphere) and surface.center[2] != 0.0:
+        tilt = f"the sphere's centre {tuple(surface.center)} is not in the plane z = 0"
+    if tilt is not None:
+        raise ValueError(
+            f"{what}: on a 2D mesh a rigid surface must be a line or a circle of the xy-plane: "
+            f"{tilt}"
+        )
 
 
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:

@@ -66,7 +66,7 @@ class BoundaryPressure:
             )
         Q, dofs = compat.component_space(V, 0)
         self.space = Q
-        node_of_q = np.asarray(dofs) // 3
+        node_of_q = np.asarray(dofs) // V.dofmap.index_map_bs  # 3, or 2 on a 2D mesh
         self._q_of_node = np.full(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, -1)
         self._q_of_node[node_of_q] = np.arange(node_of_q.size)
         self._node_of_q = node_of_q

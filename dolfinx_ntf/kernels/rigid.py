@@ -20,6 +20,7 @@ outputs apply unchanged.
 from __future__ import annotations
 
 import abc
+import dataclasses
 import typing
 
 import numpy as np
@@ -36,6 +37,7 @@ __all__ = [
     "RigidSurface",
     "SignedDistanceSurface",
     "evaluate_rigid_springs",
+    "in_plane",
     "rigid_master",
 ]
 
@@ -362,20 +364,60 @@ class _RigidFaces:
     nodes = np.zeros(0, dtype=np.int64)
 
 
+def in_plane(evaluation: SpringEvaluation, points: np.ndarray, name: str) -> SpringEvaluation:
+    """The in-plane (x, y) part of rigid springs evaluated at points of a 2D mesh (z = 0).
+
+    The surface must not depend on z there: its normal has no z component (a plane whose normal
+    lies in the xy-plane, a cylinder along z, a sphere centred in z = 0, which is a circle in that
+    plane); then the forces and the tangent of the 2D springs are the first two rows and columns.
+
+    Raises:
+        ValueError: The normal has a z component at some point (the first one named).
+    """
+    tilt = np.abs(evaluation.normal[:, 2]) if evaluation.normal.size else np.zeros(0)
+    bad = np.flatnonzero(tilt > 1e-12)
+    if bad.size:
+        i = int(bad[np.argmax(tilt[bad])])
+        raise ValueError(
+            f"{name}: on a 2D mesh a rigid surface must not depend on z, but its normal at the "
+            f"slave node ({points[i, 0]:.6g}, {points[i, 1]:.6g}) has the z component "
+            f"{evaluation.normal[i, 2]:.3g} (use a RigidPlane with its normal in the xy-plane, a "
+            "RigidCylinder along z, or a RigidSphere centred in z = 0)"
+        )
+    stiffness = evaluation.stiffness
+    return dataclasses.replace(
+        evaluation,
+        xi=evaluation.xi[:, :1],
+        normal=evaluation.normal[:, :2].copy(),
+        forces=evaluation.forces[..., :2].copy(),
+        force_per_area=evaluation.force_per_area[..., :2].copy(),
+        stiffness=None if stiffness is None else stiffness[:, :2, :2].copy(),
+    )
+
+
 class RigidMaster:
     """A rigid surface behind the master-surface interface of :class:`~dolfinx_ntf.ContactProblem`.
 
     Every slave node "finds" the one face 0 unless it lies deeper than ``max_depth``; the spring
     evaluator ignores the (empty) master coordinates and evaluates :func:`evaluate_rigid_springs`
-    at the time ``clock()`` (the problem's relative step time).
+    at the time ``clock()`` (the problem's relative step time). With ``dim=2`` (a 2D mesh) the
+    springs keep their in-plane part (:func:`in_plane`).
     """
 
     def __init__(
-        self, surface: RigidSurface, clock: typing.Callable[[], float], name: str = ""
+        self,
+        surface: RigidSurface,
+        clock: typing.Callable[[], float],
+        name: str = "",
+        *,
+        dim: int = 3,
     ) -> None:
+        if dim not in (2, 3):
+            raise ValueError(f"{name}: dim must be 2 or 3, got {dim!r}")
         self.surface = surface
         self.clock = clock
         self.name = name
+        self.dim = dim
 
     #: Searches involve this process only (the :class:`~dolfinx_ntf.kernels.master.ContactMaster`
     #: role).
@@ -436,7 +478,7 @@ class RigidMaster:
                 f"{self.name}: friction against a rigid analytical master is not supported yet; "
                 "use a meshed master (docs/method.md §15.1)"
             )
-        return evaluate_rigid_springs(
+        evaluation = evaluate_rigid_springs(
             self.surface,
             slave_coords,
             areas,
@@ -446,10 +488,16 @@ class RigidMaster:
             tangent=tangent,
             symmetric=symmetric,
         )
+        if self.dim == 2:
+            return in_plane(evaluation, np.asarray(slave_coords), self.name)
+        return evaluation
 
 
 def rigid_master(
-    surface: RigidSurface, clock: typing.Callable[[], float], name: str = ""
+    surface: RigidSurface, clock: typing.Callable[[], float], name: str = "", *, dim: int = 3
 ) -> tuple[_RigidFaces, RigidMaster]:
-    """The (faces, master) pair a ContactProblem keeps for a rigid master surface."""
-    return _RigidFaces(), RigidMaster(surface, clock, name)
+    """The (faces, master) pair a ContactProblem keeps for a rigid master surface.
+
+    ``dim``: 2 on a 2D mesh (in-plane springs, :func:`in_plane`).
+    """
+    return _RigidFaces(), RigidMaster(surface, clock, name, dim=dim)

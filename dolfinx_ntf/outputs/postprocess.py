@@ -44,16 +44,18 @@ def reaction(
 
     Args:
         problem: The contact problem, at the displacement to evaluate (e.g. after a solve).
-        facets: The facets whose nodes to sum over, all three components: a
+        facets: The facets whose nodes to sum over, all components: a
             :class:`~dolfinx_ntf.FacetSurface`, or local facet indices (e.g.
             ``facet_tags.find(TAG)``).
         dofs: Or the dofs to sum over: a Dirichlet condition (or a list of them), whose
             constrained dofs are taken, or local dof indices of the displacement space as
             ``bc.dof_indices()[0]`` or ``locate_dofs_topological((V.sub(i), Vi), ...)[0]`` give
-            them (unrolled: ``3 node + component``).
+            them (unrolled: ``d node + component``, ``d`` = 3, or 2 on a 2D mesh).
 
     Returns:
-        ``(3,)`` the summed force per component (zero for components without selected dofs).
+        ``(d,)`` the summed force per component (zero for components without selected dofs): on a
+        2D mesh per the thickness the residual form is written for (per unit thickness in plane
+        strain).
     """
     owner = "reaction"
     validation.check_type(problem, ContactProblem, f"{owner}: problem")
@@ -61,11 +63,12 @@ def reaction(
         raise TypeError(f"{owner}: give either facets or dofs (exactly one of them)")
     V = problem.u.function_space
     num_owned = V.dofmap.index_map.size_local
+    bs = V.dofmap.index_map_bs
     rows = _facet_dofs(V, facets, owner) if facets is not None else _selected_dofs(V, dofs, owner)
-    rows = rows[rows < 3 * num_owned]  # owned dofs only: each counted once over the processes
+    rows = rows[rows < bs * num_owned]  # owned dofs only: each counted once over the processes
     residual = _unconstrained_residual(problem)
-    local = np.zeros(3)
-    np.add.at(local, rows % 3, residual[rows])
+    local = np.zeros(bs)
+    np.add.at(local, rows % bs, residual[rows])
     return V.mesh.comm.allreduce(local, op=MPI.SUM)
 
 
@@ -83,7 +86,8 @@ def _facet_dofs(V: dolfinx.fem.FunctionSpace, facets: object, owner: str) -> np.
     _check_range(indices, num_facets, f"{owner}: facets", "facet")
     mesh.topology.create_connectivity(tdim - 1, tdim)
     nodes = dolfinx.fem.locate_dofs_topological(V, tdim - 1, indices.astype(np.int32))
-    return (3 * np.asarray(nodes, dtype=np.int64)[:, None] + np.arange(3)).ravel()
+    bs = V.dofmap.index_map_bs
+    return (bs * np.asarray(nodes, dtype=np.int64)[:, None] + np.arange(bs)).ravel()
 
 
 def _selected_dofs(V: dolfinx.fem.FunctionSpace, dofs: object, owner: str) -> np.ndarray:
@@ -94,7 +98,9 @@ def _selected_dofs(V: dolfinx.fem.FunctionSpace, dofs: object, owner: str) -> np
         bcs = validation.check_sequence(dofs, compat.DirichletBC, f"{owner}: dofs")
         return np.unique(np.concatenate([np.asarray(bc.dof_indices()[0]) for bc in bcs]))
     indices = _indices(dofs, f"{owner}: dofs")
-    num_dofs = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
+    num_dofs = V.dofmap.index_map_bs * (
+        V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts
+    )
     _check_range(indices, num_dofs, f"{owner}: dofs", "dof")
     return np.unique(indices)
 
@@ -174,10 +180,12 @@ def contact_force(
             sums all pairs.
 
     Returns:
-        ``(3,)`` force vector.
+        ``(d,)`` force vector (``d`` = 3, or 2 on a 2D mesh, where it is the force over the
+        pair's ``thickness``).
     """
     results = _pair_results(problem, pair, "contact_force")
-    local = sum((r.force.sum(axis=0) for r in results), np.zeros(3))
+    dim = problem.u.function_space.dofmap.index_map_bs
+    local = sum((r.force.sum(axis=0) for r in results), np.zeros(dim))
     return problem.u.function_space.mesh.comm.allreduce(local, op=MPI.SUM)
 
 
@@ -185,7 +193,8 @@ def contact_area(problem: ContactProblem, pair: int | str | ContactPair | None =
     """Contact area of a pair (or of all pairs): the spring areas of its closed springs. Collective.
 
     A spring is closed where its clearance is negative (``contact_status`` 1); its area ``A_p`` is
-    the slave area the node stands for (docs/method.md §2.2), in the current configuration.
+    the slave area the node stands for (docs/method.md §2.2), in the current configuration; on a
+    2D mesh the contact length times the pair's ``thickness``.
 
     Args:
         problem: The contact problem.

@@ -47,9 +47,10 @@ class ContactResults:
         pair: The pair's name (``"pair 1"``, ... when it has none).
         node: ``(N,)`` slave node of each spring: the index of the node in the displacement space
             ``V`` (a block dof, this process's local numbering), so that ``u.x.array.reshape(-1,
-            3)[node]`` is its displacement and ``V.tabulate_dof_coordinates()[node]`` its
+            d)[node]`` is its displacement and ``V.tabulate_dof_coordinates()[node]`` its
             reference position.
-        position: ``(N, 3)`` current position ``X + u`` of the slave node.
+        position: ``(N, d)`` current position ``X + u`` of the slave node. Vectors have ``d``
+            components, the dimension of the mesh: 3, or 2 on a 2D mesh (docs/guide/two_d.md).
         area: ``(N,)`` spring area ``A_p`` (docs/method.md §2.2).
         clearance: ``(N,)`` ``g_eff``: positive is an open gap, negative a penetration (ccx's
             CDIS).
@@ -57,12 +58,12 @@ class ContactResults:
             a small tension (negative) inside the cutoff.
         normal_force: ``(N,)`` ``F_N = A_p p(d)``.
         energy: ``(N,)`` normal spring energy (ccx's CELS without friction, docs/method.md §8.3).
-        force: ``(N, 3)`` contact force on the slave node, ``F_N n - F_T`` (the master pushes the
+        force: ``(N, d)`` contact force on the slave node, ``F_N n - F_T`` (the master pushes the
             slave away along the master normal, and friction resists the relative motion).
-        normal: ``(N, 3)`` unit normal of the master face at the projection point.
-        shear: ``(N, 3)`` shear traction ``F_T / A_p``: the tangential force per area the slave
+        normal: ``(N, d)`` unit normal of the master face at the projection point.
+        shear: ``(N, d)`` shear traction ``F_T / A_p``: the tangential force per area the slave
             exerts on the master (ccx's CSTR tangential columns); zero without friction.
-        slip: ``(N, 3)`` accumulated tangential relative displacement ``t`` of the slave node
+        slip: ``(N, d)`` accumulated tangential relative displacement ``t`` of the slave node
             relative to the master (ccx's CDIS tangential columns); zero without friction.
         sliding: ``(N,)`` True where the spring slips (``|F_T| = mu F_N``), False in stick.
         friction_energy: ``(N,)`` elastic energy of the tangential spring ``|F_T|^2/(2 K_t)``
@@ -101,17 +102,18 @@ def _evaluated(problem: ContactProblem) -> None:
         problem.evaluate(tangent=False)
 
 
-def _pair_results(index: int, state: PairState, coords: np.ndarray) -> ContactResults:
+def _pair_results(index: int, state: PairState, coords: np.ndarray, dim: int) -> ContactResults:
+    """The table of one pair; vectors of ``dim`` components (coordinates are 3D, z = 0 in 2D)."""
     ev = state.evaluation
     nodes = state.slave.nodes[state.spring_slave]
     law = state.pair.interaction.law
     num = nodes.size
     tf = ev.tangential
-    zeros = np.zeros((num, 3))
+    zeros = np.zeros((num, dim))
     return ContactResults(
         pair=state.pair.name or f"pair {index + 1}",
         node=nodes,
-        position=coords[nodes],
+        position=coords[nodes, :dim],
         area=ev.area,
         clearance=-ev.overclosure,
         pressure=ev.normal_force / ev.area,
@@ -140,7 +142,8 @@ def contact_results(problem: ContactProblem, *, recovered: bool = False) -> list
     validation.check_type(problem, ContactProblem, "contact_results: problem")
     _evaluated(problem)
     coords = problem.pairing.current_coordinates()
-    results = [_pair_results(i, s, coords) for i, s in enumerate(problem.pairing.states)]
+    dim = problem.u.function_space.dofmap.index_map_bs
+    results = [_pair_results(i, s, coords, dim) for i, s in enumerate(problem.pairing.states)]
     if recovered:
         fields = problem.output_cache.get(RECOVERY_FIELDS)
         if fields is None:
@@ -186,8 +189,9 @@ class ContactFields:
         Q, dofs = compat.component_space(problem.u.function_space, 0)
         #: The scalar space of the fields.
         self.space = Q
-        node_of_q = np.asarray(dofs) // 3
-        self._q_of_node = np.full(problem.u.x.array.size // 3, -1, dtype=np.int64)
+        self._dim = problem.u.function_space.dofmap.index_map_bs  # 3, or 2 on a 2D mesh
+        node_of_q = np.asarray(dofs) // self._dim
+        self._q_of_node = np.full(problem.u.x.array.size // self._dim, -1, dtype=np.int64)
         self._q_of_node[node_of_q] = np.arange(node_of_q.size)
         self.pressure = dolfinx.fem.Function(Q, name="contact_pressure")
         self.clearance = dolfinx.fem.Function(Q, name="contact_clearance")
@@ -225,9 +229,11 @@ class ContactFields:
         """Fill the Functions from the problem's current springs."""
         for f in (*self.functions, self.shear, self.slip):
             f.x.array[:] = 0.0
-        shear, slip = self.shear.x.array.reshape(-1, 3), self.slip.x.array.reshape(-1, 3)
+        shear = self.shear.x.array.reshape(-1, self._dim)
+        slip = self.slip.x.array.reshape(-1, self._dim)
         nodes, forces = [], []
-        for res in contact_results(self.problem):
+        states = self.problem.pairing.states
+        for res, state in zip(contact_results(self.problem), states, strict=True):
             np.add.at(shear, res.node, res.shear)
             slip[res.node] = res.slip
             q = self._q_of_node[res.node]
@@ -237,7 +243,8 @@ class ContactFields:
                 self.status.x.array[q], (res.clearance < 0).astype(float)
             )
             nodes.append(res.node)
-            forces.append(res.normal_force)
+            # 2D: the recovery integrates over edge lengths, the springs carry length x thickness
+            forces.append(res.normal_force / state.slave.thickness)
         self.recovery.from_forces(
             np.concatenate(nodes) if nodes else np.zeros(0, dtype=np.int64),
             np.concatenate(forces) if forces else np.zeros(0),

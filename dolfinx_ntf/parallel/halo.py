@@ -20,18 +20,28 @@ import dolfinx.fem
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.surfaces import reference_coordinates
 
-__all__ = ["NodeHalo"]
+__all__ = ["NodeHalo", "planar_padded"]
+
+
+def planar_padded(values: np.ndarray) -> np.ndarray:
+    """Nodal vectors ``(N, 2 or 3)`` as ``(N, 3)``: a 2D mesh's get z = 0, like its coordinates."""
+    if values.shape[1] == 3:
+        return values
+    return np.pad(values, ((0, 0), (0, 3 - values.shape[1])))
 
 
 class NodeHalo:
     """``V``'s local nodes extended by contact nodes held by other processes.
 
     Node ``i < num_local`` is ``V``'s local block dof ``i``; node ``num_local + k`` is the global
-    node ``extra[k]``.
+    node ``extra[k]``. Coordinates have 3 columns on 2D meshes too (z = 0); values of ``V``'s
+    vectors have its block size ``bs`` (3, or 2 on a 2D mesh).
     """
 
     def __init__(self, V: dolfinx.fem.FunctionSpace) -> None:
         index_map = V.dofmap.index_map
+        #: Components per node of ``V``'s vectors.
+        self.bs: int = V.dofmap.index_map_bs
         self.comm: MPI.Comm = V.mesh.comm
         self.num_owned = index_map.size_local
         self.num_local = index_map.size_local + index_map.num_ghosts
@@ -91,9 +101,10 @@ class NodeHalo:
     # -- values of other processes -----------------------------------------------------------------
 
     def _scatter_from(self, vector: PETSc.Vec) -> np.ndarray:
-        """Values of ``vector`` (V's layout) at the halo nodes, shape (extras, 3). Collective."""
+        """Values of ``vector`` (V's layout) at the halo nodes, shape (extras, bs). Collective."""
+        bs = self.bs
         if self._scatter is None:
-            dofs = (3 * self.extra[:, None] + np.arange(3)).ravel().astype(PETSc.IntType)
+            dofs = (bs * self.extra[:, None] + np.arange(bs)).ravel().astype(PETSc.IntType)
             self._target = PETSc.Vec().createSeq(dofs.size, comm=PETSc.COMM_SELF)
             source = PETSc.IS().createGeneral(dofs, comm=PETSc.COMM_SELF)
             self._scatter = PETSc.Scatter().create(vector, source, self._target, None)
@@ -101,28 +112,28 @@ class NodeHalo:
         self._scatter.scatter(
             vector, self._target, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD
         )
-        return self._target.array_r.reshape(-1, 3).copy()
+        return self._target.array_r.reshape(-1, bs).copy()
 
     def values(self, vector: PETSc.Vec) -> np.ndarray:
-        """Values of ``vector`` (V's layout) at the halo nodes, shape (extras, 3). Collective."""
+        """Values of ``vector`` (V's layout) at the halo nodes, shape (extras, bs). Collective."""
         return self._scatter_from(vector)
 
     def displacement(self, u: dolfinx.fem.Function) -> np.ndarray:
-        """``u`` at every extended node, shape (num_local + extras, 3). Collective."""
-        values = u.x.array.reshape(-1, 3)
-        if self.comm.size == 1:
-            return values
-        return np.vstack([values, self._scatter_from(compat.petsc_vector(u))])
+        """``u`` at every extended node, shape (num_local + extras, 3) (z = 0 in 2D). Collective."""
+        values = u.x.array.reshape(-1, self.bs)
+        if self.comm.size > 1:
+            values = np.vstack([values, self._scatter_from(compat.petsc_vector(u))])
+        return planar_padded(values)
 
     def constrained(self, u: dolfinx.fem.Function, bcs: typing.Sequence) -> np.ndarray:
-        """Which dofs of the halo nodes the Dirichlet conditions fix, (extras, 3). Collective."""
+        """Which dofs of the halo nodes the Dirichlet conditions fix, (extras, bs). Collective."""
         marker = compat.petsc_vector(u).duplicate()
         with marker.localForm() as local:
             local.set(0.0)
             array = local.array
             for bc in bcs:
                 dofs, _ = bc.dof_indices()
-                array[dofs[dofs < 3 * self.num_owned]] = 1.0
+                array[dofs[dofs < self.bs * self.num_owned]] = 1.0
         values = self._scatter_from(marker) > 0.5
         marker.destroy()
         return values

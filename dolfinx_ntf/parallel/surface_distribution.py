@@ -71,9 +71,10 @@ def _marked_locally(V: dolfinx.fem.FunctionSpace, halo: NodeHalo, owned: np.ndar
     """``owned`` (a flag per owned node) at every local node (ghosts from owners). Collective."""
     marker = dolfinx.fem.Function(V)
     marker.x.array[:] = 0.0
-    marker.x.array[: 3 * halo.num_owned : 3] = owned
+    bs = halo.bs  # one flag per node: its first component
+    marker.x.array[: bs * halo.num_owned : bs] = owned
     marker.x.scatter_forward()
-    return marker.x.array[: 3 * halo.num_local : 3] > 0.5
+    return marker.x.array[: bs * halo.num_local : bs] > 0.5
 
 
 def _exterior_faces_touching(

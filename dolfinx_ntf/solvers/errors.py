@@ -50,7 +50,7 @@ def non_finite_input(problem: ContactProblem) -> str:
     values = problem.u.x.array
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
-        node = bad[0] // 3
+        node = bad[0] // problem.u.function_space.dofmap.index_map_bs  # 3, or 2 on a 2D mesh
         position = problem.reference_coordinates[node]
         return (
             f"the displacement has {bad.size} non-finite value(s) at the start of the increment "
@@ -113,7 +113,7 @@ def _unheld_bodies(problem: ContactProblem) -> tuple[int, np.ndarray, np.ndarray
     held = np.zeros(num_bodies, dtype=np.int64)
     for bc in problem.bcs:
         dofs = np.asarray(bc.dof_indices()[0])
-        held[body[dofs // 3]] = 1
+        held[body[dofs // V.dofmap.index_map_bs]] = 1
     for state in problem.states:
         nodes = state.element_nodes.ravel()
         held[body[nodes[nodes < body.size]]] = 1

@@ -243,7 +243,6 @@ def test_hertz_line_contact_plane_strain() -> None:
             },
             "friction",
         ),
-        ({"master": ntf.RigidPlane((0.0, 0.0, 0.0), (0.0, 1.0, 0.0))}, "a rigid analytical master"),
         ({"adjust": 0.01}, "ADJUST"),
     ],
 )
