@@ -31,7 +31,7 @@ from dolfinx_ntf.fem.surfaces import (
     resolve_master,
     resolve_slave,
 )
-from dolfinx_ntf.kernels.edges import EdgeType, edge_spring_areas
+from dolfinx_ntf.kernels.edges import EdgeType, axisymmetric_edge_spring_areas, edge_spring_areas
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.rigid import RigidSurface, rigid_master
 from dolfinx_ntf.kernels.search import MasterSurface
@@ -138,6 +138,11 @@ class Pairing:
         if pair.thickness != 1.0:
             raise ValueError(
                 f"{name}: thickness = {pair.thickness:g} is for 2D meshes; a 3D mesh has its own"
+            )
+        if pair.axisymmetric:
+            raise ValueError(
+                f"{name}: axisymmetric = True is for 2D meshes of the meridian half-plane; this "
+                "mesh is 3D"
             )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
@@ -249,7 +254,17 @@ class Pairing:
                 "frictionless node-to-segment springs between meshed surfaces, on one process)"
             )
         slave = resolve_slave(V, pair.slave, what=f"{name} slave")
-        slave = dataclasses.replace(slave, thickness=pair.thickness)
+        slave = dataclasses.replace(slave, thickness=pair.thickness, axisymmetric=pair.axisymmetric)
+        if pair.axisymmetric:  # line3 corners on the axis: no ring area, no spring (§16.2)
+            keep = slave_areas(slave, self._reference) > 0.0
+            if not np.all(keep):
+                details_logger.info(
+                    " %s: %d slave node(s) on the axis without ring area get no spring",
+                    name,
+                    int(np.count_nonzero(~keep)),
+                )
+                faceless = None if slave.faceless is None else slave.faceless[keep]
+                slave = dataclasses.replace(slave, nodes=slave.nodes[keep], faceless=faceless)
         master_faces = resolve_master(V, pair.master, what=f"{name} master")
         if master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no edges")
@@ -674,7 +689,9 @@ class Pairing:
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
     """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
     faces = slave.faces
-    if isinstance(faces.face_type, EdgeType):  # 2D: tributary length times the thickness
+    if isinstance(faces.face_type, EdgeType) and slave.axisymmetric:  # rings (§16.2)
+        areas = axisymmetric_edge_spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    elif isinstance(faces.face_type, EdgeType):  # 2D: tributary length times the thickness
         areas = slave.thickness * edge_spring_areas(
             faces.face_type, faces.faces, coords, slave.nodes
         )

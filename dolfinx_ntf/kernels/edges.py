@@ -8,7 +8,8 @@ so that the outward normal is the tangent ``q_ξ`` turned clockwise, ``m = (q_ξ
 - line3: φ = (ξ(ξ - 1)/2, ξ(ξ + 1)/2, 1 - ξ²), the midside node at ξ = 0.
 
 Spring-area weights are the integrals of the shape functions over the edge (the tributary
-length): 1/2 each for line2, Simpson's 1/6, 1/6, 2/3 for line3.
+length): 1/2 each for line2, Simpson's 1/6, 1/6, 2/3 for line3. Axisymmetric spring areas weight
+the same integrals by the circumference 2 pi r (docs/method.md §16.2).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ __all__ = [
     "LINE2",
     "LINE3",
     "EdgeType",
+    "axisymmetric_edge_spring_areas",
     "edge_lengths",
     "edge_spring_areas",
     "edge_type_from_num_nodes",
@@ -132,6 +134,59 @@ def edge_spring_areas(
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, edge_type.num_nodes)
     slave_nodes = np.asarray(slave_nodes, dtype=np.int64)
     shares = edge_lengths(edge_type, np.asarray(coords)[edges])[:, None] * edge_type.area_weights
+    return _sum_to_nodes(edges, shares, slave_nodes)
+
+
+# Radii below zero by less than this fraction of the edge's length count as on the axis.
+_AXIS_TOL = 1e-9
+
+
+def axisymmetric_edge_spring_areas(
+    edge_type: EdgeType, edges: np.ndarray, coords: np.ndarray, slave_nodes: np.ndarray
+) -> np.ndarray:
+    """Ring areas ``A_p = 2 pi Σ_{e∋p} ∫_e r φ_p ds`` of the slave nodes (axisymmetric) -> (S,).
+
+    ``r = x[0]`` is the distance from the axis. The areas are the consistent nodal shares of a
+    uniform pressure on the surface of revolution (they sum to its area ``2 pi ∫ r ds``), so a
+    uniform pressure is transmitted exactly; in the interior of a uniform line2 mesh
+    ``A_p = 2 pi r_p L_p`` with the tributary length ``L_p``. A node on the axis keeps the share
+    of its line2 edges (``2 pi L²/6`` for an edge of length ``L``); a line3 corner on the axis
+    gets exactly 0 (its consistent share), never a negative area or NaN.
+
+    Args:
+        edge_type: Type of every slave edge.
+        edges: (F, n) node ids of the slave edges (rows index ``coords``).
+        coords: (num_nodes, 2 or 3) node coordinates (current configuration), ``x[0] = r``.
+        slave_nodes: (S,) unique node ids; a slave node on no edge gets 0.
+
+    Raises:
+        ValueError: A slave edge has a node at ``r < 0`` (off the meridian half-plane).
+    """
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, edge_type.num_nodes)
+    slave_nodes = np.asarray(slave_nodes, dtype=np.int64)
+    xy = np.asarray(coords, dtype=float)[edges][..., :2]  # (F, n, 2)
+    lengths = edge_lengths(edge_type, xy)
+    outside = np.flatnonzero(np.any(xy[..., 0] < -_AXIS_TOL * lengths[:, None], axis=1))
+    if outside.size:
+        node = edges[outside[0]][np.argmin(xy[outside[0], :, 0])]
+        raise ValueError(
+            f"axisymmetric spring areas need r = x[0] >= 0; {outside.size} slave edge(s) reach "
+            f"r < 0 (node {node} at r = {xy[outside[0], :, 0].min():.6g})"
+        )
+    points = _GAUSS_POINTS[:, None]
+    phi = edge_type.shape_functions(points)  # (q, n)
+    jacobian = np.linalg.norm(
+        np.einsum("qj,fjc->fqc", edge_type.shape_derivatives(points), xy), axis=2
+    )
+    radius = np.maximum(np.einsum("qj,fj->fq", phi, xy[..., 0]), 0.0)  # (F, q)
+    shares = 2.0 * np.pi * np.einsum("fq,qj->fj", radius * jacobian * _GAUSS_WEIGHTS, phi)
+    # A line3 corner on the axis has the share 0 exactly (round-off: ±1e-19); none is negative.
+    shares[shares <= _AXIS_TOL * shares.sum(axis=1, keepdims=True)] = 0.0
+    return _sum_to_nodes(edges, shares, slave_nodes)
+
+
+def _sum_to_nodes(edges: np.ndarray, shares: np.ndarray, slave_nodes: np.ndarray) -> np.ndarray:
+    """Sum the (F, n) per-edge node shares onto the (S,) slave nodes (0 where none)."""
     order = np.argsort(slave_nodes)
     position = np.minimum(np.searchsorted(slave_nodes[order], edges), max(slave_nodes.size - 1, 0))
     hit = slave_nodes[order][position] == edges if slave_nodes.size else np.zeros(edges.shape, bool)
