@@ -1,7 +1,7 @@
 """UFL helpers for axisymmetric solids: ``x[0] = r``, ``x[1] = z``, the body of revolution about z.
 
 A 2D mesh of the meridian half-plane (``r >= 0``) and a 2D displacement ``u = (u_r, u_z)``. The
-displacement gradient of the body of revolution is the 3x3 tensor
+displacement gradient of the body of revolution is the 3x3 tensor::
 
     [[u_r,r  u_r,z  0      ],
      [u_z,r  u_z,z  0      ],
