@@ -26,6 +26,7 @@ __all__ = [
     "EdgeType",
     "axisymmetric_edge_spring_areas",
     "edge_lengths",
+    "edge_spring_area_gradients",
     "edge_spring_areas",
     "edge_type_from_num_nodes",
 ]
@@ -183,6 +184,71 @@ def axisymmetric_edge_spring_areas(
     # A line3 corner on the axis has the share 0 exactly (round-off: ±1e-19); none is negative.
     shares[shares <= _AXIS_TOL * shares.sum(axis=1, keepdims=True)] = 0.0
     return _sum_to_nodes(edges, shares, slave_nodes)
+
+
+def edge_spring_area_gradients(
+    edge_type: EdgeType,
+    edges: np.ndarray,
+    coords: np.ndarray,
+    slave_nodes: np.ndarray,
+    *,
+    thickness: float = 1.0,
+    axisymmetric: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Derivatives ``∂A_p/∂x_q`` of 2D spring areas as COO triplets (duplicates summed).
+
+    The areas are ``thickness`` times :func:`edge_spring_areas`, or
+    :func:`axisymmetric_edge_spring_areas` with ``axisymmetric`` (its shares set to 0 on the axis
+    are differentiated as computed, unclamped); ``linearize_area`` (docs/method.md §6.3, §16.2).
+
+    Args:
+        edge_type: Type of every slave edge.
+        edges: (F, n) node ids of the slave edges.
+        coords: (num_nodes, 2 or 3) current node coordinates.
+        slave_nodes: (S,) unique node ids.
+        thickness: Out-of-plane thickness of plane models (1 with ``axisymmetric``).
+        axisymmetric: Ring areas ``2 pi ∫ r φ_p ds``.
+
+    Returns:
+        ``(slave_index (K,), node (K,), gradient (K, 2))``: ``slave_index`` indexes
+        ``slave_nodes``, ``node`` is a node id; pairs are unique and sorted by
+        ``(slave_index, node)``.
+    """
+    n = edge_type.num_nodes
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, n)
+    slave_nodes = np.asarray(slave_nodes, dtype=np.int64)
+    xy = np.asarray(coords, dtype=float)[edges][..., :2]  # (F, n, 2)
+    points = _GAUSS_POINTS[:, None]
+    phi = edge_type.shape_functions(points)  # (q, n)
+    dphi = edge_type.shape_derivatives(points)
+    tangent = np.einsum("qj,fjc->fqc", dphi, xy)  # (F, q, 2)
+    jacobian = np.linalg.norm(tangent, axis=2)  # (F, q)
+    unit = tangent / jacobian[..., None]
+    # ∂J_q/∂x_kc = t̂_c φ'_k(q): (F, q, k, c)
+    djac = unit[:, :, None, :] * dphi[None, :, :, None]
+    if axisymmetric:  # share_p = 2 pi Σ_q w_q φ_p r_q J_q
+        radius = np.einsum("qj,fj->fq", phi, xy[..., 0])
+        dproduct = radius[:, :, None, None] * djac
+        dproduct[..., 0] += phi[None, :, :] * jacobian[:, :, None]
+        grads = 2.0 * np.pi * np.einsum("q,qp,fqkc->fpkc", _GAUSS_WEIGHTS, phi, dproduct)
+    else:  # share_p = t w_p Σ_q w_q J_q
+        dlength = np.einsum("q,fqkc->fkc", _GAUSS_WEIGHTS, djac)
+        grads = thickness * edge_type.area_weights[None, :, None, None] * dlength[:, None]
+    order = np.argsort(slave_nodes)
+    position = np.minimum(np.searchsorted(slave_nodes[order], edges), max(slave_nodes.size - 1, 0))
+    hit = slave_nodes[order][position] == edges if slave_nodes.size else np.zeros(edges.shape, bool)
+    face_of, local_of = np.nonzero(hit)
+    rows = np.repeat(order[position[face_of, local_of]], n)
+    cols = edges[face_of].reshape(-1)
+    values = grads[face_of, local_of].reshape(-1, 2)
+    num_nodes = int(max(edges.max(initial=-1), slave_nodes.max(initial=-1))) + 1
+    keys = rows * num_nodes + cols
+    unique_keys, inverse = np.unique(keys, return_inverse=True)
+    summed = np.stack(
+        [np.bincount(inverse, weights=values[:, c], minlength=unique_keys.size) for c in range(2)],
+        axis=1,
+    )
+    return unique_keys // num_nodes, unique_keys % num_nodes, summed
 
 
 def _sum_to_nodes(edges: np.ndarray, shares: np.ndarray, slave_nodes: np.ndarray) -> np.ndarray:

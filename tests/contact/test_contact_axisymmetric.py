@@ -47,11 +47,13 @@ def _rectangle(x0: float, y0: float, x1: float, y1: float, nx: int, ny: int) -> 
     return surface, lines
 
 
-def _build_cylinder_on_block(order: int, x0: float = 0.0) -> None:
+def _build_cylinder_on_block(
+    order: int, x0: float = 0.0, upper_radius: float = RADIUS, nx_upper: int = 5
+) -> None:
     """Meridian section: a cylinder r <= R, 0 <= z <= 0.4 on a block r <= R, -0.5 <= z <= 0."""
     gmsh.model.add("cylinder_axisymmetric")
     lower, lower_lines = _rectangle(x0, -0.5, x0 + RADIUS, 0.0, 5, 2)
-    upper, upper_lines = _rectangle(x0, 0.0, x0 + RADIUS, 0.4, 5, 2)
+    upper, upper_lines = _rectangle(x0, 0.0, x0 + upper_radius, 0.4, nx_upper, 2)
     gmsh.model.geo.synchronize()
     model = gmsh.model
     model.addPhysicalGroup(2, [lower], 1)
@@ -65,17 +67,26 @@ def _build_cylinder_on_block(order: int, x0: float = 0.0) -> None:
     model.mesh.setOrder(order)
 
 
-def _cylinder_problem(order: int, **pair_options):
-    mesh, _, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=order)
+def _cylinder_problem(
+    order: int, mesh_options=None, *, axisymmetric=True, radial_load=False, **options
+):
+    """Cylinder on block, slave the cylinder's bottom; the load p (1 + r) with ``radial_load``."""
+    mesh, _, facet_tags = mesh_from_gmsh(
+        _build_cylinder_on_block, gdim=2, order=order, **(mesh_options or {})
+    )
     V = compat.vector_space(mesh, "Lagrange", order)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     load = dolfinx.fem.Constant(mesh, 0.0)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
-    w = axisymmetric_weight(mesh)
     n = ufl.FacetNormal(mesh)
-    F = ufl.inner(
-        axisymmetric_stress(u, E, NU), axisymmetric_grad(v)
-    ) * w * ufl.dx + load * ufl.inner(n, v) * w * ds(UPPER_TOP)
+    if axisymmetric:
+        w = axisymmetric_weight(mesh)
+        bulk = ufl.inner(axisymmetric_stress(u, E, NU), axisymmetric_grad(v)) * w * ufl.dx
+    else:  # plane strain
+        w = 1.0
+        bulk = ufl.inner(small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
+    shape = 1.0 + ufl.SpatialCoordinate(mesh)[0] if radial_load else 1.0
+    F = bulk + load * shape * ufl.inner(n, v) * w * ds(UPPER_TOP)
     bcs = [
         component_bc(V, 0, facet_tags.find(AXIS)),
         component_bc(V, 1, facet_tags.find(LOWER_BOTTOM)),
@@ -84,10 +95,9 @@ def _cylinder_problem(order: int, **pair_options):
         ntf.FacetSurface(facet_tags, UPPER_BOTTOM),
         ntf.FacetSurface(facet_tags, LOWER_TOP),
         ntf.SurfaceInteraction(ntf.LinearLaw(slope=1e4 * E, tension=E / 70000)),
-        axisymmetric=True,
-        **pair_options,
+        axisymmetric=axisymmetric,
     )
-    return ntf.ContactProblem(F, u, [pair], bcs), load
+    return ntf.ContactProblem(F, u, [pair], bcs, **options), load
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -112,6 +122,56 @@ def test_patch_test_cylinder_on_block_axisymmetric(order: int) -> None:
     current = RADIUS * (1 + NU * 10.0 / E)
     assert ev.area.sum() == pytest.approx(np.pi * current**2, rel=1e-6)
     assert pressure.mean() == pytest.approx(force / (np.pi * current**2), rel=1e-8)
+
+
+@pytest.mark.parametrize("axisymmetric", [True, False], ids=["axisymmetric", "plane_strain"])
+@pytest.mark.parametrize("linearize_area", [False, True])
+def test_global_jacobian_matches_finite_differences_2d(
+    axisymmetric: bool, linearize_area: bool
+) -> None:
+    """The assembled 2D Jacobian is the derivative of the residual at a fixed pairing: areas held
+    at their pairing values, or recomputed and linearized (linearize_area).
+
+    A narrower cylinder (R 0.9, 4 edges) on the block (5 edges) under a load growing with r: the
+    springs, areas and pressures differ from node to node.
+    """
+    problem, load = _cylinder_problem(
+        1, {"upper_radius": 0.9, "nx_upper": 4}, axisymmetric=axisymmetric,
+        radial_load=True, linearize_area=linearize_area,
+    )  # fmt: skip
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    ntf.StaticStep(lambda t: setattr(load, "value", 10.0 * t), initial_increment=1.0).run(
+        solver, problem.u
+    )
+    assert problem.states[0].num_springs == 5
+    problem.iteration = 100  # past the re-pairing schedule: the pairing stays fixed
+    x = compat.petsc_vector(problem.u)
+    base = x.copy()
+    problem.form(x)
+    A = problem.ensure_matrix()
+    problem.J(x, A)
+    rng = np.random.default_rng(1)
+    step = x.copy()
+    step.array[:] = rng.standard_normal(step.array.size) * 1e-3
+    bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in problem.bcs])
+    step.array[bc_dofs] = 0.0
+    Jw = A.createVecLeft()
+    A.mult(step, Jw)
+
+    def residual(scale: float) -> np.ndarray:
+        x.array[:] = base.array + scale * step.array
+        problem.u.x.scatter_forward()
+        problem.form(x)
+        b = x.copy()
+        problem.F(x, b)
+        return b.array.copy()
+
+    h = 1e-4
+    fd = (residual(h) - residual(-h)) / (2 * h)
+    x.array[:] = base.array
+    contact_rows = np.unique(2 * problem.states[0].element_nodes[:, :, None] + np.arange(2))
+    scale = np.abs(Jw.array[contact_rows]).max()
+    np.testing.assert_allclose(Jw.array, fd, atol=1e-6 * scale)
 
 
 def test_hertz_sphere_axisymmetric() -> None:

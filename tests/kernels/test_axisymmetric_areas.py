@@ -10,6 +10,7 @@ from dolfinx_ntf.kernels.edges import (
     LINE3,
     EdgeType,
     axisymmetric_edge_spring_areas,
+    edge_spring_area_gradients,
     edge_spring_areas,
 )
 
@@ -81,3 +82,37 @@ def test_slave_nodes_off_the_edges_and_negative_radii() -> None:
     coords[0, 0] = -0.01
     with pytest.raises(ValueError, match=r"need r = x\[0\] >= 0; 1 slave edge.*node 0"):
         axisymmetric_edge_spring_areas(LINE2, edges, coords, [0, 1])
+
+
+@pytest.mark.parametrize("edge_type", [LINE2, LINE3], ids=["line2", "line3"])
+@pytest.mark.parametrize("axisymmetric", [False, True], ids=["plane", "axisymmetric"])
+def test_area_gradients_match_finite_differences(edge_type: EdgeType, axisymmetric: bool) -> None:
+    """∂A_p/∂x_q of every slave node against central differences (linearize_area in 2D)."""
+    rng = np.random.default_rng(3)
+    r = np.array([0.0, 0.3, 0.7, 1.2])
+    coords, edges = _chain(edge_type, r, 0.2 * rng.standard_normal(r.size))
+    coords = coords + 0.03 * rng.standard_normal(coords.shape)
+    coords[0, 0] = 0.05  # near the axis (on it, r may not decrease)
+    slaves = np.arange(coords.shape[0] - 1)  # the last node is on an edge but not a slave
+
+    def areas(x: np.ndarray) -> np.ndarray:
+        if axisymmetric:
+            return axisymmetric_edge_spring_areas(edge_type, edges, x, slaves)
+        return 2.5 * edge_spring_areas(edge_type, edges, x, slaves)
+
+    index, node, gradient = edge_spring_area_gradients(
+        edge_type, edges, coords, slaves, thickness=1.0 if axisymmetric else 2.5,
+        axisymmetric=axisymmetric,
+    )  # fmt: skip
+    dense = np.zeros((slaves.size, coords.shape[0], 2))
+    dense[index, node] = gradient
+    fd = np.zeros_like(dense)
+    h = 1e-6
+    for q in range(coords.shape[0]):
+        for c in range(2):
+            plus, minus = coords.copy(), coords.copy()
+            plus[q, c] += h
+            minus[q, c] -= h
+            fd[:, q, c] = (areas(plus) - areas(minus)) / (2 * h)
+    np.testing.assert_allclose(dense, fd, rtol=0, atol=1e-7 * np.abs(fd).max())
+    assert np.abs(dense).max() > 0.1
