@@ -67,7 +67,7 @@ def _solve_linear(F: ufl.Form, u: dolfinx.fem.Function, bcs: list) -> None:
     V = u.function_space
     w = ufl.TrialFunction(V)
     a = ufl.derivative(F, u, w)
-    L = -ufl.replace(F, {u: ufl.as_vector([0.0] * V.num_sub_spaces)})
+    L = -ufl.replace(F, {u: ufl.as_vector([0.0, 0.0])})
     problem = compat.linear_problem(
         a, L, bcs=bcs, petsc_options={"ksp_type": "preonly", "pc_type": "lu"}
     )
