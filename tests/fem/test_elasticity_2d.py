@@ -1,5 +1,5 @@
 """UFL helpers for 2D elasticity against closed forms: plane stress and plane strain bars, the
-axisymmetric thick-walled cylinder (Lamé) and the neo-Hookean axisymmetric stretch.
+axisymmetric thick-walled cylinder (Lamé) and neo-Hookean stretches (axisymmetric, plane strain).
 
 The fields are compared at each process's own nodes with the closed form evaluated there, so the
 tests run alike in serial and on several processes.
@@ -135,36 +135,44 @@ def test_thick_walled_cylinder_axisymmetric() -> None:
     )
 
 
-def _neo_hookean_lateral_stretch(stretch_z: float) -> float:
-    """Lateral stretch of a neo-Hookean rod stretched axially with free sides (P_rr = 0)."""
+def _neo_hookean_lateral_stretch(stretch_z: float, free: int) -> float:
+    """Lateral stretch of a neo-Hookean rod stretched axially with ``free`` free directions.
+
+    Axisymmetric: r and hoop (2, J = s² lz); plane strain: one (J = s lz); P_lateral = 0.
+    """
     mu, lmbda = lame_parameters(E, NU)
     s = 1.0
-    for _ in range(50):  # Newton on s P_rr = mu (s² - 1) + lambda ln(s² lz) = 0
-        f = mu * (s**2 - 1) + lmbda * np.log(s**2 * stretch_z)
-        step = f / (2 * mu * s + 2 * lmbda / s)
+    for _ in range(50):  # Newton on s P = mu (s² - 1) + lambda ln(s^free lz) = 0
+        f = mu * (s**2 - 1) + lmbda * np.log(s**free * stretch_z)
+        step = f / (2 * mu * s + free * lmbda / s)
         s -= step
         if abs(step) < 1e-15:
             break
     return s
 
 
-def test_neo_hookean_axisymmetric_stretch() -> None:
-    """A solid cylinder stretched 30 %: the homogeneous neo-Hookean solution, exact in P1.
+@pytest.mark.parametrize("axisymmetric", [True, False], ids=["axisymmetric", "plane_strain"])
+def test_neo_hookean_stretch(axisymmetric: bool) -> None:
+    """A solid cylinder (or a plane-strain strip) stretched 30 %: the homogeneous neo-Hookean
+    solution, exact in P1.
 
-    Its radius shrinks by the stretch of P_rr = 0 (a scalar Newton solve); Newton on the FE
+    Its width shrinks by the stretch of P_lateral = 0 (a scalar Newton solve); Newton on the FE
     residual converges quadratically from the axial field alone.
     """
     radius, height, stretch_z = 1.0, 2.0, 1.3
     mesh = _rectangle(0.0, 0.0, radius, height, 4, 6)
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    w = axisymmetric_weight(mesh)
-    P = neo_hookean_stress(axisymmetric_deformation_gradient(u), E, NU)
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 4})
-    F = ufl.inner(P, axisymmetric_grad(v)) * w * dx
+    if axisymmetric:
+        P = neo_hookean_stress(axisymmetric_deformation_gradient(u), E, NU)
+        F = ufl.inner(P, axisymmetric_grad(v)) * axisymmetric_weight(mesh) * dx
+    else:
+        P = neo_hookean_stress(ufl.Identity(2) + ufl.grad(u), E, NU)
+        F = ufl.inner(P, ufl.grad(v)) * dx
     u.interpolate(lambda x: np.stack([0.0 * x[0], (stretch_z - 1.0) * x[1]]))
     bcs = [
-        component_bc(V, 0, _facets(mesh, lambda x: np.isclose(x[0], 0.0))),  # the axis
+        component_bc(V, 0, _facets(mesh, lambda x: np.isclose(x[0], 0.0))),  # axis, symmetry
         component_bc(
             V, 1, _facets(mesh, lambda x: np.isclose(x[1], 0.0) | np.isclose(x[1], height))
         ),
@@ -184,7 +192,7 @@ def test_neo_hookean_axisymmetric_stretch() -> None:
         if norm < 1e-13:
             break
     assert corrections[-1] < 1e-13 and len(corrections) <= 7
-    s = _neo_hookean_lateral_stretch(stretch_z)
+    s = _neo_hookean_lateral_stretch(stretch_z, 2 if axisymmetric else 1)
     assert s < 1.0 - 0.05  # a real contraction
     x, nodes = _owned_nodes(V)
     values = u.x.array.reshape(-1, 2)[nodes]
