@@ -255,6 +255,12 @@ class Pairing:
             )
         slave = resolve_slave(V, pair.slave, what=f"{name} slave")
         slave = dataclasses.replace(slave, thickness=pair.thickness, axisymmetric=pair.axisymmetric)
+        if pair.axisymmetric and slave.faceless is not None and np.any(slave.faceless):
+            raise NotImplementedError(
+                f"{name}: an axisymmetric pair cannot give the midside nodes of a node surface "
+                "CalculiX's fallback area (it is not a ring area); use a FacetSurface or a "
+                "NodeSurface without midside_nodes"
+            )
         if pair.axisymmetric:  # line3 corners on the axis: no ring area, no spring (§16.2)
             keep = slave_areas(slave, self._reference) > 0.0
             if not np.all(keep):

@@ -240,3 +240,24 @@ def test_axisymmetric_pair_refuses_3d_meshes_and_negative_radii() -> None:
     )
     with pytest.raises(ValueError, match=r"need r = x\[0\] >= 0; 3 slave edge\(s\) reach r < 0"):
         ntf.ContactProblem(F2, u2, [pair2])
+
+
+def test_axisymmetric_node_surface_with_midside_nodes_is_refused() -> None:
+    """ccx's fallback area of a node surface's midside nodes is no ring area: a clear error."""
+    mesh, cell_tags, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=2)
+    V = compat.vector_space(mesh, "Lagrange", 2)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    bottom = facet_tags.find(UPPER_BOTTOM)
+    vertices = np.unique(compat.incident_entities(mesh, bottom, 1, 0))
+    vertex_dofs = dolfinx.fem.locate_dofs_topological(V, 0, vertices)
+    midside = np.setdiff1d(dolfinx.fem.locate_dofs_topological(V, 1, bottom), vertex_dofs)
+    assert midside.size == 5
+    F = ufl.inner(axisymmetric_stress(u, E, NU), axisymmetric_grad(v)) * ufl.dx
+    pair = ntf.ContactPair(
+        ntf.NodeSurface(vertices, midside_nodes=midside),
+        ntf.FacetSurface(facet_tags, LOWER_TOP),
+        ntf.SurfaceInteraction(ntf.LinearLaw(1e4, 1e-2)),
+        axisymmetric=True,
+    )
+    with pytest.raises(NotImplementedError, match="cannot give the midside nodes"):
+        ntf.ContactProblem(F, u, [pair])
