@@ -244,7 +244,7 @@ def test_axisymmetric_pair_refuses_3d_meshes_and_negative_radii() -> None:
 
 def test_axisymmetric_node_surface_with_midside_nodes_is_refused() -> None:
     """ccx's fallback area of a node surface's midside nodes is no ring area: a clear error."""
-    mesh, cell_tags, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=2)
+    mesh, _, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=2)
     V = compat.vector_space(mesh, "Lagrange", 2)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     bottom = facet_tags.find(UPPER_BOTTOM)
