@@ -19,6 +19,7 @@ Run it with::
     .venv/bin/python demos/hertz_axisymmetric.py                    # same sizes as the 3D demo
     .venv/bin/python demos/hertz_axisymmetric.py --size-fine 0.002  # finer
     .venv/bin/python demos/hertz_axisymmetric.py --coarse           # tests
+    .venv/bin/python demos/hertz_axisymmetric.py --output output    # and a pressure plot
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import argparse
 import math
 import time
 import typing
+from pathlib import Path
 
 from mpi4py import MPI
 
@@ -73,6 +75,9 @@ def _parse(argv: typing.Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--penalty", type=float, default=PENALTY, help="K in units of E per mm")
     parser.add_argument("--increments", type=int, default=8)
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
+    parser.add_argument(
+        "--output", type=Path, default=None, help="folder for hertz_axisymmetric_pressure.png"
+    )
     return parser.parse_args(argv)
 
 
@@ -175,6 +180,9 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
     summary["a_error"] = a_fit / a_hertz - 1
     summary["p0_error"] = p0_fit / p0_hertz - 1
     summary["p_max_error"] = summary["p_max"] / p0_hertz - 1
+    if args.output is not None:
+        args.output.mkdir(parents=True, exist_ok=True)
+        summary["png"] = str(_plot(args.output, reference, pressure, summary))
     summary["time"] = time.perf_counter() - start
     if not args.quiet:
         print(
@@ -187,6 +195,37 @@ def main(argv: typing.Sequence[str] | None = None) -> dict:
             f"{summary['p_max_error']:+.2%}"
         )
     return summary
+
+
+def _plot(folder: Path, r: np.ndarray, p: np.ndarray, summary: dict) -> Path:
+    """Nodal contact pressure against radius beside Hertz's profile and the fitted one."""
+    import matplotlib as mpl
+
+    mpl.use("Agg")
+    import matplotlib.pyplot as plt
+
+    a, p0 = summary["a_hertz"], summary["p0_hertz"]
+    rr = np.linspace(0, 1.5 * a, 400)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    near = r < 1.5 * a
+    ax.plot(r[near], p[near], "o", ms=3, label="nodal pressure F_N/A (ring areas)")
+    ax.plot(rr, p0 * np.sqrt(np.clip(1 - (rr / a) ** 2, 0, None)), "k-", label="Hertz")
+    fitted = summary["p0_fit"] * np.sqrt(np.clip(1 - (rr / summary["a_fit"]) ** 2, 0, None))
+    label = f"fit: a {summary['a_error']:+.1%}, p0 {summary['p0_error']:+.1%}"
+    ax.plot(rr, fitted, "r--", label=label)
+    ax.set_xlabel("radius r [mm]")
+    ax.set_ylabel("contact pressure [MPa]")
+    ax.set_title(
+        f"Axisymmetric Hertz: R = {RADIUS:g} mm, F = {summary['force'] / 1e3:.1f} kN, "
+        f"{summary['dofs']} dofs"
+    )
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    path = folder / "hertz_axisymmetric_pressure.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 if __name__ == "__main__":

@@ -174,7 +174,7 @@ def test_global_jacobian_matches_finite_differences_2d(
     np.testing.assert_allclose(Jw.array, fd, atol=1e-6 * scale)
 
 
-def test_hertz_sphere_axisymmetric() -> None:
+def test_hertz_sphere_axisymmetric(tmp_path: Path) -> None:
     """The 3D demo's sphere, force and mesh size in axisymmetry: a within 1 %, p0 within 2 %.
 
     Measured (P1, h = 0.014 R at the contact, 2162 dofs): F = 3.43e5 N, a -0.40 %, p0 +0.85 %
@@ -185,7 +185,7 @@ def test_hertz_sphere_axisymmetric() -> None:
     )
     demo = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(demo)
-    summary = demo.main(["--quiet"])
+    summary = demo.main(["--quiet", "--output", str(tmp_path)])
     assert summary["equilibrium_error"] < 1e-8
     assert summary["force"] == pytest.approx(3.43e5, rel=0.02)
     assert abs(summary["a_error"]) < 0.01
@@ -193,6 +193,7 @@ def test_hertz_sphere_axisymmetric() -> None:
     assert abs(summary["p_max_error"]) < 0.05
     assert summary["a_last_closed"] < summary["a_hertz"] < summary["a_first_open"]
     assert summary["increments"] == 8 and max(summary["iterations"]) <= 8
+    assert Path(summary["png"]).stat().st_size > 10_000
 
 
 def test_axisymmetric_pair_options_are_checked() -> None:
