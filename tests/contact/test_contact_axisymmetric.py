@@ -250,6 +250,8 @@ def test_axisymmetric_node_surface_with_midside_nodes_is_refused() -> None:
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     bottom = facet_tags.find(UPPER_BOTTOM)
     vertices = np.unique(compat.incident_entities(mesh, bottom, 1, 0))
+    for dim in (0, 1):  # dolfinx 0.9 locates dofs only with these computed
+        mesh.topology.create_connectivity(dim, 2)
     vertex_dofs = dolfinx.fem.locate_dofs_topological(V, 0, vertices)
     midside = np.setdiff1d(dolfinx.fem.locate_dofs_topological(V, 1, bottom), vertex_dofs)
     assert midside.size == 5
