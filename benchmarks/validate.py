@@ -28,6 +28,7 @@ import argparse
 import datetime as dt
 import logging
 import math
+import re
 import shutil
 import subprocess
 import sys
@@ -502,8 +503,23 @@ def _release_comparison(lines: list[str], other_path: Path, other_text: str) -> 
     return out
 
 
+_KEPT = re.compile(r"<!-- kept section: (.*?) -->.*?<!-- /kept section: \1 -->\n", re.S)
+
+
+def kept_sections(path: Path) -> list[str]:
+    """Sections of an existing report that a regeneration keeps, markers included.
+
+    A section between ``<!-- kept section: NAME -->`` and ``<!-- /kept section: NAME -->`` is
+    measured by another command (it says which) and written by hand from its output.
+    """
+    if not path.exists():
+        return []
+    return [m.group(0) for m in _KEPT.finditer(path.read_text())]
+
+
 def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any]) -> None:
-    """Write the Markdown report."""
+    """Write the Markdown report (the kept sections of the existing one stay, before the last)."""
+    kept = kept_sections(path)
     cross = [runs[c.name] for c in cases.CASES if c.name in runs]
     analytic = [runs[n] for n in _ANALYTIC if n in runs]
     out = [
@@ -732,6 +748,7 @@ def write_report(path: Path, runs: dict[str, Run], extra: dict[str, typing.Any])
             "resultant still balances the load (to the tilt of the deformed master faces).",
             "",
         ]
+    out += [section.rstrip("\n") + "\n" for section in kept]
     out += [
         "## Cross-checking your own problem",
         "",

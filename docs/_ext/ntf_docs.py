@@ -170,6 +170,8 @@ API_MODULES: list[tuple[str, str]] = [
     ("Continuum contact in UFL", "dolfinx_ntf.fem.continuum"),
     ("Continuum contact by steps", "dolfinx_ntf.solvers.continuum"),
     ("Measures of a contact solution", "dolfinx_ntf.fem.measures"),
+    ("Elasticity in UFL (3D, plane strain, plane stress)", "dolfinx_ntf.fem.elasticity"),
+    ("Axisymmetric elasticity in UFL", "dolfinx_ntf.fem.axisymmetric"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
     ("The Hertz geometry of the demos", "dolfinx_ntf.meshes.hertz"),
@@ -179,6 +181,7 @@ API_MODULES: list[tuple[str, str]] = [
 
 #: Modules of :data:`API_MODULES` whose public names are checked like ``dolfinx_ntf``'s.
 ARGS_CHECKED_MODULES = (
+    "dolfinx_ntf.fem.axisymmetric",
     "dolfinx_ntf.fem.continuum",
     "dolfinx_ntf.fem.measures",
     "dolfinx_ntf.fem.pressure_recovery",

@@ -13,6 +13,7 @@ import numpy as np
 from dolfinx_ntf.contact.assembly import SpringBlocks
 from dolfinx_ntf.contact.pair import PairState
 from dolfinx_ntf.contact.pairing import slave_areas
+from dolfinx_ntf.kernels.edges import EdgeType, edge_spring_area_gradients
 from dolfinx_ntf.kernels.friction import FrictionInput
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.spring_areas import spring_area_gradients
@@ -117,10 +118,16 @@ def area_block(state: PairState, coords: np.ndarray, *, values: bool = True) -> 
 
     With ``values=False`` only the couplings (for the matrix pattern).
     """
-    faces = state.slave.faces
-    slave_index, node, gradient = spring_area_gradients(
-        faces.face_type, faces.faces, coords, state.slave.nodes
-    )
+    faces, slave = state.slave.faces, state.slave
+    if isinstance(faces.face_type, EdgeType):  # 2D: lengths or rings (§17.2)
+        slave_index, node, gradient = edge_spring_area_gradients(
+            faces.face_type, faces.faces, coords, slave.nodes,
+            thickness=slave.thickness, axisymmetric=slave.axisymmetric,
+        )  # fmt: skip
+    else:
+        slave_index, node, gradient = spring_area_gradients(
+            faces.face_type, faces.faces, coords, slave.nodes
+        )
     spring_of_slave = np.full(state.slave.nodes.size, -1, dtype=np.int64)
     spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
     spring = spring_of_slave[slave_index]
@@ -131,7 +138,7 @@ def area_block(state: PairState, coords: np.ndarray, *, values: bool = True) -> 
     block_values = None
     if values:
         per_area = state.evaluation.force_per_area.reshape(
-            state.num_springs, 3 * state.element_nodes.shape[1]
+            state.num_springs, gradient.shape[1] * state.element_nodes.shape[1]
         )[spring]
         block_values = per_area[:, :, None] * gradient[:, None, :]
     return SpringBlocks(state.element_nodes[spring], node[:, None].astype(np.int64), block_values)

@@ -45,6 +45,11 @@ class ContactPair:
         thickness: On a 2D mesh, the out-of-plane thickness the tributary edge lengths are
             multiplied by to give the spring areas (1: plane strain per unit thickness, like a
             residual form per unit thickness); it must be 1 on a 3D mesh.
+        axisymmetric: On a 2D mesh of the meridian half-plane (``x[0] = r >= 0``, ``x[1] = z``),
+            the spring areas are the ring areas ``2 pi ∫ r φ_p ds`` of the slave edges at the
+            current radius (docs/method.md §17.2), for the full 360 degrees like a residual
+            form with :func:`~dolfinx_ntf.fem.axisymmetric.axisymmetric_weight`; the thickness
+            must then stay 1. False on a 3D mesh.
     """
 
     slave: FacetSurface | NodeSurface
@@ -55,6 +60,7 @@ class ContactPair:
     active: bool = True
     adjust: float | NodeSurface | None = None
     thickness: float = 1.0
+    axisymmetric: bool = False
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -80,6 +86,12 @@ class ContactPair:
         )
         validation.check_type(self.name, str, f"{owner}: name")
         validation.check_positive(self.thickness, f"{owner}: thickness")
+        validation.check_type(self.axisymmetric, bool, f"{owner}: axisymmetric")
+        if self.axisymmetric and self.thickness != 1.0:
+            raise ValueError(
+                f"{owner}: an axisymmetric pair has no thickness (its spring areas are rings, "
+                f"2 pi r times a length), got thickness = {self.thickness:g}"
+            )
         if self.adjust is not None and not isinstance(self.adjust, NodeSurface):
             if isinstance(self.adjust, bool) or not isinstance(self.adjust, (int, float)):
                 raise TypeError(

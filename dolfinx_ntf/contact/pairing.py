@@ -31,7 +31,7 @@ from dolfinx_ntf.fem.surfaces import (
     resolve_master,
     resolve_slave,
 )
-from dolfinx_ntf.kernels.edges import EdgeType, edge_spring_areas
+from dolfinx_ntf.kernels.edges import EdgeType, axisymmetric_edge_spring_areas, edge_spring_areas
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.rigid import (
     RigidCylinder,
@@ -144,6 +144,11 @@ class Pairing:
         if pair.thickness != 1.0:
             raise ValueError(
                 f"{name}: thickness = {pair.thickness:g} is for 2D meshes; a 3D mesh has its own"
+            )
+        if pair.axisymmetric:
+            raise ValueError(
+                f"{name}: axisymmetric = True is for 2D meshes of the meridian half-plane; this "
+                "mesh is 3D"
             )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
@@ -259,6 +264,14 @@ class Pairing:
                 "frictionless springs against meshed edges, rigid lines and circles)"
             )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        if pair.axisymmetric:
+            midside = slave.faceless is not None and bool(np.any(slave.faceless))
+            if comm.allreduce(midside, op=MPI.LOR):
+                raise NotImplementedError(
+                    f"{name}: an axisymmetric pair cannot give the midside nodes of a node surface "
+                    "CalculiX's fallback area (it is not a ring area); use a FacetSurface or a "
+                    "NodeSurface without midside_nodes"
+                )
         if isinstance(pair.master, RigidSurface):  # a line or a circle in the plane (§15.1)
             _check_in_plane(pair.master, f"{name} master")
             if self.halo is not None:  # the owned slave nodes and their edges
@@ -266,7 +279,7 @@ class Pairing:
                     comm, surface_distribution.distribute_slave, V, self.halo, pair.slave, slave,
                     name,
                 )  # fmt: skip
-            slave = dataclasses.replace(slave, thickness=pair.thickness)
+            slave = self._planar_slave(name, pair, slave)
             faces, master = rigid_master(
                 pair.master, lambda: self.time_fraction, f"{name} master", dim=2
             )
@@ -282,7 +295,7 @@ class Pairing:
                 comm, surface_distribution.distribute_pair, V, self.halo, pair.slave, slave,
                 master_faces, name,
             )  # fmt: skip
-        slave = dataclasses.replace(slave, thickness=pair.thickness)
+        slave = self._planar_slave(name, pair, slave)
         if master_faces.faces.shape[0] == 0:  # the gathered surface: the same on every process
             raise ValueError(f"{name}: the master surface has no edges")
         reference = self._reference if self.halo is None else self.halo.reference
@@ -305,6 +318,27 @@ class Pairing:
             pair, slave, master_faces, master, np.zeros(slave.nodes.size), friction=friction,
             was_active=pair.active,
         )  # fmt: skip
+
+    def _planar_slave(self, name: str, pair: ContactPair, slave: SlaveSurface) -> SlaveSurface:
+        """The pair's thickness and model on a 2D slave surface.
+
+        In axisymmetry the nodes on the axis without ring area (line3 corners) get no spring
+        (docs/method.md §17).
+        """
+        slave = dataclasses.replace(slave, thickness=pair.thickness, axisymmetric=pair.axisymmetric)
+        if not pair.axisymmetric:
+            return slave
+        reference = self._reference if self.halo is None else self.halo.reference
+        keep = slave_areas(slave, reference) > 0.0
+        if np.all(keep):
+            return slave
+        details_logger.info(
+            " %s: %d slave node(s) on the axis without ring area get no spring",
+            name,
+            int(np.count_nonzero(~keep)),
+        )
+        faceless = None if slave.faceless is None else slave.faceless[keep]
+        return dataclasses.replace(slave, nodes=slave.nodes[keep], faceless=faceless)
 
     # -- checks ------------------------------------------------------------------------------------
 
@@ -724,7 +758,9 @@ def _check_in_plane(surface: RigidSurface, what: str) -> None:
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
     """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
     faces = slave.faces
-    if isinstance(faces.face_type, EdgeType):  # 2D: tributary length times the thickness
+    if isinstance(faces.face_type, EdgeType) and slave.axisymmetric:  # rings (§17.2)
+        areas = axisymmetric_edge_spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    elif isinstance(faces.face_type, EdgeType):  # 2D: tributary length times the thickness
         areas = slave.thickness * edge_spring_areas(
             faces.face_type, faces.faces, coords, slave.nodes
         )

@@ -158,10 +158,6 @@ class ContactProblem:
         projection_tangent: str = "exact",
     ) -> None:
         pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth)
-        if linearize_area and u.function_space.mesh.topology.dim == 2:
-            raise NotImplementedError(
-                "ContactProblem: 2D contact does not support linearize_area yet"
-            )
         options = compat.jit_keywords(form_compiler_options, jit_options)
         V = u.function_space
         self._L = dolfinx.fem.form(F, **options)

@@ -154,6 +154,7 @@ class SlaveSurface:
     faces: SurfaceFaces
     faceless: np.ndarray | None = None  # (S,) bool
     thickness: float = 1.0  # 2D meshes: the spring areas are tributary lengths times this
+    axisymmetric: bool = False  # 2D meshes: ring areas 2 pi ∫ r φ_p ds instead (§17.2)
 
 
 def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:

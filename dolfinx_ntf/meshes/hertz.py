@@ -11,6 +11,10 @@ The mesh size is ``size_fine`` within ``refine_radius`` of the contact point and
 from the unstructured mesher; hexahedra from splitting each tetrahedron into four (gmsh
 subdivision), with the tetrahedral sizes doubled so that hexahedral edges keep the requested sizes.
 
+:func:`build_hertz_axisymmetric` meshes the meridian section of the same model in 2D
+(``x = r``, ``y = z``): a quarter disc on a rectangle, for axisymmetric contact
+(``ContactPair(..., axisymmetric=True)``), with the same tags (``SYMMETRY_X`` is the axis).
+
 Builders talk to gmsh only: call them on one MPI rank with gmsh initialized. Run as a script to
 write ``hertz.msh``::
 
@@ -42,6 +46,7 @@ __all__ = [
     "SYMMETRY_X",
     "SYMMETRY_Y",
     "build_hertz",
+    "build_hertz_axisymmetric",
     "build_hertz_sphere",
     "main",
 ]
@@ -187,6 +192,84 @@ def build_hertz_sphere(**kwargs: typing.Any) -> None:
             model.setPhysicalName(dim, tag, PHYSICAL_NAMES[tag])
     model.mesh.renumberNodes()
     model.mesh.renumberElements()
+
+
+def build_hertz_axisymmetric(
+    *,
+    radius: float = 1.0,
+    block_size: Sequence[float] | None = None,
+    size_fine: float | None = None,
+    size_coarse: float | None = None,
+    refine_radius: float | None = None,
+    coarse_radius: float | None = None,
+    order: int = 1,
+    name: str = "hertz_axisymmetric",
+) -> None:
+    """Mesh the meridian section of :func:`build_hertz`'s model in 2D (triangles).
+
+    The sphere is the quarter disc of centre ``(0, R)`` between the axis ``x = 0`` and its top
+    ``y = R``, touching the block ``[0, Lr] x [-Lz, 0]`` at the origin (separate nodes); the
+    defaults and the size field are :func:`build_hertz`'s (block ``2R x 1.5R``, ``0.014 R``
+    within ``0.25 R`` of the contact point, ``R/4`` beyond ``1.2 R``). Tags: ``BLOCK``,
+    ``SPHERE``, ``BLOCK_BOTTOM``, ``BLOCK_TOP``, ``SPHERE_CONTACT`` (the arc), ``SPHERE_TOP``,
+    and ``SYMMETRY_X`` for the axis segments of both bodies.
+
+    Args:
+        radius: Sphere radius R.
+        block_size: ``(Lr, Lz)``: the block's radius and depth.
+        size_fine: Edge length near the contact point.
+        size_coarse: Largest edge length.
+        refine_radius: Distance from the contact point within which the size is ``size_fine``.
+        coarse_radius: Distance from which the size is ``size_coarse`` (default ``1.2 R``).
+        order: Geometric order 1 or 2 (6-node triangles, curved arc edges).
+        name: Name of the gmsh model to create.
+
+    Raises:
+        ValueError: Bad sizes or order.
+    """
+    r = _positive(radius, "radius")
+    if block_size is None:
+        lr, lz = 2.0 * r, 1.5 * r
+    else:
+        lr, lz = (_positive(v, "block_size") for v in block_size)
+    h_fine = _positive(0.014 * r if size_fine is None else size_fine, "size_fine")
+    h_coarse = _positive(0.25 * r if size_coarse is None else size_coarse, "size_coarse")
+    d_fine = _positive(0.25 * r if refine_radius is None else refine_radius, "refine_radius")
+    d_coarse = _positive(1.2 * r if coarse_radius is None else coarse_radius, "coarse_radius")
+    if h_coarse < h_fine:
+        raise ValueError(f"size_coarse ({h_coarse}) must not be smaller than size_fine ({h_fine})")
+    if d_coarse <= d_fine:
+        raise ValueError(f"coarse_radius ({d_coarse}) must exceed refine_radius ({d_fine})")
+    if order not in (1, 2):
+        raise ValueError(f"order must be 1 or 2, got {order!r}")
+    _new_model(name, hexahedra=False)
+    geo = gmsh.model.geo
+    corners = [geo.addPoint(x, y, 0.0) for x, y in ((0, -lz), (lr, -lz), (lr, 0), (0, 0))]
+    block_lines = [geo.addLine(corners[i], corners[(i + 1) % 4]) for i in range(4)]
+    block = geo.addPlaneSurface([geo.addCurveLoop(block_lines)])
+    pole, rim, centre = geo.addPoint(0, 0, 0), geo.addPoint(r, r, 0), geo.addPoint(0, r, 0)
+    arc = geo.addCircleArc(pole, centre, rim)
+    top, axis = geo.addLine(rim, centre), geo.addLine(centre, pole)
+    sphere = geo.addPlaneSurface([geo.addCurveLoop([arc, top, axis])])
+    geo.synchronize()
+    _size_field(r, h_fine, h_coarse, d_fine, d_coarse)
+    groups = {
+        (2, BLOCK): [block],
+        (2, SPHERE): [sphere],
+        (1, BLOCK_BOTTOM): [block_lines[0]],
+        (1, BLOCK_TOP): [block_lines[2]],
+        (1, SPHERE_CONTACT): [arc],
+        (1, SPHERE_TOP): [top],
+        (1, SYMMETRY_X): [block_lines[3], axis],
+    }
+    for (dim, tag), entities in groups.items():
+        gmsh.model.addPhysicalGroup(dim, entities, tag)
+        gmsh.model.setPhysicalName(dim, tag, PHYSICAL_NAMES[tag])
+    gmsh.model.mesh.generate(2)
+    if order > 1:
+        gmsh.model.mesh.setOrder(order)
+    gmsh.model.mesh.renumberNodes()
+    gmsh.model.mesh.renumberElements()
 
 
 def _positive(value: float, what: str) -> float:

@@ -249,17 +249,3 @@ def test_hertz_line_contact_plane_strain() -> None:
 def test_unsupported_2d_features_are_named(options: dict, feature: str) -> None:
     with pytest.raises(NotImplementedError, match=f"2D contact does not support {feature}"):
         _blocks_problem(1, **options)
-
-
-def test_linearized_area_is_refused_in_2d() -> None:
-    mesh, _, facet_tags = mesh_from_gmsh(_build_blocks, gdim=2, nx_upper=4, order=1)
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    F = ufl.inner(small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(facet_tags, UPPER_BOTTOM),
-        ntf.FacetSurface(facet_tags, LOWER_TOP),
-        ntf.SurfaceInteraction(ntf.LinearLaw(1e4, 1e-2)),
-    )
-    with pytest.raises(NotImplementedError, match="2D contact does not support linearize_area"):
-        ntf.ContactProblem(F, u, [pair], linearize_area=True)
