@@ -59,6 +59,9 @@ class DiscreteSprings:
         ground: The ``second`` points are fixed anchor points instead of mesh nodes (an axial
             spring to the ground).
         tolerance: Largest distance between a point and its node; default 1e-8 of the mesh size.
+        nodes: (S, 2) global block indices of the end nodes (-1: grounded) when the caller knows
+            them (coincident nodes cannot be told apart by coordinates); the points then only
+            give the geometry.
 
     The same points on every process (the union is not taken): springs are few.
     """
@@ -72,6 +75,7 @@ class DiscreteSprings:
         *,
         ground: bool = False,
         tolerance: float | None = None,
+        nodes: np.ndarray | None = None,
     ) -> None:
         if V.dofmap.index_map_bs != 3 or V.mesh.geometry.dim != 3:
             raise ValueError("DiscreteSprings: a 3D vector displacement space is needed")
@@ -94,6 +98,25 @@ class DiscreteSprings:
         #: (S, 2, 3) reference coordinates of the ends (the anchor for a grounded end).
         self.reference = np.stack([first, second], axis=1)
         index_map = V.dofmap.index_map
+        first_global = int(index_map.local_range[0])
+        if nodes is not None:
+            self.global_nodes = np.asarray(nodes, dtype=np.int64).reshape(-1, 2)
+            if self.global_nodes.shape[0] != first.shape[0]:
+                raise ValueError("DiscreteSprings: nodes needs one row per spring")
+            local = self.global_nodes - first_global
+            self._local = np.where((local >= 0) & (local < index_map.size_local), local, -1)
+        else:
+            self.global_nodes, self._local = self._locate(V, ground, tolerance)
+        #: Springs this process evaluates and inserts: those whose first node it owns.
+        self.mine = self._local[:, 0] >= 0
+        self._forces = np.zeros((0, 6))
+
+    def _locate(
+        self, V: dolfinx.fem.FunctionSpace, ground: bool, tolerance: float | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(S, 2) global nodes at the end points and (S, 2) owned local nodes (-1 elsewhere)."""
+        index_map = V.dofmap.index_map
+        first_global = int(index_map.local_range[0])
         owned = index_map.size_local
         coordinates = V.tabulate_dof_coordinates()[:owned]
         if tolerance is None:
@@ -110,8 +133,7 @@ class DiscreteSprings:
         if ground:
             here.reshape(-1, 2)[:, 1] = False
         found = _allreduce(self._comm, here.astype(np.int64), MPI.SUM)
-        nodes = first.shape[0] * 2
-        needed = np.ones(nodes, bool)
+        needed = np.ones(points.shape[0], bool)
         if ground:
             needed.reshape(-1, 2)[:, 1] = False
         missing = np.flatnonzero(needed & (found != 1))
@@ -122,16 +144,9 @@ class DiscreteSprings:
                 f"{points[missing[0]].tolist()}, is not a node of the displacement space "
                 f"(within {tolerance:.3g}; {missing.size} such ends)"
             )
-        first_global = int(index_map.local_range[0])
-        global_node = np.where(here, first_global + nearest, -1)
-        #: (S, 2) global node of each end (-1: grounded).
-        self.global_nodes = _allreduce(self._comm, global_node.astype(np.int64), MPI.MAX).reshape(
-            -1, 2
-        )
-        self._local = np.where(here, nearest, -1).reshape(-1, 2)  # owned local node, or -1
-        #: Springs this process evaluates and inserts: those whose first node it owns.
-        self.mine = self._local[:, 0] >= 0
-        self._forces = np.zeros((0, 6))
+        global_node = np.where(here, first_global + nearest, -1).astype(np.int64)
+        global_nodes = _allreduce(self._comm, global_node, MPI.MAX).reshape(-1, 2)
+        return global_nodes, np.where(here, nearest, -1).reshape(-1, 2)
 
     @property
     def num_springs(self) -> int:

@@ -27,11 +27,19 @@ from .loads import LoadCards
 from .materials import MaterialCards
 from .mesh import MeshCards
 from .output import OutputCards
+from .springs import SpringCards
 from .steps import StepCards
 
 
 class _Reader(
-    MeshCards, MaterialCards, InteractionCards, LoadCards, StepCards, OutputCards, Checks
+    MeshCards,
+    SpringCards,
+    MaterialCards,
+    InteractionCards,
+    LoadCards,
+    StepCards,
+    OutputCards,
+    Checks,
 ):
     """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""
 
