@@ -180,6 +180,17 @@ class DiscreteSprings:
         self._forces = forces
         return GlobalBlocks(self._dofs(bcs)[self.mine], matrix, forces)
 
+    def end_forces(self, x: PETSc.Vec, element: SpringElement | None = None) -> np.ndarray:
+        """(S, 2, 3) internal forces at both ends of every spring at ``x``, on every process.
+
+        For reactions and printed nodal forces; a grounded end's entry is the ground's share.
+        ``element``: evaluate with this element instead of the springs' own (CalculiX prints
+        SPRINGA forces of the current line also without NLGEOM, docs/method.md §15.3).
+        """
+        element = self.element if element is None else element
+        forces, _ = element.evaluate(self.reference, self.displacements(x), tangent=False)
+        return forces.reshape(-1, 2, 3)
+
     def _dofs(self, bcs: typing.Sequence[compat.DirichletBC]) -> np.ndarray:
         """(S, 6) global dofs of the spring ends, -1 at grounded ends and Dirichlet dofs."""
         here = self._local >= 0

@@ -2,9 +2,9 @@
 
 The deck (``tests/data/calculix/springs/spring_deck.py``): two C3D8 cubes joined by SPRINGA
 (inclined), SPRING1 and SPRING2 elements. ccx 2.20 runs it in a scratch directory; the deck
-runner's ``*NODE PRINT`` displacements agree within 1e-6 of the largest one (measured: equal to
-ccx's 7 printed digits), in every increment. On 2 processes each cube is on its own process, so
-the springs join nodes of two processes.
+runner's ``*NODE PRINT`` displacements and reactions agree within 1e-6 of the largest one
+(measured: equal to ccx's 7 printed digits), in every increment. On 2 processes each cube is on
+its own process, so the springs join nodes of two processes.
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ COMM = MPI.COMM_WORLD
 HAS_CCX = shutil.which("ccx") is not None
 
 
-def _displacements(path: Path) -> list:
-    return [block for block in read_dat(path) if block.name == "U"]
+def _blocks(path: Path, name: str) -> list:
+    return [block for block in read_dat(path) if block.name == name]
 
 
 @pytest.mark.mpi
@@ -50,15 +50,24 @@ def test_spring_deck_matches_ccx(tmp_path, nlgeom, nonlinear):
     result = run_job("springs", ntf_dir, comm=COMM, progress=False)
     assert result.completed
     if COMM.rank == 0:
-        ccx, ntf = _displacements(ccx_dir / "springs.dat"), _displacements(ntf_dir / "springs.dat")
-        assert len(ccx) == len(ntf) == (4 if nlgeom else 1)
-        for a, b in zip(ccx, ntf):
-            assert b.time == pytest.approx(a.time, rel=1e-12)
-            np.testing.assert_array_equal(a.labels, b.labels)
-            scale = np.abs(a.values).max()
-            assert np.abs(a.values - b.values).max() <= 1e-6 * scale
-            # the second cube hangs on the springs: it moves in all three directions
-            assert np.all(np.abs(b.values[a.labels >= 9]).max(axis=0) > 1e-2 * scale)
+        for name in ("U", "RF", "RF_TOTAL"):
+            ccx = _blocks(ccx_dir / "springs.dat", name)
+            ntf = _blocks(ntf_dir / "springs.dat", name)
+            assert len(ccx) == len(ntf) == (4 if nlgeom else 1), name
+            for a, b in zip(ccx, ntf):
+                assert b.time == pytest.approx(a.time, rel=1e-12)
+                np.testing.assert_array_equal(a.labels, b.labels)
+                scale = np.abs(a.values).max()
+                assert np.abs(a.values - b.values).max() <= 1e-6 * scale, name
+        u = _blocks(ntf_dir / "springs.dat", "U")[-1]
+        # the second cube hangs on the springs: it moves in all three directions
+        assert np.all(np.abs(u.values[u.labels >= 9]).max(axis=0) > 1e-2 * np.abs(u.values).max())
+        # In x and y (the SPRING1 to the ground take z) the reactions balance the loads (4, -3)
+        # only with the clamped node's spring. Without NLGEOM they do not: ccx prints the
+        # spring's force of the current line there too (reproduced, docs/method.md §15.3).
+        total = _blocks(ntf_dir / "springs.dat", "RF_TOTAL")[-1].values[0]
+        imbalance = np.abs(total[:2] - [-4.0, 3.0]).max()
+        assert imbalance <= 1e-5 if nlgeom else imbalance > 0.1
 
 
 @pytest.mark.serial
@@ -67,13 +76,13 @@ def test_spring_cards_are_read(tmp_path):
     path.write_text(spring_deck(nlgeom=True, nonlinear=True))
     deck = read_deck(path)
     assert [(s.type, s.dofs, s.ids.tolist()) for s in deck.springs] == [
-        ("SPRINGA", (), [3, 4, 5, 6]),
+        ("SPRINGA", (), [3, 4, 5, 6, 11]),
         ("SPRING1", (3,), [7, 8, 9]),
         ("SPRING2", (2, 2), [10]),
     ]
     assert deck.springs[0].table[:, 1].tolist() == [-50.0, 0.0, 40.0, 60.0]  # forces
     assert deck.springs[1].stiffness == 50.0 and deck.springs[1].connectivity.shape == (3, 1)
-    assert deck.num_elements == 10  # ccx numbers contact elements after the springs too
+    assert deck.num_elements == 11  # ccx numbers contact elements after the springs too
 
 
 @pytest.mark.serial

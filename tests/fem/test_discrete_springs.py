@@ -72,12 +72,13 @@ def _bars(starts: list[float]) -> tuple[dolfinx.fem.Function, list, ufl.Form, uf
     return u, bcs, F, ds
 
 
-def _solve(u, bcs, F, springs) -> None:
+def _solve(u, bcs, F, springs) -> ntf.ContactProblem:
+    """Solve in one increment; the problem for outputs (the caller destroys it)."""
     problem = ntf.ContactProblem(F, u, [], bcs)
     problem.element_terms.extend(springs)
     solver = ntf.ContactNewtonSolver(u.function_space.mesh.comm, problem)
     ntf.StaticStep(fixed=True, initial_increment=1.0).run(solver, u)
-    problem.destroy()
+    return problem
 
 
 def _end_displacement(u: dolfinx.fem.Function, x_end: float) -> np.ndarray:
@@ -92,7 +93,7 @@ def _end_displacement(u: dolfinx.fem.Function, x_end: float) -> np.ndarray:
 CORNERS = [[LENGTH, 0, 0], [LENGTH, 1, 0], [LENGTH, 0, 1], [LENGTH, 1, 1]]
 
 
-@pytest.mark.parametrize("kind", ["directional", "axial_ground", "tabular"])
+@pytest.mark.parametrize("kind", ["directional", "axial_ground", "tabular", "parallel"])
 def test_bar_on_a_spring(kind: str) -> None:
     """Bar fixed at x = 0, spring to ground at x = L: u = F / (k + EA/L)."""
     u, bcs, F, _ = _bars([0.0])
@@ -103,14 +104,22 @@ def test_bar_on_a_spring(kind: str) -> None:
     elif kind == "axial_ground":  # SPRINGA to a fixed anchor one unit back along x
         anchors = np.array(CORNERS) - [1.0, 0.0, 0.0]
         springs = ntf.DiscreteSprings(V, ntf.AxialSpring(law), CORNERS, anchors, ground=True)
+    elif kind == "parallel":  # SPRINGA beside the bar, from its loaded end to its fixed end
+        start = np.array(CORNERS) - [LENGTH, 0.0, 0.0]
+        springs = ntf.DiscreteSprings(V, ntf.AxialSpring(law), CORNERS, start)
     else:  # a table that is linear with slope k/4 over the range reached
         table = ntf.TabularSpringLaw([-1.0, 0.0, 1.0], [-K / 4, 0.0, K / 4])
         springs = ntf.DiscreteSprings(V, ntf.DirectionalSpring(table, (1.0, 0.0, 0.0)), CORNERS)
-    _solve(u, bcs, F, [springs])
+    problem = _solve(u, bcs, F, [springs])
     expected = FORCE / (K + E / LENGTH)
     values = _end_displacement(u, LENGTH)
     assert values.size == 4
     np.testing.assert_allclose(values, expected, rtol=1e-10)
+    # the support at x = 0 takes all of F only when the springs ending there count
+    support = ntf.reaction(problem, dofs=bcs[0])[0]
+    carried = FORCE if kind == "parallel" else FORCE * (E / LENGTH) / (K + E / LENGTH)
+    assert support == pytest.approx(-carried, rel=1e-10)
+    problem.destroy()
 
 
 def test_two_bars_joined_by_springs() -> None:
@@ -125,7 +134,7 @@ def test_two_bars_joined_by_springs() -> None:
     if MPI.COMM_WORLD.size > 1:  # the springs join nodes of two processes
         assert MPI.COMM_WORLD.allreduce(int(springs.mine.sum())) == 4
         assert springs.mine.all() == (MPI.COMM_WORLD.rank == 0)
-    _solve(u, bcs, F, [springs])
+    _solve(u, bcs, F, [springs]).destroy()
     flexibility = 2 * LENGTH / E + 1 / K
     np.testing.assert_allclose(
         _end_displacement(u, 2 * LENGTH + gap), FORCE * flexibility, rtol=1e-10

@@ -1,8 +1,9 @@
 """A small spring deck for the deck runner's comparison with ccx 2.20 (docs/method.md §15.3).
 
 Two C3D8 unit cubes, the first clamped at x = 0, the second 1 unit further along x and 0.3 along
-y, held only by springs: four SPRINGA between the facing corners (inclined lines), three SPRING1
-in z to the ground and one SPRING2 in y between the cubes; concentrated forces on the second cube.
+y, held only by springs: five SPRINGA (four between the facing corners, inclined, and one from a
+clamped node, whose force is in the reactions ``RF``), three SPRING1 in z to the ground and one
+SPRING2 in y between the cubes; concentrated forces on the second cube.
 ``write_spring_deck(directory, name, nlgeom=..., nonlinear=...)`` writes ``name.inp``.
 """
 
@@ -24,7 +25,7 @@ def spring_deck(*, nlgeom: bool, nonlinear: bool) -> str:
     lines += [
         "*ELEMENT, TYPE=C3D8, ELSET=EA", "1,1,2,3,4,5,6,7,8",
         "*ELEMENT, TYPE=C3D8, ELSET=EB", "2,9,10,11,12,13,14,15,16",
-        "*ELEMENT, TYPE=SPRINGA, ELSET=ESA", "3,2,9", "4,3,12", "5,6,13", "6,7,16",
+        "*ELEMENT, TYPE=SPRINGA, ELSET=ESA", "3,2,9", "4,3,12", "5,6,13", "6,7,16", "11,8,16",
         "*ELEMENT, TYPE=SPRING1, ELSET=ES1", "7,10", "8,11", "9,14",
         "*ELEMENT, TYPE=SPRING2, ELSET=ES2", "10,6,15",
         "*NSET, NSET=FIX", "1,4,5,8", "*BOUNDARY", "FIX,1,3",
@@ -39,6 +40,7 @@ def spring_deck(*, nlgeom: bool, nonlinear: bool) -> str:
     lines += ["*STEP, NLGEOM" if nlgeom else "*STEP", "*STATIC"]
     lines += ["0.25,1."] if nlgeom else []
     lines += ["*CLOAD", "15,1,4.", "11,2,-3.", "14,3,2.", "*NODE PRINT, NSET=NALL", "U"]
+    lines += ["*NODE PRINT, NSET=FIX, TOTALS=YES", "RF"]
     lines += ["*END STEP"]
     return "\n".join(lines) + "\n"
 
