@@ -214,9 +214,9 @@ class CcxNumbering:
     def _discrete_spring_forces(self) -> np.ndarray:
         """``(N, 3)`` forces of the spring elements (SPRINGA, SPRING1, SPRING2) at deck nodes.
 
-        Every process evaluates every spring (docs/method.md §15.2): no gathering. As ccx 2.20
+        Every process evaluates every spring (docs/method.md §16.2): no gathering. As ccx 2.20
         prints them (measured): SPRINGA's force of the current line and length also in steps
-        without NLGEOM, whose solution takes the initial line (docs/method.md §15.3).
+        without NLGEOM, whose solution takes the initial line (docs/method.md §16.3).
         """
         forces = np.zeros((self.deck.node_ids.size, 3))
         x = compat.petsc_vector(self.model.u)

@@ -79,7 +79,7 @@ class ResidualTerm(typing.Protocol):
 class ElementTerm(typing.Protocol):
     """Elements between nodes that may share no cell, in the global numbering.
 
-    For example discrete springs (:class:`~dolfinx_ntf.DiscreteSprings`, docs/method.md §15); see
+    For example discrete springs (:class:`~dolfinx_ntf.DiscreteSprings`, docs/method.md §16); see
     :attr:`~dolfinx_ntf.ContactProblem.element_terms`. The problem reserves the term's couplings
     in the matrix pattern and assembles its blocks with the contact springs. Collective methods.
     """
@@ -264,7 +264,7 @@ class ContactProblem:
         #: (e.g. the inertia of a dynamic step, docs/method.md §12).
         self.extra_terms: list[ResidualTerm] = []
         #: Elements between arbitrary nodes assembled with the springs (e.g. discrete springs,
-        #: docs/method.md §15); add them before the first step.
+        #: docs/method.md §16); add them before the first step.
         self.element_terms: list[ElementTerm] = []
         self._element_blocks: list[GlobalBlocks] = []
         #: Objects the outputs derive from this problem and keep with it for later calls, by name

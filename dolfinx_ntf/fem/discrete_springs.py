@@ -1,6 +1,6 @@
 """Discrete springs between mesh nodes, or from a node to the ground: :class:`DiscreteSprings`.
 
-The dolfinx glue of ``kernels/discrete_springs.py`` (docs/method.md §15). A spring joins two nodes
+The dolfinx glue of ``kernels/discrete_springs.py`` (docs/method.md §16). A spring joins two nodes
 of the displacement space that may share no cell and, in parallel, may be owned by different
 processes. So the springs are kept in the *global* numbering: the end nodes are located once by
 their coordinates; at each evaluation the end displacements of all springs are summed over the
@@ -185,7 +185,7 @@ class DiscreteSprings:
 
         For reactions and printed nodal forces; a grounded end's entry is the ground's share.
         ``element``: evaluate with this element instead of the springs' own (CalculiX prints
-        SPRINGA forces of the current line also without NLGEOM, docs/method.md §15.3).
+        SPRINGA forces of the current line also without NLGEOM, docs/method.md §16.3).
         """
         element = self.element if element is None else element
         forces, _ = element.evaluate(self.reference, self.displacements(x), tangent=False)

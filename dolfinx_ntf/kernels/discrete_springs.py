@@ -1,6 +1,6 @@
 """Discrete spring elements between two nodes: forces and tangents, vectorized over springs.
 
-CalculiX's spring elements (docs/method.md §15), pure numpy. A spring has two end nodes; a
+CalculiX's spring elements (docs/method.md §16), pure numpy. A spring has two end nodes; a
 grounded end is a node that does not move. Its element dofs are ``[node 1 x, y, z, node 2 x, y,
 z]``, and it returns the internal forces (the residual contribution: the forces the nodes need to
 hold the spring stretched) and their derivative with respect to the nodal displacements.

@@ -1,4 +1,4 @@
-"""Spring elements in the deck runner against ccx 2.20 (docs/method.md §15.3).
+"""Spring elements in the deck runner against ccx 2.20 (docs/method.md §16.3).
 
 The deck (``tests/data/calculix/springs/spring_deck.py``): two C3D8 cubes joined by SPRINGA
 (inclined), SPRING1 and SPRING2 elements. ccx 2.20 runs it in a scratch directory; the deck
@@ -64,7 +64,7 @@ def test_spring_deck_matches_ccx(tmp_path, nlgeom, nonlinear):
         assert np.all(np.abs(u.values[u.labels >= 9]).max(axis=0) > 1e-2 * np.abs(u.values).max())
         # In x and y (the SPRING1 to the ground take z) the reactions balance the loads (4, -3)
         # only with the clamped node's spring. Without NLGEOM they do not: ccx prints the
-        # spring's force of the current line there too (reproduced, docs/method.md §15.3).
+        # spring's force of the current line there too (reproduced, docs/method.md §16.3).
         total = _blocks(ntf_dir / "springs.dat", "RF_TOTAL")[-1].values[0]
         imbalance = np.abs(total[:2] - [-4.0, 3.0]).max()
         assert imbalance <= 1e-5 if nlgeom else imbalance > 0.1
@@ -116,7 +116,7 @@ def test_nonlinear_springs_without_nlgeom_are_refused(tmp_path):
 
 @pytest.mark.serial
 def test_contact_damping_in_a_dynamic_step_is_refused(tmp_path):
-    """ccx damps the contact springs in ``*DYNAMIC`` steps only; not reproduced yet (§15.4)."""
+    """ccx damps the contact springs in ``*DYNAMIC`` steps only; not reproduced yet (§16.4)."""
     text = spring_deck(nlgeom=True, nonlinear=False).replace(
         "*STEP",
         "*SURFACE INTERACTION, NAME=SI1\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n1.e5\n"

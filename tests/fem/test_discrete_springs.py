@@ -1,4 +1,4 @@
-"""Discrete springs in the Python API (``DiscreteSprings``, docs/method.md §15): closed forms.
+"""Discrete springs in the Python API (``DiscreteSprings``, docs/method.md §16): closed forms.
 
 A bar of ``nu = 0`` with rollers on three faces is in uniform uniaxial stress under an end
 traction, on any mesh and partition, so the springs' closed forms hold to round-off. Four
@@ -7,6 +7,9 @@ traction would: the uniform state stays exact.
 """
 
 from __future__ import annotations
+
+import re
+from pathlib import Path
 
 from mpi4py import MPI
 
@@ -151,3 +154,14 @@ def test_a_point_off_the_mesh_is_refused() -> None:
             [[0, 0, 0], [0, 1, 0]],
             [[1, 0, 0], [1, 0.5, 0]],
         )
+
+
+def test_guide_example_runs() -> None:
+    """The guide page's bar on a spring (docs/guide/springs.md) runs and moves F/(k + EA/L)."""
+    text = (Path(__file__).parents[2] / "docs" / "guide" / "springs.md").read_text()
+    (block,) = re.findall(r"^```python\n(.*?)^```$", text, flags=re.S | re.M)
+    namespace: dict = {}
+    exec(compile(block, "docs/guide/springs.md", "exec"), namespace)
+    expected = namespace["force"] / (namespace["k"] + namespace["E"] / 4.0)
+    np.testing.assert_allclose(namespace["end_u"], expected, rtol=1e-10)
+    namespace["problem"].destroy()

@@ -26,7 +26,7 @@ class ElementBlock:
 
 @dataclass(frozen=True, eq=False)
 class SpringElements:
-    """Spring elements of one type with the behaviour of one ``*SPRING`` card (§15.3).
+    """Spring elements of one type with the behaviour of one ``*SPRING`` card (§16.3).
 
     Attributes:
         type: ``SPRINGA``, ``SPRING1`` or ``SPRING2``.

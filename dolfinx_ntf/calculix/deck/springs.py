@@ -1,4 +1,4 @@
-"""Spring cards: ``*ELEMENT, TYPE=SPRINGA|SPRING1|SPRING2`` and ``*SPRING`` (docs/method.md §15.3).
+"""Spring cards: ``*ELEMENT, TYPE=SPRINGA|SPRING1|SPRING2`` and ``*SPRING`` (docs/method.md §16.3).
 
 Spring elements are no mesh cells: the reader keeps them apart from the solid element blocks and
 ``_finish_springs`` joins each set of them to its ``*SPRING`` behaviour (one

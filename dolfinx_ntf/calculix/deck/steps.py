@@ -79,7 +79,7 @@ class StepCards(ReaderState):
                 raise DeckError(
                     "*CONTACT DAMPING is not supported yet in a *DYNAMIC step (ccx's damping of "
                     f"the contact springs, in *SURFACE INTERACTION {interaction.name}; see "
-                    "docs/method.md §15.4)",
+                    "docs/method.md §16.4)",
                     interaction.location,
                 )
         alpha = -0.05

@@ -80,7 +80,7 @@ class CalculixModel:
             in no element, whose prescribed values move to the constraint's right-hand side.
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
         springs: The spring elements (SPRINGA, SPRING1, SPRING2), one
-            :class:`~dolfinx_ntf.DiscreteSprings` per ``*SPRING`` card (docs/method.md §15.3).
+            :class:`~dolfinx_ntf.DiscreteSprings` per ``*SPRING`` card (docs/method.md §16.3).
     """
 
     deck: Deck

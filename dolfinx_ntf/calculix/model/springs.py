@@ -1,4 +1,4 @@
-"""The deck's spring elements as :class:`~dolfinx_ntf.DiscreteSprings` (docs/method.md §15.3).
+"""The deck's spring elements as :class:`~dolfinx_ntf.DiscreteSprings` (docs/method.md §16.3).
 
 SPRINGA is an :class:`~dolfinx_ntf.AxialSpring` (the current line with ``NLGEOM``, the initial one
 without), SPRING1 and SPRING2 are :class:`~dolfinx_ntf.DirectionalSpring` (SPRING1's second end

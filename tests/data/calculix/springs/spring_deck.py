@@ -1,4 +1,4 @@
-"""A small spring deck for the deck runner's comparison with ccx 2.20 (docs/method.md §15.3).
+"""A small spring deck for the deck runner's comparison with ccx 2.20 (docs/method.md §16.3).
 
 Two C3D8 unit cubes, the first clamped at x = 0, the second 1 unit further along x and 0.3 along
 y, held only by springs: five SPRINGA (four between the facing corners, inclined, and one from a
