@@ -359,7 +359,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
         pairs = contact_pairs(deck, surfaces, maps)
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
-        spring_nlgeom = check_springs(deck, maps.meshed)
+        springs_follow = check_springs(deck, maps.meshed)
     except (ValueError, NotImplementedError) as exc:
         error = exc
     validation.raise_collectively(comm, error)
@@ -390,7 +390,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
 
-    springs = deck_springs(deck, V, node_dof, bool(spring_nlgeom)) if deck.springs else []
+    springs = deck_springs(deck, V, node_dof, bool(springs_follow)) if deck.springs else []
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
     for component in range(3):

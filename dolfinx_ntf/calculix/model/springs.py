@@ -1,9 +1,10 @@
 """The deck's spring elements as :class:`~dolfinx_ntf.DiscreteSprings` (docs/method.md §16.3).
 
-SPRINGA is an :class:`~dolfinx_ntf.AxialSpring` (the current line with ``NLGEOM``, the initial one
-without), SPRING1 and SPRING2 are :class:`~dolfinx_ntf.DirectionalSpring` (SPRING1's second end
-grounded) acting in the global directions of their degrees of freedom; a linear ``*SPRING`` is a
-:class:`~dolfinx_ntf.LinearSpringLaw`, ``NONLINEAR`` a :class:`~dolfinx_ntf.TabularSpringLaw`.
+SPRINGA is an :class:`~dolfinx_ntf.AxialSpring` (the current line where ccx iterates, the initial
+one in linear steps), SPRING1 and SPRING2 are :class:`~dolfinx_ntf.DirectionalSpring` (SPRING1's
+second end grounded) acting in the global directions of their degrees of freedom; a linear
+``*SPRING`` is a :class:`~dolfinx_ntf.LinearSpringLaw`, ``NONLINEAR`` a
+:class:`~dolfinx_ntf.TabularSpringLaw`.
 """
 
 from __future__ import annotations
@@ -23,15 +24,18 @@ from dolfinx_ntf.kernels.discrete_springs import (
     TabularSpringLaw,
 )
 
-from ..deck import Deck, SpringElements
+from ..deck import Deck, SpringElements, Step
 
 __all__ = ["check_springs", "deck_springs"]
 
 
 def check_springs(deck: Deck, meshed: np.ndarray) -> bool | None:
-    """Refuse what the springs cannot do; returns SPRINGA's NLGEOM (None without springs).
+    """Refuse what springs cannot do; whether SPRINGA follows its current line (None: no springs).
 
-    ``meshed[row]``: the deck node belongs to a solid element. The same on every process.
+    ccx 2.20 takes SPRINGA's force along the current line and length whenever it iterates (NLGEOM,
+    contact pairs, ``*DYNAMIC``), and the initial line only in a linear step, solved at once
+    (measured, docs/method.md §16.3). ``meshed[row]``: the deck node belongs to a solid element. The
+    same on every process.
     """
     if not deck.springs:
         return None
@@ -45,20 +49,25 @@ def check_springs(deck: Deck, meshed: np.ndarray) -> bool | None:
                 f"{int(group.ids[e])} belongs to no solid element: springs to such nodes are not "
                 "supported yet (they need dofs outside the mesh)"
             )
-    kinds = {step.nlgeom for step in deck.steps}
+    kinds = {_iterated(deck, step) for step in deck.steps}
     tables = [group for group in deck.springs if group.table is not None]
     if tables and False in kinds:
         raise NotImplementedError(
-            f"{tables[0].location}: *SPRING, NONLINEAR in a step without NLGEOM is not supported: "
-            "ccx 2.20 then takes the spring as linear with the table's slope at zero elongation "
-            "(measured on a static step), which is not reproduced; use NLGEOM"
+            f"{tables[0].location}: *SPRING, NONLINEAR in a linear step (no NLGEOM, no contact, "
+            "static) is not supported: ccx 2.20 then takes the spring as linear with the table's "
+            "slope at zero elongation (measured), which is not reproduced; use NLGEOM"
         )
     if len(kinds) > 1 and any(group.type == "SPRINGA" for group in deck.springs):
         raise NotImplementedError(
-            f"{deck.springs[0].location}: SPRINGA elements in a deck with steps with and without "
-            "NLGEOM are not supported yet"
+            f"{deck.springs[0].location}: SPRINGA elements in a deck with linear steps (one solve) "
+            "and iterated ones (NLGEOM, contact, *DYNAMIC) are not supported yet"
         )
     return True in kinds
+
+
+def _iterated(deck: Deck, step: Step) -> bool:
+    """Whether ccx solves ``step`` by Newton iterations rather than one linear solve."""
+    return step.nlgeom or bool(deck.contact_pairs) or step.dynamic is not None
 
 
 def deck_springs(

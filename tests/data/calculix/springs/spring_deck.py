@@ -17,8 +17,12 @@ _CORNERS = [
 ]  # fmt: skip
 
 
-def spring_deck(*, nlgeom: bool, nonlinear: bool) -> str:
-    """The deck: SPRINGA constant 200, or a force-elongation table with ``nonlinear``."""
+def spring_deck(*, nlgeom: bool, nonlinear: bool, contact: bool = False) -> str:
+    """The deck: SPRINGA constant 200, or a force-elongation table with ``nonlinear``.
+
+    ``contact``: a contact pair between the cubes' facing sides that stays open (the loads pull the
+    second cube away), which makes ccx iterate without NLGEOM too.
+    """
     nodes = [(1 + i, float(x), float(y), float(z)) for i, (x, y, z) in enumerate(_CORNERS)]
     nodes += [(9 + i, 2.0 + x, 0.3 + y, float(z)) for i, (x, y, z) in enumerate(_CORNERS)]
     lines = ["*NODE, NSET=NALL", *(f"{n},{x!r},{y!r},{z!r}" for n, x, y, z in nodes)]
@@ -37,6 +41,13 @@ def spring_deck(*, nlgeom: bool, nonlinear: bool) -> str:
     else:
         lines += ["*SPRING, ELSET=ESA", "", "200."]
     lines += ["*SPRING, ELSET=ES1", "3", "50.", "*SPRING, ELSET=ES2", "2,2", "80."]
+    if contact:
+        lines += [
+            "*SURFACE, NAME=SB, TYPE=NODE", "9", "12", "13", "16", "*SURFACE, NAME=MA", "1,S4",
+            "*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE", "SB, MA",
+            "*SURFACE INTERACTION, NAME=SI", "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
+            "1.e5",
+        ]  # fmt: skip
     lines += ["*STEP, NLGEOM" if nlgeom else "*STEP", "*STATIC"]
     lines += ["0.25,1."] if nlgeom else []
     lines += ["*CLOAD", "15,1,4.", "11,2,-3.", "14,3,2.", "*NODE PRINT, NSET=NALL", "U"]
@@ -45,8 +56,10 @@ def spring_deck(*, nlgeom: bool, nonlinear: bool) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_spring_deck(directory: Path, name: str, *, nlgeom: bool, nonlinear: bool) -> Path:
+def write_spring_deck(
+    directory: Path, name: str, *, nlgeom: bool, nonlinear: bool, contact: bool = False
+) -> Path:
     """Write ``name.inp`` into ``directory``; returns its path."""
     path = Path(directory) / f"{name}.inp"
-    path.write_text(spring_deck(nlgeom=nlgeom, nonlinear=nonlinear))
+    path.write_text(spring_deck(nlgeom=nlgeom, nonlinear=nonlinear, contact=contact))
     return path
