@@ -172,7 +172,13 @@ class DiscreteSprings:
     def evaluate(
         self, x: PETSc.Vec, bcs: typing.Sequence[compat.DirichletBC], *, tangent: bool = True
     ) -> GlobalBlocks:
-        """The forces (and tangent) of this process's springs at ``x``, in global dofs."""
+        """The forces (and tangent) of this process's springs at ``x``, in global dofs.
+
+        Args:
+            x: The displacement vector (owned values are read).
+            bcs: Dirichlet conditions: their dofs get index -1 (rows and columns skipped).
+            tangent: Compute the stiffness blocks too.
+        """
         displacement = self.displacements(x)
         forces, matrix = self.element.evaluate(
             self.reference[self.mine], displacement[self.mine], tangent=tangent
