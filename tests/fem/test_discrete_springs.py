@@ -149,6 +149,13 @@ def test_two_bars_joined_by_springs() -> None:
 
 def test_a_point_off_the_mesh_is_refused() -> None:
     u, _, _, _ = _bars([0.0])
+    law = ntf.LinearSpringLaw(1.0)
+    with pytest.raises(TypeError, match="AxialSpring or a DirectionalSpring"):
+        ntf.DiscreteSprings(u.function_space, law, [[0, 0, 0]])
+    with pytest.raises(ValueError, match="same shape"):
+        ntf.DiscreteSprings(u.function_space, ntf.AxialSpring(law), [[0, 0, 0]], np.zeros((2, 3)))
+    with pytest.raises(ValueError, match=r"finite \(S, 3\) coordinates"):
+        ntf.DiscreteSprings(u.function_space, ntf.AxialSpring(law), [[0, 0]])
     with pytest.raises(ValueError, match=r"end 2 of spring 1.*not a node"):
         ntf.DiscreteSprings(
             u.function_space,
