@@ -13,10 +13,17 @@ from dolfinx_ntf import logs as _logs
 from dolfinx_ntf.contact.pair import ContactPair
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
+from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.kernels.discrete_springs import (
+    AxialSpring,
+    DirectionalSpring,
+    LinearSpringLaw,
+    TabularSpringLaw,
+)
 from dolfinx_ntf.kernels.laws import (
     DynamicLinearLaw,
     ExponentialLaw,
@@ -77,6 +84,7 @@ __all__ = [
     "AddPair",
     "Amplitude",
     "AnalysisStep",
+    "AxialSpring",
     "BoundaryPressure",
     "ChangeFriction",
     "ContactConvergenceError",
@@ -89,6 +97,8 @@ __all__ = [
     "ContactSNESSolver",
     "ContactSolverError",
     "ContactWriter",
+    "DirectionalSpring",
+    "DiscreteSprings",
     "DynamicLinearLaw",
     "DynamicStep",
     "ExponentialLaw",
@@ -99,6 +109,7 @@ __all__ = [
     "LinearConstraint",
     "LinearConstraintBlock",
     "LinearLaw",
+    "LinearSpringLaw",
     "Load",
     "Modes",
     "NewtonSolver",
@@ -114,6 +125,7 @@ __all__ = [
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",
+    "TabularSpringLaw",
     "__version__",
     "component_bc",
     "contact_area",

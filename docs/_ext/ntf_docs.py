@@ -55,6 +55,17 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         ],
     ),
     (
+        "Discrete springs",
+        "dolfinx_ntf",
+        [
+            "DiscreteSprings",
+            "AxialSpring",
+            "DirectionalSpring",
+            "LinearSpringLaw",
+            "TabularSpringLaw",
+        ],
+    ),
+    (
         "Rigid master surfaces",
         "dolfinx_ntf",
         ["RigidSurface", "RigidPlane", "RigidSphere", "RigidCylinder", "SignedDistanceSurface"],

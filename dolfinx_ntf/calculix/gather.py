@@ -9,6 +9,7 @@ process the same code runs without communication.
 
 from __future__ import annotations
 
+import dataclasses
 import typing
 
 from mpi4py import MPI
@@ -23,6 +24,7 @@ import ufl
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.serendipity import element_forces_on_nodes
+from dolfinx_ntf.kernels.discrete_springs import AxialSpring
 
 from .deck import Deck
 from .model import CalculixModel
@@ -207,4 +209,21 @@ class CcxNumbering:
         order = np.lexsort(keys.T[::-1])
         contact = np.zeros_like(bulk)
         np.add.at(contact, rows[order], values[order])
-        return bulk + contact
+        return bulk + contact + self._discrete_spring_forces()
+
+    def _discrete_spring_forces(self) -> np.ndarray:
+        """``(N, 3)`` forces of the spring elements (SPRINGA, SPRING1, SPRING2) at deck nodes.
+
+        Every process evaluates every spring (docs/method.md §18.2): no gathering. As ccx 2.20
+        prints them (measured): SPRINGA's force of the current line and length also in steps
+        without NLGEOM, whose solution takes the initial line (docs/method.md §18.3).
+        """
+        forces = np.zeros((self.deck.node_ids.size, 3))
+        x = compat.petsc_vector(self.model.u)
+        for group, springs in zip(self.deck.springs, self.model.springs):
+            element = springs.element
+            if isinstance(element, AxialSpring):
+                element = dataclasses.replace(element, nlgeom=True)
+            ends = springs.end_forces(x, element)[:, : group.connectivity.shape[1]]
+            np.add.at(forces, self.deck.node_index(group.connectivity).ravel(), ends.reshape(-1, 3))
+        return forces

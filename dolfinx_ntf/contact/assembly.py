@@ -27,6 +27,7 @@ import dolfinx.fem
 import dolfinx.fem.petsc
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.halo import NodeHalo
 
@@ -117,27 +118,42 @@ class ContactAssembler:
 
     # -- sparsity ----------------------------------------------------------------------------------
 
-    def _coupling_keys(self, blocks: typing.Sequence[SpringBlocks]) -> np.ndarray:
-        """Sorted unique global node couplings (row * N + col) of the blocks."""
+    def _coupling_keys(
+        self, blocks: typing.Sequence[SpringBlocks], couplings: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Sorted unique global node couplings (row * N + col) of the blocks and ``couplings``.
+
+        ``couplings``: (K, 2) global node pairs (element terms, e.g. discrete springs).
+        """
         keys = [np.empty(0, dtype=np.int64)]
+        if couplings is not None and len(couplings):
+            pairs = np.asarray(couplings, dtype=np.int64)
+            keys.append(pairs[:, 0] * self._num_global + pairs[:, 1])
         for blk in blocks:
             rows = self._global_node[blk.row_nodes]
             cols = self._global_node[blk.col_nodes]
             keys.append((rows[:, :, None] * self._num_global + cols[:, None, :]).ravel())
         return np.unique(np.concatenate(keys))
 
-    def has_pattern(self, blocks: typing.Sequence[SpringBlocks]) -> bool:
-        """Whether the current matrix pattern holds every coupling of ``blocks``.
+    def has_pattern(
+        self, blocks: typing.Sequence[SpringBlocks], couplings: np.ndarray | None = None
+    ) -> bool:
+        """Whether the current matrix pattern holds every coupling of ``blocks`` and ``couplings``.
 
         Only contact couplings are tracked; couplings the bulk form also has count as missing until
-        merged, which costs one merge at most.
+        merged, which costs one merge at most. ``couplings``: (K, 2) global node pairs.
         """
-        keys = self._coupling_keys(blocks)
+        keys = self._coupling_keys(blocks, couplings)
         has = bool(np.all(np.isin(keys, self._pattern_keys, assume_unique=True)))
         return bool(self._comm.allreduce(has, op=MPI.LAND))
 
-    def create_matrix(self, blocks: typing.Sequence[SpringBlocks] = ()) -> PETSc.Mat:
-        """A new matrix with the bulk pattern plus the couplings of ``blocks`` and earlier ones."""
+    def create_matrix(
+        self, blocks: typing.Sequence[SpringBlocks] = (), couplings: np.ndarray | None = None
+    ) -> PETSc.Mat:
+        """A new matrix with the bulk pattern plus the couplings of ``blocks`` and earlier ones.
+
+        ``couplings``: more (K, 2) global node pairs to hold (element terms).
+        """
         A = dolfinx.fem.petsc.create_matrix(self._form)
         # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
         # preallocation.
@@ -147,7 +163,7 @@ class ContactAssembler:
             columns.astype(PETSc.IntType),
             np.zeros(columns.size * self._bs**2),
         )
-        keys = np.union1d(self._coupling_keys(blocks), self._pattern_keys)
+        keys = np.union1d(self._coupling_keys(blocks, couplings), self._pattern_keys)
         self._pattern_keys = np.empty(0, dtype=np.int64)
         self._merge(A, keys)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
@@ -224,6 +240,33 @@ class ContactAssembler:
                 self.pattern_merges += 1
                 return
         self._set_values(A, blocks)
+
+    def add_global_to_matrix(self, A: PETSc.Mat, blocks: typing.Sequence[GlobalBlocks]) -> None:
+        """Add element blocks in global dofs to ``A`` (its pattern holds them; -1 is skipped).
+
+        Call ``A.assemble()`` afterwards.
+        """
+        for blk in blocks:
+            if blk.values is None or blk.dofs.shape[0] == 0:
+                continue
+            dofs = blk.dofs.astype(PETSc.IntType)
+            A.setValuesRCV(dofs, dofs, blk.values, addv=PETSc.InsertMode.ADD_VALUES)
+
+    def add_global_to_vector(self, b: PETSc.Vec, blocks: typing.Sequence[GlobalBlocks]) -> None:
+        """Add the residual of element blocks in global dofs to ``b`` (-1 is skipped).
+
+        Ends with a vector assembly so off-process rows reach their owners.
+        """
+        for blk in blocks:
+            rows = blk.dofs.ravel()
+            keep = rows >= 0
+            b.setValues(
+                rows[keep].astype(PETSc.IntType),
+                blk.vector.ravel()[keep],
+                addv=PETSc.InsertMode.ADD_VALUES,
+            )
+        b.assemblyBegin()
+        b.assemblyEnd()
 
     def add_to_vector(
         self,

@@ -39,6 +39,7 @@ from dolfinx_ntf.fem.constraints import (
     LinearConstraint,
     LinearConstraintBlock,
 )
+from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.kernels.friction import TANGENT_MODES
 from dolfinx_ntf.kernels.start_slope import start_law
 from dolfinx_ntf.logs import details_logger
@@ -46,7 +47,7 @@ from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import distributed_elimination
 from dolfinx_ntf.parallel.halo import NodeHalo
 
-__all__ = ["ContactPair", "ContactProblem", "PairState", "ResidualTerm"]
+__all__ = ["ContactPair", "ContactProblem", "ElementTerm", "PairState", "ResidualTerm"]
 
 logger = logging.getLogger("dolfinx_ntf")
 
@@ -73,6 +74,26 @@ class ResidualTerm(typing.Protocol):
 
         Enters :meth:`~dolfinx_ntf.ContactProblem.average_element_force`.
         """
+
+
+class ElementTerm(typing.Protocol):
+    """Elements between nodes that may share no cell, in the global numbering.
+
+    For example discrete springs (:class:`~dolfinx_ntf.DiscreteSprings`, docs/method.md §18); see
+    :attr:`~dolfinx_ntf.ContactProblem.element_terms`. The problem reserves the term's couplings
+    in the matrix pattern and assembles its blocks with the contact springs. Collective methods.
+    """
+
+    def node_couplings(self) -> np.ndarray:
+        """(K, 2) global node pairs whose matrix entries this process adds."""
+
+    def evaluate(
+        self, x: PETSc.Vec, bcs: typing.Sequence[compat.DirichletBC], *, tangent: bool = True
+    ) -> GlobalBlocks:
+        """This process's blocks at ``x``; dofs of ``bcs`` get index -1."""
+
+    def force_sum(self) -> tuple[float, int]:
+        """Sum of the absolute values of its nodal forces and their count (this process's)."""
 
 
 class ContactProblem:
@@ -238,6 +259,10 @@ class ContactProblem:
         #: Extra terms added to the residual and the Jacobian after the bulk form and the springs
         #: (e.g. the inertia of a dynamic step, docs/method.md §12).
         self.extra_terms: list[ResidualTerm] = []
+        #: Elements between arbitrary nodes assembled with the springs (e.g. discrete springs,
+        #: docs/method.md §18); add them before the first step.
+        self.element_terms: list[ElementTerm] = []
+        self._element_blocks: list[GlobalBlocks] = []
         #: Objects the outputs derive from this problem and keep with it for later calls, by name
         #: (e.g. the recovered pressure's compiled forms, ``outputs/results.py``).
         self.output_cache: dict[str, typing.Any] = {}
@@ -305,7 +330,7 @@ class ContactProblem:
                 forces = state.evaluation.forces
                 total += float(np.abs(forces).sum())
                 count += forces.size
-        for term in self.extra_terms:  # e.g. inertia forces: (sum of |force|, count)
+        for term in [*self.extra_terms, *self.element_terms]:  # (sum of |force|, count)
             extra_total, extra_count = term.force_sum()
             total, count = total + extra_total, count + extra_count
         comm = self.u.function_space.mesh.comm
@@ -451,12 +476,14 @@ class ContactProblem:
         if self.linearize_area:
             coords = self.current_coordinates()
             blocks += [area_block(s, coords, values=False) for s in self.states]
-        if self.matrix is None or not self.assembler.has_pattern(blocks):
+        couplings = [term.node_couplings() for term in self.element_terms]
+        couplings = np.concatenate(couplings) if couplings else None
+        if self.matrix is None or not self.assembler.has_pattern(blocks, couplings):
             if self.matrix is not None:
                 self.matrix.destroy()
             comm = self.u.function_space.mesh.comm  # a failed patch lookup fails on all (§14.4)
             reserved = collectives.collectively(comm, self.pairing.reserved_blocks)
-            self.matrix = self.assembler.create_matrix(blocks + reserved)
+            self.matrix = self.assembler.create_matrix(blocks + reserved, couplings)
         self._pattern_checked = True
         return self.matrix
 
@@ -477,6 +504,7 @@ class ContactProblem:
             self.elimination.back_substitute(x)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._blocks = self.evaluate(tangent=True)
+        self._element_blocks = [term.evaluate(x, self.bcs) for term in self.element_terms]
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """Assemble the bulk residual plus the spring forces at ``x`` into ``b``."""
@@ -491,6 +519,8 @@ class ContactProblem:
         dolfinx.fem.petsc.apply_lifting(b, [self.a], [self.bcs], [x], -1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.assembler.add_to_vector(b, self._blocks)
+        if self._element_blocks:
+            self.assembler.add_global_to_vector(b, self._element_blocks)
         if self.nodal_loads is not None:
             b.axpy(-1.0, compat.petsc_vector(self.nodal_loads))
         for term in self.extra_terms:
@@ -551,6 +581,7 @@ class ContactProblem:
             self.bulk_norm = A.norm(PETSc.NormType.NORM_INFINITY)
         self.assembler.add_to_matrix(A, self._blocks, check_pattern=not self._pattern_checked)
         self._pattern_checked = True
+        self.assembler.add_global_to_matrix(A, self._element_blocks)
         A.assemble()
         for term in self.extra_terms:
             term.add_to_jacobian(x, A)

@@ -134,6 +134,10 @@ def _unconstrained_residual(problem: ContactProblem) -> np.ndarray:
         dolfinx.fem.petsc.assemble_vector(b, problem.L)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         problem.assembler.add_to_vector(b, problem.evaluate(tangent=False), dirichlet_rows=True)
+        x = compat.petsc_vector(problem.u)  # element terms with their Dirichlet rows: no bcs
+        blocks = [term.evaluate(x, (), tangent=False) for term in problem.element_terms]
+        if blocks:
+            problem.assembler.add_global_to_vector(b, blocks)
         if problem.nodal_loads is not None:
             b.axpy(-1.0, compat.petsc_vector(problem.nodal_loads))
         return b.array.copy()

@@ -26,8 +26,10 @@ class Checks(ReaderState):
                               block.locations)  # fmt: skip
         for what, ids, loc in self.node_refs:
             self._check_known(node_ids, ids, "node", what, (loc,))
+        springs = self._finish_springs(all_elements)
+        known_elements = np.sort(np.concatenate([all_elements, *(s.ids for s in springs)]))
         for what, ids, loc in self.element_refs:
-            self._check_known(all_elements, ids, "element", what, (loc,))
+            self._check_known(known_elements, ids, "element", what, (loc,))
         self._check_faces(elements)
         materials = self._check_materials(elements, all_elements)
         interactions = self._check_contact()
@@ -61,6 +63,7 @@ class Checks(ReaderState):
             warnings=tuple(self.warnings),
             initial_velocities=tuple(self.initial_velocities),
             equations=tuple(self.equations),
+            springs=springs,
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

@@ -25,6 +25,30 @@ class ElementBlock:
 
 
 @dataclass(frozen=True, eq=False)
+class SpringElements:
+    """Spring elements of one type with the behaviour of one ``*SPRING`` card (§18.3).
+
+    Attributes:
+        type: ``SPRINGA``, ``SPRING1`` or ``SPRING2``.
+        ids: ``(E,)`` element numbers.
+        connectivity: ``(E, 2)`` node numbers (``(E, 1)`` for SPRING1).
+        dofs: The degrees of freedom the spring acts in (1..3): none for SPRINGA, one for
+            SPRING1, two for SPRING2.
+        stiffness: The spring constant (linear springs), else None.
+        table: ``(k, 2)`` rows ``(elongation, force)`` of ``NONLINEAR`` springs, else None.
+        location: The ``*SPRING`` card.
+    """
+
+    type: str
+    ids: np.ndarray
+    connectivity: np.ndarray
+    dofs: tuple[int, ...]
+    stiffness: float | None
+    table: np.ndarray | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class Surface:
     """A ``*SURFACE``: element faces (``elements``, 1-based ``faces``) or nodes (``TYPE=NODE``)."""
 
@@ -406,6 +430,7 @@ class Deck:
         warnings: every keyword and parameter skipped by ``LENIENCY``, in deck order.
         equations: ``*EQUATION`` constraints (model definition), in deck order.
         initial_velocities: ``*INITIAL CONDITIONS, TYPE=VELOCITY`` data lines, in deck order.
+        springs: spring elements (SPRINGA, SPRING1, SPRING2) by ``*SPRING`` card.
     """
 
     path: str
@@ -427,11 +452,13 @@ class Deck:
     warnings: tuple[DeckWarning, ...] = ()
     initial_velocities: tuple[InitialVelocity, ...] = ()
     equations: tuple[Equation, ...] = ()
+    springs: tuple[SpringElements, ...] = ()
 
     @property
     def num_elements(self) -> int:
-        """Total number of elements (ccx numbers contact elements after them)."""
-        return sum(int(b.ids.size) for b in self.elements.values())
+        """Total number of elements, springs included (ccx numbers contact elements after them)."""
+        solids = sum(int(b.ids.size) for b in self.elements.values())
+        return solids + sum(int(s.ids.size) for s in self.springs)
 
     def node_index(self, ids) -> np.ndarray:
         """Row indices in ``node_ids``/``node_coords`` of node numbers ``ids`` (any shape)."""

@@ -12,6 +12,7 @@ from ..elements import ELEMENT_TYPES, REFUSED_ELEMENTS, frozen_array
 from .data import Surface
 from .errors import DeckError, Location
 from .lexer import INT_RE, Card
+from .springs import SPRING_TYPES
 from .state import ReaderState
 
 
@@ -121,8 +122,11 @@ class MeshCards(ReaderState):
     def _k_ELEMENT(self, card: Card) -> None:
         self._check_params(card, allowed={"TYPE", "ELSET"}, required={"TYPE"})
         type_name = card.params["TYPE"] or ""
+        if type_name in SPRING_TYPES:  # no mesh cells: springs.py
+            self._spring_elements(card, type_name)
+            return
         if type_name not in ELEMENT_TYPES:
-            supported = ", ".join(ELEMENT_TYPES)
+            supported = ", ".join([*ELEMENT_TYPES, *SPRING_TYPES])
             why = REFUSED_ELEMENTS.get(type_name, "")
             raise DeckError(
                 f"element type {type_name} is not supported{why} (supported: {supported})",

@@ -28,11 +28,13 @@ from .loads import LoadCards
 from .materials import MaterialCards
 from .mesh import MeshCards
 from .output import OutputCards
+from .springs import SpringCards
 from .steps import StepCards
 
 
 class _Reader(
     MeshCards,
+    SpringCards,
     MaterialCards,
     InteractionCards,
     LoadCards,

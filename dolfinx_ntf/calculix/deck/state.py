@@ -89,6 +89,12 @@ class ReaderState:
         self.element_rows: dict[str, list[list[int]]] = {t: [] for t in ELEMENT_TYPES}
         self.element_ids: dict[str, list[int]] = {t: [] for t in ELEMENT_TYPES}
         self.element_locs: dict[str, list[Location]] = {t: [] for t in ELEMENT_TYPES}
+        #: Spring elements by type: (element number, nodes, location) (``springs.py``).
+        self.spring_rows: dict[str, list[tuple[int, list[int], Location]]] = {}
+        #: ``*SPRING`` cards: (card, dofs, stiffness or None, table or None).
+        self._spring_behaviors: list[
+            tuple[Card, tuple[int, ...], float | None, np.ndarray | None]
+        ] = []
         self.nsets: dict[str, list[int]] = {}
         self.elsets: dict[str, list[int]] = {}
         self.set_locations: dict[tuple[str, str], Location] = {}

@@ -24,6 +24,7 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
+from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel.global_constraints import global_constraints
@@ -35,6 +36,7 @@ from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
 from .mesh import create_mesh, element_block, mesh_maps, numbering
+from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
 
 __all__ = ["CalculixModel", "build_model"]
@@ -77,6 +79,8 @@ class CalculixModel:
         reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
             in no element, whose prescribed values move to the constraint's right-hand side.
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
+        springs: The spring elements (SPRINGA, SPRING1, SPRING2), one
+            :class:`~dolfinx_ntf.DiscreteSprings` per ``*SPRING`` card (docs/method.md §18.3).
     """
 
     deck: Deck
@@ -111,6 +115,7 @@ class CalculixModel:
     constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
+    springs: list[DiscreteSprings] = field(default_factory=list)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -318,6 +323,7 @@ class CalculixModel:
         options.setdefault("constraints", self.constraints)
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
+        problem.element_terms.extend(self.springs)
         return problem
 
 
@@ -353,6 +359,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
         pairs = contact_pairs(deck, surfaces, maps)
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
+        springs_follow = check_springs(deck, maps.meshed)
     except (ValueError, NotImplementedError) as exc:
         error = exc
     validation.raise_collectively(comm, error)
@@ -383,6 +390,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
 
+    springs = deck_springs(deck, V, node_dof, bool(springs_follow)) if deck.springs else []
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
     for component in range(3):
@@ -422,4 +430,5 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         constraints=constraints,
         reference_terms=reference_terms,
         free_references=free_references,
+        springs=springs,
     )
