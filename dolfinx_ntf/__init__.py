@@ -12,6 +12,7 @@ from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
 from dolfinx_ntf.contact.pair import ContactPair
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
@@ -112,6 +113,7 @@ __all__ = [
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",
+    "Tie",
     "__version__",
     "component_bc",
     "contact_area",
@@ -125,4 +127,5 @@ __all__ = [
     "run_steps",
     "serendipity_constraints",
     "small_strain_stress",
+    "tie_constraints",
 ]
