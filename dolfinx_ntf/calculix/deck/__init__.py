@@ -31,6 +31,7 @@ from .data import (
     Boundary,
     CLoad,
     ContactPair,
+    CyclicSymmetry,
     Deck,
     DLoad,
     Dynamic,
@@ -49,6 +50,7 @@ from .data import (
     Surface,
     SurfaceBehavior,
     SurfaceInteraction,
+    Tie,
 )
 from .errors import DeckError, DeckWarning, Location, not_supported
 from .faces import external_faces, face_nodes, node_surface_faces, surface_nodes
@@ -64,6 +66,7 @@ __all__ = [
     "Boundary",
     "CLoad",
     "ContactPair",
+    "CyclicSymmetry",
     "DLoad",
     "Deck",
     "DeckError",
@@ -86,6 +89,7 @@ __all__ = [
     "Surface",
     "SurfaceBehavior",
     "SurfaceInteraction",
+    "Tie",
     "external_faces",
     "face_nodes",
     "node_surface_faces",

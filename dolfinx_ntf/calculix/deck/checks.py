@@ -61,6 +61,8 @@ class Checks(ReaderState):
             warnings=tuple(self.warnings),
             initial_velocities=tuple(self.initial_velocities),
             equations=tuple(self.equations),
+            ties=tuple(self.ties.values()),
+            cyclic_symmetries=tuple(self.cyclic_symmetries),
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

@@ -28,10 +28,11 @@ from .materials import MaterialCards
 from .mesh import MeshCards
 from .output import OutputCards
 from .steps import StepCards
+from .ties import TieCards
 
 
 class _Reader(
-    MeshCards, MaterialCards, InteractionCards, LoadCards, StepCards, OutputCards, Checks
+    MeshCards, MaterialCards, InteractionCards, LoadCards, StepCards, OutputCards, TieCards, Checks
 ):
     """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""
 

@@ -26,7 +26,7 @@ from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
-from dolfinx_ntf.parallel.global_constraints import global_constraints
+from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
 from ..deck import Deck
 from ..elements import ElementType
@@ -36,6 +36,7 @@ from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
 from .mesh import create_mesh, element_block, mesh_maps, numbering
 from .surfaces import deck_surfaces
+from .ties import tie_constraints
 
 __all__ = ["CalculixModel", "build_model"]
 
@@ -73,7 +74,8 @@ class CalculixModel:
         steps: Load schedule of every step.
         amplitude_names: Amplitude names by index.
         constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1), then
-            for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5).
+            for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5), then
+            the ``*TIE`` blocks (surface ties and cyclic symmetry, §15).
         reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
             in no element, whose prescribed values move to the constraint's right-hand side.
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
@@ -330,7 +332,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             0's cells (docs/method.md §14.5); every process must have read the same deck.
 
     Returns:
-        The :class:`CalculixModel`.
+        The :class:`CalculixModel` (its ``deck`` has the slave nodes ADJUST of ``*TIE`` moved).
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
@@ -339,6 +341,8 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     """
     block = element_block(deck)
     etype = block.type
+    # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §15)
+    deck, tie_blocks = tie_constraints(deck, np.isin(deck.node_ids, block.connectivity))
     mesh = create_mesh(deck, block, comm)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
@@ -382,6 +386,13 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
+    for tie in tie_blocks:  # every process read them: rank 0 gives them
+        rows = slice(None) if comm.rank == 0 else slice(0)
+        given = LinearConstraintBlock(
+            tie.nodes[rows], tie.components[rows], tie.coefficients[rows], tie.values[rows],
+            name=tie.name, drop_prescribed=tie.drop_prescribed,
+        )  # fmt: skip
+        constraints.append(global_constraint_block(V, given, node_ids=dof_node))
 
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
