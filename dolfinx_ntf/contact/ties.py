@@ -1,4 +1,4 @@
-"""Surface ties between non-matching meshes (CalculiX ``*TIE``): docs/method.md §15.1.
+"""Surface ties between non-matching meshes (CalculiX ``*TIE``): docs/method.md §16.1.
 
 A :class:`Tie` names a slave surface (nodes) and a master surface (faces) of one mesh, e.g. two
 bodies meshed independently. :func:`tie_constraints` ties every slave node to the point of the

@@ -112,7 +112,7 @@ class LinearConstraintBlock:
         name: Label for messages.
         drop_prescribed: Drop a row whose every term (of non-zero coefficient) is prescribed by
             a Dirichlet condition, instead of refusing it as redundant (surface ties and cyclic
-            symmetry on a fixed boundary, §15: the prescribed values are the caller's to keep
+            symmetry on a fixed boundary, §16: the prescribed values are the caller's to keep
             consistent).
     """
 

@@ -1,4 +1,4 @@
-"""Cyclic symmetry of a sector, static case (nodal diameter 0): docs/method.md §15.3.
+"""Cyclic symmetry of a sector, static case (nodal diameter 0): docs/method.md §16.2.
 
 A structure of ``N`` identical sectors under a cyclic symmetric load deforms cyclic symmetrically:
 the two faces bounding one sector have the same displacements in cylindrical coordinates. Each

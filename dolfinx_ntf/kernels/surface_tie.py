@@ -1,4 +1,4 @@
-"""Surface ties: each slave node tied to its projection on a master face (docs/method.md §15.1).
+"""Surface ties: each slave node tied to its projection on a master face (docs/method.md §16.1).
 
 CalculiX's ``*TIE`` (tied contact) makes every slave node follow the point of the master surface
 it projects onto: ``u_s = Σ_i N_i(ξ) u_i`` over the nodes of that face, three linear constraints
@@ -6,7 +6,7 @@ per slave node. A slave node is tied when its distance to that point is at most 
 tolerance (ccx: orthogonal distance, and the projection within the face or not farther than the
 tolerance parallel to it); the default tolerance is "2.5 % of the typical element size" (ccx's
 manual), here a quarter of the mean edge of the master's sub-triangles, which reproduces the
-tolerance ccx 2.20 prints for square master faces to all digits (docs/method.md §15.1). Nothing
+tolerance ccx 2.20 prints for square master faces to all digits (docs/method.md §16.1). Nothing
 here is about the *ties* of the contact search (equal distances, ``tie_frame``).
 
 The face is found by the triangle walk of the contact search (:class:`~dolfinx_ntf.kernels.search.

@@ -57,7 +57,7 @@ class GlobalLinearConstraint(LinearConstraint):
 class GlobalLinearConstraintBlock(LinearConstraintBlock):
     """A :class:`LinearConstraintBlock` whose ``nodes`` are global block dofs of the space.
 
-    The block form of :class:`GlobalLinearConstraint` (surface ties, cyclic symmetry: §15), made
+    The block form of :class:`GlobalLinearConstraint` (surface ties, cyclic symmetry: §16), made
     by :func:`global_constraint_block`; any process may give rows of it.
     """
 
@@ -244,7 +244,7 @@ def gather_constraints(
         if isinstance(c, GlobalLinearConstraint):  # already global (§14.9)
             local.append(("one", c.dofs, c.coefficients, c.value, c.name))
             continue
-        if isinstance(c, GlobalLinearConstraintBlock):  # already global (§15)
+        if isinstance(c, GlobalLinearConstraintBlock):  # already global (§16)
             local.append(("block", c.dofs, c.coefficients, c.values, (c.name, c.drop_prescribed)))
             continue
         if c.dofs.size and c.dofs.max() >= global_dofs.size:

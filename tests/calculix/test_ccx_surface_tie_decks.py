@@ -1,4 +1,4 @@
-"""``*TIE`` in the deck runner against ccx 2.20 (docs/method.md §15): generated decks of two
+"""``*TIE`` in the deck runner against ccx 2.20 (docs/method.md §16): generated decks of two
 non-matching C3D8 blocks tied and of a cyclic sector, and CalculiX's own scheibe2n2f.
 
 Every comparison runs ccx (on rank 0) and the deck runner (serially, or on all processes for the

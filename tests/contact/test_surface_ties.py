@@ -1,4 +1,4 @@
-"""Surface ties between non-matching meshes (dolfinx_ntf.contact.ties, ccx *TIE; method §15.1).
+"""Surface ties between non-matching meshes (dolfinx_ntf.contact.ties, ccx *TIE; method §16.1).
 
 Serial and on 2 ranks: every check compares scalars or fields of one mesh with an exact field.
 """
@@ -112,7 +112,7 @@ def test_patch_test_along_the_interface_is_exact_on_non_matching_meshes(division
 
 def test_patch_test_across_the_interface_is_exact_when_slave_faces_nest_in_master_faces():
     """Tension along z through the tie: exact when every slave face lies in one master face
-    (the slave's nodal forces then integrate the master shape functions exactly, §15.1)."""
+    (the slave's nodal forces then integrate the master shape functions exactly, §16.1)."""
     problem, _ = _blocks_problem((2, 2, 2), (4, 4, 2), direction=2)
     _solve(problem)
     assert _uniaxial_error(problem, 2) < 1e-12 * STRAIN

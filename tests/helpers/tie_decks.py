@@ -1,4 +1,4 @@
-"""Small generated decks of ``*TIE`` (docs/method.md §15): tied blocks and a cyclic sector.
+"""Small generated decks of ``*TIE`` (docs/method.md §16): tied blocks and a cyclic sector.
 
 ``tied_blocks_deck``: two C3D8 blocks, the upper one (its bottom the slave surface) meshed
 differently from the lower one (its top the master), the lower one clamped at its bottom, a shear

@@ -1,4 +1,4 @@
-"""Tie cards: ``*TIE`` and ``*CYCLIC SYMMETRY MODEL`` (docs/method.md §15).
+"""Tie cards: ``*TIE`` and ``*CYCLIC SYMMETRY MODEL`` (docs/method.md §16).
 
 A ``*TIE`` is a surface tie (tied contact: slave nodes follow the master faces) or, with
 ``CYCLIC SYMMETRY``, the pair of faces bounding a sector, which a ``*CYCLIC SYMMETRY MODEL``

@@ -75,7 +75,7 @@ class CalculixModel:
         amplitude_names: Amplitude names by index.
         constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1), then
             for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5), then
-            the ``*TIE`` blocks (surface ties and cyclic symmetry, §15).
+            the ``*TIE`` blocks (surface ties and cyclic symmetry, §16).
         reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
             in no element, whose prescribed values move to the constraint's right-hand side.
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
@@ -341,7 +341,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     """
     block = element_block(deck)
     etype = block.type
-    # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §15)
+    # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §16)
     deck, tie_blocks = tie_constraints(deck, np.isin(deck.node_ids, block.connectivity))
     mesh = create_mesh(deck, block, comm)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)

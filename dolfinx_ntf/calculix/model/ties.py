@@ -1,12 +1,12 @@
-"""The deck's ``*TIE`` cards as linear constraints on ccx node numbers (docs/method.md §15).
+"""The deck's ``*TIE`` cards as linear constraints on ccx node numbers (docs/method.md §16).
 
-Surface ties (tied contact, §15.1): each slave node within the position tolerance of the master
+Surface ties (tied contact, §16.1): each slave node within the position tolerance of the master
 faces follows its projection point, ``u_s = Σ_i N_i(ξ) u_i``; with ADJUST (ccx's default) it is
-first moved there. Slave nodes out of tolerance are left free with a warning, as ccx does (it lists
-them in ``jobname_WarnNodeMissMasterIntersect.nam``).
+first moved there. Slave nodes out of tolerance are left free with a warning, as ccx does (ccx 2.20
+lists them in ``jobname_WarnNodeMissTiedContact.nam``).
 
 Cyclic symmetry (``*TIE, CYCLIC SYMMETRY`` with ``*CYCLIC SYMMETRY MODEL``, static, nodal
-diameter 0, §15.3): each dependent node is matched with the independent node at the same radius
+diameter 0, §16.2): each dependent node is matched with the independent node at the same radius
 and axial position, ``u_s = R^T u_m``.
 
 Both are :class:`~dolfinx_ntf.fem.constraints.LinearConstraintBlock` objects on ccx node numbers
