@@ -19,6 +19,7 @@ import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.elasticity import small_strain_stress
+from dolfinx_ntf.kernels.cyclic_symmetry import CyclicMatch, cyclic_rows
 from dolfinx_ntf.kernels.faces import face_type_from_num_nodes
 from dolfinx_ntf.kernels.search import MasterSurface
 from dolfinx_ntf.kernels.surface_tie import default_tolerance, project_on_master, tie_rows
@@ -52,6 +53,33 @@ def test_projection_weights_reproduce_the_point_and_far_nodes_are_not_tied():
     nodes, components, coefficients = tie_rows([9], faces[:1], projection.weights[:1])
     assert nodes.shape == (3, 5) and components[:, 0].tolist() == [0, 1, 2]
     assert np.all(components == components[:, :1]) and np.all(coefficients[:, 0] == 1.0)
+
+
+def test_cyclic_rows_hold_for_a_cyclic_symmetric_field_and_not_for_a_uniform_one():
+    """Faces of a 40 degree sector about the axis (1, 1, 0) + t (0, 0, 1): a radial field satisfies
+    ``u_s = R^T u_m``, a uniform translation along x does not."""
+    axis_point = np.array([1.0, 1.0, 0.0])
+    radius, height = np.meshgrid([0.5, 1.0, 2.0], [0.0, 0.3], indexing="ij")
+    r, h = radius.ravel(), height.ravel()
+    angle = np.radians(40.0)
+    master_x = axis_point + np.column_stack([r, np.zeros_like(r), h])
+    slave_x = axis_point + np.column_stack([r * np.cos(angle), r * np.sin(angle), h])
+    order = np.arange(r.size)[::-1]  # any numbering
+    match = CyclicMatch(slave_x, master_x[order], axis_point, axis_point + [0, 0, 2], 9, 1e-9)
+    np.testing.assert_array_equal(order[match.master], np.arange(r.size))
+    assert match.angle == pytest.approx(-angle) and match.angle_error < 1e-12
+    nodes, components, coefficients = cyclic_rows(np.arange(r.size), r.size + match.master,
+                                                   match.rotation)  # fmt: skip
+    x = np.vstack([slave_x, master_x[order]])
+
+    def residual(u):
+        return np.einsum("kj,kj->k", coefficients, u[nodes, components])
+
+    radial = 0.01 * (x - axis_point) * [1.0, 1.0, 0.0] + [0.0, 0.0, 0.002]
+    assert np.abs(residual(radial)).max() < 1e-15
+    assert np.abs(residual(np.tile([0.01, 0.0, 0.0], (x.shape[0], 1)))).max() > 1e-3
+    with pytest.raises(ValueError, match="the two points of the axis coincide"):
+        CyclicMatch(slave_x, master_x, axis_point, axis_point, 9, 1e-9)
 
 
 # ----------------------------------------------------------------------------- two blocks
