@@ -65,7 +65,9 @@ def test_cyclic_rows_hold_for_a_cyclic_symmetric_field_and_not_for_a_uniform_one
     master_x = axis_point + np.column_stack([r, np.zeros_like(r), h])
     slave_x = axis_point + np.column_stack([r * np.cos(angle), r * np.sin(angle), h])
     order = np.arange(r.size)[::-1]  # any numbering
-    match = CyclicMatch(slave_x, master_x[order], axis_point, axis_point + [0, 0, 2], 9, 1e-9)
+    match = CyclicMatch(
+        slave_x, master_x[order], axis_point, axis_point + np.array([0.0, 0.0, 2.0]), 9, 1e-9
+    )
     np.testing.assert_array_equal(order[match.master], np.arange(r.size))
     assert match.angle == pytest.approx(-angle) and match.angle_error < 1e-12
     nodes, components, coefficients = cyclic_rows(np.arange(r.size), r.size + match.master,
