@@ -17,7 +17,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers.decks import CCX_TESTS
-from helpers.tie_decks import sector_deck, tied_blocks_deck
+from helpers.tie_decks import sector_deck, tied_blocks_deck, tied_quadratic_blocks_deck
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
@@ -71,6 +71,18 @@ def _dat_difference(ccx_dir: Path, ntf_dir: Path, name: str) -> float:
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_tied_blocks_match_ccx(tmp_path, case):
     ccx_dir, ntf_dir = _both(tmp_path, "tied", tied_blocks_deck(**CASES[case]))
+    assert _dat_difference(ccx_dir, ntf_dir, "tied") < 1e-6
+
+
+@needs_ccx
+@pytest.mark.serial
+@pytest.mark.parametrize("element", ["C3D20", "C3D20R"])
+@pytest.mark.parametrize("nodal", [False, True])
+def test_tied_quadratic_blocks_match_ccx(tmp_path, element, nodal):
+    """quad8 master faces; the slave's midside nodes are tied too."""
+    ccx_dir, ntf_dir = _both(
+        tmp_path, "tied", tied_quadratic_blocks_deck(element, slave_nodal=nodal)
+    )
     assert _dat_difference(ccx_dir, ntf_dir, "tied") < 1e-6
 
 

@@ -2,7 +2,8 @@
 
 ``tied_blocks_deck``: two C3D8 blocks, the upper one (its bottom the slave surface) meshed
 differently from the lower one (its top the master), the lower one clamped at its bottom, a shear
-and a compressive force on the upper top. ``sector_deck``: a 30 degree sector of a ring (C3D8)
+and a compressive force on the upper top; ``tied_quadratic_blocks_deck`` the same of C3D20 or
+C3D20R. ``sector_deck``: a 30 degree sector of a ring (C3D8)
 under internal pressure, its two radial faces tied by cyclic symmetry about z.
 """
 
@@ -137,5 +138,100 @@ def sector_deck(
     out.append("*BOUNDARY\nBOTTOM, 3, 3\nMASTERN, 2, 2")
     out.append("*STEP\n*STATIC\n*DLOAD")
     out.extend(f"{e}, P6, 100." for e in inner)
+    out.append("*NODE PRINT, NSET=NALL\nU\n*END STEP")
+    return "\n".join(out) + "\n"
+
+
+def _box20(origin, size, div, first_node, first_elem, lines, ids_out):
+    nx, ny, nz = div
+    ids = {}
+    nid = first_node
+    for kk in range(2 * nz + 1):
+        for jj in range(2 * ny + 1):
+            for ii in range(2 * nx + 1):
+                if (ii % 2) + (jj % 2) + (kk % 2) > 1:
+                    continue
+                ids[ii, jj, kk] = nid
+                x = origin[0] + size[0] * ii / (2 * nx)
+                y = origin[1] + size[1] * jj / (2 * ny)
+                z = origin[2] + size[2] * kk / (2 * nz)
+                lines.append(f"{nid}, {x:.15g}, {y:.15g}, {z:.15g}")
+                nid += 1
+    elems = []
+    eid = first_elem
+    for k in range(nz):
+        for j in range(ny):
+            for i in range(nx):
+                ii, jj, kk = 2 * i, 2 * j, 2 * k
+                c = [
+                    (ii, jj, kk),
+                    (ii + 2, jj, kk),
+                    (ii + 2, jj + 2, kk),
+                    (ii, jj + 2, kk),
+                    (ii, jj, kk + 2),
+                    (ii + 2, jj, kk + 2),
+                    (ii + 2, jj + 2, kk + 2),
+                    (ii, jj + 2, kk + 2),
+                ]
+                m = [
+                    (ii + 1, jj, kk),
+                    (ii + 2, jj + 1, kk),
+                    (ii + 1, jj + 2, kk),
+                    (ii, jj + 1, kk),
+                    (ii + 1, jj, kk + 2),
+                    (ii + 2, jj + 1, kk + 2),
+                    (ii + 1, jj + 2, kk + 2),
+                    (ii, jj + 1, kk + 2),
+                    (ii, jj, kk + 1),
+                    (ii + 2, jj, kk + 1),
+                    (ii + 2, jj + 2, kk + 1),
+                    (ii, jj + 2, kk + 1),
+                ]
+                elems.append((eid, k, [ids[p] for p in (*c, *m)]))
+                eid += 1
+    ids_out.update(ids)
+    return elems
+
+
+def tied_quadratic_blocks_deck(
+    etype="C3D20", lower=(2, 2, 2), upper=(3, 3, 2), gap=0.0, slave_nodal=False
+):
+    """``tied_blocks_deck`` with 20-node hexahedra (``etype`` C3D20 or C3D20R)."""
+    lines = []
+    lids = {}
+    uids = {}
+    le = _box20((0, 0, -1), (1, 1, 1), lower, 1, 1, lines, lids)
+    ue = _box20((0, 0, gap), (1, 1, 1), upper, 10001, 1001, lines, uids)
+    out = ["*NODE, NSET=NALL", *lines, f"*ELEMENT, TYPE={etype}, ELSET=EALL"]
+    for e, _, n in le + ue:
+        out.append(f"{e}, " + ", ".join(map(str, n[:15])) + ",")
+        out.append(", ".join(map(str, n[15:])))
+    out.append("*ELSET, ELSET=TOPEL")
+    out += [str(e) for e, k, _ in le if k == lower[2] - 1]
+    out.append("*ELSET, ELSET=BOTEL")
+    out += [str(e) for e, k, _ in ue if k == 0]
+    out.append("*NSET, NSET=FIX")
+    out += [str(v) for (ii, jj, kk), v in lids.items() if kk == 0]
+    out.append("*NSET, NSET=LOAD")
+    out += [
+        str(v)
+        for (ii, jj, kk), v in uids.items()
+        if kk == 2 * upper[2] and ii % 2 == 0 and jj % 2 == 0
+    ]
+    out.append("*NSET, NSET=UBOT")
+    out += [str(v) for (ii, jj, kk), v in uids.items() if kk == 0]
+    out.append("*SURFACE, NAME=MASTER\nTOPEL, S2")
+    out.append(
+        "*SURFACE, NAME=SLAVE, TYPE=NODE\nUBOT"
+        if slave_nodal
+        else "*SURFACE, NAME=SLAVE\nBOTEL, S1"
+    )
+    out.append("*TIE, NAME=T1\nSLAVE, MASTER")
+    out.append(
+        "*MATERIAL, NAME=STEEL\n*ELASTIC\n210000., 0.3\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL"
+    )
+    out.append("*BOUNDARY\nFIX, 1, 3\n*STEP\n*STATIC")
+    n = len([1 for (ii, jj, kk) in uids if kk == 2 * upper[2] and ii % 2 == 0 and jj % 2 == 0])
+    out.append(f"*CLOAD\nLOAD, 1, {1000.0 / n:g}\nLOAD, 3, {-3000.0 / n:g}")
     out.append("*NODE PRINT, NSET=NALL\nU\n*END STEP")
     return "\n".join(out) + "\n"
