@@ -72,7 +72,8 @@ def default_tolerance(face_type: FaceType, faces: np.ndarray, coords: np.ndarray
     """ccx's default position tolerance: 2.5 % of a quarter of the mean sub-triangle edge.
 
     ccx 2.20 prints 0.0071129449 h for square faces of side h (this formula's value to all
-    digits); for rectangles of 1 by 0.5 and 1 by 0.25 its value is 11 % and 9 % larger.
+    digits); on rectangles its value depends on their orientation in the global axes
+    (docs/method.md §16.1).
 
     Args:
         face_type: Type of the master faces.
