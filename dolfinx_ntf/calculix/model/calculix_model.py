@@ -342,7 +342,8 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     block = element_block(deck)
     etype = block.type
     # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §16)
-    deck, tie_blocks = tie_constraints(deck, np.isin(deck.node_ids, block.connectivity))
+    meshed = np.isin(deck.node_ids, block.connectivity)
+    deck, tie_blocks = tie_constraints(deck, meshed, warn=comm.rank == 0)
     mesh = create_mesh(deck, block, comm)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")

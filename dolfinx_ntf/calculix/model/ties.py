@@ -38,12 +38,15 @@ CYCLIC_TOLERANCE_FRACTION = 1e-10
 """ccx's default cyclic tolerance: this fraction of the mean distance between master nodes."""
 
 
-def tie_constraints(deck: Deck, meshed: np.ndarray) -> tuple[Deck, list[LinearConstraintBlock]]:
+def tie_constraints(
+    deck: Deck, meshed: np.ndarray, *, warn: bool = True
+) -> tuple[Deck, list[LinearConstraintBlock]]:
     """The deck with ADJUST's node moves, and its ``*TIE`` constraints on ccx node numbers.
 
     Args:
         deck: The parsed deck.
         meshed: ``(N,)`` whether each deck node belongs to an element.
+        warn: Log the slave nodes left untied (one process of several: rank 0).
 
     Raises:
         ValueError: a tie on nodes in no element, a nodal master surface of a surface tie,
@@ -68,13 +71,13 @@ def tie_constraints(deck: Deck, meshed: np.ndarray) -> tuple[Deck, list[LinearCo
         if tie.cyclic:
             blocks.append(_cyclic(deck, tie, symmetry[tie.name], coords, slaves))
         else:
-            blocks.append(_surface_tie(deck, tie, coords, slaves))
+            blocks.append(_surface_tie(deck, tie, coords, slaves, warn))
     blocks = [b for b in blocks if len(b)]
     return dataclasses.replace(deck, node_coords=coords), blocks
 
 
 def _surface_tie(
-    deck: Deck, tie: Tie, coords: np.ndarray, slaves: np.ndarray
+    deck: Deck, tie: Tie, coords: np.ndarray, slaves: np.ndarray, warn: bool
 ) -> LinearConstraintBlock:
     """Rows of a surface tie; moves the tied slave nodes in ``coords`` with ADJUST."""
     label = f"{tie.location}: *TIE {tie.name}"
@@ -89,7 +92,7 @@ def _surface_tie(
     rows = deck.node_index(slaves)
     projection = project_on_master(master, coords, coords[rows], tolerance)
     tied = projection.tied
-    if not np.all(tied):
+    if warn and not np.all(tied):
         missed = slaves[~tied]
         logger.warning(
             "%s: %d slave node(s) have no master face within the position tolerance %.6g and are "
