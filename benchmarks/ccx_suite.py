@@ -291,7 +291,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as scratch:
         root = args.keep or Path(scratch)
         rows = [run_ccx_deck(name, text, root, args.timeout) for name, text in decks]
-        if args.separate:
+        if args.separate or len(rows) == 1:  # one job: `run` prints no job header nor status
             for row in rows:
                 run_ntf_deck(row, root, args.timeout)
             wall = sum(row.ntf_time for row in rows)
