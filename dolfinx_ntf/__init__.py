@@ -12,6 +12,7 @@ from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
 from dolfinx_ntf.contact.pair import ContactPair
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
@@ -126,6 +127,7 @@ __all__ = [
     "SurfaceInteraction",
     "TabularLaw",
     "TabularSpringLaw",
+    "Tie",
     "__version__",
     "component_bc",
     "contact_area",
@@ -140,4 +142,5 @@ __all__ = [
     "run_steps",
     "serendipity_constraints",
     "small_strain_stress",
+    "tie_constraints",
 ]

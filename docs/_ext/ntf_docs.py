@@ -114,6 +114,8 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
             "global_constraints",
             "input_node_ids",
             "serendipity_constraints",
+            "Tie",
+            "tie_constraints",
         ],
     ),
     (

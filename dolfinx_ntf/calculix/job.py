@@ -612,7 +612,7 @@ def run_job(
     job = _Job(
         jobname,
         directory,
-        deck,
+        model.deck,  # *TIE's ADJUST moved nodes
         model,
         comm,
         tight=tight,

@@ -110,6 +110,10 @@ class LinearConstraintBlock:
         coefficients: ``(K, m)`` or ``(m,)`` (the same for every row) coefficients.
         values: ``(K,)`` right-hand sides; default 0.
         name: Label for messages.
+        drop_prescribed: Drop a row whose every term (of non-zero coefficient) is prescribed by
+            a Dirichlet condition, instead of refusing it as redundant (surface ties and cyclic
+            symmetry on a fixed boundary, §19: the prescribed values are the caller's to keep
+            consistent).
     """
 
     nodes: np.ndarray
@@ -117,6 +121,7 @@ class LinearConstraintBlock:
     coefficients: np.ndarray
     values: np.ndarray | None = None
     name: str = "constraint block"
+    drop_prescribed: bool = False
 
     def __post_init__(self) -> None:
         """Check shapes and values (``ValueError`` naming the block)."""
@@ -176,16 +181,19 @@ def _values(constraints: Constraints) -> np.ndarray:
 def _terms(constraints: Constraints):
     """All terms at once: ``(sizes, dofs, coefficients, label)`` of the scalar constraints.
 
-    ``label(k)`` names scalar constraint ``k`` and ``first_dof(k)`` its first term's dof.
+    ``label(k)`` names scalar constraint ``k``, ``first_dof(k)`` its first term's dof, and
+    ``droppable`` marks the rows of blocks with ``drop_prescribed``.
     """
-    sizes, dofs, coefficients, owners = [], [], [], []
+    sizes, dofs, coefficients, owners, droppable = [], [], [], [], []
     for index, c in enumerate(constraints):
         if isinstance(c, LinearConstraintBlock):
+            droppable.append(np.full(len(c), c.drop_prescribed))
             sizes.append(np.full(len(c), c.nodes.shape[1]))
             dofs.append(c.dofs.ravel())
             coefficients.append(c.coefficients.ravel())
             owners.append(np.full(len(c), index))
         else:
+            droppable.append(np.zeros(1, dtype=bool))
             sizes.append(np.array([c.nodes.size]))
             dofs.append(c.dofs)
             coefficients.append(c.coefficients)
@@ -201,7 +209,14 @@ def _terms(constraints: Constraints):
             return f"{c.name} (row {k - int(np.flatnonzero(owner_of == owner_of[k])[0])})"
         return c.label
 
-    return sizes_a, dofs_a, np.concatenate(coefficients), label, lambda k: int(dofs_a[starts[k]])
+    return (
+        sizes_a,
+        dofs_a,
+        np.concatenate(coefficients),
+        label,
+        lambda k: int(dofs_a[starts[k]]),
+        np.concatenate(droppable),
+    )
 
 
 def elimination_rows(
@@ -245,12 +260,28 @@ def _elimination(
         empty = scipy.sparse.csr_matrix((0, num_dofs))
         return np.zeros(0, np.int64), empty, scipy.sparse.csr_matrix((0, 0))
     # all terms at once: constraint index, dof, coefficient; repeated dofs of a constraint summed
-    sizes, dofs, coefficients, label, first_dof = _terms(constraints)
-    count = sizes.size
-    owner = np.repeat(np.arange(count), sizes)
-    if dofs.max() >= num_dofs:
+    sizes, dofs, coefficients, label, first_dof, droppable = _terms(constraints)
+    num_rows = sizes.size
+    owner = np.repeat(np.arange(num_rows), sizes)
+    if dofs.size and dofs.max() >= num_dofs:
         bad = int(owner[np.argmax(dofs >= num_dofs)])
         raise ValueError(f"{label(bad)}: dof {int(dofs.max())} is outside the space")
+    kept = np.arange(num_rows)
+    if np.any(droppable):  # rows of drop_prescribed blocks on prescribed dofs only: dropped
+        largest = np.zeros(num_rows)
+        np.maximum.at(largest, owner, np.abs(coefficients))
+        free = np.zeros(num_rows, dtype=bool)
+        significant = np.abs(coefficients) > 1e-14 * largest[owner]
+        np.logical_or.at(free, owner, ~fixed[dofs] & significant)
+        kept = np.flatnonzero(free | ~droppable)
+        terms = np.isin(owner, kept)
+        sizes, dofs, coefficients = sizes[kept], dofs[terms], coefficients[terms]
+        label, first_dof = _renumbered(label, kept), _renumbered(first_dof, kept)
+    count = sizes.size
+    owner = np.repeat(np.arange(count), sizes)
+    if count == 0:
+        empty = scipy.sparse.csr_matrix((0, num_dofs))
+        return np.zeros(0, np.int64), empty, scipy.sparse.csr_matrix((0, num_rows))
     keys, first, inverse = np.unique(
         owner * num_dofs + dofs, return_index=True, return_inverse=True
     )
@@ -284,7 +315,8 @@ def _elimination(
         (-merged[others] / a[term_owner[others]], (term_owner[others], term_dof[others])),
         shape=(s.size, num_dofs),
     )
-    G = scipy.sparse.diags(1.0 / a, format="csr")  # one dependent dof per constraint, in order
+    # one dependent dof per kept constraint, in order
+    G = scipy.sparse.csr_matrix((1.0 / a, (np.arange(count), kept)), shape=(count, num_rows))
     # chains: a dependent dof on the right-hand side of another constraint is substituted, round
     # by round (as many rounds as the longest chain); a cycle is refused first
     chained = M[:, s]
@@ -437,6 +469,11 @@ class ConstraintElimination:
             if obj is not None:
                 obj.destroy()
         self._reduced = None
+
+
+def _renumbered(function: typing.Callable[[int], typing.Any], rows: np.ndarray):
+    """``function`` of the original row number, called with the number among ``rows``."""
+    return lambda k: function(int(rows[k]))
 
 
 def _choose_sequentially(

@@ -35,8 +35,10 @@ from dolfinx_ntf.fem.constraints import (
 
 __all__ = [
     "GlobalLinearConstraint",
+    "GlobalLinearConstraintBlock",
     "distributed_elimination",
     "gather_constraints",
+    "global_constraint_block",
     "global_constraints",
     "input_node_ids",
 ]
@@ -49,6 +51,14 @@ class GlobalLinearConstraint(LinearConstraint):
     local block dofs), so any process may give it, whichever processes hold its nodes. Made by
     :func:`global_constraints` (docs/method.md §14.9). ``components``, ``coefficients``, ``value``
     and ``name`` are those of :class:`LinearConstraint`.
+    """
+
+
+class GlobalLinearConstraintBlock(LinearConstraintBlock):
+    """A :class:`LinearConstraintBlock` whose ``nodes`` are global block dofs of the space.
+
+    The block form of :class:`GlobalLinearConstraint` (surface ties, cyclic symmetry: §19), made
+    by :func:`global_constraint_block`; any process may give rows of it.
     """
 
 
@@ -118,18 +128,7 @@ def global_constraints(
     validation.raise_collectively(comm, error)
     parts = [c.nodes for c in constraints]
     wanted = np.unique(np.concatenate(parts)) if parts else np.zeros(0, np.int64)
-    if comm.size > 1:
-        wanted = np.unique(np.concatenate(comm.allgather(wanted)))
-    # each owner answers for the ids of its owned nodes (an id on several nodes is counted)
-    order = np.argsort(ids[: index_map.size_local], kind="stable")
-    owned = ids[order]
-    first = np.searchsorted(owned, wanted, side="left")
-    count = (np.searchsorted(owned, wanted, side="right") - first).astype(np.int64)
-    found = np.full(wanted.size, -1, dtype=np.int64)
-    found[count > 0] = int(index_map.local_range[0]) + order[first[count > 0]]
-    if comm.size > 1:
-        comm.Allreduce(MPI.IN_PLACE, found, op=MPI.MAX)
-        comm.Allreduce(MPI.IN_PLACE, count, op=MPI.SUM)
+    wanted, found, count = _owners_of_ids(V, ids, wanted)
     result, error = [], None
     for c in constraints:
         where = np.searchsorted(wanted, c.nodes)
@@ -146,6 +145,82 @@ def global_constraints(
         )
     validation.raise_collectively(comm, error)
     return result
+
+
+def _owners_of_ids(
+    V: dolfinx.fem.FunctionSpace, ids: np.ndarray, wanted: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Global block dof and number of carriers of every id wanted by any process. Collective.
+
+    Returns ``(wanted, found, count)``: the sorted union of all processes' ``wanted``, the global
+    block dof of each (-1 for none) and how many owned nodes carry it (1 when well defined).
+    """
+    comm = V.mesh.comm
+    index_map = V.dofmap.index_map
+    wanted = np.unique(np.asarray(wanted, dtype=np.int64))
+    if comm.size > 1:
+        wanted = np.unique(np.concatenate(comm.allgather(wanted)))
+    # each owner answers for the ids of its owned nodes (an id on several nodes is counted)
+    order = np.argsort(ids[: index_map.size_local], kind="stable")
+    owned = ids[order]
+    first = np.searchsorted(owned, wanted, side="left")
+    count = (np.searchsorted(owned, wanted, side="right") - first).astype(np.int64)
+    found = np.full(wanted.size, -1, dtype=np.int64)
+    found[count > 0] = int(index_map.local_range[0]) + order[first[count > 0]]
+    if comm.size > 1:
+        comm.Allreduce(MPI.IN_PLACE, found, op=MPI.MAX)
+        comm.Allreduce(MPI.IN_PLACE, count, op=MPI.SUM)
+    return wanted, found, count
+
+
+def global_constraint_block(
+    V: dolfinx.fem.FunctionSpace,
+    block: LinearConstraintBlock,
+    node_ids: np.ndarray | None = None,
+) -> GlobalLinearConstraintBlock:
+    """A block written with node ids, in ``V``'s global numbering. Collective.
+
+    The array form of :func:`global_constraints` (docs/method.md §14.9): each process may give
+    any rows (an empty block where it has none), on nodes any processes hold.
+
+    Args:
+        V: The displacement space (block size 3).
+        block: This process's rows, whose ``nodes`` are node ids.
+        node_ids: Id of each local block dof of ``V`` (see :func:`global_constraints`).
+
+    Raises:
+        ValueError: on every process, naming the block and the id, for an id that no process
+            holds or that several nodes carry.
+    """
+    comm = V.mesh.comm
+    index_map = V.dofmap.index_map
+    ids = input_node_ids(V) if node_ids is None else np.asarray(node_ids, dtype=np.int64)
+    num_local = index_map.size_local + index_map.num_ghosts
+    error = None
+    if ids.shape != (num_local,):
+        error = ValueError(
+            f"global_constraint_block: node_ids needs one id per local block dof ({num_local}), "
+            f"got shape {ids.shape} on process {comm.rank}"
+        )
+    validation.raise_collectively(comm, error)
+    wanted, found, count = _owners_of_ids(V, ids, block.nodes.ravel())
+    where = np.searchsorted(wanted, block.nodes)
+    bad = count[where] != 1
+    if np.any(bad):
+        node, many = int(block.nodes[bad][0]), bool(count[where][bad][0])
+        error = ValueError(
+            f"{block.name}: node {node}: "
+            + ("several nodes carry this id" if many else "no node of the mesh has this id")
+        )
+    validation.raise_collectively(comm, error)
+    return GlobalLinearConstraintBlock(
+        found[where],
+        block.components,
+        block.coefficients,
+        block.values,
+        name=block.name,
+        drop_prescribed=block.drop_prescribed,
+    )
 
 
 def gather_constraints(
@@ -169,6 +244,9 @@ def gather_constraints(
         if isinstance(c, GlobalLinearConstraint):  # already global (§14.9)
             local.append(("one", c.dofs, c.coefficients, c.value, c.name))
             continue
+        if isinstance(c, GlobalLinearConstraintBlock):  # already global (§19)
+            local.append(("block", c.dofs, c.coefficients, c.values, (c.name, c.drop_prescribed)))
+            continue
         if c.dofs.size and c.dofs.max() >= global_dofs.size:
             node = int(c.nodes.max())
             error = ValueError(
@@ -177,13 +255,15 @@ def gather_constraints(
             )
             break
         if isinstance(c, LinearConstraintBlock):
-            local.append(("block", global_dofs[c.dofs], c.coefficients, c.values, c.name))
+            block = (c.name, c.drop_prescribed)
+            local.append(("block", global_dofs[c.dofs], c.coefficients, c.values, block))
         else:
             local.append(("one", global_dofs[c.dofs], c.coefficients, c.value, c.name))
     validation.raise_collectively(comm, error)
     seen: set[tuple] = set()
     result: list[LinearConstraint | LinearConstraintBlock] = []
-    blocks: dict[tuple[str, int], list] = {}  # (name, width) -> [position in result, parts]
+    # ((name, drop_prescribed), width) -> [position in result, parts]
+    blocks: dict[tuple[tuple[str, bool], int], list] = {}
     for part in comm.allgather(local):
         for kind, dofs, coefficients, value, name in part:
             if kind == "block":
@@ -199,12 +279,12 @@ def gather_constraints(
                 continue
             seen.add(key)
             result.append(LinearConstraint(dofs // 3, dofs % 3, coefficients, value, name))
-    for (name, _), (position, parts) in blocks.items():
-        result[position] = _merged_block(name, parts)
+    for ((name, drop), _), (position, parts) in blocks.items():
+        result[position] = _merged_block(name, parts, drop)
     return result
 
 
-def _merged_block(name: str, parts: list) -> LinearConstraintBlock:
+def _merged_block(name: str, parts: list, drop_prescribed: bool) -> LinearConstraintBlock:
     """One block of the rows of ``parts`` ``(dofs, coefficients, values)``, each row once."""
     dofs = np.vstack([d for d, _, _ in parts])
     coefficients = np.vstack([np.broadcast_to(c, d.shape) for d, c, _ in parts])
@@ -218,7 +298,12 @@ def _merged_block(name: str, parts: list) -> LinearConstraintBlock:
     _, first = np.unique(keys, axis=0, return_index=True)
     rows = np.sort(first)
     return LinearConstraintBlock(
-        dofs[rows] // 3, dofs[rows] % 3, coefficients[rows], values[rows], name=name
+        dofs[rows] // 3,
+        dofs[rows] % 3,
+        coefficients[rows],
+        values[rows],
+        name=name,
+        drop_prescribed=drop_prescribed,
     )
 
 

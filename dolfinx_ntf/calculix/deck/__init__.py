@@ -31,6 +31,7 @@ from .data import (
     Boundary,
     CLoad,
     ContactPair,
+    CyclicSymmetry,
     Deck,
     DLoad,
     Dynamic,
@@ -51,6 +52,7 @@ from .data import (
     Surface,
     SurfaceBehavior,
     SurfaceInteraction,
+    Tie,
 )
 from .errors import DeckError, DeckWarning, Location, not_supported
 from .faces import external_faces, face_nodes, node_surface_faces, surface_nodes
@@ -66,6 +68,7 @@ __all__ = [
     "Boundary",
     "CLoad",
     "ContactPair",
+    "CyclicSymmetry",
     "DLoad",
     "Deck",
     "DeckError",
@@ -90,6 +93,7 @@ __all__ = [
     "Surface",
     "SurfaceBehavior",
     "SurfaceInteraction",
+    "Tie",
     "external_faces",
     "face_nodes",
     "node_surface_faces",

@@ -64,6 +64,8 @@ class Checks(ReaderState):
             initial_velocities=tuple(self.initial_velocities),
             equations=tuple(self.equations),
             springs=springs,
+            ties=tuple(self.ties.values()),
+            cyclic_symmetries=tuple(self.cyclic_symmetries),
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

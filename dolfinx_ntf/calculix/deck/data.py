@@ -411,6 +411,39 @@ class Step:
 
 
 @dataclass(frozen=True, eq=False)
+class Tie:
+    """A ``*TIE``: ``slave`` (dependent) and ``master`` surface names.
+
+    ``position_tolerance`` is None for ccx's default; ``adjust`` is False for ``ADJUST=NO``;
+    ``cyclic`` marks a ``CYCLIC SYMMETRY`` tie (used by a :class:`CyclicSymmetry`).
+    """
+
+    name: str
+    slave: str
+    master: str
+    position_tolerance: float | None
+    adjust: bool
+    cyclic: bool
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class CyclicSymmetry:
+    """A ``*CYCLIC SYMMETRY MODEL``: ``num_sectors`` (N) about the axis from a to b.
+
+    The sector's faces are those of the cyclic ``tie``; ``check`` compares the geometry's sector
+    angle with 2π/N (ccx's CHECK).
+    """
+
+    tie: str
+    num_sectors: float
+    point_a: tuple[float, float, float]
+    point_b: tuple[float, float, float]
+    check: bool
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class Deck:
     """A parsed deck.
 
@@ -431,6 +464,7 @@ class Deck:
         equations: ``*EQUATION`` constraints (model definition), in deck order.
         initial_velocities: ``*INITIAL CONDITIONS, TYPE=VELOCITY`` data lines, in deck order.
         springs: spring elements (SPRINGA, SPRING1, SPRING2) by ``*SPRING`` card.
+        ties: ``*TIE`` cards in deck order; cyclic_symmetries: ``*CYCLIC SYMMETRY MODEL`` cards.
     """
 
     path: str
@@ -453,6 +487,8 @@ class Deck:
     initial_velocities: tuple[InitialVelocity, ...] = ()
     equations: tuple[Equation, ...] = ()
     springs: tuple[SpringElements, ...] = ()
+    ties: tuple[Tie, ...] = ()
+    cyclic_symmetries: tuple[CyclicSymmetry, ...] = ()
 
     @property
     def num_elements(self) -> int:

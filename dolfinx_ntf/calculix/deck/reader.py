@@ -30,6 +30,7 @@ from .mesh import MeshCards
 from .output import OutputCards
 from .springs import SpringCards
 from .steps import StepCards
+from .ties import TieCards
 
 
 class _Reader(
@@ -41,6 +42,7 @@ class _Reader(
     StepCards,
     FrequencyCards,
     OutputCards,
+    TieCards,
     Checks,
 ):
     """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""

@@ -13,6 +13,7 @@ from .data import (
     Boundary,
     CLoad,
     ContactPair,
+    CyclicSymmetry,
     DLoad,
     Dynamic,
     Equation,
@@ -28,6 +29,7 @@ from .data import (
     Step,
     Surface,
     SurfaceBehavior,
+    Tie,
 )
 from .errors import DeckError, DeckWarning, Location
 from .leniency import SETS_FREQUENCY
@@ -107,6 +109,8 @@ class ReaderState:
         self.boundaries: list[Boundary] = []
         self.initial_velocities: list[InitialVelocity] = []
         self.equations: list[Equation] = []
+        self.ties: dict[str, Tie] = {}
+        self.cyclic_symmetries: list[CyclicSymmetry] = []
         self.steps: list[Step] = []
         self.ignored: list[tuple[str, str, int]] = []
         self.warnings: list[DeckWarning] = []

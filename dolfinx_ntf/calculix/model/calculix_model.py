@@ -27,7 +27,7 @@ from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock,
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
-from dolfinx_ntf.parallel.global_constraints import global_constraints
+from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
 from ..deck import Deck
 from ..elements import ElementType
@@ -38,6 +38,7 @@ from .loads import Schedule, StepLoads, schedules
 from .mesh import create_mesh, element_block, mesh_maps, numbering
 from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
+from .ties import tie_constraints
 
 __all__ = ["CalculixModel", "build_model"]
 
@@ -75,7 +76,8 @@ class CalculixModel:
         steps: Load schedule of every step.
         amplitude_names: Amplitude names by index.
         constraints: The ``*EQUATION`` constraints on ``V``'s dofs (docs/method.md §13.1), then
-            for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5).
+            for C3D20/C3D20R the serendipity constraints of the face and cell centres (§13.5), then
+            the ``*TIE`` blocks (surface ties and cyclic symmetry, §19).
         reference_terms: ``(constraint, keys, coefficients)`` of the ``*EQUATION`` terms on nodes
             in no element, whose prescribed values move to the constraint's right-hand side.
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
@@ -336,7 +338,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             0's cells (docs/method.md §14.5); every process must have read the same deck.
 
     Returns:
-        The :class:`CalculixModel`.
+        The :class:`CalculixModel` (its ``deck`` has the slave nodes ADJUST of ``*TIE`` moved).
 
     Raises:
         ValueError: mixed element types, faces that are not boundary facets, bad material data.
@@ -345,6 +347,9 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     """
     block = element_block(deck)
     etype = block.type
+    # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §19)
+    meshed = np.isin(deck.node_ids, block.connectivity)
+    deck, tie_blocks = tie_constraints(deck, meshed, warn=comm.rank == 0)
     mesh = create_mesh(deck, block, comm)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
@@ -389,6 +394,13 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
+    for tie in tie_blocks:  # every process read them: rank 0 gives them
+        rows = slice(None) if comm.rank == 0 else slice(0)
+        given = LinearConstraintBlock(
+            tie.nodes[rows], tie.components[rows], tie.coefficients[rows], tie.values[rows],
+            name=tie.name, drop_prescribed=tie.drop_prescribed,
+        )  # fmt: skip
+        constraints.append(global_constraint_block(V, given, node_ids=dof_node))
 
     springs = deck_springs(deck, V, node_dof, bool(springs_follow)) if deck.springs else []
     bc_spaces = []
