@@ -37,9 +37,10 @@ __all__ = ["ContactAssembler", "SpringBlocks"]
 class SpringBlocks:
     """Dense element blocks to add: ``values[e]`` couples ``row_nodes[e]`` with ``col_nodes[e]``.
 
-    Nodes are local block dofs; ``values`` has shape (E, 3 a, 3 b) for ``row_nodes`` (E, a) and
-    ``col_nodes`` (E, b). ``vector`` (E, 3 a) is the residual contribution of the rows (only for
-    square element blocks).
+    Nodes are local block dofs; ``values`` has shape (E, bs a, bs b) for ``row_nodes`` (E, a) and
+    ``col_nodes`` (E, b), bs the space's block size (3 for the displacement, 1 for a temperature).
+    ``vector`` (E, bs a) is the residual contribution of the rows (only for square element
+    blocks).
     """
 
     row_nodes: np.ndarray
@@ -65,16 +66,18 @@ class ContactAssembler:
         """Prepare global numbering and the Dirichlet mask.
 
         Args:
-            V: The vector displacement space (block size 3).
+            V: The vector displacement space (block size 3), or a scalar space numbered like its
+                nodes (the temperature of thermal contact, docs/method.md §16).
             jacobian_form: The compiled bulk Jacobian form; its sparsity pattern is the base of
                 every matrix.
             bcs: Dirichlet conditions on ``V``; their dofs receive no contact entries.
         """
         self._bs = V.dofmap.index_map_bs
-        if self._bs != V.mesh.topology.dim or self._bs not in (2, 3):
+        if self._bs not in (1, V.mesh.topology.dim) or self._bs > 3:
             raise ValueError(
                 "contact needs a vector displacement space with one component per dimension of "
-                f"the mesh, got block size {self._bs} on a {V.mesh.topology.dim}D mesh"
+                "the mesh (or a scalar space, e.g. the temperature), got block size "
+                f"{self._bs} on a {V.mesh.topology.dim}D mesh"
             )
         self._form = jacobian_form
         index_map = V.dofmap.index_map

@@ -1,0 +1,200 @@
+"""Thermal contact (contact/thermal.py, solvers/staggered.py) against 1D closed forms.
+
+Two bars stacked along z on rollers (x = 0, y = 0 planes, the lower bottom), meshes matching at
+the interface (node-to-face contact passes the patch test only there), the lower block's top the
+master surface: with temperatures prescribed on the far ends and the
+sides insulated, temperature and stress are uniform across the bars' sections and the hexahedra
+are exact, so the finite element answers equal the closed forms to the solver tolerance.
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+import scipy.optimize
+from helpers import (
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    YOUNGS_MODULUS,
+    solve_increments,
+    two_blocks,
+)
+
+import dolfinx.fem
+import ufl
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf import compat
+from dolfinx_ntf.contact.thermal import ThermalContactProblem
+from dolfinx_ntf.fem.elasticity import component_bc
+from dolfinx_ntf.fem.thermal import thermoelastic_stress
+from dolfinx_ntf.kernels.gap_conductance import GapConductance
+from dolfinx_ntf.solvers.staggered import solve_staggered
+
+pytestmark = pytest.mark.mpi
+
+#: No lateral strain from the axial stress: the spring areas stay the reference ones.
+POISSON_RATIO = 0.0
+CONDUCTIVITY = 2.0
+T_BOTTOM, T_TOP = 400.0, 300.0  # the lower (master) bar is the hotter
+#: h(p): 20 at p = 0 rising to 220 at p = 100, constant beyond.
+TABLE = GapConductance.from_rows([(20.0, 0.0, 0.0), (220.0, 100.0, 0.0)])
+LAW = ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS)
+
+
+def _bars(gap: float = 0.0):
+    """Mesh, tags, displacement space, thermal space, temperature and its Dirichlet conditions."""
+    mesh, _, ft = two_blocks(
+        upper=((0, 0, 0), (1, 1, 1), (3, 3, 2)), lower=((0, 0, -1), (1, 1, 1), (3, 3, 4)), gap=gap
+    )
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    Q = compat.scalar_space(mesh, "Lagrange", 1)
+    T = dolfinx.fem.Function(Q)
+    bcs_T = [
+        dolfinx.fem.dirichletbc(
+            dolfinx.fem.Constant(mesh, value),
+            dolfinx.fem.locate_dofs_topological(Q, 2, ft.find(tag)),
+            Q,
+        )
+        for tag, value in ((LOWER_BOTTOM, T_BOTTOM), (UPPER_TOP, T_TOP))
+    ]
+    return mesh, ft, V, Q, T, bcs_T
+
+
+def _rollers(V, ft, *, constrained: bool):
+    """Rollers on x = 0, y = 0 and the lower bottom; ``constrained``: also on x = 1, y = 1 (no
+    lateral strain: the thermal strain of a gradient along z then bends nothing) and the upper
+    top held in z."""
+    mesh = V.mesh
+    planes = [(0, 0.0), (1, 0.0)] + ([(0, 1.0), (1, 1.0)] if constrained else [])
+    bcs = [
+        component_bc(V, axis, dolfinx.mesh.locate_entities_boundary(
+            mesh, 2, lambda x, a=axis, c=coordinate: np.isclose(x[a], c)
+        ))
+        for axis, coordinate in planes
+    ]  # fmt: skip
+    bcs.append(component_bc(V, 2, ft.find(LOWER_BOTTOM)))
+    if constrained:
+        bcs.append(component_bc(V, 2, ft.find(UPPER_TOP)))
+    return bcs
+
+
+def _pair(ft):
+    return ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(LAW),
+    )
+
+
+def _heat_residual(T, Q):
+    return CONDUCTIVITY * ufl.inner(ufl.grad(T), ufl.grad(ufl.TestFunction(Q))) * ufl.dx
+
+
+def _interface_temperatures(T, mesh):
+    """(min, max) of T over the nodes at z = 0 (both bodies' interface nodes), all processes."""
+    z = T.function_space.tabulate_dof_coordinates()[:, 2]
+    values = T.x.array[np.isclose(z, 0.0)]
+    low = mesh.comm.allreduce(values.min(initial=np.inf), op=MPI.MIN)
+    high = mesh.comm.allreduce(values.max(initial=-np.inf), op=MPI.MAX)
+    return low, high
+
+
+def _total_flow(thermal):
+    local = sum(float(q.sum()) for q in thermal.heat_flows)
+    return thermal.T.function_space.mesh.comm.allreduce(local, op=MPI.SUM)
+
+
+def test_heat_flow_through_pressure_dependent_conductance() -> None:
+    """Jump T_m - T_s = q/h(p) with the pressure p of the load; flow q through the series."""
+    load = 40.0
+    mesh, ft, V, Q, T, bcs_T = _bars()
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
+    sigma = ntf.small_strain_stress(u, YOUNGS_MODULUS, POISSON_RATIO)
+    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
+        ufl.FacetNormal(mesh), v
+    ) * ds(UPPER_TOP)
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=False))
+    thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T)
+    passes = solve_staggered(lambda: solve_increments(problem, pressure, load, 1), thermal)
+    assert passes <= 3  # one-way coupling: the second pass changes nothing
+
+    h = 20.0 + 200.0 * load / 100.0
+    flux = (T_BOTTOM - T_TOP) / (1.0 / CONDUCTIVITY + 1.0 / h + 1.0 / CONDUCTIVITY)
+    slave, master = T_TOP + flux / CONDUCTIVITY, T_BOTTOM - flux / CONDUCTIVITY
+    np.testing.assert_allclose(_interface_temperatures(T, mesh), (slave, master), rtol=1e-7)
+    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-7)
+    np.testing.assert_allclose(master - slave, flux / h, rtol=1e-12)  # the jump q/h
+    local_h = np.concatenate([np.zeros(0)] + [s.evaluation.area * 0 + 1 for s in problem.states])
+    assert mesh.comm.allreduce(local_h.size) == 16  # every slave node has a spring
+    thermal.destroy()
+    problem.destroy()
+
+
+def _closed_form(gap: float, alpha: float, t_ref: float) -> tuple[float, float]:
+    """Contact force and heat flow of the bars heated closed: the fixed point in the flow q.
+
+    Per unit section (the bars keep their section): q = k dT/dz in each bar (length 1) and
+    q = h(p) (T_m - T_s) across the springs; the pressure p = p(d) compresses both bars and fills
+    the closure of their free expansions beyond the gap with the penetration d.
+    """
+
+    def state(q: float) -> tuple[float, float]:
+        t_slave, t_master = T_TOP + q / CONDUCTIVITY, T_BOTTOM - q / CONDUCTIVITY
+        means = (0.5 * (T_BOTTOM + t_master), 0.5 * (T_TOP + t_slave))
+        closure = alpha * sum(m - t_ref for m in means) - gap
+        d = scipy.optimize.brentq(
+            lambda d: float(LAW.pressure(d)) * 2.0 / YOUNGS_MODULUS + d - closure,
+            -1e-3, 1.0, xtol=1e-15, rtol=1e-15,
+        )  # fmt: skip
+        return float(LAW.pressure(d)), t_master - t_slave
+
+    def balance(q: float) -> float:
+        p, jump = state(q)
+        return q - TABLE.evaluate([p], [0.0])[0][0] * jump
+
+    q = scipy.optimize.brentq(balance, 0.0, (T_BOTTOM - T_TOP) * CONDUCTIVITY / 2, xtol=1e-14)
+    return state(q)[0], q
+
+
+def test_thermal_expansion_closes_gap() -> None:
+    """The heated bars, held at both ends, close the gap: force and flux from the closed form."""
+    gap, alpha, t_ref = 0.02, 2e-4, 250.0
+    mesh, ft, V, Q, T, bcs_T = _bars(gap)
+    T.x.array[:] = t_ref
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    ramp = dolfinx.fem.Constant(mesh, 0.0)  # the expansion grows with the step time
+    sigma = thermoelastic_stress(u, T, YOUNGS_MODULUS, POISSON_RATIO, ramp * alpha, t_ref)
+    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=True))
+    thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, [TABLE], bcs_T)
+    passes = solve_staggered(
+        lambda: solve_increments(problem, ramp, 1.0, 2), thermal, rtol=1e-10, max_passes=60
+    )
+    total, flux = _closed_form(gap, alpha, t_ref)
+    assert total > 1.0 and passes > 2  # two-way coupling
+    force = ntf.contact_force(problem)
+    np.testing.assert_allclose(force[2], total, rtol=1e-6)
+    np.testing.assert_allclose(force[:2], 0.0, atol=1e-8 * total)
+    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-6)
+    thermal.destroy()
+    problem.destroy()
+
+
+def test_refuses_a_temperature_of_another_space() -> None:
+    mesh, ft, V, Q, T, _ = _bars()
+    u = dolfinx.fem.Function(V)
+    F = ufl.inner(ntf.small_strain_stress(u, 1.0, 0.3), ufl.grad(ufl.TestFunction(V))) * ufl.dx
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=False))
+    P2 = dolfinx.fem.Function(compat.scalar_space(mesh, "Lagrange", 2))
+    with pytest.raises(ValueError, match="number its nodes like the displacement"):
+        ThermalContactProblem(_heat_residual(P2, P2.function_space), P2, problem, TABLE)
+    with pytest.raises(ValueError, match="2 conductances for 1 contact pairs"):
+        ThermalContactProblem(_heat_residual(T, Q), T, problem, [TABLE, TABLE])
+    problem.destroy()
