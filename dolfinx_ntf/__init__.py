@@ -12,11 +12,14 @@ from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
 from dolfinx_ntf.contact.pair import ContactPair
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.contact.thermal import ThermalContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.fem.thermal import thermal_strain, thermoelastic_stress
+from dolfinx_ntf.kernels.gap_conductance import GapConductance
 from dolfinx_ntf.kernels.laws import (
     DynamicLinearLaw,
     ExponentialLaw,
@@ -66,6 +69,7 @@ from dolfinx_ntf.solvers.errors import (
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.newton_loop import NewtonSolver
 from dolfinx_ntf.solvers.snes import ContactSNESSolver
+from dolfinx_ntf.solvers.staggered import solve_staggered, thermal_solver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 _logs.route_compiler_lines()
@@ -93,6 +97,7 @@ __all__ = [
     "ExponentialLaw",
     "FacetSurface",
     "Friction",
+    "GapConductance",
     "GlobalLinearConstraint",
     "IncrementResult",
     "LinearConstraint",
@@ -112,6 +117,7 @@ __all__ = [
     "StaticStep",
     "SurfaceInteraction",
     "TabularLaw",
+    "ThermalContactProblem",
     "__version__",
     "component_bc",
     "contact_area",
@@ -125,4 +131,8 @@ __all__ = [
     "run_steps",
     "serendipity_constraints",
     "small_strain_stress",
+    "solve_staggered",
+    "thermal_solver",
+    "thermal_strain",
+    "thermoelastic_stress",
 ]

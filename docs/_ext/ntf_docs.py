@@ -55,6 +55,18 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         ],
     ),
     (
+        "Thermal contact",
+        "dolfinx_ntf",
+        [
+            "ThermalContactProblem",
+            "GapConductance",
+            "solve_staggered",
+            "thermal_solver",
+            "thermal_strain",
+            "thermoelastic_stress",
+        ],
+    ),
+    (
         "Rigid master surfaces",
         "dolfinx_ntf",
         ["RigidSurface", "RigidPlane", "RigidSphere", "RigidCylinder", "SignedDistanceSurface"],
