@@ -30,7 +30,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.halo import NodeHalo
 
-__all__ = ["ContactAssembler", "SpringBlocks"]
+__all__ = ["ContactAssembler", "SpringBlocks", "coupling_matrix"]
 
 
 @dataclass(frozen=True)
@@ -259,3 +259,62 @@ class ContactAssembler:
             )
         b.assemblyBegin()
         b.assemblyEnd()
+
+
+def coupling_matrix(
+    rows: ContactAssembler, columns: ContactAssembler, blocks: typing.Sequence[SpringBlocks]
+) -> PETSc.Mat:
+    """A new matrix coupling two spaces with exactly the entries of ``blocks``. Collective.
+
+    The off-diagonal block of a coupled problem (e.g. heat flows by displacements, docs/method.md
+    §16.2): rows of ``rows``'s space, columns of ``columns``'s, the two numbered over the same
+    nodes (halo included). ``values[e]`` has shape (bs_r a, bs_c b); Dirichlet rows and columns of
+    either assembler are left out (dolfinx's rule for off-diagonal blocks).
+
+    Args:
+        rows: The assembler of the row space.
+        columns: The assembler of the column space.
+        blocks: Element blocks whose ``row_nodes`` and ``col_nodes`` are nodes of both.
+    """
+    comm = rows._comm
+    row_list, col_list, value_list = [np.empty(0, np.int64)], [np.empty(0, np.int64)], [np.empty(0)]
+    for blk in blocks:
+        if blk.values is None or blk.row_nodes.shape[0] == 0:
+            continue
+        r = rows._global_dof_masked[_unblocked(blk.row_nodes, rows._bs)]
+        c = columns._global_dof_masked[_unblocked(blk.col_nodes, columns._bs)]
+        shape = blk.values.shape
+        row_list.append(np.broadcast_to(r[:, :, None], shape).ravel())
+        col_list.append(np.broadcast_to(c[:, None, :], shape).ravel())
+        value_list.append(blk.values.ravel())
+    r, c, values = (np.concatenate(x) for x in (row_list, col_list, value_list))
+    keep = (r >= 0) & (c >= 0)
+    r, c, values = r[keep], c[keep], values[keep]
+    num_columns = columns._bs * columns._num_global
+    keys = np.unique(r * num_columns + c)
+    first = rows._bs * rows._first_nodes
+    if comm.size > 1:  # the pattern goes to the process owning each row
+        owner = np.searchsorted(first, keys // num_columns, side="right") - 1
+        keys = np.unique(collectives.send_to_owners(comm, keys, owner))
+    n_rows, n_columns = rows._bs * rows._num_owned, columns._bs * columns._num_owned
+    start = int(first[comm.rank])
+    pattern = scipy.sparse.csr_matrix(
+        (np.ones(keys.size, dtype=np.int8), (keys // num_columns - start, keys % num_columns)),
+        shape=(n_rows, num_columns),
+    )
+    pattern.sort_indices()
+    A = PETSc.Mat().createAIJ(
+        ((n_rows, rows._bs * rows._num_global), (n_columns, num_columns)),
+        csr=(pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType)),
+        comm=comm,
+    )
+    A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+    if r.size:  # petsc4py divides by the number of rows
+        A.setValuesRCV(
+            r.astype(PETSc.IntType)[:, None],
+            c.astype(PETSc.IntType)[:, None],
+            values[:, None, None],
+            addv=PETSc.InsertMode.ADD_VALUES,
+        )
+    A.assemble()
+    return A

@@ -96,6 +96,9 @@ class ThermalContactProblem:
         #: Heat flow into the slave node of every spring of every pair at the last evaluation
         #: (positive when the master side is hotter), per pair in ``contact``'s order.
         self.heat_flows: list[np.ndarray] = []
+        #: ∂(heat flows)/∂u of the springs at the last evaluation with ``coupling``: blocks of
+        #: (n+1, 3(n+1)) per spring (docs/method.md §16.2).
+        self.coupling_blocks: list[SpringBlocks] = []
 
     @property
     def L(self) -> compat.Form:
@@ -112,20 +115,33 @@ class ThermalContactProblem:
         halo = self.contact.halo
         return self.T.x.array if halo is None else halo.field(self.T)[:, 0]
 
-    def evaluate(self, *, tangent: bool = True) -> list[SpringBlocks]:
+    def evaluate(
+        self, *, tangent: bool = True, coupling: bool = False, mechanics: bool = True
+    ) -> list[SpringBlocks]:
         """The thermal springs at the current ``T`` and the mechanical springs at ``u``. Collective.
 
-        Re-evaluates the mechanical springs (forces only) at the current displacement so that the
-        projection points, areas and pressures belong to the current pairing.
+        Args:
+            tangent: Also the temperature tangent.
+            coupling: Also the blocks of the heat flows' derivatives with respect to the
+                displacement (:attr:`coupling_blocks`; needs the mechanical tangent).
+            mechanics: Re-evaluate the mechanical springs at the current displacement first (so
+                that projection points, areas and pressures belong to the current pairing); a
+                coupled solve that has just evaluated them passes False.
         """
-        self.contact.evaluate(tangent=False)
+        if mechanics:
+            self.contact.evaluate(tangent=coupling)
         temperatures = self.temperatures()
-        blocks, self.heat_flows = [], []
+        blocks, self.heat_flows, self.coupling_blocks = [], [], []
         for state, conductance in zip(self.contact.states, self.conductances):
             ev = state.evaluation
             if state.num_springs == 0 or ev is None:
                 self.heat_flows.append(np.zeros(0))
                 continue
+            if coupling and ev.dxi is None:
+                raise RuntimeError(
+                    "ThermalContactProblem.evaluate: the coupling needs the mechanical springs "
+                    "evaluated with their tangent"
+                )
             nodes = state.element_nodes
             pressure = np.divide(
                 ev.normal_force, ev.area, out=np.zeros_like(ev.area), where=ev.area > 0
@@ -138,9 +154,13 @@ class ThermalContactProblem:
                 pressure,
                 conductance,
                 tangent=tangent,
+                dxi=ev.dxi if coupling else None,
+                dpressure=ev.dpressure if coupling else None,
             )
             self.heat_flows.append(th.flow)
             blocks.append(SpringBlocks(nodes, nodes, th.jacobian, th.residual))
+            if coupling:
+                self.coupling_blocks.append(SpringBlocks(nodes, nodes, th.coupling))
         return blocks
 
     def ensure_matrix(self) -> PETSc.Mat:
@@ -154,10 +174,13 @@ class ThermalContactProblem:
 
     # -- NonlinearSystem callbacks -----------------------------------------------------------------
 
-    def form(self, x: PETSc.Vec) -> None:
-        """Before F: update the ghost values of ``x`` and evaluate the thermal springs."""
+    def form(self, x: PETSc.Vec, *, coupling: bool = False, mechanics: bool = True) -> None:
+        """Before F: update the ghost values of ``x`` and evaluate the thermal springs.
+
+        ``coupling`` and ``mechanics`` as for :meth:`evaluate`.
+        """
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        self._blocks = self.evaluate(tangent=True)
+        self._blocks = self.evaluate(tangent=True, coupling=coupling, mechanics=mechanics)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """Assemble the bulk heat residual plus the springs' heat flows at ``x`` into ``b``."""

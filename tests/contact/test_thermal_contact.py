@@ -1,4 +1,6 @@
-"""Thermal contact (contact/thermal.py, solvers/staggered.py) against 1D closed forms.
+"""Thermal contact (contact/thermal.py, contact/coupled.py, solvers/staggered.py): closed forms.
+
+The coupled (monolithic) Jacobian is also checked against finite differences of its residual.
 
 Two bars stacked along z on rollers (x = 0, y = 0 planes, the lower bottom), meshes matching at
 the interface (node-to-face contact passes the patch test only there), the lower block's top the
@@ -17,6 +19,8 @@ import scipy.optimize
 from helpers import (
     LOWER_BOTTOM,
     LOWER_TOP,
+    PUNCH,
+    UPPER,
     UPPER_BOTTOM,
     UPPER_TOP,
     YOUNGS_MODULUS,
@@ -29,13 +33,12 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
+from dolfinx_ntf.contact.coupled import ThermoMechanicalContact
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
 from dolfinx_ntf.fem.elasticity import component_bc
 from dolfinx_ntf.fem.thermal import thermoelastic_stress
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 from dolfinx_ntf.solvers.staggered import solve_staggered
-
-pytestmark = pytest.mark.mpi
 
 #: No lateral strain from the axial stress: the spring areas stay the reference ones.
 POISSON_RATIO = 0.0
@@ -109,6 +112,7 @@ def _total_flow(thermal):
     return thermal.T.function_space.mesh.comm.allreduce(local, op=MPI.SUM)
 
 
+@pytest.mark.mpi
 def test_heat_flow_through_pressure_dependent_conductance() -> None:
     """Jump T_m - T_s = q/h(p) with the pressure p of the load; flow q through the series."""
     load = 40.0
@@ -163,6 +167,7 @@ def _closed_form(gap: float, alpha: float, t_ref: float) -> tuple[float, float]:
     return state(q)[0], q
 
 
+@pytest.mark.mpi
 def test_thermal_expansion_closes_gap() -> None:
     """The heated bars, held at both ends, close the gap: force and flux from the closed form."""
     gap, alpha, t_ref = 0.02, 2e-4, 250.0
@@ -187,6 +192,7 @@ def test_thermal_expansion_closes_gap() -> None:
     problem.destroy()
 
 
+@pytest.mark.mpi
 def test_refuses_a_temperature_of_another_space() -> None:
     mesh, ft, V, Q, T, _ = _bars()
     u = dolfinx.fem.Function(V)
@@ -197,4 +203,109 @@ def test_refuses_a_temperature_of_another_space() -> None:
         ThermalContactProblem(_heat_residual(P2, P2.function_space), P2, problem, TABLE)
     with pytest.raises(ValueError, match="2 conductances for 1 contact pairs"):
         ThermalContactProblem(_heat_residual(T, Q), T, problem, [TABLE, TABLE])
+    problem.destroy()
+
+
+def _punch(alpha: float = 1e-3, t_ref: float = 300.0):
+    """A punch on a block (slave nodes inside master faces), thermal expansion and heat flow."""
+    mesh, cells, ft = two_blocks(MPI.COMM_SELF, upper=PUNCH)
+    V = compat.vector_space(mesh, "Lagrange", 1)
+    Q = compat.scalar_space(mesh, "Lagrange", 1)
+    u, T = dolfinx.fem.Function(V), dolfinx.fem.Function(Q)
+    sigma = ntf.thermoelastic_stress(u, T, YOUNGS_MODULUS, 0.3, alpha, t_ref)
+    F = ufl.inner(sigma, ufl.grad(ufl.TestFunction(V))) * ufl.dx
+    bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    top = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(UPPER_TOP))
+    bcs = [
+        dolfinx.fem.dirichletbc(np.zeros(3), bottom, V),
+        dolfinx.fem.dirichletbc(np.zeros(3), top, V),
+    ]
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], bcs, contact_start_slope=False)
+    bcs_T = [
+        dolfinx.fem.dirichletbc(
+            dolfinx.fem.Constant(mesh, 350.0),
+            dolfinx.fem.locate_dofs_topological(Q, 2, ft.find(LOWER_BOTTOM)),
+            Q,
+        )
+    ]
+    thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T)
+    punch = dolfinx.fem.locate_dofs_topological(V, 3, cells.find(UPPER))
+    return ThermoMechanicalContact(F, thermal), punch, [bottom, top], bcs_T[0].dof_indices()[0]
+
+
+def test_coupled_jacobian_matches_finite_differences() -> None:
+    """All four blocks, springs included, at a penetrated state with a varying temperature."""
+    coupled, punch, fixed_u, fixed_T = _punch()
+    contact, thermal = coupled.contact, coupled.thermal
+    u, T = contact.u, thermal.T
+    x = u.function_space.tabulate_dof_coordinates()
+    rng = np.random.default_rng(7)
+    values = u.x.array.reshape(-1, 3)
+    values[punch, 2] = -0.01 * (1.2 - x[punch, 2])  # the punch pressed 0.006..0.012 into the block
+    values += 1e-3 * rng.uniform(-1, 1, values.shape)
+    for dofs in fixed_u:
+        values[dofs] = 0.0
+    T.x.array[:] = (
+        300.0 + 40.0 * x[:, 2] + 20.0 * x[:, 0] * x[:, 1] + rng.uniform(-2, 2, x.shape[0])
+    )
+    T.x.array[fixed_T] = 350.0
+    contact.begin_increment(1.0)
+    assert contact.num_springs == 16
+    coupled.evaluate()
+    r0 = coupled.residual()
+    A = coupled.jacobian()
+    dense = A.convert("dense").getDenseArray().copy()
+    A.destroy()
+    n_u = u.x.array.size
+    free = np.ones(dense.shape[0], dtype=bool)
+    free[np.concatenate([3 * d[:, None] + np.arange(3) for d in fixed_u]).ravel()] = False
+    free[n_u + fixed_T] = False
+    columns = np.flatnonzero(free)
+    fd = np.zeros((dense.shape[0], columns.size))
+    step = 1e-6
+    for j, col in enumerate(columns):
+        field, index = (u, col) if col < n_u else (T, col - n_u)
+        results = []
+        for sign in (1.0, -1.0):
+            field.x.array[index] += sign * step
+            coupled.evaluate()
+            results.append(coupled.residual())
+            field.x.array[index] -= sign * step
+        fd[:, j] = (results[0] - results[1]) / (2 * step)
+    coupled.evaluate()
+    np.testing.assert_allclose(coupled.residual(), r0, rtol=0, atol=1e-12 * np.abs(r0).max())
+    exact = dense[np.ix_(free, columns)]
+    fd = fd[free]
+    error = np.abs(exact - fd).max() / np.abs(fd).max()
+    assert error <= 1e-6, error
+    # The cross blocks are there and right: heat flows by displacement, expansion by temperature.
+    rows_T, columns_u = free[:n_u].sum(), columns < n_u
+    block = fd[rows_T:][:, columns_u]
+    assert np.abs(block).max() > 1e-3 * np.abs(fd).max()
+    assert np.abs(exact[rows_T:][:, columns_u] - block).max() <= 1e-6 * np.abs(block).max()
+    assert np.abs(fd[:rows_T][:, ~columns_u]).max() > 0
+    coupled.destroy()
+
+
+@pytest.mark.mpi
+def test_heated_bars_closing_gap_monolithic() -> None:
+    """The heated bars closing the gap, in one Newton on (u, T): the same closed form."""
+    gap, alpha, t_ref = 0.02, 2e-4, 250.0
+    _, ft, V, Q, T, bcs_T = _bars(gap)
+    T.x.array[:] = t_ref
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    sigma = ntf.thermoelastic_stress(u, T, YOUNGS_MODULUS, POISSON_RATIO, alpha, t_ref)
+    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=True))
+    thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T)
+    coupled = ThermoMechanicalContact(F, thermal)
+    iterations = coupled.solve(rtol=1e-12)
+    total, flux = _closed_form(gap, alpha, t_ref)
+    np.testing.assert_allclose(ntf.contact_force(problem)[2], total, rtol=1e-6)
+    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-6)
+    assert iterations <= 15
+    norms = coupled.residual_norms
+    assert norms[-1] <= 1e-12 * norms[0]
+    coupled.destroy()
+    thermal.destroy()
     problem.destroy()
