@@ -309,3 +309,60 @@ def test_heated_bars_closing_gap_monolithic() -> None:
     coupled.destroy()
     thermal.destroy()
     problem.destroy()
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("conductivity", [1.0, 1e6])
+def test_transient_exchange_between_bars(conductivity: float) -> None:
+    """Backward Euler: two insulated bars exchange heat through the springs only.
+
+    The heat content is conserved (to the Newton tolerance). With a nearly infinite conductivity
+    (Biot number hL/k = 1e-6) the bars are lumped and the jump decays by
+    1/(1 + dt h A (1/C_1 + 1/C_2)) per step.
+    """
+    mesh, ft, V, Q, T, _ = _bars()
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    load = dolfinx.fem.Constant(mesh, 0.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
+    sigma = ntf.small_strain_stress(u, YOUNGS_MODULUS, POISSON_RATIO)
+    n = ufl.FacetNormal(mesh)
+    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx + load * ufl.inner(n, v) * ds(UPPER_TOP)
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=False))
+    solve_increments(problem, load, 10.0, 1)
+    lower = dolfinx.fem.locate_dofs_topological(Q, 3, _cells(mesh, upper=False))
+    T.x.array[:] = T_TOP
+    T.x.array[lower] = T_BOTTOM
+    T_old = dolfinx.fem.Function(Q)
+    dt, h, capacity = 0.25, 1.0, 1.0
+    q = ufl.TestFunction(Q)
+    F_T = capacity * (T - T_old) / dt * q * ufl.dx
+    F_T += conductivity * ufl.inner(ufl.grad(T), ufl.grad(q)) * ufl.dx
+    thermal = ThermalContactProblem(F_T, T, problem, GapConductance.constant(h))
+    solver = ntf.thermal_solver(thermal)
+    # Linear in T: one update reaches the round-off floor, about k T eps per row.
+    solver.rtol, solver.atol = 1e-13, 1e-13 * conductivity * T_BOTTOM
+    heat = dolfinx.fem.form(capacity * T * ufl.dx)
+    content = mesh.comm.allreduce(dolfinx.fem.assemble_scalar(heat), op=MPI.SUM)
+    jump, jumps = T_BOTTOM - T_TOP, []
+    for _ in range(4):
+        T_old.x.array[:] = T.x.array
+        solver.solve(T)
+        jump /= 1.0 + dt * h * (1.0 / capacity + 1.0 / capacity)  # C = capacity x volume 1
+        low, high = _interface_temperatures(T, mesh)
+        jumps.append(high - low)
+        total = mesh.comm.allreduce(dolfinx.fem.assemble_scalar(heat), op=MPI.SUM)
+        np.testing.assert_allclose(total, content, rtol=1e-12 * conductivity)
+        if conductivity > 1e5:
+            np.testing.assert_allclose(high - low, jump, rtol=1e-5)
+    assert np.all(np.diff(jumps) < 0) and 0 < jumps[-1] < 0.5 * (T_BOTTOM - T_TOP)
+    solver.destroy()
+    thermal.destroy()
+    problem.destroy()
+
+
+def _cells(mesh, *, upper: bool) -> np.ndarray:
+    """Local cells of the upper (or lower) bar, by their midpoints."""
+    tdim = mesh.topology.dim
+    cells = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+    midpoints = dolfinx.mesh.compute_midpoints(mesh, tdim, cells)
+    return cells[(midpoints[:, 2] > 0.0) == upper]
