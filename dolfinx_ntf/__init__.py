@@ -10,6 +10,7 @@ __version__ = "0.1.0"
 
 from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
+from dolfinx_ntf.contact.coupled import ThermoMechanicalContact
 from dolfinx_ntf.contact.pair import ContactPair
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
@@ -118,6 +119,7 @@ __all__ = [
     "SurfaceInteraction",
     "TabularLaw",
     "ThermalContactProblem",
+    "ThermoMechanicalContact",
     "__version__",
     "component_bc",
     "contact_area",

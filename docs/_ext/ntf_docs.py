@@ -59,6 +59,7 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         "dolfinx_ntf",
         [
             "ThermalContactProblem",
+            "ThermoMechanicalContact",
             "GapConductance",
             "solve_staggered",
             "thermal_solver",

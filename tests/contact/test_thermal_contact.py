@@ -132,8 +132,8 @@ def test_heat_flow_through_pressure_dependent_conductance() -> None:
     h = 20.0 + 200.0 * load / 100.0
     flux = (T_BOTTOM - T_TOP) / (1.0 / CONDUCTIVITY + 1.0 / h + 1.0 / CONDUCTIVITY)
     slave, master = T_TOP + flux / CONDUCTIVITY, T_BOTTOM - flux / CONDUCTIVITY
-    np.testing.assert_allclose(_interface_temperatures(T, mesh), (slave, master), rtol=1e-7)
-    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-7)
+    np.testing.assert_allclose(_interface_temperatures(T, mesh), (slave, master), rtol=1e-10)
+    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-10)
     np.testing.assert_allclose(master - slave, flux / h, rtol=1e-12)  # the jump q/h
     local_h = np.concatenate([np.zeros(0)] + [s.evaluation.area * 0 + 1 for s in problem.states])
     assert mesh.comm.allreduce(local_h.size) == 16  # every slave node has a spring
@@ -185,9 +185,9 @@ def test_thermal_expansion_closes_gap() -> None:
     total, flux = _closed_form(gap, alpha, t_ref)
     assert total > 1.0 and passes > 2  # two-way coupling
     force = ntf.contact_force(problem)
-    np.testing.assert_allclose(force[2], total, rtol=1e-6)
+    np.testing.assert_allclose(force[2], total, rtol=1e-9)
     np.testing.assert_allclose(force[:2], 0.0, atol=1e-8 * total)
-    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-6)
+    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-9)
     thermal.destroy()
     problem.destroy()
 
@@ -301,8 +301,8 @@ def test_heated_bars_closing_gap_monolithic() -> None:
     coupled = ThermoMechanicalContact(F, thermal)
     iterations = coupled.solve(rtol=1e-12)
     total, flux = _closed_form(gap, alpha, t_ref)
-    np.testing.assert_allclose(ntf.contact_force(problem)[2], total, rtol=1e-6)
-    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-6)
+    np.testing.assert_allclose(ntf.contact_force(problem)[2], total, rtol=1e-10)
+    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-10)
     assert iterations <= 15
     norms = coupled.residual_norms
     assert norms[-1] <= 1e-12 * norms[0]
