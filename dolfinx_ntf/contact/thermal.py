@@ -30,6 +30,7 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.kernels.gap_conductance import GapConductance, evaluate_thermal_springs
+from dolfinx_ntf.kernels.rigid import RigidSurface
 from dolfinx_ntf.parallel import collectives
 
 __all__ = ["ThermalContactProblem"]
@@ -77,8 +78,15 @@ class ThermalContactProblem:
             validation.check_type(h, GapConductance, f"{owner}: conductances[{i}]")
         Q = T.function_space
         collectives.collectively(contact.u.function_space.mesh.comm, _check_space, T, contact.u)
-        if any(s.master.__class__.__name__.startswith("Rigid") for s in contact.states):
-            raise NotImplementedError(f"{owner}: a rigid master surface has no temperature")
+        rigid = [
+            s.pair.name or str(i)
+            for i, s in enumerate(contact.states)
+            if isinstance(s.pair.master, RigidSurface)
+        ]
+        if rigid:
+            raise NotImplementedError(
+                f"{owner}: pair(s) {rigid} have a rigid master surface, which has no temperature"
+            )
         options = compat.jit_keywords(form_compiler_options, jit_options)
         self._L = dolfinx.fem.form(F, **options)
         self._a = dolfinx.fem.form(

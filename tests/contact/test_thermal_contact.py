@@ -141,6 +141,59 @@ def test_heat_flow_through_pressure_dependent_conductance() -> None:
     problem.destroy()
 
 
+@pytest.mark.mpi
+@pytest.mark.parametrize("gap", [5e-5, 1e-2])
+def test_heat_flows_only_across_generated_springs(gap: float) -> None:
+    """An open spring (clearance 5e-5, below the cutoff 1e-3 sqrt(A) >= 8e-5 of every slave node)
+    conducts with h(p) at its (tension) pressure, the table's first value; beyond the cutoff there
+    is no spring and no heat flow (CalculiX: heat flows only across generated springs)."""
+    mesh, ft, V, Q, T, bcs_T = _bars(gap)
+    u = dolfinx.fem.Function(V)
+    F = (
+        ufl.inner(
+            ntf.small_strain_stress(u, YOUNGS_MODULUS, POISSON_RATIO), ufl.grad(ufl.TestFunction(V))
+        )
+        * ufl.dx
+    )
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=True))
+    thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T)
+    solve_staggered(
+        lambda: solve_increments(problem, dolfinx.fem.Constant(mesh, 0.0), 1.0, 1), thermal
+    )
+    springs = mesh.comm.allreduce(problem.num_springs)
+    if gap < 1e-3:
+        assert springs == 16
+        assert float(LAW.pressure(-gap)) < 0.0  # the law's tension: below the table, h = 20
+        h = 20.0
+        flux = (T_BOTTOM - T_TOP) / (2.0 / CONDUCTIVITY + 1.0 / h)
+        np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-10)
+    else:
+        assert springs == 0
+        assert _total_flow(thermal) == 0.0
+        z = Q.tabulate_dof_coordinates()[:, 2]
+        upper = dolfinx.fem.locate_dofs_topological(Q, 3, _cells(mesh, upper=True))
+        np.testing.assert_allclose(T.x.array[upper], T_TOP, rtol=1e-12)
+        assert z.size
+    thermal.destroy()
+    problem.destroy()
+
+
+def test_refuses_a_rigid_master() -> None:
+    mesh, ft, V, Q, T, _ = _bars()
+    u = dolfinx.fem.Function(V)
+    F = ufl.inner(ntf.small_strain_stress(u, 1.0, 0.3), ufl.grad(ufl.TestFunction(V))) * ufl.dx
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.RigidPlane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+        ntf.SurfaceInteraction(LAW),
+        name="floor",
+    )
+    problem = ntf.ContactProblem(F, u, [pair], _rollers(V, ft, constrained=True))
+    with pytest.raises(NotImplementedError, match=r"\['floor'\] have a rigid master"):
+        ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE)
+    problem.destroy()
+
+
 def _closed_form(gap: float, alpha: float, t_ref: float) -> tuple[float, float]:
     """Contact force and heat flow of the bars heated closed: the fixed point in the flow q.
 
