@@ -179,7 +179,7 @@ def test_heat_flows_only_across_generated_springs(gap: float) -> None:
 
 
 def test_refuses_a_rigid_master() -> None:
-    mesh, ft, V, Q, T, _ = _bars()
+    _mesh, ft, V, Q, T, _ = _bars()
     u = dolfinx.fem.Function(V)
     F = ufl.inner(ntf.small_strain_stress(u, 1.0, 0.3), ufl.grad(ufl.TestFunction(V))) * ufl.dx
     pair = ntf.ContactPair(
