@@ -419,3 +419,115 @@ def _cells(mesh, *, upper: bool) -> np.ndarray:
     cells = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
     midpoints = dolfinx.mesh.compute_midpoints(mesh, tdim, cells)
     return cells[(midpoints[:, 2] > 0.0) == upper]
+
+
+_CCX_DECK = """*NODE, NSET=NALL
+1, 0., 0., -1.
+2, 1., 0., -1.
+3, 1., 1., -1.
+4, 0., 1., -1.
+5, 0., 0., 0.
+6, 1., 0., 0.
+7, 1., 1., 0.
+8, 0., 1., 0.
+11, 0., 0., 0.
+12, 1., 0., 0.
+13, 1., 1., 0.
+14, 0., 1., 0.
+15, 0., 0., 1.
+16, 1., 0., 1.
+17, 1., 1., 1.
+18, 0., 1., 1.
+*ELEMENT, TYPE=C3D8, ELSET=EALL
+1, 1, 2, 3, 4, 5, 6, 7, 8
+2, 11, 12, 13, 14, 15, 16, 17, 18
+*NSET, NSET=BOTTOM
+1, 2, 3, 4
+*NSET, NSET=TOP
+15, 16, 17, 18
+*NSET, NSET=X0
+1, 4, 5, 8, 11, 14, 15, 18
+*NSET, NSET=Y0
+1, 2, 5, 6, 11, 12, 15, 16
+*SURFACE, NAME=SLAVE
+2, S1
+*SURFACE, NAME=MASTER
+1, S2
+*MATERIAL, NAME=M
+*ELASTIC
+{E}, 0.
+*CONDUCTIVITY
+{k}
+*EXPANSION
+0.
+*DENSITY
+1.
+*SPECIFIC HEAT
+1.
+*SOLID SECTION, ELSET=EALL, MATERIAL=M
+*SURFACE INTERACTION, NAME=SI
+*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR
+{slope}, {tension}, 1.e-3
+*GAP CONDUCTANCE
+{table}
+*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE
+SLAVE, MASTER
+*INITIAL CONDITIONS, TYPE=TEMPERATURE
+NALL, 350.
+*BOUNDARY
+BOTTOM, 3, 3
+X0, 1, 1
+Y0, 2, 2
+BOTTOM, 11, 11, {t_bottom}
+TOP, 11, 11, {t_top}
+*STEP
+*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE
+1., 1.
+*DLOAD
+2, P2, {load}
+*NODE PRINT, NSET=NALL
+NT
+*END STEP
+"""
+
+
+@pytest.mark.parametrize(
+    "rows",
+    [[(100.0, 0.0, 0.0)], [(50.0, 0.0, 300.0), (150.0, 0.0, 400.0)]],
+    ids=["constant", "temperature-dependent"],
+)
+def test_agrees_with_ccx(rows, tmp_path) -> None:
+    """The bars of the first test in ccx 2.20 (one C3D8 per bar, *COUPLED TEMPERATURE-
+    DISPLACEMENT, STEADY STATE): the interface temperatures agree to ccx's 7 printed digits.
+
+    The tables do not depend on the pressure: for a LINEAR law ccx 2.20's thermal spring looks
+    the table up at the law's slope K instead of the contact pressure (docs/method.md §16.1).
+    """
+    from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
+
+    load = 40.0
+    deck = _CCX_DECK.format(
+        E=YOUNGS_MODULUS, k=CONDUCTIVITY, slope=LAW.slope, tension=LAW.tension, load=load,
+        table="\n".join(f"{h}, {p}, {t}" for h, p, t in rows), t_bottom=T_BOTTOM, t_top=T_TOP,
+    )  # fmt: skip
+    (tmp_path / "bars.inp").write_text(deck)
+    run_ccx(tmp_path, "bars", timeout=120)
+    block = next(b for b in read_ccx_dat(tmp_path, "bars") if b.name.startswith("temperatures"))
+    ccx = dict(zip(block.labels.tolist(), block.values[:, 0]))
+
+    mesh, ft, V, Q, T, bcs_T = _bars()
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
+    sigma = ntf.small_strain_stress(u, YOUNGS_MODULUS, POISSON_RATIO)
+    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx
+    F += pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(UPPER_TOP)
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=False))
+    table = GapConductance.from_rows(rows)
+    thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, table, bcs_T)
+    solve_staggered(lambda: solve_increments(problem, pressure, load, 1), thermal)
+    slave, master = _interface_temperatures(T, mesh)
+    np.testing.assert_allclose([slave, master], [ccx[11], ccx[5]], rtol=2e-7)  # 7 digits
+    assert all(ccx[n] == ccx[11] for n in (12, 13, 14)) and ccx[5] > ccx[11]
+    thermal.destroy()
+    problem.destroy()
