@@ -225,15 +225,14 @@ def evaluate_thermal_springs(
     if dxi is not None and dpressure is not None:
         dphi = face_type.shape_derivatives(xi)  # (N, n, 2)
         grad = np.einsum("nja,nj->na", dphi, temperatures[:, :-1])  # ∂T_m/∂ξ
-        djump = np.einsum("na,nkac->nkc", grad, dxi)  # ∂T_m/∂x = ∂ΔT/∂x
-        dflow = area[:, None, None] * (
-            (dh_dp * jump)[:, None, None] * dpressure
-            + (h + 0.5 * jump * dh_dt)[:, None, None] * djump
+        dxi_flat = dxi.transpose(0, 2, 1, 3).reshape(num, 2, 3 * size)  # (N, 2, 3(n+1))
+        djump = (grad[:, None, :] @ dxi_flat)[:, 0]  # ∂T_m/∂x = ∂ΔT/∂x, (N, 3(n+1))
+        dflow = area[:, None] * (
+            (dh_dp * jump)[:, None] * dpressure.reshape(num, 3 * size)
+            + (h + 0.5 * jump * dh_dt)[:, None] * djump
         )
-        dweights = np.zeros((num, size, 2))
-        dweights[:, :-1] = -dphi  # ∂w_e/∂ξ
-        coupling = -weights[:, :, None, None] * dflow[:, None] - flow[:, None, None, None] * (
-            np.einsum("nea,nkac->nekc", dweights, dxi)
-        )
-        result.coupling = coupling.reshape(num, size, 3 * size)
+        coupling = -weights[:, :, None] * dflow[:, None, :]
+        # Master rows also move with their weights: ∂w_e/∂x = −∂φ_e/∂ξ · ∂ξ/∂x.
+        coupling[:, :-1] += flow[:, None, None] * (dphi @ dxi_flat)
+        result.coupling = coupling
     return result
