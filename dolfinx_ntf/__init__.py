@@ -45,6 +45,7 @@ from dolfinx_ntf.outputs.results import (
     ContactWriter,
     contact_results,
 )
+from dolfinx_ntf.outputs.thermal import ThermalResults, heat_flux_field, thermal_results
 from dolfinx_ntf.parallel.global_constraints import (
     GlobalLinearConstraint,
     global_constraints,
@@ -119,6 +120,7 @@ __all__ = [
     "SurfaceInteraction",
     "TabularLaw",
     "ThermalContactProblem",
+    "ThermalResults",
     "ThermoMechanicalContact",
     "__version__",
     "component_bc",
@@ -126,6 +128,7 @@ __all__ = [
     "contact_force",
     "contact_results",
     "global_constraints",
+    "heat_flux_field",
     "input_node_ids",
     "kinetic_energy",
     "log_progress",
@@ -134,6 +137,7 @@ __all__ = [
     "serendipity_constraints",
     "small_strain_stress",
     "solve_staggered",
+    "thermal_results",
     "thermal_solver",
     "thermal_strain",
     "thermoelastic_stress",

@@ -65,6 +65,9 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
             "thermal_solver",
             "thermal_strain",
             "thermoelastic_stress",
+            "thermal_results",
+            "ThermalResults",
+            "heat_flux_field",
         ],
     ),
     (

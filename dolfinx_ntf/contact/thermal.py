@@ -29,7 +29,11 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.contact.problem import ContactProblem
-from dolfinx_ntf.kernels.gap_conductance import GapConductance, evaluate_thermal_springs
+from dolfinx_ntf.kernels.gap_conductance import (
+    GapConductance,
+    ThermalSpringEvaluation,
+    evaluate_thermal_springs,
+)
 from dolfinx_ntf.kernels.rigid import RigidSurface
 from dolfinx_ntf.parallel import collectives
 
@@ -107,6 +111,8 @@ class ThermalContactProblem:
         #: ∂(heat flows)/∂u of the springs at the last evaluation with ``coupling``: blocks of
         #: (n+1, 3(n+1)) per spring (docs/method.md §16.2).
         self.coupling_blocks: list[SpringBlocks] = []
+        #: The thermal springs of every pair at the last evaluation (None: no springs).
+        self.evaluations: list[ThermalSpringEvaluation | None] = []
 
     @property
     def L(self) -> compat.Form:
@@ -139,11 +145,12 @@ class ThermalContactProblem:
         if mechanics:
             self.contact.evaluate(tangent=coupling)
         temperatures = self.temperatures()
-        blocks, self.heat_flows, self.coupling_blocks = [], [], []
+        blocks, self.heat_flows, self.coupling_blocks, self.evaluations = [], [], [], []
         for state, conductance in zip(self.contact.states, self.conductances):
             ev = state.evaluation
             if state.num_springs == 0 or ev is None:
                 self.heat_flows.append(np.zeros(0))
+                self.evaluations.append(None)
                 continue
             if coupling and ev.dxi is None:
                 raise RuntimeError(
@@ -166,6 +173,7 @@ class ThermalContactProblem:
                 dpressure=ev.dpressure if coupling else None,
             )
             self.heat_flows.append(th.flow)
+            self.evaluations.append(th)
             blocks.append(SpringBlocks(nodes, nodes, th.jacobian, th.residual))
             if coupling:
                 self.coupling_blocks.append(SpringBlocks(nodes, nodes, th.coupling))

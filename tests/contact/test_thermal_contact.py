@@ -29,6 +29,7 @@ from helpers import (
 )
 
 import dolfinx.fem
+import dolfinx.io
 import ufl
 
 import dolfinx_ntf as ntf
@@ -113,7 +114,7 @@ def _total_flow(thermal):
 
 
 @pytest.mark.mpi
-def test_heat_flow_through_pressure_dependent_conductance() -> None:
+def test_heat_flow_through_pressure_dependent_conductance(tmp_path_factory) -> None:
     """Jump T_m - T_s = q/h(p) with the pressure p of the load; flow q through the series."""
     load = 40.0
     mesh, ft, V, Q, T, bcs_T = _bars()
@@ -135,8 +136,24 @@ def test_heat_flow_through_pressure_dependent_conductance() -> None:
     np.testing.assert_allclose(_interface_temperatures(T, mesh), (slave, master), rtol=1e-10)
     np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-10)
     np.testing.assert_allclose(master - slave, flux / h, rtol=1e-12)  # the jump q/h
-    local_h = np.concatenate([np.zeros(0)] + [s.evaluation.area * 0 + 1 for s in problem.states])
-    assert mesh.comm.allreduce(local_h.size) == 16  # every slave node has a spring
+    # Outputs: per spring (every slave node has one) and the flux density as a field.
+    (res,) = ntf.thermal_results(thermal)
+    assert mesh.comm.allreduce(res.flow.size) == 16
+    np.testing.assert_allclose(res.flux, flux, rtol=1e-10)
+    np.testing.assert_allclose(res.conductance, h, rtol=1e-12)
+    np.testing.assert_allclose(res.master_temperature - res.temperature, flux / h, rtol=1e-9)
+    field = ntf.heat_flux_field(thermal)
+    z = Q.tabulate_dof_coordinates()[:, 2]
+    values = field.x.array[np.isclose(z, 0.0)]
+    assert np.all(np.isclose(values, flux, rtol=1e-10) | (values == 0.0))
+    owned = field.x.array[: Q.dofmap.index_map.size_local]
+    assert mesh.comm.allreduce(int(np.count_nonzero(owned))) == 16
+    path = mesh.comm.bcast(str(tmp_path_factory.mktemp("xdmf") / "thermal.xdmf"), root=0)
+    T.name = "temperature"
+    with dolfinx.io.XDMFFile(mesh.comm, path, "w") as f:
+        f.write_mesh(mesh)
+        f.write_function(T, 0.0)
+        f.write_function(field, 0.0)
     thermal.destroy()
     problem.destroy()
 
