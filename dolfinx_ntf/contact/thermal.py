@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import typing
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -101,8 +102,8 @@ class ThermalContactProblem:
         self.conductances = conductances
         self.bcs = validation.check_bcs(bcs, owner)
         self.assembler = ContactAssembler(Q, self._a, self.bcs)
-        if contact.halo is not None:
-            self.assembler.extend(contact.halo, T)
+        self._halo_nodes = 0
+        self._follow_halo()
         self.matrix: PETSc.Mat | None = None
         self._blocks: list[SpringBlocks] = []
         #: Heat flow into the slave node of every spring of every pair at the last evaluation
@@ -129,6 +130,19 @@ class ThermalContactProblem:
         halo = self.contact.halo
         return self.T.x.array if halo is None else halo.field(self.T)[:, 0]
 
+    def _follow_halo(self) -> None:
+        """Number the contact halo's nodes in the temperature space too, also after it grew.
+
+        The halo grows when a master patch does (docs/method.md §14.8). Collective.
+        """
+        halo = self.contact.halo
+        if halo is None:
+            return
+        grown = halo.global_nodes.size != self._halo_nodes
+        if halo.comm.allreduce(grown, op=MPI.LOR):
+            self.assembler.extend(halo, self.T)
+            self._halo_nodes = halo.global_nodes.size
+
     def evaluate(
         self, *, tangent: bool = True, coupling: bool = False, mechanics: bool = True
     ) -> list[SpringBlocks]:
@@ -144,6 +158,7 @@ class ThermalContactProblem:
         """
         if mechanics:
             self.contact.evaluate(tangent=coupling)
+        self._follow_halo()
         temperatures = self.temperatures()
         blocks, self.heat_flows, self.coupling_blocks, self.evaluations = [], [], [], []
         for state, conductance in zip(self.contact.states, self.conductances):
