@@ -61,6 +61,17 @@ class ThermoMechanicalContact:
         self.thermal = thermal
         self.contact = thermal.contact
         u, T = self.contact.u, thermal.T
+        validation.check_residual(F, u, owner)
+        if T not in F.coefficients():
+            raise ValueError(
+                f"{owner}: F does not depend on the temperature T: give the mechanical residual "
+                "with the thermal strain (e.g. thermoelastic_stress(u, T, ...))"
+            )
+        if u in thermal.residual_form.coefficients():
+            raise NotImplementedError(
+                f"{owner}: the heat residual depends on the displacement; only the springs may "
+                "couple it to u for now"
+            )
         if self.contact.constraints:
             raise NotImplementedError(f"{owner}: linear constraints are not supported yet")
         options = compat.jit_keywords(form_compiler_options, jit_options)

@@ -92,7 +92,10 @@ class ThermalContactProblem:
             raise NotImplementedError(
                 f"{owner}: pair(s) {rigid} have a rigid master surface, which has no temperature"
             )
+        validation.check_residual(F, T, owner, J)
         options = compat.jit_keywords(form_compiler_options, jit_options)
+        #: The UFL heat residual.
+        self.residual_form = F
         self._L = dolfinx.fem.form(F, **options)
         self._a = dolfinx.fem.form(
             ufl.derivative(F, T, ufl.TrialFunction(Q)) if J is None else J, **options

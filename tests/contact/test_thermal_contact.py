@@ -265,14 +265,22 @@ def test_thermal_expansion_closes_gap() -> None:
 @pytest.mark.mpi
 def test_refuses_a_temperature_of_another_space() -> None:
     mesh, ft, V, Q, T, _ = _bars()
-    u = dolfinx.fem.Function(V)
-    F = ufl.inner(ntf.small_strain_stress(u, 1.0, 0.3), ufl.grad(ufl.TestFunction(V))) * ufl.dx
+    u, v, q = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TestFunction(Q)
+    F = ufl.inner(ntf.small_strain_stress(u, 1.0, 0.3), ufl.grad(v)) * ufl.dx
     problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=False))
     P2 = dolfinx.fem.Function(compat.scalar_space(mesh, "Lagrange", 2))
     with pytest.raises(ValueError, match="number its nodes like the displacement"):
         ThermalContactProblem(_heat_residual(P2, P2.function_space), P2, problem, TABLE)
     with pytest.raises(ValueError, match="2 conductances for 1 contact pairs"):
         ThermalContactProblem(_heat_residual(T, Q), T, problem, [TABLE, TABLE])
+    heat = CONDUCTIVITY * ufl.inner(ufl.grad(T), ufl.grad(q)) * ufl.dx
+    thermal = ThermalContactProblem(heat, T, problem, TABLE)
+    with pytest.raises(ValueError, match="F does not depend on the temperature"):
+        ThermoMechanicalContact(F, thermal)
+    thermal2 = ThermalContactProblem(heat + ufl.div(u) * q * ufl.dx, T, problem, TABLE)
+    F_T = F + ufl.inner(T * ufl.Identity(3), ufl.grad(v)) * ufl.dx
+    with pytest.raises(NotImplementedError, match="heat residual depends on the displacement"):
+        ThermoMechanicalContact(F_T, thermal2)
     problem.destroy()
 
 
