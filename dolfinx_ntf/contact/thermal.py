@@ -227,7 +227,7 @@ class ThermalContactProblem:
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """Assemble the bulk Jacobian plus the springs' exact temperature tangent into ``A``."""
+        """The Jacobian at ``x`` (bulk, springs' exact temperature tangent) into ``A``."""
         A.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(A, self.a, self.bcs)
         A.assemble()
