@@ -10,7 +10,6 @@ __version__ = "0.1.0"
 
 from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
-from dolfinx_ntf.contact.coupled import ThermoMechanicalContact
 from dolfinx_ntf.contact.pair import ContactPair
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
@@ -62,6 +61,7 @@ from dolfinx_ntf.solvers.analysis import (
     SetSmallSliding,
     run_steps,
 )
+from dolfinx_ntf.solvers.coupled import ThermoMechanicalContact
 from dolfinx_ntf.solvers.dynamics import DynamicStep, kinetic_energy
 from dolfinx_ntf.solvers.errors import (
     ContactConvergenceError,

@@ -1,4 +1,4 @@
-"""Thermal contact (contact/thermal.py, contact/coupled.py, solvers/staggered.py): closed forms.
+"""Thermal contact (contact/thermal.py, solvers/coupled.py, solvers/staggered.py): closed forms.
 
 The coupled (monolithic) Jacobian is also checked against finite differences of its residual.
 
@@ -34,11 +34,11 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.contact.coupled import ThermoMechanicalContact
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
 from dolfinx_ntf.fem.elasticity import component_bc
 from dolfinx_ntf.fem.thermal import thermoelastic_stress
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
+from dolfinx_ntf.solvers.coupled import ThermoMechanicalContact
 from dolfinx_ntf.solvers.staggered import solve_staggered
 
 #: No lateral strain from the axial stress: the spring areas stay the reference ones.
@@ -366,18 +366,32 @@ def test_coupled_jacobian_matches_finite_differences() -> None:
 
 
 @pytest.mark.mpi
-def test_heated_bars_closing_gap_monolithic() -> None:
-    """The heated bars closing the gap, in one Newton on (u, T): the same closed form."""
+@pytest.mark.parametrize("increments", [0, 2], ids=["one-solve", "static-step"])
+def test_heated_bars_closing_gap_monolithic(increments: int) -> None:
+    """The heated bars closing the gap, in one Newton on (u, T): the same closed form.
+
+    Alone (``solve_increment``) or as the solver of a StaticStep ramping the expansion.
+    """
     gap, alpha, t_ref = 0.02, 2e-4, 250.0
     _, ft, V, Q, T, bcs_T = _bars(gap)
     T.x.array[:] = t_ref
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    sigma = ntf.thermoelastic_stress(u, T, YOUNGS_MODULUS, POISSON_RATIO, alpha, t_ref)
+    ramp = dolfinx.fem.Constant(V.mesh, 1.0)
+    sigma = ntf.thermoelastic_stress(u, T, YOUNGS_MODULUS, POISSON_RATIO, ramp * alpha, t_ref)
     F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx
     problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=True))
     thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T)
     coupled = ThermoMechanicalContact(F, thermal)
-    iterations = coupled.solve(rtol=1e-12)
+    coupled.rtol = 1e-12
+    if increments:
+        step = ntf.StaticStep(
+            lambda t: setattr(ramp, "value", t), initial_increment=1 / increments, fixed=True
+        )
+        results = step.run(coupled, u)
+        assert [r.increment for r in results] == list(range(1, increments + 1))
+        iterations = results[-1].iterations
+    else:
+        iterations = coupled.solve_increment()
     total, flux = _closed_form(gap, alpha, t_ref)
     np.testing.assert_allclose(ntf.contact_force(problem)[2], total, rtol=1e-10)
     np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-10)

@@ -31,6 +31,7 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.assembly import coupling_matrix
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
+from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenceError
 
 __all__ = ["ThermoMechanicalContact"]
 
@@ -88,6 +89,18 @@ class ThermoMechanicalContact:
         if PETSc.Sys.hasExternalPackage("mumps"):
             self._ksp.getPC().setFactorSolverType("mumps")
         self._ksp.setFromOptions()
+        #: The contact problem (the step's solver role names it ``problem``).
+        self.problem = self.contact
+        #: Relative tolerance of the combined residual's 2-norm.
+        self.rtol = 1e-10
+        #: Absolute tolerance of the combined residual's 2-norm.
+        self.atol = 1e-12
+        #: Raise ``ContactConvergenceError`` after this many iterations.
+        self.max_iterations = 30
+        #: Displacement at the start of the increment (set by a step before each attempt).
+        self.increment_start: np.ndarray | None = None
+        self._increment_key: np.ndarray | None = None
+        self._T_start = T.x.array.copy()
         #: Newton iterations of the last :meth:`solve`.
         self.iterations = 0
         #: Norms of the combined residual at each iterate of the last :meth:`solve`.
@@ -140,28 +153,49 @@ class ThermoMechanicalContact:
 
     # -- Newton --------------------------------------------------------------------------------
 
-    def solve(self, *, rtol: float = 1e-10, atol: float = 1e-12, max_iterations: int = 30) -> int:
-        """Newton on both fields from the current ``u`` and ``T``; returns the iterations.
+    def begin_step(self) -> None:
+        """A new step starts (the StaticStep solver role): nothing to reset."""
 
-        One increment of the contact problem: pairing at the start (``begin_increment(1)``),
-        re-pairing on its schedule inside (docs/method.md §3.1), the friction state committed at
-        the end. Converged when the combined residual's norm is below ``rtol`` times the first
-        one or below ``atol``. Collective.
+    def solve(self, u: dolfinx.fem.Function | None = None) -> tuple[int, bool]:
+        """Newton on both fields from the current ``u`` and ``T`` at the current pairing.
+
+        The increment solver of a :class:`~dolfinx_ntf.StaticStep` (which pairs at the increment
+        start and commits at its end); :meth:`solve_increment` does one increment alone.
+        Converged when the combined residual's 2-norm is below :attr:`rtol` times the first one
+        or below :attr:`atol`. A retried attempt of the same increment (cutback) restarts ``T``
+        from the increment start, as the step restarts ``u``. Collective.
+
+        Args:
+            u: The contact problem's displacement (the step passes it; default that one).
+
+        Returns:
+            ``(iterations, True)``.
 
         Raises:
-            RuntimeError: No convergence within ``max_iterations``.
+            ContactConvergenceError: No convergence within :attr:`max_iterations`.
+            ContactDivergenceError: A non-finite residual.
         """
         contact = self.contact
-        u, T = contact.u, self.thermal.T
-        x_u, x_T = compat.petsc_vector(u), compat.petsc_vector(T)
-        contact.begin_increment(1.0)
+        if u is not None and u is not contact.u:
+            raise ValueError("ThermoMechanicalContact.solve: u is not the contact problem's")
+        T = self.thermal.T
+        if self.increment_start is None or self.increment_start is not self._increment_key:
+            self._increment_key, self._T_start = self.increment_start, T.x.array.copy()
+        else:  # a cutback: the step restored u, we restore T
+            T.x.array[:] = self._T_start
+            T.x.scatter_forward()
+        x_u, x_T = compat.petsc_vector(contact.u), compat.petsc_vector(T)
         self.evaluate()
         self.residual_norms = [self._norm()]
         self.iterations = 0
-        while self.residual_norms[-1] > max(rtol * self.residual_norms[0], atol):
-            if self.iterations == max_iterations:
-                raise RuntimeError(
-                    f"ThermoMechanicalContact.solve: no convergence in {max_iterations} "
+        while self.residual_norms[-1] > max(self.rtol * self.residual_norms[0], self.atol):
+            if not np.isfinite(self.residual_norms[-1]):
+                raise ContactDivergenceError(
+                    f"ThermoMechanicalContact: non-finite residual at iteration {self.iterations}"
+                )
+            if self.iterations == self.max_iterations:
+                raise ContactConvergenceError(
+                    f"ThermoMechanicalContact: no convergence in {self.max_iterations} "
                     f"iterations (residual {self.residual_norms[-1]:.3e}, first "
                     f"{self.residual_norms[0]:.3e})"
                 )
@@ -188,8 +222,19 @@ class ThermoMechanicalContact:
                 self.iterations,
                 self.residual_norms[-1],
             )
-        contact.end_increment()
-        return self.iterations
+        return self.iterations, True
+
+    def solve_increment(self) -> int:
+        """One increment alone: pair at the current state, :meth:`solve`, commit. Collective.
+
+        Returns:
+            The Newton iterations.
+        """
+        self.contact.begin_increment(1.0)
+        self.increment_start = None
+        iterations, _ = self.solve()
+        self.contact.end_increment()
+        return iterations
 
     def _norm(self) -> float:
         """The 2-norm of the combined residual over all processes."""
