@@ -28,9 +28,23 @@ logger = logging.getLogger("dolfinx_ntf")
 
 
 def thermal_solver(problem: ThermalContactProblem) -> NewtonSolver:
-    """A Newton solver for ``problem`` on its Jacobian matrix (the springs' couplings included)."""
+    """A Newton solver for ``problem`` on its Jacobian matrix (the springs' couplings included).
+
+    Args:
+        problem: The heat problem.
+    """
     solver = NewtonSolver(problem.T.function_space.mesh.comm, problem)
-    solver.setJ(problem.J, problem.ensure_matrix())
+
+    def jacobian(x: PETSc.Vec, A: PETSc.Mat) -> None:
+        # A grown pattern starts the factorization afresh: PETSc 3.22 does not see the pattern
+        # change of MatAXPY(..., DIFFERENT_NONZERO_PATTERN) (solvers/linear_solver.py).
+        merges = problem.assembler.pattern_merges
+        problem.J(x, A)
+        if problem.assembler.pattern_merges != merges:
+            solver.krylov_solver.getPC().reset()
+            solver.krylov_solver.setOperators(A, A)
+
+    solver.setJ(jacobian, problem.ensure_matrix())
     solver.report = False
     return solver
 

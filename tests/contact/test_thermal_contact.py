@@ -307,6 +307,7 @@ def _punch(alpha: float = 1e-3, t_ref: float = 300.0):
         )
     ]
     thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T)
+    mesh.topology.create_connectivity(3, 3)  # dolfinx >= 0.9 locates cell dofs with it
     punch = dolfinx.fem.locate_dofs_topological(V, 3, cells.find(UPPER))
     return ThermoMechanicalContact(F, thermal), punch, [bottom, top], bcs_T[0].dof_indices()[0]
 
@@ -455,6 +456,7 @@ def test_transient_exchange_between_bars(conductivity: float) -> None:
 def _cells(mesh, *, upper: bool) -> np.ndarray:
     """Local cells of the upper (or lower) bar, by their midpoints."""
     tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim, tdim)  # dolfinx >= 0.9 locates cell dofs with it
     cells = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
     midpoints = dolfinx.mesh.compute_midpoints(mesh, tdim, cells)
     return cells[(midpoints[:, 2] > 0.0) == upper]
