@@ -35,6 +35,7 @@ from dolfinx_ntf.kernels.gap_conductance import (
     ThermalSpringEvaluation,
     evaluate_thermal_springs,
 )
+from dolfinx_ntf.kernels.laws import LinearLaw
 from dolfinx_ntf.kernels.rigid import RigidSurface
 from dolfinx_ntf.parallel import collectives
 
@@ -53,6 +54,10 @@ class ThermalContactProblem:
             order), or one for all pairs.
         bcs: Dirichlet conditions on ``T``'s space.
         J: UFL Jacobian (derived from ``F`` when omitted).
+        conductance_pressure: The pressure the conductance table is looked up at: ``"contact"``
+            (the spring's contact pressure ``F_N/A``, default) or ``"ccx"`` (CalculiX 2.20's
+            thermal spring: the slope ``K`` of a LINEAR law, whatever the contact pressure;
+            docs/method.md §16.1; other laws are refused, their ccx value is not measured).
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
@@ -65,6 +70,7 @@ class ThermalContactProblem:
         bcs: typing.Sequence[compat.DirichletBC] = (),
         J: ufl.form.Form | None = None,
         *,
+        conductance_pressure: str = "contact",
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -81,6 +87,24 @@ class ThermalContactProblem:
             )
         for i, h in enumerate(conductances):
             validation.check_type(h, GapConductance, f"{owner}: conductances[{i}]")
+        if conductance_pressure not in ("contact", "ccx"):
+            raise ValueError(
+                f"{owner}: conductance_pressure must be 'contact' or 'ccx', got "
+                f"{conductance_pressure!r}"
+            )
+        if conductance_pressure == "ccx":
+            other = [
+                f"{s.pair.name or i} ({type(s.pair.interaction.law).__name__})"
+                for i, s in enumerate(contact.states)
+                if type(s.pair.interaction.law) is not LinearLaw
+            ]
+            if other:
+                raise NotImplementedError(
+                    f"{owner}: conductance_pressure='ccx' is known for LinearLaw only; pair(s) "
+                    f"{other} have another law"
+                )
+        #: ``"contact"`` or ``"ccx"``: the pressure the conductance tables are looked up at.
+        self.conductance_pressure = conductance_pressure
         Q = T.function_space
         collectives.collectively(contact.u.function_space.mesh.comm, _check_space, T, contact.u)
         rigid = [
@@ -176,9 +200,14 @@ class ThermalContactProblem:
                     "evaluated with their tangent"
                 )
             nodes = state.element_nodes
-            pressure = np.divide(
-                ev.normal_force, ev.area, out=np.zeros_like(ev.area), where=ev.area > 0
-            )
+            if self.conductance_pressure == "ccx":  # ccx 2.20: the slope, constant (§16.1)
+                pressure = np.full(state.num_springs, state.pair.interaction.law.slope)
+                dpressure = None if ev.dpressure is None else np.zeros_like(ev.dpressure)
+            else:
+                pressure = np.divide(
+                    ev.normal_force, ev.area, out=np.zeros_like(ev.area), where=ev.area > 0
+                )
+                dpressure = ev.dpressure
             th = evaluate_thermal_springs(
                 state.master_faces.face_type,
                 ev.xi,
@@ -188,7 +217,7 @@ class ThermalContactProblem:
                 conductance,
                 tangent=tangent,
                 dxi=ev.dxi if coupling else None,
-                dpressure=ev.dpressure if coupling else None,
+                dpressure=dpressure if coupling else None,
             )
             self.heat_flows.append(th.flow)
             self.evaluations.append(th)

@@ -273,6 +273,8 @@ def test_refuses_a_temperature_of_another_space() -> None:
         ThermalContactProblem(_heat_residual(P2, P2.function_space), P2, problem, TABLE)
     with pytest.raises(ValueError, match="2 conductances for 1 contact pairs"):
         ThermalContactProblem(_heat_residual(T, Q), T, problem, [TABLE, TABLE])
+    with pytest.raises(ValueError, match="conductance_pressure must be 'contact' or 'ccx'"):
+        ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, conductance_pressure="p")
     heat = CONDUCTIVITY * ufl.inner(ufl.grad(T), ufl.grad(q)) * ufl.dx
     thermal = ThermalContactProblem(heat, T, problem, TABLE)
     with pytest.raises(ValueError, match="F does not depend on the temperature"):
@@ -533,16 +535,21 @@ NT
 
 
 @pytest.mark.parametrize(
-    "rows",
-    [[(100.0, 0.0, 0.0)], [(50.0, 0.0, 300.0), (150.0, 0.0, 400.0)]],
-    ids=["constant", "temperature-dependent"],
+    ("rows", "conductance_pressure"),
+    [
+        ([(100.0, 0.0, 0.0)], "contact"),
+        ([(50.0, 0.0, 300.0), (150.0, 0.0, 400.0)], "contact"),
+        ([(20.0, 0.0, 0.0), (220.0, 1e5, 0.0)], "ccx"),
+    ],
+    ids=["constant", "temperature-dependent", "pressure-dependent-ccx"],
 )
-def test_agrees_with_ccx(rows, tmp_path) -> None:
+def test_agrees_with_ccx(rows, conductance_pressure, tmp_path) -> None:
     """The bars of the first test in ccx 2.20 (one C3D8 per bar, *COUPLED TEMPERATURE-
     DISPLACEMENT, STEADY STATE): the interface temperatures agree to ccx's 7 printed digits.
 
-    The tables do not depend on the pressure: for a LINEAR law ccx 2.20's thermal spring looks
-    the table up at the law's slope K instead of the contact pressure (docs/method.md §16.1).
+    For a LINEAR law ccx 2.20's thermal spring looks the table up at the law's slope K instead of
+    the contact pressure (docs/method.md §16.1): a pressure-dependent table agrees with
+    ``conductance_pressure="ccx"`` (h(K = 5e4) = 120 here, h(40) = 20.08 with the contact pressure).
     """
     from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
 
@@ -565,7 +572,9 @@ def test_agrees_with_ccx(rows, tmp_path) -> None:
     F += pressure * ufl.inner(ufl.FacetNormal(mesh), v) * ds(UPPER_TOP)
     problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=False))
     table = GapConductance.from_rows(rows)
-    thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, table, bcs_T)
+    thermal = ThermalContactProblem(
+        _heat_residual(T, Q), T, problem, table, bcs_T, conductance_pressure=conductance_pressure
+    )
     solve_staggered(lambda: solve_increments(problem, pressure, load, 1), thermal)
     slave, master = _interface_temperatures(T, mesh)
     np.testing.assert_allclose([slave, master], [ccx[11], ccx[5]], rtol=2e-7)  # 7 digits
