@@ -12,6 +12,7 @@ from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
 from dolfinx_ntf.contact.pair import ContactPair
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.contact.thermal import ThermalContactProblem
 from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
@@ -19,12 +20,14 @@ from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.fem.thermal import thermal_strain, thermoelastic_stress
 from dolfinx_ntf.kernels.discrete_springs import (
     AxialSpring,
     DirectionalSpring,
     LinearSpringLaw,
     TabularSpringLaw,
 )
+from dolfinx_ntf.kernels.gap_conductance import GapConductance
 from dolfinx_ntf.kernels.laws import (
     DynamicLinearLaw,
     ExponentialLaw,
@@ -49,6 +52,7 @@ from dolfinx_ntf.outputs.results import (
     ContactWriter,
     contact_results,
 )
+from dolfinx_ntf.outputs.thermal import ThermalResults, heat_flux_field, thermal_results
 from dolfinx_ntf.parallel.global_constraints import (
     GlobalLinearConstraint,
     global_constraints,
@@ -65,6 +69,7 @@ from dolfinx_ntf.solvers.analysis import (
     SetSmallSliding,
     run_steps,
 )
+from dolfinx_ntf.solvers.coupled import ThermoMechanicalContact
 from dolfinx_ntf.solvers.dynamics import DynamicStep, kinetic_energy
 from dolfinx_ntf.solvers.errors import (
     ContactConvergenceError,
@@ -75,6 +80,7 @@ from dolfinx_ntf.solvers.modes import Modes, contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.newton_loop import NewtonSolver
 from dolfinx_ntf.solvers.snes import ContactSNESSolver
+from dolfinx_ntf.solvers.staggered import solve_staggered, thermal_solver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 _logs.route_compiler_lines()
@@ -105,6 +111,7 @@ __all__ = [
     "ExponentialLaw",
     "FacetSurface",
     "Friction",
+    "GapConductance",
     "GlobalLinearConstraint",
     "IncrementResult",
     "LinearConstraint",
@@ -127,6 +134,9 @@ __all__ = [
     "SurfaceInteraction",
     "TabularLaw",
     "TabularSpringLaw",
+    "ThermalContactProblem",
+    "ThermalResults",
+    "ThermoMechanicalContact",
     "Tie",
     "__version__",
     "component_bc",
@@ -135,6 +145,7 @@ __all__ = [
     "contact_modes",
     "contact_results",
     "global_constraints",
+    "heat_flux_field",
     "input_node_ids",
     "kinetic_energy",
     "log_progress",
@@ -142,5 +153,10 @@ __all__ = [
     "run_steps",
     "serendipity_constraints",
     "small_strain_stress",
+    "solve_staggered",
+    "thermal_results",
+    "thermal_solver",
+    "thermal_strain",
+    "thermoelastic_stress",
     "tie_constraints",
 ]

@@ -269,6 +269,7 @@ def test_guide_examples_run(tmp_path, monkeypatch):
         ("guide/steps.md", steps[2]),
         ("guide/steps.md", steps[3]),
         ("guide/surfaces.md", _python_blocks("guide/surfaces.md")[0]),
+        *(("guide/thermal.md", block) for block in _python_blocks("guide/thermal.md")),
     ]
     monkeypatch.chdir(tmp_path)  # the writer's file goes here
     monkeypatch.setattr(logs, "_handler", logging.NullHandler())
@@ -304,6 +305,11 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     u, u5 = namespace["u"], namespace["u5"]
     assert [r.time for r in namespace["snes_results"]] == [0.5, 1.0]
     assert np.abs(u5.x.array - u.x.array).max() <= 1e-8 * np.abs(u.x.array).max()
+    # Thermal contact: the staggered passes converge, the coupled Newton too; heat flows down.
+    assert namespace["passes"] <= 10
+    assert namespace["norms"][-1] <= 1e-10 * namespace["norms"][0]
+    flow = MPI.COMM_WORLD.allreduce(sum(float(q.sum()) for q in namespace["flows"]))
+    assert flow > 0.0  # into the slave (the punch): the heated block is the master
     # The gmsh builder of one's own: 3D groups are cell tags, 2D groups facet tags.
     _, cells, facets = mesh_from_gmsh(namespace["build_two_boxes"], MPI.COMM_SELF, size=0.2)
     assert set(np.unique(cells.values)) == {1, 2} and set(np.unique(facets.values)) == {11, 12}

@@ -66,6 +66,22 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         ],
     ),
     (
+        "Thermal contact",
+        "dolfinx_ntf",
+        [
+            "ThermalContactProblem",
+            "ThermoMechanicalContact",
+            "GapConductance",
+            "solve_staggered",
+            "thermal_solver",
+            "thermal_strain",
+            "thermoelastic_stress",
+            "thermal_results",
+            "ThermalResults",
+            "heat_flux_field",
+        ],
+    ),
+    (
         "Rigid master surfaces",
         "dolfinx_ntf",
         ["RigidSurface", "RigidPlane", "RigidSphere", "RigidCylinder", "SignedDistanceSurface"],

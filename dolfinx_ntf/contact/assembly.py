@@ -31,16 +31,17 @@ from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.halo import NodeHalo
 
-__all__ = ["ContactAssembler", "SpringBlocks"]
+__all__ = ["ContactAssembler", "SpringBlocks", "coupling_matrix"]
 
 
 @dataclass(frozen=True)
 class SpringBlocks:
     """Dense element blocks to add: ``values[e]`` couples ``row_nodes[e]`` with ``col_nodes[e]``.
 
-    Nodes are local block dofs; ``values`` has shape (E, 3 a, 3 b) for ``row_nodes`` (E, a) and
-    ``col_nodes`` (E, b). ``vector`` (E, 3 a) is the residual contribution of the rows (only for
-    square element blocks).
+    Nodes are local block dofs; ``values`` has shape (E, bs a, bs b) for ``row_nodes`` (E, a) and
+    ``col_nodes`` (E, b), bs the space's block size (3 for the displacement, 1 for a temperature).
+    ``vector`` (E, bs a) is the residual contribution of the rows (only for square element
+    blocks).
     """
 
     row_nodes: np.ndarray
@@ -66,16 +67,18 @@ class ContactAssembler:
         """Prepare global numbering and the Dirichlet mask.
 
         Args:
-            V: The vector displacement space (block size 3).
+            V: The vector displacement space (block size 3), or a scalar space numbered like its
+                nodes (the temperature of thermal contact, docs/method.md §20).
             jacobian_form: The compiled bulk Jacobian form; its sparsity pattern is the base of
                 every matrix.
             bcs: Dirichlet conditions on ``V``; their dofs receive no contact entries.
         """
         self._bs = V.dofmap.index_map_bs
-        if self._bs != V.mesh.topology.dim or self._bs not in (2, 3):
+        if self._bs not in (1, V.mesh.topology.dim) or self._bs > 3:
             raise ValueError(
                 "contact needs a vector displacement space with one component per dimension of "
-                f"the mesh, got block size {self._bs} on a {V.mesh.topology.dim}D mesh"
+                "the mesh (or a scalar space, e.g. the temperature), got block size "
+                f"{self._bs} on a {V.mesh.topology.dim}D mesh"
             )
         self._form = jacobian_form
         index_map = V.dofmap.index_map
@@ -299,3 +302,62 @@ class ContactAssembler:
             )
         b.assemblyBegin()
         b.assemblyEnd()
+
+
+def coupling_matrix(
+    rows: ContactAssembler, columns: ContactAssembler, blocks: typing.Sequence[SpringBlocks]
+) -> PETSc.Mat:
+    """A new matrix coupling two spaces with exactly the entries of ``blocks``. Collective.
+
+    The off-diagonal block of a coupled problem (e.g. heat flows by displacements, docs/method.md
+    §20.2): rows of ``rows``'s space, columns of ``columns``'s, the two numbered over the same
+    nodes (halo included). ``values[e]`` has shape (bs_r a, bs_c b); Dirichlet rows and columns of
+    either assembler are left out (dolfinx's rule for off-diagonal blocks).
+
+    Args:
+        rows: The assembler of the row space.
+        columns: The assembler of the column space.
+        blocks: Element blocks whose ``row_nodes`` and ``col_nodes`` are nodes of both.
+    """
+    comm = rows._comm
+    row_list, col_list, value_list = [np.empty(0, np.int64)], [np.empty(0, np.int64)], [np.empty(0)]
+    for blk in blocks:
+        if blk.values is None or blk.row_nodes.shape[0] == 0:
+            continue
+        r = rows._global_dof_masked[_unblocked(blk.row_nodes, rows._bs)]
+        c = columns._global_dof_masked[_unblocked(blk.col_nodes, columns._bs)]
+        shape = blk.values.shape
+        row_list.append(np.broadcast_to(r[:, :, None], shape).ravel())
+        col_list.append(np.broadcast_to(c[:, None, :], shape).ravel())
+        value_list.append(blk.values.ravel())
+    r, c, values = (np.concatenate(x) for x in (row_list, col_list, value_list))
+    keep = (r >= 0) & (c >= 0)
+    r, c, values = r[keep], c[keep], values[keep]
+    num_columns = columns._bs * columns._num_global
+    keys = np.unique(r * num_columns + c)
+    first = rows._bs * rows._first_nodes
+    if comm.size > 1:  # the pattern goes to the process owning each row
+        owner = np.searchsorted(first, keys // num_columns, side="right") - 1
+        keys = np.unique(collectives.send_to_owners(comm, keys, owner))
+    n_rows, n_columns = rows._bs * rows._num_owned, columns._bs * columns._num_owned
+    start = int(first[comm.rank])
+    pattern = scipy.sparse.csr_matrix(
+        (np.ones(keys.size, dtype=np.int8), (keys // num_columns - start, keys % num_columns)),
+        shape=(n_rows, num_columns),
+    )
+    pattern.sort_indices()
+    A = PETSc.Mat().createAIJ(
+        ((n_rows, rows._bs * rows._num_global), (n_columns, num_columns)),
+        csr=(pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType)),
+        comm=comm,
+    )
+    A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+    if r.size:  # petsc4py divides by the number of rows
+        A.setValuesRCV(
+            r.astype(PETSc.IntType)[:, None],
+            c.astype(PETSc.IntType)[:, None],
+            values[:, None, None],
+            addv=PETSc.InsertMode.ADD_VALUES,
+        )
+    A.assemble()
+    return A

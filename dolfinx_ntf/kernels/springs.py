@@ -76,6 +76,9 @@ class SpringEvaluation:
             linearized-area option adds ``outer(force_per_area[k], dA/dx_q)`` to block (k, q).
         stiffness: (N, 3(n+1), 3(n+1)) ∂forces/∂x with dof ``3k + c``, or None if not asked for.
         tangential: Friction results (docs/method.md §11), or None without friction.
+        dxi: (N, n+1, 2, 3) ∂ξ/∂x with the tangent (else None); the thermal springs' coupling to
+            the displacement (docs/method.md §20).
+        dpressure: (N, n+1, 3) ∂p/∂x of the pressure p = F_N/A with the tangent (else None).
     """
 
     xi: np.ndarray
@@ -89,6 +92,8 @@ class SpringEvaluation:
     force_per_area: np.ndarray
     stiffness: np.ndarray | None
     tangential: TangentialForce | None = None
+    dxi: np.ndarray | None = None
+    dpressure: np.ndarray | None = None
 
 
 @dataclass
@@ -227,6 +232,11 @@ def evaluate_springs(
         force_per_area=force_per_area,
         stiffness=stiffness,
         tangential=tangential,
+        dxi=kin.dxi,
+        dpressure=None
+        if kin.dgap is None
+        else -np.divide(dforce, area, out=np.zeros_like(area), where=area > 0)[:, None, None]
+        * kin.dgap,
     )
 
 

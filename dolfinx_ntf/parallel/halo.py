@@ -53,7 +53,8 @@ class NodeHalo:
         self.first_nodes = np.array(self.comm.allgather(int(index_map.local_range[0])))
         self._reference = reference_coordinates(V)
         self._sort()
-        self._scatter: PETSc.Scatter | None = None
+        #: Scatters to the halo nodes by block size.
+        self._scatters: dict[int, tuple[PETSc.Scatter, PETSc.Vec]] = {}
 
     def _sort(self) -> None:
         self._all = np.concatenate([self.local_global, self.extra])
@@ -100,19 +101,23 @@ class NodeHalo:
 
     # -- values of other processes -----------------------------------------------------------------
 
-    def _scatter_from(self, vector: PETSc.Vec) -> np.ndarray:
-        """Values of ``vector`` (V's layout) at the halo nodes, shape (extras, bs). Collective."""
-        bs = self.bs
-        if self._scatter is None:
+    def _scatter_from(self, vector: PETSc.Vec, bs: int | None = None) -> np.ndarray:
+        """Values of ``vector`` (block size ``bs``, V's by default) at the halo nodes, (extras, bs).
+
+        Collective.
+        """
+        bs = self.bs if bs is None else bs
+        if bs not in self._scatters:  # made once, like the halo's numbering (collective)
             dofs = (bs * self.extra[:, None] + np.arange(bs)).ravel().astype(PETSc.IntType)
-            self._target = PETSc.Vec().createSeq(dofs.size, comm=PETSc.COMM_SELF)
+            target = PETSc.Vec().createSeq(dofs.size, comm=PETSc.COMM_SELF)
             source = PETSc.IS().createGeneral(dofs, comm=PETSc.COMM_SELF)
-            self._scatter = PETSc.Scatter().create(vector, source, self._target, None)
+            self._scatters[bs] = (PETSc.Scatter().create(vector, source, target, None), target)
             source.destroy()
-        self._scatter.scatter(
-            vector, self._target, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD
+        scatter, target = self._scatters[bs]
+        scatter.scatter(
+            vector, target, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD
         )
-        return self._target.array_r.reshape(-1, bs).copy()
+        return target.array_r.reshape(-1, bs).copy()
 
     def values(self, vector: PETSc.Vec) -> np.ndarray:
         """Values of ``vector`` (V's layout) at the halo nodes, shape (extras, bs). Collective."""
@@ -125,22 +130,35 @@ class NodeHalo:
             values = np.vstack([values, self._scatter_from(compat.petsc_vector(u))])
         return planar_padded(values)
 
+    def field(self, f: dolfinx.fem.Function) -> np.ndarray:
+        """A field numbered like ``V``'s nodes (e.g. a temperature) at every extended node.
+
+        Shape (num_local + extras, bs) for the block size bs of ``f``'s space. Collective.
+        """
+        bs = f.function_space.dofmap.index_map_bs
+        values = f.x.array.reshape(-1, bs)
+        return np.vstack([values, self._scatter_from(compat.petsc_vector(f), bs)])
+
     def constrained(self, u: dolfinx.fem.Function, bcs: typing.Sequence) -> np.ndarray:
-        """Which dofs of the halo nodes the Dirichlet conditions fix, (extras, bs). Collective."""
+        """Which dofs of the halo nodes the Dirichlet conditions fix, (extras, bs). Collective.
+
+        ``u``: a function of the conditions' space (its block size bs: V's for the displacement).
+        """
+        bs = u.function_space.dofmap.index_map_bs
         marker = compat.petsc_vector(u).duplicate()
         with marker.localForm() as local:
             local.set(0.0)
             array = local.array
             for bc in bcs:
                 dofs, _ = bc.dof_indices()
-                array[dofs[dofs < self.bs * self.num_owned]] = 1.0
-        values = self._scatter_from(marker) > 0.5
+                array[dofs[dofs < bs * self.num_owned]] = 1.0
+        values = self._scatter_from(marker, bs) > 0.5
         marker.destroy()
         return values
 
     def destroy(self) -> None:
         """Free the PETSc scatter. Collective."""
-        if self._scatter is not None:
-            self._scatter.destroy()
-            self._target.destroy()
-            self._scatter = None
+        for scatter, target in self._scatters.values():
+            scatter.destroy()
+            target.destroy()
+        self._scatters = {}
