@@ -16,6 +16,7 @@ from petsc4py import PETSc
 
 import pytest
 
+from dolfinx_ntf import logs
 from dolfinx_ntf.__main__ import main
 from dolfinx_ntf.calculix import job as job_module
 
@@ -49,9 +50,9 @@ class _CurrentStderr:
 @pytest.fixture(autouse=True)
 def _progress_to_current_stderr(monkeypatch):
     """The progress handler is made once per process, bound to the stderr of that moment."""
-    for handler in logging.getLogger("dolfinx_ntf").handlers:
-        if isinstance(handler, logging.StreamHandler):
-            monkeypatch.setattr(handler, "stream", _CurrentStderr())
+    handler = logs._handler  # ours only: pytest's own handlers are StreamHandlers too
+    if handler is not None and handler in logging.getLogger("dolfinx_ntf").handlers:
+        monkeypatch.setattr(handler, "stream", _CurrentStderr())
 
 
 def test_batch_runs_every_job_with_its_own_files_and_status(tmp_path, capsys, monkeypatch):
