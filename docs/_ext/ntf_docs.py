@@ -201,6 +201,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Measures of a contact solution", "dolfinx_ntf.fem.measures"),
     ("Elasticity in UFL (3D, plane strain, plane stress)", "dolfinx_ntf.fem.elasticity"),
     ("Axisymmetric elasticity in UFL", "dolfinx_ntf.fem.axisymmetric"),
+    ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
     ("The Hertz geometry of the demos", "dolfinx_ntf.meshes.hertz"),
@@ -423,6 +424,8 @@ def _hinted_classes(obj: object) -> set[type]:
 #: do not resolve at run time) but docstrings of public names refer to; they get a page too.
 EXTRA_TYPES: list[str] = [
     "dolfinx_ntf.contact.problem.ResidualTerm",
+    "dolfinx_ntf.contact.problem.ElementTerm",
+    "dolfinx_ntf.kernels.gap_conductance.ThermalSpringEvaluation",
     "dolfinx_ntf.contact.pairing.Pairing",
     "dolfinx_ntf.solvers.convergence.ForceScaledTest",
     "dolfinx_ntf.solvers.convergence.DivergenceRule",

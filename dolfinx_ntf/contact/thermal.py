@@ -139,7 +139,7 @@ class ThermalContactProblem:
         #: ∂(heat flows)/∂u of the springs at the last evaluation with ``coupling``: blocks of
         #: (n+1, 3(n+1)) per spring (docs/method.md §20.2).
         self.coupling_blocks: list[SpringBlocks] = []
-        #: The thermal springs of every pair at the last evaluation (None: no springs).
+        #: The thermal springs of every pair at the last evaluation (None where a pair has none).
         self.evaluations: list[ThermalSpringEvaluation | None] = []
 
     @property

@@ -76,7 +76,7 @@ class Tie:
 
 @dataclass(frozen=True)
 class TiedNodes:
-    """What :func:`tie_constraints` did on this process (for reports and tests).
+    """What :func:`~dolfinx_ntf.tie_constraints` did on this process (for reports and tests).
 
     Attributes:
         slaves: ``(S,)`` global block dofs of the slave nodes tied here.

@@ -107,7 +107,7 @@ class DiscreteSprings:
             self._local = np.where((local >= 0) & (local < index_map.size_local), local, -1)
         else:
             self.global_nodes, self._local = self._locate(V, ground, tolerance)
-        #: Springs this process evaluates and inserts: those whose first node it owns.
+        #: Springs this process evaluates and inserts (those whose first node it owns).
         self.mine = self._local[:, 0] >= 0
         self._forces = np.zeros((0, 6))
 

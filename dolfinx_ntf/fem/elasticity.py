@@ -55,8 +55,8 @@ def hooke_stress(
     """Isotropic Hooke's law ``2 mu eps + lambda tr(eps) I`` of a (2x2 or 3x3) strain tensor.
 
     Args:
-        strain: The small-strain tensor (e.g. :func:`~dolfinx_ntf.fem.axisymmetric.
-            axisymmetric_strain`, 3x3 with the hoop strain).
+        strain: The small-strain tensor (e.g.
+            :func:`~dolfinx_ntf.fem.axisymmetric.axisymmetric_strain`, 3x3 with the hoop strain).
         youngs_modulus: Young's modulus E > 0.
         poisson_ratio: Poisson's ratio, -1 < nu < 0.5.
     """

@@ -55,10 +55,10 @@ class GlobalLinearConstraint(LinearConstraint):
 
 
 class GlobalLinearConstraintBlock(LinearConstraintBlock):
-    """A :class:`LinearConstraintBlock` whose ``nodes`` are global block dofs of the space.
+    """A :class:`~dolfinx_ntf.LinearConstraintBlock` whose ``nodes`` are global block dofs.
 
     The block form of :class:`GlobalLinearConstraint` (surface ties, cyclic symmetry: §19), made
-    by :func:`global_constraint_block`; any process may give rows of it.
+    by ``global_constraint_block``; any process may give rows of it.
     """
 
 

@@ -1,10 +1,11 @@
 """Natural frequencies and modes of a structure stiffened by its closed contact springs.
 
 :func:`contact_modes` solves ``K phi = omega^2 M phi`` with SLEPc (shift-invert about a target)
-for the lowest modes, ``K`` being the tangent of a :class:`ContactProblem` at its converged state:
-the bulk tangent plus every spring's tangent stiffness (closed springs stiffen, open ones add
-nothing), as CalculiX's ``*FREQUENCY`` step after a static contact step (docs/method.md §16). It
-is built of :func:`tangent_stiffness`, :func:`mass_matrix` and :func:`solve_modes`.
+for the lowest modes, ``K`` being the tangent of a :class:`~dolfinx_ntf.ContactProblem` at its
+converged state: the bulk tangent plus every spring's tangent stiffness (closed springs stiffen,
+open ones add nothing), as CalculiX's ``*FREQUENCY`` step after a static contact step
+(docs/method.md §16). It is built of :func:`tangent_stiffness`, :func:`mass_matrix` and
+:func:`solve_modes`.
 
 Dirichlet dofs carry 1 on ``K``'s diagonal and 0 on ``M``'s (the dofs of dolfinx's modal demos):
 their eigenvalues are infinite and shift-invert never returns them. Constraints (``*EQUATION``,
@@ -305,13 +306,14 @@ def contact_modes(
 ) -> Modes:
     """The lowest natural frequencies and modes of ``problem``'s structure at its converged state.
 
-    The stiffness is the problem's tangent at the current displacement (:func:`tangent_stiffness`:
-    bulk tangent, stress stiffening of a large-strain form included, plus the closed springs'
-    tangent); the mass is the form ``mass`` (:func:`mass_matrix`). Collective.
+    The stiffness is the problem's tangent at the current displacement
+    (:func:`~dolfinx_ntf.solvers.modes.tangent_stiffness`: bulk tangent, stress stiffening of a
+    large-strain form included, plus the closed springs' tangent); the mass is the form ``mass``
+    (:func:`~dolfinx_ntf.solvers.modes.mass_matrix`). Collective.
 
     Args:
-        problem: A :class:`ContactProblem` solved to convergence (e.g. after
-            :meth:`StaticStep.run`).
+        problem: A :class:`~dolfinx_ntf.ContactProblem` solved to convergence (e.g. after
+            :meth:`~dolfinx_ntf.solvers.steps.Step.run`).
         mass: Bilinear mass form on the displacement space, e.g. ``rho * inner(u, v) * dx``.
         num_modes: How many modes, lowest first.
         shift: Target of the shift-invert transform (below the lowest eigenvalue); by default
@@ -321,7 +323,8 @@ def contact_modes(
         symmetric: Solve as a symmetric problem; by default when ``K`` is symmetric to round-off.
         options_prefix: PETSc options prefix of the eigensolver.
         springs: Include the contact springs' tangent (False: the bulk alone,
-            :func:`bulk_stiffness`, as CalculiX 2.20's ``*FREQUENCY`` step).
+            :func:`~dolfinx_ntf.solvers.modes.bulk_stiffness`, as CalculiX 2.20's
+            ``*FREQUENCY`` step).
 
     Returns:
         The :class:`Modes`; their mode Functions are mass-normalized and zero at Dirichlet dofs.
