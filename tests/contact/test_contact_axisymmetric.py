@@ -27,8 +27,6 @@ from dolfinx_ntf.fem.axisymmetric import axisymmetric_grad, axisymmetric_stress,
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
-pytestmark = pytest.mark.serial  # 2D contact runs on one process (for now)
-
 E, NU = 1000.0, 0.3
 RADIUS = 1.0
 LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, LOWER_BOTTOM, AXIS = 3, 4, 5, 6, 7
@@ -100,30 +98,39 @@ def _cylinder_problem(
     return ntf.ContactProblem(F, u, [pair], bcs, **options), load
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("order", [1, 2])
 def test_patch_test_cylinder_on_block_axisymmetric(order: int) -> None:
     """Uniform pressure p: F_N/A uniform to 1e-8, the rings carry p pi R² to 1e-10.
 
     P2: the corner node on the axis has no ring area (its consistent share is 0) and no spring.
+    On several processes each owns its slave nodes' springs: the sums are global.
     """
+    comm = MPI.COMM_WORLD
     problem, load = _cylinder_problem(order)
-    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    solver = ntf.ContactNewtonSolver(comm, problem)
     step = ntf.StaticStep(lambda t: setattr(load, "value", 10.0 * t), initial_increment=0.5)
     results = step.run(solver, problem.u)
     assert all(r.iterations <= 3 for r in results)
     state = problem.states[0]
     ev = state.evaluation
-    assert state.num_springs == (6 if order == 1 else 10)  # all slave nodes but a P2 axis corner
-    pressure = ev.normal_force / ev.area
+    springs = comm.allreduce(state.num_springs)
+    assert springs == (6 if order == 1 else 10)  # all slave nodes but a P2 axis corner
+    if state.num_springs:
+        normal, area, vertical = ev.normal_force, ev.area, ev.forces[:, -1, 1]
+    else:
+        normal, area, vertical = np.zeros(0), np.zeros(0), np.zeros(0)
+    pressure = np.concatenate(comm.allgather(normal / area))
     np.testing.assert_allclose(pressure, pressure.mean(), rtol=1e-8)
-    force = -ev.forces[:, -1, 1].sum()
+    force = -comm.allreduce(vertical.sum())
     assert force == pytest.approx(10.0 * np.pi * RADIUS**2, rel=1e-10)
     # The areas are rings at the current radius: R grew by nu p R / E (uniform stress -p).
     current = RADIUS * (1 + NU * 10.0 / E)
-    assert ev.area.sum() == pytest.approx(np.pi * current**2, rel=1e-6)
+    assert comm.allreduce(area.sum()) == pytest.approx(np.pi * current**2, rel=1e-6)
     assert pressure.mean() == pytest.approx(force / (np.pi * current**2), rel=1e-8)
 
 
+@pytest.mark.serial
 @pytest.mark.parametrize("axisymmetric", [True, False], ids=["axisymmetric", "plane_strain"])
 @pytest.mark.parametrize("linearize_area", [False, True])
 def test_global_jacobian_matches_finite_differences_2d(
@@ -174,6 +181,7 @@ def test_global_jacobian_matches_finite_differences_2d(
     np.testing.assert_allclose(Jw.array, fd, atol=1e-6 * scale)
 
 
+@pytest.mark.serial
 def test_hertz_sphere_axisymmetric(tmp_path: Path) -> None:
     """The 3D demo's sphere, force and mesh size in axisymmetry: a within 1 %, p0 within 2 %.
 
@@ -196,6 +204,7 @@ def test_hertz_sphere_axisymmetric(tmp_path: Path) -> None:
     assert Path(summary["png"]).stat().st_size > 10_000
 
 
+@pytest.mark.serial
 def test_axisymmetric_pair_options_are_checked() -> None:
     _, _, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=1)
     slave_master = (
@@ -209,6 +218,7 @@ def test_axisymmetric_pair_options_are_checked() -> None:
         ntf.ContactPair(*slave_master, interaction, axisymmetric="yes")
 
 
+@pytest.mark.serial
 def test_axisymmetric_pair_refuses_3d_meshes_and_negative_radii() -> None:
     mesh = dolfinx.mesh.create_unit_cube(MPI.COMM_WORLD, 2, 2, 2)
     top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[2], 1.0))
@@ -243,6 +253,7 @@ def test_axisymmetric_pair_refuses_3d_meshes_and_negative_radii() -> None:
         ntf.ContactProblem(F2, u2, [pair2])
 
 
+@pytest.mark.serial
 def test_axisymmetric_node_surface_with_midside_nodes_is_refused() -> None:
     """ccx's fallback area of a node surface's midside nodes is no ring area: a clear error."""
     mesh, _, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=2)
