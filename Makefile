@@ -38,7 +38,7 @@ test-here: setup
 	@start=$$(date +%s); echo "== dolfinx_ntf tests on $$(. /etc/os-release && echo "$$PRETTY_NAME"), dolfinx $$($(PY) -c 'import dolfinx; print(dolfinx.__version__)')"; \
 	$(PY) -m pytest -q -m "not docs" tests && \
 	$(MPIRUN) $(PY) -m pytest -q -m mpi tests && \
-	$(MPIRUN3) $(PY) -m pytest -q -m mpi tests/parallel/test_parallel.py tests/parallel/test_parallel_friction.py tests/parallel/test_parallel_adjust.py tests/parallel/test_parallel_rigid.py tests/parallel/test_constraints_mpi.py tests/parallel/test_collective.py tests/parallel/test_parallel_deck.py tests/solvers/test_snes.py && \
+	$(MPIRUN3) $(PY) -m pytest -q -m mpi tests/parallel/test_parallel.py tests/parallel/test_parallel_friction.py tests/parallel/test_parallel_adjust.py tests/parallel/test_parallel_rigid.py tests/parallel/test_constraints_mpi.py tests/parallel/test_collective.py tests/parallel/test_parallel_deck.py tests/solvers/test_snes.py tests/contact/test_contact_axisymmetric.py && \
 	echo "test-here: passed in $$(( $$(date +%s) - start )) s"
 
 # The other releases in cached chroots: bookworm, trixie and sid but the machine's own by default;
