@@ -20,6 +20,7 @@ from helpers.blocks import (
     punch_conditions,
     two_blocks,
 )
+from helpers.serial_answer import sorted_rows
 
 import dolfinx_ntf as ntf
 
@@ -43,7 +44,8 @@ def _press(pressure):
 
 
 def _solve(case, driver, **options):
-    """Run ``case`` ("punch", "drag") with ``driver``; returns (iterations, pairings, u)."""
+    """Run ``case`` ("punch", "drag") with ``driver``; returns (iterations, pairings, u of every
+    node in the order of their positions)."""
     if case == "drag":
         problem, pressure, set_drag, _ = drag_problem()
         step = _press_and_drag(problem, pressure, set_drag)
@@ -56,7 +58,11 @@ def _solve(case, driver, **options):
     else:
         solver = ntf.ContactSNESSolver(comm, problem, **options)
     results = step.run(solver, problem.u)
-    return [r.iterations for r in results], problem.pairings, problem.u.x.array.copy()
+    # owned nodes sorted by position: two meshes built alike need not be partitioned alike
+    owned = problem.u.function_space.dofmap.index_map.size_local
+    X = problem.reference_coordinates[:owned]
+    nodes = sorted_rows(comm, np.hstack([X, problem.u.x.array.reshape(-1, 3)[:owned]]))
+    return [r.iterations for r in results], problem.pairings, nodes[:, 3:]
 
 
 @pytest.mark.parametrize("case", ["punch", "drag"])
