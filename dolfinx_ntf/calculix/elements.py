@@ -24,15 +24,25 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "AXISYMMETRIC_SECTOR",
     "C3D8_EXTRAPOLATION",
     "C3D20_EXTRAPOLATION",
     "ELEMENT_TYPES",
     "REFUSED_ELEMENTS",
+    "TWO_D_MODELS",
     "ElementType",
     "element_for_cell",
     "frozen_array",
     "nodal_extrapolation",
 ]
+
+
+#: The 2D model of ccx's 2D element families (the first three letters of the type name).
+TWO_D_MODELS = {"CPE": "plane strain", "CPS": "plane stress", "CAX": "axisymmetric"}
+
+#: The sector (radians) ccx 2.20 expands CAX elements into: 2 degrees (manual, CAX8). Its printed
+#: forces and spring energies are the sector's, 1/180 of the whole ring's (docs/method.md §23).
+AXISYMMETRIC_SECTOR = np.pi / 90.0
 
 
 def frozen_array(values: npt.ArrayLike, dtype: npt.DTypeLike) -> np.ndarray:
@@ -68,6 +78,9 @@ class ElementType:
             quads, 3 points on triangles; C3D20 3x3).
         frd_order: the ccx nodes of an element in ``.frd`` order (ccx order but for C3D20:
             nodes 1..12, 17..20, 13..16, as ccx 2.20 writes them).
+        print_rows: 2D elements: the integration point of each ``*EL PRINT`` row ccx 2.20 prints
+            (the points of the one layer of 3D elements it expands the element into, both
+            layers the same in-plane points; docs/method.md §23); None for 3D elements.
     """
 
     name: str
@@ -86,6 +99,17 @@ class ElementType:
     extrapolation: np.ndarray
     face_quadrature_degree: int = 2
     frd_order: np.ndarray | None = None
+    print_rows: np.ndarray | None = None
+
+    @property
+    def tdim(self) -> int:
+        """Topological dimension of the element: 2 for ccx's 2D elements, else 3."""
+        return 2 if self.cell in ("triangle", "quadrilateral") else 3
+
+    @property
+    def model(self) -> str:
+        """``solid`` (3D), ``plane strain`` (CPE), ``plane stress`` (CPS) or ``axisymmetric``."""
+        return TWO_D_MODELS.get(self.name[:3], "solid")
 
     @property
     def frd_nodes(self) -> np.ndarray:
@@ -99,7 +123,9 @@ class ElementType:
 
     @property
     def face_corners(self) -> int:
-        """Number of corner nodes per face."""
+        """Number of corner nodes per face (2 for the edges of 2D elements)."""
+        if self.face_type.startswith("line"):
+            return 2
         return 3 if self.face_type.startswith("tri") else 4
 
     @property
@@ -154,6 +180,15 @@ def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
         return np.vstack([corner, midside])
     if element_type == "C3D20":
         return _c3d20_extrapolation(points)
+    if element_type[:3] in TWO_D_MODELS and element_type[3:] == "3":
+        return np.ones((3, 1))
+    if element_type[:3] in TWO_D_MODELS and element_type[3:] == "4":
+        # the bilinear field through the 2x2 Gauss values, at the corners
+        corners = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+        sides = (points > 0.5).astype(int)
+        distance = np.sum(corners[:, None, :] != sides[None, :, :], axis=2)
+        s3 = np.sqrt(3.0)
+        return np.array([(1 + s3) ** 2 / 4, -0.5, (1 - s3) ** 2 / 4])[distance]
     raise NotImplementedError(f"stress extrapolation of {element_type} is not supported")
 
 
@@ -214,6 +249,10 @@ _POINTS = {
     "C3D20": [[(x + 1) / 2, (y + 1) / 2, (z + 1) / 2] for z in _G3 for y in _G3 for x in _G3],
 }
 _POINTS["C3D20R"] = _POINTS["C3D8"]
+# 2D elements: the in-plane points of ccx's expanded element (2x2 Gauss, xi fastest; one point).
+for _family in TWO_D_MODELS:
+    _POINTS[_family + "4"] = [[(x + 1) / 2, (y + 1) / 2] for y in (-_G, _G) for x in (-_G, _G)]
+    _POINTS[_family + "3"] = [[1 / 3, 1 / 3]]
 
 
 def _element_type(
@@ -230,6 +269,7 @@ def _element_type(
     quadrature_degree: int,
     frd_type: int,
     face_quadrature_degree: int = 2,
+    print_rows: list[int] | None = None,
 ) -> ElementType:
     points = frozen_array(_POINTS[name], np.float64)
     midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES}.get(num_nodes, ())
@@ -252,6 +292,7 @@ def _element_type(
         frozen_array([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
         if num_nodes == 20
         else None,
+        None if print_rows is None else frozen_array(print_rows, np.int64),
     )
 
 
@@ -329,6 +370,44 @@ ELEMENT_TYPES: dict[str, ElementType] = {
         )
         for name, quadrature in (("C3D20", 5), ("C3D20R", 2))
     },
+    # ccx's 2D elements (manual "Face numbering for quadrilateral elements": S1 1-2, S2 2-3,
+    # S3 3-4, S4 4-1; triangles S1 1-2, S2 2-3, S3 3-1), run natively in 2D (docs/method.md §23).
+    # ccx expands a 4-node element into one C3D8 and prints its 8 points (two equal layers of the
+    # 2x2 in-plane points), a 3-node one into a C3D6 wedge with 2 points (one per layer).
+    **{
+        family + "4": _element_type(
+            family + "4",
+            4,
+            4,
+            "line2",
+            [[1, 2], [2, 3], [3, 4], [4, 1]],
+            cell="quadrilateral",
+            degree=1,
+            to_dolfinx=[0, 1, 3, 2],
+            mirrored_vertices=[1, 0, 2, 3],
+            quadrature_degree=2,
+            frd_type=9,
+            print_rows=[0, 1, 2, 3, 0, 1, 2, 3],
+        )
+        for family in TWO_D_MODELS
+    },
+    **{
+        family + "3": _element_type(
+            family + "3",
+            3,
+            3,
+            "line2",
+            [[1, 2], [2, 3], [3, 1]],
+            cell="triangle",
+            degree=1,
+            to_dolfinx=[0, 1, 2],
+            mirrored_vertices=[0, 2, 1],
+            quadrature_degree=1,
+            frd_type=7,
+            print_rows=[0, 0],
+        )
+        for family in TWO_D_MODELS
+    },
 }
 """Supported element types by ccx name."""
 
@@ -336,6 +415,12 @@ ELEMENT_TYPES: dict[str, ElementType] = {
 #: Why some common ccx elements are refused (appended to the reader's refusal).
 REFUSED_ELEMENTS = {
     "C3D8R": ": its one-point integration with hourglass control is not reproduced",
+    **{
+        family + suffix: ": quadratic and reduced-integration 2D elements are not run yet "
+        "(4-node and 3-node CPE, CPS and CAX elements are)"
+        for family in TWO_D_MODELS
+        for suffix in ("4R", "6", "8", "8R")
+    },
     "C3D8I": ": its incompatible modes (extra internal displacement fields) are not reproduced",
 }
 
@@ -343,9 +428,15 @@ REFUSED_ELEMENTS = {
 def element_for_cell(cell: str, degree: int) -> ElementType | None:
     """The ccx element of a degree-``degree`` Lagrange space on ``cell`` cells, or None.
 
-    None for degree-2 hexahedra: a 27-node space is not C3D20's (docs/method.md §13.5).
+    None for degree-2 hexahedra: a 27-node space is not C3D20's (docs/method.md §13.5). Only 3D
+    elements: a 2D cell has several ccx elements (CPE, CPS, CAX).
     """
     for etype in ELEMENT_TYPES.values():
-        if etype.cell == cell and etype.degree == degree and etype.num_nodes != 20:
+        if (
+            etype.tdim == 3
+            and etype.cell == cell
+            and etype.degree == degree
+            and etype.num_nodes != 20
+        ):
             return etype
     return None

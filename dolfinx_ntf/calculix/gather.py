@@ -63,12 +63,20 @@ def surface_face_nodes(deck: Deck, block, name: str) -> np.ndarray:
     return block.connectivity[rows[:, None], block.type.faces[surface.faces - 1]]
 
 
+def _padded(values: np.ndarray) -> np.ndarray:
+    """Vectors ``(..., 2)`` of a 2D model with a zero z component ``(..., 3)``; 3D unchanged."""
+    if values.shape[-1] == 3:
+        return values
+    return np.concatenate([values, np.zeros((*values.shape[:-1], 1))], axis=-1)
+
+
 def _broken(
     form: ufl.Form, V: dolfinx.fem.FunctionSpace
 ) -> tuple[compat.Form, dolfinx.fem.FunctionSpace]:
     """``form`` tested with the discontinuous space of ``V``'s degree: per-element vectors."""
     mesh = V.mesh
-    family = "DQ" if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else "DG"
+    tensor = (dolfinx.mesh.CellType.hexahedron, dolfinx.mesh.CellType.quadrilateral)
+    family = "DQ" if mesh.topology.cell_type in tensor else "DG"
     W = compat.vector_space(mesh, family, compat.space_degree(V))
     (argument,) = form.arguments()
     return dolfinx.fem.form(ufl.replace(form, {argument: ufl.TestFunction(W)})), W
@@ -164,7 +172,8 @@ class CcxNumbering:
         if self._form is None:
             self._form, self._W = _broken(self._internal, self.model.V)
         vector = dolfinx.fem.petsc.assemble_vector(self._form)
-        forces = vector.array_r.reshape(-1, 3).copy()  # broken dofs: one cell each, no sum
+        gdim = self.model.gdim  # 2 for ccx's 2D elements: padded with z = 0 below
+        forces = vector.array_r.reshape(-1, gdim).copy()  # broken dofs: one cell each, no sum
         vector.destroy()
         cells = np.arange(self.num_owned_cells)
         values = forces[compat.cell_dofs(self._W)[cells]]
@@ -173,7 +182,7 @@ class CcxNumbering:
             values = element_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 20, 3)
             dofs = dofs[:, :20]
         rows = self.deck.node_index(self.model.dof_node[dofs])
-        return self.model.cell_element[cells], rows, values
+        return self.model.cell_element[cells], rows, _padded(values)
 
     def _spring_forces(self, problem: ContactProblem) -> tuple[np.ndarray, ...]:
         """This process's springs: (pair, slave node, position) keys, node rows and forces."""
@@ -191,7 +200,7 @@ class CcxNumbering:
             key[..., 0], key[..., 1], key[..., 2] = p, nodes[:, -1:], np.arange(m)
             keys.append(key.reshape(-1, 3))
             rows.append(self.deck.node_index(nodes).ravel())
-            values.append(state.evaluation.forces.reshape(-1, 3))
+            values.append(_padded(state.evaluation.forces.reshape(-1, self.model.gdim)))
         return np.concatenate(keys), np.concatenate(rows), np.vstack(values)
 
     def nodal_forces(self, problem: ContactProblem) -> np.ndarray:

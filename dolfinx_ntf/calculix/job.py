@@ -223,7 +223,9 @@ class _Job:
         self.counters = _Counters()
 
         v = ufl.TestFunction(model.V)
-        internal = ufl.inner(model.first_piola, ufl.grad(v)) * model.dx
+        internal = model.internal_force
+        if internal is None:
+            internal = ufl.inner(model.first_piola, ufl.grad(v)) * model.dx
         self.problem = model.create_problem(
             model.begin_step(0), element_forces=internal, **problem_options
         )

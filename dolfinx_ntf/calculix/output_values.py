@@ -68,6 +68,14 @@ class ContactRows:
     accuracy: tuple | None = None
 
 
+def _vectors3(values: np.ndarray) -> np.ndarray:
+    """``(n, 3)`` vectors: those of a 2D model with z = 0 (docs/method.md §23)."""
+    values = np.asarray(values, dtype=float).reshape(len(values), -1)
+    if values.shape[1] == 3:
+        return values
+    return np.column_stack([values, np.zeros((values.shape[0], 3 - values.shape[1]))])
+
+
 class OutputValues:
     """The output values of a deck's model at its current displacement (all collective).
 
@@ -100,7 +108,7 @@ class OutputValues:
         Summed in ccx order, the same on any number of processes; C3D20's face- and cell-centre
         forces moved to its 20 nodes (docs/method.md §13.5). Collective.
         """
-        return self.numbering.nodal_forces(self.problem)
+        return self.numbering.nodal_forces(self.problem) * self.model.printed_scale
 
     def printed_forces(self, largest_residual: float) -> tuple[np.ndarray, float]:
         """:meth:`internal_forces` with those within their accuracy as 0, and that accuracy.
@@ -136,7 +144,10 @@ class OutputValues:
 
     def displacements(self) -> np.ndarray:
         """``(N, 3)`` displacement of every deck node (rows of ``deck.node_ids``). Collective."""
-        return self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
+        values = self.model.u.x.array.reshape(-1, self.model.gdim)
+        if values.shape[1] == 2:  # ccx's 2D elements: uz = 0 (docs/method.md §23)
+            values = np.column_stack([values, np.zeros(values.shape[0])])
+        return self.numbering.nodal(values)
 
     def with_reference(
         self, ids: np.ndarray, values: np.ndarray, load_time: tuple[int, float]
@@ -178,7 +189,9 @@ class OutputValues:
             ).reshape(cells.size, q, 3, 3)
             return values[:, :, index[0], index[1]]
 
-        return self.numbering.element_values(element_ids, evaluate, (q, 6))
+        values = self.numbering.element_values(element_ids, evaluate, (q, 6))
+        rows = self.model.element_type.print_rows
+        return values if rows is None else values[:, rows]  # ccx's expanded 2D elements
 
     def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
         """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).
@@ -214,11 +227,15 @@ class OutputValues:
             self.problem.states, contact_results(self.problem), self.deck.contact_pairs
         ):
             faces = numbering.ccx_nodes(self.problem, state.master_faces.faces[state.spring_face])
-            t1, t2 = output_tangents(results.normal)
-            slip = np.column_stack([np.einsum("ni,ni->n", results.slip, t) for t in (t1, t2)])
-            shear = np.column_stack([np.einsum("ni,ni->n", results.shear, t) for t in (t1, t2)])
+            normal, slip, shear = (
+                _vectors3(v) for v in (results.normal, results.slip, results.shear)
+            )
+            t1, t2 = output_tangents(normal)
+            slip = np.column_stack([np.einsum("ni,ni->n", slip, t) for t in (t1, t2)])
+            shear = np.column_stack([np.einsum("ni,ni->n", shear, t) for t in (t1, t2)])
             # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4), 2.23 not
             energy = results.energy + (2.0 if ccx == "2.20" else 1.0) * results.friction_energy
+            energy = energy * self.model.printed_scale  # CAX: ccx's sector (§23)
             dp, de = law_accuracy(
                 state.pair.interaction.law, -results.clearance, results.area, length
             )

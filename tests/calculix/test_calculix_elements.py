@@ -16,10 +16,14 @@ def test_node_tables_are_permutations(name):
     assert sorted(etype.to_dolfinx.tolist()) == list(range(etype.num_nodes))
     assert sorted(etype.mirrored_vertices.tolist()) == list(range(etype.num_corners))
     assert etype.to_dolfinx[etype.corner_vertices].tolist() == list(range(etype.num_corners))
-    assert etype.faces.max() < etype.num_nodes and etype.faces.shape[1] in (3, 4, 6, 8)
+    assert etype.faces.max() < etype.num_nodes and etype.faces.shape[1] in (2, 3, 4, 6, 8)
+    assert etype.faces.shape[1] == etype.face_corners + (etype.num_nodes > etype.num_corners) * (
+        etype.face_corners if etype.tdim == 3 else 1
+    )
     assert len(etype.midside_edges) == etype.num_nodes - etype.num_corners
-    # a 27-node space is not C3D20's: no element for degree-2 hexahedra (docs/method.md §13.5)
-    expected = None if etype.num_nodes == 20 else etype
+    # a 27-node space is not C3D20's: no element for degree-2 hexahedra (docs/method.md §13.5);
+    # a 2D cell is several ccx elements (CPE, CPS, CAX): none (the writer is 3D only)
+    expected = None if etype.num_nodes == 20 or etype.tdim == 2 else etype
     assert element_for_cell(etype.cell, etype.degree) is expected
     assert not etype.faces.flags.writeable and not etype.integration_points.flags.writeable
 
@@ -52,3 +56,19 @@ def test_extrapolation_keeps_a_constant_stress(name):
         np.testing.assert_allclose(sums[8:], 1.00005, atol=2e-6)
     else:
         np.testing.assert_allclose(sums, expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("name", [n for n, t in ELEMENT_TYPES.items() if t.tdim == 2])
+def test_two_d_faces_are_the_counterclockwise_edges(name):
+    """ccx's 2D faces S1.. are the element's edges 1-2, 2-3, ... (manual, quadrilateral faces)."""
+    etype = ELEMENT_TYPES[name]
+    n = etype.num_corners
+    assert etype.faces.tolist() == [[k, (k + 1) % n] for k in range(n)]
+    assert (
+        etype.model
+        == {"CPE": "plane strain", "CPS": "plane stress", "CAX": "axisymmetric"}[name[:3]]
+    )
+    # ccx prints its expanded element's points: both layers repeat the in-plane points
+    rows = etype.print_rows
+    assert rows.size == 2 * etype.integration_points.shape[0]
+    assert rows.tolist() == 2 * list(range(etype.integration_points.shape[0]))

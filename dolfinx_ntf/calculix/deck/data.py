@@ -72,11 +72,16 @@ class Material:
 
 @dataclass(frozen=True, eq=False)
 class SolidSection:
-    """A ``*SOLID SECTION``: material of the elements of ``elset``."""
+    """A ``*SOLID SECTION``: material of the elements of ``elset``.
+
+    ``thickness`` is the first value of its data line, if any: the out-of-plane thickness of
+    plane strain and plane stress elements (ccx's default 1; ignored for 3D and CAX elements).
+    """
 
     elset: str
     material: str
     location: Location
+    thickness: float | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -63,4 +63,12 @@ class MaterialCards(ReaderState):
         elset = card.params["ELSET"] or ""
         if elset not in self.elsets:
             raise DeckError(f"element set {elset} is not defined (before this line)", card.location)
-        self.sections.append(SolidSection(elset, card.params["MATERIAL"] or "", card.location))
+        thickness = None  # checked by the model of 2D elements only (3D decks ignore it, as ccx)
+        if card.lines and card.lines[0][0] and card.lines[0][0][0]:
+            try:
+                thickness = float(card.lines[0][0][0].replace("D", "E").replace("d", "e"))
+            except ValueError:
+                thickness = float("nan")
+        self.sections.append(
+            SolidSection(elset, card.params["MATERIAL"] or "", card.location, thickness)
+        )

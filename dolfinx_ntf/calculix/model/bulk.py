@@ -16,7 +16,7 @@ from dolfinx_ntf import compat
 
 from ..deck import Deck, ElementBlock
 
-__all__ = ["lame", "stresses"]
+__all__ = ["lame", "plane_stress_factor", "stresses"]
 
 
 def lame(
@@ -55,3 +55,10 @@ def stresses(
     S = 2 * mu * E + lmbda * ufl.tr(E) * Id
     P = F * S
     return F, P, P * F.T / ufl.det(F)
+
+
+def plane_stress_factor(
+    mu: dolfinx.fem.Function, lmbda: dolfinx.fem.Function
+) -> ufl.core.expr.Expr:
+    """``-lambda / (lambda + 2 mu)``: the plane-stress strain ``e_zz`` per ``e_xx + e_yy``."""
+    return -lmbda / (lmbda + 2 * mu)

@@ -31,11 +31,18 @@ from dolfinx_ntf.parallel.global_constraints import global_constraint_block, glo
 
 from ..deck import Deck
 from ..elements import ElementType
-from .bulk import lame, stresses
+from .bulk import lame, plane_stress_factor, stresses
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
 from .mesh import create_mesh, element_block, mesh_maps, numbering
+from .plane import (
+    check_two_d_deck,
+    plane_kinematics,
+    printed_scale,
+    section_thickness,
+    volume_weight,
+)
 from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
 from .ties import tie_constraints
@@ -83,6 +90,10 @@ class CalculixModel:
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
         springs: The spring elements (SPRINGA, SPRING1, SPRING2), one
             :class:`~dolfinx_ntf.DiscreteSprings` per ``*SPRING`` card (docs/method.md §18.3).
+        internal_force: The bulk internal force form ``f_int`` (test function on ``V``), whose
+            element vectors make the ``RF`` output.
+        printed_scale: Factor from the model's forces and spring energies to those ccx prints
+            (1; CAX decks 1/180: ccx prints its 2-degree sector's, docs/method.md §23).
     """
 
     deck: Deck
@@ -118,6 +129,13 @@ class CalculixModel:
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
     springs: list[DiscreteSprings] = field(default_factory=list)
+    internal_force: ufl.Form | None = None
+    printed_scale: float = 1.0
+
+    @property
+    def gdim(self) -> int:
+        """Components of the displacement: 2 for ccx's 2D elements, else 3."""
+        return int(self.mesh.geometry.dim)
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -168,7 +186,7 @@ class CalculixModel:
         loads.bc.start = self.u.x.array[loads.bc_dofs].copy()
         bcs = []
         for component, (Vi, inverse, g) in enumerate(self._bc_spaces):
-            dofs = loads.bc_dofs[loads.bc_dofs % 3 == component].astype(np.int32)
+            dofs = loads.bc_dofs[loads.bc_dofs % self.gdim == component].astype(np.int32)
             if dofs.size:
                 pair = [dofs, inverse[dofs].astype(np.int32)]
                 bcs.append(dolfinx.fem.dirichletbc(g, pair, self.V.sub(component)))
@@ -205,7 +223,7 @@ class CalculixModel:
             constant.value = value
         values = self._evaluate(loads.bc, fraction, step_time, total)
         for component, (_, inverse, g) in enumerate(self._bc_spaces):
-            mask = loads.bc_dofs % 3 == component
+            mask = loads.bc_dofs % self.gdim == component
             g.x.array[inverse[loads.bc_dofs[mask]]] = values[mask]
 
     def reference_displacements(
@@ -347,6 +365,10 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     """
     block = element_block(deck)
     etype = block.type
+    thickness = 1.0
+    if etype.tdim == 2:  # ccx's 2D elements, natively in 2D (docs/method.md §23)
+        check_two_d_deck(deck, block)
+        thickness = section_thickness(deck, block)
     # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §19)
     meshed = np.isin(deck.node_ids, block.connectivity)
     deck, tie_blocks = tie_constraints(deck, meshed, warn=comm.rank == 0)
@@ -362,7 +384,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     error = None
     try:  # local work: a bad face found by one process is an error on all (no collective inside)
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
-        pairs = contact_pairs(deck, surfaces, maps)
+        pairs = contact_pairs(deck, surfaces, maps, thickness=thickness)
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
         springs_follow = check_springs(deck, maps.meshed)
     except (ValueError, NotImplementedError) as exc:
@@ -372,10 +394,18 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     kinds = {step.nlgeom for step in deck.steps}
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
-    F, P, sigma = stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
     v = ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
-    residual = ufl.inner(P, ufl.grad(v)) * dx
+    if etype.tdim == 2:  # small strain; the 3x3 stress of the 2D model, weighted (§23)
+        weight = volume_weight(mesh, etype.model, thickness)
+        H = plane_kinematics(u, etype.model, plane_stress_factor(mu, lmbda))
+        sigma = 2 * mu * ufl.sym(H) + lmbda * ufl.tr(H) * ufl.Identity(3)
+        P = sigma
+        internal_force = ufl.inner(sigma, plane_kinematics(v, etype.model)) * weight * dx
+    else:
+        F, P, sigma = stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
+        internal_force = ufl.inner(P, ufl.grad(v)) * dx
+    residual = internal_force
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     if pressures:
         ds = ufl.Measure(
@@ -385,7 +415,10 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
             metadata={"quadrature_degree": etype.face_quadrature_degree},
         )
         N = ufl.FacetNormal(mesh)
-        traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
+        if etype.tdim == 2:  # small strain, per thickness or ring
+            traction_map = weight * N
+        else:
+            traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
@@ -404,8 +437,9 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     springs = deck_springs(deck, V, node_dof, bool(springs_follow)) if deck.springs else []
     bc_spaces = []
-    num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
-    for component in range(3):
+    gdim = mesh.geometry.dim
+    num_unrolled = gdim * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
+    for component in range(gdim):
         Vi, dof_map = compat.component_space(V, component)
         inverse = np.full(num_unrolled, -1, dtype=np.int64)
         inverse[np.asarray(dof_map)] = np.arange(len(dof_map))
@@ -443,4 +477,6 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         reference_terms=reference_terms,
         free_references=free_references,
         springs=springs,
+        internal_force=internal_force,
+        printed_scale=printed_scale(etype.model),
     )

@@ -99,9 +99,21 @@ def adjust_of(deck: Deck, pair: ContactPairCard, maps: MeshMaps) -> float | Node
 
 
 def contact_pairs(
-    deck: Deck, surfaces: dict[str, FacetSurface | NodeSurface], maps: MeshMaps
+    deck: Deck,
+    surfaces: dict[str, FacetSurface | NodeSurface],
+    maps: MeshMaps,
+    *,
+    thickness: float = 1.0,
 ) -> list[ContactPair]:
-    """The deck's ``*CONTACT PAIR`` cards as contact pairs, in deck order."""
+    """The deck's ``*CONTACT PAIR`` cards as contact pairs, in deck order.
+
+    On CPE/CPS decks the spring areas are the edge shares times ``thickness``, on CAX decks
+    the ring areas of the whole circumference (docs/method.md §23).
+    """
+    two_d = {}
+    if maps.block.type.tdim == 2:
+        axisymmetric = maps.block.type.model == "axisymmetric"
+        two_d = {"axisymmetric": True} if axisymmetric else {"thickness": thickness}
     pairs = []
     for pair in deck.contact_pairs:
         law = pressure_overclosure_law(deck, pair.interaction)
@@ -115,6 +127,7 @@ def contact_pairs(
                 small_sliding=pair.small_sliding,
                 name=f"{pair.slave}-{pair.master}",
                 adjust=adjust_of(deck, pair, maps),
+                **two_d,
             )
         )
     return pairs

@@ -258,10 +258,10 @@ def schedules(
 
     steps = []
     for s, (step, (bc, bc_active, forces, pressure)) in enumerate(zip(deck.steps, raw)):
-        dofs3 = 3 * np.repeat(node_dof, 3) + np.tile(
-            np.arange(3), num_nodes
-        )  # unrolled dof of each key
-        local = np.repeat(node_dof >= 0, 3)
+        gdim = block.type.tdim  # 2D elements: no z dofs (their z conditions are checked, §23)
+        component = np.tile(np.arange(3), num_nodes)
+        dofs3 = gdim * np.repeat(node_dof, 3) + component  # unrolled dof of each key
+        local = np.repeat(node_dof >= 0, 3) & (component < gdim)
         valid = np.repeat(maps.meshed, 3)
         bc_keys = np.flatnonzero(bc_active & local)
         bc_dofs, first = np.unique(dofs3[bc_keys], return_index=True)

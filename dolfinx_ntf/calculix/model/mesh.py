@@ -115,16 +115,17 @@ def element_block(deck: Deck) -> ElementBlock:
 
 def create_mesh(deck: Deck, block: ElementBlock, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
     """The dolfinx mesh of ``block``, distributed from rank 0's cells (collective)."""
-    domain = compat.coordinate_element(block.type.cell, block.type.degree)
+    gdim = block.type.tdim  # ccx's 2D elements: a 2D mesh of the plane z = 0 (§23)
+    domain = compat.coordinate_element(block.type.cell, block.type.degree, gdim)
     serendipity = block.type.num_nodes == 20  # C3D20(R): 27-node cells (docs/method.md §13.5)
     if comm.rank == 0:
         cells = deck.node_index(block.connectivity)[:, block.type.to_dolfinx]
-        x = np.asarray(deck.node_coords, dtype=np.float64)
+        x = np.asarray(deck.node_coords, dtype=np.float64)[:, :gdim].copy()
         if serendipity:
             cells, x = add_centres(cells, x)
     else:
         cells = np.zeros((0, 27 if serendipity else block.type.num_nodes), dtype=np.int64)
-        x = np.zeros((0, 3))
+        x = np.zeros((0, gdim))
     return compat.create_mesh(comm, cells.astype(np.int64), x, domain)
 
 

@@ -1,0 +1,165 @@
+"""ccx's 2D elements (CPE, CPS, CAX) run natively on a 2D mesh (docs/method.md §23).
+
+ccx 2.20 expands them into one layer of 3D elements; here the deck's 2D elements become a 2D
+dolfinx mesh (``x`` and ``y`` of the nodes, which must lie in ``z = 0``) with a 2-component
+displacement. The bulk is plane strain, plane stress or axisymmetric small-strain elasticity
+written with a 3x3 displacement gradient (zz entry 0, the plane-stress strain, or the hoop strain
+``u_r / r``), so that the Cauchy stress has ccx's six components; the residual is weighted by the
+``*SOLID SECTION`` thickness (plane) or by ``2 pi r`` (axisymmetric: every force is the whole
+ring's, as ccx's input). What the 2D model does not support is refused here, naming the card.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+
+from ..deck import Deck, ElementBlock, not_supported
+from ..elements import AXISYMMETRIC_SECTOR
+
+__all__ = [
+    "check_two_d_deck",
+    "plane_kinematics",
+    "printed_scale",
+    "section_thickness",
+    "volume_weight",
+]
+
+
+def section_thickness(deck: Deck, block: ElementBlock) -> float:
+    """The out-of-plane thickness of a CPE/CPS deck's sections (ccx's default 1).
+
+    One value for every section: a thickness that varies between sections is refused (ccx allows
+    it for plane stress; its springs would need a thickness per slave node). 1 for CAX decks,
+    whose ``*SOLID SECTION`` value has no effect in ccx either.
+    """
+    if block.type.model == "axisymmetric":
+        return 1.0
+    values = {1.0 if s.thickness is None else s.thickness for s in deck.sections}
+    for section in deck.sections:
+        t = section.thickness
+        if t is not None and not (np.isfinite(t) and t > 0.0):
+            raise ValueError(
+                f"{section.location}: *SOLID SECTION thickness of {block.type.name} elements must "
+                "be a positive number"
+            )
+    if len(values) > 1:
+        raise not_supported(
+            f"*SOLID SECTION thicknesses {sorted(values)} that differ between sections of "
+            f"{block.type.name} elements",
+            deck.sections[0].location,
+        )
+    return values.pop() if values else 1.0
+
+
+def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
+    """Refuse what the 2D deck runner does not do (``NotImplementedError``/``ValueError``).
+
+    The nodes must lie in ``z = 0`` (ccx's rule for 2D elements); no NLGEOM, dynamic or frequency
+    steps, friction, ``*EQUATION``, ``*TIE``, spring elements, out-of-plane loads or ``.frd``
+    output.
+    """
+    name = block.type.name
+    coords = np.asarray(deck.node_coords, dtype=np.float64)
+    used = deck.node_index(np.unique(block.connectivity))
+    off = np.abs(coords[used, 2]) > 0.0
+    if np.any(off):
+        row = used[np.argmax(off)]
+        raise ValueError(
+            f"{deck.path}: node {int(deck.node_ids[row])} of a {name} element has z = "
+            f"{coords[row, 2]}; structures of 2D elements must lie in the plane z = 0"
+        )
+    if block.type.model == "axisymmetric" and np.any(coords[used, 0] < 0.0):
+        node = int(deck.node_ids[used[np.argmax(coords[used, 0] < 0.0)]])
+        raise ValueError(
+            f"{deck.path}: node {node} of a {name} element has a negative radius x "
+            f"= {coords[deck.node_index([node])[0], 0]}"
+        )
+    features = [
+        ("*EQUATION", deck.equations),
+        ("*TIE", deck.ties),
+        ("spring elements", deck.springs),
+        ("*CYCLIC SYMMETRY MODEL", deck.cyclic_symmetries),
+    ]
+    for what, cards in features:
+        if cards:
+            raise not_supported(f"{what} with {name} elements", _where(cards[0], deck))
+    for interaction in deck.interactions.values():
+        if interaction.friction is not None:
+            raise not_supported(
+                f"*FRICTION with {name} elements (2D friction is not in the deck runner yet)",
+                interaction.friction.location,
+            )
+    for step in deck.steps:
+        if step.nlgeom:
+            raise not_supported(f"NLGEOM with {name} elements", step.location)
+        for change in (*step.friction_changes, *step.model_changes):
+            raise not_supported(
+                f"*CHANGE FRICTION and *MODEL CHANGE with {name} elements", _where(change, deck)
+            )
+        if step.dynamic is not None or step.frequency is not None:
+            raise not_supported(
+                f"*DYNAMIC and *FREQUENCY steps with {name} elements", step.location
+            )
+        for request in step.file_requests:
+            raise not_supported(
+                f"{request.keyword} (.frd and .cel files) with {name} elements", request.location
+            )
+        for card in step.cloads:
+            if card.dof == 3 and card.value != 0.0:
+                raise ValueError(
+                    f"{card.location}: *CLOAD in direction 3 on a structure of {name} elements, "
+                    "which lies in the xy-plane"
+                )
+    for card in [*deck.boundaries, *(b for s in deck.steps for b in s.boundaries)]:
+        if card.first_dof <= 3 <= card.last_dof and card.value not in (None, 0.0):
+            raise ValueError(
+                f"{card.location}: *BOUNDARY prescribes a displacement in direction 3 on a "
+                f"structure of {name} elements, which lies in the xy-plane"
+            )
+
+
+def _where(card: object, deck: Deck) -> str:
+    """The location of a deck card, or the deck's path."""
+    return str(getattr(card, "location", deck.path))
+
+
+def volume_weight(mesh: dolfinx.mesh.Mesh, model: str, thickness: float) -> ufl.core.expr.Expr:
+    """The weight of the 2D residual: ``2 pi r`` (axisymmetric) or the thickness (plane)."""
+    if model == "axisymmetric":
+        return 2 * math.pi * ufl.SpatialCoordinate(mesh)[0]
+    return dolfinx.fem.Constant(mesh, float(thickness))
+
+
+def plane_kinematics(
+    w: ufl.core.expr.Expr, model: str, nu_factor: ufl.core.expr.Expr | None = None
+) -> ufl.core.expr.Expr:
+    """The 3x3 gradient of a 2D field ``w`` in ``model``.
+
+    zz entry: 0 (plane strain, and the test function of plane stress), ``w_r / r``
+    (axisymmetric), or for plane stress with ``nu_factor = -lambda / (lambda + 2 mu)`` the strain
+    ``nu_factor (e_xx + e_yy)`` that makes ``sigma_zz = 0``.
+    """
+    g = ufl.grad(w)
+    if model == "axisymmetric":
+        r = ufl.SpatialCoordinate(ufl.domain.extract_unique_domain(w))[0]
+        zz = w[0] / r
+    elif model == "plane stress" and nu_factor is not None:
+        zz = nu_factor * (g[0, 0] + g[1, 1])
+    else:
+        zz = 0
+    return ufl.as_tensor([[g[0, 0], g[0, 1], 0], [g[1, 0], g[1, 1], 0], [0, 0, zz]])
+
+
+def printed_scale(model: str) -> float:
+    """Factor from the 2D model's forces and energies to those ccx prints.
+
+    ccx prints the forces and spring energies of its expanded CAX sector (2 degrees, 1/180 of the
+    ring); of the thickness for plane elements, which the 2D model already has.
+    """
+    return AXISYMMETRIC_SECTOR / (2 * math.pi) if model == "axisymmetric" else 1.0
