@@ -106,6 +106,14 @@ def _parser() -> argparse.ArgumentParser:
         "clamped projections); 'auto' ccx's symmetrized one from 10000 dofs on, exact below",
     )
     run.add_argument(
+        "--ring-areas",
+        choices=("consistent", "ccx"),
+        default="consistent",
+        help="spring areas of CAX decks: 'consistent' (default) the ring shares 2 pi int r phi "
+        "ds; 'ccx' the weights of ccx's 2-degree expansion (half an edge's ring area per node), "
+        "which reproduce ccx's results",
+    )
+    run.add_argument(
         "--predictor",
         choices=("ccx", "guarded", "off"),
         default="ccx",
@@ -219,6 +227,7 @@ def _run_one(job: str, args: argparse.Namespace, comm: object) -> int:
             guard_predictor=args.predictor == "guarded" or args.robust,
             pair_after_predictor=args.pair_after_predictor,
             ccx_format=args.ccx_format,
+            ring_areas=args.ring_areas,
         )
     except JobError as error:
         if root:

@@ -41,7 +41,8 @@ __all__ = [
 TWO_D_MODELS = {"CPE": "plane strain", "CPS": "plane stress", "CAX": "axisymmetric"}
 
 #: The sector (radians) ccx 2.20 expands CAX elements into: 2 degrees (manual, CAX8). Its printed
-#: forces and spring energies are the sector's, 1/180 of the whole ring's (docs/method.md §23).
+#: forces and spring energies are the sector's, about 1/180 of the whole ring's (docs/method.md
+#: §23).
 AXISYMMETRIC_SECTOR = np.pi / 90.0
 
 

@@ -553,6 +553,7 @@ def run_job(
     tangent: str = "ccx",
     line_search: bool = False,
     solver_options: dict | None = None,
+    ring_areas: str = "consistent",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -586,6 +587,9 @@ def run_job(
         line_search: Line-search the Newton corrections (beyond ccx, the Python API's default:
             :class:`~dolfinx_ntf.ContactNewtonSolver`); off by default, as in ccx.
         solver_options: Extra :class:`~dolfinx_ntf.ContactNewtonSolver` options.
+        ring_areas: Spring areas of CAX decks: ``"consistent"`` (default, the ring shares
+            ``2 pi ∫ r phi_p ds``) or ``"ccx"``, the weights of ccx's 2-degree expansion, which
+            reproduce its results (``ContactPair.ring_areas``, docs/method.md §23).
 
     Returns:
         The :class:`JobResult`.
@@ -610,7 +614,7 @@ def run_job(
         for warning in deck.warnings:
             logger.warning("%s", warning)
     check_requests(deck)
-    model = build_model(deck, comm)
+    model = build_model(deck, comm, ring_areas=ring_areas)
     job = _Job(
         jobname,
         directory,

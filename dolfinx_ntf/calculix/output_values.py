@@ -70,7 +70,7 @@ class ContactRows:
 
 def _vectors3(values: np.ndarray) -> np.ndarray:
     """``(n, 3)`` vectors: those of a 2D model with z = 0 (docs/method.md §23)."""
-    values = np.asarray(values, dtype=float).reshape(len(values), -1)
+    values = np.asarray(values, dtype=float)
     if values.shape[1] == 3:
         return values
     return np.column_stack([values, np.zeros((values.shape[0], 3 - values.shape[1]))])

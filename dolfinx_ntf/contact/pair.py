@@ -50,6 +50,11 @@ class ContactPair:
             current radius (docs/method.md §17.2), for the full 360 degrees like a residual
             form with :func:`~dolfinx_ntf.fem.axisymmetric.axisymmetric_weight`; the thickness
             must then stay 1. False on a 3D mesh.
+        ring_areas: With ``axisymmetric``: ``"consistent"`` (the shares above) or ``"ccx"``,
+            CalculiX 2.20's weights from its 2-degree expansion, half an edge's ring area
+            ``pi L (r_1 + r_2)`` to each node of a line2 edge (docs/method.md §23), to
+            reproduce ccx's results; the areas are then held between pairings (no
+            ``linearize_area``).
     """
 
     slave: FacetSurface | NodeSurface
@@ -61,6 +66,7 @@ class ContactPair:
     adjust: float | NodeSurface | None = None
     thickness: float = 1.0
     axisymmetric: bool = False
+    ring_areas: str = "consistent"
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -87,6 +93,12 @@ class ContactPair:
         validation.check_type(self.name, str, f"{owner}: name")
         validation.check_positive(self.thickness, f"{owner}: thickness")
         validation.check_type(self.axisymmetric, bool, f"{owner}: axisymmetric")
+        if self.ring_areas not in ("consistent", "ccx"):
+            raise ValueError(
+                f"{owner}: ring_areas must be 'consistent' or 'ccx', got {self.ring_areas!r}"
+            )
+        if self.ring_areas == "ccx" and not self.axisymmetric:
+            raise ValueError(f"{owner}: ring_areas = 'ccx' is for axisymmetric pairs")
         if self.axisymmetric and self.thickness != 1.0:
             raise ValueError(
                 f"{owner}: an axisymmetric pair has no thickness (its spring areas are rings, "

@@ -31,7 +31,12 @@ from dolfinx_ntf.fem.surfaces import (
     resolve_master,
     resolve_slave,
 )
-from dolfinx_ntf.kernels.edges import EdgeType, axisymmetric_edge_spring_areas, edge_spring_areas
+from dolfinx_ntf.kernels.edges import (
+    EdgeType,
+    axisymmetric_edge_spring_areas,
+    edge_spring_areas,
+    sector_ring_spring_areas,
+)
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.rigid import (
     RigidCylinder,
@@ -325,7 +330,12 @@ class Pairing:
         In axisymmetry the nodes on the axis without ring area (line3 corners) get no spring
         (docs/method.md §17).
         """
-        slave = dataclasses.replace(slave, thickness=pair.thickness, axisymmetric=pair.axisymmetric)
+        slave = dataclasses.replace(
+            slave,
+            thickness=pair.thickness,
+            axisymmetric=pair.axisymmetric,
+            ring_areas=pair.ring_areas,
+        )
         if not pair.axisymmetric:
             return slave
         reference = self._reference if self.halo is None else self.halo.reference
@@ -758,7 +768,9 @@ def _check_in_plane(surface: RigidSurface, what: str) -> None:
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
     """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
     faces = slave.faces
-    if isinstance(faces.face_type, EdgeType) and slave.axisymmetric:  # rings (§17.2)
+    if isinstance(faces.face_type, EdgeType) and slave.axisymmetric and slave.ring_areas == "ccx":
+        areas = sector_ring_spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    elif isinstance(faces.face_type, EdgeType) and slave.axisymmetric:  # rings (§17.2)
         areas = axisymmetric_edge_spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
     elif isinstance(faces.face_type, EdgeType):  # 2D: tributary length times the thickness
         areas = slave.thickness * edge_spring_areas(

@@ -29,6 +29,7 @@ __all__ = [
     "edge_spring_area_gradients",
     "edge_spring_areas",
     "edge_type_from_num_nodes",
+    "sector_ring_spring_areas",
 ]
 
 
@@ -184,6 +185,37 @@ def axisymmetric_edge_spring_areas(
     # A line3 corner on the axis has the share 0 exactly (round-off: ±1e-19); none is negative.
     shares[shares <= _AXIS_TOL * shares.sum(axis=1, keepdims=True)] = 0.0
     return _sum_to_nodes(edges, shares, slave_nodes)
+
+
+def sector_ring_spring_areas(
+    edge_type: EdgeType, edges: np.ndarray, coords: np.ndarray, slave_nodes: np.ndarray
+) -> np.ndarray:
+    """CalculiX's ring areas of axisymmetric slave nodes: its sector's face weights -> (S,).
+
+    ccx expands a CAX edge between radii ``r_1`` and ``r_2`` into a quad4 face of its 2-degree
+    sector and gives each of the face's four nodes a quarter of its area, so a 2D node's two node
+    lines get half the face: scaled to the ring, each node of the edge gets ``pi L (r_1 + r_2)/2``,
+    the share of the edge's mean radius (too much for the inner node, too little for the outer
+    one; docs/method.md §17.2, §23). With these areas the deck runner's CAX4 contact results are
+    ccx's to 4e-5 (measured, docs/validation.md). Line2 edges only.
+
+    Args:
+        edge_type: Type of every slave edge (line2).
+        edges: (F, 2) node ids of the slave edges (rows index ``coords``).
+        coords: (num_nodes, 2 or 3) node coordinates (current configuration), ``x[0] = r``.
+        slave_nodes: (S,) unique node ids; a slave node on no edge gets 0.
+    """
+    if edge_type.num_nodes != 2:
+        raise NotImplementedError(
+            f"ccx's sector ring areas are for line2 slave edges, got {edge_type.name}"
+        )
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    xy = np.asarray(coords, dtype=float)[edges][..., :2]  # (F, 2, 2)
+    lengths = np.linalg.norm(xy[:, 1] - xy[:, 0], axis=1)
+    radii = np.maximum(xy[..., 0].sum(axis=1), 0.0)
+    half = 0.5 * np.pi * lengths * radii
+    shares = np.repeat(half[:, None], 2, axis=1)
+    return _sum_to_nodes(edges, shares, np.asarray(slave_nodes, dtype=np.int64))
 
 
 def edge_spring_area_gradients(

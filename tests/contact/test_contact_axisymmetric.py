@@ -216,6 +216,10 @@ def test_axisymmetric_pair_options_are_checked() -> None:
         ntf.ContactPair(*slave_master, interaction, axisymmetric=True, thickness=2.0)
     with pytest.raises(TypeError, match="axisymmetric"):
         ntf.ContactPair(*slave_master, interaction, axisymmetric="yes")
+    with pytest.raises(ValueError, match="ring_areas must be 'consistent' or 'ccx'"):
+        ntf.ContactPair(*slave_master, interaction, axisymmetric=True, ring_areas="sector")
+    with pytest.raises(ValueError, match="ring_areas = 'ccx' is for axisymmetric pairs"):
+        ntf.ContactPair(*slave_master, interaction, ring_areas="ccx")
 
 
 @pytest.mark.serial

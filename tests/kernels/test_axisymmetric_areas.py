@@ -12,6 +12,7 @@ from dolfinx_ntf.kernels.edges import (
     axisymmetric_edge_spring_areas,
     edge_spring_area_gradients,
     edge_spring_areas,
+    sector_ring_spring_areas,
 )
 
 
@@ -116,3 +117,22 @@ def test_area_gradients_match_finite_differences(edge_type: EdgeType, axisymmetr
             fd[:, q, c] = (areas(plus) - areas(minus)) / (2 * h)
     np.testing.assert_allclose(dense, fd, rtol=0, atol=1e-7 * np.abs(fd).max())
     assert np.abs(dense).max() > 0.1
+
+
+def test_ccx_sector_weights_give_each_node_half_the_edge_ring() -> None:
+    """ccx's CAX weights: the same total as the consistent shares, split equally per edge."""
+    r = np.array([0.0, 0.1, 0.25, 0.5, 1.0])
+    z = np.array([0.0, 0.05, 0.0, 0.1, 0.0])
+    coords, edges = _chain(LINE2, r, z)
+    nodes = np.arange(coords.shape[0])
+    ccx = sector_ring_spring_areas(LINE2, edges, coords, nodes)
+    consistent = axisymmetric_edge_spring_areas(LINE2, edges, coords, nodes)
+    assert ccx.sum() == pytest.approx(consistent.sum(), rel=1e-13)  # 2 pi ∫ r ds either way
+    lengths = np.linalg.norm(np.diff(coords, axis=0), axis=1)
+    halves = np.pi * lengths * (r[:-1] + r[1:]) / 2  # half the ring area of each edge
+    expected = np.concatenate([halves, [0.0]]) + np.concatenate([[0.0], halves])
+    np.testing.assert_allclose(ccx, expected, rtol=1e-13)
+    # the node nearer the axis gets more than its consistent share, the outer one less
+    assert ccx[0] > consistent[0] and ccx[-1] < consistent[-1]
+    with pytest.raises(NotImplementedError, match="line2"):
+        sector_ring_spring_areas(LINE3, *_chain(LINE3, r, z)[::-1], nodes)

@@ -347,13 +347,17 @@ class CalculixModel:
         return problem
 
 
-def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
+def build_model(
+    deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD, *, ring_areas: str = "consistent"
+) -> CalculixModel:
     """Build the dolfinx model of a parsed CalculiX deck (collective).
 
     Args:
         deck: The deck (``read_deck``).
         comm: Communicator. On several processes the mesh is distributed by dolfinx from rank
             0's cells (docs/method.md §14.5); every process must have read the same deck.
+        ring_areas: Spring areas of CAX decks, ``"consistent"`` or ``"ccx"`` (its 2-degree
+            sector's weights, ``ContactPair.ring_areas``, docs/method.md §23).
 
     Returns:
         The :class:`CalculixModel` (its ``deck`` has the slave nodes ADJUST of ``*TIE`` moved).
@@ -384,7 +388,7 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     error = None
     try:  # local work: a bad face found by one process is an error on all (no collective inside)
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
-        pairs = contact_pairs(deck, surfaces, maps, thickness=thickness)
+        pairs = contact_pairs(deck, surfaces, maps, thickness=thickness, ring_areas=ring_areas)
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
         springs_follow = check_springs(deck, maps.meshed)
     except (ValueError, NotImplementedError) as exc:

@@ -159,7 +159,12 @@ def plane_kinematics(
 def printed_scale(model: str) -> float:
     """Factor from the 2D model's forces and energies to those ccx prints.
 
-    ccx prints the forces and spring energies of its expanded CAX sector (2 degrees, 1/180 of the
-    ring); of the thickness for plane elements, which the 2D model already has.
+    ccx prints the forces and spring energies of its expanded CAX sector: a wedge of angle
+    ``theta`` = 2 degrees with straight chords, whose volume is ``sin(theta)/(2 pi)`` of the ring's
+    (``r^2 sin(theta)/2`` against ``r^2 theta/2`` per unit area of the meridian section), so its
+    forces are the ring's times ``sin(theta)/(2 pi)`` (measured to 7 digits, docs/method.md §23).
+    Plane elements: 1 (the 2D model has the thickness already).
     """
-    return AXISYMMETRIC_SECTOR / (2 * math.pi) if model == "axisymmetric" else 1.0
+    if model == "axisymmetric":
+        return math.sin(AXISYMMETRIC_SECTOR) / (2 * math.pi)
+    return 1.0

@@ -1,0 +1,91 @@
+"""ccx's 2D elements: the deck runner (natively 2D) against ccx 2.20 (expanded into 3D).
+
+Runs the generated two-block decks of ``tests/helpers/ccx_2d_decks.py`` with ccx and with
+``run_job`` and prints, per deck, the largest difference of each ``.dat`` block relative to ccx's
+largest value of the block (last increment), as a Markdown table (docs/validation.md, "ccx's 2D
+elements"). For CAX decks the column ``U turned`` compares after multiplying our ``u_r`` by
+``cos(1 deg)``, what ccx prints for its sector's two node lines (docs/method.md §23).
+
+    .venv/bin/python benchmarks/ccx_2d_decks.py
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import tempfile
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+
+from dolfinx_ntf.calculix.ccx import run_ccx
+from dolfinx_ntf.calculix.job import run_job
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from helpers.ccx_2d_decks import Deck2D, block_difference, dat_pairs  # noqa: E402
+
+#: (label, deck, run_job options)
+CASES = [
+    ("CPE4 LINEAR", Deck2D("cpe4", "CPE4"), {}),
+    ("CPE4 EXPONENTIAL", Deck2D("cpe4", "CPE4", law="EXPONENTIAL"), {}),
+    ("CPE4 thickness 0.25", Deck2D("cpe4", "CPE4", thickness=0.25), {}),
+    ("CPE3 LINEAR", Deck2D("cpe3", "CPE3"), {}),
+    ("CPS4 without contact", Deck2D("cps4", "CPS4", contact=False), {}),
+    ("CPS4 LINEAR", Deck2D("cps4", "CPS4"), {}),
+    ("CPS4 EXPONENTIAL", Deck2D("cps4", "CPS4", law="EXPONENTIAL"), {}),
+    ("CPS3 LINEAR", Deck2D("cps3", "CPS3"), {}),
+    ("CAX4 without contact", Deck2D("cax4", "CAX4", contact=False), {}),
+    ("CAX4 LINEAR", Deck2D("cax4", "CAX4"), {}),
+    ("CAX4 LINEAR, ring_areas=ccx", Deck2D("cax4", "CAX4"), {"ring_areas": "ccx"}),
+    ("CAX4 EXPONENTIAL, ring_areas=ccx", Deck2D("cax4", "CAX4", law="EXPONENTIAL"),
+     {"ring_areas": "ccx"}),
+    ("CAX3 LINEAR, ring_areas=ccx", Deck2D("cax3", "CAX3"), {"ring_areas": "ccx"}),
+]  # fmt: skip
+
+COLUMNS = ("U", "U turned", "RF", "S", "S zz", "CDIS", "CSTR", "CELS")
+
+
+def measure(deck: Deck2D, options: dict, directory: Path) -> dict[str, float]:
+    """Largest relative difference of each block at the last time."""
+    ccx_dir, ntf_dir = directory / "ccx", directory / "ntf"
+    for d in (ccx_dir, ntf_dir):
+        d.mkdir(parents=True)
+        deck.write(d)
+    run_ccx(ccx_dir, deck.name, timeout=120)
+    run_job(deck.name, ntf_dir, comm=MPI.COMM_SELF, progress=False, **options)
+    pairs = dat_pairs(ccx_dir, ntf_dir, deck.name)
+    last = max(r.time for r, _ in pairs)
+    out = {}
+    for reference, mine in pairs:
+        if reference.time != last or reference.name == "RF_TOTAL":
+            continue
+        if reference.name == "S":
+            out["S"] = block_difference(reference, mine, [0, 1, 3])
+            out["S zz"] = block_difference(reference, mine, [2])
+            continue
+        columns = [0] if reference.name in ("CDIS", "CSTR") else slice(None)
+        out[reference.name] = block_difference(reference, mine, columns)
+        if reference.name == "U" and deck.element.startswith("CAX"):
+            turned = mine.values.copy()
+            turned[:, 0] *= np.cos(np.pi / 180)
+            scale = np.abs(reference.values).max()
+            out["U turned"] = float(np.abs(turned - reference.values).max() / scale)
+    return out
+
+
+def main() -> None:
+    logging.getLogger("dolfinx_ntf").setLevel(logging.WARNING)
+    print("| deck | " + " | ".join(COLUMNS) + " |")
+    print("|---" * (len(COLUMNS) + 1) + "|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (label, deck, options) in enumerate(CASES):
+            values = measure(deck, options, Path(tmp) / str(k))
+            cells = [f"{values[c]:.1e}" if c in values else "" for c in COLUMNS]
+            print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
+
+
+if __name__ == "__main__":
+    main()

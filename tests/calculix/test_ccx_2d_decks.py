@@ -1,0 +1,224 @@
+"""ccx's 2D elements in the deck runner against ccx 2.20 (docs/method.md §23).
+
+Generated decks (``helpers/ccx_2d_decks.py``: two blocks pressed together, LINEAR and EXPONENTIAL
+laws) run with ccx, which expands the 2D elements into one layer of 3D elements, and natively in
+2D with the deck runner. Compared block by block, relative to ccx's largest value of the block:
+
+- plane strain (CPE4, CPE3, any thickness): the expansion is exact, so everything agrees to ccx's
+  printed digits (1e-6);
+- plane stress (CPS4): a homogeneous state agrees to 1e-6; with contact the expanded element is
+  not plane stress (its out-of-plane strain is a bilinear field of its nodes, not zero stress at
+  each point): ccx prints ``s_zz != 0`` where the 2D model has 0;
+- axisymmetric (CAX4): ccx's 2-degree sector prints ``u_r cos(1 deg)`` (the mean x of its two
+  node lines) and forces per sector; its spring areas are its sector's face weights, which
+  ``ring_areas="ccx"`` reproduces.
+
+ccx prints the contact rows at its expanded nodes: two per 2D slave node (numbered
+``3 (n - 1) + 1`` and ``+ 3`` above the deck's largest node number), each with half the energy.
+"""
+
+from __future__ import annotations
+
+import logging
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+from helpers.ccx_2d_decks import Deck2D, block_difference, dat_pairs
+
+from dolfinx_ntf.calculix.ccx import run_ccx
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.deck import DeckError
+from dolfinx_ntf.calculix.job import run_job
+
+COMM = MPI.COMM_WORLD
+needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="needs ccx")
+
+#: 1 degree: ccx's CAX sector is 2 degrees wide, its node lines at +-1 degree.
+HALF_SECTOR = np.pi / 180.0
+
+
+def _run(deck: Deck2D, tmp_path: Path, *, ccx: bool = True, **options) -> tuple[Path, Path]:
+    """Write the deck, run ccx (rank 0) and the deck runner (``COMM``): the two directories."""
+    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
+    if COMM.rank == 0:
+        for directory in (ccx_dir, ntf_dir):
+            directory.mkdir(parents=True, exist_ok=True)
+            deck.write(directory)
+        if ccx:
+            run_ccx(ccx_dir, deck.name, timeout=120)
+    ntf_dir = Path(COMM.bcast(str(ntf_dir)))
+    COMM.barrier()
+    logger = logging.getLogger("dolfinx_ntf")
+    level = logger.level
+    logger.setLevel(logging.WARNING)
+    try:
+        assert run_job(deck.name, ntf_dir, progress=False, comm=COMM, **options).completed
+    finally:
+        logger.setLevel(level)
+    return ccx_dir, ntf_dir
+
+
+PLANE_STRAIN = {
+    "cpe4_linear": Deck2D("cpe4", "CPE4"),
+    "cpe4_exponential": Deck2D("cpe4", "CPE4", law="EXPONENTIAL"),
+    "cpe4_thickness": Deck2D("cpe4", "CPE4", thickness=0.25),
+    "cpe3_linear": Deck2D("cpe3", "CPE3"),
+}
+
+
+@needs_ccx
+@pytest.mark.serial
+@pytest.mark.parametrize("case", sorted(PLANE_STRAIN))
+def test_plane_strain_decks_match_ccx(tmp_path, case):
+    """ccx's expansion of plane strain is exact: U, RF, S and the contact rows to its digits."""
+    deck = PLANE_STRAIN[case]
+    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    names = set()
+    for reference, mine in dat_pairs(ccx_dir, ntf_dir, deck.name):
+        if reference.name == "RF_TOTAL":  # zero: ccx's round-off against 0
+            assert np.abs(reference.values).max() < 1e-9 * 100
+            continue
+        names.add(reference.name)
+        assert block_difference(reference, mine) < 1e-6, reference.name
+    assert names == {"U", "RF", "S", "CDIS", "CSTR", "CELS"}
+
+
+@pytest.mark.serial
+def test_plane_strain_thickness_scales_forces_only(tmp_path):
+    """The thickness scales RF and energies, not displacements, stresses or pressures."""
+    thin, thick = Deck2D("t1", "CPE4", thickness=0.25), Deck2D("t2", "CPE4", thickness=1.0)
+    _, a = _run(thin, tmp_path / "a", ccx=False)
+    _, b = _run(thick, tmp_path / "b", ccx=False)
+    for x, y in zip(read_dat(a / "t1.dat"), read_dat(b / "t2.dat")):
+        factor = 0.25 if x.name in ("RF", "CELS") else 1.0
+        if x.name in ("RF_TOTAL", "CNUM"):
+            continue
+        scale = np.abs(y.values).max()
+        assert np.abs(x.values - factor * y.values).max() <= 2e-6 * scale, x.name
+
+
+@needs_ccx
+@pytest.mark.serial
+def test_plane_stress_matches_ccx_where_its_expansion_is_exact(tmp_path):
+    """A homogeneous plane-stress state: ccx's expanded element is exact, the blocks agree."""
+    deck = Deck2D("bulk", "CPS4", contact=False)
+    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    for reference, mine in dat_pairs(ccx_dir, ntf_dir, deck.name):
+        if reference.name != "RF_TOTAL":
+            assert block_difference(reference, mine) < 1e-6, reference.name
+
+
+@needs_ccx
+@pytest.mark.serial
+def test_plane_stress_with_contact_differs_by_ccx_expansion(tmp_path):
+    """Not homogeneous: ccx's one layer of C3D8 is not plane stress (s_zz != 0 at its points)."""
+    deck = Deck2D("cps4", "CPS4")
+    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    blocks = {(r.name, r.time): (r, m) for r, m in dat_pairs(ccx_dir, ntf_dir, deck.name)}
+    reference, mine = blocks[("S", 1.0)]
+    assert np.all(mine.values[:, 2] == 0.0)  # plane stress: s_zz = 0 at every point
+    szz = np.abs(reference.values[:, 2]).max() / np.abs(reference.values).max()
+    assert szz > 1e-2  # ccx's expanded element: measured 5.6e-2 of the largest stress
+    # in-plane components and displacements: the difference of the two discretizations
+    assert block_difference(reference, mine, [0, 1, 3]) < 5e-2
+    reference, mine = blocks[("U", 1.0)]
+    assert 1e-4 < block_difference(reference, mine) < 2e-2  # measured 6.3e-3
+
+
+def _cax_results(tmp_path: Path, **options) -> dict:
+    deck = Deck2D("cax4", "CAX4")
+    ccx_dir, ntf_dir = _run(deck, tmp_path, **options)
+    return {(r.name, r.time): (r, m) for r, m in dat_pairs(ccx_dir, ntf_dir, deck.name)}
+
+
+@needs_ccx
+@pytest.mark.serial
+def test_axisymmetric_bulk_is_ccx_sector_turned_by_one_degree(tmp_path):
+    """CAX4 without contact: ccx's u_x is u_r cos(1 deg), its forces those of 1/180 of the ring."""
+    deck = Deck2D("bulk", "CAX4", contact=False)
+    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    blocks = {(r.name, r.time): (r, m) for r, m in dat_pairs(ccx_dir, ntf_dir, deck.name)}
+    reference, mine = blocks[("U", 1.0)]
+    assert block_difference(reference, mine, [0]) > 5e-5  # as printed: u_r against u_r cos(1 deg)
+    turned = mine.values.copy()
+    turned[:, 0] *= np.cos(HALF_SECTOR)
+    scale = np.abs(reference.values).max()
+    assert np.abs(turned - reference.values).max() < 1e-6 * scale
+    # forces of the straight-sided 2-degree wedge: sin(2 deg)/(2 pi) of the ring's, not 1/180
+    reference, mine = blocks[("RF", 1.0)]
+    assert block_difference(reference, mine) < 1e-6
+    assert np.abs(reference.values[:, 1]).max() < (1 - 1e-4) * np.abs(mine.values[:, 1]).max() * (
+        np.pi / 90
+    ) / np.sin(np.pi / 90)
+
+
+@needs_ccx
+@pytest.mark.serial
+def test_axisymmetric_contact_with_ccx_ring_areas(tmp_path):
+    """ccx's sector face weights (``ring_areas="ccx"``) give ccx's CAX contact solution."""
+    consistent = _cax_results(tmp_path / "consistent")
+    weighted = _cax_results(tmp_path / "ccx", ring_areas="ccx")
+    u_consistent = block_difference(*consistent[("U", 1.0)])
+    reference, mine = weighted[("U", 1.0)]
+    turned = mine.values.copy()
+    turned[:, 0] *= np.cos(HALF_SECTOR)
+    u_ccx = np.abs(turned - reference.values).max() / np.abs(reference.values).max()
+    assert u_consistent > 1e-3  # measured 3.9e-3: the consistent ring shares differ from ccx's
+    # measured 2.7e-5 (u_z), CSTR and CDIS 4.2e-5, CELS 8.4e-5: the rest of ccx's 3D sector
+    # (docs/method.md §23.4), not explained yet; 100 times less than with consistent areas
+    assert u_ccx < 4e-5
+    for name in ("CSTR", "CDIS"):
+        assert block_difference(*weighted[(name, 1.0)], [0]) < 6e-5, name
+    assert block_difference(*weighted[("CELS", 1.0)]) < 1e-4  # per 2-degree sector, as ccx
+
+
+def _refused(tmp_path: Path, text: str, error: type[Exception], match: str) -> None:
+    path = tmp_path / "refused.inp"
+    path.write_text(text)
+    with pytest.raises(error, match=match):
+        run_job("refused", tmp_path, progress=False, comm=MPI.COMM_SELF)
+
+
+@pytest.mark.serial
+def test_unsupported_two_d_features_are_refused(tmp_path):
+    deck = Deck2D("refused", "CPE4")
+    text = deck.write(tmp_path).read_text()
+    _refused(
+        tmp_path, text.replace("TYPE=CPE4", "TYPE=CPE8"), DeckError, "CPE8 is not supported: quad"
+    )
+    friction = text.replace("*CONTACT PAIR", "*FRICTION\n0.2, 1e5\n*CONTACT PAIR")
+    _refused(tmp_path, friction, NotImplementedError, "FRICTION with CPE4 elements")
+    nlgeom = text.replace("*STEP\n", "*STEP, NLGEOM\n")
+    _refused(tmp_path, nlgeom, NotImplementedError, "NLGEOM with CPE4 elements")
+    lifted = text.replace("27, 1.3, 2.0, 0.0", "27, 1.3, 2.0, 0.5")
+    _refused(tmp_path, lifted, ValueError, "node 27 of a CPE4 element has z = 0.5")
+    frd = text.replace("*END STEP", "*NODE FILE\nU\n*END STEP")
+    _refused(tmp_path, frd, NotImplementedError, r"NODE FILE \(.frd and .cel files\)")
+    sections = text.replace("*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n", "")
+    sections = sections.replace(
+        "*SURFACE INTERACTION",
+        "*ELSET, ELSET=LOW, GENERATE\n1, 8\n*ELSET, ELSET=UP, GENERATE\n9, 14\n"
+        "*SOLID SECTION, ELSET=LOW, MATERIAL=STEEL\n1.0\n"
+        "*SOLID SECTION, ELSET=UP, MATERIAL=STEEL\n2.0\n*SURFACE INTERACTION",
+    )
+    _refused(tmp_path, sections, NotImplementedError, "thicknesses")
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("element", ["CPE4", "CAX4"])
+def test_two_d_decks_give_the_serial_files_on_all_processes(tmp_path, element):
+    """The .dat of a 2D deck on all processes is the serial run's, digit for digit."""
+    root = Path(COMM.bcast(str(tmp_path)))
+    deck = Deck2D("plane", element)
+    _, every = _run(deck, root / "all", ccx=False)
+    serial = root / "serial"
+    if COMM.rank == 0:
+        serial.mkdir()
+        deck.write(serial)
+        assert run_job(deck.name, serial, progress=False, comm=MPI.COMM_SELF).completed
+        assert (every / "plane.dat").read_text() == (serial / "plane.dat").read_text()
+    COMM.barrier()
