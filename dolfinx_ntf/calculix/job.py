@@ -230,7 +230,9 @@ class _Job:
             model.begin_step(0), element_forces=internal, **problem_options
         )
         self.problem.pairing_callbacks.append(self._on_pairing)
-        self.numbering = CcxNumbering(model, internal)
+        # RF as ccx prints it (CAX: without the hoop term, docs/method.md §23)
+        printed = internal if model.printed_force is None else model.printed_force
+        self.numbering = CcxNumbering(model, printed)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
         self.solver = ContactNewtonSolver(
             comm,

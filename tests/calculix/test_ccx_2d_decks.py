@@ -174,6 +174,8 @@ def test_axisymmetric_contact_with_ccx_ring_areas(tmp_path):
     for name in ("CSTR", "CDIS"):
         assert block_difference(*weighted[(name, 1.0)], [0]) < 6e-5, name
     assert block_difference(*weighted[("CELS", 1.0)]) < 1e-4  # per 2-degree sector, as ccx
+    # RF: ccx's radial force is its expanded nodes' sum, without the hoop term (measured 4.9e-5)
+    assert block_difference(*weighted[("RF", 1.0)]) < 1e-4
 
 
 def _refused(tmp_path: Path, text: str, error: type[Exception], match: str) -> None:

@@ -92,6 +92,9 @@ class CalculixModel:
             :class:`~dolfinx_ntf.DiscreteSprings` per ``*SPRING`` card (docs/method.md §18.3).
         internal_force: The bulk internal force form ``f_int`` (test function on ``V``), whose
             element vectors make the ``RF`` output.
+        printed_force: The internal force whose element vectors ccx's ``RF`` prints, when it is
+            not ``internal_force``: CAX decks leave out the hoop term of the radial force, as the
+            sum of ccx's expanded nodes' forces does (docs/method.md §23); else None.
         printed_scale: Factor from the model's forces and spring energies to those ccx prints
             (1; CAX decks 1/180: ccx prints its 2-degree sector's, docs/method.md §23).
     """
@@ -130,6 +133,7 @@ class CalculixModel:
     free_references: list[FreeReference] = field(default_factory=list)
     springs: list[DiscreteSprings] = field(default_factory=list)
     internal_force: ufl.Form | None = None
+    printed_force: ufl.Form | None = None
     printed_scale: float = 1.0
 
     @property
@@ -400,12 +404,15 @@ def build_model(
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     v = ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
+    printed_force = None
     if etype.tdim == 2:  # small strain; the 3x3 stress of the 2D model, weighted (§23)
         weight = volume_weight(mesh, etype.model, thickness)
         H = plane_kinematics(u, etype.model, plane_stress_factor(mu, lmbda))
         sigma = 2 * mu * ufl.sym(H) + lmbda * ufl.tr(H) * ufl.Identity(3)
         P = sigma
         internal_force = ufl.inner(sigma, plane_kinematics(v, etype.model)) * weight * dx
+        if etype.model == "axisymmetric":  # ccx's RF: without the hoop term (§23)
+            printed_force = ufl.inner(sigma, plane_kinematics(v, "plane strain")) * weight * dx
     else:
         F, P, sigma = stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
         internal_force = ufl.inner(P, ufl.grad(v)) * dx
@@ -482,5 +489,6 @@ def build_model(
         free_references=free_references,
         springs=springs,
         internal_force=internal_force,
+        printed_force=printed_force,
         printed_scale=printed_scale(etype.model),
     )
