@@ -33,6 +33,8 @@ CASES = [
     ("CPE4 EXPONENTIAL", Deck2D("cpe4", "CPE4", law="EXPONENTIAL"), {}),
     ("CPE4 thickness 0.25", Deck2D("cpe4", "CPE4", thickness=0.25), {}),
     ("CPE3 LINEAR", Deck2D("cpe3", "CPE3"), {}),
+    ("CPE4 pressure (*DLOAD)", Deck2D("cpe4", "CPE4", load="dload"), {}),
+    ("CPE4 point forces (*CLOAD)", Deck2D("cpe4", "CPE4", load="cload"), {}),
     ("CPS4 without contact", Deck2D("cps4", "CPS4", contact=False), {}),
     ("CPS4 LINEAR", Deck2D("cps4", "CPS4"), {}),
     ("CPS4 EXPONENTIAL", Deck2D("cps4", "CPS4", law="EXPONENTIAL"), {}),
@@ -43,6 +45,9 @@ CASES = [
     ("CAX4 EXPONENTIAL, ring_areas=ccx", Deck2D("cax4", "CAX4", law="EXPONENTIAL"),
      {"ring_areas": "ccx"}),
     ("CAX3 LINEAR, ring_areas=ccx", Deck2D("cax3", "CAX3"), {"ring_areas": "ccx"}),
+    ("CAX4 pressure, ring_areas=ccx", Deck2D("cax4", "CAX4", load="dload"), {"ring_areas": "ccx"}),
+    ("CAX4 point forces, ring_areas=ccx", Deck2D("cax4", "CAX4", load="cload"),
+     {"ring_areas": "ccx"}),
 ]  # fmt: skip
 
 COLUMNS = ("U", "U turned", "RF", "S", "S zz", "CDIS", "CSTR", "CELS")

@@ -67,6 +67,9 @@ PLANE_STRAIN = {
     "cpe4_exponential": Deck2D("cpe4", "CPE4", law="EXPONENTIAL"),
     "cpe4_thickness": Deck2D("cpe4", "CPE4", thickness=0.25),
     "cpe3_linear": Deck2D("cpe3", "CPE3"),
+    "cpe4_pressure": Deck2D("cpe4", "CPE4", load="dload"),
+    "cpe4_point_forces": Deck2D("cpe4", "CPE4", load="cload"),
+    "cpe3_pressure": Deck2D("cpe3", "CPE3", load="dload"),
 }
 
 
