@@ -6,8 +6,8 @@ LINEAR or EXPONENTIAL pressure-overclosure law. The lower block ``[0, 2] x [0, 1
 top edge) rests on rollers; the upper block ``[0.3, 1.3] x [1, 2]`` (slave, its bottom edge, a
 non-matching grid) is pushed down by a prescribed displacement of its top edge, by point forces
 (``load="cload"``) or by a pressure (``load="dload"``). For CAX decks ``x`` is the radius: the
-lower block touches the axis (``u_r = 0`` there). Both ccx 2.20 and the deck runner run the same file
-(``tests/calculix/test_ccx_2d_decks.py``). 3-node elements (CPE3, ...) split each
+lower block touches the axis (``u_r = 0`` there). Both ccx 2.20 and the deck runner run the
+same file (``tests/calculix/test_ccx_2d_decks.py``). 3-node elements (CPE3, ...) split each
 quadrilateral into two triangles.
 """
 
