@@ -66,7 +66,13 @@ def _build_cylinder_on_block(
 
 
 def _cylinder_problem(
-    order: int, mesh_options=None, *, axisymmetric=True, radial_load=False, **options
+    order: int,
+    mesh_options=None,
+    *,
+    axisymmetric=True,
+    radial_load=False,
+    ring_areas="consistent",
+    **options,
 ):
     """Cylinder on block, slave the cylinder's bottom; the load p (1 + r) with ``radial_load``."""
     mesh, _, facet_tags = mesh_from_gmsh(
@@ -94,6 +100,7 @@ def _cylinder_problem(
         ntf.FacetSurface(facet_tags, LOWER_TOP),
         ntf.SurfaceInteraction(ntf.LinearLaw(slope=1e4 * E, tension=E / 70000)),
         axisymmetric=axisymmetric,
+        ring_areas=ring_areas,
     )
     return ntf.ContactProblem(F, u, [pair], bcs, **options), load
 
@@ -220,6 +227,8 @@ def test_axisymmetric_pair_options_are_checked() -> None:
         ntf.ContactPair(*slave_master, interaction, axisymmetric=True, ring_areas="sector")
     with pytest.raises(ValueError, match="ring_areas = 'ccx' is for axisymmetric pairs"):
         ntf.ContactPair(*slave_master, interaction, ring_areas="ccx")
+    with pytest.raises(ValueError, match="linearize_area = True is not supported"):
+        _cylinder_problem(1, ring_areas="ccx", linearize_area=True)
 
 
 @pytest.mark.serial
