@@ -28,6 +28,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 from helpers.ccx_2d_decks import Deck2D, block_difference, dat_pairs  # noqa: E402
 
 #: (label, deck, run_job options)
+CCX_AREAS = {"area_weights": "ccx"}
+
 CASES = [
     ("CPE4 LINEAR", Deck2D("cpe4", "CPE4"), {}),
     ("CPE4 EXPONENTIAL", Deck2D("cpe4", "CPE4", law="EXPONENTIAL"), {}),
@@ -35,20 +37,23 @@ CASES = [
     ("CPE3 LINEAR", Deck2D("cpe3", "CPE3"), {}),
     ("CPE4 pressure (*DLOAD)", Deck2D("cpe4", "CPE4", load="dload"), {}),
     ("CPE4 point forces (*CLOAD)", Deck2D("cpe4", "CPE4", load="cload"), {}),
+    ("CPE6 LINEAR", Deck2D("cpe6", "CPE6"), {}),
+    ("CPE6 LINEAR, area_weights=ccx", Deck2D("cpe6", "CPE6"), CCX_AREAS),
+    ("CPE6 EXPONENTIAL, area_weights=ccx", Deck2D("cpe6", "CPE6", law="EXPONENTIAL"), CCX_AREAS),
     ("CPS4 without contact", Deck2D("cps4", "CPS4", contact=False), {}),
     ("CPS4 LINEAR", Deck2D("cps4", "CPS4"), {}),
     ("CPS4 EXPONENTIAL", Deck2D("cps4", "CPS4", law="EXPONENTIAL"), {}),
     ("CPS3 LINEAR", Deck2D("cps3", "CPS3"), {}),
+    ("CPS6 LINEAR, area_weights=ccx", Deck2D("cps6", "CPS6"), CCX_AREAS),
     ("CAX4 without contact", Deck2D("cax4", "CAX4", contact=False), {}),
     ("CAX4 LINEAR", Deck2D("cax4", "CAX4"), {}),
-    ("CAX4 LINEAR, ring_areas=ccx", Deck2D("cax4", "CAX4"), {"ring_areas": "ccx"}),
-    ("CAX4 EXPONENTIAL, ring_areas=ccx", Deck2D("cax4", "CAX4", law="EXPONENTIAL"),
-     {"ring_areas": "ccx"}),
-    ("CAX3 LINEAR, ring_areas=ccx", Deck2D("cax3", "CAX3"), {"ring_areas": "ccx"}),
-    ("CAX4 pressure, ring_areas=ccx", Deck2D("cax4", "CAX4", load="dload"), {"ring_areas": "ccx"}),
-    ("CAX4 point forces, ring_areas=ccx", Deck2D("cax4", "CAX4", load="cload"),
-     {"ring_areas": "ccx"}),
-]  # fmt: skip
+    ("CAX4 LINEAR, area_weights=ccx", Deck2D("cax4", "CAX4"), CCX_AREAS),
+    ("CAX4 EXPONENTIAL, area_weights=ccx", Deck2D("cax4", "CAX4", law="EXPONENTIAL"), CCX_AREAS),
+    ("CAX3 LINEAR, area_weights=ccx", Deck2D("cax3", "CAX3"), CCX_AREAS),
+    ("CAX6 LINEAR, area_weights=ccx", Deck2D("cax6", "CAX6"), CCX_AREAS),
+    ("CAX4 pressure, area_weights=ccx", Deck2D("cax4", "CAX4", load="dload"), CCX_AREAS),
+    ("CAX4 point forces, area_weights=ccx", Deck2D("cax4", "CAX4", load="cload"), CCX_AREAS),
+]
 
 COLUMNS = ("U", "U turned", "RF", "S", "S zz", "CDIS", "CSTR", "CELS")
 

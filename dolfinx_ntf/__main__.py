@@ -106,12 +106,13 @@ def _parser() -> argparse.ArgumentParser:
         "clamped projections); 'auto' ccx's symmetrized one from 10000 dofs on, exact below",
     )
     run.add_argument(
-        "--ring-areas",
+        "--area-weights",
         choices=("consistent", "ccx"),
         default="consistent",
-        help="spring areas of CAX decks: 'consistent' (default) the ring shares 2 pi int r phi "
-        "ds; 'ccx' the weights of ccx's 2-degree expansion (half an edge's ring area per node), "
-        "which reproduce ccx's results",
+        help="spring areas of 2D decks: 'consistent' (default) each edge's consistent shares "
+        "(rings 2 pi int r phi ds); 'ccx' the fixed shares of the faces ccx expands 2D edges "
+        "into (1/2, 1/2; 26/100, 26/100, 48/100 on 3-node edges; rings by the edge's mean "
+        "radius), which reproduce ccx's results",
     )
     run.add_argument(
         "--predictor",
@@ -227,7 +228,7 @@ def _run_one(job: str, args: argparse.Namespace, comm: object) -> int:
             guard_predictor=args.predictor == "guarded" or args.robust,
             pair_after_predictor=args.pair_after_predictor,
             ccx_format=args.ccx_format,
-            ring_areas=args.ring_areas,
+            area_weights=args.area_weights,
         )
     except JobError as error:
         if root:

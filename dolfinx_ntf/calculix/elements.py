@@ -146,6 +146,8 @@ C3D8_EXTRAPOLATION = (2.549, -0.683, 0.183, -0.04904)
 _HEX_CORNERS = np.array(
     [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
 )
+# ccx's 6-node triangle: midside nodes 4..6 on the edges 1-2, 2-3, 3-1.
+_TRI_EDGES = ((0, 1), (1, 2), (2, 0))
 # ccx C3D10 midside nodes 5..10 sit on the edges between these ccx corners (manual fig. 55).
 _TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
 # ccx C3D20 midside nodes 9..20 (manual): on 1-2, 2-3, 3-4, 4-1, 5-6, 6-7, 7-8, 8-5, 1-5, 2-6,
@@ -183,6 +185,11 @@ def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
         return _c3d20_extrapolation(points)
     if element_type[:3] in TWO_D_MODELS and element_type[3:] == "3":
         return np.ones((3, 1))
+    if element_type[:3] in TWO_D_MODELS and element_type[3:] == "6":
+        # the linear field through the 3 point values, at the corners; midside nodes the means
+        affine = np.column_stack([np.ones(3), points])
+        corner = np.array([[1, 0, 0], [1, 1, 0], [1, 0, 1]], float) @ np.linalg.inv(affine)
+        return np.vstack([corner, [(corner[a] + corner[b]) / 2 for a, b in _TRI_EDGES]])
     if element_type[:3] in TWO_D_MODELS and element_type[3:] == "4":
         # the bilinear field through the 2x2 Gauss values, at the corners
         corners = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
@@ -254,6 +261,7 @@ _POINTS["C3D20R"] = _POINTS["C3D8"]
 for _family in TWO_D_MODELS:
     _POINTS[_family + "4"] = [[(x + 1) / 2, (y + 1) / 2] for y in (-_G, _G) for x in (-_G, _G)]
     _POINTS[_family + "3"] = [[1 / 3, 1 / 3]]
+    _POINTS[_family + "6"] = [[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]]
 
 
 def _element_type(
@@ -273,7 +281,7 @@ def _element_type(
     print_rows: list[int] | None = None,
 ) -> ElementType:
     points = frozen_array(_POINTS[name], np.float64)
-    midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES}.get(num_nodes, ())
+    midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES, 6: _TRI_EDGES}.get(num_nodes, ())
     return ElementType(
         name,
         num_nodes,
@@ -409,6 +417,26 @@ ELEMENT_TYPES: dict[str, ElementType] = {
         )
         for family in TWO_D_MODELS
     },
+    # 6-node triangles (midside nodes 4 on 1-2, 5 on 2-3, 6 on 3-1), P2 triangles: ccx expands
+    # them into C3D15 wedges and prints their 3 x 3 points (3 layers of the 3 in-plane points).
+    # dolfinx P2 triangle edges are (v1,v2), (v0,v2), (v0,v1).
+    **{
+        family + "6": _element_type(
+            family + "6",
+            6,
+            3,
+            "line3",
+            [[1, 2, 4], [2, 3, 5], [3, 1, 6]],
+            cell="triangle",
+            degree=2,
+            to_dolfinx=[0, 1, 2, 4, 5, 3],
+            mirrored_vertices=[0, 2, 1],
+            quadrature_degree=2,
+            frd_type=8,
+            print_rows=[0, 1, 2, 0, 1, 2, 0, 1, 2],
+        )
+        for family in TWO_D_MODELS
+    },
 }
 """Supported element types by ccx name."""
 
@@ -417,10 +445,10 @@ ELEMENT_TYPES: dict[str, ElementType] = {
 REFUSED_ELEMENTS = {
     "C3D8R": ": its one-point integration with hourglass control is not reproduced",
     **{
-        family + suffix: ": quadratic and reduced-integration 2D elements are not run yet "
-        "(4-node and 3-node CPE, CPS and CAX elements are)"
+        family + suffix: ": 8-node and reduced-integration 2D elements are not run yet "
+        "(3-, 4- and 6-node CPE, CPS and CAX elements are)"
         for family in TWO_D_MODELS
-        for suffix in ("4R", "6", "8", "8R")
+        for suffix in ("4R", "8", "8R")
     },
     "C3D8I": ": its incompatible modes (extra internal displacement fields) are not reproduced",
 }

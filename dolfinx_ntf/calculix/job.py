@@ -555,7 +555,7 @@ def run_job(
     tangent: str = "ccx",
     line_search: bool = False,
     solver_options: dict | None = None,
-    ring_areas: str = "consistent",
+    area_weights: str = "consistent",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -589,9 +589,10 @@ def run_job(
         line_search: Line-search the Newton corrections (beyond ccx, the Python API's default:
             :class:`~dolfinx_ntf.ContactNewtonSolver`); off by default, as in ccx.
         solver_options: Extra :class:`~dolfinx_ntf.ContactNewtonSolver` options.
-        ring_areas: Spring areas of CAX decks: ``"consistent"`` (default, the ring shares
-            ``2 pi ∫ r phi_p ds``) or ``"ccx"``, the weights of ccx's 2-degree expansion, which
-            reproduce its results (``ContactPair.ring_areas``, docs/method.md §23).
+        area_weights: Spring areas of 2D decks: ``"consistent"`` (default: the consistent shares
+            of each edge, rings ``2 pi ∫ r phi_p ds``) or ``"ccx"``, the fixed shares of the faces
+            ccx expands 2D edges into, which reproduce its results (``ContactPair.area_weights``,
+            docs/method.md §23.3).
 
     Returns:
         The :class:`JobResult`.
@@ -616,7 +617,7 @@ def run_job(
         for warning in deck.warnings:
             logger.warning("%s", warning)
     check_requests(deck)
-    model = build_model(deck, comm, ring_areas=ring_areas)
+    model = build_model(deck, comm, area_weights=area_weights)
     job = _Job(
         jobname,
         directory,

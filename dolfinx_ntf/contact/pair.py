@@ -50,10 +50,12 @@ class ContactPair:
             current radius (docs/method.md §17.2), for the full 360 degrees like a residual
             form with :func:`~dolfinx_ntf.fem.axisymmetric.axisymmetric_weight`; the thickness
             must then stay 1. False on a 3D mesh.
-        ring_areas: With ``axisymmetric``: ``"consistent"`` (the shares above) or ``"ccx"``,
-            CalculiX 2.20's weights from its 2-degree expansion, half an edge's ring area
-            ``pi L (r_1 + r_2)`` to each node of a line2 edge (docs/method.md §23), to
-            reproduce ccx's results; the areas are then held between pairings (no
+        area_weights: On a 2D mesh, how an edge's area (length times thickness, or ring area)
+            is shared among its nodes: ``"consistent"`` (default: 1/2, 1/2 on a line2 edge,
+            Simpson's 1/6, 1/6, 2/3 on a line3 one; rings weighted by each node's radius) or
+            ``"ccx"``, CalculiX 2.20's fixed shares of the faces it expands 2D edges into (1/2, 1/2;
+            26/100, 26/100, 48/100; rings shared by the edge's mean radius), to reproduce ccx
+            (docs/method.md §23.3); the areas are then held between pairings (no
             ``linearize_area``).
     """
 
@@ -66,7 +68,7 @@ class ContactPair:
     adjust: float | NodeSurface | None = None
     thickness: float = 1.0
     axisymmetric: bool = False
-    ring_areas: str = "consistent"
+    area_weights: str = "consistent"
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -93,12 +95,10 @@ class ContactPair:
         validation.check_type(self.name, str, f"{owner}: name")
         validation.check_positive(self.thickness, f"{owner}: thickness")
         validation.check_type(self.axisymmetric, bool, f"{owner}: axisymmetric")
-        if self.ring_areas not in ("consistent", "ccx"):
+        if self.area_weights not in ("consistent", "ccx"):
             raise ValueError(
-                f"{owner}: ring_areas must be 'consistent' or 'ccx', got {self.ring_areas!r}"
+                f"{owner}: area_weights must be 'consistent' or 'ccx', got {self.area_weights!r}"
             )
-        if self.ring_areas == "ccx" and not self.axisymmetric:
-            raise ValueError(f"{owner}: ring_areas = 'ccx' is for axisymmetric pairs")
         if self.axisymmetric and self.thickness != 1.0:
             raise ValueError(
                 f"{owner}: an axisymmetric pair has no thickness (its spring areas are rings, "

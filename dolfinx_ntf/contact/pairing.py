@@ -34,8 +34,8 @@ from dolfinx_ntf.fem.surfaces import (
 from dolfinx_ntf.kernels.edges import (
     EdgeType,
     axisymmetric_edge_spring_areas,
+    ccx_edge_spring_areas,
     edge_spring_areas,
-    sector_ring_spring_areas,
 )
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.rigid import (
@@ -150,6 +150,8 @@ class Pairing:
             raise ValueError(
                 f"{name}: thickness = {pair.thickness:g} is for 2D meshes; a 3D mesh has its own"
             )
+        if pair.area_weights != "consistent":
+            raise ValueError(f"{name}: area_weights = 'ccx' is for 2D meshes; this mesh is 3D")
         if pair.axisymmetric:
             raise ValueError(
                 f"{name}: axisymmetric = True is for 2D meshes of the meridian half-plane; this "
@@ -334,7 +336,7 @@ class Pairing:
             slave,
             thickness=pair.thickness,
             axisymmetric=pair.axisymmetric,
-            ring_areas=pair.ring_areas,
+            area_weights=pair.area_weights,
         )
         if not pair.axisymmetric:
             return slave
@@ -768,8 +770,11 @@ def _check_in_plane(surface: RigidSurface, what: str) -> None:
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
     """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
     faces = slave.faces
-    if isinstance(faces.face_type, EdgeType) and slave.axisymmetric and slave.ring_areas == "ccx":
-        areas = sector_ring_spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    if isinstance(faces.face_type, EdgeType) and slave.area_weights == "ccx":  # §23.3
+        areas = ccx_edge_spring_areas(
+            faces.face_type, faces.faces, coords, slave.nodes,
+            thickness=slave.thickness, axisymmetric=slave.axisymmetric,
+        )  # fmt: skip
     elif isinstance(faces.face_type, EdgeType) and slave.axisymmetric:  # rings (§17.2)
         areas = axisymmetric_edge_spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
     elif isinstance(faces.face_type, EdgeType):  # 2D: tributary length times the thickness

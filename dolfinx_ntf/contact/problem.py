@@ -202,10 +202,10 @@ class ContactProblem:
         self.friction_tangent = friction_tangent
         self.friction_in_tension = bool(friction_in_tension)
         self.linearize_area = linearize_area
-        ccx_rings = [p.name or f"pair {k}" for k, p in enumerate(pairs) if p.ring_areas == "ccx"]
+        ccx_rings = [p.name or f"pair {k}" for k, p in enumerate(pairs) if p.area_weights == "ccx"]
         if linearize_area and ccx_rings:
             raise ValueError(
-                f"{ccx_rings[0]}: ring_areas = 'ccx' holds its areas between pairings; "
+                f"{ccx_rings[0]}: area_weights = 'ccx' holds its areas between pairings; "
                 "linearize_area = True is not supported with it"
             )
         self.contact_start_slope = contact_start_slope

@@ -155,7 +155,7 @@ class SlaveSurface:
     faceless: np.ndarray | None = None  # (S,) bool
     thickness: float = 1.0  # 2D meshes: the spring areas are tributary lengths times this
     axisymmetric: bool = False  # 2D meshes: ring areas 2 pi ∫ r φ_p ds instead (§17.2)
-    ring_areas: str = "consistent"  # axisymmetric: "ccx" for ccx's sector weights (§23)
+    area_weights: str = "consistent"  # 2D meshes: "ccx" for ccx's expanded faces' shares (§23)
 
 
 def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:

@@ -20,16 +20,17 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "CCX_EDGE_SHARES",
     "EDGE_TYPES",
     "LINE2",
     "LINE3",
     "EdgeType",
     "axisymmetric_edge_spring_areas",
+    "ccx_edge_spring_areas",
     "edge_lengths",
     "edge_spring_area_gradients",
     "edge_spring_areas",
     "edge_type_from_num_nodes",
-    "sector_ring_spring_areas",
 ]
 
 
@@ -187,35 +188,50 @@ def axisymmetric_edge_spring_areas(
     return _sum_to_nodes(edges, shares, slave_nodes)
 
 
-def sector_ring_spring_areas(
-    edge_type: EdgeType, edges: np.ndarray, coords: np.ndarray, slave_nodes: np.ndarray
-) -> np.ndarray:
-    """CalculiX's ring areas of axisymmetric slave nodes: its sector's face weights -> (S,).
+#: CalculiX 2.20's shares of a 2D edge's area per node (corners, then the midside node): ccx expands
+#: the edge into a quad4 face (a quarter to each of its corners, two per 2D node) or, for a line3
+#: edge, a quad8 face (1/100 to each corner, 24/100 to each midside node: a 2D corner node has two
+#: corners and its mid-plane midside node, the 2D midside node two midside nodes), spec §2.2.
+CCX_EDGE_SHARES = {2: np.array([0.5, 0.5]), 3: np.array([0.26, 0.26, 0.48])}
 
-    ccx expands a CAX edge between radii ``r_1`` and ``r_2`` into a quad4 face of its 2-degree
-    sector and gives each of the face's four nodes a quarter of its area, so a 2D node's two node
-    lines get half the face: scaled to the ring, each node of the edge gets ``pi L (r_1 + r_2)/2``,
-    the share of the edge's mean radius (too much for the inner node, too little for the outer
-    one; docs/method.md §17.2, §23). With these areas the deck runner's CAX4 contact results are
-    ccx's to 4e-5 (measured, docs/validation.md). Line2 edges only.
+
+def ccx_edge_spring_areas(
+    edge_type: EdgeType,
+    edges: np.ndarray,
+    coords: np.ndarray,
+    slave_nodes: np.ndarray,
+    *,
+    thickness: float = 1.0,
+    axisymmetric: bool = False,
+) -> np.ndarray:
+    """CalculiX's spring areas of 2D slave nodes: its expanded faces' fixed shares -> (S,).
+
+    Each edge's area (its length times ``thickness``, or with ``axisymmetric`` its ring area
+    ``2 pi ∫ r ds``) is shared among its nodes by ``CCX_EDGE_SHARES``: 1/2, 1/2 on a line2 edge
+    (the plane tributary rule; on a ring each node gets half the edge's ring area, the share of its
+    mean radius, where the consistent shares weight each node by its own radius), 26/100, 26/100,
+    48/100 on a line3 edge (Simpson's 1/6, 1/6, 2/3 are the consistent ones). docs/method.md §23.3.
 
     Args:
-        edge_type: Type of every slave edge (line2).
-        edges: (F, 2) node ids of the slave edges (rows index ``coords``).
-        coords: (num_nodes, 2 or 3) node coordinates (current configuration), ``x[0] = r``.
+        edge_type: Type of every slave edge.
+        edges: (F, n) node ids of the slave edges (rows index ``coords``).
+        coords: (num_nodes, 2 or 3) node coordinates (current configuration).
         slave_nodes: (S,) unique node ids; a slave node on no edge gets 0.
+        thickness: Out-of-plane thickness of plane models (1 with ``axisymmetric``).
+        axisymmetric: Ring areas (``x[0] = r``).
     """
-    if edge_type.num_nodes != 2:
-        raise NotImplementedError(
-            f"ccx's sector ring areas are for line2 slave edges, got {edge_type.name}"
-        )
-    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
-    xy = np.asarray(coords, dtype=float)[edges][..., :2]  # (F, 2, 2)
-    lengths = np.linalg.norm(xy[:, 1] - xy[:, 0], axis=1)
-    radii = np.maximum(xy[..., 0].sum(axis=1), 0.0)
-    half = 0.5 * np.pi * lengths * radii
-    shares = np.repeat(half[:, None], 2, axis=1)
-    return _sum_to_nodes(edges, shares, np.asarray(slave_nodes, dtype=np.int64))
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, edge_type.num_nodes)
+    slave_nodes = np.asarray(slave_nodes, dtype=np.int64)
+    each = np.arange(edges.size, dtype=np.int64).reshape(edges.shape)  # every edge node its own
+    if axisymmetric:
+        flat = np.asarray(coords, dtype=float)[edges.ravel()]
+        totals = axisymmetric_edge_spring_areas(edge_type, each, flat, each.ravel())
+        totals = totals.reshape(edges.shape).sum(axis=1)
+    else:
+        xy = np.asarray(coords, dtype=float)[edges][..., :2]
+        totals = thickness * edge_lengths(edge_type, xy)
+    shares = totals[:, None] * CCX_EDGE_SHARES[edge_type.num_nodes][None, :]
+    return _sum_to_nodes(edges, shares, slave_nodes)
 
 
 def edge_spring_area_gradients(

@@ -63,12 +63,15 @@ def test_two_d_faces_are_the_counterclockwise_edges(name):
     """ccx's 2D faces S1.. are the element's edges 1-2, 2-3, ... (manual, quadrilateral faces)."""
     etype = ELEMENT_TYPES[name]
     n = etype.num_corners
-    assert etype.faces.tolist() == [[k, (k + 1) % n] for k in range(n)]
+    assert etype.faces[:, :2].tolist() == [[k, (k + 1) % n] for k in range(n)]
+    if etype.num_nodes > n:  # 6-node triangles: the edge's midside node n + k
+        assert etype.faces[:, 2].tolist() == [n + k for k in range(n)]
+        assert [tuple(e) for e in etype.midside_edges] == [(k, (k + 1) % n) for k in range(n)]
     assert (
         etype.model
         == {"CPE": "plane strain", "CPS": "plane stress", "CAX": "axisymmetric"}[name[:3]]
     )
-    # ccx prints its expanded element's points: both layers repeat the in-plane points
-    rows = etype.print_rows
-    assert rows.size == 2 * etype.integration_points.shape[0]
-    assert rows.tolist() == 2 * list(range(etype.integration_points.shape[0]))
+    # ccx prints its expanded element's points: each layer repeats the in-plane points (two
+    # layers of C3D8 and C3D6, three of the C3D15 of a 6-node triangle)
+    layers = 3 if etype.num_nodes == 6 else 2
+    assert etype.print_rows.tolist() == layers * list(range(etype.integration_points.shape[0]))

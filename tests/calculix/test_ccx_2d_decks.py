@@ -11,7 +11,7 @@ laws) run with ccx, which expands the 2D elements into one layer of 3D elements,
   each point): ccx prints ``s_zz != 0`` where the 2D model has 0;
 - axisymmetric (CAX4): ccx's 2-degree sector prints ``u_r cos(1 deg)`` (the mean x of its two
   node lines) and forces per sector; its spring areas are its sector's face weights, which
-  ``ring_areas="ccx"`` reproduces.
+  ``area_weights="ccx"`` reproduces.
 
 ccx prints the contact rows at its expanded nodes: two per 2D slave node (numbered
 ``3 (n - 1) + 1`` and ``+ 3`` above the deck's largest node number), each with half the energy.
@@ -70,6 +70,8 @@ PLANE_STRAIN = {
     "cpe4_pressure": Deck2D("cpe4", "CPE4", load="dload"),
     "cpe4_point_forces": Deck2D("cpe4", "CPE4", load="cload"),
     "cpe3_pressure": Deck2D("cpe3", "CPE3", load="dload"),
+    "cpe6_linear": Deck2D("cpe6", "CPE6"),
+    "cpe6_exponential": Deck2D("cpe6", "CPE6", law="EXPONENTIAL"),
 }
 
 
@@ -79,7 +81,8 @@ PLANE_STRAIN = {
 def test_plane_strain_decks_match_ccx(tmp_path, case):
     """ccx's expansion of plane strain is exact: U, RF, S and the contact rows to its digits."""
     deck = PLANE_STRAIN[case]
-    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    # ccx's fixed shares of its expanded faces (the consistent ones on line2 edges)
+    ccx_dir, ntf_dir = _run(deck, tmp_path, area_weights="ccx")
     names = set()
     for reference, mine in dat_pairs(ccx_dir, ntf_dir, deck.name):
         if reference.name == "RF_TOTAL":  # zero: ccx's round-off against 0
@@ -88,6 +91,18 @@ def test_plane_strain_decks_match_ccx(tmp_path, case):
         names.add(reference.name)
         assert block_difference(reference, mine) < 1e-6, reference.name
     assert names == {"U", "RF", "S", "CDIS", "CSTR", "CELS"}
+
+
+@needs_ccx
+@pytest.mark.serial
+def test_quadratic_plane_strain_needs_ccx_edge_shares(tmp_path):
+    """CPE6: ccx shares a 3-node edge 26/100, 26/100, 48/100 (its expanded quad8 face), not 1/6,
+    1/6, 2/3 as the consistent loads: the default areas give other pressures."""
+    deck = Deck2D("cpe6", "CPE6")
+    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    blocks = {(r.name, r.time): (r, m) for r, m in dat_pairs(ccx_dir, ntf_dir, deck.name)}
+    assert block_difference(*blocks[("CSTR", 1.0)], [0]) > 0.1  # measured 0.29
+    assert block_difference(*blocks[("U", 1.0)]) > 1e-3  # measured 2.2e-2
 
 
 @pytest.mark.serial
@@ -132,8 +147,8 @@ def test_plane_stress_with_contact_differs_by_ccx_expansion(tmp_path):
     assert 1e-4 < block_difference(reference, mine) < 2e-2  # measured 6.3e-3
 
 
-def _cax_results(tmp_path: Path, **options) -> dict:
-    deck = Deck2D("cax4", "CAX4")
+def _cax_results(tmp_path: Path, element: str = "CAX4", **options) -> dict:
+    deck = Deck2D(element.lower(), element)
     ccx_dir, ntf_dir = _run(deck, tmp_path, **options)
     return {(r.name, r.time): (r, m) for r, m in dat_pairs(ccx_dir, ntf_dir, deck.name)}
 
@@ -162,9 +177,9 @@ def test_axisymmetric_bulk_is_ccx_sector_turned_by_one_degree(tmp_path):
 @needs_ccx
 @pytest.mark.serial
 def test_axisymmetric_contact_with_ccx_ring_areas(tmp_path):
-    """ccx's sector face weights (``ring_areas="ccx"``) give ccx's CAX contact solution."""
+    """ccx's sector face weights (``area_weights="ccx"``) give ccx's CAX contact solution."""
     consistent = _cax_results(tmp_path / "consistent")
-    weighted = _cax_results(tmp_path / "ccx", ring_areas="ccx")
+    weighted = _cax_results(tmp_path / "ccx", area_weights="ccx")
     u_consistent = block_difference(*consistent[("U", 1.0)])
     reference, mine = weighted[("U", 1.0)]
     turned = mine.values.copy()
@@ -181,6 +196,19 @@ def test_axisymmetric_contact_with_ccx_ring_areas(tmp_path):
     assert block_difference(*weighted[("RF", 1.0)]) < 1e-4
 
 
+@needs_ccx
+@pytest.mark.serial
+def test_quadratic_axisymmetric_contact_with_ccx_shares(tmp_path):
+    """CAX6 with ccx's shares: U 2.6e-5 (after the 1-degree turn), CSTR 0, RF and CELS 2.0e-4."""
+    blocks = _cax_results(tmp_path, "CAX6", area_weights="ccx")
+    reference, mine = blocks[("U", 1.0)]
+    turned = mine.values.copy()
+    turned[:, 0] *= np.cos(HALF_SECTOR)
+    assert np.abs(turned - reference.values).max() < 4e-5 * np.abs(reference.values).max()
+    assert block_difference(*blocks[("CSTR", 1.0)], [0]) < 6e-5
+    assert block_difference(*blocks[("RF", 1.0)]) < 3e-4
+
+
 def _refused(tmp_path: Path, text: str, error: type[Exception], match: str) -> None:
     path = tmp_path / "refused.inp"
     path.write_text(text)
@@ -193,7 +221,7 @@ def test_unsupported_two_d_features_are_refused(tmp_path):
     deck = Deck2D("refused", "CPE4")
     text = deck.write(tmp_path).read_text()
     _refused(
-        tmp_path, text.replace("TYPE=CPE4", "TYPE=CPE8"), DeckError, "CPE8 is not supported: quad"
+        tmp_path, text.replace("TYPE=CPE4", "TYPE=CPE8"), DeckError, "CPE8 is not supported: 8-node"
     )
     friction = text.replace("*CONTACT PAIR", "*FRICTION\n0.2, 1e5\n*CONTACT PAIR")
     _refused(tmp_path, friction, NotImplementedError, "FRICTION with CPE4 elements")

@@ -71,7 +71,7 @@ def _cylinder_problem(
     *,
     axisymmetric=True,
     radial_load=False,
-    ring_areas="consistent",
+    area_weights="consistent",
     **options,
 ):
     """Cylinder on block, slave the cylinder's bottom; the load p (1 + r) with ``radial_load``."""
@@ -100,7 +100,7 @@ def _cylinder_problem(
         ntf.FacetSurface(facet_tags, LOWER_TOP),
         ntf.SurfaceInteraction(ntf.LinearLaw(slope=1e4 * E, tension=E / 70000)),
         axisymmetric=axisymmetric,
-        ring_areas=ring_areas,
+        area_weights=area_weights,
     )
     return ntf.ContactProblem(F, u, [pair], bcs, **options), load
 
@@ -223,12 +223,10 @@ def test_axisymmetric_pair_options_are_checked() -> None:
         ntf.ContactPair(*slave_master, interaction, axisymmetric=True, thickness=2.0)
     with pytest.raises(TypeError, match="axisymmetric"):
         ntf.ContactPair(*slave_master, interaction, axisymmetric="yes")
-    with pytest.raises(ValueError, match="ring_areas must be 'consistent' or 'ccx'"):
-        ntf.ContactPair(*slave_master, interaction, axisymmetric=True, ring_areas="sector")
-    with pytest.raises(ValueError, match="ring_areas = 'ccx' is for axisymmetric pairs"):
-        ntf.ContactPair(*slave_master, interaction, ring_areas="ccx")
+    with pytest.raises(ValueError, match="area_weights must be 'consistent' or 'ccx'"):
+        ntf.ContactPair(*slave_master, interaction, axisymmetric=True, area_weights="sector")
     with pytest.raises(ValueError, match="linearize_area = True is not supported"):
-        _cylinder_problem(1, ring_areas="ccx", linearize_area=True)
+        _cylinder_problem(1, area_weights="ccx", linearize_area=True)
 
 
 @pytest.mark.serial

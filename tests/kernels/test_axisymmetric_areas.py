@@ -10,9 +10,9 @@ from dolfinx_ntf.kernels.edges import (
     LINE3,
     EdgeType,
     axisymmetric_edge_spring_areas,
+    ccx_edge_spring_areas,
     edge_spring_area_gradients,
     edge_spring_areas,
-    sector_ring_spring_areas,
 )
 
 
@@ -119,13 +119,13 @@ def test_area_gradients_match_finite_differences(edge_type: EdgeType, axisymmetr
     assert np.abs(dense).max() > 0.1
 
 
-def test_ccx_sector_weights_give_each_node_half_the_edge_ring() -> None:
+def test_ccx_shares_give_each_node_of_a_line2_ring_half_the_edge() -> None:
     """ccx's CAX weights: the same total as the consistent shares, split equally per edge."""
     r = np.array([0.0, 0.1, 0.25, 0.5, 1.0])
     z = np.array([0.0, 0.05, 0.0, 0.1, 0.0])
     coords, edges = _chain(LINE2, r, z)
     nodes = np.arange(coords.shape[0])
-    ccx = sector_ring_spring_areas(LINE2, edges, coords, nodes)
+    ccx = ccx_edge_spring_areas(LINE2, edges, coords, nodes, axisymmetric=True)
     consistent = axisymmetric_edge_spring_areas(LINE2, edges, coords, nodes)
     assert ccx.sum() == pytest.approx(consistent.sum(), rel=1e-13)  # 2 pi ∫ r ds either way
     lengths = np.linalg.norm(np.diff(coords, axis=0), axis=1)
@@ -134,5 +134,22 @@ def test_ccx_sector_weights_give_each_node_half_the_edge_ring() -> None:
     np.testing.assert_allclose(ccx, expected, rtol=1e-13)
     # the node nearer the axis gets more than its consistent share, the outer one less
     assert ccx[0] > consistent[0] and ccx[-1] < consistent[-1]
-    with pytest.raises(NotImplementedError, match="line2"):
-        sector_ring_spring_areas(LINE3, *_chain(LINE3, r, z)[::-1], nodes)
+
+
+def test_ccx_shares_of_line3_edges() -> None:
+    """26/100, 26/100, 48/100 of each line3 edge's length times the thickness, or ring area."""
+    r = np.array([0.2, 0.5, 1.0])
+    z = np.array([0.0, 0.1, 0.0])
+    coords, edges = _chain(LINE3, r, z)
+    nodes = np.arange(coords.shape[0])
+    plane = ccx_edge_spring_areas(LINE3, edges, coords, nodes, thickness=0.5)
+    lengths = 0.5 * edge_spring_areas(LINE3, edges, coords, np.arange(coords.shape[0]))
+    assert plane.sum() == pytest.approx(lengths.sum(), rel=1e-13)
+    length = np.linalg.norm(np.diff(coords[:3], axis=0), axis=1)  # straight edges
+    np.testing.assert_allclose(plane[3:], 0.5 * 0.48 * length, rtol=1e-13)  # midside nodes
+    np.testing.assert_allclose(plane[0], 0.5 * 0.26 * length[0], rtol=1e-13)
+    ring = ccx_edge_spring_areas(LINE3, edges, coords, nodes, axisymmetric=True)
+    consistent = axisymmetric_edge_spring_areas(LINE3, edges, coords, nodes)
+    assert ring.sum() == pytest.approx(consistent.sum(), rel=1e-13)
+    totals = 2 * np.pi * length * (r[:-1] + r[1:]) / 2  # ring area of each straight edge
+    np.testing.assert_allclose(ring[3:], 0.48 * totals, rtol=1e-13)

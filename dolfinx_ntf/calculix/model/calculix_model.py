@@ -352,7 +352,7 @@ class CalculixModel:
 
 
 def build_model(
-    deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD, *, ring_areas: str = "consistent"
+    deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD, *, area_weights: str = "consistent"
 ) -> CalculixModel:
     """Build the dolfinx model of a parsed CalculiX deck (collective).
 
@@ -360,8 +360,8 @@ def build_model(
         deck: The deck (``read_deck``).
         comm: Communicator. On several processes the mesh is distributed by dolfinx from rank
             0's cells (docs/method.md §14.5); every process must have read the same deck.
-        ring_areas: Spring areas of CAX decks, ``"consistent"`` or ``"ccx"`` (its 2-degree
-            sector's weights, ``ContactPair.ring_areas``, docs/method.md §23).
+        area_weights: Spring areas of 2D decks, ``"consistent"`` or ``"ccx"`` (the shares of
+            ccx's expanded faces, ``ContactPair.area_weights``, docs/method.md §23.3).
 
     Returns:
         The :class:`CalculixModel` (its ``deck`` has the slave nodes ADJUST of ``*TIE`` moved).
@@ -392,7 +392,7 @@ def build_model(
     error = None
     try:  # local work: a bad face found by one process is an error on all (no collective inside)
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
-        pairs = contact_pairs(deck, surfaces, maps, thickness=thickness, ring_areas=ring_areas)
+        pairs = contact_pairs(deck, surfaces, maps, thickness=thickness, area_weights=area_weights)
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
         springs_follow = check_springs(deck, maps.meshed)
     except (ValueError, NotImplementedError) as exc:

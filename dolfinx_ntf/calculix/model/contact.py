@@ -104,22 +104,19 @@ def contact_pairs(
     maps: MeshMaps,
     *,
     thickness: float = 1.0,
-    ring_areas: str = "consistent",
+    area_weights: str = "consistent",
 ) -> list[ContactPair]:
     """The deck's ``*CONTACT PAIR`` cards as contact pairs, in deck order.
 
     On CPE/CPS decks the spring areas are the edge shares times ``thickness``, on CAX decks
-    the ring areas of the whole circumference, consistent or with ccx's sector weights
-    (``ring_areas``, docs/method.md §23).
+    the ring areas of the whole circumference, consistent or with the shares of ccx's expanded
+    faces (``area_weights``, docs/method.md §23).
     """
     two_d = {}
     if maps.block.type.tdim == 2:
         axisymmetric = maps.block.type.model == "axisymmetric"
-        two_d = (
-            {"axisymmetric": True, "ring_areas": ring_areas}
-            if axisymmetric
-            else {"thickness": thickness}
-        )
+        two_d = {"axisymmetric": True} if axisymmetric else {"thickness": thickness}
+        two_d["area_weights"] = area_weights
     pairs = []
     for pair in deck.contact_pairs:
         law = pressure_overclosure_law(deck, pair.interaction)
