@@ -146,8 +146,10 @@ C3D8_EXTRAPOLATION = (2.549, -0.683, 0.183, -0.04904)
 _HEX_CORNERS = np.array(
     [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
 )
-# ccx's 6-node triangle: midside nodes 4..6 on the edges 1-2, 2-3, 3-1.
+# ccx's 6-node triangle: midside nodes 4..6 on the edges 1-2, 2-3, 3-1; 8-node quadrilateral:
+# midside nodes 5..8 on 1-2, 2-3, 3-4, 4-1.
 _TRI_EDGES = ((0, 1), (1, 2), (2, 0))
+_QUAD_EDGES = ((0, 1), (1, 2), (2, 3), (3, 0))
 # ccx C3D10 midside nodes 5..10 sit on the edges between these ccx corners (manual fig. 55).
 _TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
 # ccx C3D20 midside nodes 9..20 (manual): on 1-2, 2-3, 3-4, 4-1, 5-6, 6-7, 7-8, 8-5, 1-5, 2-6,
@@ -185,6 +187,14 @@ def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
         return _c3d20_extrapolation(points)
     if element_type[:3] in TWO_D_MODELS and element_type[3:] == "3":
         return np.ones((3, 1))
+    if element_type[:3] in TWO_D_MODELS and element_type[3:] in ("8", "8R"):
+        # corners: the bilinear field through the 2x2 points, or the quad8 field through the
+        # 3x3 points (least squares, exact for quad8 fields); midside nodes the means
+        if points.shape[0] == 4:
+            corner = nodal_extrapolation(element_type[:3] + "4", points)
+        else:
+            corner = np.linalg.pinv(_quad8_shapes(points))[:4]
+        return np.vstack([corner, [(corner[a] + corner[b]) / 2 for a, b in _QUAD_EDGES]])
     if element_type[:3] in TWO_D_MODELS and element_type[3:] == "6":
         # the linear field through the 3 point values, at the corners; midside nodes the means
         affine = np.column_stack([np.ones(3), points])
@@ -217,6 +227,16 @@ C3D20_EXTRAPOLATION = {
     "onn": 0.0000019, "omn": 0.0000015, "ofn": -0.0000001, "omm": 0.0000004, "ofm": 0.0000012,
     "off": 0.0000018,
 }  # fmt: skip
+
+
+def _quad8_shapes(points: np.ndarray) -> np.ndarray:
+    """``(q, 8)`` quad8 serendipity shape functions at unit-square ``points`` (ccx node order)."""
+    xi, eta = 2 * points[:, 0] - 1, 2 * points[:, 1] - 1
+    corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+    out = [(1 + xi * a) * (1 + eta * b) * (xi * a + eta * b - 1) / 4 for a, b in corners]
+    out += [(1 - xi**2) * (1 - eta) / 2, (1 + xi) * (1 - eta**2) / 2]
+    out += [(1 - xi**2) * (1 + eta) / 2, (1 - xi) * (1 - eta**2) / 2]
+    return np.column_stack(out)
 
 
 def _c3d20_extrapolation(points: np.ndarray) -> np.ndarray:
@@ -262,6 +282,8 @@ for _family in TWO_D_MODELS:
     _POINTS[_family + "4"] = [[(x + 1) / 2, (y + 1) / 2] for y in (-_G, _G) for x in (-_G, _G)]
     _POINTS[_family + "3"] = [[1 / 3, 1 / 3]]
     _POINTS[_family + "6"] = [[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]]
+    _POINTS[_family + "8"] = [[(x + 1) / 2, (y + 1) / 2] for y in _G3 for x in _G3]
+    _POINTS[_family + "8R"] = _POINTS[_family + "4"]
 
 
 def _element_type(
@@ -281,7 +303,8 @@ def _element_type(
     print_rows: list[int] | None = None,
 ) -> ElementType:
     points = frozen_array(_POINTS[name], np.float64)
-    midside_edges = {10: _TET_EDGES, 20: _HEX_EDGES, 6: _TRI_EDGES}.get(num_nodes, ())
+    midside = {10: _TET_EDGES, 20: _HEX_EDGES, 6: _TRI_EDGES, 8: _QUAD_EDGES}
+    midside_edges = midside[num_nodes] if num_nodes > num_corners else ()
     return ElementType(
         name,
         num_nodes,
@@ -417,6 +440,28 @@ ELEMENT_TYPES: dict[str, ElementType] = {
         )
         for family in TWO_D_MODELS
     },
+    # 8-node quadrilaterals (midside nodes 5..8 on 1-2, 2-3, 3-4, 4-1): Q2 quadrilaterals whose
+    # centre the model adds and constrains to the serendipity space (fem/serendipity_quad.py);
+    # ccx expands them into C3D20 (27 points: 3 layers of 3x3) or C3D20R (8: 2 layers of 2x2).
+    # dolfinx Q2 quadrilateral edges are (v0,v1), (v0,v2), (v1,v3), (v2,v3).
+    **{
+        family + suffix: _element_type(
+            family + suffix,
+            8,
+            4,
+            "line3",
+            [[1, 2, 5], [2, 3, 6], [3, 4, 7], [4, 1, 8]],
+            cell="quadrilateral",
+            degree=2,
+            to_dolfinx=[0, 1, 3, 2, 4, 7, 5, 6],
+            mirrored_vertices=[1, 0, 2, 3],
+            quadrature_degree=quadrature,
+            frd_type=10,
+            print_rows=layers * list(range(points)),
+        )
+        for family in TWO_D_MODELS
+        for suffix, quadrature, points, layers in (("8", 4, 9, 3), ("8R", 2, 4, 2))
+    },
     # 6-node triangles (midside nodes 4 on 1-2, 5 on 2-3, 6 on 3-1), P2 triangles: ccx expands
     # them into C3D15 wedges and prints their 3 x 3 points (3 layers of the 3 in-plane points).
     # dolfinx P2 triangle edges are (v1,v2), (v0,v2), (v0,v1).
@@ -445,10 +490,10 @@ ELEMENT_TYPES: dict[str, ElementType] = {
 REFUSED_ELEMENTS = {
     "C3D8R": ": its one-point integration with hourglass control is not reproduced",
     **{
-        family + suffix: ": 8-node and reduced-integration 2D elements are not run yet "
-        "(3-, 4- and 6-node CPE, CPS and CAX elements are)"
+        family + suffix: ": its one-point integration with hourglass control is not reproduced "
+        "(3-, 4-, 6- and 8-node CPE, CPS and CAX elements run)"
         for family in TWO_D_MODELS
-        for suffix in ("4R", "8", "8R")
+        for suffix in ("4R",)
     },
     "C3D8I": ": its incompatible modes (extra internal displacement fields) are not reproduced",
 }

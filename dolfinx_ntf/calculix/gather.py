@@ -24,6 +24,7 @@ import ufl
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.serendipity import element_forces_on_nodes
+from dolfinx_ntf.fem.serendipity_quad import quad_forces_on_nodes
 from dolfinx_ntf.kernels.discrete_springs import AxialSpring
 
 from .deck import Deck
@@ -181,6 +182,9 @@ class CcxNumbering:
         if self.model.element_type.num_nodes == 20:  # C3D20: centre forces on the 20 nodes
             values = element_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 20, 3)
             dofs = dofs[:, :20]
+        elif gdim == 2 and self.model.element_type.num_nodes == 8:  # CPE8: the centre's too
+            values = quad_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 8, 2)
+            dofs = dofs[:, :8]
         rows = self.deck.node_index(self.model.dof_node[dofs])
         return self.model.cell_element[cells], rows, _padded(values)
 

@@ -32,7 +32,7 @@ from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.contact.evaluation import area_block, evaluate_pair
 from dolfinx_ntf.contact.pair import ContactPair, PairState
 from dolfinx_ntf.contact.pairing import Pairing
-from dolfinx_ntf.fem import serendipity
+from dolfinx_ntf.fem import serendipity, serendipity_quad
 from dolfinx_ntf.fem.bulk_jacobian import BulkJacobian
 from dolfinx_ntf.fem.constraints import (
     ConstraintElimination,
@@ -221,6 +221,7 @@ class ContactProblem:
         )
         #: Face centres of C3D20's space: its quad9 faces are quad8 faces (docs/method.md §13.5).
         self._face_centres = serendipity.face_centres(constraints)
+        self._quad_centres = serendipity_quad.has_quad_centres(constraints)  # CPE8 ... (§23)
         #: The pairs' states, the halo and the search, in one
         #: :class:`~dolfinx_ntf.contact.pairing.Pairing`.
         self.pairing = Pairing(
@@ -330,6 +331,8 @@ class ContactProblem:
         values = vector.array_r  # owned entries: broken dofs belong to one cell each
         if self._face_centres.size:  # C3D20: the forces of its 20 nodes (docs/method.md §13.5)
             values = serendipity.element_forces_on_nodes(values, self._element_space)
+        elif self._quad_centres:  # 8-node quadrilaterals: the forces of their 8 nodes
+            values = serendipity_quad.quad_forces_on_nodes(values, self._element_space)
         total, count = float(np.abs(values).sum()), values.size
         for state in self.states:
             if state.evaluation is not None and state.num_springs:

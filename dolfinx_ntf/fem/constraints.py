@@ -114,6 +114,8 @@ class LinearConstraintBlock:
             a Dirichlet condition, instead of refusing it as redundant (surface ties and cyclic
             symmetry on a fixed boundary, §19: the prescribed values are the caller's to keep
             consistent).
+        block_size: Components per node of the space (3; 2 on a 2D mesh, e.g. the centres of
+            8-node quadrilaterals, §23).
     """
 
     nodes: np.ndarray
@@ -122,6 +124,7 @@ class LinearConstraintBlock:
     values: np.ndarray | None = None
     name: str = "constraint block"
     drop_prescribed: bool = False
+    block_size: int = 3
 
     def __post_init__(self) -> None:
         """Check shapes and values (``ValueError`` naming the block)."""
@@ -142,8 +145,9 @@ class LinearConstraintBlock:
             raise ValueError(f"{label}: nodes must be (K, m) with m > 0 and values (K,)")
         if nodes.size and nodes.min() < 0:
             raise ValueError(f"{label}: node {int(nodes.min())} is not a mesh node")
-        if np.any((components < 0) | (components > 2)):
-            raise ValueError(f"{label}: components must be 0, 1 or 2")
+        if np.any((components < 0) | (components >= self.block_size)):
+            allowed = "0, 1 or 2" if self.block_size == 3 else "0 or 1"
+            raise ValueError(f"{label}: components must be {allowed}")
         if not (np.all(np.isfinite(coefficients)) and np.all(np.isfinite(values))):
             raise ValueError(f"{label}: coefficients and values must be finite")
         object.__setattr__(self, "nodes", nodes)
@@ -157,8 +161,8 @@ class LinearConstraintBlock:
 
     @property
     def dofs(self) -> np.ndarray:
-        """``(K, m)`` unrolled dofs ``3 node + component``."""
-        return 3 * self.nodes + self.components
+        """``(K, m)`` unrolled dofs ``block_size node + component``."""
+        return self.block_size * self.nodes + self.components
 
 
 Constraints = typing.Sequence[LinearConstraint | LinearConstraintBlock]

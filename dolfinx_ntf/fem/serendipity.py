@@ -130,7 +130,7 @@ def face_centres(constraints: typing.Sequence) -> np.ndarray:
     found = [
         c.nodes[np.all(np.isclose(c.coefficients, _FACE_ROW), axis=1), 0]
         for c in constraints
-        if isinstance(c, LinearConstraintBlock) and c.nodes.shape[1] == 9
+        if isinstance(c, LinearConstraintBlock) and c.nodes.shape[1] == 9 and c.block_size == 3
     ]
     return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int64)
 

@@ -64,7 +64,7 @@ def test_two_d_faces_are_the_counterclockwise_edges(name):
     etype = ELEMENT_TYPES[name]
     n = etype.num_corners
     assert etype.faces[:, :2].tolist() == [[k, (k + 1) % n] for k in range(n)]
-    if etype.num_nodes > n:  # 6-node triangles: the edge's midside node n + k
+    if etype.num_nodes > n:  # 6- and 8-node elements: the edge's midside node n + k
         assert etype.faces[:, 2].tolist() == [n + k for k in range(n)]
         assert [tuple(e) for e in etype.midside_edges] == [(k, (k + 1) % n) for k in range(n)]
     assert (
@@ -72,6 +72,6 @@ def test_two_d_faces_are_the_counterclockwise_edges(name):
         == {"CPE": "plane strain", "CPS": "plane stress", "CAX": "axisymmetric"}[name[:3]]
     )
     # ccx prints its expanded element's points: each layer repeats the in-plane points (two
-    # layers of C3D8 and C3D6, three of the C3D15 of a 6-node triangle)
-    layers = 3 if etype.num_nodes == 6 else 2
+    # layers of C3D8, C3D6 and C3D20R, three of C3D15 and C3D20)
+    layers = 3 if etype.num_nodes == 6 or etype.name.endswith("8") else 2
     assert etype.print_rows.tolist() == layers * list(range(etype.integration_points.shape[0]))

@@ -72,6 +72,10 @@ PLANE_STRAIN = {
     "cpe3_pressure": Deck2D("cpe3", "CPE3", load="dload"),
     "cpe6_linear": Deck2D("cpe6", "CPE6"),
     "cpe6_exponential": Deck2D("cpe6", "CPE6", law="EXPONENTIAL"),
+    "cpe8_linear": Deck2D("cpe8", "CPE8"),
+    "cpe8r_linear": Deck2D("cpe8r", "CPE8R"),
+    "cpe8r_exponential": Deck2D("cpe8r", "CPE8R", law="EXPONENTIAL"),
+    "cpe8r_pressure": Deck2D("cpe8r", "CPE8R", load="dload"),
 }
 
 
@@ -221,7 +225,10 @@ def test_unsupported_two_d_features_are_refused(tmp_path):
     deck = Deck2D("refused", "CPE4")
     text = deck.write(tmp_path).read_text()
     _refused(
-        tmp_path, text.replace("TYPE=CPE4", "TYPE=CPE8"), DeckError, "CPE8 is not supported: 8-node"
+        tmp_path,
+        text.replace("TYPE=CPE4", "TYPE=CPE4R"),
+        DeckError,
+        "CPE4R is not supported: its one",
     )
     friction = text.replace("*CONTACT PAIR", "*FRICTION\n0.2, 1e5\n*CONTACT PAIR")
     _refused(tmp_path, friction, NotImplementedError, "FRICTION with CPE4 elements")

@@ -26,6 +26,7 @@ from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
@@ -438,6 +439,8 @@ def build_model(
     constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
+    if etype.tdim == 2 and etype.num_nodes == 8:
+        constraints += quad_serendipity_constraints(V)  # CPE8's space (§23)
     for tie in tie_blocks:  # every process read them: rank 0 gives them
         rows = slice(None) if comm.rank == 0 else slice(0)
         given = LinearConstraintBlock(

@@ -21,6 +21,7 @@ import dolfinx.mesh
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.serendipity import add_centres
+from dolfinx_ntf.fem.serendipity_quad import add_quad_centres
 
 from ..deck import Deck, ElementBlock, Location
 from ..elements import ELEMENT_TYPES
@@ -118,13 +119,17 @@ def create_mesh(deck: Deck, block: ElementBlock, comm: MPI.Comm) -> dolfinx.mesh
     gdim = block.type.tdim  # ccx's 2D elements: a 2D mesh of the plane z = 0 (§23)
     domain = compat.coordinate_element(block.type.cell, block.type.degree, gdim)
     serendipity = block.type.num_nodes == 20  # C3D20(R): 27-node cells (docs/method.md §13.5)
+    quad8 = gdim == 2 and block.type.num_nodes == 8  # CPE8 ...: 9-node cells (§23)
+    width = 27 if serendipity else (9 if quad8 else block.type.num_nodes)
     if comm.rank == 0:
         cells = deck.node_index(block.connectivity)[:, block.type.to_dolfinx]
         x = np.asarray(deck.node_coords, dtype=np.float64)[:, :gdim].copy()
         if serendipity:
             cells, x = add_centres(cells, x)
+        if quad8:
+            cells, x = add_quad_centres(cells, x)
     else:
-        cells = np.zeros((0, 27 if serendipity else block.type.num_nodes), dtype=np.int64)
+        cells = np.zeros((0, width), dtype=np.int64)
         x = np.zeros((0, gdim))
     return compat.create_mesh(comm, cells.astype(np.int64), x, domain)
 
