@@ -97,7 +97,7 @@ def global_constraints(
     owner of each id gives its global block dof (docs/method.md §14.9).
 
     Args:
-        V: The displacement space (block size 3).
+        V: The displacement space (block size 3, or 2 on a 2D mesh).
         constraints: This process's constraints, whose ``nodes`` are node ids. Each process may
             give any constraints; one given by several processes counts once in ``ContactProblem``.
         node_ids: Id of each local block dof of ``V`` (owned, then ghosts; -1 for none), the same
@@ -184,7 +184,7 @@ def global_constraint_block(
     any rows (an empty block where it has none), on nodes any processes hold.
 
     Args:
-        V: The displacement space (block size 3).
+        V: The displacement space (block size 3, or 2 on a 2D mesh).
         block: This process's rows, whose ``nodes`` are node ids.
         node_ids: Id of each local block dof of ``V`` (see :func:`global_constraints`).
 
@@ -227,6 +227,7 @@ def gather_constraints(
     comm: MPI.Comm,
     constraints: typing.Sequence[LinearConstraint | LinearConstraintBlock],
     global_dofs: np.ndarray,
+    block_size: int = 3,
 ) -> list[LinearConstraint | LinearConstraintBlock]:
     """Every process's constraints with global dofs, each once, in process order. Collective.
 
@@ -238,6 +239,7 @@ def gather_constraints(
         constraints: This process's constraints (local block dofs, ghosts included, or
             :class:`GlobalLinearConstraint`).
         global_dofs: Global unrolled dof of every local unrolled dof.
+        block_size: Components per node (3; 2 on a 2D mesh: constraint blocks only, §23).
     """
     local, error = [], None
     for c in constraints:
@@ -251,7 +253,8 @@ def gather_constraints(
             node = int(c.nodes.max())
             error = ValueError(
                 f"{getattr(c, 'label', c.name)}: node {node} is not a node of process "
-                f"{comm.rank} (local nodes 0..{global_dofs.size // 3 - 1}, ghosts included)"
+                f"{comm.rank} (local nodes 0..{global_dofs.size // block_size - 1}, ghosts "
+                "included)"
             )
             break
         if isinstance(c, LinearConstraintBlock):
@@ -278,13 +281,17 @@ def gather_constraints(
             if key in seen:
                 continue
             seen.add(key)
+            if block_size != 3:
+                raise NotImplementedError(f"{name}: single constraints on a 2D space")
             result.append(LinearConstraint(dofs // 3, dofs % 3, coefficients, value, name))
     for ((name, drop), _), (position, parts) in blocks.items():
-        result[position] = _merged_block(name, parts, drop)
+        result[position] = _merged_block(name, parts, drop, block_size)
     return result
 
 
-def _merged_block(name: str, parts: list, drop_prescribed: bool) -> LinearConstraintBlock:
+def _merged_block(
+    name: str, parts: list, drop_prescribed: bool, block_size: int = 3
+) -> LinearConstraintBlock:
     """One block of the rows of ``parts`` ``(dofs, coefficients, values)``, each row once."""
     dofs = np.vstack([d for d, _, _ in parts])
     coefficients = np.vstack([np.broadcast_to(c, d.shape) for d, c, _ in parts])
@@ -298,12 +305,13 @@ def _merged_block(name: str, parts: list, drop_prescribed: bool) -> LinearConstr
     _, first = np.unique(keys, axis=0, return_index=True)
     rows = np.sort(first)
     return LinearConstraintBlock(
-        dofs[rows] // 3,
-        dofs[rows] % 3,
+        dofs[rows] // block_size,
+        dofs[rows] % block_size,
         coefficients[rows],
         values[rows],
         name=name,
         drop_prescribed=drop_prescribed,
+        block_size=block_size,
     )
 
 
@@ -315,7 +323,7 @@ def distributed_elimination(
     """The elimination of all processes' constraints on ``V``'s distributed layout. Collective.
 
     Args:
-        V: The displacement space (block size 3).
+        V: The displacement space (block size 3, or 2 on a 2D mesh).
         constraints: This process's constraints (local numbering).
         prescribed: This process's local unrolled Dirichlet dofs (ghosts included).
     """
@@ -323,17 +331,18 @@ def distributed_elimination(
     index_map = V.dofmap.index_map
     num_local = index_map.size_local + index_map.num_ghosts
     nodes = index_map.local_to_global(np.arange(num_local, dtype=np.int32)).astype(np.int64)
-    global_dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
-    everything = gather_constraints(comm, constraints, global_dofs)
+    bs = V.dofmap.index_map_bs
+    global_dofs = (bs * nodes[:, None] + np.arange(bs)).ravel()
+    everything = gather_constraints(comm, constraints, global_dofs, bs)
     terms = np.unique(np.concatenate([c.dofs.ravel() for c in everything]))
     fixed = global_dofs[np.asarray(prescribed, dtype=np.int64)]
     in_terms = np.concatenate(comm.allgather(fixed[np.isin(fixed, terms)]))
-    owned = fixed[np.asarray(prescribed) < 3 * index_map.size_local]
+    owned = fixed[np.asarray(prescribed) < bs * index_map.size_local]
     return ConstraintElimination(
-        3 * index_map.size_global,
+        bs * index_map.size_global,
         everything,
         np.union1d(in_terms, owned),
         comm,
-        first_dof=3 * int(index_map.local_range[0]),
-        num_owned=3 * index_map.size_local,
+        first_dof=bs * int(index_map.local_range[0]),
+        num_owned=bs * index_map.size_local,
     )

@@ -202,9 +202,10 @@ def test_axisymmetric_contact_with_ccx_ring_areas(tmp_path):
 
 @needs_ccx
 @pytest.mark.serial
-def test_quadratic_axisymmetric_contact_with_ccx_shares(tmp_path):
-    """CAX6 with ccx's shares: U 2.6e-5 (after the 1-degree turn), CSTR 0, RF and CELS 2.0e-4."""
-    blocks = _cax_results(tmp_path, "CAX6", area_weights="ccx")
+@pytest.mark.parametrize("element", ["CAX6", "CAX8", "CAX8R"])
+def test_quadratic_axisymmetric_contact_with_ccx_shares(tmp_path, element):
+    """With ccx's shares: U 2.7e-5 (after the 1-degree turn), CSTR 3e-7, RF and CELS 2.0e-4."""
+    blocks = _cax_results(tmp_path, element, area_weights="ccx")
     reference, mine = blocks[("U", 1.0)]
     turned = mine.values.copy()
     turned[:, 0] *= np.cos(HALF_SECTOR)
@@ -249,7 +250,7 @@ def test_unsupported_two_d_features_are_refused(tmp_path):
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("element", ["CPE4", "CAX4"])
+@pytest.mark.parametrize("element", ["CPE4", "CAX4", "CPE8R", "CAX6"])
 def test_two_d_decks_give_the_serial_files_on_all_processes(tmp_path, element):
     """The .dat of a 2D deck on all processes is the serial run's, digit for digit."""
     root = Path(COMM.bcast(str(tmp_path)))
