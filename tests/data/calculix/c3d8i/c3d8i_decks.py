@@ -2,7 +2,7 @@
 
 ``cantilever_deck``: a clamped beam of 8 x 1 x 2 hexahedra with a tip load in z, its inner nodes
 optionally moved off the grid (distorted cells, not parallelepipeds). ``contact_deck``: a beam of
-6 x 1 x 1 hexahedra pressed at its ends onto a block of 4 x 2 x 2 (node-to-surface contact, the
+6 x 1 x 1 hexahedra pressed at its ends onto a block of 4 x 2 x 2 in 2 increments (contact, the
 beam's bottom the slave face S1, the block's top the master S2; non-matching meshes). Both write
 every print and file request the tests compare.
 """
@@ -68,7 +68,7 @@ def cantilever_deck(element: str = "C3D8I", *, distorted: bool = False) -> str:
 
 
 def contact_deck(element: str = "C3D8I") -> str:
-    """A beam pressed at its ends onto a block: node-to-surface contact, LINEAR law, 2 increments."""
+    """A beam pressed at its ends onto a block: node-to-surface contact, LINEAR law."""
     block, block_points, block_cells = _grid(1, (0, 0, 0), (4.0, 1.0, 1.0), (4, 2, 2))
     beam, beam_points, beam_cells = _grid(101, (0.3, 0.25, 1.0), (3.0, 0.5, 0.5), (6, 1, 1))
     ends = np.concatenate([beam[-1, :, 0], beam[-1, :, -1]])
