@@ -21,6 +21,7 @@ from c3d8i_decks import cantilever_deck, contact_deck, write_deck
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import read_deck
+from dolfinx_ntf.calculix.frd import read_frd
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.model import build_model
 
@@ -81,6 +82,14 @@ def test_cantilever_matches_ccx_where_c3d8_locks(tmp_path, distorted):
         if not distorted:
             assert _tip(blocks) == pytest.approx(0.01919, rel=0.06)
         assert _tip(locked) < 0.75 * _tip(blocks)  # shear locking
+        # the .frd: DISP and the extrapolated STRESS to ccx's 6 printed digits (ccx's error
+        # estimator block ERROR is not written, docs/method.md §13.2)
+        ccx_frd, ntf_frd = read_frd(root / "ccx" / "beam.frd"), read_frd(root / "ntf" / "beam.frd")
+        assert [b.name for b in ccx_frd.blocks] == ["DISP", "STRESS", "ERROR"]
+        assert [b.name for b in ntf_frd.blocks] == ["DISP", "STRESS"]
+        for a, b in zip(ccx_frd.blocks, ntf_frd.blocks):
+            scale = np.abs(a.values).max()
+            assert np.abs(a.values - b.values).max() <= 2e-6 * scale, a.name
 
 
 @pytest.mark.mpi
