@@ -130,3 +130,29 @@ def test_unsupported_steps_are_refused(tmp_path, old, new, what):
     deck = read_deck(path)
     with pytest.raises(NotImplementedError, match=rf"refused.inp:\d+: {what} with C3D8I"):
         build_model(deck, MPI.COMM_SELF)
+
+
+@pytest.mark.ccx
+@pytest.mark.skipif(shutil.which("ccx-2.23") is None, reason="ccx 2.23 is not installed (sid)")
+def test_ccx_223_takes_taylors_modes(tmp_path, monkeypatch):
+    """ccx 2.23's C3D8I is Taylor's: equal to ``taylor=True`` on distorted cells (U, RF, S).
+
+    ccx 2.20 leaves the scaling out (the runner's default); 2.23 differs from it by 1.6 % in U here.
+    """
+    import dolfinx_ntf.calculix.model.calculix_model as calculix_model
+    from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
+
+    def taylor_modes(V, mu, lmbda, taylor):
+        return IncompatibleModes(V, mu, lmbda, taylor=True)
+
+    monkeypatch.setattr(calculix_model, "IncompatibleModes", taylor_modes)
+    (tmp_path / "ccx").mkdir()
+    (tmp_path / "ntf").mkdir()
+    text = cantilever_deck("C3D8I", distorted=True)
+    write_deck(tmp_path / "ccx", "beam", text)
+    write_deck(tmp_path / "ntf", "beam", text)
+    run_ccx(tmp_path / "ccx", "beam", timeout=120, ccx="ccx-2.23")
+    assert run_job("beam", tmp_path / "ntf", comm=MPI.COMM_SELF, progress=False).completed
+    reference = [b for b in read_dat(tmp_path / "ccx" / "beam.dat") if b.name in ("U", "RF", "S")]
+    blocks = [b for b in read_dat(tmp_path / "ntf" / "beam.dat") if b.name in ("U", "RF", "S")]
+    _compare(reference, blocks, {1.0: 1e-6})
