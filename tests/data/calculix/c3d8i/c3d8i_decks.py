@@ -1,7 +1,8 @@
 """Generated C3D8I decks for the deck runner's tests against ccx 2.20 (docs/method.md §22).
 
-``cantilever_deck``: a clamped beam of 8 x 1 x 2 hexahedra with a tip load in z, its inner nodes
-optionally moved off the grid (distorted cells, not parallelepipeds). ``contact_deck``: a beam of
+``cantilever_deck``: a clamped beam of 8 x 1 x 2 hexahedra with a tip load in z (and optionally a
+pressure on its top), its inner nodes optionally moved off the grid (distorted cells, not
+parallelepipeds). ``contact_deck``: a beam of
 6 x 1 x 1 hexahedra pressed at its ends onto a block of 4 x 2 x 2 in 2 increments (contact, the
 beam's bottom the slave face S1, the block's top the master S2; non-matching meshes). Both write
 every print and file request the tests compare.
@@ -51,8 +52,13 @@ def _elements(first, cells) -> list[str]:
     return [f"{first + e}, " + ", ".join(map(str, c)) for e, c in enumerate(cells.tolist())]
 
 
-def cantilever_deck(element: str = "C3D8I", *, distorted: bool = False) -> str:
-    """A clamped beam 8 x 1 x 2 under a tip force in z (1 in total, on the 6 tip nodes)."""
+def cantilever_deck(
+    element: str = "C3D8I", *, distorted: bool = False, pressure: float | None = None
+) -> str:
+    """A clamped beam 8 x 1 x 2 under a tip force in z (1 in total, on the 6 tip nodes).
+
+    ``pressure``: also a ``*DLOAD`` pressure on the top faces (S2 of the upper layer).
+    """
     rng = np.random.default_rng(7) if distorted else None
     ids, points, cells = _grid(1, (0, 0, 0), (10.0, 1.0, 1.0), (8, 1, 2), rng, 0.2)
     fixed, tip = ids[:, :, 0].ravel(), ids[:, :, -1].ravel()
@@ -61,7 +67,10 @@ def cantilever_deck(element: str = "C3D8I", *, distorted: bool = False) -> str:
     lines += ["*NSET, NSET=FIX", ", ".join(map(str, fixed)), "*NSET, NSET=TIP"]
     lines += [", ".join(map(str, tip)), "*MATERIAL, NAME=STEEL", "*ELASTIC", f"{E}, {NU}"]
     lines += ["*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL", "*STEP", "*STATIC", "*BOUNDARY"]
-    lines += ["FIX, 1, 3", "*CLOAD", f"TIP, 3, {1.0 / tip.size!r}"]
+    lines += ["FIX, 1, 3"]
+    if pressure is not None:
+        lines += ["*DLOAD", *[f"{e}, P2, {pressure!r}" for e in range(9, 17)]]
+    lines += ["*CLOAD", f"TIP, 3, {1.0 / tip.size!r}"]
     lines += ["*NODE PRINT, NSET=NALL", "U", "*NODE PRINT, NSET=FIX, TOTALS=YES", "RF"]
     lines += ["*EL PRINT, ELSET=EALL", "S", "*NODE FILE", "U", "*EL FILE", "S", "*END STEP"]
     return "\n".join(lines) + "\n"
