@@ -17,6 +17,7 @@ from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
@@ -113,6 +114,7 @@ __all__ = [
     "Friction",
     "GapConductance",
     "GlobalLinearConstraint",
+    "IncompatibleModes",
     "IncrementResult",
     "LinearConstraint",
     "LinearConstraintBlock",
