@@ -242,26 +242,19 @@ class Pairing:
         )
 
     def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
-        """A pair on a 2D mesh: springs on master edges, rigid lines or circles (frictionless).
+        """A pair on a 2D mesh: springs on master edges, rigid lines or circles.
 
-        On several processes the surfaces are distributed as in 3D (docs/method.md §14.1): the
-        master edges of every process are gathered on each, the slave nodes go to their owners
-        with every slave edge holding one of them. Collective.
+        Friction works on meshed master edges (one tangent direction, docs/method.md §17); like
+        in 3D it is refused against a rigid master. On several processes the surfaces are
+        distributed as in 3D (docs/method.md §14.1): the master edges of every process are
+        gathered on each, the slave nodes go to their owners with every slave edge holding one of
+        them. Collective.
         """
         V = self.u.function_space
         comm = V.mesh.comm
-        missing = [
-            feature
-            for feature, used in (
-                ("friction", pair.interaction.friction is not None),
-                ("ADJUST", pair.adjust is not None),
-            )
-            if used
-        ]
-        if missing:
+        if pair.adjust is not None:
             raise NotImplementedError(
-                f"{name}: 2D contact does not support {', '.join(missing)} yet (2D meshes have "
-                "frictionless springs against meshed edges, rigid lines and circles)"
+                f"{name}: 2D contact does not support ADJUST yet (ContactPair(adjust=...))"
             )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if pair.axisymmetric:
@@ -273,6 +266,11 @@ class Pairing:
                     "NodeSurface without midside_nodes"
                 )
         if isinstance(pair.master, RigidSurface):  # a line or a circle in the plane (§15.1)
+            if pair.interaction.friction is not None:
+                raise NotImplementedError(
+                    f"{name}: friction against a rigid analytical master is not supported yet "
+                    "(in 2D as in 3D); use a meshed master"
+                )
             _check_in_plane(pair.master, f"{name} master")
             if self.halo is not None:  # the owned slave nodes and their edges
                 slave = collectives.collectively(

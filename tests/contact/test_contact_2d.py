@@ -2,7 +2,7 @@
 
 A patch test (two blocks, uniform pressure transmitted exactly on matching meshes, P1 and P2), the
 plane-strain Hertz line contact of a cylinder on a block (half model), and the clear errors for
-what 2D does not support yet.
+what 2D does not support yet (friction: tests/contact/test_friction_2d.py).
 """
 
 from __future__ import annotations
@@ -232,20 +232,14 @@ def test_hertz_line_contact_plane_strain() -> None:
     assert contact_force == pytest.approx(LINE_LOAD / 2, rel=1e-8)
 
 
-@pytest.mark.parametrize(
-    ("options", "feature"),
-    [
-        (
-            {
-                "interaction": ntf.SurfaceInteraction(
-                    ntf.LinearLaw(1e4, 1e-2), ntf.Friction(0.3, 1e4)
-                )
-            },
-            "friction",
-        ),
-        ({"adjust": 0.01}, "ADJUST"),
-    ],
-)
-def test_unsupported_2d_features_are_named(options: dict, feature: str) -> None:
-    with pytest.raises(NotImplementedError, match=f"2D contact does not support {feature}"):
-        _blocks_problem(1, **options)
+def test_unsupported_2d_features_are_named() -> None:
+    with pytest.raises(NotImplementedError, match="2D contact does not support ADJUST"):
+        _blocks_problem(1, adjust=0.01)
+
+
+def test_friction_against_a_rigid_line_is_refused_2d() -> None:
+    """As in 3D: friction needs a meshed master; the error names the pair and the feature."""
+    interaction = ntf.SurfaceInteraction(ntf.LinearLaw(1e4, 1e-2), ntf.Friction(0.3, 1e4))
+    line = ntf.RigidPlane((0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    with pytest.raises(NotImplementedError, match="pair 1: friction against a rigid"):
+        _blocks_problem(1, interaction=interaction, master=line)
