@@ -221,15 +221,7 @@ class Pairing:
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
-        adjust_nodes = None
-        if isinstance(pair.adjust, NodeSurface):
-            adjust_nodes = collectives.collectively(
-                comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
-            ).nodes
-            if self.halo is not None:  # the union over processes, as extended nodes
-                held = self.halo.local_global[adjust_nodes]
-                adjust_nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
-                adjust_nodes = adjust_nodes[adjust_nodes >= 0]
+        adjust_nodes = self._adjust_nodes(name, pair)
         return PairState(
             pair,
             slave,
@@ -252,10 +244,6 @@ class Pairing:
         """
         V = self.u.function_space
         comm = V.mesh.comm
-        if pair.adjust is not None:
-            raise NotImplementedError(
-                f"{name}: 2D contact does not support ADJUST yet (ContactPair(adjust=...))"
-            )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if pair.axisymmetric:
             midside = slave.faceless is not None and bool(np.any(slave.faceless))
@@ -266,10 +254,10 @@ class Pairing:
                     "NodeSurface without midside_nodes"
                 )
         if isinstance(pair.master, RigidSurface):  # a line or a circle in the plane (§15.1)
-            if pair.interaction.friction is not None:
+            if pair.interaction.friction is not None or pair.adjust is not None:
                 raise NotImplementedError(
-                    f"{name}: friction against a rigid analytical master is not supported yet "
-                    "(in 2D as in 3D); use a meshed master"
+                    f"{name}: friction and ADJUST against a rigid analytical master are not "
+                    "supported yet (in 2D as in 3D); use a meshed master"
                 )
             _check_in_plane(pair.master, f"{name} master")
             if self.halo is not None:  # the owned slave nodes and their edges
@@ -314,8 +302,26 @@ class Pairing:
         )
         return PairState(
             pair, slave, master_faces, master, np.zeros(slave.nodes.size), friction=friction,
-            was_active=pair.active,
+            was_active=pair.active, adjust_nodes=self._adjust_nodes(name, pair),
         )  # fmt: skip
+
+    def _adjust_nodes(self, name: str, pair: ContactPair) -> np.ndarray | None:
+        """The nodes of an ADJUST node set as extended nodes (None: a distance, or no ADJUST).
+
+        Collective: the node set is resolved on every process and joined over them.
+        """
+        if not isinstance(pair.adjust, NodeSurface):
+            return None
+        V = self.u.function_space
+        comm = V.mesh.comm
+        nodes = collectives.collectively(
+            comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
+        ).nodes
+        if self.halo is not None:  # the union over processes, as extended nodes
+            held = self.halo.local_global[nodes]
+            nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
+            nodes = nodes[nodes >= 0]
+        return nodes
 
     def _planar_slave(self, name: str, pair: ContactPair, slave: SlaveSurface) -> SlaveSurface:
         """The pair's thickness and model on a 2D slave surface.
@@ -681,7 +687,7 @@ class Pairing:
         move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
         count = self.u.function_space.mesh.comm.allreduce(int(np.count_nonzero(move)))
         if count:  # on every process: the moves reach ghost and halo copies (§14.6)
-            delta = -evaluation.gap[move, None] * evaluation.normal[move]
+            delta = planar_padded(-evaluation.gap[move, None] * evaluation.normal[move])
             move_reference_nodes(
                 self.u.function_space,
                 self._reference,

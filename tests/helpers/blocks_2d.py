@@ -53,15 +53,16 @@ PARTITIONS = {"graph": None, "bodies": by_body, "cut": cut_along_x}
 
 
 def two_rectangles(
-    comm=MPI.COMM_WORLD, *, upper_divisions=4, partition=None, upper_span=(0.0, 1.0)
+    comm=MPI.COMM_WORLD, *, upper_divisions=4, partition=None, upper_span=(0.0, 1.0), gap=0.0
 ):
     """The mesh and its facet tags (LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, SYMMETRY).
 
-    ``upper_span``: the x-range of the upper block (the whole lower block's by default).
+    ``upper_span``: the x-range of the upper block (the whole lower block's by default); ``gap``:
+    the upper block's bottom at y = gap.
     """
     p1, c1 = rectangle_grid((0.0, -0.5), (1.0, 0.5), (4, 2))
     (x0, x1) = upper_span
-    p2, c2 = rectangle_grid((x0, 0.0), (x1 - x0, 0.4), (upper_divisions, 2))
+    p2, c2 = rectangle_grid((x0, gap), (x1 - x0, 0.4), (upper_divisions, 2))
     points, cells = np.vstack([p1, p2]), np.vstack([c1, c2 + p1.shape[0]])
     if comm.rank != 0:
         points, cells = np.empty((0, 2)), np.empty((0, 3), dtype=np.int64)
@@ -79,8 +80,8 @@ def two_rectangles(
     values = np.zeros(exterior.size, dtype=np.int32)
     values[~in_upper & np.isclose(y, -0.5)] = LOWER_BOTTOM
     values[~in_upper & np.isclose(y, 0.0)] = LOWER_TOP
-    values[in_upper & np.isclose(y, 0.0)] = UPPER_BOTTOM
-    values[in_upper & np.isclose(y, 0.4)] = UPPER_TOP
+    values[in_upper & np.isclose(y, gap)] = UPPER_BOTTOM
+    values[in_upper & np.isclose(y, 0.4 + gap)] = UPPER_TOP
     values[np.isclose(x, 0.0)] = SYMMETRY
     keep = values > 0
     order = np.argsort(exterior[keep])
@@ -95,13 +96,18 @@ def patch_problem(
     upper_divisions=4,
     partition=None,
     rigid=False,
+    gap=0.0,
+    adjust=None,
 ):
     """The blocks' contact problem: (problem, pressure Constant, facet tags).
 
     ``rigid``: the upper block's bottom against the rigid line y = 0 instead of the lower block
-    (which then carries nothing).
+    (which then carries nothing). ``gap``: the upper block starts at y = gap; ``adjust``: the
+    pair's ADJUST, a distance or a callable giving the NodeSurface from the mesh.
     """
-    mesh, ft = two_rectangles(comm, upper_divisions=upper_divisions, partition=partition)
+    mesh, ft = two_rectangles(comm, upper_divisions=upper_divisions, partition=partition, gap=gap)
+    if callable(adjust):
+        adjust = adjust(mesh)
     V = compat.vector_space(mesh, "Lagrange", degree)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
@@ -118,6 +124,7 @@ def patch_problem(
         master or ntf.FacetSurface(ft, LOWER_TOP),
         ntf.SurfaceInteraction(law),
         thickness=thickness,
+        adjust=adjust,
     )
     bcs = [component_bc(V, 0, ft.find(SYMMETRY)), component_bc(V, 1, ft.find(LOWER_BOTTOM))]
     return ntf.ContactProblem(F, u, [pair], bcs), pressure, ft
