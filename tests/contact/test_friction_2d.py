@@ -4,7 +4,8 @@ The lower block's top is clamped, so every master edge stays on the x-axis and e
 normal is exactly (0, 1): in slip each spring carries |F_T| = mu F_N along x, so the contact force
 on the upper block satisfies F_x = mu F_y to round-off, and F_y is the pressure times the width
 (the block has no other vertical support). In stick F_x stays below mu F_y. Plane strain (P1 and
-P2) and axisymmetric; CHANGE FRICTION between steps; on several processes the serial answer.
+P2) and axisymmetric; CHANGE FRICTION between steps; the assembled Jacobian against central
+differences of the residual; on several processes the serial answer.
 """
 
 from __future__ import annotations
@@ -136,6 +137,51 @@ def test_change_friction_between_steps():
     assert -force[0] == pytest.approx(MU / 2 * force[1], rel=1e-12)
     # the slip history was kept: the accumulated slip did not restart from zero
     assert np.all(res.slip[:, 0] > 0.01)
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("degree", [1, 2])
+def test_global_jacobian_with_friction_matches_finite_differences(degree):
+    """The assembled Jacobian of a frictional 2D problem (some springs stick, some slip) is the
+    derivative of the residual at a fixed pairing and increment start, by central differences."""
+    from dolfinx_ntf import compat
+
+    problem, pressure, drag, _ = drag_problem(degree=degree)
+    press_and_drag(problem, pressure, drag, 0.004, increments=4)
+    (res,) = ntf.contact_results(problem)
+    assert 0 < res.sliding.sum() < res.node.size  # both states in the check
+    problem.iteration = 100  # past the re-pairing schedule: the pairing stays fixed
+    x = compat.petsc_vector(problem.u)
+    base = x.copy()
+    problem.form(x)
+    A = problem.ensure_matrix()
+    problem.J(x, A)
+    rng = np.random.default_rng(2)
+    step = x.copy()
+    step.array[:] = rng.standard_normal(step.array.size) * 1e-6
+    bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in problem.bcs])
+    step.array[bc_dofs] = 0.0
+    Jw = A.createVecLeft()
+    A.mult(step, Jw)
+
+    def residual(scale: float) -> np.ndarray:
+        x.array[:] = base.array + scale * step.array
+        problem.u.x.scatter_forward()
+        problem.form(x)
+        b = x.copy()
+        problem.F(x, b)
+        return b.array.copy()
+
+    h = 1e-3
+    fd = (residual(h) - residual(-h)) / (2 * h)
+    x.array[:] = base.array
+    problem.u.x.scatter_forward()
+    (after,) = ntf.contact_results(problem)
+    np.testing.assert_array_equal(after.sliding, res.sliding)  # no state crossed a kink
+    contact_rows = np.unique(2 * problem.states[0].element_nodes[:, :, None] + np.arange(2))
+    scale = np.abs(Jw.array[contact_rows]).max()
+    np.testing.assert_allclose(Jw.array, fd, rtol=0, atol=1e-7 * scale)
+    assert not A.isSymmetric(1e-8 * A.norm())  # friction: unsymmetric
 
 
 def _frictional_run(comm, partition, degree):
