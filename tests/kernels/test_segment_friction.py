@@ -196,3 +196,24 @@ def test_bad_friction_input_names_the_array():
     bad = FrictionInput(u, start[0][:3], start[1], start[2], 0.3, 1e3)
     with pytest.raises(ValueError, match="a_start"):
         _evaluate(edge_type, x, areas, LAWS["linear"], bad)
+
+
+@pytest.mark.parametrize("regime", sorted(REGIMES))
+@pytest.mark.parametrize("edge_name", sorted(EDGE_TYPES))
+def test_frictional_tangent_at_clamped_projections(edge_name, regime):
+    """Slave nodes beside the edge ends (ξ fixed at ±1): the exact tangent still matches."""
+    edge_type = EDGE_TYPES[edge_name]
+    x, u, areas, start = _springs(edge_type, 8, seed=26, depth=(0.005, 0.04))
+    end = np.where(np.arange(8) % 2, 1.0, -1.0)[:, None]
+    t_end = np.einsum("nj,njc->nc", edge_type.shape_derivatives(end), x[:, :-1])
+    q_end = np.einsum("nj,njc->nc", edge_type.shape_functions(end), x[:, :-1])
+    normal = np.stack([t_end[:, 1], -t_end[:, 0]], axis=1) / np.linalg.norm(t_end, axis=1)[:, None]
+    x[:, -1] = q_end - 0.02 * normal + 0.05 * end * t_end / np.linalg.norm(t_end, axis=1)[:, None]
+    mu, slope = REGIMES[regime]
+    data = FrictionInput(u, *start, mu=mu, stick_slope=slope)
+    ev = _evaluate(edge_type, x, areas, LAWS["linear"], data)
+    np.testing.assert_array_equal(ev.xi, end)
+    sliding = ev.tangential.sliding
+    assert np.all(sliding) if regime == "slip" else not np.any(sliding)
+    fd = _finite_difference(edge_type, x, u, areas, LAWS["linear"], data, h=1e-7)
+    assert _relative_error(ev.stiffness, fd).max() <= 1e-6
