@@ -184,6 +184,7 @@ def test_demo_pages_show_their_figures(site):
         "hertz_cylinder_2d",
         "impact",
         "sliding_block",
+        "sliding_block_2d",
         "frictional_punch",
     ):
         page = (site / "demos" / f"{demo}.html").read_text()
