@@ -17,6 +17,7 @@ from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.plasticity import J2Plasticity, mandel_strain
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
@@ -37,6 +38,7 @@ from dolfinx_ntf.kernels.laws import (
     SurfaceInteraction,
     TabularLaw,
 )
+from dolfinx_ntf.kernels.plasticity import IsotropicHardening
 from dolfinx_ntf.kernels.rigid import (
     RigidCylinder,
     RigidPlane,
@@ -114,6 +116,8 @@ __all__ = [
     "GapConductance",
     "GlobalLinearConstraint",
     "IncrementResult",
+    "IsotropicHardening",
+    "J2Plasticity",
     "LinearConstraint",
     "LinearConstraintBlock",
     "LinearLaw",
@@ -149,6 +153,7 @@ __all__ = [
     "input_node_ids",
     "kinetic_energy",
     "log_progress",
+    "mandel_strain",
     "reaction",
     "run_steps",
     "serendipity_constraints",

@@ -82,6 +82,11 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         ],
     ),
     (
+        "Plasticity",
+        "dolfinx_ntf",
+        ["J2Plasticity", "IsotropicHardening", "mandel_strain"],
+    ),
+    (
         "Rigid master surfaces",
         "dolfinx_ntf",
         ["RigidSurface", "RigidPlane", "RigidSphere", "RigidCylinder", "SignedDistanceSurface"],
