@@ -187,7 +187,7 @@ def quadrature_space(
     import basix.ufl
 
     element = basix.ufl.quadrature_element(
-        cell.cellname(), value_shape=tuple(shape), scheme="default", degree=degree
+        mesh.topology.cell_type.name, value_shape=tuple(shape), scheme="default", degree=degree
     )
     return dolfinx.fem.functionspace(mesh, element)
 
@@ -200,7 +200,7 @@ def quadrature_points(mesh: dolfinx.mesh.Mesh, degree: int) -> np.ndarray:
     """
     import basix
 
-    cell = basix.cell.string_to_type(mesh.topology.cell_type.name)
+    cell = getattr(basix.CellType, mesh.topology.cell_type.name)
     if _LEGACY:
         points, _ = basix.make_quadrature(basix.QuadratureType.Default, cell, degree)
     else:
