@@ -233,3 +233,83 @@ def test_bad_arguments() -> None:
         ntf.J2Plasticity(u, E, NU, (250.0, 0.0))
     with pytest.raises(ValueError, match="quadrature_degree"):
         ntf.J2Plasticity(u, E, NU, TABLE, quadrature_degree=-1)
+
+
+_CCX_NODES = np.array(
+    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float
+)
+#: A non-proportional strain path: tension with shear, a turn with partial elastic unloading,
+#: then tension past the table's last line.
+_PATH = (
+    np.array([[0.004, 0.002, 0.0], [0.002, -0.001, 0.0], [0.0, 0.0, -0.001]]),
+    np.array([[0.002, 0.002, 0.003], [0.002, 0.002, 0.0], [0.003, 0.0, -0.001]]),
+    np.array([[0.016, 0.002, 0.003], [0.002, -0.006, 0.0], [0.003, 0.0, -0.007]]),
+)
+
+
+def _ccx_path_deck() -> str:
+    """One C3D8 of the table's steel, every node prescribed to ``u = eps X`` in steps of ten
+    fixed increments (ccx ramps the boundary values linearly over each step)."""
+    nodes = "\n".join(f"{i + 1}, {x[0]}, {x[1]}, {x[2]}" for i, x in enumerate(_CCX_NODES))
+    table = "\n".join(f"{s}, {a}" for s, a in zip(TABLE.yield_stress, TABLE.plastic_strain))
+    steps = []
+    for eps in _PATH:
+        u = _CCX_NODES @ eps.T
+        values = "\n".join(
+            f"{n + 1}, {d + 1}, {d + 1}, {float(u[n, d])!r}" for n in range(8) for d in range(3)
+        )
+        steps.append(
+            f"*STEP, INC=1000\n*STATIC, DIRECT\n0.1, 1.\n*BOUNDARY\n{values}\n"
+            "*EL PRINT, ELSET=EALL\nS, PEEQ\n*END STEP"
+        )
+    return (
+        f"*NODE, NSET=NALL\n{nodes}\n*ELEMENT, TYPE=C3D8, ELSET=EALL\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"
+        f"*MATERIAL, NAME=STEEL\n*ELASTIC\n{E}, {NU}\n*PLASTIC\n{table}\n"
+        "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n" + "\n".join(steps) + "\n"
+    )
+
+
+def test_agrees_with_ccx(tmp_path) -> None:
+    """CalculiX's *PLASTIC on one C3D8 along a non-proportional strain path (past the table's
+    last line, where ccx keeps the yield stress constant, and through an elastic unloading at
+    the turn): the stresses and PEEQ at the 8 Gauss points agree with ccx's 7 printed digits at
+    every increment."""
+    from dolfinx_ntf.calculix.ccx import read_ccx_dat, run_ccx
+
+    (tmp_path / "path.inp").write_text(_ccx_path_deck())
+    run_ccx(tmp_path, "path", timeout=120)
+    blocks = read_ccx_dat(tmp_path, "path")
+    stresses = [b for b in blocks if b.name == "S"]
+    peeq = [b for b in blocks if b.name == "equivalent plastic strain"]
+    assert len(stresses) == len(peeq) == 10 * len(_PATH)
+
+    points, hexes = box_grid((0, 0, 0), (1, 1, 1), (1, 1, 1))
+    comm = MPI.COMM_SELF
+    mesh = compat.create_mesh(
+        comm, hexes.astype(np.int64), points, compat.coordinate_element("hexahedron")
+    )
+    u = dolfinx.fem.Function(compat.vector_space(mesh))
+    material = ntf.J2Plasticity(u, E, NU, TABLE)
+    r = 1 / np.sqrt(2)
+    previous = np.zeros((3, 3))
+    increment = 0
+    for eps in _PATH:
+        for t in np.arange(1, 11) / 10:
+            strain = previous + (eps - previous) * t
+            u.interpolate(lambda x, s=strain: s @ x)
+            material.increment_converged()  # the return map at u, committed
+            ours = material.stress.x.array.reshape(-1, 6) * [1, 1, 1, r, r, r]  # ccx: tensor
+            ccx = stresses[increment].values  # sxx, syy, szz, sxy, sxz, syz
+            assert ccx.shape == (8, 6)
+            scale = np.abs(ccx).max()
+            np.testing.assert_allclose(ours, np.broadcast_to(ccx[0], ours.shape), atol=5e-7 * scale)
+            np.testing.assert_allclose(ccx, ccx[0:1].repeat(8, axis=0), atol=1e-12 * scale)
+            np.testing.assert_allclose(
+                material.equivalent_plastic_strain,
+                peeq[increment].values[0, 0],
+                rtol=5e-7,
+                atol=1e-12,
+            )
+            increment += 1
+        previous = eps
+    assert material.equivalent_plastic_strain.min() > TABLE.plastic_strain[-1]  # past the table
