@@ -189,6 +189,83 @@ def test_uniaxial_bar_closed_form(hardening: ntf.IsotropicHardening) -> None:
     assert all(iterations == 2 for _, iterations in checked)
 
 
+def _plane_strain_reference(strains: np.ndarray) -> list[np.ndarray]:
+    """The kernel driven along ``eps_xx`` with ``eps_zz = 0`` and ``eps_yy`` such that
+    ``sigma_yy = 0`` (Newton on the algorithmic tangent): the stresses of a plane-strain bar."""
+    from dolfinx_ntf.kernels.plasticity import return_map
+
+    plastic, alpha, strain = np.zeros((1, 6)), np.zeros(1), np.zeros((1, 6))
+    out = []
+    for eps_x in strains:
+        strain[0, 0] = eps_x
+        for _ in range(30):
+            result = return_map(strain, plastic, alpha, E, NU, TABLE)
+            if abs(result.stress[0, 1]) < 1e-12 * SIGMA_Y0:
+                break
+            strain[0, 1] -= result.stress[0, 1] / result.tangent[0, 1, 1]
+        plastic, alpha = result.plastic_strain, result.equivalent_plastic_strain
+        out.append(result.stress[0].copy())
+    return out
+
+
+@pytest.mark.mpi
+def test_plane_strain_bar() -> None:
+    """A plane-strain bar (2D ``u``, rollers on x = 0 and y = 0) pulled past yield: every point's
+    stress, the out-of-plane ``sigma_zz`` included, is the kernel's along the same homogeneous
+    path (``eps_zz = 0``, ``sigma_yy = 0``), increment by increment."""
+    mesh = dolfinx.mesh.create_rectangle(
+        MPI.COMM_WORLD,
+        [np.zeros(2), np.array([LENGTH, 1.0])],
+        [4, 2],
+        dolfinx.mesh.CellType.quadrilateral,
+    )
+    V = compat.vector_space(mesh)
+    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    material = ntf.J2Plasticity(u, E, NU, TABLE)
+
+    def line(axis, where):
+        return dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda x: np.isclose(x[axis], where))
+
+    bcs = [ntf.component_bc(V, axis, line(axis, 0.0)) for axis in range(2)]
+    Vx, _ = compat.component_space(V, 0)
+    end = dolfinx.fem.Function(Vx)
+    dofs = dolfinx.fem.locate_dofs_topological((V.sub(0), Vx), 1, line(0, LENGTH))
+    bcs.append(dolfinx.fem.dirichletbc(end, dofs, V.sub(0)))
+    problem = ntf.ContactProblem(
+        material.residual(v), u, [], bcs, J=material.jacobian(du, v), history=[material]
+    )
+    solver = ntf.ContactNewtonSolver(mesh.comm, problem)
+    largest = 8 * SIGMA_Y0 / E
+    times = np.arange(1, 11) / 10
+    reference = _plane_strain_reference(times * largest)
+    checked = []
+
+    def check(result: ntf.IncrementResult) -> None:
+        expected = reference[len(checked)]
+        stress = material.stress.x.array.reshape(-1, 6)
+        np.testing.assert_allclose(
+            stress, np.broadcast_to(expected, stress.shape), atol=1e-8 * E * largest
+        )
+        checked.append(result.time)
+
+    ntf.StaticStep(
+        lambda t: end.x.array.__setitem__(slice(None), t * largest * LENGTH),
+        initial_increment=0.1,
+        fixed=True,
+        on_increment=check,
+    ).run(solver, u)
+    solver.destroy()
+    problem.destroy()
+    assert checked == pytest.approx(times)
+    assert reference[-1][2] > 0.4 * reference[-1][0]  # sigma_zz carries the constraint
+    assert _largest_alpha(material) > TABLE.plastic_strain[1]
+
+
+def _largest_alpha(material: ntf.J2Plasticity) -> float:
+    comm = material.u.function_space.mesh.comm
+    return comm.allreduce(float(material.equivalent_plastic_strain.max(initial=0.0)), op=MPI.MAX)
+
+
 def test_rejected_increment_rolls_back() -> None:
     """A failed attempt leaves the committed history alone; the stress at the restored
     displacement is the committed state's again, and only a converged increment commits."""
