@@ -152,6 +152,8 @@ class J2Plasticity:
 
     def strain(self) -> np.ndarray:
         """The total strain of ``u`` at every local quadrature point, Mandel (n, 6)."""
+        if self._cells.size == 0:  # a process without cells
+            return np.zeros((0, 6))
         values = compat.evaluate_expression(self._strain, self.u.function_space.mesh, self._cells)
         return np.asarray(values).reshape(-1, 6)
 

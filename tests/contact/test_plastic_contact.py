@@ -24,7 +24,7 @@ from helpers import (
     punch_conditions,
     two_blocks,
 )
-from helpers.serial_answer import sorted_rows
+from helpers.serial_answer import empty_last, sorted_rows
 
 import ufl
 
@@ -36,9 +36,9 @@ PEAK, RESIDUAL_LOAD = 1.6, 0.2  # top pressures: past yield (sigma_y0 = 1), then
 TOP_AREA = PUNCH[1][0] * PUNCH[1][1]
 
 
-def _plastic_punch(comm=MPI.COMM_WORLD, **solver_options):
+def _plastic_punch(comm=MPI.COMM_WORLD, partition=None, **solver_options):
     """The problem, its solver, the material and the pressure Constant (0)."""
-    mesh, _, ft = two_blocks(comm, upper=PUNCH)
+    mesh, _, ft = two_blocks(comm, upper=PUNCH, partition=partition)
     V, u, v, pressure = displacement_fields(mesh)
     material = ntf.J2Plasticity(u, E, NU, HARDENING)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
@@ -65,10 +65,10 @@ def _largest(comm, values: np.ndarray) -> float:
     return comm.allreduce(float(np.max(values, initial=0.0)), op=MPI.MAX)
 
 
-def _load_and_unload(comm):
+def _load_and_unload(comm, partition=None):
     """Press to PEAK in increments of 0.25, unload to RESIDUAL_LOAD in two; per increment:
     (pressure, contact force, largest alpha, yielding points, residual norms, iterations)."""
-    problem, solver, material, pressure = _plastic_punch(comm)
+    problem, solver, material, pressure = _plastic_punch(comm, partition)
     records = []
 
     def record(result: ntf.IncrementResult) -> None:
@@ -180,10 +180,10 @@ def test_cutback_rolls_the_history_back() -> None:
     problem.destroy()
 
 
-def _answer(comm):
+def _answer(comm, partition=None):
     """Sorted rows (reference position, displacement) of the owned nodes after the analysis, and
     the largest committed alpha."""
-    problem, solver, material, _, _ = _load_and_unload(comm)
+    problem, solver, material, _, _ = _load_and_unload(comm, partition)
     owned = problem.u.function_space.dofmap.index_map.size_local
     X = problem.reference_coordinates[:owned]
     rows = sorted_rows(comm, np.hstack([X, problem.u.x.array.reshape(-1, 3)[:owned]]))
@@ -194,10 +194,12 @@ def _answer(comm):
 
 
 @pytest.mark.mpi
-def test_parallel_run_is_the_serial_one() -> None:
+@pytest.mark.parametrize("partition", [None, empty_last], ids=["dolfinx", "empty-last"])
+def test_parallel_run_is_the_serial_one(partition) -> None:
     """On every process count the displacements node by node and the largest plastic strain are
-    the serial run's (each process also runs the serial problem on COMM_SELF)."""
-    rows, alpha = _answer(MPI.COMM_WORLD)
+    the serial run's (each process also runs the serial problem on COMM_SELF); also with a last
+    process that holds no cell (and no quadrature point)."""
+    rows, alpha = _answer(MPI.COMM_WORLD, partition)
     serial_rows, serial_alpha = _answer(MPI.COMM_SELF)
     np.testing.assert_allclose(rows[:, :3], serial_rows[:, :3], atol=1e-12)
     scale = np.abs(serial_rows[:, 3:]).max()
