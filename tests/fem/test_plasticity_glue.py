@@ -139,11 +139,13 @@ def _uniaxial_stress(strain: float, hardening: ntf.IsotropicHardening) -> float:
 
 @pytest.mark.mpi
 @pytest.mark.parametrize("hardening", [ntf.IsotropicHardening.linear(SIGMA_Y0, H), TABLE])
-def test_uniaxial_bar_closed_form(hardening: ntf.IsotropicHardening) -> None:
+@pytest.mark.parametrize("driver", [ntf.ContactNewtonSolver, ntf.ContactSNESSolver])
+def test_uniaxial_bar_closed_form(hardening: ntf.IsotropicHardening, driver: type) -> None:
     """A bar on symmetry rollers pulled past yield by a prescribed end displacement: the axial
     stress at every quadrature point and the end reaction follow the uniaxial curve, increment by
     increment, each plastic increment in two Newton iterations (the elastic predictor's, then the
-    consistent tangent's exact one: the curve is linear within a piece)."""
+    consistent tangent's exact one: the curve is linear within a piece), with the package's Newton
+    and with PETSc's SNES as the driver."""
     mesh = _mesh()
     V = compat.vector_space(mesh)
     u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
@@ -160,7 +162,7 @@ def test_uniaxial_bar_closed_form(hardening: ntf.IsotropicHardening) -> None:
     problem = ntf.ContactProblem(
         material.residual(v), u, [], bcs, J=material.jacobian(du, v), history=[material]
     )
-    solver = ntf.ContactNewtonSolver(mesh.comm, problem)
+    solver = driver(mesh.comm, problem)
     largest = 6 * SIGMA_Y0 / E  # about 0.0075, past the table's second point
     checked = []
 
