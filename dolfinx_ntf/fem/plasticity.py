@@ -111,8 +111,9 @@ class J2Plasticity:
         #: Quadrature points of every local cell (owned and ghost), in the stress's block dofs.
         self._dofs = compat.cell_dofs(self.stress.function_space)[self._cells].reshape(-1)
         n = self._dofs.size
-        #: Committed plastic strain (Mandel) and equivalent plastic strain, per quadrature point.
+        #: Committed plastic strain, Mandel (n, 6), one row per local quadrature point.
         self.plastic_strain = np.zeros((n, 6))
+        #: Committed equivalent plastic strain (CalculiX's PEEQ), (n,).
         self.equivalent_plastic_strain = np.zeros(n)
         self._trial = None
         self.evaluate()
