@@ -18,6 +18,7 @@ from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
+from dolfinx_ntf.fem.plasticity import J2Plasticity, mandel_strain
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
@@ -38,6 +39,7 @@ from dolfinx_ntf.kernels.laws import (
     SurfaceInteraction,
     TabularLaw,
 )
+from dolfinx_ntf.kernels.plasticity import IsotropicHardening
 from dolfinx_ntf.kernels.rigid import (
     RigidCylinder,
     RigidPlane,
@@ -116,6 +118,8 @@ __all__ = [
     "GlobalLinearConstraint",
     "IncompatibleModes",
     "IncrementResult",
+    "IsotropicHardening",
+    "J2Plasticity",
     "LinearConstraint",
     "LinearConstraintBlock",
     "LinearLaw",
@@ -151,6 +155,7 @@ __all__ = [
     "input_node_ids",
     "kinetic_energy",
     "log_progress",
+    "mandel_strain",
     "reaction",
     "run_steps",
     "serendipity_constraints",

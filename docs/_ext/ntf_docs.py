@@ -83,6 +83,11 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         ],
     ),
     (
+        "Plasticity",
+        "dolfinx_ntf",
+        ["J2Plasticity", "IsotropicHardening", "mandel_strain"],
+    ),
+    (
         "Rigid master surfaces",
         "dolfinx_ntf",
         ["RigidSurface", "RigidPlane", "RigidSphere", "RigidCylinder", "SignedDistanceSurface"],
@@ -428,6 +433,7 @@ def _hinted_classes(obj: object) -> set[type]:
 EXTRA_TYPES: list[str] = [
     "dolfinx_ntf.contact.problem.ResidualTerm",
     "dolfinx_ntf.contact.problem.ElementTerm",
+    "dolfinx_ntf.contact.problem.MaterialHistory",
     "dolfinx_ntf.kernels.gap_conductance.ThermalSpringEvaluation",
     "dolfinx_ntf.contact.pairing.Pairing",
     "dolfinx_ntf.solvers.convergence.ForceScaledTest",
