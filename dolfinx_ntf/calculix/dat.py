@@ -16,7 +16,7 @@ Formats, verified byte for byte against ``ccx`` 2.20 output:
     - totals rows (``TOTALS=YES/ONLY`` of RF and CELS) are ``6X`` then the values;
     - the CNUM row is the count right-aligned in 17 columns.
 
-Block names used here: ``U``, ``RF``, ``RF_TOTAL``, ``S``, ``CDIS``, ``CSTR``, ``CELS``,
+Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``CDIS``, ``CSTR``, ``CELS``,
 ``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no name for (the name is then the
 title text before the first parenthesis) so that any ccx ``.dat`` file can be compared.
 """
@@ -84,6 +84,7 @@ class DatBlock:
 _BLOCKS: dict[str, tuple[str, int, int]] = {
     "U": (" displacements (vx,vy,vz) for set {set} and time {time}", 1, 3),
     "RF": (" forces (fx,fy,fz) for set {set} and time {time}", 1, 3),
+    "NT": (" temperatures for set {set} and time {time}", 1, 1),
     "RF_TOTAL": (" total force (fx,fy,fz) for set {set} and time {time}", 0, 3),
     "S": (
         " stresses (elem, integ.pnt.,sxx,syy,szz,sxy,sxz,syz) for set {set} and time {time}",
@@ -252,22 +253,22 @@ def _rows(labels, values, width: int, what: str) -> tuple[np.ndarray, np.ndarray
 def node_print_blocks(
     key: str, set_name: str, time: float, nodes, values, *, totals: str = "NO"
 ) -> list[DatBlock]:
-    """Blocks of a ``*NODE PRINT`` key (``U`` or ``RF``) for one set and time.
+    """Blocks of a ``*NODE PRINT`` key (``U``, ``RF`` or ``NT``) for one set and time.
 
     Args:
-        key: ``U`` or ``RF``.
+        key: ``U``, ``RF`` or ``NT`` (temperatures).
         set_name: node set name as printed (upper case).
         time: total time.
         nodes: ``(n,)`` node numbers in set order.
-        values: ``(n, 3)`` displacements or external forces.
+        values: ``(n, 3)`` displacements or external forces, ``(n, 1)`` temperatures.
         totals: ``NO``, ``YES`` or ``ONLY``; ccx applies it to RF only (a sum row).
     """
-    if key not in ("U", "RF"):
-        raise ValueError(f"*NODE PRINT key must be U or RF, got {key!r}")
+    if key not in ("U", "RF", "NT"):
+        raise ValueError(f"*NODE PRINT key must be U, RF or NT, got {key!r}")
     totals = _totals(totals)
-    nodes, values = _rows(nodes, values, 3, f"*NODE PRINT {key}")
+    nodes, values = _rows(nodes, values, 1 if key == "NT" else 3, f"*NODE PRINT {key}")
     blocks = []
-    if key == "U" or totals != "ONLY":
+    if key != "RF" or totals != "ONLY":
         blocks.append(DatBlock(key, time, set_name, nodes, values))
     if key == "RF" and totals != "NO":
         total = values.sum(axis=0, keepdims=True)

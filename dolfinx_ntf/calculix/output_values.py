@@ -138,6 +138,13 @@ class OutputValues:
         """``(N, 3)`` displacement of every deck node (rows of ``deck.node_ids``). Collective."""
         return self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
 
+    def temperatures(self) -> np.ndarray:
+        """``(N, 1)`` temperature of every deck node (coupled steps only). Collective."""
+        thermal = self.model.thermal
+        if thermal is None:
+            raise ValueError("the model has no temperature field (no *COUPLED step)")
+        return self.numbering.nodal(thermal.T.x.array[:, None])
+
     def with_reference(
         self, ids: np.ndarray, values: np.ndarray, load_time: tuple[int, float]
     ) -> np.ndarray:

@@ -43,15 +43,19 @@ def stresses(
     mu: dolfinx.fem.Function,
     lmbda: dolfinx.fem.Function,
     nlgeom: dolfinx.fem.Constant | float,
+    thermal_strain: ufl.core.expr.Expr | None = None,
 ) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr, ufl.core.expr.Expr]:
     """Deformation gradient, first Piola-Kirchhoff and Cauchy stress.
 
-    ``nlgeom`` 0 gives small-strain elasticity, 1 St.Venant-Kirchhoff.
+    ``nlgeom`` 0 gives small-strain elasticity, 1 St.Venant-Kirchhoff. A ``thermal_strain`` is
+    subtracted from the strain (the Green-Lagrange strain with ``nlgeom``, as ccx does).
     """
     H = ufl.grad(u)
     Id = ufl.Identity(3)
     F = Id + nlgeom * H
     E = ufl.sym(H) + 0.5 * nlgeom * H.T * H
+    if thermal_strain is not None:
+        E = E - thermal_strain
     S = 2 * mu * E + lmbda * ufl.tr(E) * Id
     P = F * S
     return F, P, P * F.T / ufl.det(F)
