@@ -46,7 +46,10 @@ class CoupledIncrementSolver:
             conductance_pressure="ccx",
         )
         #: The monolithic Newton.
-        self.coupled = ThermoMechanicalContact(residual, self.heat)
+        self.coupled = ThermoMechanicalContact(
+            residual, self.heat, cell_temperature=thermal.cell_temperature
+        )
+        self.coupled.coupling_blocks = False  # ccx's iterates (docs/method.md §20.8)
         self.problem = problem
         #: ccx's field controls (kept for the job; the Newton's test is its own, §20.5).
         self.controls: dict[str, float] = {}

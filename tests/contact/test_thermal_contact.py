@@ -560,7 +560,7 @@ def test_agrees_with_ccx(rows, conductance_pressure, tmp_path) -> None:
     )  # fmt: skip
     (tmp_path / "bars.inp").write_text(deck)
     run_ccx(tmp_path, "bars", timeout=120)
-    block = next(b for b in read_ccx_dat(tmp_path, "bars") if b.name.startswith("temperatures"))
+    block = next(b for b in read_ccx_dat(tmp_path, "bars") if b.name == "NT")
     ccx = dict(zip(block.labels.tolist(), block.values[:, 0]))
 
     mesh, ft, V, Q, T, bcs_T = _bars()

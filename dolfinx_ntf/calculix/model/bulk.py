@@ -47,15 +47,16 @@ def stresses(
 ) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr, ufl.core.expr.Expr]:
     """Deformation gradient, first Piola-Kirchhoff and Cauchy stress.
 
-    ``nlgeom`` 0 gives small-strain elasticity, 1 St.Venant-Kirchhoff. A ``thermal_strain`` is
-    subtracted from the strain (the Green-Lagrange strain with ``nlgeom``, as ccx does).
+    ``nlgeom`` 0 gives small-strain elasticity, 1 St.Venant-Kirchhoff. A ``thermal_strain``
+    ``eps_th`` is subtracted from the displacement gradient before the strain is formed: the
+    strain is that of ``H - eps_th`` (with ``nlgeom`` its Green-Lagrange strain, as ccx 2.20's
+    measured: docs/method.md §20.8), the deformation gradient that of ``H``.
     """
     H = ufl.grad(u)
     Id = ufl.Identity(3)
     F = Id + nlgeom * H
-    E = ufl.sym(H) + 0.5 * nlgeom * H.T * H
-    if thermal_strain is not None:
-        E = E - thermal_strain
+    Hm = H if thermal_strain is None else H - thermal_strain
+    E = ufl.sym(Hm) + 0.5 * nlgeom * Hm.T * Hm
     S = 2 * mu * E + lmbda * ufl.tr(E) * Id
     P = F * S
     return F, P, P * F.T / ufl.det(F)

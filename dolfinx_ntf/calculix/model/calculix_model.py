@@ -381,10 +381,10 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
     thermal = None
     if collectives.collectively(comm, is_thermal, deck):
         thermal = thermal_model(deck, block, mesh, etype.degree, node_dof, element_cell, dx)
+    kinematics = nlgeom if nlgeom is not None else float(True in kinds)
     F, P, sigma = stresses(
-        u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds),
-        None if thermal is None else thermal.thermal_strain(),
-    )  # fmt: skip
+        u, mu, lmbda, kinematics, None if thermal is None else thermal.thermal_strain()
+    )
     v = ufl.TestFunction(V)
     residual = ufl.inner(P, ufl.grad(v)) * dx
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]

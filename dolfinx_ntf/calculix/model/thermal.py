@@ -5,8 +5,10 @@ numbered like the displacement's), the material data per cell (``*CONDUCTIVITY``
 HEAT``, ``*DENSITY``, ``*EXPANSION``), the heat residual with CalculiX's backward-Euler capacity
 term, the temperature conditions (``*BOUNDARY`` dof 11) of every step, the initial temperatures
 and one :class:`~dolfinx_ntf.GapConductance` per contact pair (``*GAP CONDUCTANCE``). The
-mechanical residual takes its thermal strain ``alpha (T - T_init) I`` (measured from the initial
-temperature, as ccx does for a constant ``alpha``).
+mechanical residual takes ccx's thermal strain (measured against ccx 2.20 with C3D8): from the mean
+temperature of each element (:class:`~dolfinx_ntf.fem.thermal.CellTemperature`), measured from the
+initial temperature, ``x = alpha (T_c - T_init,c)`` subtracted from the diagonal of the
+displacement gradient before the strain is formed.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.thermal import CellTemperature
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 
 from ..deck import Boundary, Deck, ElementBlock
@@ -72,6 +75,7 @@ class ThermalModel:
         Q: Scalar Lagrange space of the displacement's degree (numbered like it).
         T: The temperature; ``T_old`` its value at the start of the increment.
         T_init: The initial temperature (reference of the thermal strain).
+        cell_temperature: The element mean temperatures of ``T`` (the thermal strain's).
         inverse_dt: Constant ``1/dt`` of the capacity term (0 in a steady step).
         alpha: Coefficient of thermal expansion per cell (DG0).
         residual: The heat residual ``rho c (T - T_old)/dt v + k grad T . grad v`` (ccx's
@@ -86,6 +90,8 @@ class ThermalModel:
     T: dolfinx.fem.Function
     T_old: dolfinx.fem.Function
     T_init: dolfinx.fem.Function
+    cell_temperature: CellTemperature
+    T_init_c: dolfinx.fem.Function
     inverse_dt: dolfinx.fem.Constant
     alpha: dolfinx.fem.Function
     residual: ufl.Form
@@ -99,8 +105,14 @@ class ThermalModel:
     _target: np.ndarray | None = None
 
     def thermal_strain(self) -> ufl.core.expr.Expr:
-        """``alpha (T - T_init) I``, the strain the mechanical residual subtracts."""
-        return self.alpha * (self.T - self.T_init) * ufl.Identity(3)
+        """``x I``, ``x = alpha (T_c - T_init,c)`` of the element mean temperatures.
+
+        The mechanical strain is formed from ``grad u - x I`` (``bulk.stresses``): with
+        ``NLGEOM`` its Green-Lagrange strain ``x^2/2`` off the small one where ``u = 0``, as ccx
+        2.20's (measured, docs/method.md §20.8).
+        """
+        x = self.alpha * (self.cell_temperature.T_c - self.T_init_c)
+        return x * ufl.Identity(3)
 
     def begin_step(self, step_index: int, steady: bool) -> None:
         """Start a step: its prescribed temperatures and its kind (steady or transient).
@@ -226,6 +238,12 @@ def thermal_model(
     Q = compat.scalar_space(mesh, "Lagrange", degree)
     T = dolfinx.fem.Function(Q, name="temperature")
     Q0 = compat.scalar_space(mesh, "DG", 0)
+    if block.type.name != "C3D8":
+        raise NotImplementedError(
+            f"{block.locations[0]}: *COUPLED TEMPERATURE-DISPLACEMENT with {block.type.name} "
+            "elements is not supported yet (ccx's thermal strain is measured for C3D8 only: the "
+            "element mean temperature)"
+        )
     transient = any(not s.coupled.steady for s in deck.steps)
     k = _cell_values(deck, block, element_cell, Q0, "*CONDUCTIVITY", True)
     rho = _cell_values(deck, block, element_cell, Q0, "*DENSITY", transient)
@@ -238,6 +256,9 @@ def thermal_model(
     T_old = dolfinx.fem.Function(Q, name="temperature_old")
     T_init = dolfinx.fem.Function(Q, name="initial_temperature")
     T_old.x.array[:] = T_init.x.array[:] = T.x.array
+    cell_temperature = CellTemperature(T)
+    T_init_c = dolfinx.fem.Function(cell_temperature.T_c.function_space, name="initial_cell_temp")
+    T_init_c.x.array[:] = cell_temperature.T_c.x.array
     inverse_dt = dolfinx.fem.Constant(mesh, 0.0)
     v = ufl.TestFunction(Q)
     residual = (
@@ -254,8 +275,8 @@ def thermal_model(
     bc_values = [np.array([values[n] for n in nodes.tolist()])[held] for values in per_step]
     bc_value = dolfinx.fem.Function(Q, name="prescribed_temperature")
     bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
-    return ThermalModel(Q, T, T_old, T_init, inverse_dt, alpha, residual, conductances,
-                        bc_dofs, bc_values, bc_value, bcs)  # fmt: skip
+    return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha,
+                        residual, conductances, bc_dofs, bc_values, bc_value, bcs)  # fmt: skip
 
 
 def _conductance(rows: tuple | None, interaction: str) -> GapConductance:
