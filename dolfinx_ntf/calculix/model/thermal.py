@@ -188,6 +188,7 @@ def _bc_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
     current: dict[int, float] = {}
     per_step = []
     for b in deck.temperature_boundaries:
+        _check_boundary(b)
         current.update(dict.fromkeys(b.nodes.tolist(), b.value))
     for step in deck.steps:
         if step.temperatures and step.temperatures[0].op == "NEW":
