@@ -191,6 +191,8 @@ def test_reader_errors_name_the_line(tmp_path, old, new, match):
          r"only one constant value"),
         ("*BOUNDARY\nBOTTOM, 11", "*BOUNDARY, AMPLITUDE=A\nBOTTOM, 11", NotImplementedError,
          r"dof 11 with an AMPLITUDE"),
+        (", STEADY STATE\n1., 1.\n", "\n0.1, 1., , , 5.\n", NotImplementedError,
+         r"DELTMX .* is not supported yet"),
     ],
 )  # fmt: skip
 def test_model_refuses_what_it_cannot_do(tmp_path, old, new, error, match):

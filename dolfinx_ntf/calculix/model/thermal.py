@@ -246,6 +246,12 @@ def thermal_model(
             "element mean temperature)"
         )
     transient = any(not s.coupled.steady for s in deck.steps)
+    for step in deck.steps:
+        if step.coupled.deltmx is not None and not step.coupled.steady:
+            raise NotImplementedError(
+                f"{step.coupled.location}: DELTMX (the largest temperature change per increment) "
+                "is not supported yet"
+            )
     k = _cell_values(deck, block, element_cell, Q0, "*CONDUCTIVITY", True)
     rho = _cell_values(deck, block, element_cell, Q0, "*DENSITY", transient)
     c = _cell_values(deck, block, element_cell, Q0, "*SPECIFIC HEAT", transient)
