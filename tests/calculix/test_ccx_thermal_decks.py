@@ -54,7 +54,7 @@ def bars_deck(
             ids = []
             for x, y in ((0, 0), (1, 0), (1, 1), (0, 1)):
                 number += 1
-                nodes.append(f"{number}, {x}., {y}., {z!r}")
+                nodes.append(f"{number}, {x}., {y}., {float(z)!r}")
                 ids.append(number)
             layers[bar, i] = ids
         for i in range(elements):
