@@ -320,7 +320,7 @@ def _punch(alpha: float = 1e-3, t_ref: float = 300.0, cell_mean: bool = False):
         with pytest.raises(ValueError, match="F does not depend on the temperature"):
             ThermoMechanicalContact(F, thermal)  # F holds T_c, not T
         other = ntf.CellTemperature(dolfinx.fem.Function(Q))
-        with pytest.raises(ValueError, match="cell_temperature is not made from thermal.T"):
+        with pytest.raises(ValueError, match=r"cell_temperature is not made from thermal\.T"):
             ThermoMechanicalContact(F, thermal, cell_temperature=other)
         other.destroy()
     coupled = ThermoMechanicalContact(F, thermal, cell_temperature=cell)
