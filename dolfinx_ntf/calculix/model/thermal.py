@@ -41,25 +41,19 @@ def is_thermal(deck: Deck) -> bool:
             coupled (their thermal strains are not supported), or mixed step kinds.
     """
     coupled = [step.coupled is not None for step in deck.steps]
-    temperature_input = (
-        deck.initial_temperatures
-        or deck.temperature_boundaries
-        or any(s.temperatures for s in deck.steps)
-    )
+    inputs = [
+        *deck.initial_temperatures,
+        *deck.temperature_boundaries,
+        *(b for step in deck.steps for b in step.temperatures),
+    ]
     if any(coupled) and not all(coupled):
         step = deck.steps[coupled.index(False)]
         raise NotImplementedError(
             f"{step.location}: step {step.number} is not *COUPLED TEMPERATURE-DISPLACEMENT while "
             "another step is: mixing coupled and other steps is not supported yet"
         )
-    if temperature_input and not any(coupled):
-        where = (
-            deck.initial_temperatures[0].location
-            if deck.initial_temperatures
-            else (deck.temperature_boundaries or [b for s in deck.steps for b in s.temperatures])[
-                0
-            ].location
-        )
+    if inputs and not any(coupled):
+        where = inputs[0].location
         raise NotImplementedError(
             f"{where}: temperatures (*INITIAL CONDITIONS, TYPE=TEMPERATURE or *BOUNDARY dof 11) "
             "are supported in *COUPLED TEMPERATURE-DISPLACEMENT steps only"
@@ -76,6 +70,7 @@ class ThermalModel:
         T: The temperature; ``T_old`` its value at the start of the increment.
         T_init: The initial temperature (reference of the thermal strain).
         cell_temperature: The element mean temperatures of ``T`` (the thermal strain's).
+        T_init_c: The element mean initial temperatures.
         inverse_dt: Constant ``1/dt`` of the capacity term (0 in a steady step).
         alpha: Coefficient of thermal expansion per cell (DG0).
         residual: The heat residual ``rho c (T - T_old)/dt v + k grad T . grad v`` (ccx's
