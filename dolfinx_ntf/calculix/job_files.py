@@ -296,6 +296,11 @@ class _Increment:
         ids = self.deck.elsets[request.set]
         blocks = []
         for key in request.keys:
+            if key == "HFL":
+                blocks += el_print_blocks(
+                    "HFL", request.set, total, ids, self.values.heat_fluxes(ids)
+                )
+                continue
             if key != "S":
                 raise NotImplementedError(
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
@@ -371,14 +376,13 @@ def check_requests(deck: Deck) -> None:
     for step in deck.steps:
         for request in step.prints:
             for key in request.keys:
-                if key == "NT" and request.kind == "NODE" and step.coupled is None:
+                thermal = (request.kind, key) in (("NODE", "NT"), ("EL", "HFL"))
+                if thermal and step.coupled is None:
                     raise NotImplementedError(
-                        f"{request.location}: *NODE PRINT NT (temperatures) needs a *COUPLED "
+                        f"{request.location}: *{request.kind} PRINT {key} needs a *COUPLED "
                         "TEMPERATURE-DISPLACEMENT step"
                     )
-                if key not in supported[request.kind] and not (
-                    key == "NT" and request.kind == "NODE"
-                ):
+                if key not in supported[request.kind] and not thermal:
                     raise NotImplementedError(
                         f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
                     )

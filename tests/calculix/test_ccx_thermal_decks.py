@@ -217,13 +217,18 @@ def test_steady_bars_agree_with_closed_form_and_ccx(tmp_path):
     contact (the matching meshes pass the node-to-face patch test: each slave node's spring
     carries its quarter of the face).
     """
-    ccx, ntf = _run_both(tmp_path, "bars", bars_deck(), MPI.COMM_WORLD)
+    deck_text = bars_deck(extra="*EL PRINT, ELSET=EALL\nHFL\n")
+    ccx, ntf = _run_both(tmp_path, "bars", deck_text, MPI.COMM_WORLD)
     if MPI.COMM_WORLD.rank != 0:
         return
     worst = _differences(ccx, ntf)
     assert worst["NT"] < 1e-6  # ccx prints 7 digits
+    assert worst["HFL"] < 1e-6
     (nt,) = [b for b in ntf if b.name == "NT"]
     q = (T_HIGH - T_LOW) / (2 * LENGTH / K + 1 / H)
+    (hfl,) = [b for b in ntf if b.name == "HFL"]  # -k grad T at the 8 points of the 4 elements
+    assert hfl.values.shape == (32, 3)
+    np.testing.assert_allclose(hfl.values, np.tile([0.0, 0.0, q], (32, 1)), rtol=0, atol=1e-9 * q)
     deck = read_deck(Path(str(tmp_path)) / "ntf" / "bars.inp")
     z = deck.node_coords[deck.node_index(nt.labels), 2]
     upper = np.isin(nt.labels, deck.nsets["SLAVES"])  # the upper bar's nodes at z = 0

@@ -73,6 +73,7 @@ class ThermalModel:
         T_init_c: The element mean initial temperatures.
         inverse_dt: Constant ``1/dt`` of the capacity term (0 in a steady step).
         alpha: Coefficient of thermal expansion per cell (DG0).
+        conductivity: Conductivity per cell (DG0).
         residual: The heat residual ``rho c (T - T_old)/dt v + k grad T . grad v`` (ccx's
             quadrature).
         conductances: One gap conductance per contact pair (zero without ``*GAP CONDUCTANCE``).
@@ -89,6 +90,7 @@ class ThermalModel:
     T_init_c: dolfinx.fem.Function
     inverse_dt: dolfinx.fem.Constant
     alpha: dolfinx.fem.Function
+    conductivity: dolfinx.fem.Function
     residual: ufl.Form
     conductances: list[GapConductance]
     bc_dofs: np.ndarray
@@ -277,7 +279,7 @@ def thermal_model(
     bc_values = [np.array([values[n] for n in nodes.tolist()])[held] for values in per_step]
     bc_value = dolfinx.fem.Function(Q, name="prescribed_temperature")
     bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
-    return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha,
+    return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
                         residual, conductances, bc_dofs, bc_values, bc_value, bcs)  # fmt: skip
 
 
