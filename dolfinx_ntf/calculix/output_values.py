@@ -192,7 +192,8 @@ class OutputValues:
     def heat_fluxes(self, element_ids: np.ndarray) -> np.ndarray:
         """Heat fluxes ``-k grad T`` ``(E, q, 3)`` at ccx's integration points (coupled steps).
 
-        In the reference configuration (not measured under NLGEOM). Collective.
+        In the reference configuration, as ccx 2.20 prints them under NLGEOM (docs/method.md
+        §20.8). Collective.
         """
         thermal = self.model.thermal
         if thermal is None:
