@@ -85,6 +85,23 @@ def test_hertz_cylinder_2d_demo_is_close_to_hertz(tmp_path):
     assert Path(summary["xdmf"]).exists() and Path(summary["png"]).stat().st_size > 10_000
 
 
+def test_sliding_block_2d_demo_slips_at_mu(tmp_path):
+    summary = _demo("sliding_block_2d").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # Press (2 increments), small drag (1), drag (4), mu raised and drag (4); 9 springs.
+    assert summary["increments"] == 11 and summary["springs"] == 9
+    # Measured: after the small drag F_x / F_y = 0.019 and no spring slips; at the end of the
+    # drags every spring slips with |F_T| = mu F_N to 3e-16, sum |F_T| = mu sum F_N to 1e-16,
+    # and F_x / F_y = 0.200008, 0.299984 (the tilt of the base's deformed top).
+    assert summary["stick_sliding"] == 0 and 0.01 < summary["ratio_stick"] < 0.05
+    assert summary["end_sliding"] == [9, 9]
+    assert summary["slip_error"] < 1e-12 and summary["coulomb_error"] < 1e-12
+    assert summary["ratio_drag"] == pytest.approx(0.2, rel=1e-3)
+    assert summary["ratio_mu"] == pytest.approx(0.3, rel=1e-3)
+    assert summary["equilibrium_error"] < 1e-8
+    assert Path(summary["xdmf"]).exists() and Path(summary["png"]).stat().st_size > 10_000
+
+
 def test_impact_demo_keeps_the_energy(tmp_path):
     summary = _demo("impact").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]

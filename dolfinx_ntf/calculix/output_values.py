@@ -175,6 +175,8 @@ class OutputValues:
 
         Collective: each element is evaluated by the process owning it.
         """
+        if self.model.incompatible_modes is not None:
+            return self._incompatible_mode_stresses(element_ids)
         if self._stress is None:
             points = self.model.element_type.integration_points
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
@@ -209,6 +211,27 @@ class OutputValues:
             return values.reshape(cells.size, q, 3)
 
         return self.numbering.element_values(element_ids, evaluate, (q, 3))
+
+    def _incompatible_mode_stresses(self, element_ids: np.ndarray) -> np.ndarray:
+        """C3D8I's stresses ``(E, 8, 6)``: small-strain, the condensed modes' strains included."""
+        modes = self.model.incompatible_modes
+        self.model.u.x.scatter_forward()
+        strain = modes.strains(compat.petsc_vector(self.model.u))  # (C, 8, 3, 3), owned cells
+        position = np.full(self.numbering.num_owned_cells, -1)
+        position[modes.cells] = np.arange(modes.cells.size)
+        mu = self.model.mu.x.array[compat.cell_dofs(self.model.mu.function_space)[modes.cells, 0]]
+        lmbda = self.model.lmbda.x.array[
+            compat.cell_dofs(self.model.lmbda.function_space)[modes.cells, 0]
+        ]
+        trace = np.trace(strain, axis1=2, axis2=3)
+        stress = 2 * mu[:, None, None, None] * strain
+        stress += (lmbda[:, None] * trace)[:, :, None, None] * np.eye(3)
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            return stress[position[cells]][:, :, index[0], index[1]]
+
+        return self.numbering.element_values(element_ids, evaluate, (8, 6))
 
     def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
         """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).

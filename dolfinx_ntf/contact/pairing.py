@@ -221,15 +221,7 @@ class Pairing:
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
-        adjust_nodes = None
-        if isinstance(pair.adjust, NodeSurface):
-            adjust_nodes = collectives.collectively(
-                comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
-            ).nodes
-            if self.halo is not None:  # the union over processes, as extended nodes
-                held = self.halo.local_global[adjust_nodes]
-                adjust_nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
-                adjust_nodes = adjust_nodes[adjust_nodes >= 0]
+        adjust_nodes = self._adjust_nodes(name, pair)
         return PairState(
             pair,
             slave,
@@ -242,27 +234,16 @@ class Pairing:
         )
 
     def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
-        """A pair on a 2D mesh: springs on master edges, rigid lines or circles (frictionless).
+        """A pair on a 2D mesh: springs on master edges, rigid lines or circles.
 
-        On several processes the surfaces are distributed as in 3D (docs/method.md §14.1): the
-        master edges of every process are gathered on each, the slave nodes go to their owners
-        with every slave edge holding one of them. Collective.
+        Friction works on meshed master edges (one tangent direction, docs/method.md §17); like
+        in 3D it is refused against a rigid master. On several processes the surfaces are
+        distributed as in 3D (docs/method.md §14.1): the master edges of every process are
+        gathered on each, the slave nodes go to their owners with every slave edge holding one of
+        them. Collective.
         """
         V = self.u.function_space
         comm = V.mesh.comm
-        missing = [
-            feature
-            for feature, used in (
-                ("friction", pair.interaction.friction is not None),
-                ("ADJUST", pair.adjust is not None),
-            )
-            if used
-        ]
-        if missing:
-            raise NotImplementedError(
-                f"{name}: 2D contact does not support {', '.join(missing)} yet (2D meshes have "
-                "frictionless springs against meshed edges, rigid lines and circles)"
-            )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if pair.axisymmetric:
             midside = slave.faceless is not None and bool(np.any(slave.faceless))
@@ -273,6 +254,11 @@ class Pairing:
                     "NodeSurface without midside_nodes"
                 )
         if isinstance(pair.master, RigidSurface):  # a line or a circle in the plane (§15.1)
+            if pair.interaction.friction is not None or pair.adjust is not None:
+                raise NotImplementedError(
+                    f"{name}: friction and ADJUST against a rigid analytical master are not "
+                    "supported yet (in 2D as in 3D); use a meshed master"
+                )
             _check_in_plane(pair.master, f"{name} master")
             if self.halo is not None:  # the owned slave nodes and their edges
                 slave = collectives.collectively(
@@ -316,8 +302,26 @@ class Pairing:
         )
         return PairState(
             pair, slave, master_faces, master, np.zeros(slave.nodes.size), friction=friction,
-            was_active=pair.active,
+            was_active=pair.active, adjust_nodes=self._adjust_nodes(name, pair),
         )  # fmt: skip
+
+    def _adjust_nodes(self, name: str, pair: ContactPair) -> np.ndarray | None:
+        """The nodes of an ADJUST node set as extended nodes (None: a distance, or no ADJUST).
+
+        Collective: the node set is resolved on every process and joined over them.
+        """
+        if not isinstance(pair.adjust, NodeSurface):
+            return None
+        V = self.u.function_space
+        comm = V.mesh.comm
+        nodes = collectives.collectively(
+            comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
+        ).nodes
+        if self.halo is not None:  # the union over processes, as extended nodes
+            held = self.halo.local_global[nodes]
+            nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
+            nodes = nodes[nodes >= 0]
+        return nodes
 
     def _planar_slave(self, name: str, pair: ContactPair, slave: SlaveSurface) -> SlaveSurface:
         """The pair's thickness and model on a 2D slave surface.
@@ -683,7 +687,7 @@ class Pairing:
         move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
         count = self.u.function_space.mesh.comm.allreduce(int(np.count_nonzero(move)))
         if count:  # on every process: the moves reach ghost and halo copies (§14.6)
-            delta = -evaluation.gap[move, None] * evaluation.normal[move]
+            delta = planar_padded(-evaluation.gap[move, None] * evaluation.normal[move])
             move_reference_nodes(
                 self.u.function_space,
                 self._reference,

@@ -25,6 +25,7 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
+from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel import collectives
@@ -87,6 +88,8 @@ class CalculixModel:
             :class:`~dolfinx_ntf.DiscreteSprings` per ``*SPRING`` card (docs/method.md §18.3).
         thermal: The temperature field of a deck with coupled steps (docs/method.md §20.8), else
             None.
+        incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
+            term of the problem, docs/method.md §22), else None.
     """
 
     deck: Deck
@@ -123,6 +126,7 @@ class CalculixModel:
     free_references: list[FreeReference] = field(default_factory=list)
     springs: list[DiscreteSprings] = field(default_factory=list)
     thermal: ThermalModel | None = None
+    incompatible_modes: IncompatibleModes | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -331,7 +335,32 @@ class CalculixModel:
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
         problem.element_terms.extend(self.springs)
+        if self.incompatible_modes is not None:
+            problem.element_terms.append(self.incompatible_modes)
         return problem
+
+
+def check_incompatible_modes(deck: Deck) -> None:
+    """Refuse what C3D8I decks cannot do yet: its modes are condensed for small strain statics.
+
+    ``NLGEOM`` (the modes' correction is linear elasticity's), ``*FREQUENCY`` and ``*DYNAMIC``
+    (ccx's modal stiffness and mass with the modes are not measured), naming the step's line.
+    """
+    for step in deck.steps:
+        what = (
+            "NLGEOM"
+            if step.nlgeom
+            else "*FREQUENCY"
+            if step.frequency is not None
+            else "*DYNAMIC"
+            if step.dynamic is not None
+            else None
+        )
+        if what is not None:
+            raise NotImplementedError(
+                f"{step.location}: {what} with C3D8I elements is not supported yet (their "
+                "incompatible modes are condensed for small-strain static steps only)"
+            )
 
 
 def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
@@ -370,6 +399,8 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         pairs = contact_pairs(deck, surfaces, maps)
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
         springs_follow = check_springs(deck, maps.meshed)
+        if etype.name == "C3D8I":
+            check_incompatible_modes(deck)
     except (ValueError, NotImplementedError) as exc:
         error = exc
     validation.raise_collectively(comm, error)
@@ -414,6 +445,9 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         constraints.append(global_constraint_block(V, given, node_ids=dof_node))
 
     springs = deck_springs(deck, V, node_dof, bool(springs_follow)) if deck.springs else []
+    modes = None
+    if etype.name == "C3D8I":  # ccx 2.20's modes: unscaled (measured, docs/method.md §22)
+        modes = IncompatibleModes(V, mu, lmbda, taylor=False)
     bc_spaces = []
     num_unrolled = 3 * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
     for component in range(3):
@@ -455,4 +489,5 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         free_references=free_references,
         springs=springs,
         thermal=thermal,
+        incompatible_modes=modes,
     )
