@@ -206,3 +206,36 @@ def test_preloaded_modes_demo_bounces_on_the_joint_stiffness():
     # Frequency as the square root of the preload.
     assert rows[-1]["bounce"] / rows[0]["bounce"] == pytest.approx(2.0, rel=5e-3)
     assert abs(summary["floating"]) < 1e-3 * rows[0]["bounce"]  # no springs: the punch floats
+
+
+def test_hot_block_demo_balances_heat_and_force(tmp_path):
+    summary = _demo("hot_block").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # Three transient increments and the steady state; 5 x 5 slave nodes, all in contact.
+    assert summary["increments"] == 4 and summary["springs"] == 25
+    # The springs carry the load in every increment (measured 9e-13).
+    assert summary["force_error"] < 1e-8
+    # Steady state: the heat through the contact is the heat entering at the hot top and leaving
+    # at the cold bottom, within the converged residual's bound (measured 4e-12 W against a bound
+    # of 6e-11 W on a flow of 49.74 W); the transient storage balance likewise (7e-14 W).
+    assert summary["heat_through_contact"] < 0  # into the slave (hot) side: negative
+    assert summary["balance_top"] <= summary["balance_bound"] < 1e-8
+    assert summary["balance_bottom"] <= summary["balance_bound"]
+    assert summary["storage_error"] <= summary["storage_bound"] < 1e-6
+    assert summary["heat_in_top"] == pytest.approx(-summary["heat_in_bottom"], rel=1e-10)
+    # The cold block is wider than the hot one: its spreading makes the flow exceed the 1D series
+    # estimate with the mean conductance (measured 49.74 W against 35.78 W), never fall below it.
+    assert summary["heat_in_top"] > summary["series_estimate"]
+    # The conductance varies with the pressure over the interface (measured p 3.6 to 27.2 MPa:
+    # h from 0.0053 to the table's end 0.02) and the jump T_m - T_s is q/(h A) at every spring.
+    assert summary["pressure_range"][0] < 10.0 < summary["pressure_range"][1]
+    assert summary["conductance_range"][1] == pytest.approx(0.02)
+    assert summary["conductance_range"][0] < 0.01
+    assert summary["jump_error"] < 1e-8
+    assert summary["jump_range"][1] < 0  # the master (cold) side is colder at every spring
+    assert min(summary["t_min"]) >= 293.0 - 1e-9 and max(summary["t_max"]) <= 373.0 + 1e-9
+    # Measured 6, 4, 4, 4 Newton iterations.
+    assert max(summary["iterations"]) <= 10
+    assert Path(summary["xdmf"]).exists() and Path(summary["xdmf"]).with_suffix(".h5").exists()
+    assert Path(summary["png"]).stat().st_size > 10_000
+    assert Path(summary["interface_png"]).stat().st_size > 10_000
