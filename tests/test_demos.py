@@ -239,3 +239,27 @@ def test_hot_block_demo_balances_heat_and_force(tmp_path):
     assert Path(summary["xdmf"]).exists() and Path(summary["xdmf"]).with_suffix(".h5").exists()
     assert Path(summary["png"]).stat().st_size > 10_000
     assert Path(summary["interface_png"]).stat().st_size > 10_000
+
+
+def test_plastic_indentation_demo_leaves_a_dent(tmp_path):
+    summary = _demo("plastic_indentation").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # 4 loading increments, 4 + 2 withdrawing ones (after the seating increment).
+    assert summary["increments"] == 10
+    # The contact force is the bottom's reaction (measured 2.5e-12 of the peak).
+    assert summary["equilibrium_error"] < 1e-8
+    # Plastic flow under the ball; the ball leaves the dent within the first withdrawal (measured
+    # 0.1764 mm of 0.1999 mm at the peak on the coarse mesh): no spring, no force at the end.
+    assert summary["alpha_max"] > 0.05 and summary["yielding_at_peak"] > 0
+    assert summary["final_springs"] == 0 and summary["final_force"] == 0.0
+    assert 0.5 * summary["dent_at_peak"] < summary["residual_dent"] < summary["dent_at_peak"]
+    # Reverse plasticity while withdrawing (measured 534 points, plastic strain changes 9.5e-4):
+    # small beside the peak's plastic strains.
+    assert summary["alpha_changed_unloading"] < 0.05 * summary["alpha_max"]
+    # The elastic control springs back entirely and starts at Hertz's force (measured +6.7 %,
+    # then +11.8 %, +16.7 %, +19.4 % as the contact grows against the clamped block).
+    assert abs(summary["elastic_residual_dent"]) < 1e-8 * 0.2
+    assert abs(summary["hertz_error"]) < 0.1
+    assert summary["softer_than_elastic"] and summary["cycle_work"] > 0
+    assert max(summary["iterations"]) <= 15  # measured 7-8 in the plastic loading
+    assert Path(summary["xdmf"]).exists() and Path(summary["png"]).stat().st_size > 10_000
