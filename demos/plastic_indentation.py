@@ -32,7 +32,7 @@ equivalent plastic strain does not change, the plastic strains change by less th
 
 Run it with::
 
-    .venv/bin/python demos/plastic_indentation.py            # ~28k dofs, a few minutes
+    .venv/bin/python demos/plastic_indentation.py            # ~28k dofs, about 5 minutes
     .venv/bin/python demos/plastic_indentation.py --coarse   # ~4k dofs (tests), about 15 s
 """
 
