@@ -26,7 +26,7 @@ class CellTemperature:
 
     CalculiX's C3D8 takes the thermal strain from one temperature per element, the mean of its
     eight nodal temperatures (its value at the element centre; measured against ccx 2.20,
-    docs/method.md §20.8). A mechanical residual written with :attr:`T_c` instead of ``T`` has
+    docs/method.md §20.8). A mechanical residual written with ``T_c`` instead of ``T`` has
     that thermal strain; :class:`~dolfinx_ntf.ThermoMechanicalContact` updates ``T_c`` before
     each evaluation and chains ``∂F_u/∂T_c`` with :attr:`P` in the coupling block.
 
@@ -37,7 +37,7 @@ class CellTemperature:
     def __init__(self, T: dolfinx.fem.Function) -> None:
         mesh = T.function_space.mesh
         Q, Q0 = T.function_space, compat.scalar_space(mesh, "DG", 0)
-        #: The temperature; :attr:`T_c` its cell means.
+        #: The temperature; ``T_c`` holds its cell means.
         self.T = T
         self.T_c = dolfinx.fem.Function(Q0, name="cell_temperature")
         cell_map, node_map = Q0.dofmap.index_map, Q.dofmap.index_map

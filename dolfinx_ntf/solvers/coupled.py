@@ -109,9 +109,9 @@ class ThermoMechanicalContact:
         self.atol = 1e-12
         #: Raise ``ContactConvergenceError`` after this many iterations.
         self.max_iterations = 30
-        #: Put the coupling blocks ∂F_u/∂T and ∂F_T/∂u in the Jacobian (True: Newton's method).
-        #: False leaves them out as CalculiX 2.20 does (manual, ``*COUPLED
-        #: TEMPERATURE-DISPLACEMENT``: the fields are coupled by updating each after every
+        #: Whether the Jacobian has the coupling blocks ∂F_u/∂T and ∂F_T/∂u (True, Newton's
+        #: method). False leaves them out as CalculiX 2.20 does (its manual on ``*COUPLED
+        #: TEMPERATURE-DISPLACEMENT`` couples the fields by updating each after every
         #: iteration): the same solution, reached by ccx's iterates (the pairings of its
         #: iterations follow them), at a linear rate.
         self.coupling_blocks = True
