@@ -596,7 +596,9 @@ class Pairing:
             found, face, areas, evaluation = self._search(state, coords, previous)
         state.found_face = face
         gap = evaluation.gap
-        if record_overlap:
+        if record_overlap and isinstance(state.pair.master, RigidSurface):
+            self._record_rigid_overlap(state, coords, previous)
+        elif record_overlap:
             state.overlap[found] = np.minimum(gap, 0.0)
         create = self._creates_spring(state, found, gap, areas)
         state.spring_slave = found[create]
@@ -618,6 +620,24 @@ class Pairing:
         state.face_changes = int(
             np.count_nonzero((previous >= 0) & (current >= 0) & (previous != current))
         )
+
+    def _record_rigid_overlap(
+        self, state: PairState, coords: np.ndarray, previous: np.ndarray
+    ) -> None:
+        """The initial overlap on a rigid master at its place at the start of the step (§3.5).
+
+        The pairing sees a rigid master where its motion puts it at the end of the increment; a
+        meshed master moved by Dirichlet conditions is still at its start when the first pairing
+        records the overlap, and so is the rigid one here: only what overlaps before any motion
+        is ramped, the motion's own penetration acts in full.
+        """
+        end = self.time_fraction
+        self.time_fraction = 0.0
+        try:
+            found, _, _, evaluation = self._search(state, coords, previous)
+        finally:
+            self.time_fraction = end
+        state.overlap[found] = np.minimum(evaluation.gap, 0.0)
 
     def _search(
         self, state: PairState, coords: np.ndarray, previous: np.ndarray
