@@ -5,7 +5,8 @@ plane z = 0 (axisymmetric, the ring weight ``2 pi r`` in the bulk and the contac
 uniform pressure, exact for Nitsche (no penetration), ``E' (DEPTH - d)/H = K d`` for the penalty.
 A half cylinder pressed onto the rigid line: the penalty, Nitsche and the node-to-segment springs
 on the same mesh follow Hertz's line contact (b within 1 %, p0 within 2 %) and agree with each
-other. A rigid surface that leaves the plane is refused.
+other; the same mesh as an axisymmetric hemisphere follows Hertz's sphere. A rigid surface that
+leaves the plane is refused; a circle's UFL gap and normal are the numpy surface's.
 """
 
 from __future__ import annotations
@@ -145,6 +146,7 @@ def test_nitsche_block_gives_the_exact_pressure(axisymmetric, theta):
 HALF_WIDTH = 0.05
 ZONE = 99  # the cylinder's arc below y = 0.2 R: the potential contact zone
 PUSH = 0.005  # the top's displacement: b close to HALF_WIDTH
+SPHERE_PUSH = 0.0025  # the same for the axisymmetric hemisphere's contact radius a
 
 
 @functools.cache
@@ -165,61 +167,88 @@ def _cylinder():
     return mesh, dolfinx.mesh.meshtags(mesh, 1, ft.indices, values)
 
 
-def _hertz_cylinder(method: str) -> dict:
-    """The top pushed PUSH down in 4 increments; Hertz's b and p0 for the reaction, the fit."""
+def _hertz(method: str, axisymmetric: bool = False) -> dict:
+    """The top pushed down in 4 increments: plane strain, the cylinder by PUSH (Hertz's b and p0
+    of the line contact for the reaction); axisymmetric, the quarter disc turned about its
+    symmetry line, a hemisphere, by SPHERE_PUSH (Hertz's a and p0 of the sphere). The fit of
+    Hertz's profile to the nodal pressures: the springs' law values ``F_N / A_p`` in the ring (the
+    recovery's boundary mass has no ``2 pi r``), the recovered pressure otherwise."""
     mesh, tags = _cylinder()
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    if axisymmetric:
+        weight, grad_v, push = axisymmetric_weight(mesh), axisymmetric_grad(v), SPHERE_PUSH
 
-    def stress(w):
-        return small_strain_stress(w, E, NU)
+        def stress(w):
+            return axisymmetric_stress(w, E, NU)
 
-    bulk = ufl.inner(stress(u), ufl.grad(v)) * ufl.dx
+    else:
+        weight, grad_v, push = 1.0, ufl.grad(v), PUSH
+
+        def stress(w):
+            return small_strain_stress(w, E, NU)
+
+    bulk = ufl.inner(stress(u), grad_v) * weight * ufl.dx
     Vy, _ = compat.component_space(V, 1)
     top_uy = dolfinx.fem.Function(Vy)
     top = dolfinx.fem.locate_dofs_topological((V.sub(1), Vy), 1, tags.find(cylinder.CYLINDER_TOP))
     bcs = [
-        component_bc(V, 0, tags.find(cylinder.SYMMETRY)),
+        component_bc(V, 0, tags.find(cylinder.SYMMETRY)),  # the axis in axisymmetry
         dolfinx.fem.dirichletbc(top_uy, top, V.sub(1)),
     ]
     recovery = BoundaryPressure(V, tags.find(ZONE))
+    X = V.tabulate_dof_coordinates()
     if method == "springs":
         law = ntf.LinearLaw.with_ccx_defaults(E, slope=1e4 * E)
-        pair = ntf.ContactPair(ntf.FacetSurface(tags, ZONE), LINE, ntf.SurfaceInteraction(law))
+        pair = ntf.ContactPair(
+            ntf.FacetSurface(tags, ZONE),
+            LINE,
+            ntf.SurfaceInteraction(law),
+            axisymmetric=axisymmetric,
+        )
         problem = ntf.ContactProblem(bulk, u, [pair], bcs)
         with ntf.ContactNewtonSolver(MPI.COMM_SELF, problem) as solver:
             ntf.StaticStep(
-                lambda t: top_uy.x.array.fill(-t * PUSH), initial_increment=0.25, max_increment=0.25
+                lambda t: top_uy.x.array.fill(-t * push), initial_increment=0.25, max_increment=0.25
             ).run(solver, u)
         (res,) = ntf.contact_results(problem)
         recovery.from_forces(res.node, res.normal_force)
         residual = bulk
+        nodes, p = (res.node, res.pressure) if axisymmetric else recovery.nodal()
+        x = X[nodes, 0]
     else:
         obstacle = continuum.RigidObstacle(LINE, mesh)
         ds = continuum.contact_measure(mesh, tags, ZONE)
         if method == "penalty":
-            contact = continuum.penalty_residual(u, v, obstacle, ds, 1e4 * E)
+            contact = continuum.penalty_residual(u, v, obstacle, ds, 1e4 * E, weight)
             pressure = continuum.penalty_pressure(u, obstacle, 1e4 * E)
         else:
             gamma = continuum.nitsche_gamma(10.0, E, mesh)
-            contact = continuum.nitsche_residual(u, v, obstacle, ds, stress, gamma)
+            contact = continuum.nitsche_residual(u, v, obstacle, ds, stress, gamma, weight=weight)
             pressure = continuum.nitsche_pressure(u, obstacle, stress, gamma)
         newton = continuum.ContinuumNewton(bulk, contact, u, bcs)
         for k in range(4):
-            top_uy.x.array[:] = -(k + 1) / 4 * PUSH
+            top_uy.x.array[:] = -(k + 1) / 4 * push
             newton.solve()
         newton.destroy()
         recovery.from_expression(pressure)
         residual = bulk + contact
-    line_load = -2 * measures.facet_reaction(residual, u, tags, cylinder.CYLINDER_TOP)[1]
-    b = np.sqrt(4 * line_load / (np.pi * E / (1 - NU**2)))
-    p0 = 2 * line_load / (np.pi * b)
-    nodes, p = recovery.nodal()
-    x = V.tabulate_dof_coordinates()[nodes, 0]
+        nodes, p = recovery.nodal()
+        x = X[nodes, 0]
+    reaction = -measures.facet_reaction(residual, u, tags, cylinder.CYLINDER_TOP)[1]
+    e_star = E / (1 - NU**2)
+    if axisymmetric:  # the whole sphere's force; R = 1
+        force = reaction
+        b = (3 * force / (4 * e_star)) ** (1 / 3)
+        p0 = 3 * force / (2 * np.pi * b**2)
+    else:  # the half model carries half the line load
+        force = 2 * reaction
+        b = np.sqrt(4 * force / (np.pi * e_star))
+        p0 = 2 * force / (np.pi * b)
     b_fit, p0_fit = measures.fit_hertz_profile(x, p, b, p0)
     return {
-        "line_load": line_load,
-        "pressure_load": 2 * recovery.total(),
+        "force": force,
+        "pressure_load": None if axisymmetric else 2 * recovery.total(),
         "b": b,
         "p0": p0,
         "b_fit": b_fit,
@@ -229,21 +258,38 @@ def _hertz_cylinder(method: str) -> dict:
 
 @pytest.mark.serial
 def test_hertz_cylinder_by_penalty_nitsche_and_springs():
-    runs = {m: _hertz_cylinder(m) for m in ("springs", "penalty", "nitsche")}
+    runs = {m: _hertz(m) for m in ("springs", "penalty", "nitsche")}
     for run in runs.values():
         assert run["b"] == pytest.approx(HALF_WIDTH, rel=0.05)
-        assert run["pressure_load"] == pytest.approx(run["line_load"], rel=1e-10)
+        assert run["pressure_load"] == pytest.approx(run["force"], rel=1e-10)
         # measured b -0.53 %, -0.56 %, -0.69 %; p0 +0.17 %, +0.19 %, +0.32 %
         assert run["b_fit"] == pytest.approx(run["b"], rel=1e-2)
         assert run["p0_fit"] == pytest.approx(run["p0"], rel=2e-2)
     springs = runs["springs"]
     # the same penalty slope: the penalty is the springs' continuum twin (measured 1e-5);
     # Nitsche has no penetration: a little more force for the same push (measured 4e-4)
-    assert runs["penalty"]["line_load"] == pytest.approx(springs["line_load"], rel=1e-4)
-    assert runs["nitsche"]["line_load"] == pytest.approx(springs["line_load"], rel=2e-3)
+    assert runs["penalty"]["force"] == pytest.approx(springs["force"], rel=1e-4)
+    assert runs["nitsche"]["force"] == pytest.approx(springs["force"], rel=2e-3)
     for method in ("penalty", "nitsche"):
         assert runs[method]["b_fit"] == pytest.approx(springs["b_fit"], rel=3e-3)
         assert runs[method]["p0_fit"] == pytest.approx(springs["p0_fit"], rel=3e-3)
+
+
+@pytest.mark.serial
+def test_axisymmetric_hertz_sphere_by_penalty_nitsche_and_springs():
+    """The quarter disc as a hemisphere (R = 1) on the plane: a and p0 of Hertz's sphere."""
+    runs = {m: _hertz(m, axisymmetric=True) for m in ("springs", "penalty", "nitsche")}
+    for run in runs.values():
+        assert run["b"] == pytest.approx(HALF_WIDTH, rel=0.05)
+        # measured a -0.29 %, -0.19 %, -0.26 %; p0 +1.2 %, -0.41 %, -0.27 %
+        assert run["b_fit"] == pytest.approx(run["b"], rel=1e-2)
+        assert run["p0_fit"] == pytest.approx(run["p0"], rel=2e-2)
+    springs = runs["springs"]
+    # force: the penalty within 4e-5 of the springs, Nitsche 1e-3 above (no penetration)
+    assert runs["penalty"]["force"] == pytest.approx(springs["force"], rel=1e-4)
+    assert runs["nitsche"]["force"] == pytest.approx(springs["force"], rel=2e-3)
+    for method in ("penalty", "nitsche"):
+        assert runs[method]["b_fit"] == pytest.approx(springs["b_fit"], rel=3e-3)
 
 
 @pytest.mark.serial
