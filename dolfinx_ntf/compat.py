@@ -229,6 +229,17 @@ def cpp_mesh(mesh: dolfinx.mesh.Mesh) -> typing.Any:
     return mesh._mesh if _LEGACY else mesh._cpp_object
 
 
+def tags_on_mesh(tags: MeshTags, mesh: dolfinx.mesh.Mesh) -> bool:
+    """Whether ``tags`` were made on ``mesh`` (the same topology object, not an equal one).
+
+    dolfinx 0.5 tags hold their mesh, later ones its topology; both hand out the C++ object that
+    ``mesh.topology`` wraps (a Python wrapper from dolfinx 0.10 on).
+    """
+    topology = tags.mesh.topology if hasattr(tags, "mesh") else tags.topology
+    ours = mesh.topology
+    return getattr(topology, "_cpp_object", topology) is getattr(ours, "_cpp_object", ours)
+
+
 def entities_to_geometry(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray) -> np.ndarray:
     """Geometry nodes of the closure of each entity, shape (num_entities, nodes per entity)."""
     entities = np.asarray(entities, dtype=np.int32)

@@ -33,13 +33,7 @@ from dolfinx_ntf.fem.surfaces import (
 )
 from dolfinx_ntf.kernels.edges import EdgeType, axisymmetric_edge_spring_areas, edge_spring_areas
 from dolfinx_ntf.kernels.friction_state import FrictionState
-from dolfinx_ntf.kernels.rigid import (
-    RigidCylinder,
-    RigidPlane,
-    RigidSphere,
-    RigidSurface,
-    rigid_master,
-)
+from dolfinx_ntf.kernels.rigid import RigidSurface, check_in_plane, rigid_master
 from dolfinx_ntf.kernels.search import MasterSurface
 from dolfinx_ntf.kernels.segment_search import MasterCurve
 from dolfinx_ntf.kernels.spring_areas import spring_areas
@@ -259,7 +253,7 @@ class Pairing:
                     f"{name}: friction and ADJUST against a rigid analytical master are not "
                     "supported yet (in 2D as in 3D); use a meshed master"
                 )
-            _check_in_plane(pair.master, f"{name} master")
+            check_in_plane(pair.master, f"{name} master")
             if self.halo is not None:  # the owned slave nodes and their edges
                 slave = collectives.collectively(
                     comm, surface_distribution.distribute_slave, V, self.halo, pair.slave, slave,
@@ -756,27 +750,6 @@ class Pairing:
             same = previous_face[found] == face[found]
             xi0[same] = previous_xi[found[same]]
         return xi0
-
-
-def _check_in_plane(surface: RigidSurface, what: str) -> None:
-    """A rigid master of a 2D mesh must not depend on z (a line or a circle in the xy-plane).
-
-    Planes, cylinders and spheres are checked here, when the pair is set up; a
-    :class:`~dolfinx_ntf.SignedDistanceSurface` and moving surfaces are checked by their normal
-    at every evaluation (``kernels.rigid.in_plane``).
-    """
-    tilt = None
-    if isinstance(surface, RigidPlane) and surface.unit_normal[2] != 0.0:
-        tilt = f"the plane's normal {tuple(surface.unit_normal)} is not in the xy-plane"
-    elif isinstance(surface, RigidCylinder) and abs(abs(surface.axis[2]) - 1.0) > 1e-12:
-        tilt = f"the cylinder's axis {tuple(surface.axis)} is not along z"
-    elif isinstance(surface, RigidSphere) and surface.center[2] != 0.0:
-        tilt = f"the sphere's centre {tuple(surface.center)} is not in the plane z = 0"
-    if tilt is not None:
-        raise ValueError(
-            f"{what}: on a 2D mesh a rigid surface must be a line or a circle of the xy-plane: "
-            f"{tilt}"
-        )
 
 
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
