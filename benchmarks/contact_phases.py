@@ -8,6 +8,12 @@ in memory and minutes. The lower plate's bottom is clamped; the upper plate's to
 y and loaded by a pressure, and the upper plate is given a small uniform penetration so that every
 slave node carries a compressed spring.
 
+With ``--dim 2`` the plates are two strips of triangles meeting along the line y = 0 (plane strain,
+node-to-segment springs, docs/guide/two_d.md): the slave line has about ``--sizes`` nodes and the
+strips ``--layers`` rows of near-square cells (split into two triangles each), so 1e5 slave nodes
+with 2 layers make about 1e6 dofs, solved by MUMPS (a strip's fill is small; 2D problems switch
+to GAMG only above ``--direct-max-dofs``, default 2e6 in 2D).
+
 Every phase calls the library's own code path, timed with ``time.perf_counter`` over ``--repeat``
 runs after one untimed warm-up run; the tables give the median:
 
@@ -39,6 +45,10 @@ of processes. Run::
     .venv/bin/python benchmarks/contact_phases.py                     # 1e3, 1e4, 1e5 slave nodes
     .venv/bin/python benchmarks/contact_phases.py --sizes 1e3 1e4 --repeat 5 --solver gamg
     mpirun -n 2 .venv/bin/python benchmarks/contact_phases.py --sizes 1e3 1e4
+    .venv/bin/python benchmarks/contact_phases.py --dim 2 --layers 2   # 2D, up to about 1e6 dofs
+
+The main table's last column is the contact share of a Newton iteration: the spring evaluation
+and its insertion into the matrix and the vector, over the whole iteration.
 """
 
 from __future__ import annotations
@@ -65,12 +75,11 @@ import ufl
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.assembly import SpringBlocks
-from dolfinx_ntf.contact.pairing import SEARCH_TOLERANCE
+from dolfinx_ntf.contact.pairing import SEARCH_TOLERANCE, slave_areas
 from dolfinx_ntf.contact.problem import LAST_REPAIRING_ITERATION
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.fem.surfaces import resolve_master
 from dolfinx_ntf.kernels.search import NOT_HELD, MasterSurface
-from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.parallel import master_exchange, surface_distribution
 from dolfinx_ntf.parallel.halo import NodeHalo
 from dolfinx_ntf.solvers.linear_solver import ITERATIVE_PETSC_OPTIONS, galerkin_products
@@ -141,45 +150,72 @@ def _box(
     return points, np.column_stack([node(*c) for c in corners])
 
 
+def _strip(
+    origin: typing.Sequence[float], size: typing.Sequence[float], divisions: typing.Sequence[int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Points and triangles (each rectangle of a structured grid cut along a diagonal)."""
+    axes = [np.linspace(o, o + s, n + 1) for o, s, n in zip(origin, size, divisions)]
+    y, x = np.meshgrid(axes[1], axes[0], indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel()])
+    nx, ny = divisions
+    j, i = (a.ravel() for a in np.meshgrid(np.arange(ny), np.arange(nx), indexing="ij"))
+    corner = j * (nx + 1) + i
+    a, b, c, d = corner, corner + 1, corner + nx + 1, corner + nx + 2
+    return points, np.vstack([np.column_stack([a, b, d]), np.column_stack([a, d, c])])
+
+
 def build_plates(
-    slave_nodes: int, *, layers: int = 1, master_ratio: float = 0.7, comm: MPI.Comm = MPI.COMM_WORLD
+    slave_nodes: int,
+    *,
+    layers: int = 1,
+    master_ratio: float = 0.7,
+    dim: int = 3,
+    comm: MPI.Comm = MPI.COMM_WORLD,
 ) -> PlateMesh:
     """Two touching plates; the upper plate's bottom face has about ``slave_nodes`` nodes.
 
     Args:
-        slave_nodes: Target number of slave nodes, (n+1)^2 with n slave divisions per side.
+        slave_nodes: Target number of slave nodes: (n+1)^2 with n slave divisions per side in 3D,
+            n+1 along the slave line in 2D.
         layers: Cell layers through the thickness of each plate (cells are near-cubic).
         master_ratio: Master divisions per side relative to the slave's (< 1: coarser master).
+        dim: 3 (hexahedra) or 2 (triangles, two strips meeting along y = 0).
         comm: Communicator (the mesh is built on rank 0).
     """
+    if dim not in (2, 3):
+        raise ValueError(f"dim = {dim}: expected 2 or 3")
     if slave_nodes < 4:
         raise ValueError(f"slave_nodes = {slave_nodes}: need at least 4")
     if layers < 1:
         raise ValueError(f"layers = {layers}: need at least 1")
     if not master_ratio > 0.0:
         raise ValueError(f"master_ratio = {master_ratio}: must be positive")
-    n = max(1, round(math.sqrt(slave_nodes)) - 1)
+    n = max(1, (round(math.sqrt(slave_nodes)) if dim == 3 else slave_nodes) - 1)
     m = max(1, round(master_ratio * n))
     inset = 0.01  # the slave plate lies inside the master's edges
     hs, hm = (1.0 - 2 * inset) / n, 1.0 / m
-    p1, c1 = _box((0.0, 0.0, -layers * hm), (1.0, 1.0, layers * hm), (m, m, layers))
-    p2, c2 = _box(
-        (inset, inset, 0.0), (1.0 - 2 * inset, 1.0 - 2 * inset, layers * hs), (n, n, layers)
-    )
+    if dim == 3:
+        p1, c1 = _box((0.0, 0.0, -layers * hm), (1.0, 1.0, layers * hm), (m, m, layers))
+        p2, c2 = _box(
+            (inset, inset, 0.0), (1.0 - 2 * inset, 1.0 - 2 * inset, layers * hs), (n, n, layers)
+        )
+    else:
+        p1, c1 = _strip((0.0, -layers * hm), (1.0, layers * hm), (m, layers))
+        p2, c2 = _strip((inset, 0.0), (1.0 - 2 * inset, layers * hs), (n, layers))
     points, cells = np.vstack([p1, p2]), np.vstack([c1, c2 + p1.shape[0]])
     if comm.rank != 0:
-        points, cells = np.empty((0, 3)), np.empty((0, 8), dtype=np.int64)
-    domain = compat.coordinate_element("hexahedron", 1)
+        points, cells = np.empty((0, dim)), np.empty((0, cells.shape[1]), dtype=np.int64)
+    domain = compat.coordinate_element("hexahedron" if dim == 3 else "triangle", 1)
     mesh = compat.create_mesh(comm, cells.astype(np.int64), points, domain)
 
-    tdim = 3
+    tdim = dim
     num_cells = mesh.topology.index_map(tdim).size_local
     cells_local = np.arange(num_cells, dtype=np.int32)
-    upper = dolfinx.mesh.compute_midpoints(mesh, tdim, cells_local)[:, 2] > 0.0
+    upper = dolfinx.mesh.compute_midpoints(mesh, tdim, cells_local)[:, dim - 1] > 0.0
     mesh.topology.create_connectivity(tdim - 1, tdim)
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     f_to_c = mesh.topology.connectivity(tdim - 1, tdim)
-    z = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, exterior)[:, 2]
+    z = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, exterior)[:, dim - 1]
     in_upper = upper[f_to_c.array[f_to_c.offsets[exterior]]]
     tol = 1e-3 * min(hs, hm)
     values = np.zeros(exterior.size, dtype=np.int32)
@@ -207,6 +243,7 @@ def build_problem(
     if solver not in SOLVERS:
         raise ValueError(f"solver = {solver!r}: expected one of {sorted(SOLVERS)}")
     mesh, ft = plates.mesh, plates.facet_tags
+    dim = mesh.topology.dim
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     sigma = small_strain_stress(u, E, NU)
@@ -215,13 +252,10 @@ def build_problem(
     F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
         ufl.FacetNormal(mesh), v
     ) * ds(UPPER_TOP)
-    clamp = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
+    clamp = dolfinx.fem.locate_dofs_topological(V, dim - 1, ft.find(LOWER_BOTTOM))
     top = ft.find(UPPER_TOP)
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(3), clamp, V),
-        component_bc(V, 0, top),
-        component_bc(V, 1, top),
-    ]
+    bcs = [dolfinx.fem.dirichletbc(np.zeros(dim), clamp, V)]
+    bcs += [component_bc(V, i, top) for i in range(dim - 1)]  # the top slides along the normal
     interaction = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(E))
     pair = ntf.ContactPair(ntf.FacetSurface(ft, SLAVE), ntf.FacetSurface(ft, MASTER), interaction)
     problem = ntf.ContactProblem(F, u, [pair], bcs)
@@ -231,9 +265,9 @@ def build_problem(
     x = problem.current_coordinates()
     edges = np.linalg.norm(x[slave_faces[:, 1]] - x[slave_faces[:, 0]], axis=1)
     h = mesh.comm.allreduce(edges.sum()) / mesh.comm.allreduce(edges.size)  # any process count
-    mesh.topology.create_connectivity(3, 3)  # dolfinx 0.9 needs it to locate dofs by cell
-    upper = dolfinx.fem.locate_dofs_topological(V, 3, plates.upper_cells)
-    u.x.array.reshape(-1, 3)[upper, 2] = -penetration * h
+    mesh.topology.create_connectivity(dim, dim)  # dolfinx 0.9 needs it to locate dofs by cell
+    upper = dolfinx.fem.locate_dofs_topological(V, dim, plates.upper_cells)
+    u.x.array.reshape(-1, dim)[upper, dim - 1] = -penetration * h
     u.x.scatter_forward()
     problem.begin_increment(1.0)
 
@@ -271,9 +305,9 @@ def _time_search(problem: ntf.ContactProblem, repeat: int, out: dict[str, typing
     out["search"] = timed(problem.pair, repeat)
     out["springs"] = problem.total_springs
     coords = problem.current_coordinates()
-    ft, faces, nodes = state.slave.faces.face_type, state.slave.faces.faces, state.slave.nodes
-    out["areas"] = timed(lambda: spring_areas(ft, faces, coords, nodes), repeat)
-    areas = spring_areas(ft, faces, coords, nodes)
+    nodes = state.slave.nodes
+    out["areas"] = timed(lambda: slave_areas(state.slave, coords), repeat)
+    areas = slave_areas(state.slave, coords)
     out["update"] = timed(lambda: state.master.update(coords), repeat)
     points = coords[nodes]
     tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
@@ -294,6 +328,8 @@ def _time_master_distribution(
     halo, state = problem.halo, problem.states[0]
     if halo is None or isinstance(state.master, master_exchange.MasterPatch):
         return  # serial, or the problem's own halo lacks the whole surface
+    if problem.u.function_space.mesh.topology.dim == 2:
+        return  # a 2D master is always gathered whole (docs/method.md §14.11)
     own = resolve_master(problem.u.function_space, state.pair.master, what="master")
     coords = problem.current_coordinates()
     nodes = state.slave.nodes
@@ -309,7 +345,7 @@ def _time_master_distribution(
     out["master_gather"] = timed(gathered, repeat)
     out["master_exchange"] = timed(exchanged, repeat)
     whole, patch = gathered(), exchanged()
-    areas = spring_areas(state.slave.faces.face_type, state.slave.faces.faces, coords, nodes)
+    areas = slave_areas(state.slave, coords)
     points = coords[nodes]
     tolerances = np.where(areas > 0, SEARCH_TOLERANCE * np.sqrt(areas), 0.0)
     for key, surface in (("whole", whole), ("patch", patch)):
@@ -379,18 +415,19 @@ def run_size(
     solver: str,
     layers: int = 1,
     master_ratio: float = 0.7,
+    dim: int = 3,
     log: typing.Callable[[str], None] = _print,
 ) -> dict[str, typing.Any]:
     """Build the plates for one size and time every phase; returns median times (s) and counts."""
     comm = MPI.COMM_WORLD
     t0 = time.perf_counter()
-    plates = build_plates(slave_nodes, layers=layers, master_ratio=master_ratio)
+    plates = build_plates(slave_nodes, layers=layers, master_ratio=master_ratio, dim=dim)
     comm.barrier()
     t1 = time.perf_counter()
     problem, newton = build_problem(plates, solver, options_prefix=f"bench{slave_nodes}_")
     setup = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
     state = problem.states[0]
-    dofs = 3 * problem.u.function_space.dofmap.index_map.size_global
+    dofs = dim * problem.u.function_space.dofmap.index_map.size_global
     out: dict[str, typing.Any] = {
         "slave_nodes": comm.allreduce(int(state.slave.nodes.size)),
         "dofs": dofs,
@@ -467,6 +504,11 @@ def _exponents(results: typing.Sequence[dict], keys: typing.Sequence[str]) -> li
     return rows
 
 
+def contact_share(result: dict[str, typing.Any]) -> float:
+    """The springs' part of a Newton iteration: their evaluation and insertion, over the whole."""
+    return (result["evaluate"] + result["insert"]) / result["newton"]
+
+
 def report(results: typing.Sequence[dict], repeat: int) -> str:
     """The main table, the breakdown and the scaling exponents as text."""
     main_keys = ["search", "evaluate", "insert", "pattern", "newton"]
@@ -480,6 +522,7 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         "Newton iteration (s)",
         "dofs",
         "solver",
+        "contact share",
     ]
     rows = []
     for r in results:
@@ -488,7 +531,7 @@ def report(results: typing.Sequence[dict], repeat: int) -> str:
         rows.append(
             [str(r["slave_nodes"]), str(r["springs"])]
             + [_s(r[k]) for k in main_keys]
-            + [str(r["dofs"]), solver]
+            + [str(r["dofs"]), solver, f"{contact_share(r):.1%}"]
         )
     text = [f"Median of {repeat} runs (s).", _format_table(header, rows), ""]
 
@@ -610,9 +653,12 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--direct-max-dofs",
         type=int,
-        default=400_000,
+        default=None,
         help="with --solver mumps, sizes with more dofs use cg+gamg instead "
-        "(default 400000; 0 = never switch)",
+        "(default 400000 in 3D, 2000000 in 2D; 0 = never switch)",
+    )
+    parser.add_argument(
+        "--dim", type=int, choices=(2, 3), default=3, help="3D plates or 2D strips (default 3)"
     )
     parser.add_argument(
         "--layers", type=int, default=1, help="cell layers through each plate (default 1)"
@@ -626,6 +672,8 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.repeat < 1:
         parser.error(f"--repeat {args.repeat}: need at least 1")
+    if args.direct_max_dofs is None:
+        args.direct_max_dofs = 400_000 if args.dim == 3 else 2_000_000
     if any(size < 4 for size in args.sizes):
         parser.error(f"--sizes {args.sizes}: every size must be at least 4 slave nodes")
 
@@ -634,7 +682,8 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
     load = os.getloadavg()[0]
     for size in args.sizes:
         target = round(size)
-        dofs = int(3 * (args.layers + 1) * target * (1 + args.master_ratio**2))  # both plates
+        master_share = args.master_ratio ** (args.dim - 1)
+        dofs = int(args.dim * (args.layers + 1) * target * (1 + master_share))  # both plates
         solver = args.solver
         if solver == "mumps" and args.direct_max_dofs and dofs > args.direct_max_dofs:
             solver = "gamg"
@@ -650,14 +699,16 @@ def main(argv: typing.Sequence[str] | None = None) -> int:
                 solver=solver,
                 layers=args.layers,
                 master_ratio=args.master_ratio,
+                dim=args.dim,
             )
         )
     _print()
     _print(report(results, args.repeat))
     version = ".".join(map(str, PETSc.Sys.getVersion()))
     _print(
-        f"\nTotal {time.perf_counter() - start:.0f} s; layers {args.layers}, master ratio "
-        f"{args.master_ratio}, PETSc {version}, {MPI.COMM_WORLD.size} process(es); 1-min load "
+        f"\nTotal {time.perf_counter() - start:.0f} s; {args.dim}D, layers {args.layers}, "
+        f"master ratio {args.master_ratio}, PETSc {version}, {MPI.COMM_WORLD.size} process(es); "
+        f"1-min load "
         f"average {load:.1f} at start, "
         f"{os.getloadavg()[0]:.1f} at end (other processes on the machine inflate the times)."
     )

@@ -17,10 +17,12 @@ from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
+from dolfinx_ntf.fem.plasticity import J2Plasticity, mandel_strain
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
-from dolfinx_ntf.fem.thermal import thermal_strain, thermoelastic_stress
+from dolfinx_ntf.fem.thermal import CellTemperature, thermal_strain, thermoelastic_stress
 from dolfinx_ntf.kernels.discrete_springs import (
     AxialSpring,
     DirectionalSpring,
@@ -37,6 +39,7 @@ from dolfinx_ntf.kernels.laws import (
     SurfaceInteraction,
     TabularLaw,
 )
+from dolfinx_ntf.kernels.plasticity import IsotropicHardening
 from dolfinx_ntf.kernels.rigid import (
     RigidCylinder,
     RigidPlane,
@@ -93,6 +96,7 @@ __all__ = [
     "AnalysisStep",
     "AxialSpring",
     "BoundaryPressure",
+    "CellTemperature",
     "ChangeFriction",
     "ContactConvergenceError",
     "ContactDivergenceError",
@@ -113,7 +117,10 @@ __all__ = [
     "Friction",
     "GapConductance",
     "GlobalLinearConstraint",
+    "IncompatibleModes",
     "IncrementResult",
+    "IsotropicHardening",
+    "J2Plasticity",
     "LinearConstraint",
     "LinearConstraintBlock",
     "LinearLaw",
@@ -149,6 +156,7 @@ __all__ = [
     "input_node_ids",
     "kinetic_energy",
     "log_progress",
+    "mandel_strain",
     "reaction",
     "run_steps",
     "serendipity_constraints",

@@ -30,6 +30,11 @@ geometry dofmap                        ``geometry.dofmap``              as 0.5.2
 scalar space of one component          scalar space, same numbering     ``V.sub(i).collapse()``         as 0.9, dof maps per cell type
                                        (``collapse`` crashes on a
                                        process without cells)
+quadrature space (e.g. stresses)       ``ufl.VectorElement(             ``basix.ufl.                    as 0.9
+                                       "Quadrature", ...,               quadrature_element(...,
+                                       quad_scheme="default")``         scheme="default")``
+reference quadrature points            ``basix.make_quadrature(type,    ``make_quadrature(cell, deg)``  as 0.9
+                                       cell, deg)``
 =====================================  ===============================  ==============================  ==============================
 
 A user's own UFL code differs the same way (element and space creation, ``LinearProblem``'s
@@ -73,6 +78,8 @@ __all__ = [
     "linear_problem",
     "model_to_mesh",
     "petsc_vector",
+    "quadrature_points",
+    "quadrature_space",
     "scalar_space",
     "space_degree",
     "space_family",
@@ -155,6 +162,52 @@ def coordinate_element(cell_name: str, degree: int = 1, gdim: int = 3) -> typing
     return basix.ufl.element("Lagrange", cell_name, degree, shape=(gdim,))
 
 
+def quadrature_space(
+    mesh: dolfinx.mesh.Mesh, degree: int, shape: tuple[int, ...] = ()
+) -> dolfinx.fem.FunctionSpace:
+    """Values of shape ``shape`` at the points of the default quadrature rule of ``degree``.
+
+    A form integrates such a Function exactly at its points with the measure
+    ``dx(metadata={"quadrature_degree": degree, "quadrature_scheme": "default"})``;
+    :func:`quadrature_points` gives the same points on the reference cell.
+    """
+    cell = mesh.ufl_cell()
+    if _LEGACY:
+        if shape == ():
+            element = ufl.FiniteElement("Quadrature", cell, degree, quad_scheme="default")
+        elif len(shape) == 1:
+            element = ufl.VectorElement(
+                "Quadrature", cell, degree, dim=shape[0], quad_scheme="default"
+            )
+        else:
+            element = ufl.TensorElement(
+                "Quadrature", cell, degree, shape=shape, quad_scheme="default"
+            )
+        return dolfinx.fem.FunctionSpace(mesh, element)
+    import basix.ufl
+
+    element = basix.ufl.quadrature_element(
+        mesh.topology.cell_type.name, value_shape=tuple(shape), scheme="default", degree=degree
+    )
+    return dolfinx.fem.functionspace(mesh, element)
+
+
+def quadrature_points(mesh: dolfinx.mesh.Mesh, degree: int) -> np.ndarray:
+    """Reference points of the default quadrature rule of ``degree`` on the mesh's cells.
+
+    The points of :func:`quadrature_space` and of forms integrated with that rule, in their
+    order (e.g. for a ``dolfinx.fem.Expression`` evaluated at them).
+    """
+    import basix
+
+    cell = getattr(basix.CellType, mesh.topology.cell_type.name)
+    if _LEGACY:
+        points, _ = basix.make_quadrature(basix.QuadratureType.Default, cell, degree)
+    else:
+        points, _ = basix.make_quadrature(cell, degree)
+    return np.asarray(points)
+
+
 def space_degree(V: dolfinx.fem.FunctionSpace) -> int:
     """Polynomial degree of a (vector) Lagrange space."""
     element = V.ufl_element()
@@ -174,6 +227,17 @@ def space_family(V: dolfinx.fem.FunctionSpace) -> str:
 def cpp_mesh(mesh: dolfinx.mesh.Mesh) -> typing.Any:
     """The C++ mesh object that ``dolfinx.cpp`` functions take."""
     return mesh._mesh if _LEGACY else mesh._cpp_object
+
+
+def tags_on_mesh(tags: MeshTags, mesh: dolfinx.mesh.Mesh) -> bool:
+    """Whether ``tags`` were made on ``mesh`` (the same topology object, not an equal one).
+
+    dolfinx 0.5 tags hold their mesh, later ones its topology; both hand out the C++ object that
+    ``mesh.topology`` wraps (a Python wrapper from dolfinx 0.10 on).
+    """
+    topology = tags.mesh.topology if hasattr(tags, "mesh") else tags.topology
+    ours = mesh.topology
+    return getattr(topology, "_cpp_object", topology) is getattr(ours, "_cpp_object", ours)
 
 
 def entities_to_geometry(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray) -> np.ndarray:

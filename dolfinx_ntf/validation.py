@@ -171,8 +171,14 @@ def check_displacement(u: object, owner: str) -> None:
         raise ValueError(f"{owner}: u must be {expected}, got {space}")
 
 
-def check_residual(F: object, u: dolfinx.fem.Function, owner: str, J: object = None) -> None:
-    """``F`` must be a UFL residual form (one test function) that depends on ``u``."""
+def check_residual(
+    F: object, u: dolfinx.fem.Function, owner: str, J: object = None, *, through: bool = False
+) -> None:
+    """``F`` must be a UFL residual form (one test function) that depends on ``u``.
+
+    With ``through`` it may depend on ``u`` only through coefficients updated from it (a
+    material history's stresses); ``J`` is then needed.
+    """
     if not isinstance(F, ufl.Form):
         raise TypeError(
             f"{owner}: F must be a UFL form (the residual, e.g. inner(sigma(u), grad(v)) * dx), "
@@ -184,7 +190,13 @@ def check_residual(F: object, u: dolfinx.fem.Function, owner: str, J: object = N
             f"{owner}: F must be a residual form, linear in one test function, got a form with "
             f"{len(arguments)} arguments"
         )
-    if u not in F.coefficients():
+    if through and J is None:
+        raise ValueError(
+            f"{owner}: with a material history (e.g. J2Plasticity) pass J, the consistent "
+            "Jacobian (e.g. plasticity.jacobian(du, v)): ufl.derivative cannot see through the "
+            "stresses"
+        )
+    if u not in F.coefficients() and not through:
         raise ValueError(
             f"{owner}: F does not depend on u (its coefficients are "
             f"{[getattr(c, 'name', str(c)) for c in F.coefficients()]}): the Jacobian would be "

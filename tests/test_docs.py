@@ -184,7 +184,10 @@ def test_demo_pages_show_their_figures(site):
         "hertz_cylinder_2d",
         "impact",
         "sliding_block",
+        "sliding_block_2d",
         "frictional_punch",
+        "hot_block",
+        "plastic_indentation",
     ):
         page = (site / "demos" / f"{demo}.html").read_text()
         images = re.findall(r'<img[^>]+src="([^"]+)"', page)
@@ -270,6 +273,7 @@ def test_guide_examples_run(tmp_path, monkeypatch):
         ("guide/steps.md", steps[3]),
         ("guide/surfaces.md", _python_blocks("guide/surfaces.md")[0]),
         *(("guide/thermal.md", block) for block in _python_blocks("guide/thermal.md")),
+        *(("guide/plasticity.md", block) for block in _python_blocks("guide/plasticity.md")),
     ]
     monkeypatch.chdir(tmp_path)  # the writer's file goes here
     monkeypatch.setattr(logs, "_handler", logging.NullHandler())
@@ -310,6 +314,11 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     assert namespace["norms"][-1] <= 1e-10 * namespace["norms"][0]
     flow = MPI.COMM_WORLD.allreduce(sum(float(q.sum()) for q in namespace["flows"]))
     assert flow > 0.0  # into the slave (the punch): the heated block is the master
+    # Plasticity: the punch yielded, the unloading kept the plastic strains, the force is the load.
+    material = namespace["material"]
+    assert MPI.COMM_WORLD.allreduce(namespace["alpha_loaded"].max(initial=0.0), op=MPI.MAX) > 0
+    assert np.array_equal(material.equivalent_plastic_strain, namespace["alpha_loaded"])
+    assert namespace["force_pl"][2] == pytest.approx(2.0 * 0.4 * 0.4, rel=1e-8)
     # The gmsh builder of one's own: 3D groups are cell tags, 2D groups facet tags.
     _, cells, facets = mesh_from_gmsh(namespace["build_two_boxes"], MPI.COMM_SELF, size=0.2)
     assert set(np.unique(cells.values)) == {1, 2} and set(np.unique(facets.values)) == {11, 12}

@@ -65,12 +65,14 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
             "TabularSpringLaw",
         ],
     ),
+    ("Incompatible-mode hexahedra (C3D8I)", "dolfinx_ntf", ["IncompatibleModes"]),
     (
         "Thermal contact",
         "dolfinx_ntf",
         [
             "ThermalContactProblem",
             "ThermoMechanicalContact",
+            "CellTemperature",
             "GapConductance",
             "solve_staggered",
             "thermal_solver",
@@ -80,6 +82,11 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
             "ThermalResults",
             "heat_flux_field",
         ],
+    ),
+    (
+        "Plasticity",
+        "dolfinx_ntf",
+        ["J2Plasticity", "IsotropicHardening", "mandel_strain"],
     ),
     (
         "Rigid master surfaces",
@@ -201,6 +208,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Measures of a contact solution", "dolfinx_ntf.fem.measures"),
     ("Elasticity in UFL (3D, plane strain, plane stress)", "dolfinx_ntf.fem.elasticity"),
     ("Axisymmetric elasticity in UFL", "dolfinx_ntf.fem.axisymmetric"),
+    ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
@@ -215,6 +223,7 @@ ARGS_CHECKED_MODULES = (
     "dolfinx_ntf.fem.continuum",
     "dolfinx_ntf.fem.measures",
     "dolfinx_ntf.fem.pressure_recovery",
+    "dolfinx_ntf.kernels.incompatible_modes",
     "dolfinx_ntf.solvers.continuum",
 )
 
@@ -425,6 +434,7 @@ def _hinted_classes(obj: object) -> set[type]:
 EXTRA_TYPES: list[str] = [
     "dolfinx_ntf.contact.problem.ResidualTerm",
     "dolfinx_ntf.contact.problem.ElementTerm",
+    "dolfinx_ntf.contact.problem.MaterialHistory",
     "dolfinx_ntf.kernels.gap_conductance.ThermalSpringEvaluation",
     "dolfinx_ntf.contact.pairing.Pairing",
     "dolfinx_ntf.solvers.convergence.ForceScaledTest",

@@ -58,7 +58,7 @@ class ElementType:
     """A supported CalculiX solid element type.
 
     Attributes:
-        name: ccx type name (``C3D4``, ``C3D8``, ``C3D10``).
+        name: ccx type name (``C3D4``, ``C3D8``, ``C3D8I``, ``C3D10``, ``C3D20``, ``C3D20R``).
         num_nodes: nodes per element.
         num_corners: corner (vertex) nodes per element, listed first.
         face_type: face type name of ``dolfinx_ntf.kernels.faces`` (``tri3``, ``quad4``, ``tri6``).
@@ -169,7 +169,7 @@ def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
     """
     if element_type == "C3D4":
         return np.ones((4, 1))
-    if element_type == "C3D8":
+    if element_type in ("C3D8", "C3D8I"):
         sides = (points > 0.5).astype(int)
         distance = np.sum(_HEX_CORNERS[:, None, :] != sides[None, :, :], axis=2)
         return np.asarray(C3D8_EXTRAPOLATION)[distance]
@@ -276,7 +276,7 @@ _POINTS = {
     # C3D20: 3x3x3 Gauss, xi fastest (checked against ccx's *EL PRINT); C3D20R as C3D8.
     "C3D20": [[(x + 1) / 2, (y + 1) / 2, (z + 1) / 2] for z in _G3 for y in _G3 for x in _G3],
 }
-_POINTS["C3D20R"] = _POINTS["C3D8"]
+_POINTS["C3D20R"] = _POINTS["C3D8I"] = _POINTS["C3D8"]
 # 2D elements: the in-plane points of ccx's expanded element (2x2 Gauss, xi fastest; one point).
 for _family in TWO_D_MODELS:
     _POINTS[_family + "4"] = [[(x + 1) / 2, (y + 1) / 2] for y in (-_G, _G) for x in (-_G, _G)]
@@ -359,20 +359,24 @@ ELEMENT_TYPES: dict[str, ElementType] = {
         frd_type=6,
     ),
     # Manual: S1 1-2-3-4, S2 5-8-7-6, S3 1-5-6-2, S4 2-6-7-3, S5 3-7-8-4, S6 4-8-5-1 (inward).
-    # dolfinx hexahedron vertices are in tensor order.
-    "C3D8": _element_type(
-        "C3D8",
-        8,
-        8,
-        "quad4",
-        [[4, 3, 2, 1], [5, 6, 7, 8], [1, 2, 6, 5], [2, 3, 7, 6], [3, 4, 8, 7], [4, 1, 5, 8]],
-        cell="hexahedron",
-        degree=1,
-        to_dolfinx=[0, 1, 3, 2, 4, 5, 7, 6],
-        mirrored_vertices=[4, 5, 7, 6, 0, 1, 3, 2],
-        quadrature_degree=2,
-        frd_type=1,
-    ),
+    # dolfinx hexahedron vertices are in tensor order. C3D8I: C3D8's nodes, faces and Gauss
+    # points; the model adds its incompatible modes (docs/method.md §22).
+    **{
+        name: _element_type(
+            name,
+            8,
+            8,
+            "quad4",
+            [[4, 3, 2, 1], [5, 6, 7, 8], [1, 2, 6, 5], [2, 3, 7, 6], [3, 4, 8, 7], [4, 1, 5, 8]],
+            cell="hexahedron",
+            degree=1,
+            to_dolfinx=[0, 1, 3, 2, 4, 5, 7, 6],
+            mirrored_vertices=[4, 5, 7, 6, 0, 1, 3, 2],
+            quadrature_degree=2,
+            frd_type=1,
+        )
+        for name in ("C3D8", "C3D8I")
+    },
     # C3D20 (3x3x3 Gauss) and C3D20R (2x2x2): corners as C3D8, midside nodes 9..20 on the edges
     # _HEX_EDGES; faces as C3D8's, then the midside nodes of edges c1-c2, c2-c3, c3-c4, c4-c1.
     # The dolfinx cell is a 27-node hexahedron: to_dolfinx gives its corners and edge nodes (v0-v1,
@@ -495,14 +499,17 @@ REFUSED_ELEMENTS = {
         for family in TWO_D_MODELS
         for suffix in ("4R",)
     },
-    "C3D8I": ": its incompatible modes (extra internal displacement fields) are not reproduced",
 }
+
+
+_NOT_PLAIN = ("C3D20", "C3D20R", "C3D8I")
 
 
 def element_for_cell(cell: str, degree: int) -> ElementType | None:
     """The ccx element of a degree-``degree`` Lagrange space on ``cell`` cells, or None.
 
-    None for degree-2 hexahedra: a 27-node space is not C3D20's (docs/method.md §13.5). Only 3D
+    None for degree-2 hexahedra: a 27-node space is not C3D20's (docs/method.md §13.5); C3D8
+    for degree-1 hexahedra (C3D8I needs its modes, which a plain space does not have). Only 3D
     elements: a 2D cell has several ccx elements (CPE, CPS, CAX).
     """
     for etype in ELEMENT_TYPES.values():
@@ -510,7 +517,7 @@ def element_for_cell(cell: str, degree: int) -> ElementType | None:
             etype.tdim == 3
             and etype.cell == cell
             and etype.degree == degree
-            and etype.num_nodes != 20
+            and etype.name not in _NOT_PLAIN
         ):
             return etype
     return None

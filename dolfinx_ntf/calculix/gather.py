@@ -179,6 +179,13 @@ class CcxNumbering:
         cells = np.arange(self.num_owned_cells)
         values = forces[compat.cell_dofs(self._W)[cells]]
         dofs = compat.cell_dofs(self.model.V)[cells]
+        modes = self.model.incompatible_modes
+        if modes is not None:  # C3D8I: the condensed modes' forces (docs/method.md §22)
+            self.model.u.x.scatter_forward()
+            x = compat.petsc_vector(self.model.u)
+            extra = np.zeros((self.num_owned_cells, 24))
+            extra[modes.cells] = modes.cell_forces(x)
+            values = values + extra.reshape(-1, 8, 3)
         if self.model.element_type.num_nodes == 20:  # C3D20: centre forces on the 20 nodes
             values = element_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 20, 3)
             dofs = dofs[:, :20]

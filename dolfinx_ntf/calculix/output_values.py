@@ -17,6 +17,7 @@ from mpi4py import MPI
 import numpy as np
 
 import dolfinx.fem
+import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
@@ -98,6 +99,7 @@ class OutputValues:
         self.deck, self.model, self.problem, self.numbering = deck, model, problem, numbering
         self.comm = comm
         self._stress: tuple[dolfinx.fem.Expression, int] | None = None
+        self._heat_flux: tuple[dolfinx.fem.Expression, int] | None = None
         self._field_scales: tuple[float, float, tuple[float, float]] | None = None
 
     # -- forces ------------------------------------------------------------------------------------
@@ -149,6 +151,13 @@ class OutputValues:
             values = np.column_stack([values, np.zeros(values.shape[0])])
         return self.numbering.nodal(values)
 
+    def temperatures(self) -> np.ndarray:
+        """``(N, 1)`` temperature of every deck node (coupled steps only). Collective."""
+        thermal = self.model.thermal
+        if thermal is None:
+            raise ValueError("the model has no temperature field (no *COUPLED step)")
+        return self.numbering.nodal(thermal.T.x.array[:, None])
+
     def with_reference(
         self, ids: np.ndarray, values: np.ndarray, load_time: tuple[int, float]
     ) -> np.ndarray:
@@ -177,6 +186,8 @@ class OutputValues:
 
         Collective: each element is evaluated by the process owning it.
         """
+        if self.model.incompatible_modes is not None:
+            return self._incompatible_mode_stresses(element_ids)
         if self._stress is None:
             points = self.model.element_type.integration_points
             self._stress = (dolfinx.fem.Expression(self.model.cauchy, points), points.shape[0])
@@ -192,6 +203,48 @@ class OutputValues:
         values = self.numbering.element_values(element_ids, evaluate, (q, 6))
         rows = self.model.element_type.print_rows
         return values if rows is None else values[:, rows]  # ccx's expanded 2D elements
+
+    def heat_fluxes(self, element_ids: np.ndarray) -> np.ndarray:
+        """Heat fluxes ``-k grad T`` ``(E, q, 3)`` at ccx's integration points (coupled steps).
+
+        In the reference configuration, as ccx 2.20 prints them under NLGEOM (docs/method.md
+        §20.8). Collective.
+        """
+        thermal = self.model.thermal
+        if thermal is None:
+            raise ValueError("the model has no temperature field (no *COUPLED step)")
+        if self._heat_flux is None:
+            points = self.model.element_type.integration_points
+            flux = -thermal.conductivity * ufl.grad(thermal.T)
+            self._heat_flux = (dolfinx.fem.Expression(flux, points), points.shape[0])
+        expression, q = self._heat_flux
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, self.model.mesh, cells.astype(np.int32))
+            return values.reshape(cells.size, q, 3)
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 3))
+
+    def _incompatible_mode_stresses(self, element_ids: np.ndarray) -> np.ndarray:
+        """C3D8I's stresses ``(E, 8, 6)``: small-strain, the condensed modes' strains included."""
+        modes = self.model.incompatible_modes
+        self.model.u.x.scatter_forward()
+        strain = modes.strains(compat.petsc_vector(self.model.u))  # (C, 8, 3, 3), owned cells
+        position = np.full(self.numbering.num_owned_cells, -1)
+        position[modes.cells] = np.arange(modes.cells.size)
+        mu = self.model.mu.x.array[compat.cell_dofs(self.model.mu.function_space)[modes.cells, 0]]
+        lmbda = self.model.lmbda.x.array[
+            compat.cell_dofs(self.model.lmbda.function_space)[modes.cells, 0]
+        ]
+        trace = np.trace(strain, axis1=2, axis2=3)
+        stress = 2 * mu[:, None, None, None] * strain
+        stress += (lmbda[:, None] * trace)[:, :, None, None] * np.eye(3)
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            return stress[position[cells]][:, :, index[0], index[1]]
+
+        return self.numbering.element_values(element_ids, evaluate, (8, 6))
 
     def nodal_stresses(self) -> tuple[np.ndarray, np.ndarray]:
         """Cauchy stresses at the nodes like ccx's ``.frd`` (frd order xx, yy, zz, xy, yz, zx).

@@ -38,13 +38,7 @@ from dolfinx_ntf.kernels.edges import (
     edge_spring_areas,
 )
 from dolfinx_ntf.kernels.friction_state import FrictionState
-from dolfinx_ntf.kernels.rigid import (
-    RigidCylinder,
-    RigidPlane,
-    RigidSphere,
-    RigidSurface,
-    rigid_master,
-)
+from dolfinx_ntf.kernels.rigid import RigidSurface, check_in_plane, rigid_master
 from dolfinx_ntf.kernels.search import MasterSurface
 from dolfinx_ntf.kernels.segment_search import MasterCurve
 from dolfinx_ntf.kernels.spring_areas import spring_areas
@@ -228,15 +222,7 @@ class Pairing:
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
-        adjust_nodes = None
-        if isinstance(pair.adjust, NodeSurface):
-            adjust_nodes = collectives.collectively(
-                comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
-            ).nodes
-            if self.halo is not None:  # the union over processes, as extended nodes
-                held = self.halo.local_global[adjust_nodes]
-                adjust_nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
-                adjust_nodes = adjust_nodes[adjust_nodes >= 0]
+        adjust_nodes = self._adjust_nodes(name, pair)
         return PairState(
             pair,
             slave,
@@ -249,27 +235,16 @@ class Pairing:
         )
 
     def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
-        """A pair on a 2D mesh: springs on master edges, rigid lines or circles (frictionless).
+        """A pair on a 2D mesh: springs on master edges, rigid lines or circles.
 
-        On several processes the surfaces are distributed as in 3D (docs/method.md §14.1): the
-        master edges of every process are gathered on each, the slave nodes go to their owners
-        with every slave edge holding one of them. Collective.
+        Friction works on meshed master edges (one tangent direction, docs/method.md §17); like
+        in 3D it is refused against a rigid master. On several processes the surfaces are
+        distributed as in 3D (docs/method.md §14.1): the master edges of every process are
+        gathered on each, the slave nodes go to their owners with every slave edge holding one of
+        them. Collective.
         """
         V = self.u.function_space
         comm = V.mesh.comm
-        missing = [
-            feature
-            for feature, used in (
-                ("friction", pair.interaction.friction is not None),
-                ("ADJUST", pair.adjust is not None),
-            )
-            if used
-        ]
-        if missing:
-            raise NotImplementedError(
-                f"{name}: 2D contact does not support {', '.join(missing)} yet (2D meshes have "
-                "frictionless springs against meshed edges, rigid lines and circles)"
-            )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if pair.axisymmetric:
             midside = slave.faceless is not None and bool(np.any(slave.faceless))
@@ -280,7 +255,12 @@ class Pairing:
                     "NodeSurface without midside_nodes"
                 )
         if isinstance(pair.master, RigidSurface):  # a line or a circle in the plane (§15.1)
-            _check_in_plane(pair.master, f"{name} master")
+            if pair.interaction.friction is not None or pair.adjust is not None:
+                raise NotImplementedError(
+                    f"{name}: friction and ADJUST against a rigid analytical master are not "
+                    "supported yet (in 2D as in 3D); use a meshed master"
+                )
+            check_in_plane(pair.master, f"{name} master")
             if self.halo is not None:  # the owned slave nodes and their edges
                 slave = collectives.collectively(
                     comm, surface_distribution.distribute_slave, V, self.halo, pair.slave, slave,
@@ -323,8 +303,26 @@ class Pairing:
         )
         return PairState(
             pair, slave, master_faces, master, np.zeros(slave.nodes.size), friction=friction,
-            was_active=pair.active,
+            was_active=pair.active, adjust_nodes=self._adjust_nodes(name, pair),
         )  # fmt: skip
+
+    def _adjust_nodes(self, name: str, pair: ContactPair) -> np.ndarray | None:
+        """The nodes of an ADJUST node set as extended nodes (None: a distance, or no ADJUST).
+
+        Collective: the node set is resolved on every process and joined over them.
+        """
+        if not isinstance(pair.adjust, NodeSurface):
+            return None
+        V = self.u.function_space
+        comm = V.mesh.comm
+        nodes = collectives.collectively(
+            comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
+        ).nodes
+        if self.halo is not None:  # the union over processes, as extended nodes
+            held = self.halo.local_global[nodes]
+            nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))
+            nodes = nodes[nodes >= 0]
+        return nodes
 
     def _planar_slave(self, name: str, pair: ContactPair, slave: SlaveSurface) -> SlaveSurface:
         """The pair's thickness and model on a 2D slave surface.
@@ -604,7 +602,9 @@ class Pairing:
             found, face, areas, evaluation = self._search(state, coords, previous)
         state.found_face = face
         gap = evaluation.gap
-        if record_overlap:
+        if record_overlap and isinstance(state.pair.master, RigidSurface):
+            self._record_rigid_overlap(state, coords, previous)
+        elif record_overlap:
             state.overlap[found] = np.minimum(gap, 0.0)
         create = self._creates_spring(state, found, gap, areas)
         state.spring_slave = found[create]
@@ -626,6 +626,24 @@ class Pairing:
         state.face_changes = int(
             np.count_nonzero((previous >= 0) & (current >= 0) & (previous != current))
         )
+
+    def _record_rigid_overlap(
+        self, state: PairState, coords: np.ndarray, previous: np.ndarray
+    ) -> None:
+        """The initial overlap on a rigid master at its place at the start of the step (§3.5).
+
+        The pairing sees a rigid master where its motion puts it at the end of the increment; a
+        meshed master moved by Dirichlet conditions is still at its start when the first pairing
+        records the overlap, and so is the rigid one here: only what overlaps before any motion
+        is ramped, the motion's own penetration acts in full.
+        """
+        end = self.time_fraction
+        self.time_fraction = 0.0
+        try:
+            found, _, _, evaluation = self._search(state, coords, previous)
+        finally:
+            self.time_fraction = end
+        state.overlap[found] = np.minimum(evaluation.gap, 0.0)
 
     def _search(
         self, state: PairState, coords: np.ndarray, previous: np.ndarray
@@ -695,7 +713,7 @@ class Pairing:
         move = adjusted_nodes(evaluation.gap, None if in_set is not None else float(adjust), in_set)
         count = self.u.function_space.mesh.comm.allreduce(int(np.count_nonzero(move)))
         if count:  # on every process: the moves reach ghost and halo copies (§14.6)
-            delta = -evaluation.gap[move, None] * evaluation.normal[move]
+            delta = planar_padded(-evaluation.gap[move, None] * evaluation.normal[move])
             move_reference_nodes(
                 self.u.function_space,
                 self._reference,
@@ -744,27 +762,6 @@ class Pairing:
             same = previous_face[found] == face[found]
             xi0[same] = previous_xi[found[same]]
         return xi0
-
-
-def _check_in_plane(surface: RigidSurface, what: str) -> None:
-    """A rigid master of a 2D mesh must not depend on z (a line or a circle in the xy-plane).
-
-    Planes, cylinders and spheres are checked here, when the pair is set up; a
-    :class:`~dolfinx_ntf.SignedDistanceSurface` and moving surfaces are checked by their normal
-    at every evaluation (``kernels.rigid.in_plane``).
-    """
-    tilt = None
-    if isinstance(surface, RigidPlane) and surface.unit_normal[2] != 0.0:
-        tilt = f"the plane's normal {tuple(surface.unit_normal)} is not in the xy-plane"
-    elif isinstance(surface, RigidCylinder) and abs(abs(surface.axis[2]) - 1.0) > 1e-12:
-        tilt = f"the cylinder's axis {tuple(surface.axis)} is not along z"
-    elif isinstance(surface, RigidSphere) and surface.center[2] != 0.0:
-        tilt = f"the sphere's centre {tuple(surface.center)} is not in the plane z = 0"
-    if tilt is not None:
-        raise ValueError(
-            f"{what}: on a 2D mesh a rigid surface must be a line or a circle of the xy-plane: "
-            f"{tilt}"
-        )
 
 
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:

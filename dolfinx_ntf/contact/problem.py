@@ -47,7 +47,14 @@ from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import distributed_elimination
 from dolfinx_ntf.parallel.halo import NodeHalo
 
-__all__ = ["ContactPair", "ContactProblem", "ElementTerm", "PairState", "ResidualTerm"]
+__all__ = [
+    "ContactPair",
+    "ContactProblem",
+    "ElementTerm",
+    "MaterialHistory",
+    "PairState",
+    "ResidualTerm",
+]
 
 logger = logging.getLogger("dolfinx_ntf")
 
@@ -94,6 +101,25 @@ class ElementTerm(typing.Protocol):
 
     def force_sum(self) -> tuple[float, int]:
         """Sum of the absolute values of its nodal forces and their count (this process's)."""
+
+
+class MaterialHistory(typing.Protocol):
+    """A material state at the quadrature points that the increments carry (e.g. plastic strains).
+
+    For example :class:`~dolfinx_ntf.J2Plasticity` (docs/method.md §21); see
+    :attr:`~dolfinx_ntf.ContactProblem.history`. The problem evaluates it at every iterate before
+    the residual; the step driver commits it when an increment converges (with the friction state)
+    and rolls it back when an attempt fails. Collective methods.
+    """
+
+    def evaluate(self) -> None:
+        """Update the stress and tangent at the current displacement from the committed state."""
+
+    def increment_converged(self) -> None:
+        """Commit the state of the current (converged) displacement."""
+
+    def increment_rejected(self) -> None:
+        """Forget the trial state: the displacement is back at the increment start."""
 
 
 class ContactProblem:
@@ -147,6 +173,9 @@ class ContactProblem:
             increment's time fraction in the first increment only) or ``"linear"`` (over the whole
             first step, as CalculiX's manual describes), docs/method.md §11.6.
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
+        history: Material states the increments carry (:class:`MaterialHistory`, e.g.
+            :class:`~dolfinx_ntf.J2Plasticity`): evaluated before every residual, committed when
+            an increment converges, rolled back when an attempt fails.
         reuse_bulk_jacobian: When the bulk Jacobian form does not contain ``u`` (a linear material
             at small strain), assemble it once and copy it at later iterations while its inputs
             are unchanged (``BulkJacobian`` of ``fem/bulk_jacobian.py``; one more matrix in
@@ -177,8 +206,9 @@ class ContactProblem:
         jit_options: dict | None = None,
         reuse_bulk_jacobian: bool = True,
         projection_tangent: str = "exact",
+        history: typing.Sequence[MaterialHistory] = (),
     ) -> None:
-        pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth)
+        pairs, bcs = _check_arguments(F, u, pairs, bcs, J, max_depth, bool(history))
         options = compat.jit_keywords(form_compiler_options, jit_options)
         V = u.function_space
         self._L = dolfinx.fem.form(F, **options)
@@ -273,6 +303,20 @@ class ContactProblem:
         #: Objects the outputs derive from this problem and keep with it for later calls, by name
         #: (e.g. the recovered pressure's compiled forms, ``outputs/results.py``).
         self.output_cache: dict[str, typing.Any] = {}
+        #: Material states evaluated before every residual and committed with the friction state
+        #: (:class:`MaterialHistory`, docs/method.md §21).
+        self.history: list[MaterialHistory] = list(history)
+        for term in self.history:
+            missing = [
+                name
+                for name in ("evaluate", "increment_converged", "increment_rejected")
+                if not callable(getattr(term, name, None))
+            ]
+            if missing:
+                raise TypeError(
+                    f"ContactProblem: history entries must be MaterialHistory objects (such as "
+                    f"J2Plasticity); {validation.describe(term)} lacks {missing}"
+                )
         self.constraints = list(constraints)
         self.elimination: ConstraintElimination | None = None
         #: The reduced Jacobian the linear solver uses when there are constraints.
@@ -420,10 +464,23 @@ class ContactProblem:
         self.pairing.begin_step()
 
     def end_increment(self) -> None:
-        """Accept the converged increment: commit the friction state (docs/method.md §11.3)."""
+        """Accept the converged increment: commit the friction state and the material history.
+
+        docs/method.md §11.3 (friction) and §21 (:attr:`history`).
+        """
         if self.has_friction:
             self.evaluate(tangent=False)
         self.pairing.end_increment()
+        for term in self.history:
+            term.increment_converged()
+
+    def reject_increment(self) -> None:
+        """A failed attempt: ``u`` is back at the increment start; roll the history back (§21).
+
+        The friction state needs nothing: it is committed by :meth:`end_increment` only.
+        """
+        for term in self.history:
+            term.increment_rejected()
 
     def pair(self, *, record_overlap: bool = False, large_sliding_only: bool = False) -> int:
         """Pair every slave node with a master face at the current displacement.
@@ -512,6 +569,8 @@ class ContactProblem:
             dolfinx.fem.petsc.set_bc(x, self.bcs)
             self.elimination.back_substitute(x)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        for term in self.history:  # stresses at the iterate, from the committed state (§21)
+            term.evaluate()
         self._blocks = self.evaluate(tangent=True)
         self._element_blocks = [term.evaluate(x, self.bcs) for term in self.element_terms]
 
@@ -650,13 +709,19 @@ def _broken(
 
 
 def _check_arguments(
-    F: object, u: object, pairs: object, bcs: object, J: object, max_depth: object
+    F: object,
+    u: object,
+    pairs: object,
+    bcs: object,
+    J: object,
+    max_depth: object,
+    history: bool = False,
 ) -> tuple[list[ContactPair], list[compat.DirichletBC]]:
     """The arguments of :class:`ContactProblem`; returns ``(pairs, bcs)`` as lists."""
     owner = "ContactProblem"
     validation.check_displacement(u, owner)
     collectives.collectively(u.function_space.mesh.comm, _check_geometry, u.function_space.mesh)
-    validation.check_residual(F, u, owner, J)
+    validation.check_residual(F, u, owner, J, through=history)
     pairs = validation.check_sequence(
         pairs, ContactPair, f"{owner}: pairs", single_hint="pass [pair] instead of pair"
     )

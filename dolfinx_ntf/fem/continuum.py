@@ -42,6 +42,7 @@ from dolfinx_ntf.kernels.rigid import (
     RigidSphere,
     RigidSurface,
     SignedDistanceSurface,
+    check_in_plane,
 )
 from dolfinx_ntf.logs import newton_logger
 
@@ -87,10 +88,18 @@ class RigidObstacle:
     ``ContinuumIncrementSolver(newton, obstacles)`` and the steps do it
     (:mod:`dolfinx_ntf.solvers.continuum`).
 
+    On a 2D mesh (docs/method.md §17.5) the surface must not depend on z, as for the springs: a
+    plane with its normal in the xy-plane (a line), a cylinder along z or a sphere centred in
+    z = 0 (a circle); gap and normal are then those of the xy-plane (2 components), a
+    ``ufl_distance`` receives a 2-component vector, and a motion must stay in the plane.
+
     Args:
         surface: Plane, sphere, cylinder, or a :class:`~dolfinx_ntf.SignedDistanceSurface` with a
             ``ufl_distance`` (its normal is the UFL derivative of it).
         mesh: The mesh of ``u``.
+
+    Raises:
+        ValueError: On a 2D mesh, a surface or a motion that leaves the xy-plane.
     """
 
     def __init__(self, surface: RigidSurface, mesh: dolfinx.mesh.Mesh) -> None:
@@ -103,7 +112,10 @@ class RigidObstacle:
             )
         self.surface = surface
         self.mesh = mesh
-        self.translation = dolfinx.fem.Constant(mesh, np.zeros(3, dtype=PETSc.ScalarType))
+        self.dim = mesh.geometry.dim
+        if self.dim == 2:
+            check_in_plane(surface, "RigidObstacle")
+        self.translation = dolfinx.fem.Constant(mesh, np.zeros(self.dim, dtype=PETSc.ScalarType))
         self.update(0.0)
 
     def update(self, time: float) -> None:
@@ -111,8 +123,21 @@ class RigidObstacle:
 
         Args:
             time: Relative step time, 0 to 1 (the steps pass the end of the increment).
+
+        Raises:
+            ValueError: On a 2D mesh, a translation with a z component.
         """
-        self.translation.value[:] = self.surface.translation(time)
+        c = self.surface.translation(time)
+        if self.dim == 2 and c[2] != 0.0:
+            raise ValueError(
+                f"RigidObstacle: on a 2D mesh the surface must move in the xy-plane, but its "
+                f"translation at step time {time:g} is {tuple(float(v) for v in c)}"
+            )
+        self.translation.value[:] = c[: self.dim]
+
+    def _vector(self, values: np.ndarray) -> ufl.core.expr.Expr:
+        """A constant vector of the mesh's dimension (the z component dropped in 2D)."""
+        return ufl.as_vector([float(c) for c in values[: self.dim]])
 
     def _local(self, u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
         return ufl.SpatialCoordinate(self.mesh) + u - self.translation
@@ -131,16 +156,19 @@ class RigidObstacle:
         y = self._local(u)
         s = self.surface
         if isinstance(s, RigidPlane):
-            n = ufl.as_vector([float(c) for c in s.unit_normal])
-            return ufl.dot(y - ufl.as_vector([float(c) for c in s.point]), n), n
+            n = self._vector(s.unit_normal)
+            return ufl.dot(y - self._vector(s.point), n), n
         if isinstance(s, RigidSphere):
-            r = y - ufl.as_vector([float(c) for c in s.center])
+            r = y - self._vector(s.center)
             length = ufl.sqrt(ufl.dot(r, r))
             return s.sign * (length - s.radius), s.sign * r / length
         if isinstance(s, RigidCylinder):
-            a = ufl.as_vector([float(c) for c in s.axis])
-            r = y - ufl.as_vector([float(c) for c in s.point])
-            radial = r - ufl.dot(r, a) * a
+            r = y - self._vector(s.point)
+            if self.dim == 2:  # the axis is along z: the distance is the in-plane one
+                radial = r
+            else:
+                a = self._vector(s.axis)
+                radial = r - ufl.dot(r, a) * a
             length = ufl.sqrt(ufl.dot(radial, radial))
             return s.sign * (length - s.radius), s.sign * radial / length
         if isinstance(s, SignedDistanceSurface):
@@ -191,8 +219,9 @@ def penalty_residual(
     obstacle: RigidObstacle,
     ds: ufl.Measure,
     penalty: float,
+    weight: ufl.core.expr.Expr | float = 1.0,
 ) -> ufl.Form:
-    """Penalty contact residual ``-∫ K [-g]_+ n·v ds`` (add it to the bulk residual).
+    """Penalty contact residual ``-∫ K [-g]_+ n·v w ds`` (add it to the bulk residual).
 
     Args:
         u: The displacement.
@@ -200,9 +229,11 @@ def penalty_residual(
         obstacle: The rigid surface.
         ds: Measure of the contact boundary (:func:`contact_measure`).
         penalty: The penalty stiffness ``K`` (pressure per penetration).
+        weight: The weight ``w`` of the boundary integral: 1, or the ring weight ``2 pi r`` of an
+            axisymmetric model (:func:`~dolfinx_ntf.fem.axisymmetric.axisymmetric_weight`).
     """
     _, n = obstacle.gap_and_normal(u)
-    return -penalty_pressure(u, obstacle, penalty) * ufl.dot(n, v) * ds
+    return -penalty_pressure(u, obstacle, penalty) * ufl.dot(n, v) * weight * ds
 
 
 def nitsche_gamma(
@@ -224,6 +255,9 @@ def nitsche_gamma(
 
 
 def _sigma_n(sigma: ufl.core.expr.Expr, n: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """``n·sigma n``; an axisymmetric 3x3 stress (hoop last) takes the meridian normal padded."""
+    if ufl.shape(sigma)[0] == 3 and ufl.shape(n)[0] == 2:
+        n = ufl.as_vector([n[0], n[1], 0.0])
     return ufl.dot(ufl.dot(sigma, n), n)
 
 
@@ -253,6 +287,7 @@ def nitsche_residual(
     stress: typing.Callable[[ufl.core.expr.Expr], ufl.core.expr.Expr],
     gamma: ufl.core.expr.Expr,
     theta: int = 1,
+    weight: ufl.core.expr.Expr | float = 1.0,
 ) -> ufl.Form:
     """Nitsche's frictionless contact residual (docs/method.md §15.2); add it to the bulk residual.
 
@@ -264,6 +299,9 @@ def nitsche_residual(
         stress: ``stress(w)``, the (linear) stress of a displacement, used for ``u`` and ``v``.
         gamma: Nitsche parameter (:func:`nitsche_gamma`).
         theta: 1 (symmetric), 0 (incomplete), -1 (skew-symmetric).
+        weight: The weight of the boundary integrals: 1, or the ring weight ``2 pi r`` of an
+            axisymmetric model (:func:`~dolfinx_ntf.fem.axisymmetric.axisymmetric_weight`, with
+            ``stress`` the 3x3 axisymmetric one).
 
     Raises:
         ValueError: ``theta`` not 1, 0 or -1.
@@ -273,9 +311,9 @@ def nitsche_residual(
     g, n = obstacle.gap_and_normal(u)
     sn_u, sn_v = _sigma_n(stress(u), n), _sigma_n(stress(v), n)
     active = _negative_part(sn_u + gamma * g)
-    form = active * (theta / gamma * sn_v + ufl.dot(n, v)) * ds
+    form = active * (theta / gamma * sn_v + ufl.dot(n, v)) * weight * ds
     if theta:
-        form += -theta / gamma * sn_u * sn_v * ds
+        form += -theta / gamma * sn_u * sn_v * weight * ds
     return form
 
 

@@ -44,7 +44,7 @@ __all__ = [
 def facet_reaction(
     residual: ufl.Form, u: dolfinx.fem.Function, facet_tags: compat.MeshTags, tag: int
 ) -> np.ndarray:
-    """``(3,)`` sum of the assembled residual (no Dirichlet conditions) over the dofs of facets.
+    """``(d,)`` sum of the assembled residual (no Dirichlet conditions) over the dofs of facets.
 
     At prescribed dofs this is the force the support exerts on the body. Collective.
 
@@ -56,15 +56,16 @@ def facet_reaction(
         tag: The tag of the facets.
 
     Returns:
-        The summed force components, the same on every process.
+        The summed force components (``d`` = 3, or 2 on a 2D mesh), the same on every process.
     """
     V = u.function_space
     form = dolfinx.fem.form(residual)
     b = dolfinx.fem.petsc.assemble_vector(form)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    nodes = dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(tag))
+    fdim = V.mesh.topology.dim - 1
+    nodes = dolfinx.fem.locate_dofs_topological(V, fdim, facet_tags.find(tag))
     nodes = nodes[nodes < V.dofmap.index_map.size_local]
-    local = b.array.reshape(-1, 3)[nodes].sum(axis=0)
+    local = b.array.reshape(-1, V.dofmap.index_map_bs)[nodes].sum(axis=0)
     b.destroy()
     return V.mesh.comm.allreduce(local, op=MPI.SUM)
 

@@ -306,10 +306,17 @@ def _tagged_facets(surface: FacetSurface, mesh: dolfinx.mesh.Mesh, what: str) ->
     """Local facets of a facet surface; tag values absent on every process are an error."""
     tags = surface.tags
     tdim = mesh.topology.dim
-    if tags.dim != tdim - 1:
+    if not compat.tags_on_mesh(tags, mesh):
         raise ValueError(
-            f"{what}: MeshTags of dimension {tags.dim} given, facet tags "
-            f"(dimension {tdim - 1}) needed"
+            f"{what}: the facet tags were made on another mesh than the displacement's (build "
+            "them on the mesh of u's function space; equal meshes are still different meshes)"
+        )
+    if tags.dim != tdim - 1:
+        given = {0: "vertex tags", tdim: "cell tags"}.get(tags.dim, "edge tags")
+        facets = "edges" if tdim == 2 else "faces"
+        raise ValueError(
+            f"{what}: MeshTags of dimension {tags.dim} given ({given}), facet tags "
+            f"(dimension {tdim - 1}, the {facets} of the {tdim}D mesh) needed"
         )
     values = surface.value_list()
     facets = tags.indices[np.isin(tags.values, values)]

@@ -14,7 +14,9 @@ node ``j``, ``+1`` for the slave):
   unchanged;
 - slip: ``e = t_e/|t_e|``, ``F_T = F_s e``, ``t_p = t_p,n + (|F_tr| - F_s)/K_t e``.
 
-``F_T`` is added to the slave node's internal force ``f_p = -F_N n + F_T``. The tangent
+``F_T`` is added to the slave node's internal force ``f_p = -F_N n + F_T``. Vectors have
+``d = normal.shape[1]`` components: 3 for the node-to-face springs, 2 for the node-to-segment
+springs of 2D meshes (one tangent direction, the same return map; docs/method.md §17). The tangent
 ``dF_T/dx_k`` comes in two forms: ``"ccx"`` holds the projection point fixed in ``ds/dx``
 (CalculiX's element matrix) and ``"consistent"`` (default) also differentiates ``phi_j(xi)`` in
 ``a``, which makes it the exact derivative of the force (checked against finite differences).
@@ -56,9 +58,9 @@ class FrictionInput:
     """What the tangential force of N springs needs besides the normal kinematics.
 
     Attributes:
-        displacements: ``(N, n+1, 3)`` displacements ``u_k`` of the element nodes (master face
-            nodes, then the slave node).
-        a_start, t_start, slip_start: ``(N, 3)`` relative displacement ``a_n``, accumulated
+        displacements: ``(N, n+1, d)`` displacements ``u_k`` of the element nodes (master face
+            nodes, then the slave node); ``d = 3``, or 2 on a 2D mesh.
+        a_start, t_start, slip_start: ``(N, d)`` relative displacement ``a_n``, accumulated
             tangential relative displacement ``t_n`` and slip ``t_p,n`` at the start of the
             increment.
         mu: Friction coefficient (scalar or ``(N,)``).
@@ -85,12 +87,12 @@ class TangentialForce:
     """Friction results of N springs.
 
     Attributes:
-        force: ``(N, 3)`` tangential internal force ``F_T`` on the slave node (the force the slave
+        force: ``(N, d)`` tangential internal force ``F_T`` on the slave node (the force the slave
             exerts on the master; the master exerts ``-F_T`` on the slave).
-        dforce: ``(N, n+1, 3, 3)`` ``dF_T_i/dx_kc``, or None without tangent.
-        a, t, slip: ``(N, 3)`` new state values (relative displacement, accumulated tangential
+        dforce: ``(N, n+1, d, d)`` ``dF_T_i/dx_kc``, or None without tangent.
+        a, t, slip: ``(N, d)`` new state values (relative displacement, accumulated tangential
             relative displacement, slip).
-        elastic: ``(N, 3)`` ``t_e = t - t_p,n``.
+        elastic: ``(N, d)`` ``t_e = t - t_p,n``.
         limit: ``(N,)`` ``F_s``.
         sliding: ``(N,)`` True where the spring slips.
         energy: ``(N,)`` elastic energy of the tangential spring, ``|F_T|^2 / (2 K_t)``.
@@ -130,14 +132,16 @@ def tangential_forces(
 
     Args:
         weights: ``(N, n+1)`` ``w_k`` (``-phi_j``, then 1).
-        normal: ``(N, 3)`` unit master normal at the projection point.
+        normal: ``(N, d)`` unit master normal at the projection point (``d = 3``, or 2 for the
+            springs of a 2D mesh, whose tangent plane is the line of the edge's tangent).
         normal_force: ``(N,)`` ``F_N`` (compression positive).
         area: ``(N,)`` spring area ``A_p``.
         data: State and parameters.
-        dphi: ``(N, n+1, 2)`` shape-function derivatives (zero for the slave); tangent only.
-        dxi: ``(N, n+1, 2, 3)`` ``dxi_alpha/dx_kc``; tangent only.
-        dnormal: ``(N, n+1, 3, 3)`` ``dn_i/dx_kc``; tangent only.
-        dnormal_force: ``(N, n+1, 3)`` ``dF_N/dx_kc``; tangent only.
+        dphi: ``(N, n+1, p)`` shape-function derivatives by the ``p = d - 1`` face parameters
+            (zero for the slave); tangent only.
+        dxi: ``(N, n+1, p, d)`` ``dxi_alpha/dx_kc``; tangent only.
+        dnormal: ``(N, n+1, d, d)`` ``dn_i/dx_kc``; tangent only.
+        dnormal_force: ``(N, n+1, d)`` ``dF_N/dx_kc``; tangent only.
 
     Returns:
         The :class:`TangentialForce`; ``dforce`` is None unless all four derivatives are given.
@@ -181,7 +185,7 @@ def tangential_forces(
 
     dforce = None
     if dphi is not None and dxi is not None and dnormal is not None and dnormal_force is not None:
-        eye = np.eye(3)
+        eye = np.eye(normal.shape[1])
         # ds_i/dx_kc = w_k delta_ic (- sum_alpha U_alpha,i dxi_alpha/dx_kc in consistent mode),
         # U_alpha = sum_j dphi_j/dxi_alpha u_j = -da/dxi_alpha.
         ds = weights[:, :, None, None] * eye

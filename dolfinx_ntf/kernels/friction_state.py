@@ -2,7 +2,8 @@
 
 Pure numpy, no dolfinx: the state belongs to the pairing, not to the problem. Per slave node it
 holds the relative displacement ``a``, the accumulated tangential relative displacement ``t`` and
-the slip ``t_p`` (global Cartesian 3-vectors, CalculiX's nine state variables) three times over:
+the slip ``t_p`` (global Cartesian 3-vectors, CalculiX's nine state variables; on a 2D mesh their
+third components stay 0) three times over:
 
 - committed: the values at the end of the last converged increment;
 - start: the values the current increment starts from (``a_n``, ``t_n``, ``t_p,n``);
@@ -82,10 +83,15 @@ class FrictionState:
         return tuple(self.start[k][nodes] for k in ("a", "t", "slip"))
 
     def store(self, nodes: np.ndarray, a: np.ndarray, t: np.ndarray, slip: np.ndarray) -> None:
-        """Record an evaluation of ``nodes``; other nodes keep their last values."""
-        self.current["a"][nodes] = a
-        self.current["t"][nodes] = t
-        self.current["slip"][nodes] = slip
+        """Record an evaluation of ``nodes``; other nodes keep their last values.
+
+        ``a``, ``t`` and ``slip`` are ``(k, d)``: ``d = 3``, or 2 from the springs of a 2D mesh
+        (the third components then stay 0).
+        """
+        dim = np.shape(a)[-1]
+        self.current["a"][nodes, :dim] = a
+        self.current["t"][nodes, :dim] = t
+        self.current["slip"][nodes, :dim] = slip
 
     def commit(self, nodes_in_contact: np.ndarray) -> None:
         """Accept the converged increment; ``nodes_in_contact``: the nodes with a spring now."""

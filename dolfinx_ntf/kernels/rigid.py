@@ -36,6 +36,7 @@ __all__ = [
     "RigidSphere",
     "RigidSurface",
     "SignedDistanceSurface",
+    "check_in_plane",
     "evaluate_rigid_springs",
     "in_plane",
     "rigid_master",
@@ -362,6 +363,33 @@ class _RigidFaces:
     faces = np.zeros((1, 0), dtype=np.int64)
     facets = np.zeros(0, dtype=np.int32)
     nodes = np.zeros(0, dtype=np.int64)
+
+
+def check_in_plane(surface: RigidSurface, what: str) -> None:
+    """A rigid surface for a 2D mesh must not depend on z (a line or a circle in the xy-plane).
+
+    Planes, cylinders and spheres are checked by their data; a :class:`SignedDistanceSurface`
+    and moving surfaces only by their normal where they are evaluated (:func:`in_plane`).
+
+    Args:
+        surface: The rigid surface.
+        what: Who uses it, for the message (e.g. ``"pair 1 master"``).
+
+    Raises:
+        ValueError: A plane's normal, a cylinder's axis or a sphere's centre leaves the plane.
+    """
+    tilt = None
+    if isinstance(surface, RigidPlane) and surface.unit_normal[2] != 0.0:
+        tilt = f"the plane's normal {tuple(surface.unit_normal)} is not in the xy-plane"
+    elif isinstance(surface, RigidCylinder) and abs(abs(surface.axis[2]) - 1.0) > 1e-12:
+        tilt = f"the cylinder's axis {tuple(surface.axis)} is not along z"
+    elif isinstance(surface, RigidSphere) and surface.center[2] != 0.0:
+        tilt = f"the sphere's centre {tuple(surface.center)} is not in the plane z = 0"
+    if tilt is not None:
+        raise ValueError(
+            f"{what}: on a 2D mesh a rigid surface must be a line or a circle of the xy-plane: "
+            f"{tilt}"
+        )
 
 
 def in_plane(evaluation: SpringEvaluation, points: np.ndarray, name: str) -> SpringEvaluation:

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from dolfinx_ntf.kernels.edges import EdgeType
+from dolfinx_ntf.kernels.friction import FrictionInput
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.segment_springs import evaluate_segment_springs
 from dolfinx_ntf.kernels.springs import SpringEvaluation
@@ -200,12 +201,10 @@ class MasterCurve:
         xi0: np.ndarray | None = None,
         tangent: bool = True,
         symmetric: bool = False,
-        friction: object | None = None,
+        friction: FrictionInput | None = None,
         interior_projection: bool = False,
     ) -> SpringEvaluation:
         """:func:`~dolfinx_ntf.kernels.segment_springs.evaluate_segment_springs` on these edges."""
-        if friction is not None:
-            raise NotImplementedError(f"{self.name}: friction is not supported in 2D yet")
         return evaluate_segment_springs(
             face_type,
             master_coords,
@@ -217,4 +216,5 @@ class MasterCurve:
             tangent=tangent,
             symmetric=symmetric,
             interior_projection=interior_projection,
+            friction=friction,
         )

@@ -15,13 +15,22 @@ the spring area held constant: stationarity r·t = 0 gives H δξ = Σ_k b_k·δ
 H = t·t − r·q_ξξ and b_k = w_k t + φ_k,ξ r (w = −φ_j for master nodes, 1 for the slave); at a
 projection clamped to an end of the edge (the slave node beside the edge) ξ is fixed (δξ = 0)
 unless ``interior_projection`` asks for CalculiX's interior formula everywhere.
+
+Friction (docs/method.md §11, §17): the 3D return map of ``friction.tangential_forces`` on
+2-vectors, whose tangent plane is the line of t: the tangential force F_T is added to f_p and its
+exact derivative (through ∂ξ/∂x, ∂n/∂x and ∂F_N/∂x) to ∂f_p/∂x; the tangent is then never
+symmetrized.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import typing
+
 import numpy as np
 
 from dolfinx_ntf.kernels.edges import EdgeType
+from dolfinx_ntf.kernels.friction import FrictionInput, tangential_forces
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
 from dolfinx_ntf.kernels.springs import SpringEvaluation, _check_finite, _force_per_area
 
@@ -92,6 +101,7 @@ def evaluate_segment_springs(
     symmetric: bool = False,
     area_fallback: bool = True,
     interior_projection: bool = False,
+    friction: FrictionInput | None = None,
 ) -> SpringEvaluation:
     """Forces and tangent of N node-to-segment springs (2D; docs/method.md §5, §6).
 
@@ -108,10 +118,14 @@ def evaluate_segment_springs(
         symmetric: Return (K + Kᵀ)/2 (exact tangent is unsymmetric only at clamped projections).
         area_fallback: Where A = 0, use |q_ξ| (half the length of a straight edge).
         interior_projection: Differentiate clamped projections as interior ones (CalculiX).
+        friction: Friction state and parameters (vectors of 2 or 3 components, a third one
+            ignored): adds the tangential force F_T along the edge to f_p and its derivative to
+            the tangent (docs/method.md §17); the tangent is then never symmetrized.
 
     Returns:
-        The evaluation with ``xi`` (N, 1), ``normal`` (N, 2), ``forces`` (N, n+1, 2) and
-        ``stiffness`` (N, 2(n+1), 2(n+1)) with dofs ``2k + c``.
+        The evaluation with ``xi`` (N, 1), ``normal`` (N, 2), ``forces`` (N, n+1, 2),
+        ``stiffness`` (N, 2(n+1), 2(n+1)) with dofs ``2k + c`` and, with friction,
+        ``tangential`` of 2-vectors.
     """
     n = edge_type.num_nodes
     area = np.asarray(areas, dtype=float)
@@ -148,33 +162,40 @@ def evaluate_segment_springs(
     _check_finite("normal force from the law", force)
 
     weights = np.concatenate([-phi, np.ones((num, 1))], axis=1)  # (N, n+1)
+    dphi = np.concatenate([dphi_master, np.zeros((num, 1))], axis=1)  # (N, n+1)
+    derivatives = _Derivatives(None, None, None)
+    if tangent:
+        derivatives = _derivatives(
+            edge_type, master, xi, r, t, normal, m_norm, weights, dphi, interior_projection
+        )
+    dxi, dnormal, dgap = derivatives
+
     slave_force = -force[:, None] * normal
+    tangential = None
+    if friction is not None:
+        tangential = tangential_forces(
+            weights,
+            normal,
+            force,
+            area,
+            _planar_friction(friction, num, n),
+            dphi=dphi[:, :, None],
+            dxi=None if dxi is None else dxi[:, :, None, :],
+            dnormal=dnormal,
+            dnormal_force=None if dgap is None else -dforce[:, None, None] * dgap,
+        )
+        slave_force = slave_force + tangential.force
+        symmetric = False
     forces = weights[:, :, None] * slave_force[:, None, :]
     force_per_area = _force_per_area(forces, force, area, overclosure, weights, normal, law)
 
     stiffness = None
     if tangent:
-        dphi = np.concatenate([dphi_master, np.zeros((num, 1))], axis=1)  # (N, n+1)
-        q2 = np.einsum("nj,njc->nc", edge_type.shape_second_derivatives(xi), master)
-        h = np.einsum("nc,nc->n", t, t) - np.einsum("nc,nc->n", r, q2)
-        b = weights[:, :, None] * t[:, None, :] + dphi[:, :, None] * r[:, None, :]  # (N, k, c)
-        free = _free_projection(xi[:, 0], r, t, h) | interior_projection
-        singular = free & ~(h > 1e-14 * np.einsum("nc,nc->n", t, t))
-        if np.any(singular):
-            raise ValueError(
-                "singular projection (slave node at a centre of curvature of its master edge) at "
-                f"springs {np.flatnonzero(singular)[:10].tolist()}"
-            )
-        dxi = np.where(free, 1.0 / np.where(free, h, 1.0), 0.0)[:, None, None] * b  # (N, k, c)
-        # ∂m/∂x_kc = J (φ_k,ξ e_c + q_ξξ ∂ξ/∂x_kc) with J t = (t_y, −t_x).
-        dt = dphi[:, :, None, None] * np.eye(2) + q2[:, None, :, None] * dxi[:, :, None, :]
-        dm = np.stack([dt[:, :, 1], -dt[:, :, 0]], axis=2)  # (N, k, i, c)
-        projector = np.eye(2) - normal[:, :, None] * normal[:, None, :]
-        dnormal = np.einsum("nij,nkjc->nkic", projector / m_norm[:, None, None], dm)
-        dgap = weights[:, :, None] * normal[:, None, :] + np.einsum("ni,nkic->nkc", r, dnormal)
-        # ∂f_p/∂x_kc = dF_N/dd n ⊗ ∂g/∂x_kc − F_N ∂n/∂x_kc (∂d = −∂g).
+        # ∂f_p/∂x_kc = dF_N/dd n ⊗ ∂g/∂x_kc − F_N ∂n/∂x_kc (∂d = −∂g), + ∂F_T/∂x_kc.
         dslave = dforce[:, None, None, None] * normal[:, None, :, None] * dgap[:, :, None, :]
         dslave -= force[:, None, None, None] * dnormal  # (N, l, i, c)
+        if tangential is not None:
+            dslave += tangential.dforce
         # ∂f_k/∂x_l = w_k ∂f_p/∂x_l − φ_k,ξ f_p ⊗ ∂ξ/∂x_l.
         blocks = weights[:, :, None, None, None] * dslave.transpose(0, 2, 1, 3)[:, None]
         blocks -= (
@@ -198,6 +219,68 @@ def evaluate_segment_springs(
         forces=forces,
         force_per_area=force_per_area,
         stiffness=stiffness,
+        tangential=tangential,
+    )
+
+
+class _Derivatives(typing.NamedTuple):
+    """∂ξ/∂x_kc (N, k, c), ∂n_i/∂x_kc (N, k, i, c) and ∂g/∂x_kc (N, k, c), or None."""
+
+    dxi: np.ndarray | None
+    dnormal: np.ndarray | None
+    dgap: np.ndarray | None
+
+
+def _derivatives(
+    edge_type: EdgeType,
+    master: np.ndarray,
+    xi: np.ndarray,
+    r: np.ndarray,
+    t: np.ndarray,
+    normal: np.ndarray,
+    m_norm: np.ndarray,
+    weights: np.ndarray,
+    dphi: np.ndarray,
+    interior_projection: bool,
+) -> _Derivatives:
+    """Exact derivatives of the projection ξ*, the normal and the clearance by the nodes."""
+    q2 = np.einsum("nj,njc->nc", edge_type.shape_second_derivatives(xi), master)
+    h = np.einsum("nc,nc->n", t, t) - np.einsum("nc,nc->n", r, q2)
+    b = weights[:, :, None] * t[:, None, :] + dphi[:, :, None] * r[:, None, :]  # (N, k, c)
+    free = _free_projection(xi[:, 0], r, t, h) | interior_projection
+    singular = free & ~(h > 1e-14 * np.einsum("nc,nc->n", t, t))
+    if np.any(singular):
+        raise ValueError(
+            "singular projection (slave node at a centre of curvature of its master edge) at "
+            f"springs {np.flatnonzero(singular)[:10].tolist()}"
+        )
+    dxi = np.where(free, 1.0 / np.where(free, h, 1.0), 0.0)[:, None, None] * b  # (N, k, c)
+    # ∂m/∂x_kc = J (φ_k,ξ e_c + q_ξξ ∂ξ/∂x_kc) with J t = (t_y, −t_x).
+    dt = dphi[:, :, None, None] * np.eye(2) + q2[:, None, :, None] * dxi[:, :, None, :]
+    dm = np.stack([dt[:, :, 1], -dt[:, :, 0]], axis=2)  # (N, k, i, c)
+    projector = np.eye(2) - normal[:, :, None] * normal[:, None, :]
+    dnormal = np.einsum("nij,nkjc->nkic", projector / m_norm[:, None, None], dm)
+    dgap = weights[:, :, None] * normal[:, None, :] + np.einsum("ni,nkic->nkc", r, dnormal)
+    return _Derivatives(dxi, dnormal, dgap)
+
+
+def _planar_friction(friction: FrictionInput, num: int, n: int) -> FrictionInput:
+    """The friction input on 2-vectors (a third component, z = 0 of a 2D mesh, dropped)."""
+    displacements = _planar(friction.displacements, "friction displacements", (num, n + 1))
+    starts = [
+        _planar(value, f"friction {name}", (num,))
+        for name, value in (
+            ("a_start", friction.a_start),
+            ("t_start", friction.t_start),
+            ("slip_start", friction.slip_start),
+        )
+    ]
+    return dataclasses.replace(
+        friction,
+        displacements=displacements,
+        a_start=starts[0],
+        t_start=starts[1],
+        slip_start=starts[2],
     )
 
 

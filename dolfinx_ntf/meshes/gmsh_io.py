@@ -36,6 +36,8 @@ from dolfinx_ntf.compat import MeshTags
 __all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh", "write_msh"]
 
 _model_counter = itertools.count()
+#: gmsh's serendipity cell types, which dolfinx has no coordinate element for.
+_INCOMPLETE = {16: "8-node quadrilaterals", 17: "20-node hexahedra"}
 
 
 def _track_initialization() -> dict[str, bool] | None:
@@ -312,6 +314,14 @@ def _prepare_model() -> None:
             raise ValueError(
                 f"gmsh model '{model}': physical groups of dimension {dim} mix element types "
                 f"{names}; dolfinx needs one cell type"
+            )
+        incomplete = sorted(types & set(_INCOMPLETE)) if dim == tdim else []
+        if incomplete:
+            raise ValueError(
+                f"gmsh model '{model}': its cells are {_INCOMPLETE[incomplete[0]]} (gmsh's "
+                "incomplete second order, Mesh.SecondOrderIncomplete = 1), which dolfinx meshes "
+                "cannot hold; generate complete second-order cells (Mesh.SecondOrderIncomplete "
+                "= 0: 9-node quadrilaterals, 27-node hexahedra)"
             )
         if dim == tdim and not types:
             raise ValueError(

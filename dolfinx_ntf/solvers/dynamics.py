@@ -210,6 +210,7 @@ class DynamicStep(Step):
         """Add the inertia terms to the problem for the run, integrate, remove them."""
         problem = solver.problem
         V = u.function_space
+        self._check_mass_space(V)
         velocity = self._state_function(self.velocity, V, "velocity")
         acceleration = self._state_function(self.acceleration, V, "acceleration")
         mass = dolfinx.fem.form(self.mass)
@@ -228,6 +229,19 @@ class DynamicStep(Step):
         finally:
             problem.extra_terms.remove(inertia)
             inertia.destroy()
+
+    def _check_mass_space(self, V: dolfinx.fem.FunctionSpace) -> None:
+        """Both arguments of the mass form must live on the displacement space of ``u``."""
+        for argument in self.mass.arguments():
+            space = argument.ufl_function_space()
+            if space.ufl_element() != V.ufl_element() or space.ufl_domain() != V.mesh.ufl_domain():
+                raise ValueError(
+                    "DynamicStep: mass must be a form on the displacement space of u "
+                    f"({V.ufl_element()} on its mesh), but its "
+                    f"{'trial' if argument.number() else 'test'} function is on "
+                    f"{space.ufl_element()}"
+                    + ("" if space.ufl_domain() == V.mesh.ufl_domain() else " of another mesh")
+                )
 
     @staticmethod
     def _state_function(

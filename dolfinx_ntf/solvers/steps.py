@@ -301,6 +301,7 @@ class Step:
                 except ContactConvergenceError as error:
                     u.x.array[:] = u_start
                     u.x.scatter_forward()
+                    problem.reject_increment()  # the material history back to the start
                     first_failure = first_failure or error
                     failed = (
                         f"increment {increment} (step time {t:.6g} -> {t_new:.6g}) "

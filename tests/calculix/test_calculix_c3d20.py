@@ -185,12 +185,10 @@ def test_c3d20_contact_faces_are_quad8(tmp_path):
     np.testing.assert_array_equal(np.sort(model.dof_node[state.slave.nodes]), slave_nodes)
 
 
-@pytest.mark.parametrize("element", ["C3D8R", "C3D8I"])
-def test_unsupported_hexahedra_are_refused_with_the_reason(tmp_path, element):
+def test_unsupported_hexahedra_are_refused_with_the_reason(tmp_path):
     path = tmp_path / "bad.inp"
-    path.write_text(_CUBE.format(E=E, NU=NU, P=P).replace("TYPE=C3D8", f"TYPE={element}"))
-    reason = "hourglass" if element == "C3D8R" else "incompatible modes"
-    with pytest.raises(DeckError, match=rf"element type {element} is not supported: .*{reason}"):
+    path.write_text(_CUBE.format(E=E, NU=NU, P=P).replace("TYPE=C3D8", "TYPE=C3D8R"))
+    with pytest.raises(DeckError, match=r"element type C3D8R is not supported: .*hourglass"):
         read_deck(path)
 
 

@@ -22,8 +22,11 @@ def test_node_tables_are_permutations(name):
     )
     assert len(etype.midside_edges) == etype.num_nodes - etype.num_corners
     # a 27-node space is not C3D20's: no element for degree-2 hexahedra (docs/method.md §13.5);
-    # a 2D cell is several ccx elements (CPE, CPS, CAX): none (the writer is 3D only)
+    # a plain Q1 space is C3D8's, not C3D8I's (no incompatible modes, §22); a 2D cell is several
+    # ccx elements (CPE, CPS, CAX): none (the writer is 3D only)
     expected = None if etype.num_nodes == 20 or etype.tdim == 2 else etype
+    if name == "C3D8I":
+        expected = ELEMENT_TYPES["C3D8"]
     assert element_for_cell(etype.cell, etype.degree) is expected
     assert not etype.faces.flags.writeable and not etype.integration_points.flags.writeable
 
@@ -49,7 +52,7 @@ def test_extrapolation_keeps_a_constant_stress(name):
     assert etype.extrapolation.shape == (etype.num_nodes, etype.integration_points.shape[0])
     # ccx's rounded C3D8 weights (also C3D20R's corners, its midside nodes their means); C3D20's
     # fitted weights write a uniform stress as ccx does, 0.99996 at corners, 1.00005 at midsides
-    expected = {"C3D8": 0.99996, "C3D20R": 0.99996}.get(name, 1.0)
+    expected = {"C3D8": 0.99996, "C3D8I": 0.99996, "C3D20R": 0.99996}.get(name, 1.0)
     sums = etype.extrapolation.sum(axis=1)
     if name == "C3D20":
         np.testing.assert_allclose(sums[:8], 0.99996, atol=2e-6)

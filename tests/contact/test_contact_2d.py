@@ -2,7 +2,7 @@
 
 A patch test (two blocks, uniform pressure transmitted exactly on matching meshes, P1 and P2), the
 plane-strain Hertz line contact of a cylinder on a block (half model), and the clear errors for
-what 2D does not support yet.
+what 2D does not support yet (friction: test_friction_2d.py, ADJUST: test_adjust_2d.py).
 """
 
 from __future__ import annotations
@@ -233,19 +233,15 @@ def test_hertz_line_contact_plane_strain() -> None:
 
 
 @pytest.mark.parametrize(
-    ("options", "feature"),
+    "options",
     [
-        (
-            {
-                "interaction": ntf.SurfaceInteraction(
-                    ntf.LinearLaw(1e4, 1e-2), ntf.Friction(0.3, 1e4)
-                )
-            },
-            "friction",
-        ),
-        ({"adjust": 0.01}, "ADJUST"),
+        {"interaction": ntf.SurfaceInteraction(ntf.LinearLaw(1e4, 1e-2), ntf.Friction(0.3, 1e4))},
+        {"adjust": 0.01},
     ],
+    ids=["friction", "adjust"],
 )
-def test_unsupported_2d_features_are_named(options: dict, feature: str) -> None:
-    with pytest.raises(NotImplementedError, match=f"2D contact does not support {feature}"):
-        _blocks_problem(1, **options)
+def test_rigid_line_refuses_friction_and_adjust_2d(options: dict) -> None:
+    """As in 3D: friction and ADJUST need a meshed master; the error names the pair."""
+    line = ntf.RigidPlane((0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    with pytest.raises(NotImplementedError, match="pair 1: friction and ADJUST against a rigid"):
+        _blocks_problem(1, master=line, **options)

@@ -242,6 +242,46 @@ def test_moving_rigid_plane_presses_like_a_moving_top():
         obj.destroy()
 
 
+@pytest.mark.serial
+def test_a_rigid_master_moving_into_the_slave_is_not_an_initial_overlap():
+    """The plane's motion in the first increment presses as a moving top does, not ramped (§3.5).
+
+    The first pairing records the initial overlap with the plane where it starts; before, it
+    was recorded where the motion puts it at the end of the increment, and only a quarter of the
+    motion acted in the first of two increments.
+    """
+    forces = {}
+    for driver in ("plane", "top"):
+        if driver == "plane":
+            V, tags, bcs = rigid_block("hexahedron", HEIGHT)
+            u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+            F = ufl.inner(small_strain_stress(u, E, NU), ufl.grad(v)) * ufl.dx
+            plane = ntf.RigidPlane((0, 0, 0), (0, 0, 1), motion=lambda t: (0.0, 0.0, t * DEPTH))
+            law = ntf.LinearLaw.with_ccx_defaults(E, slope=10 * E)
+            pair = ntf.ContactPair(
+                ntf.FacetSurface(tags, BLOCK_CONTACT), plane, ntf.SurfaceInteraction(law)
+            )
+            problem = ntf.ContactProblem(F, u, [pair], bcs, linearize_area=True)
+            load = None
+        else:
+            problem, _, _ = _block_on_plane("hexahedron", 10 * E)
+            load = compat.boundary_values(problem.bcs[-1])
+        solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+        history = []
+        ntf.StaticStep(
+            lambda t, load=load: None if load is None else load.x.array.fill(-t * DEPTH),
+            initial_increment=0.5,
+            max_increment=0.5,
+            on_increment=lambda r, p=problem: history.append(float(ntf.contact_force(p)[2])),
+        ).run(solver, problem.u)
+        forces[driver] = history
+        problem.destroy()
+        solver.destroy()
+    assert forces["plane"][0] > 0
+    assert forces["plane"] == pytest.approx(forces["top"], rel=1e-8)
+    assert forces["plane"][0] == pytest.approx(forces["plane"][1] / 2, rel=0.05)
+
+
 def test_decks_have_no_rigid_masters(tmp_path):
     from dolfinx_ntf.calculix import write_inp
 

@@ -52,10 +52,17 @@ def cut_along_x(x):
 PARTITIONS = {"graph": None, "bodies": by_body, "cut": cut_along_x}
 
 
-def two_rectangles(comm=MPI.COMM_WORLD, *, upper_divisions=4, partition=None):
-    """The mesh and its facet tags (LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, SYMMETRY)."""
+def two_rectangles(
+    comm=MPI.COMM_WORLD, *, upper_divisions=4, partition=None, upper_span=(0.0, 1.0), gap=0.0
+):
+    """The mesh and its facet tags (LOWER_BOTTOM, LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, SYMMETRY).
+
+    ``upper_span``: the x-range of the upper block (the whole lower block's by default); ``gap``:
+    the upper block's bottom at y = gap.
+    """
     p1, c1 = rectangle_grid((0.0, -0.5), (1.0, 0.5), (4, 2))
-    p2, c2 = rectangle_grid((0.0, 0.0), (1.0, 0.4), (upper_divisions, 2))
+    (x0, x1) = upper_span
+    p2, c2 = rectangle_grid((x0, gap), (x1 - x0, 0.4), (upper_divisions, 2))
     points, cells = np.vstack([p1, p2]), np.vstack([c1, c2 + p1.shape[0]])
     if comm.rank != 0:
         points, cells = np.empty((0, 2)), np.empty((0, 3), dtype=np.int64)
@@ -73,8 +80,8 @@ def two_rectangles(comm=MPI.COMM_WORLD, *, upper_divisions=4, partition=None):
     values = np.zeros(exterior.size, dtype=np.int32)
     values[~in_upper & np.isclose(y, -0.5)] = LOWER_BOTTOM
     values[~in_upper & np.isclose(y, 0.0)] = LOWER_TOP
-    values[in_upper & np.isclose(y, 0.0)] = UPPER_BOTTOM
-    values[in_upper & np.isclose(y, 0.4)] = UPPER_TOP
+    values[in_upper & np.isclose(y, gap)] = UPPER_BOTTOM
+    values[in_upper & np.isclose(y, 0.4 + gap)] = UPPER_TOP
     values[np.isclose(x, 0.0)] = SYMMETRY
     keep = values > 0
     order = np.argsort(exterior[keep])
@@ -89,13 +96,18 @@ def patch_problem(
     upper_divisions=4,
     partition=None,
     rigid=False,
+    gap=0.0,
+    adjust=None,
 ):
     """The blocks' contact problem: (problem, pressure Constant, facet tags).
 
     ``rigid``: the upper block's bottom against the rigid line y = 0 instead of the lower block
-    (which then carries nothing).
+    (which then carries nothing). ``gap``: the upper block starts at y = gap; ``adjust``: the
+    pair's ADJUST, a distance or a callable giving the NodeSurface from the mesh.
     """
-    mesh, ft = two_rectangles(comm, upper_divisions=upper_divisions, partition=partition)
+    mesh, ft = two_rectangles(comm, upper_divisions=upper_divisions, partition=partition, gap=gap)
+    if callable(adjust):
+        adjust = adjust(mesh)
     V = compat.vector_space(mesh, "Lagrange", degree)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
@@ -112,6 +124,7 @@ def patch_problem(
         master or ntf.FacetSurface(ft, LOWER_TOP),
         ntf.SurfaceInteraction(law),
         thickness=thickness,
+        adjust=adjust,
     )
     bcs = [component_bc(V, 0, ft.find(SYMMETRY)), component_bc(V, 1, ft.find(LOWER_BOTTOM))]
     return ntf.ContactProblem(F, u, [pair], bcs), pressure, ft
@@ -124,5 +137,88 @@ def solve_patch(problem, pressure, value=PRESSURE, increment=0.5):
         lambda t: setattr(pressure, "value", value * t), initial_increment=increment
     )
     results = step.run(solver, problem.u)
+    solver.destroy()
+    return results
+
+
+#: Friction of the drag problem: Coulomb coefficient and stick slope (force/length^3).
+MU, STICK_SLOPE = 0.2, 1e3
+#: The upper block of the drag problem spans x in DRAG_SPAN: it stays over the lower block, and
+#: is wide enough for its trailing edge to stay in contact under MU (no tipping).
+DRAG_SPAN = (0.1, 0.9)
+
+
+def drag_problem(comm=MPI.COMM_WORLD, *, degree=1, partition=None, mu=MU, axisymmetric=False):
+    """The upper block pressed onto the lower one, whose top is clamped (a fixed flat line), then
+    dragged along x by its top; friction ``mu`` and STICK_SLOPE.
+
+    ``axisymmetric``: the blocks turned by -90 degrees, ``(r, z) = (1 + y, -x)``: a sleeve
+    ``1 <= r <= 1.4`` pressed by an external pressure onto a fixed tube ``0.5 <= r <= 1`` and
+    dragged along z by its outer surface (a sleeve pulled along a shaft: no hoop strain).
+
+    Returns (problem, pressure Constant, drag Function of the top's tangential displacement,
+    facet tags). The upper block has no other support: normally only the contact holds it.
+    """
+    mesh, ft = two_rectangles(comm, upper_divisions=3, partition=partition, upper_span=DRAG_SPAN)
+    if axisymmetric:
+        x = mesh.geometry.x
+        x[:, 0], x[:, 1] = 1.0 + x[:, 1].copy(), -x[:, 0].copy()
+    V = compat.vector_space(mesh, "Lagrange", degree)
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
+    if axisymmetric:
+        from dolfinx_ntf.fem.axisymmetric import (
+            axisymmetric_grad,
+            axisymmetric_stress,
+            axisymmetric_weight,
+        )
+
+        w = axisymmetric_weight(mesh)
+        sigma, grad_v = axisymmetric_stress(u, YOUNGS_MODULUS, POISSON_RATIO), axisymmetric_grad(v)
+    else:
+        w, sigma = 1.0, small_strain_stress(u, YOUNGS_MODULUS, POISSON_RATIO)
+        grad_v = ufl.grad(v)
+    F = ufl.inner(sigma, grad_v) * w * ufl.dx
+    F += pressure * ufl.inner(ufl.FacetNormal(mesh), v) * w * ds(UPPER_TOP)
+    law = ntf.LinearLaw(slope=1e4 * YOUNGS_MODULUS, tension=YOUNGS_MODULUS / 70000)
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(ft, UPPER_BOTTOM),
+        ntf.FacetSurface(ft, LOWER_TOP),
+        ntf.SurfaceInteraction(law, ntf.Friction(mu, STICK_SLOPE)),
+        axisymmetric=axisymmetric,
+    )
+    bcs = [component_bc(V, c, ft.find(LOWER_TOP)) for c in (0, 1)]
+    along = 1 if axisymmetric else 0  # the contact line's direction
+    Vx, _ = compat.component_space(V, along)
+    top = dolfinx.fem.locate_dofs_topological((V.sub(along), Vx), 1, ft.find(UPPER_TOP))
+    drag = dolfinx.fem.Function(Vx)
+    bcs.append(dolfinx.fem.dirichletbc(drag, top, V.sub(along)))
+    return ntf.ContactProblem(F, u, [pair], bcs), pressure, drag, ft
+
+
+def press_and_drag(problem, pressure, drag, distance, *, increments=2, steps=()):
+    """PRESSURE in two increments, then the top dragged by ``distance`` in ``increments``.
+
+    ``steps``: further :class:`~dolfinx_ntf.AnalysisStep` run after the drag (one solver).
+    Returns the increments of every step.
+    """
+    solver = ntf.ContactNewtonSolver(problem.u.function_space.mesh.comm, problem)
+    results = ntf.run_steps(
+        solver,
+        [
+            ntf.AnalysisStep(
+                ntf.StaticStep(lambda t: None, initial_increment=0.5, fixed=True),
+                loads=[ntf.Load(pressure, PRESSURE)],
+                name="press",
+            ),
+            ntf.AnalysisStep(
+                ntf.StaticStep(lambda t: None, initial_increment=1 / increments, fixed=True),
+                loads=[ntf.Load(drag, distance)],
+                name="drag",
+            ),
+            *steps,
+        ],
+    )
     solver.destroy()
     return results

@@ -25,9 +25,11 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
+from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
 from ..deck import Deck
@@ -46,6 +48,7 @@ from .plane import (
 )
 from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
+from .thermal import ThermalModel, is_thermal, thermal_model
 from .ties import tie_constraints
 
 __all__ = ["CalculixModel", "build_model"]
@@ -98,6 +101,10 @@ class CalculixModel:
             sum of ccx's expanded nodes' forces does (docs/method.md §23); else None.
         printed_scale: Factor from the model's forces and spring energies to those ccx prints
             (1; CAX decks 1/180: ccx prints its 2-degree sector's, docs/method.md §23).
+        thermal: The temperature field of a deck with coupled steps (docs/method.md §20.8), else
+            None.
+        incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
+            term of the problem, docs/method.md §22), else None.
     """
 
     deck: Deck
@@ -141,6 +148,9 @@ class CalculixModel:
     def gdim(self) -> int:
         """Components of the displacement: 2 for ccx's 2D elements, else 3."""
         return int(self.mesh.geometry.dim)
+
+    thermal: ThermalModel | None = None
+    incompatible_modes: IncompatibleModes | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -349,7 +359,32 @@ class CalculixModel:
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
         problem.element_terms.extend(self.springs)
+        if self.incompatible_modes is not None:
+            problem.element_terms.append(self.incompatible_modes)
         return problem
+
+
+def check_incompatible_modes(deck: Deck) -> None:
+    """Refuse what C3D8I decks cannot do yet: its modes are condensed for small strain statics.
+
+    ``NLGEOM`` (the modes' correction is linear elasticity's), ``*FREQUENCY`` and ``*DYNAMIC``
+    (ccx's modal stiffness and mass with the modes are not measured), naming the step's line.
+    """
+    for step in deck.steps:
+        what = (
+            "NLGEOM"
+            if step.nlgeom
+            else "*FREQUENCY"
+            if step.frequency is not None
+            else "*DYNAMIC"
+            if step.dynamic is not None
+            else None
+        )
+        if what is not None:
+            raise NotImplementedError(
+                f"{step.location}: {what} with C3D8I elements is not supported yet (their "
+                "incompatible modes are condensed for small-strain static steps only)"
+            )
 
 
 def build_model(
@@ -396,6 +431,8 @@ def build_model(
         pairs = contact_pairs(deck, surfaces, maps, thickness=thickness, area_weights=area_weights)
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
         springs_follow = check_springs(deck, maps.meshed)
+        if etype.name == "C3D8I":
+            check_incompatible_modes(deck)
     except (ValueError, NotImplementedError) as exc:
         error = exc
     validation.raise_collectively(comm, error)
@@ -403,8 +440,16 @@ def build_model(
 
     kinds = {step.nlgeom for step in deck.steps}
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
-    v = ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
+    thermal = None
+    if collectives.collectively(comm, is_thermal, deck):
+        if etype.tdim == 2:
+            raise NotImplementedError(
+                f"{deck.path}: coupled temperature-displacement steps with {etype.name} elements "
+                "are not supported yet"
+            )
+        thermal = thermal_model(deck, block, mesh, etype.degree, node_dof, element_cell, dx)
+    v = ufl.TestFunction(V)
     printed_force = None
     if etype.tdim == 2:  # small strain; the 3x3 stress of the 2D model, weighted (§23)
         weight = volume_weight(mesh, etype.model, thickness)
@@ -415,7 +460,10 @@ def build_model(
         if etype.model == "axisymmetric":  # ccx's RF: without the hoop term (§23)
             printed_force = ufl.inner(sigma, plane_kinematics(v, "plane strain")) * weight * dx
     else:
-        F, P, sigma = stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
+        kinematics = nlgeom if nlgeom is not None else float(True in kinds)
+        F, P, sigma = stresses(
+            u, mu, lmbda, kinematics, None if thermal is None else thermal.thermal_strain()
+        )
         internal_force = ufl.inner(P, ufl.grad(v)) * dx
     residual = internal_force
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
@@ -450,6 +498,9 @@ def build_model(
         constraints.append(global_constraint_block(V, given, node_ids=dof_node))
 
     springs = deck_springs(deck, V, node_dof, bool(springs_follow)) if deck.springs else []
+    modes = None
+    if etype.name == "C3D8I":  # ccx 2.20's modes: unscaled (measured, docs/method.md §22)
+        modes = IncompatibleModes(V, mu, lmbda, taylor=False)
     bc_spaces = []
     gdim = mesh.geometry.dim
     num_unrolled = gdim * (V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts)
@@ -494,4 +545,6 @@ def build_model(
         internal_force=internal_force,
         printed_force=printed_force,
         printed_scale=printed_scale(etype.model),
+        thermal=thermal,
+        incompatible_modes=modes,
     )
