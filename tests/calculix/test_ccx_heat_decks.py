@@ -178,6 +178,8 @@ def test_reader_errors_name_the_line(tmp_path, old, new, match):
          r"\*COUPLED TEMPERATURE-DISPLACEMENT with C3D8I elements is not supported yet"),
         (lambda t: t.replace("*HEAT TRANSFER\n0.1, 1.\n", "*HEAT TRANSFER\n0.1, 1., , , 5.\n"),
          r"DELTMX .* is not supported yet"),
+        (lambda t: t.replace("*BOUNDARY\nBOTTOM, 11", "*BOUNDARY\nBOTTOM, 3, 3, 0.5\nBOTTOM, 11"),
+         r"bad\.inp:\d+: a prescribed displacement \(0\.5\) in a \*HEAT TRANSFER deck"),
     ],
 )  # fmt: skip
 def test_model_refuses_what_it_cannot_do(tmp_path, change, match):

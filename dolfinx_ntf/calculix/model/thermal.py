@@ -212,6 +212,21 @@ def _bc_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
     return np.array(nodes, dtype=np.int64), per_step
 
 
+def _check_heat_boundaries(deck: Deck) -> None:
+    """Refuse prescribed displacements other than 0 in a deck of ``*HEAT TRANSFER`` steps.
+
+    ccx 2.20 prints their values as U without solving the mechanics (measured); the runner's
+    displacement stays 0 (docs/method.md §20.9).
+    """
+    cards = [*deck.boundaries, *(b for step in deck.steps for b in step.boundaries)]
+    for b in cards:
+        if b.value != 0.0:
+            raise NotImplementedError(
+                f"{b.location}: a prescribed displacement ({b.value}) in a *HEAT TRANSFER deck "
+                "is not supported yet (the mechanics is not solved; ccx prints the value as U)"
+            )
+
+
 def _check_boundary(b: Boundary) -> None:
     if b.amplitude is not None:
         raise NotImplementedError(
@@ -250,6 +265,8 @@ def thermal_model(
             f"{block.locations[0]}: {procedure} with {block.type.name} elements is not supported "
             "yet (measured against ccx for C3D8 only, and C3D8I in heat transfer)"
         )
+    if heat:
+        _check_heat_boundaries(deck)
     transient = any(not s.coupled.steady for s in deck.steps)
     for step in deck.steps:
         if step.coupled.deltmx is not None and not step.coupled.steady:
