@@ -54,7 +54,7 @@ from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
-from .coupled import CoupledIncrementSolver
+from .coupled import CoupledIncrementSolver, HeatIncrementSolver
 from .dat import CCX_FORMATS
 from .deck import Deck, Step, read_deck
 from .gather import CcxNumbering
@@ -231,8 +231,10 @@ class _Job:
         self.problem.pairing_callbacks.append(self._on_pairing)
         self.numbering = CcxNumbering(model, internal)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
-        self.solver: ContactNewtonSolver | CoupledIncrementSolver
-        if model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
+        self.solver: ContactNewtonSolver | CoupledIncrementSolver | HeatIncrementSolver
+        if model.thermal is not None and deck.steps[0].coupled.heat:  # all *HEAT TRANSFER
+            self.solver = HeatIncrementSolver(self.problem, model.thermal)
+        elif model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
             self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
         else:
             self.solver = self._mechanical_solver(comm, petsc_options, tight, solver_options)
@@ -300,10 +302,11 @@ class _Job:
         if step.frequency is not None:
             kind = "Frequency"
         if step.coupled is not None:
-            kind = "Coupled temperature-displacement"
+            kind = "Heat transfer" if step.coupled.heat else "Coupled temperature-displacement"
         logger.info("\n STEP %d\n\n %s analysis was selected\n", step.number, kind)
-        # ccx's transient coupled step is dynamic in its mechanics (manual: ALPHA, step loading)
-        transient = step.coupled is not None and not step.coupled.steady
+        # ccx's transient coupled step is dynamic in its mechanics (manual: ALPHA, step loading);
+        # a heat transfer step has no mechanics: static increments (docs/method.md §20.9)
+        transient = step.coupled is not None and not step.coupled.steady and not step.coupled.heat
         self._set_laws(dynamic=step.dynamic is not None or transient)
         if index > 0:
             bcs = model.begin_step(index)

@@ -235,19 +235,24 @@ class Frequency:
 
 @dataclass(frozen=True, eq=False)
 class Coupled:
-    """A ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments are the step's ``static``).
+    """A ``*COUPLED TEMPERATURE-DISPLACEMENT`` or ``*HEAT TRANSFER`` procedure.
+
+    Its increments are the step's ``static``.
 
     Attributes:
         steady: ``STEADY STATE`` (no heat capacity), else transient (backward Euler).
         deltmx: DELTMX, the largest temperature change per increment, or None.
         location: The card.
         alpha: The HHT parameter of the transient step's mechanics (ccx's ALPHA, -0.05).
+        heat: A ``*HEAT TRANSFER`` step: the temperature alone, the mechanics not solved
+            (docs/method.md §20.9).
     """
 
     steady: bool
     deltmx: float | None
     location: Location
     alpha: float = -0.05
+    heat: bool = False
 
 
 @dataclass(frozen=True, eq=False)
