@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..elements import ElementType
+from ..shell_expansion import ShellExpansion
 from .errors import DeckWarning, Location
 
 
@@ -465,6 +466,8 @@ class Deck:
         initial_velocities: ``*INITIAL CONDITIONS, TYPE=VELOCITY`` data lines, in deck order.
         springs: spring elements (SPRINGA, SPRING1, SPRING2) by ``*SPRING`` card.
         ties: ``*TIE`` cards in deck order; cyclic_symmetries: ``*CYCLIC SYMMETRY MODEL`` cards.
+        shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
+            (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
     """
 
     path: str
@@ -489,6 +492,7 @@ class Deck:
     springs: tuple[SpringElements, ...] = ()
     ties: tuple[Tie, ...] = ()
     cyclic_symmetries: tuple[CyclicSymmetry, ...] = ()
+    shells: ShellExpansion | None = None
 
     @property
     def num_elements(self) -> int:

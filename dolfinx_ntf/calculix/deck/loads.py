@@ -61,8 +61,8 @@ class LoadCards(ReaderState):
                     "*BOUNDARY data line: node or node set, first dof[, last dof[, value]]", loc
                 )
             nodes = self._nodes_of(fields[0], card, loc)
-            first = self._dof(fields[1], loc)
-            last = self._dof(fields[2], loc) if len(fields) > 2 and fields[2] else first
+            first = self._boundary_dof(fields[1], loc)
+            last = self._boundary_dof(fields[2], loc) if len(fields) > 2 and fields[2] else first
             if last < first:
                 raise DeckError(f"*BOUNDARY: last dof {last} < first dof {first}", loc)
             value = self._optional_float(fields, 3, "prescribed value", loc) or 0.0
