@@ -6,8 +6,9 @@ See docs/method.md §24. The shells are read as written; once the deck is read,
 S8R a C3D20R, keeping its element number), gives the bricks the shell section's material, and
 carries the boundary conditions of the shell nodes to the expanded nodes as ccx does: a dof 1-3
 of a corner node to its middle node plus the equation bottom + top - 2 middle = 0, of a midside
-node (value 0 only) as the equation bottom + top = 0; dofs 1-6 all fixed to 0 to all its expanded
-nodes (ccx's knot, fixed).
+node (value 0 only) as the equation bottom + top = 0; dofs 1-6 all fixed to 0: the middle node
+fixed and bottom and top moving only symmetrically along the normal (a fixed knot that keeps its
+uniform expansion, as ccx 2.20's results show).
 Everything else on a shell node (other rotational conditions, loads, velocities, equations,
 contact slave nodes, RF output) is refused: ccx's treatment was not measured.
 """
@@ -212,12 +213,7 @@ class ShellCards(ReaderState):
                         "treatments (knots, mean rotation equations) are not reproduced",
                         b.location,
                     )
-                used = np.where(
-                    expansion.corner[rows, None], expanded, expanded[:, [0, 2]][:, [0, 0, 1]]
-                )
-                out.append(dataclasses.replace(
-                    b, nodes=frozen_array(np.unique(used), np.int64), last_dof=3
-                ))  # fmt: skip
+                out.extend(self._fixed_shell_nodes(b, expansion, rows))
                 continue
             corner = expansion.corner[rows]
             if not model and self._released:
@@ -249,6 +245,42 @@ class ShellCards(ReaderState):
                         b.location,
                     ))  # fmt: skip
         return out
+
+    def _fixed_shell_nodes(
+        self, b: Boundary, expansion: ShellExpansion, rows: np.ndarray
+    ) -> list[Boundary]:
+        """Dofs 1-6 fixed: middle node fixed, bottom and top move only symmetrically along n.
+
+        ccx's fixed knot keeps its uniform expansion free (measured, docs/method.md §24).
+        Equations bottom + top = 0 per dof, and the top node fixed in the two coordinate
+        directions across the normal (normals along a coordinate axis only).
+        """
+        normals = expansion.normals[rows]
+        axis = np.argmax(np.abs(normals), axis=1)
+        tilted = np.flatnonzero(np.abs(normals[np.arange(axis.size), axis]) < 1.0 - 1e-12)
+        if tilted.size:
+            raise DeckError(
+                f"*BOUNDARY, dofs 1 to 6 on shell node {int(expansion.nodes[rows[tilted[0]]])}: "
+                "supported where the shell normal is along a coordinate axis only",
+                b.location,
+            )
+        expanded = expansion.expanded[rows]
+        corner = expansion.corner[rows]
+        fixed = [dataclasses.replace(b, nodes=frozen_array(expanded[corner, 1], np.int64),
+                                     last_dof=3)]  # fmt: skip
+        for (bottom, _, top), normal_axis in zip(expanded, axis):
+            for dof in (1, 2, 3):
+                if (bottom, dof) not in self._tied:
+                    self._tied.add((bottom, dof))
+                    self.equations.append(Equation(
+                        frozen_array([bottom, top], np.int64), frozen_array([dof, dof], np.int64),
+                        frozen_array([1.0, 1.0], np.float64), b.location,
+                    ))  # fmt: skip
+                if dof != normal_axis + 1:
+                    fixed.append(dataclasses.replace(
+                        b, nodes=frozen_array([top], np.int64), first_dof=dof, last_dof=dof
+                    ))  # fmt: skip
+        return fixed
 
     def _refuse_on_shell_nodes(self, expansion: ShellExpansion) -> None:
         """Refuse the references to shell nodes whose treatment by ccx was not measured."""
