@@ -165,7 +165,7 @@ class LoadCards(ReaderState):
             label = fields[1] if len(fields) > 1 else ""
             if label and not re.fullmatch(r"P[1-6]", label):
                 raise DeckError(
-                    f"*DLOAD load type {label} is not supported yet (only uniform pressure P1..P6)",
+                    f"*DLOAD, {label} is not supported yet (load types: uniform pressure P1..P6)",
                     loc,
                 )
             if len(fields) != 3:
