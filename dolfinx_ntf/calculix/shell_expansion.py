@@ -54,17 +54,26 @@ def _s8_gradients(points: np.ndarray) -> np.ndarray:
 
 
 _GRADIENTS_AT_NODES = _s8_gradients(_S8_LOCAL)
+# S4: bilinear, d N_i / d xi = xi_i (1 + eta eta_i) / 4 at the corners (p, 4, 2).
+_S4_GRADIENTS_AT_NODES = np.stack(
+    [
+        0.25 * _S8_LOCAL[None, :4, 0] * (1 + _S8_LOCAL[:4, 1:2] * _S8_LOCAL[None, :4, 1]),
+        0.25 * _S8_LOCAL[None, :4, 1] * (1 + _S8_LOCAL[:4, 0:1] * _S8_LOCAL[None, :4, 0]),
+    ],
+    axis=-1,
+)
 
 
 def s8_node_normals(coords: np.ndarray) -> np.ndarray:
-    """``(E, 8, 3)`` unit normals of S8 elements ``coords (E, 8, 3)`` at their 8 nodes.
+    """``(E, n, 3)`` unit normals of S8 (S4) elements ``coords (E, 8 or 4, 3)`` at their nodes.
 
     ``d x / d xi`` cross ``d x / d eta``: counter-clockwise nodes seen from the normal's tip.
 
     Raises:
         ValueError: an element is degenerate at a node (no normal).
     """
-    tangents = np.einsum("pnk,enx->epkx", _GRADIENTS_AT_NODES, coords)
+    table = _GRADIENTS_AT_NODES if coords.shape[1] == 8 else _S4_GRADIENTS_AT_NODES
+    tangents = np.einsum("pnk,enx->epkx", table, coords)
     normals = np.cross(tangents[..., 0, :], tangents[..., 1, :])
     length = np.linalg.norm(normals, axis=-1)
     scale = np.linalg.norm(tangents[..., 0, :], axis=-1) * np.linalg.norm(
@@ -85,7 +94,8 @@ class ShellExpansion:
     Attributes:
         nodes: ``(S,)`` shell node numbers, ascending.
         expanded: ``(S, 3)`` their bottom, middle and top node numbers.
-        corner: ``(S,)`` True for nodes at an element corner (their middle node is used).
+        corner: ``(S,)`` True for S8 corner nodes (their middle node is used); S8 midside nodes
+            and S4 nodes have a bottom and a top node only.
         normals: ``(S, 3)`` unit nodal normals.
     """
 
@@ -123,10 +133,11 @@ def expand_shells(
     offset: np.ndarray,
     element_ids: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, ShellExpansion]:
-    """The bricks of S8 elements ``connectivity (E, 8)`` (node numbers, deck order).
+    """The bricks of S8 elements ``connectivity (E, 8)`` (S4: ``(E, 4)``; node numbers, deck order).
 
     Args:
-        connectivity: ``(E, 8)`` shell node numbers in ccx order, elements in deck order.
+        connectivity: ``(E, 8)`` (or ``(E, 4)``) shell node numbers in ccx order, elements in deck
+            order.
         node_ids: ``(N,)`` all node numbers of the deck, ascending.
         node_coords: ``(N, 3)`` their coordinates.
         thickness: ``(E,)`` shell thickness of each element.
@@ -135,7 +146,8 @@ def expand_shells(
 
     Returns:
         ``(new_ids (3S,), new_coords (3S, 3), bricks (E, 20), expansion)``: the new nodes, the
-        bricks' node numbers in ccx's C3D20 order and the shell nodes' record.
+        bricks' node numbers in ccx's C3D20 order (S4: ``(E, 8)``, C3D8 order: bottom, then top)
+        and the shell nodes' record.
 
     Raises:
         ValueError: a node whose elements' normals differ by more than ``KNOT_ANGLE`` or whose
@@ -152,14 +164,15 @@ def expand_shells(
     slot[order] = np.arange(unique.size)
     node_slot = slot[np.searchsorted(unique, flat)]  # (E*8,) appearance index
     # the reference element of a node is its lowest-numbered element
-    element_of = np.repeat(element_ids, 8)
+    width = connectivity.shape[1]  # 8 (S8) or 4 (S4)
+    element_of = np.repeat(element_ids, width)
     by_number = np.lexsort((element_of, node_slot))
     _, first_of_slot = np.unique(node_slot[by_number], return_index=True)
     reference = by_number[first_of_slot]  # (S,) flat row of each node's reference element
     normals_flat = element_normals.reshape(-1, 3)
     cosine = np.einsum("ix,ix->i", normals_flat, normals_flat[reference[node_slot]])
     apart = np.flatnonzero(cosine < np.cos(np.radians(KNOT_ANGLE)))
-    thick_flat, offset_flat = np.repeat(thickness, 8), np.repeat(offset, 8)
+    thick_flat, offset_flat = np.repeat(thickness, width), np.repeat(offset, width)
     ref_rows = reference[node_slot]
     differ = np.flatnonzero(
         (thick_flat != thick_flat[ref_rows]) | (offset_flat != offset_flat[ref_rows])
@@ -187,12 +200,15 @@ def expand_shells(
     new_coords = base[:, None, :] + levels[:, :, None] * normals[:, None, :]
     first_new = int(node_ids.max()) + 1
     expanded = first_new + np.arange(3 * shell_nodes.size).reshape(-1, 3)
-    local = expanded[node_slot].reshape(-1, 8, 3)  # (E, 8, 3): bottom, middle, top
-    bricks = np.concatenate(
-        [local[:, :4, 0], local[:, :4, 2], local[:, 4:, 0], local[:, 4:, 2], local[:, :4, 1]],
-        axis=1,
-    )
-    corner_nodes = np.unique(connectivity[:, :4])
+    local = expanded[node_slot].reshape(-1, width, 3)  # (E, n, 3): bottom, middle, top
+    if width == 4:  # S4 -> 8-node brick: no middle nodes
+        bricks = np.concatenate([local[:, :, 0], local[:, :, 2]], axis=1)
+    else:
+        bricks = np.concatenate(
+            [local[:, :4, 0], local[:, :4, 2], local[:, 4:, 0], local[:, 4:, 2], local[:, :4, 1]],
+            axis=1,
+        )
+    corner_nodes = np.unique(connectivity[:, :4]) if width == 8 else np.zeros(0, np.int64)
     is_corner = np.isin(shell_nodes, corner_nodes)
     midside_nodes = np.unique(connectivity[:, 4:])
     both = np.intersect1d(corner_nodes, midside_nodes)

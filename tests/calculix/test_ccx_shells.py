@@ -17,7 +17,15 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from shell_deck import PLATE_VARIANTS, block_deck, cylinder_deck, plate_deck, write_deck
+from shell_deck import (
+    PLATE_VARIANTS,
+    block_deck,
+    cylinder_deck,
+    plate_deck,
+    s4_block_deck,
+    s4_plate_deck,
+    write_deck,
+)
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
@@ -35,6 +43,7 @@ DECKS = {
     "cylinder": cylinder_deck,
     "block-linear": lambda: block_deck("LINEAR"),
     "block-exponential": lambda: block_deck("EXPONENTIAL"),
+    "s4-block": s4_block_deck,  # a C3D8I cube on a fixed S4 floor (S4 -> C3D8I)
 }
 
 
@@ -77,19 +86,20 @@ def test_shell_deck_matches_ccx(tmp_path, name):
 
 @pytest.mark.ccx
 @needs_ccx
-@pytest.mark.parametrize("which", ["plate", "cylinder"])
+@pytest.mark.parametrize("which", ["plate", "cylinder", "s4"])
 def test_expanded_nodes_match_ccx_frd(tmp_path, which):
     """The bricks' nodes and numbering as ccx 2.20 writes them with ``OUTPUT=3D``."""
-    text = (
-        plate_deck("hinged", file_output=True)
-        if which == "plate"
-        else cylinder_deck(file_output=True)
-    )
-    write_deck(tmp_path, "shell", text)
+    decks = {
+        "plate": lambda: plate_deck("hinged", file_output=True),
+        "cylinder": lambda: cylinder_deck(file_output=True),
+        "s4": s4_plate_deck,  # a warped element: node 6 lifted 0.5
+    }
+    write_deck(tmp_path, "shell", decks[which]())
     run_ccx(tmp_path, "shell", timeout=120)
     frd = read_frd(tmp_path / "shell.frd")
     deck = read_deck(tmp_path / "shell.inp")
-    block = deck.elements["C3D20"]
+    (block,) = deck.elements.values()
+    assert block.type.name == ("C3D8I" if which == "s4" else "C3D20")
     np.testing.assert_array_equal(
         np.asarray(frd.element_nodes), block.connectivity[:, block.type.frd_nodes]
     )
@@ -187,7 +197,7 @@ def test_knot_is_refused():
         (("FIX, 1, 3\n", "FIX, 4, 6\n"), "rotational dofs are supported only all fixed"),
         (("FIX, 1, 3\n", "FIX, 1, 3\n9, 1, 6, 0.1\n"), "rotational dofs are supported only"),
         (("*STEP\n", "*STEP\n*CLOAD\n9, 3, 1.0\n"), "CLOAD names the shell node 9"),
-        (("FIX, 1, 3\n", "FIX, 1, 3\n12, 3, 3, 0.1\n"), "shell midside node 12"),
+        (("FIX, 1, 3\n", "FIX, 1, 3\n12, 3, 3, 0.1\n"), "shell node 12 \\(an S8 midside"),
         (("0.2\n", "0.0\n"), "thickness must be > 0"),
         (
             ("*SHELL SECTION, ELSET=EALL, MATERIAL=M, OFFSET=0.3\n0.2\n", ""),

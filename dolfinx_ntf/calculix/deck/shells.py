@@ -1,4 +1,4 @@
-"""Shell cards: S8/S8R elements and ``*SHELL SECTION``, expanded into C3D20/C3D20R bricks.
+"""Shell cards: S8/S8R/S4 elements and ``*SHELL SECTION``, expanded into C3D20/C3D20R/C3D8I bricks.
 
 See docs/method.md §24. The shells are read as written; once the deck is read,
 ``_expand_shells`` replaces them by the bricks ccx 2.20 makes of them
@@ -28,7 +28,10 @@ from .state import ReaderState
 
 #: The brick ccx makes of each shell type (ccx manual: S8 -> C3D20, S8R -> C3D20R; checked by
 #: the number of integration points ccx 2.20 prints).
-SHELL_TYPES = {"S8": "C3D20", "S8R": "C3D20R"}
+SHELL_TYPES = {"S8": "C3D20", "S8R": "C3D20R", "S4": "C3D8I"}
+
+#: Nodes per shell element.
+SHELL_NODES = {"S8": 8, "S8R": 8, "S4": 4}
 
 #: Face labels of shell elements: the brick's bottom (SNEG, on the side of -n) and top (SPOS).
 SHELL_FACES = {"SNEG": 1, "SPOS": 2}
@@ -49,7 +52,8 @@ class ShellCards(ReaderState):
     """Handlers of the shell cards and the expansion once the deck is read."""
 
     def _shell_elements(self, card: Card, type_name: str) -> None:
-        """The ``*ELEMENT, TYPE=S8`` (or S8R) data lines: element number and 8 nodes each."""
+        """The ``*ELEMENT, TYPE=S8`` (S8R, S4) data lines: element number and its nodes."""
+        needed = SHELL_NODES[type_name] + 1
         tokens: list[str] = []
         start: Location | None = None
         ids: list[int] = []
@@ -57,11 +61,13 @@ class ShellCards(ReaderState):
             if not tokens:
                 start = loc
             tokens.extend(f for f in fields if f != "")
-            if len(tokens) < 9:
+            if len(tokens) < needed:
                 continue
-            if len(tokens) > 9 or start is None:
+            if len(tokens) > needed or start is None:
                 raise DeckError(
-                    f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has 8", start
+                    f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has "
+                    f"{needed - 1}",
+                    start,
                 )
             numbers = [self._int(t, "element or node number", start) for t in tokens]
             self.shell_rows.append((type_name, numbers[0], numbers[1:], start))
@@ -69,7 +75,8 @@ class ShellCards(ReaderState):
             tokens = []
         if tokens:
             raise DeckError(
-                f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has 8", start
+                f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has {needed - 1}",
+                start,
             )
         self.element_refs.append((card.name, np.array(ids, np.int64), card.location))
         if card.params.get("ELSET"):
@@ -110,11 +117,20 @@ class ShellCards(ReaderState):
                 )
             if self.shell_face_refs:
                 raise DeckError(
-                    "face labels SPOS and SNEG belong to shell elements (S8, S8R)",
+                    "face labels SPOS and SNEG belong to shell elements (S8, S8R, S4)",
                     self.shell_face_refs[0][1],
                 )
             return None
         types = [row[0] for row in self.shell_rows]
+        widths = {SHELL_NODES[t] for t in types}
+        if len(widths) > 1:
+            k = next(i for i, t in enumerate(types) if SHELL_NODES[t] != SHELL_NODES[types[0]])
+            raise DeckError(
+                f"shell element {self.shell_rows[k][1]} ({types[k]}) and element "
+                f"{self.shell_rows[0][1]} ({types[0]}): S4 and S8 shells in one deck are not "
+                "supported",
+                self.shell_rows[k][3],
+            )
         ids = np.array([row[1] for row in self.shell_rows], np.int64)
         conn = np.array([row[2] for row in self.shell_rows], np.int64)
         locs = [row[3] for row in self.shell_rows]
@@ -227,9 +243,9 @@ class ShellCards(ReaderState):
                 out.append(dataclasses.replace(b, nodes=frozen_array(middle, np.int64)))
             if (~corner).any() and (b.value != 0.0 or b.amplitude is not None):
                 raise DeckError(
-                    f"*BOUNDARY on the shell midside node {int(nodes[shell][~corner][0])}: "
-                    "supported with value 0 only (ccx ties the mean of its bottom and top "
-                    "nodes; a prescribed mean is not reproduced)",
+                    f"*BOUNDARY on the shell node {int(nodes[shell][~corner][0])} (an S8 "
+                    "midside or S4 node, no middle node): supported with value 0 only (ccx ties "
+                    "the mean of its bottom and top nodes; a prescribed mean is not reproduced)",
                     b.location,
                 )
             for (bottom, middle, top), at_corner in zip(expanded, corner):

@@ -141,3 +141,57 @@ def write_deck(directory: Path, job: str, text: str) -> Path:
     path = Path(directory) / f"{job}.inp"
     path.write_text(text)
     return path
+
+
+def s4_block_deck() -> str:
+    """A C3D8I unit cube pressed 0.01 onto a fully fixed 2 x 2 S4 floor (thickness 0.1, LINEAR)."""
+    corners = [
+        (0, 0, 0),
+        (1, 0, 0),
+        (1, 1, 0),
+        (0, 1, 0),
+        (0, 0, 1),
+        (1, 0, 1),
+        (1, 1, 1),
+        (0, 1, 1),
+    ]
+    lines = ["*NODE, NSET=NBLOCK"]
+    lines += [
+        f"{k + 1}, {x - 0.4:.6f}, {y - 0.45:.6f}, {z + 0.05:.6f}"
+        for k, (x, y, z) in enumerate(corners)
+    ]
+    lines += [
+        "*ELEMENT, TYPE=C3D8I, ELSET=EBLOCK",
+        "1, 1, 2, 3, 4, 5, 6, 7, 8",
+        "*NODE, NSET=NFLOOR",
+    ]
+    grid = [(x, y) for y in (-2, 0, 2) for x in (-2, 0, 2)]
+    lines += [f"{101 + k}, {x}, {y}, 0.0" for k, (x, y) in enumerate(grid)]
+    lines += ["*ELEMENT, TYPE=S4, ELSET=EFLOOR"]
+    for e, (i, j) in enumerate(((0, 0), (1, 0), (0, 1), (1, 1))):
+        n = 101 + 3 * j + i
+        lines.append(f"{101 + e}, {n}, {n + 1}, {n + 4}, {n + 3}")
+    lines += [
+        "*NSET, NSET=NBOT", "1, 2, 3, 4", "*NSET, NSET=NTOP", "5, 6, 7, 8", "*BOUNDARY",
+        "NFLOOR, 1, 6", "NTOP, 1, 2", "*MATERIAL, NAME=M", "*ELASTIC", "1000.0, 0.3",
+        "*SOLID SECTION, ELSET=EBLOCK, MATERIAL=M", "*SHELL SECTION, ELSET=EFLOOR, MATERIAL=M",
+        "0.1", "*SURFACE, NAME=FLOOR, TYPE=ELEMENT", "EFLOOR, SPOS",
+        "*SURFACE, NAME=BOT, TYPE=NODE", "NBOT",
+        "*CONTACT PAIR, INTERACTION=CI, TYPE=NODE TO SURFACE", "BOT, FLOOR",
+        "*SURFACE INTERACTION, NAME=CI", "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
+        "1.0e4",
+        "*STEP", "*STATIC", "*BOUNDARY", "NTOP, 3, 3, -0.01", "*NODE PRINT, NSET=NBLOCK", "U",
+        "*CONTACT PRINT", "CDIS, CSTR", "*END STEP",
+    ]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+def s4_plate_deck() -> str:
+    """Two S4 elements (4 x 1, thickness 0.2, OFFSET=0.2), one edge fixed, ``.frd`` in 3D."""
+    return (
+        "*NODE, NSET=NALL\n1, 0, 0, 0\n2, 2, 0, 0\n3, 2, 1, 0\n4, 0, 1, 0\n5, 4, 0, 0\n"
+        "6, 4, 1, 0.5\n*ELEMENT, TYPE=S4, ELSET=EALL\n1, 1, 2, 3, 4\n2, 2, 5, 6, 3\n"
+        "*NSET, NSET=FIX\n1, 4\n*BOUNDARY\nFIX, 1, 3\n*MATERIAL, NAME=M\n*ELASTIC\n1000.0, 0.3\n"
+        "*SHELL SECTION, ELSET=EALL, MATERIAL=M, OFFSET=0.2\n0.2\n*STEP\n*STATIC\n"
+        "*NODE FILE, OUTPUT=3D\nU\n*END STEP\n"
+    )
