@@ -1,4 +1,4 @@
-"""The expansion of 8-node shells into 20-node bricks through the thickness, as ccx 2.20 does it.
+"""The expansion of 8-node (4-node) shells into 20-node (8-node) bricks, as ccx 2.20 does it.
 
 See docs/method.md §24. ccx replaces every S8 (S8R) element by a C3D20 (C3D20R) element: each
 shell node gets three new nodes on its nodal normal ``n``, at ``-(1/2 + offset) t``,
@@ -7,7 +7,8 @@ shell node gets three new nodes on its nodal normal ``n``, at ``-(1/2 + offset) 
 (S8 shape functions). The brick's corners 1-4 are the bottom nodes of the shell corners, 5-8 the
 top ones, its midside nodes 9-12 the bottom nodes of the shell's midside nodes, 13-16 the top
 ones, 17-20 the middle nodes of the shell corners (a midside node's middle node is numbered but
-not used). New node numbers follow the largest node number, three per shell node (bottom,
+not used). An S4 becomes an 8-node brick of its bottom (1-4) and top (5-8) nodes. New node
+numbers follow the largest node number, three per shell node (bottom,
 middle, top), shell nodes taken element by element in deck order, each node once. Measured
 with ccx 2.20's ``.frd`` (``*NODE FILE, OUTPUT=3D``). Pure numpy.
 """
