@@ -21,6 +21,7 @@ from shell_deck import (
     PLATE_VARIANTS,
     block_deck,
     cylinder_deck,
+    flying_block_deck,
     plate_deck,
     s4_block_deck,
     s4_plate_deck,
@@ -82,6 +83,30 @@ def test_shell_deck_matches_ccx(tmp_path, name):
     if name.startswith("block"):  # the cube's bottom presses into the floor
         pressure = next(b for b in ntf if b.name == "CSTR").values[:, 0]
         assert np.all(pressure > 0.1)
+
+
+@pytest.mark.mpi
+@pytest.mark.ccx
+@needs_ccx
+def test_flying_c3d20_block_matches_ccx(tmp_path):
+    """A C3D20 cube's initial velocity in a *DYNAMIC step, next to a fixed S8 floor.
+
+    The velocity of C3D20's face and cell centres follows the nodes' (before, they were left at
+    zero and the cube flew 0.26 of ``v t``).
+    """
+    root = Path(COMM.bcast(str(tmp_path), root=0))
+    ccx_dir, ntf_dir = _run_both(root, flying_block_deck())
+    result = run_job("shell", ntf_dir, comm=COMM, progress=False)
+    assert result.completed
+    if COMM.rank != 0:
+        return
+    ccx = read_dat(ccx_dir / "shell.dat")
+    ntf = {b.time: b for b in read_dat(ntf_dir / "shell.dat")}
+    assert len(ccx) == 8
+    for a in ccx:
+        b = ntf[a.time]
+        np.testing.assert_allclose(a.values[:, 2], -2.0 * a.time, rtol=1e-6)
+        assert np.abs(a.values - b.values).max() <= 1e-9 * np.abs(a.values).max()
 
 
 @pytest.mark.ccx

@@ -195,3 +195,24 @@ def s4_plate_deck() -> str:
         "*SHELL SECTION, ELSET=EALL, MATERIAL=M, OFFSET=0.2\n0.2\n*STEP\n*STATIC\n"
         "*NODE FILE, OUTPUT=3D\nU\n*END STEP\n"
     )
+
+
+def flying_block_deck() -> str:
+    """``block_deck`` in a ``*DYNAMIC`` step without contact: the C3D20 cube flies at vz = -2.
+
+    The cube starts 0.002 above the fixed S8 floor and moves 0.001 in 0.0005 (ccx's increments
+    grow from 2e-5); its displacement is ``v t`` at every node.
+    """
+    text = block_deck("LINEAR")
+    head = text.split("*SURFACE, NAME=FLOOR", 1)[0]
+    lines = head.split("\n")
+    start = lines.index("*NODE, NSET=NBLOCK") + 1
+    for k in range(start, start + 20):
+        number, x, y, z = lines[k].split(",")
+        lines[k] = f"{number},{x},{y}, {float(z) + 0.002:.6f}"
+    head = "\n".join(lines).replace("NTOP, 1, 2\n", "")
+    head = head.replace("*ELASTIC\n1000.0, 0.3\n", "*ELASTIC\n1000.0, 0.3\n*DENSITY\n2.5e-9\n")
+    return head + (
+        "*INITIAL CONDITIONS, TYPE=VELOCITY\nNBLOCK, 3, -2.0\n*STEP, NLGEOM, INC=1000\n"
+        "*DYNAMIC\n0.00002, 0.0005\n*NODE PRINT, NSET=NBLOCK\nU\n*END STEP\n"
+    )
