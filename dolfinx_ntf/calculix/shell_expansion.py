@@ -114,6 +114,10 @@ class ShellExpansion:
         """
         return np.where(self.corner[:, None], [[1 / 6, 4 / 6, 1 / 6]], [[0.5, 0.0, 0.5]])
 
+    def hidden(self) -> np.ndarray:
+        """Nodes ccx's ``.frd`` leaves out: the shell nodes and the unused middle nodes."""
+        return np.sort(np.concatenate([self.nodes, self.expanded[~self.corner, 1]]))
+
     def printed(self, node_ids: np.ndarray, values: np.ndarray) -> np.ndarray:
         """``values (N, k)`` at ``node_ids`` (ascending, all deck nodes), shell rows as ccx prints.
 

@@ -88,6 +88,29 @@ def test_shell_deck_matches_ccx(tmp_path, name):
 @pytest.mark.mpi
 @pytest.mark.ccx
 @needs_ccx
+@pytest.mark.parametrize("variant", ["clamped", "supported"])
+def test_shell_frd_matches_ccx(tmp_path, variant):
+    """The ``.frd``: the bricks' nodes (no shell nodes, no unused middle nodes), DISP and FORC."""
+    root = Path(COMM.bcast(str(tmp_path), root=0))
+    text = plate_deck(variant).replace("*END STEP", "*NODE FILE\nU, RF\n*END STEP")
+    ccx_dir, ntf_dir = _run_both(root, text)
+    assert run_job("shell", ntf_dir, comm=COMM, progress=False).completed
+    if COMM.rank != 0:
+        return
+    ccx, ntf = read_frd(ccx_dir / "shell.frd"), read_frd(ntf_dir / "shell.frd")
+    assert len(np.asarray(ccx.node_ids)) == 32  # 13 shell nodes: 8 corners x 3, 5 midside x 2
+    np.testing.assert_array_equal(np.asarray(ccx.node_ids), np.asarray(ntf.node_ids))
+    np.testing.assert_allclose(np.asarray(ntf.node_coords), np.asarray(ccx.node_coords), atol=5e-6)
+    np.testing.assert_array_equal(np.asarray(ccx.element_nodes), np.asarray(ntf.element_nodes))
+    assert [b.name for b in ccx.blocks] == [b.name for b in ntf.blocks] == ["DISP", "FORC"]
+    for a, b in zip(ccx.blocks, ntf.blocks):
+        np.testing.assert_array_equal(a.nodes, b.nodes)
+        assert np.abs(a.values - b.values).max() <= 1e-6 * np.abs(a.values).max(), a.name
+
+
+@pytest.mark.mpi
+@pytest.mark.ccx
+@needs_ccx
 def test_flying_c3d20_block_matches_ccx(tmp_path):
     """A C3D20 cube's initial velocity in a *DYNAMIC step, next to a fixed S8 floor.
 
