@@ -22,7 +22,7 @@ from dolfinx_ntf.fem.plasticity import J2Plasticity, mandel_strain
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
-from dolfinx_ntf.fem.thermal import thermal_strain, thermoelastic_stress
+from dolfinx_ntf.fem.thermal import CellTemperature, thermal_strain, thermoelastic_stress
 from dolfinx_ntf.kernels.discrete_springs import (
     AxialSpring,
     DirectionalSpring,
@@ -96,6 +96,7 @@ __all__ = [
     "AnalysisStep",
     "AxialSpring",
     "BoundaryPressure",
+    "CellTemperature",
     "ChangeFriction",
     "ContactConvergenceError",
     "ContactDivergenceError",

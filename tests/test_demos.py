@@ -206,3 +206,60 @@ def test_preloaded_modes_demo_bounces_on_the_joint_stiffness():
     # Frequency as the square root of the preload.
     assert rows[-1]["bounce"] / rows[0]["bounce"] == pytest.approx(2.0, rel=5e-3)
     assert abs(summary["floating"]) < 1e-3 * rows[0]["bounce"]  # no springs: the punch floats
+
+
+def test_hot_block_demo_balances_heat_and_force(tmp_path):
+    summary = _demo("hot_block").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # Three transient increments and the steady state; 5 x 5 slave nodes, all in contact.
+    assert summary["increments"] == 4 and summary["springs"] == 25
+    # The springs carry the load in every increment (measured 9e-13).
+    assert summary["force_error"] < 1e-8
+    # Steady state: the heat through the contact is the heat entering at the hot top and leaving
+    # at the cold bottom, within the converged residual's bound (measured 4e-12 W against a bound
+    # of 6e-11 W on a flow of 49.74 W); the transient storage balance likewise (7e-14 W).
+    assert summary["heat_through_contact"] < 0  # into the slave (hot) side: negative
+    assert summary["balance_top"] <= summary["balance_bound"] < 1e-8
+    assert summary["balance_bottom"] <= summary["balance_bound"]
+    assert summary["storage_error"] <= summary["storage_bound"] < 1e-6
+    assert summary["heat_in_top"] == pytest.approx(-summary["heat_in_bottom"], rel=1e-10)
+    # The cold block is wider than the hot one: its spreading makes the flow exceed the 1D series
+    # estimate with the mean conductance (measured 49.74 W against 35.78 W), never fall below it.
+    assert summary["heat_in_top"] > summary["series_estimate"]
+    # The conductance varies with the pressure over the interface (measured p 3.6 to 27.2 MPa:
+    # h from 0.0053 to the table's end 0.02) and the jump T_m - T_s is q/(h A) at every spring.
+    assert summary["pressure_range"][0] < 10.0 < summary["pressure_range"][1]
+    assert summary["conductance_range"][1] == pytest.approx(0.02)
+    assert summary["conductance_range"][0] < 0.01
+    assert summary["jump_error"] < 1e-8
+    assert summary["jump_range"][1] < 0  # the master (cold) side is colder at every spring
+    assert min(summary["t_min"]) >= 293.0 - 1e-9 and max(summary["t_max"]) <= 373.0 + 1e-9
+    # Measured 6, 4, 4, 4 Newton iterations.
+    assert max(summary["iterations"]) <= 10
+    assert Path(summary["xdmf"]).exists() and Path(summary["xdmf"]).with_suffix(".h5").exists()
+    assert Path(summary["png"]).stat().st_size > 10_000
+    assert Path(summary["interface_png"]).stat().st_size > 10_000
+
+
+def test_plastic_indentation_demo_leaves_a_dent(tmp_path):
+    summary = _demo("plastic_indentation").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # 4 loading increments, 4 + 2 withdrawing ones (after the seating increment).
+    assert summary["increments"] == 10
+    # The contact force is the bottom's reaction (measured 2.5e-12 of the peak).
+    assert summary["equilibrium_error"] < 1e-8
+    # Plastic flow under the ball; the ball leaves the dent within the first withdrawal (measured
+    # 0.1764 mm of 0.1999 mm at the peak on the coarse mesh): no spring, no force at the end.
+    assert summary["alpha_max"] > 0.05 and summary["yielding_at_peak"] > 0
+    assert summary["final_springs"] == 0 and summary["final_force"] == 0.0
+    assert 0.5 * summary["dent_at_peak"] < summary["residual_dent"] < summary["dent_at_peak"]
+    # Reverse plasticity while withdrawing (measured 534 points, plastic strain changes 9.5e-4):
+    # small beside the peak's plastic strains.
+    assert summary["alpha_changed_unloading"] < 0.05 * summary["alpha_max"]
+    # The elastic control springs back entirely and starts at Hertz's force (measured +6.7 %,
+    # then +11.8 %, +16.7 %, +19.4 % as the contact grows against the clamped block).
+    assert abs(summary["elastic_residual_dent"]) < 1e-8 * 0.2
+    assert abs(summary["hertz_error"]) < 0.1
+    assert summary["softer_than_elastic"] and summary["cycle_work"] > 0
+    assert max(summary["iterations"]) <= 15  # measured 7-8 in the plastic loading
+    assert Path(summary["xdmf"]).exists() and Path(summary["png"]).stat().st_size > 10_000

@@ -186,6 +186,8 @@ def test_demo_pages_show_their_figures(site):
         "sliding_block",
         "sliding_block_2d",
         "frictional_punch",
+        "hot_block",
+        "plastic_indentation",
     ):
         page = (site / "demos" / f"{demo}.html").read_text()
         images = re.findall(r'<img[^>]+src="([^"]+)"', page)

@@ -72,6 +72,7 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
         [
             "ThermalContactProblem",
             "ThermoMechanicalContact",
+            "CellTemperature",
             "GapConductance",
             "solve_staggered",
             "thermal_solver",

@@ -16,9 +16,9 @@ Formats, verified byte for byte against ``ccx`` 2.20 output:
     - totals rows (``TOTALS=YES/ONLY`` of RF and CELS) are ``6X`` then the values;
     - the CNUM row is the count right-aligned in 17 columns.
 
-Block names used here: ``U``, ``RF``, ``RF_TOTAL``, ``S``, ``CDIS``, ``CSTR``, ``CELS``,
-``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no name for (the name is then the
-title text before the first parenthesis) so that any ccx ``.dat`` file can be compared.
+Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``HFL``, ``CDIS``, ``CSTR``,
+``CELS``, ``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no name for (the name is
+then the title text before the first parenthesis) so that any ccx ``.dat`` file can be compared.
 """
 
 from __future__ import annotations
@@ -84,12 +84,15 @@ class DatBlock:
 _BLOCKS: dict[str, tuple[str, int, int]] = {
     "U": (" displacements (vx,vy,vz) for set {set} and time {time}", 1, 3),
     "RF": (" forces (fx,fy,fz) for set {set} and time {time}", 1, 3),
+    "NT": (" temperatures for set {set} and time {time}", 1, 1),
     "RF_TOTAL": (" total force (fx,fy,fz) for set {set} and time {time}", 0, 3),
     "S": (
         " stresses (elem, integ.pnt.,sxx,syy,szz,sxy,sxz,syz) for set {set} and time {time}",
         2,
         6,
     ),
+    # ccx 2.20 writes no blank between "set" and the set's name in this title
+    "HFL": (" heat flux (elem, integ.pnt.,qx,qy,qz) for set{set} and time {time}", 2, 3),
     "CDIS": (
         " relative contact displacement (slave node,normal,tang1,tang2) for all contact "
         "elements and time{time}",
@@ -252,22 +255,22 @@ def _rows(labels, values, width: int, what: str) -> tuple[np.ndarray, np.ndarray
 def node_print_blocks(
     key: str, set_name: str, time: float, nodes, values, *, totals: str = "NO"
 ) -> list[DatBlock]:
-    """Blocks of a ``*NODE PRINT`` key (``U`` or ``RF``) for one set and time.
+    """Blocks of a ``*NODE PRINT`` key (``U``, ``RF`` or ``NT``) for one set and time.
 
     Args:
-        key: ``U`` or ``RF``.
+        key: ``U``, ``RF`` or ``NT`` (temperatures).
         set_name: node set name as printed (upper case).
         time: total time.
         nodes: ``(n,)`` node numbers in set order.
-        values: ``(n, 3)`` displacements or external forces.
+        values: ``(n, 3)`` displacements or external forces, ``(n, 1)`` temperatures.
         totals: ``NO``, ``YES`` or ``ONLY``; ccx applies it to RF only (a sum row).
     """
-    if key not in ("U", "RF"):
-        raise ValueError(f"*NODE PRINT key must be U or RF, got {key!r}")
+    if key not in ("U", "RF", "NT"):
+        raise ValueError(f"*NODE PRINT key must be U, RF or NT, got {key!r}")
     totals = _totals(totals)
-    nodes, values = _rows(nodes, values, 3, f"*NODE PRINT {key}")
+    nodes, values = _rows(nodes, values, 1 if key == "NT" else 3, f"*NODE PRINT {key}")
     blocks = []
-    if key == "U" or totals != "ONLY":
+    if key != "RF" or totals != "ONLY":
         blocks.append(DatBlock(key, time, set_name, nodes, values))
     if key == "RF" and totals != "NO":
         total = values.sum(axis=0, keepdims=True)
@@ -276,25 +279,28 @@ def node_print_blocks(
 
 
 def el_print_blocks(key: str, set_name: str, time: float, elements, values) -> list[DatBlock]:
-    """Block of an ``*EL PRINT`` key (``S``: Cauchy stress at the integration points).
+    """Block of an ``*EL PRINT`` key at the integration points: ``S`` or ``HFL``.
+
+    ``S`` is the Cauchy stress, ``HFL`` the heat flux.
 
     Args:
-        key: ``S``.
+        key: ``S`` or ``HFL``.
         set_name: element set name as printed.
         time: total time.
         elements: ``(E,)`` element numbers in set order.
-        values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz`` per integration point
-            (ccx order of the points).
+        values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz`` or ``(E, q, 3)`` heat
+            fluxes ``qx, qy, qz`` per integration point (ccx order of the points).
     """
-    if key != "S":
-        raise ValueError(f"*EL PRINT key must be S, got {key!r}")
+    if key not in ("S", "HFL"):
+        raise ValueError(f"*EL PRINT key must be S or HFL, got {key!r}")
+    width = 6 if key == "S" else 3
     elements = np.asarray(elements, dtype=np.int64).reshape(-1)
     values = np.asarray(values, dtype=np.float64)
-    if values.ndim != 3 or values.shape[0] != elements.size or values.shape[2] != 6:
-        raise ValueError(f"*EL PRINT S: values must have shape ({elements.size}, q, 6)")
+    if values.ndim != 3 or values.shape[0] != elements.size or values.shape[2] != width:
+        raise ValueError(f"*EL PRINT {key}: values must have shape ({elements.size}, q, {width})")
     q = values.shape[1]
     labels = np.stack([np.repeat(elements, q), np.tile(np.arange(1, q + 1), elements.size)], 1)
-    return [DatBlock("S", time, set_name, labels, values.reshape(-1, 6))]
+    return [DatBlock(key, time, set_name, labels, values.reshape(-1, width))]
 
 
 def contact_print_blocks(
@@ -350,7 +356,7 @@ def write_dat(
 # ----------------------------------------------------------------------------- reader
 
 _TIME_RE = re.compile(r"time\s*(\S+)\s*$")
-_SET_RE = re.compile(r" for set (\S+) and time")
+_SET_RE = re.compile(r" for set ?(\S+) and time")
 #: ccx 2.23 (not 2.20) heads each step's and increment's blocks with ``S T E P       1`` and
 #: ``INCREMENT     1`` lines; blocks carry their time, so the reader skips them.
 _STEP_RE = re.compile(r"\s*(S T E P|INCREMENT)\s+\d+\s*$")

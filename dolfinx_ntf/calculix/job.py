@@ -55,6 +55,7 @@ from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
+from .coupled import CoupledIncrementSolver
 from .dat import CCX_FORMATS
 from .deck import Deck, Step, read_deck
 from .gather import CcxNumbering
@@ -231,7 +232,25 @@ class _Job:
         self.problem.pairing_callbacks.append(self._on_pairing)
         self.numbering = CcxNumbering(model, internal)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
-        self.solver = ContactNewtonSolver(
+        self.solver: ContactNewtonSolver | CoupledIncrementSolver
+        if model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
+            self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
+        else:
+            self.solver = self._mechanical_solver(comm, petsc_options, tight, solver_options)
+        self.result.xdmf = directory / f"{jobname}.xdmf"
+        self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
+        self._static_interactions = [pair.interaction for pair in model.pairs]
+        self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
+        self.acceleration: dolfinx.fem.Function | None = None
+        self._attempt: tuple | None = None  # (step, increment, attempt, start, dt, step index)
+        self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
+        self._step_time = 0.0
+
+    def _mechanical_solver(
+        self, comm: MPI.Comm, petsc_options: dict | None, tight: bool, solver_options: dict | None
+    ) -> ContactNewtonSolver:
+        """CalculiX's Newton for the mechanical steps (docs/method.md §7.1)."""
+        return ContactNewtonSolver(
             comm,
             self.problem,
             petsc_options=petsc_options,
@@ -243,14 +262,6 @@ class _Job:
             change_over_iterations=not tight,
             **(solver_options or {}),
         )
-        self.result.xdmf = directory / f"{jobname}.xdmf"
-        self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
-        self._static_interactions = [pair.interaction for pair in model.pairs]
-        self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
-        self.acceleration: dolfinx.fem.Function | None = None
-        self._attempt: tuple | None = None  # (step, increment, attempt, start, dt, step index)
-        self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
-        self._step_time = 0.0
 
     def _on_pairing(self, problem: ContactProblem) -> None:
         """Write this pairing's contact elements to the ``.cel`` file (docs/method.md §8.5)."""
@@ -289,15 +300,21 @@ class _Job:
         kind = "Static" if step.dynamic is None else "Dynamic"
         if step.frequency is not None:
             kind = "Frequency"
+        if step.coupled is not None:
+            kind = "Coupled temperature-displacement"
         logger.info("\n STEP %d\n\n %s analysis was selected\n", step.number, kind)
-        self._set_laws(dynamic=step.dynamic is not None)
+        # ccx's transient coupled step is dynamic in its mechanics (manual: ALPHA, step loading)
+        transient = step.coupled is not None and not step.coupled.steady
+        self._set_laws(dynamic=step.dynamic is not None or transient)
         if index > 0:
             bcs = model.begin_step(index)
             problem.set_bcs(bcs)
+        if step.coupled is not None:
+            model.thermal.begin_step(index, step.coupled.steady)
         self._contact_changes(step)
         self.solver.controls = solver_controls(step, tight=self.tight)
         self.solver.relaxation_iteration = relaxation_iteration(step)
-        if step.dynamic is not None:
+        if step.dynamic is not None or transient:
             self._run_dynamic_step(index, step)
             return
         if step.frequency is not None:
@@ -383,7 +400,7 @@ class _Job:
             min_increment=minimum,
             max_increment=maximum,
             fixed=increments.direct,
-            alpha=step.dynamic.alpha,
+            alpha=step.dynamic.alpha if step.dynamic is not None else step.coupled.alpha,
             velocity=self.velocity,
             acceleration=self.acceleration,
             on_increment=on_increment,
@@ -433,6 +450,8 @@ class _Job:
         c = self.counters
         start = self._step_time
         self._attempt = (step.number, c.increment, c.attempt, start, t - start, index)
+        if self.model.thermal is not None:  # each attempt restarts from the last increment's T
+            self.model.thermal.begin_increment(t - start, t / step.static.period)
         self.model.set_time(index, t, ramp=ramp)
         values = self.model.constraint_values(index, t)  # reference nodes of *EQUATION
         if values is not None and self.problem.elimination is not None:
@@ -447,6 +466,8 @@ class _Job:
                            self.solver.history)  # fmt: skip
         self._attempt = None
         self._step_time = result.time
+        if self.model.thermal is not None:
+            self.model.thermal.end_increment()
         self._converged(index, step, result)
         self.counters.increment += 1
         self.counters.attempt = 0

@@ -275,6 +275,10 @@ class _Increment:
                 for key in request.keys:
                     if key == "RF" and forces is None:
                         forces, floor = self.values.printed_forces(self.largest_residual)
+                    if key == "NT":
+                        values = self.values.temperatures()[self.deck.node_index(ids)]
+                        blocks += node_print_blocks(key, request.set, total, ids, values)
+                        continue
                     values = (displacement if key == "U" else forces)[self.deck.node_index(ids)]
                     if key == "U":
                         values = self.values.with_reference(ids, values, self.load_time)
@@ -292,6 +296,11 @@ class _Increment:
         ids = self.deck.elsets[request.set]
         blocks = []
         for key in request.keys:
+            if key == "HFL":
+                blocks += el_print_blocks(
+                    "HFL", request.set, total, ids, self.values.heat_fluxes(ids)
+                )
+                continue
             if key != "S":
                 raise NotImplementedError(
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
@@ -375,7 +384,13 @@ def check_requests(deck: Deck) -> None:
     for step in deck.steps:
         for request in step.prints:
             for key in request.keys:
-                if key not in supported[request.kind]:
+                thermal = (request.kind, key) in (("NODE", "NT"), ("EL", "HFL"))
+                if thermal and step.coupled is None:
+                    raise NotImplementedError(
+                        f"{request.location}: *{request.kind} PRINT {key} needs a *COUPLED "
+                        "TEMPERATURE-DISPLACEMENT step"
+                    )
+                if key not in supported[request.kind] and not thermal:
                     raise NotImplementedError(
                         f"{request.location}: *{request.kind} PRINT key {key} is not supported yet"
                     )

@@ -17,6 +17,7 @@ from mpi4py import MPI
 import numpy as np
 
 import dolfinx.fem
+import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
@@ -90,6 +91,7 @@ class OutputValues:
         self.deck, self.model, self.problem, self.numbering = deck, model, problem, numbering
         self.comm = comm
         self._stress: tuple[dolfinx.fem.Expression, int] | None = None
+        self._heat_flux: tuple[dolfinx.fem.Expression, int] | None = None
         self._field_scales: tuple[float, float, tuple[float, float]] | None = None
 
     # -- forces ------------------------------------------------------------------------------------
@@ -144,6 +146,13 @@ class OutputValues:
             values = self.deck.shells.printed(self.deck.node_ids, values)
         return values
 
+    def temperatures(self) -> np.ndarray:
+        """``(N, 1)`` temperature of every deck node (coupled steps only). Collective."""
+        thermal = self.model.thermal
+        if thermal is None:
+            raise ValueError("the model has no temperature field (no *COUPLED step)")
+        return self.numbering.nodal(thermal.T.x.array[:, None])
+
     def with_reference(
         self, ids: np.ndarray, values: np.ndarray, load_time: tuple[int, float]
     ) -> np.ndarray:
@@ -187,6 +196,27 @@ class OutputValues:
             return values[:, :, index[0], index[1]]
 
         return self.numbering.element_values(element_ids, evaluate, (q, 6))
+
+    def heat_fluxes(self, element_ids: np.ndarray) -> np.ndarray:
+        """Heat fluxes ``-k grad T`` ``(E, q, 3)`` at ccx's integration points (coupled steps).
+
+        In the reference configuration, as ccx 2.20 prints them under NLGEOM (docs/method.md
+        §20.8). Collective.
+        """
+        thermal = self.model.thermal
+        if thermal is None:
+            raise ValueError("the model has no temperature field (no *COUPLED step)")
+        if self._heat_flux is None:
+            points = self.model.element_type.integration_points
+            flux = -thermal.conductivity * ufl.grad(thermal.T)
+            self._heat_flux = (dolfinx.fem.Expression(flux, points), points.shape[0])
+        expression, q = self._heat_flux
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, self.model.mesh, cells.astype(np.int32))
+            return values.reshape(cells.size, q, 3)
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 3))
 
     def _incompatible_mode_stresses(self, element_ids: np.ndarray) -> np.ndarray:
         """C3D8I's stresses ``(E, 8, 6)``: small-strain, the condensed modes' strains included."""

@@ -110,7 +110,11 @@ class IncompatibleModes:
         return np.einsum("cij,cj->ci", self.condensed.correction, self.cell_displacements(x))
 
     def strains(self, x: PETSc.Vec) -> np.ndarray:
-        """(C, 8, 3, 3) small strains at the 2x2x2 Gauss points with the modes (``xi`` fastest)."""
+        """(C, 8, 3, 3) small strains at the 2x2x2 Gauss points with the modes (``xi`` fastest).
+
+        Args:
+            x: The displacement vector (ghost values must be current).
+        """
         return gauss_point_strains(self.condensed, self.cell_displacements(x))
 
     def force_sum(self) -> tuple[float, int]:

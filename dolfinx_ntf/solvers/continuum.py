@@ -92,6 +92,9 @@ class ContinuumProblem:
     def end_increment(self) -> None:
         """The increment converged (no state to commit)."""
 
+    def reject_increment(self) -> None:
+        """An attempt failed and ``u`` is back at the increment start (no state to roll back)."""
+
     def pair(self, **_: object) -> int:
         """No pairing (the gap is part of the residual); returns 0."""
         return 0

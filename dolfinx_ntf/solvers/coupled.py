@@ -31,6 +31,7 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.assembly import coupling_matrix
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
+from dolfinx_ntf.fem.thermal import CellTemperature
 from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenceError
 
 __all__ = ["ThermoMechanicalContact"]
@@ -46,6 +47,9 @@ class ThermoMechanicalContact:
             dependence on ``thermal.T`` (thermal expansion) gives the block ∂F_u/∂T.
         thermal: The heat problem on the contact problem's springs; its residual must not depend on
             the displacement except through the springs.
+        cell_temperature: When given, ``F`` holds the thermal strain of the cell mean temperatures
+            ``cell_temperature.T_c`` (CalculiX's C3D8) instead of ``T``; they are updated before
+            each evaluation and the coupling block is ``∂F_u/∂T_c P``.
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
@@ -54,6 +58,7 @@ class ThermoMechanicalContact:
         F: ufl.form.Form,
         thermal: ThermalContactProblem,
         *,
+        cell_temperature: CellTemperature | None = None,
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -63,6 +68,13 @@ class ThermoMechanicalContact:
         self.contact = thermal.contact
         u, T = self.contact.u, thermal.T
         validation.check_residual(F, u, owner)
+        if cell_temperature is not None:
+            validation.check_type(cell_temperature, CellTemperature, f"{owner}: cell_temperature")
+            if cell_temperature.T is not T:
+                raise ValueError(f"{owner}: cell_temperature is not made from thermal.T")
+            T = cell_temperature.T_c
+        #: The cell mean temperatures of the thermal strain, or None (``F`` holds ``T``).
+        self.cell_temperature = cell_temperature
         if T not in F.coefficients():
             raise ValueError(
                 f"{owner}: F does not depend on the temperature T: give the mechanical residual "
@@ -76,7 +88,7 @@ class ThermoMechanicalContact:
         if self.contact.constraints:
             raise NotImplementedError(f"{owner}: linear constraints are not supported yet")
         options = compat.jit_keywords(form_compiler_options, jit_options)
-        Q = T.function_space
+        Q = T.function_space  # T_c's with cell_temperature
         coupling = ufl.algorithms.expand_derivatives(ufl.derivative(F, T, ufl.TrialFunction(Q)))
         self._a_uT = None if coupling.empty() else dolfinx.fem.form(coupling, **options)
         self._b_u = compat.create_vector(self.contact.L)
@@ -97,10 +109,19 @@ class ThermoMechanicalContact:
         self.atol = 1e-12
         #: Raise ``ContactConvergenceError`` after this many iterations.
         self.max_iterations = 30
+        #: Whether the Jacobian has the coupling blocks ∂F_u/∂T and ∂F_T/∂u (True, Newton's
+        #: method). False leaves them out as CalculiX 2.20 does (its manual on ``*COUPLED
+        #: TEMPERATURE-DISPLACEMENT`` couples the fields by updating each after every
+        #: iteration): the same solution, reached by ccx's iterates (the pairings of its
+        #: iterations follow them), at a linear rate.
+        self.coupling_blocks = True
         #: Displacement at the start of the increment (set by a step before each attempt).
         self.increment_start: np.ndarray | None = None
         self._increment_key: np.ndarray | None = None
-        self._T_start = T.x.array.copy()
+        self._T_start = thermal.T.x.array.copy()
+        self._bc_mask = compat.create_vector(thermal.L)  # 0 at prescribed temperatures, else 1
+        self._bc_mask.set(1.0)
+        dolfinx.fem.petsc.set_bc(self._bc_mask, thermal.bcs, None, 0.0)
         #: Newton iterations of the last :meth:`solve`.
         self.iterations = 0
         #: Norms of the combined residual at each iterate of the last :meth:`solve`.
@@ -111,6 +132,8 @@ class ThermoMechanicalContact:
     def evaluate(self) -> None:
         """Evaluate both fields' springs and residuals at the current ``u`` and ``T``."""
         x_u = compat.petsc_vector(self.contact.u)
+        if self.cell_temperature is not None:
+            self.cell_temperature.update()
         self.contact.form(x_u)
         self.contact.F(x_u, self._b_u)
         self._thermal_residual()
@@ -135,20 +158,28 @@ class ThermoMechanicalContact:
         self.contact.assemble_jacobian(x_u, A_uu)
         A_TT = self.thermal.ensure_matrix()
         self.thermal.J(x_T, A_TT)
-        A_Tu = coupling_matrix(
-            self.thermal.assembler, self.contact.assembler, self.thermal.coupling_blocks
-        )
-        A_uT = self._A_uT
+        A_Tu, A_uT = None, None
+        if self.coupling_blocks:
+            A_Tu = coupling_matrix(
+                self.thermal.assembler, self.contact.assembler, self.thermal.coupling_blocks
+            )
+            A_uT = self._A_uT
         if A_uT is not None:
             A_uT.zeroEntries()
             dolfinx.fem.petsc.assemble_matrix(
                 A_uT, self._a_uT, list(self.contact.bcs) + list(self.thermal.bcs)
             )
             A_uT.assemble()
+            if self.cell_temperature is not None:  # dF_u/dT = dF_u/dT_c P, prescribed T left out
+                A_uT = A_uT.matMult(self.cell_temperature.P)
+                A_uT.diagonalScale(None, self._bc_mask)
         nest = PETSc.Mat().createNest([[A_uu, A_uT], [A_Tu, A_TT]], comm=A_uu.getComm())
         A = nest.convert("aij", PETSc.Mat())  # a new matrix (without ``out``: in place)
         nest.destroy()
-        A_Tu.destroy()
+        if A_Tu is not None:
+            A_Tu.destroy()
+        if A_uT is not None and A_uT is not self._A_uT:
+            A_uT.destroy()
         return A
 
     # -- Newton --------------------------------------------------------------------------------
@@ -242,6 +273,6 @@ class ThermoMechanicalContact:
 
     def destroy(self) -> None:
         """Destroy the PETSc objects this object created. Collective."""
-        for obj in (self._b_u, self._b_T, self._A_uT, self._ksp):
+        for obj in (self._b_u, self._b_T, self._A_uT, self._ksp, self._bc_mask):
             if obj is not None:
                 obj.destroy()

@@ -286,13 +286,18 @@ def test_refuses_a_temperature_of_another_space() -> None:
     problem.destroy()
 
 
-def _punch(alpha: float = 1e-3, t_ref: float = 300.0):
-    """A punch on a block (slave nodes inside master faces), thermal expansion and heat flow."""
+def _punch(alpha: float = 1e-3, t_ref: float = 300.0, cell_mean: bool = False):
+    """A punch on a block (slave nodes inside master faces), thermal expansion and heat flow.
+
+    ``cell_mean``: the thermal strain of the cells' mean temperatures (``CellTemperature``).
+    """
     mesh, cells, ft = two_blocks(MPI.COMM_SELF, upper=PUNCH)
     V = compat.vector_space(mesh, "Lagrange", 1)
     Q = compat.scalar_space(mesh, "Lagrange", 1)
     u, T = dolfinx.fem.Function(V), dolfinx.fem.Function(Q)
-    sigma = ntf.thermoelastic_stress(u, T, YOUNGS_MODULUS, 0.3, alpha, t_ref)
+    cell = ntf.CellTemperature(T) if cell_mean else None
+    T_strain = cell.T_c if cell_mean else T
+    sigma = ntf.thermoelastic_stress(u, T_strain, YOUNGS_MODULUS, 0.3, alpha, t_ref)
     F = ufl.inner(sigma, ufl.grad(ufl.TestFunction(V))) * ufl.dx
     bottom = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(LOWER_BOTTOM))
     top = dolfinx.fem.locate_dofs_topological(V, 2, ft.find(UPPER_TOP))
@@ -311,12 +316,27 @@ def _punch(alpha: float = 1e-3, t_ref: float = 300.0):
     thermal = ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T)
     mesh.topology.create_connectivity(3, 3)  # dolfinx >= 0.9 locates cell dofs with it
     punch = dolfinx.fem.locate_dofs_topological(V, 3, cells.find(UPPER))
-    return ThermoMechanicalContact(F, thermal), punch, [bottom, top], bcs_T[0].dof_indices()[0]
+    if cell_mean:
+        with pytest.raises(ValueError, match="F does not depend on the temperature"):
+            ThermoMechanicalContact(F, thermal)  # F holds T_c, not T
+        other = ntf.CellTemperature(dolfinx.fem.Function(Q))
+        with pytest.raises(ValueError, match=r"cell_temperature is not made from thermal\.T"):
+            ThermoMechanicalContact(F, thermal, cell_temperature=other)
+        other.destroy()
+    coupled = ThermoMechanicalContact(F, thermal, cell_temperature=cell)
+    return coupled, punch, [bottom, top], bcs_T[0].dof_indices()[0]
 
 
-def test_coupled_jacobian_matches_finite_differences() -> None:
-    """All four blocks, springs included, at a penetrated state with a varying temperature."""
-    coupled, punch, fixed_u, fixed_T = _punch()
+@pytest.mark.parametrize("cell_mean", [False, True], ids=["T", "cell-mean-T"])
+def test_coupled_jacobian_matches_finite_differences(cell_mean: bool) -> None:
+    """All four blocks, springs included, at a penetrated state with a varying temperature.
+
+    ``cell-mean-T``: the thermal strain of each cell's mean temperature (CalculiX's C3D8,
+    ``CellTemperature``): the block ∂F_u/∂T is ∂F_u/∂T_c P. Also: without the coupling blocks
+    (``coupling_blocks=False``, ccx's iteration) the diagonal blocks are the same and the
+    off-diagonal ones vanish.
+    """
+    coupled, punch, fixed_u, fixed_T = _punch(cell_mean=cell_mean)
     contact, thermal = coupled.contact, coupled.thermal
     u, T = contact.u, thermal.T
     x = u.function_space.tabulate_dof_coordinates()
@@ -365,7 +385,25 @@ def test_coupled_jacobian_matches_finite_differences() -> None:
     assert np.abs(block).max() > 1e-3 * np.abs(fd).max()
     assert np.abs(exact[rows_T:][:, columns_u] - block).max() <= 1e-6 * np.abs(block).max()
     assert np.abs(fd[:rows_T][:, ~columns_u]).max() > 0
+    if cell_mean:  # T_c is the mean of each cell's nodal temperatures
+        cell = coupled.cell_temperature
+        Q0 = cell.T_c.function_space
+        means = T.x.array[compat.cell_dofs(T.function_space)].mean(axis=1)
+        np.testing.assert_allclose(cell.T_c.x.array[compat.cell_dofs(Q0)[:, 0]], means, rtol=1e-14)
+    coupled.coupling_blocks = False
+    coupled.evaluate()
+    A = coupled.jacobian()
+    split = A.convert("dense").getDenseArray()[np.ix_(free, columns)]
+    A.destroy()
+    rows_u = np.arange(split.shape[0]) < rows_T
+    diagonal = rows_u[:, None] == columns_u[None, :]
+    np.testing.assert_array_equal(split[~diagonal], 0.0)
+    np.testing.assert_allclose(
+        split[diagonal], exact[diagonal], rtol=0, atol=1e-12 * np.abs(exact).max()
+    )
     coupled.destroy()
+    if cell_mean:
+        coupled.cell_temperature.destroy()
 
 
 @pytest.mark.mpi
@@ -560,7 +598,7 @@ def test_agrees_with_ccx(rows, conductance_pressure, tmp_path) -> None:
     )  # fmt: skip
     (tmp_path / "bars.inp").write_text(deck)
     run_ccx(tmp_path, "bars", timeout=120)
-    block = next(b for b in read_ccx_dat(tmp_path, "bars") if b.name.startswith("temperatures"))
+    block = next(b for b in read_ccx_dat(tmp_path, "bars") if b.name == "NT")
     ccx = dict(zip(block.labels.tolist(), block.values[:, 0]))
 
     mesh, ft, V, Q, T, bcs_T = _bars()

@@ -181,6 +181,43 @@ def test_punch_demo_in_parallel(tmp_path_factory):
     assert summary["contact_area"] == pytest.approx(40 * 40, rel=1e-3)
 
 
+def test_hot_block_demo_in_parallel(tmp_path_factory):
+    """The coupled demo's checks (force, heat balances, jumps, bounds) on any process count."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "demos" / "hot_block.py"
+    spec = importlib.util.spec_from_file_location("_demo_hot_block_mpi", path)
+    demo = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(demo)
+    folder = COMM.bcast(str(tmp_path_factory.mktemp("demo")) if COMM.rank == 0 else None)
+    summary = demo.main(["--coarse", "--quiet", "--output", folder])
+    assert summary["passed"]
+    assert summary["springs"] == 25 and summary["increments"] == 4
+    assert summary["force_error"] < 1e-8 and summary["jump_error"] < 1e-8
+    assert summary["balance_top"] <= summary["balance_bound"] < 1e-8
+    # The steady flow is the serial one (measured 49.743037 W serially).
+    assert summary["heat_in_top"] == pytest.approx(49.743037, rel=1e-6)
+
+
+def test_plastic_indentation_demo_in_parallel(tmp_path_factory):
+    """The indentation demo's checks (equilibrium, dent, elastic control) on any process count."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "demos" / "plastic_indentation.py"
+    spec = importlib.util.spec_from_file_location("_demo_plastic_indentation_mpi", path)
+    demo = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(demo)
+    folder = COMM.bcast(str(tmp_path_factory.mktemp("demo")) if COMM.rank == 0 else None)
+    summary = demo.main(["--coarse", "--quiet", "--output", folder])
+    assert summary["passed"]
+    assert summary["equilibrium_error"] < 1e-8 and summary["final_springs"] == 0
+    # The serial dent (measured 0.17641 mm serially) and peak force (6632.06 N).
+    assert summary["residual_dent"] == pytest.approx(0.17641, rel=1e-4)
+    assert summary["peak_force"] == pytest.approx(6632.06, rel=1e-5)
+
+
 @pytest.mark.parametrize("partition", ["graph", "cut"])
 def test_node_based_slave_gives_the_serial_answer(partition):
     """A node-based slave surface whose vertices each process finds among its own (ghosts too)."""

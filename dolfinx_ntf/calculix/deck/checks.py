@@ -67,6 +67,8 @@ class Checks(ReaderState):
             springs=springs,
             ties=tuple(self.ties.values()),
             cyclic_symmetries=tuple(self.cyclic_symmetries),
+            initial_temperatures=tuple(self.initial_temperatures),
+            temperature_boundaries=tuple(self.temperature_boundaries),
             shells=shells,
         )
 

@@ -235,6 +235,32 @@ class Frequency:
 
 
 @dataclass(frozen=True, eq=False)
+class Coupled:
+    """A ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments are the step's ``static``).
+
+    Attributes:
+        steady: ``STEADY STATE`` (no heat capacity), else transient (backward Euler).
+        deltmx: DELTMX, the largest temperature change per increment, or None.
+        location: The card.
+        alpha: The HHT parameter of the transient step's mechanics (ccx's ALPHA, -0.05).
+    """
+
+    steady: bool
+    deltmx: float | None
+    location: Location
+    alpha: float = -0.05
+
+
+@dataclass(frozen=True, eq=False)
+class InitialTemperature:
+    """``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` data line: ``value`` at ``nodes``."""
+
+    nodes: np.ndarray
+    value: float
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class InitialVelocity:
     """``*INITIAL CONDITIONS, TYPE=VELOCITY`` data line: ``value`` along ``dof`` of ``nodes``."""
 
@@ -347,6 +373,9 @@ class Step:
         dynamic: the ``*DYNAMIC`` parameters, or None for a static step.
         frequency: the ``*FREQUENCY`` procedure (a modal step; ``static`` is then unused), or
             None.
+        coupled: the ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments in
+            ``static``), or None.
+        temperatures: the ``*BOUNDARY`` lines of dof 11 (temperatures) of this step.
     """
 
     number: int
@@ -365,6 +394,8 @@ class Step:
     location: Location
     dynamic: Dynamic | None = None
     frequency: Frequency | None = None
+    coupled: Coupled | None = None
+    temperatures: tuple[Boundary, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:
@@ -466,6 +497,8 @@ class Deck:
         initial_velocities: ``*INITIAL CONDITIONS, TYPE=VELOCITY`` data lines, in deck order.
         springs: spring elements (SPRINGA, SPRING1, SPRING2) by ``*SPRING`` card.
         ties: ``*TIE`` cards in deck order; cyclic_symmetries: ``*CYCLIC SYMMETRY MODEL`` cards.
+        initial_temperatures: ``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` data lines, in order.
+        temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
         shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
     """
@@ -492,6 +525,8 @@ class Deck:
     springs: tuple[SpringElements, ...] = ()
     ties: tuple[Tie, ...] = ()
     cyclic_symmetries: tuple[CyclicSymmetry, ...] = ()
+    initial_temperatures: tuple[InitialTemperature, ...] = ()
+    temperature_boundaries: tuple[Boundary, ...] = ()
     shells: ShellExpansion | None = None
 
     @property

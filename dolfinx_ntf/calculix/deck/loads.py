@@ -10,7 +10,15 @@ import re
 import numpy as np
 
 from ..elements import frozen_array
-from .data import Amplitude, Boundary, CLoad, DLoad, Equation, InitialVelocity
+from .data import (
+    Amplitude,
+    Boundary,
+    CLoad,
+    DLoad,
+    Equation,
+    InitialTemperature,
+    InitialVelocity,
+)
 from .errors import DeckError
 from .lexer import Card
 from .state import ReaderState
@@ -55,12 +63,23 @@ class LoadCards(ReaderState):
         op = self._op(card)
         amplitude = self._amplitude_param(card)
         target_list = self.step.boundaries if self.step is not None else self.boundaries
+        temperatures = (
+            self.step.temperatures if self.step is not None else self.temperature_boundaries
+        )
         for fields, _, loc in card.lines:
             if not 2 <= len(fields) <= 4:
                 raise DeckError(
                     "*BOUNDARY data line: node or node set, first dof[, last dof[, value]]", loc
                 )
             nodes = self._nodes_of(fields[0], card, loc)
+            if self._int(fields[1], "degree of freedom", loc) == 11:  # the temperature
+                last_token = fields[2] if len(fields) > 2 and fields[2] else "11"
+                if self._int(last_token, "degree of freedom", loc) != 11:
+                    raise DeckError("*BOUNDARY: dof 11 (temperature) cannot start a range", loc)
+                value = self._optional_float(fields, 3, "prescribed temperature", loc) or 0.0
+                temperatures.append(Boundary(frozen_array(nodes, np.int64), 11, 11, value,
+                                             amplitude, op, fields[0], loc))  # fmt: skip
+                continue
             first = self._boundary_dof(fields[1], loc)
             last = self._boundary_dof(fields[2], loc) if len(fields) > 2 and fields[2] else first
             if last < first:
@@ -124,10 +143,13 @@ class LoadCards(ReaderState):
 
     def _k_INITIALCONDITIONS(self, card: Card) -> None:
         self._check_params(card, allowed={"TYPE"}, required={"TYPE"})
+        if card.params["TYPE"] == "TEMPERATURE":
+            self._initial_temperatures(card)
+            return
         if card.params["TYPE"] != "VELOCITY":
             raise DeckError(
                 "*INITIAL CONDITIONS is not supported yet for "
-                f"TYPE={card.raw_params['TYPE']} (only TYPE=VELOCITY)",
+                f"TYPE={card.raw_params['TYPE']} (only TYPE=VELOCITY and TYPE=TEMPERATURE)",
                 card.location,
             )
         self._need_data(card)
@@ -143,6 +165,22 @@ class LoadCards(ReaderState):
                 InitialVelocity(frozen_array(nodes, np.int64), self._dof(fields[1], loc),
                                 float(value or 0.0), loc)
             )  # fmt: skip
+
+    def _initial_temperatures(self, card: Card) -> None:
+        """``*INITIAL CONDITIONS, TYPE=TEMPERATURE``: lines of node or node set, temperature."""
+        self._need_data(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 2:
+                raise DeckError(
+                    "*INITIAL CONDITIONS, TYPE=TEMPERATURE data line: node or node set, "
+                    "temperature (temperature gradients are not supported)",
+                    loc,
+                )
+            nodes = self._nodes_of(fields[0], card, loc)
+            value = self._float(fields[1], "initial temperature", loc)
+            self.initial_temperatures.append(
+                InitialTemperature(frozen_array(nodes, np.int64), value, loc)
+            )
 
     def _k_CLOAD(self, card: Card) -> None:
         step = self._in_step(card)

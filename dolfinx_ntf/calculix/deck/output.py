@@ -16,7 +16,11 @@ _FILE_KEYWORDS = {
     "CONTACTOUTPUT": "CONTACT",
 }
 
-_PRINT_KEYS = {"NODE": ("U", "RF"), "EL": ("S",), "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM")}
+_PRINT_KEYS = {
+    "NODE": ("U", "RF", "NT"),
+    "EL": ("S", "HFL"),
+    "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM"),
+}
 
 
 class OutputCards(ReaderState):

@@ -304,6 +304,10 @@ class ShellCards(ReaderState):
             ("*CLOAD", c.nodes, c.location) for s in self.steps for c in s.cloads
         ]
         named += [("*INITIAL CONDITIONS", v.nodes, v.location) for v in self.initial_velocities]
+        named += [("*INITIAL CONDITIONS", v.nodes, v.location) for v in self.initial_temperatures]
+        named += [("*BOUNDARY, dof 11", b.nodes, b.location) for b in self.temperature_boundaries]
+        named += [("*BOUNDARY, dof 11", b.nodes, b.location)
+                  for s in self.steps for b in s.temperatures]  # fmt: skip
         named += [("*EQUATION", e.nodes, e.location) for e in self.equations
                   if not np.isin(e.nodes, expansion.expanded).all()]  # fmt: skip
         named += [

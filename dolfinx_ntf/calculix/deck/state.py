@@ -13,6 +13,7 @@ from .data import (
     Boundary,
     CLoad,
     ContactPair,
+    Coupled,
     CyclicSymmetry,
     DLoad,
     Dynamic,
@@ -21,6 +22,7 @@ from .data import (
     Frequency,
     Friction,
     FrictionChange,
+    InitialTemperature,
     InitialVelocity,
     ModelChange,
     PrintRequest,
@@ -47,7 +49,9 @@ class StepBuilder:
     static: Static | None = None
     dynamic: Dynamic | None = None
     frequency: Frequency | None = None
+    coupled: Coupled | None = None
     boundaries: list[Boundary] = field(default_factory=list)
+    temperatures: list[Boundary] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)
@@ -113,6 +117,8 @@ class ReaderState:
         self.amplitudes: dict[str, Amplitude] = {}
         self.boundaries: list[Boundary] = []
         self.initial_velocities: list[InitialVelocity] = []
+        self.initial_temperatures: list[InitialTemperature] = []
+        self.temperature_boundaries: list[Boundary] = []
         self.equations: list[Equation] = []
         self.ties: dict[str, Tie] = {}
         self.cyclic_symmetries: list[CyclicSymmetry] = []

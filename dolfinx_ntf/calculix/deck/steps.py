@@ -1,12 +1,13 @@
 """Step cards: procedures, controls and changes between steps.
 
-``*STEP``, ``*STATIC``, ``*DYNAMIC``, ``*CONTROLS``, ``*CHANGE FRICTION``, ``*MODEL CHANGE``,
+``*STEP``, ``*STATIC``, ``*DYNAMIC``, ``*COUPLED TEMPERATURE-DISPLACEMENT``,
+``*CONTROLS``, ``*CHANGE FRICTION``, ``*MODEL CHANGE``,
 ``*END STEP``.
 """
 
 from __future__ import annotations
 
-from .data import Dynamic, ModelChange, Static, Step
+from .data import Coupled, Dynamic, ModelChange, Static, Step
 from .errors import DeckError
 from .lexer import Card
 from .state import ReaderState, StepBuilder
@@ -108,6 +109,44 @@ class StepCards(ReaderState):
         )
         step.dynamic = Dynamic(alpha=alpha)
 
+    def _k_COUPLEDTEMPERATURE_DISPLACEMENT(self, card: Card) -> None:
+        """Initial increment, period, minimum, maximum, DELTMX; ``STEADY STATE`` or transient."""
+        step = self._in_step(card)
+        self._check_params(card, allowed={"STEADYSTATE", "SOLVER", "DIRECT", "ALPHA"})
+        if step.static is not None or step.frequency is not None:
+            raise DeckError("a step can have only one procedure card", card.location)
+        alpha = -0.05
+        if "ALPHA" in card.params:
+            alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
+            if not -1.0 / 3.0 <= alpha <= 0.0:
+                raise DeckError(f"ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        values: tuple[float | None, ...] = ()
+        if card.lines:
+            fields, _, loc = card.lines[0]
+            if len(card.lines) > 1 or len(fields) > 5:
+                raise DeckError(
+                    "*COUPLED TEMPERATURE-DISPLACEMENT data line: initial increment, period, "
+                    "minimum, maximum, DELTMX",
+                    loc,
+                )
+            values = self._floats_line(fields, "*COUPLED TEMPERATURE-DISPLACEMENT", loc)
+        values = values + (None,) * (5 - len(values))
+        for name, value in zip(("initial increment", "period", "maximum", "DELTMX"),
+                               (values[0], values[1], values[3], values[4])):  # fmt: skip
+            if value is not None and value <= 0.0:
+                raise DeckError(
+                    f"*COUPLED TEMPERATURE-DISPLACEMENT {name} must be > 0, got {value}",
+                    card.location,
+                )
+        step.static = Static(
+            initial_increment=values[0] if values[0] is not None else 1.0,
+            period=values[1] if values[1] is not None else 1.0,
+            minimum=values[2],
+            maximum=values[3],
+            direct="DIRECT" in card.params,
+        )
+        step.coupled = Coupled("STEADYSTATE" in card.params, values[4], card.location, alpha)
+
     def _k_CONTROLS(self, card: Card) -> None:
         self._in_step(card)
         self._check_params(card, allowed={"PARAMETERS", "RESET"})
@@ -155,8 +194,8 @@ class StepCards(ReaderState):
         self._no_data(card)
         if step.static is None and step.frequency is None:
             raise DeckError(
-                "the step has no *STATIC, *DYNAMIC or *FREQUENCY procedure (the only ones "
-                "supported)",
+                "the step has no *STATIC, *DYNAMIC, *FREQUENCY or *COUPLED TEMPERATURE-"
+                "DISPLACEMENT procedure (the only ones supported)",
                 step.location,
             )
         if step.pending_friction is not None:
@@ -180,6 +219,8 @@ class StepCards(ReaderState):
                 location=step.location,
                 dynamic=step.dynamic,
                 frequency=step.frequency,
+                coupled=step.coupled,
+                temperatures=tuple(step.temperatures),
             )
         )
         self.step = None

@@ -43,15 +43,20 @@ def stresses(
     mu: dolfinx.fem.Function,
     lmbda: dolfinx.fem.Function,
     nlgeom: dolfinx.fem.Constant | float,
+    thermal_strain: ufl.core.expr.Expr | None = None,
 ) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr, ufl.core.expr.Expr]:
     """Deformation gradient, first Piola-Kirchhoff and Cauchy stress.
 
-    ``nlgeom`` 0 gives small-strain elasticity, 1 St.Venant-Kirchhoff.
+    ``nlgeom`` 0 gives small-strain elasticity, 1 St.Venant-Kirchhoff. A ``thermal_strain``
+    ``eps_th`` is subtracted from the displacement gradient before the strain is formed: the
+    strain is that of ``H - eps_th`` (with ``nlgeom`` its Green-Lagrange strain, as ccx 2.20's
+    measured: docs/method.md §20.8), the deformation gradient that of ``H``.
     """
     H = ufl.grad(u)
     Id = ufl.Identity(3)
     F = Id + nlgeom * H
-    E = ufl.sym(H) + 0.5 * nlgeom * H.T * H
+    Hm = H if thermal_strain is None else H - thermal_strain
+    E = ufl.sym(Hm) + 0.5 * nlgeom * Hm.T * Hm
     S = 2 * mu * E + lmbda * ufl.tr(E) * Id
     P = F * S
     return F, P, P * F.T / ufl.det(F)

@@ -28,6 +28,7 @@ from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
 from ..deck import Deck
@@ -39,6 +40,7 @@ from .loads import Schedule, StepLoads, schedules
 from .mesh import create_mesh, element_block, mesh_maps, numbering
 from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
+from .thermal import ThermalModel, is_thermal, thermal_model
 from .ties import tie_constraints
 
 __all__ = ["CalculixModel", "build_model"]
@@ -84,6 +86,8 @@ class CalculixModel:
         free_references: Components of nodes in no element without ``*BOUNDARY``, eliminated.
         springs: The spring elements (SPRINGA, SPRING1, SPRING2), one
             :class:`~dolfinx_ntf.DiscreteSprings` per ``*SPRING`` card (docs/method.md §18.3).
+        thermal: The temperature field of a deck with coupled steps (docs/method.md §20.8), else
+            None.
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
     """
@@ -121,6 +125,7 @@ class CalculixModel:
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
     springs: list[DiscreteSprings] = field(default_factory=list)
+    thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
@@ -403,9 +408,15 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
 
     kinds = {step.nlgeom for step in deck.steps}
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
-    F, P, sigma = stresses(u, mu, lmbda, nlgeom if nlgeom is not None else float(True in kinds))
-    v = ufl.TestFunction(V)
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
+    thermal = None
+    if collectives.collectively(comm, is_thermal, deck):
+        thermal = thermal_model(deck, block, mesh, etype.degree, node_dof, element_cell, dx)
+    kinematics = nlgeom if nlgeom is not None else float(True in kinds)
+    F, P, sigma = stresses(
+        u, mu, lmbda, kinematics, None if thermal is None else thermal.thermal_strain()
+    )
+    v = ufl.TestFunction(V)
     residual = ufl.inner(P, ufl.grad(v)) * dx
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     if pressures:
@@ -477,5 +488,6 @@ def build_model(deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD) -> CalculixModel:
         reference_terms=reference_terms,
         free_references=free_references,
         springs=springs,
+        thermal=thermal,
         incompatible_modes=modes,
     )

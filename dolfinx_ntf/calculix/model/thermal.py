@@ -1,0 +1,296 @@
+"""The temperature field of a deck with ``*COUPLED TEMPERATURE-DISPLACEMENT`` steps.
+
+docs/method.md §20.8. :class:`ThermalModel` holds the temperature ``T`` (a scalar Lagrange space
+numbered like the displacement's), the material data per cell (``*CONDUCTIVITY``, ``*SPECIFIC
+HEAT``, ``*DENSITY``, ``*EXPANSION``), the heat residual with CalculiX's backward-Euler capacity
+term, the temperature conditions (``*BOUNDARY`` dof 11) of every step, the initial temperatures
+and one :class:`~dolfinx_ntf.GapConductance` per contact pair (``*GAP CONDUCTANCE``). The
+mechanical residual takes ccx's thermal strain (measured against ccx 2.20 with C3D8): from the mean
+temperature of each element (:class:`~dolfinx_ntf.fem.thermal.CellTemperature`), measured from the
+initial temperature, ``x = alpha (T_c - T_init,c)`` subtracted from the diagonal of the
+displacement gradient before the strain is formed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.fem.thermal import CellTemperature
+from dolfinx_ntf.kernels.gap_conductance import GapConductance
+
+from ..deck import Boundary, Deck, ElementBlock
+
+__all__ = ["ThermalModel", "is_thermal", "thermal_model"]
+
+#: The material cards of the heat problem and the step kind that needs each.
+_CARDS = {"*CONDUCTIVITY": "steady", "*SPECIFIC HEAT": "transient", "*DENSITY": "transient"}
+
+
+def is_thermal(deck: Deck) -> bool:
+    """True if the deck has a coupled step; refuses temperature input without one.
+
+    Raises:
+        NotImplementedError: temperatures (initial conditions or dof 11) with steps that are not
+            coupled (their thermal strains are not supported), or mixed step kinds.
+    """
+    coupled = [step.coupled is not None for step in deck.steps]
+    inputs = [
+        *deck.initial_temperatures,
+        *deck.temperature_boundaries,
+        *(b for step in deck.steps for b in step.temperatures),
+    ]
+    if any(coupled) and not all(coupled):
+        step = deck.steps[coupled.index(False)]
+        raise NotImplementedError(
+            f"{step.location}: step {step.number} is not *COUPLED TEMPERATURE-DISPLACEMENT while "
+            "another step is: mixing coupled and other steps is not supported yet"
+        )
+    if inputs and not any(coupled):
+        where = inputs[0].location
+        raise NotImplementedError(
+            f"{where}: temperatures (*INITIAL CONDITIONS, TYPE=TEMPERATURE or *BOUNDARY dof 11) "
+            "are supported in *COUPLED TEMPERATURE-DISPLACEMENT steps only"
+        )
+    return any(coupled)
+
+
+@dataclass(eq=False)
+class ThermalModel:
+    """The temperature field of a deck (see the module docstring).
+
+    Attributes:
+        Q: Scalar Lagrange space of the displacement's degree (numbered like it).
+        T: The temperature; ``T_old`` its value at the start of the increment.
+        T_init: The initial temperature (reference of the thermal strain).
+        cell_temperature: The element mean temperatures of ``T`` (the thermal strain's).
+        T_init_c: The element mean initial temperatures.
+        inverse_dt: Constant ``1/dt`` of the capacity term (0 in a steady step).
+        alpha: Coefficient of thermal expansion per cell (DG0).
+        conductivity: Conductivity per cell (DG0).
+        residual: The heat residual ``rho c (T - T_old)/dt v + k grad T . grad v`` (ccx's
+            quadrature).
+        conductances: One gap conductance per contact pair (zero without ``*GAP CONDUCTANCE``).
+        bc_dofs: Local dofs of ``Q`` with a prescribed temperature (the same in every step).
+        bc_values: Per step, the prescribed temperatures at ``bc_dofs``.
+        bc_value: Function holding the current prescribed values; ``bcs`` the conditions.
+    """
+
+    Q: dolfinx.fem.FunctionSpace
+    T: dolfinx.fem.Function
+    T_old: dolfinx.fem.Function
+    T_init: dolfinx.fem.Function
+    cell_temperature: CellTemperature
+    T_init_c: dolfinx.fem.Function
+    inverse_dt: dolfinx.fem.Constant
+    alpha: dolfinx.fem.Function
+    conductivity: dolfinx.fem.Function
+    residual: ufl.Form
+    conductances: list[GapConductance]
+    bc_dofs: np.ndarray
+    bc_values: list[np.ndarray]
+    bc_value: dolfinx.fem.Function
+    bcs: list[compat.DirichletBC]
+    _steady: bool = False
+    _start: np.ndarray | None = None
+    _target: np.ndarray | None = None
+
+    def thermal_strain(self) -> ufl.core.expr.Expr:
+        """``x I``, ``x = alpha (T_c - T_init,c)`` of the element mean temperatures.
+
+        The mechanical strain is formed from ``grad u - x I`` (``bulk.stresses``): with
+        ``NLGEOM`` its Green-Lagrange strain ``x^2/2`` off the small one where ``u = 0``, as ccx
+        2.20's (measured, docs/method.md §20.8).
+        """
+        x = self.alpha * (self.cell_temperature.T_c - self.T_init_c)
+        return x * ufl.Identity(3)
+
+    def begin_step(self, step_index: int, steady: bool) -> None:
+        """Start a step: its prescribed temperatures and its kind (steady or transient).
+
+        ccx applies the temperatures of a transient step at once and ramps those of a steady one
+        from their values at the step start (manual, ``*COUPLED TEMPERATURE-DISPLACEMENT``).
+        """
+        self._target = self.bc_values[step_index]
+        self._start = self.T.x.array[self.bc_dofs].copy()
+        self._steady = steady
+        self.inverse_dt.value = 0.0
+
+    def begin_increment(self, dt: float, fraction: float) -> None:
+        """An attempt of size ``dt`` ending at ``fraction`` of the step.
+
+        ``T`` restarts from ``T_old``, whose prescribed values are set to the new ones first: a
+        prescribed temperature has no rate in the capacity term (as in ccx: its first increment
+        gives the temperatures of ``rho c (T - T_old)/dt`` with the new boundary values in
+        ``T_old``, measured on contact8). ``1/dt`` stays 0 in a steady step.
+        """
+        scale = fraction if self._steady else 1.0
+        values = self._start + (self._target - self._start) * scale
+        for f in (self.bc_value, self.T_old):
+            f.x.array[self.bc_dofs] = values
+            f.x.scatter_forward()
+        self.T.x.array[:] = self.T_old.x.array
+        self.T.x.scatter_forward()
+        self.inverse_dt.value = 0.0 if self._steady else 1.0 / dt
+
+    def end_increment(self) -> None:
+        """A converged increment: its temperature becomes the next one's ``T_old``."""
+        self.T_old.x.array[:] = self.T.x.array
+        self.T_old.x.scatter_forward()
+
+
+def _cell_values(
+    deck: Deck, block: ElementBlock, element_cell: np.ndarray, Q0: dolfinx.fem.FunctionSpace,
+    card: str, needed: bool,
+) -> dolfinx.fem.Function:  # fmt: skip
+    """A DG0 function of one constant material value per section (0 where not given)."""
+    f = dolfinx.fem.Function(Q0)
+    order = np.argsort(block.ids)
+    for section in deck.sections:
+        material = deck.materials[section.material]
+        lines = material.extra.get(card)
+        if lines is None:
+            if needed:
+                raise ValueError(
+                    f"{section.location}: material {section.material} needs {card} for a "
+                    "*COUPLED TEMPERATURE-DISPLACEMENT step"
+                )
+            continue
+        if len(lines) != 1 or not lines[0] or lines[0][0] is None or len(lines[0]) > 2:
+            raise NotImplementedError(
+                f"{material.location}: {card} of material {material.name}: only one constant "
+                "value is supported (temperature-dependent or anisotropic data are not)"
+            )
+        if lines[0][0] < 0.0 or (lines[0][0] == 0.0 and needed):
+            raise ValueError(
+                f"{material.location}: {card} of material {material.name} must be > 0, got "
+                f"{lines[0][0]}"
+            )
+        members = np.unique(deck.elsets[section.elset])
+        members = members[np.isin(members, block.ids)]
+        rows = order[np.searchsorted(block.ids, members, sorter=order)]
+        cells = element_cell[rows]
+        f.x.array[compat.cell_dofs(Q0)[cells[cells >= 0], 0]] = lines[0][0]
+    return f
+
+
+def _bc_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
+    """The nodes with a prescribed temperature and their values per step (ccx's OP rules)."""
+    current: dict[int, float] = {}
+    per_step = []
+    for b in deck.temperature_boundaries:
+        _check_boundary(b)
+        current.update(dict.fromkeys(b.nodes.tolist(), b.value))
+    for step in deck.steps:
+        if step.temperatures and step.temperatures[0].op == "NEW":
+            current = {}
+        for b in step.temperatures:
+            _check_boundary(b)
+            current.update(dict.fromkeys(b.nodes.tolist(), b.value))
+        per_step.append(dict(current))
+    nodes = sorted(per_step[0]) if per_step else []
+    for step, values in zip(deck.steps, per_step):
+        if sorted(values) != nodes:
+            raise NotImplementedError(
+                f"{step.location}: step {step.number} prescribes the temperature at other nodes "
+                "than the first step: changing the nodes of dof 11 between steps is not "
+                "supported yet"
+            )
+    return np.array(nodes, dtype=np.int64), per_step
+
+
+def _check_boundary(b: Boundary) -> None:
+    if b.amplitude is not None:
+        raise NotImplementedError(
+            f"{b.location}: *BOUNDARY dof 11 with an AMPLITUDE is not supported yet (temperatures "
+            "are applied at once at the step start, as ccx does without one)"
+        )
+
+
+def thermal_model(
+    deck: Deck,
+    block: ElementBlock,
+    mesh: dolfinx.mesh.Mesh,
+    degree: int,
+    node_dof: np.ndarray,
+    element_cell: np.ndarray,
+    dx: ufl.Measure,
+) -> ThermalModel:
+    """The :class:`ThermalModel` of a deck with coupled steps (``is_thermal``).
+
+    Args:
+        deck: The deck.
+        block: Its element block.
+        mesh: The mesh.
+        degree: The displacement's degree (the temperature's space is numbered like it).
+        node_dof: Local block dof of each deck node (-1 where this process has none).
+        element_cell: Local cell of each element row (-1 elsewhere).
+        dx: The volume measure with ccx's quadrature.
+    """
+    Q = compat.scalar_space(mesh, "Lagrange", degree)
+    T = dolfinx.fem.Function(Q, name="temperature")
+    Q0 = compat.scalar_space(mesh, "DG", 0)
+    if block.type.name != "C3D8":
+        raise NotImplementedError(
+            f"{block.locations[0]}: *COUPLED TEMPERATURE-DISPLACEMENT with {block.type.name} "
+            "elements is not supported yet (ccx's thermal strain is measured for C3D8 only: the "
+            "element mean temperature)"
+        )
+    transient = any(not s.coupled.steady for s in deck.steps)
+    for step in deck.steps:
+        if step.coupled.deltmx is not None and not step.coupled.steady:
+            raise NotImplementedError(
+                f"{step.coupled.location}: DELTMX (the largest temperature change per increment) "
+                "is not supported yet"
+            )
+    k = _cell_values(deck, block, element_cell, Q0, "*CONDUCTIVITY", True)
+    rho = _cell_values(deck, block, element_cell, Q0, "*DENSITY", transient)
+    c = _cell_values(deck, block, element_cell, Q0, "*SPECIFIC HEAT", transient)
+    alpha = _cell_values(deck, block, element_cell, Q0, "*EXPANSION", False)
+    for condition in deck.initial_temperatures:
+        dofs = node_dof[deck.node_index(condition.nodes)]
+        T.x.array[dofs[dofs >= 0]] = condition.value
+    T.x.scatter_forward()
+    T_old = dolfinx.fem.Function(Q, name="temperature_old")
+    T_init = dolfinx.fem.Function(Q, name="initial_temperature")
+    T_old.x.array[:] = T_init.x.array[:] = T.x.array
+    cell_temperature = CellTemperature(T)
+    T_init_c = dolfinx.fem.Function(cell_temperature.T_c.function_space, name="initial_cell_temp")
+    T_init_c.x.array[:] = cell_temperature.T_c.x.array
+    inverse_dt = dolfinx.fem.Constant(mesh, 0.0)
+    v = ufl.TestFunction(Q)
+    residual = (
+        k * ufl.inner(ufl.grad(T), ufl.grad(v)) * dx + inverse_dt * rho * c * (T - T_old) * v * dx
+    )
+    conductances = []
+    for pair in deck.contact_pairs:
+        rows = deck.interactions[pair.interaction].extra.get("*GAP CONDUCTANCE")
+        conductances.append(_conductance(rows, pair.interaction))
+    nodes, per_step = _bc_nodes(deck)
+    dofs = node_dof[deck.node_index(nodes)] if nodes.size else np.zeros(0, np.int64)
+    held = dofs >= 0
+    bc_dofs = dofs[held].astype(np.int32)
+    bc_values = [np.array([values[n] for n in nodes.tolist()])[held] for values in per_step]
+    bc_value = dolfinx.fem.Function(Q, name="prescribed_temperature")
+    bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
+    return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
+                        residual, conductances, bc_dofs, bc_values, bc_value, bcs)  # fmt: skip
+
+
+def _conductance(rows: tuple | None, interaction: str) -> GapConductance:
+    """The ``*GAP CONDUCTANCE`` table of an interaction (zero without the card)."""
+    if rows is None:
+        return GapConductance.constant(0.0)
+    table = [tuple(0.0 if x is None else x for x in (*r, None, None)[:3]) for r in rows]
+    try:
+        return GapConductance.from_rows(table)
+    except ValueError as error:
+        raise ValueError(
+            f"*GAP CONDUCTANCE of *SURFACE INTERACTION {interaction}: {error}"
+        ) from None
