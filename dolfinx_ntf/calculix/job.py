@@ -42,6 +42,7 @@ import numpy as np
 import dolfinx.fem
 import ufl
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
 from dolfinx_ntf.logs import log_progress
@@ -371,6 +372,10 @@ class _Job:
         model = self.model
         if self.velocity is None:
             self.velocity = model.initial_velocity()
+            if self.problem.elimination is not None:  # dependent dofs (C3D20's face and cell
+                # centres, *EQUATION terms) from the nodes' velocities, as the displacement's
+                self.problem.elimination.expand(compat.petsc_vector(self.velocity))
+                self.velocity.x.scatter_forward()
             self.acceleration = dolfinx.fem.Function(model.V, name="acceleration")
         increments = step.static
         period = increments.period

@@ -137,8 +137,14 @@ class OutputValues:
     # -- displacements -----------------------------------------------------------------------------
 
     def displacements(self) -> np.ndarray:
-        """``(N, 3)`` displacement of every deck node (rows of ``deck.node_ids``). Collective."""
-        return self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
+        """``(N, 3)`` displacement of every deck node (rows of ``deck.node_ids``). Collective.
+
+        Shell nodes: ccx's combination of their expanded nodes (docs/method.md §24).
+        """
+        values = self.numbering.nodal(self.model.u.x.array.reshape(-1, 3))
+        if self.deck.shells is not None:
+            values = self.deck.shells.printed(self.deck.node_ids, values)
+        return values
 
     def temperatures(self) -> np.ndarray:
         """``(N, 1)`` temperature of every deck node (coupled steps only). Collective."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..elements import ElementType
+from ..shell_expansion import ShellExpansion
 from .errors import DeckWarning, Location
 
 
@@ -503,6 +504,8 @@ class Deck:
         ties: ``*TIE`` cards in deck order; cyclic_symmetries: ``*CYCLIC SYMMETRY MODEL`` cards.
         initial_temperatures: ``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` data lines, in order.
         temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
+        shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
+            (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
     """
 
     path: str
@@ -529,6 +532,7 @@ class Deck:
     cyclic_symmetries: tuple[CyclicSymmetry, ...] = ()
     initial_temperatures: tuple[InitialTemperature, ...] = ()
     temperature_boundaries: tuple[Boundary, ...] = ()
+    shells: ShellExpansion | None = None
 
     @property
     def num_elements(self) -> int:
