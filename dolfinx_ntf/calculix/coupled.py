@@ -1,4 +1,7 @@
-"""The increment solver of ``*COUPLED TEMPERATURE-DISPLACEMENT`` steps in the deck runner.
+"""The increment solvers of the thermal steps in the deck runner.
+
+``*HEAT TRANSFER`` steps (docs/method.md §20.9): :class:`HeatIncrementSolver`, Newton on the
+temperature alone with the springs of the undeformed state.
 
 docs/method.md §20.8. :class:`CoupledIncrementSolver` runs the monolithic Newton of
 :class:`~dolfinx_ntf.ThermoMechanicalContact` (both fields, the coupling blocks in the Jacobian)
@@ -11,19 +14,22 @@ pressure (``conductance_pressure="ccx"``, §20.1).
 from __future__ import annotations
 
 from mpi4py import MPI
+from petsc4py import PETSc
 
 import numpy as np
 
 import dolfinx.fem
 import ufl
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
 from dolfinx_ntf.solvers.coupled import ThermoMechanicalContact
+from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenceError
 
 from .model.thermal import ThermalModel
 
-__all__ = ["CoupledIncrementSolver"]
+__all__ = ["CoupledIncrementSolver", "HeatIncrementSolver"]
 
 
 class CoupledIncrementSolver:
@@ -100,4 +106,122 @@ class CoupledIncrementSolver:
     def destroy(self) -> None:
         """Destroy the PETSc objects. Collective."""
         self.coupled.destroy()
+        self.heat.destroy()
+
+
+class HeatIncrementSolver:
+    """Newton on the temperature alone per increment (the job's solver role, ``*HEAT TRANSFER``).
+
+    The displacement is never solved for: the springs are those the contact problem pairs at
+    the undeformed state (as ccx 2.20's heat transfer step, docs/method.md §20.9), their heat
+    flows are :class:`~dolfinx_ntf.ThermalContactProblem`'s with ccx's conductance pressure.
+
+    Args:
+        problem: The job's contact problem (its displacement stays as it is).
+        thermal: The deck's temperature field.
+    """
+
+    def __init__(self, problem: ContactProblem, thermal: ThermalModel) -> None:
+        #: The heat problem on the springs of ``problem``.
+        self.heat = ThermalContactProblem(
+            thermal.residual,
+            thermal.T,
+            problem,
+            thermal.conductances,
+            thermal.bcs,
+            conductance_pressure="ccx",
+        )
+        self.problem = problem
+        #: Relative and absolute tolerances of the heat residual's 2-norm.
+        self.rtol, self.atol = 1e-10, 1e-12
+        #: Raise ``ContactConvergenceError`` after this many iterations.
+        self.max_iterations = 30
+        #: ccx's field controls and I_P (kept for the job; the test is the Newton's own).
+        self.controls: dict[str, float] = {}
+        self.relaxation_iteration = 9
+        #: Displacement at the start of the increment (set by the step; marks a cutback).
+        self.increment_start: np.ndarray | None = None
+        self._increment_key: np.ndarray | None = None
+        self._T_start = thermal.T.x.array.copy()
+        #: Heat residual norms of the last solve.
+        self.residual_norms: list[float] = []
+        #: Rows of the ``.cvg`` file of the last solve: (iteration, springs, residual norm, 0, 0,
+        #: 0).
+        self.history: list[tuple[int, int, float, float, float, float]] = []
+        self._b = compat.create_vector(self.heat.L)
+        self._ksp = PETSc.KSP().create(problem.u.function_space.mesh.comm)
+        self._ksp.setOptionsPrefix("ntf_heat_")
+        self._ksp.setType("preonly")
+        self._ksp.getPC().setType("lu")
+        if PETSc.Sys.hasExternalPackage("mumps"):
+            self._ksp.getPC().setFactorSolverType("mumps")
+        self._ksp.setFromOptions()
+
+    @property
+    def largest_residual(self) -> float:
+        """Largest heat residual component of the last iterate, all processes."""
+        local = np.abs(self._b.array_r)
+        comm = self.problem.u.function_space.mesh.comm
+        return comm.allreduce(float(local.max()) if local.size else 0.0, op=MPI.MAX)
+
+    def begin_step(self) -> None:
+        """A step starts: nothing to reset."""
+
+    def _residual(self, x: PETSc.Vec, *, mechanics: bool) -> float:
+        self.heat.form(x, mechanics=mechanics)
+        self.heat.F(x, self._b)
+        return self._b.norm()
+
+    def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
+        """Newton on ``T`` at the current pairing, ``u`` unchanged. Collective.
+
+        A retried attempt of the same increment restarts ``T`` from the increment start.
+
+        Raises:
+            ContactConvergenceError: No convergence within :attr:`max_iterations`.
+            ContactDivergenceError: A non-finite residual.
+        """
+        T = self.heat.T
+        if self.increment_start is None or self.increment_start is not self._increment_key:
+            self._increment_key, self._T_start = self.increment_start, T.x.array.copy()
+        else:
+            T.x.array[:] = self._T_start
+            T.x.scatter_forward()
+        x = compat.petsc_vector(T)
+        self.residual_norms = [self._residual(x, mechanics=True)]
+        iterations = 0
+        try:
+            while self.residual_norms[-1] > max(self.rtol * self.residual_norms[0], self.atol):
+                if not np.isfinite(self.residual_norms[-1]):
+                    raise ContactDivergenceError(
+                        f"heat transfer: non-finite residual at iteration {iterations}"
+                    )
+                if iterations == self.max_iterations:
+                    raise ContactConvergenceError(
+                        f"heat transfer: no convergence in {self.max_iterations} iterations "
+                        f"(residual {self.residual_norms[-1]:.3e}, first "
+                        f"{self.residual_norms[0]:.3e})"
+                    )
+                A = self.heat.ensure_matrix()
+                self.heat.J(x, A)
+                dx = A.createVecLeft()
+                self._ksp.setOperators(A)
+                self._ksp.solve(self._b, dx)
+                x.array[:] -= dx.array_r
+                x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+                dx.destroy()
+                iterations += 1
+                self.residual_norms.append(self._residual(x, mechanics=False))
+        finally:
+            springs = self.problem.total_springs
+            self.history = [
+                (i + 1, springs, norm, 0.0, 0.0, 0.0)
+                for i, norm in enumerate(self.residual_norms[1:])
+            ]
+        return iterations, True
+
+    def destroy(self) -> None:
+        """Destroy the PETSc objects. Collective."""
+        self._b.destroy()
+        self._ksp.destroy()
         self.heat.destroy()

@@ -42,6 +42,7 @@ import numpy as np
 import dolfinx.fem
 import ufl
 
+from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
 from dolfinx_ntf.logs import log_progress
@@ -54,7 +55,7 @@ from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
-from .coupled import CoupledIncrementSolver
+from .coupled import CoupledIncrementSolver, HeatIncrementSolver
 from .dat import CCX_FORMATS
 from .deck import Deck, Step, read_deck
 from .gather import CcxNumbering
@@ -235,8 +236,10 @@ class _Job:
         printed = internal if model.printed_force is None else model.printed_force
         self.numbering = CcxNumbering(model, printed)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
-        self.solver: ContactNewtonSolver | CoupledIncrementSolver
-        if model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
+        self.solver: ContactNewtonSolver | CoupledIncrementSolver | HeatIncrementSolver
+        if model.thermal is not None and deck.steps[0].coupled.heat:  # all *HEAT TRANSFER
+            self.solver = HeatIncrementSolver(self.problem, model.thermal)
+        elif model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
             self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
         else:
             self.solver = self._mechanical_solver(comm, petsc_options, tight, solver_options)
@@ -304,10 +307,11 @@ class _Job:
         if step.frequency is not None:
             kind = "Frequency"
         if step.coupled is not None:
-            kind = "Coupled temperature-displacement"
+            kind = "Heat transfer" if step.coupled.heat else "Coupled temperature-displacement"
         logger.info("\n STEP %d\n\n %s analysis was selected\n", step.number, kind)
-        # ccx's transient coupled step is dynamic in its mechanics (manual: ALPHA, step loading)
-        transient = step.coupled is not None and not step.coupled.steady
+        # ccx's transient coupled step is dynamic in its mechanics (manual: ALPHA, step loading);
+        # a heat transfer step has no mechanics: static increments (docs/method.md §20.9)
+        transient = step.coupled is not None and not step.coupled.steady and not step.coupled.heat
         self._set_laws(dynamic=step.dynamic is not None or transient)
         if index > 0:
             bcs = model.begin_step(index)
@@ -372,6 +376,10 @@ class _Job:
         model = self.model
         if self.velocity is None:
             self.velocity = model.initial_velocity()
+            if self.problem.elimination is not None:  # dependent dofs (C3D20's face and cell
+                # centres, *EQUATION terms) from the nodes' velocities, as the displacement's
+                self.problem.elimination.expand(compat.petsc_vector(self.velocity))
+                self.velocity.x.scatter_forward()
             self.acceleration = dolfinx.fem.Function(model.V, name="acceleration")
         increments = step.static
         period = increments.period

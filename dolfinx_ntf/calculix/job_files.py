@@ -229,7 +229,7 @@ class _Increment:
         blocks = []
 
         def node_block(name: str, request: FileRequest, values: np.ndarray) -> None:
-            ids = self.deck.node_ids
+            ids = _frd_node_ids(self.deck)
             if request.set is not None:  # in set order, repeats kept, as ccx (docs/method.md §13.2)
                 ids = self.deck.nsets[request.set]
             values = values[self.deck.node_index(ids)]
@@ -347,6 +347,13 @@ def _contact_blocks(
     return blocks
 
 
+def _frd_node_ids(deck: Deck) -> np.ndarray:
+    """The nodes ccx writes in the ``.frd``: without shell nodes and unused middle nodes (§24)."""
+    if deck.shells is None:
+        return deck.node_ids
+    return deck.node_ids[~np.isin(deck.node_ids, deck.shells.hidden())]
+
+
 def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWriter:
     """The ``.frd`` file with the deck's mesh (ccx writes it for every job)."""
     block = deck.elements[model.element_type.name]
@@ -357,10 +364,11 @@ def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWr
     for section in deck.sections:
         for element in deck.elsets[section.elset]:
             element_material[position[int(element)]] = index[section.material]
+    ids = _frd_node_ids(deck)
     return FrdWriter(
         path,
-        deck.node_ids,
-        deck.node_coords,
+        ids,
+        deck.node_coords[deck.node_index(ids)],
         block.ids,
         model.element_type.name,
         block.connectivity,

@@ -145,11 +145,18 @@ class OutputValues:
     # -- displacements -----------------------------------------------------------------------------
 
     def displacements(self) -> np.ndarray:
-        """``(N, 3)`` displacement of every deck node (rows of ``deck.node_ids``). Collective."""
+        """``(N, 3)`` displacement of every deck node (rows of ``deck.node_ids``). Collective.
+
+        Shell nodes: ccx's combination of their expanded nodes (docs/method.md §24); 2D elements:
+        ``u_z = 0`` (§23).
+        """
         values = self.model.u.x.array.reshape(-1, self.model.gdim)
-        if values.shape[1] == 2:  # ccx's 2D elements: uz = 0 (docs/method.md §23)
+        if values.shape[1] == 2:  # ccx's 2D elements
             values = np.column_stack([values, np.zeros(values.shape[0])])
-        return self.numbering.nodal(values)
+        values = self.numbering.nodal(values)
+        if self.deck.shells is not None:
+            values = self.deck.shells.printed(self.deck.node_ids, values)
+        return values
 
     def temperatures(self) -> np.ndarray:
         """``(N, 1)`` temperature of every deck node (coupled steps only). Collective."""

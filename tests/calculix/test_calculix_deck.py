@@ -352,9 +352,9 @@ BAD_DECKS = [
     ("model keyword in step", ("*STATIC\n", "*NSET, NSET=X\n1\n*STATIC\n"), "*NSET, NSET=X",
      r"\*NSET is a model definition keyword"),
     ("dload label", ("*END STEP", "*DLOAD\n1, GRAV, 9.81, 0., 0., -1.\n*END STEP"), "1, GRAV",
-     r"load type GRAV is not supported yet"),
+     r"\*DLOAD, GRAV is not supported yet"),
     ("dload face", ("*END STEP", "*DLOAD\nEALL, P7, 1.\n*END STEP"), "EALL, P7",
-     r"load type P7 is not supported yet"),
+     r"\*DLOAD, P7 is not supported yet"),
     ("tied behavior", ("PRESSURE-OVERCLOSURE=LINEAR", "PRESSURE-OVERCLOSURE=TIED"),
      "PRESSURE-OVERCLOSURE=TIED", r"TIED is for face-to-face contact"),
     ("exponential data", ("1.0e7, 1.0, 1.0e-3", "1.0e7, 1.0, 1.0e-3\n*SURFACE INTERACTION, NAME=E\n"

@@ -185,7 +185,7 @@ def test_reader_errors_name_the_line(tmp_path, old, new, match):
     ("old", "new", "error", "match"),
     [
         ("*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE", "*STATIC", NotImplementedError,
-         r"supported in \*COUPLED TEMPERATURE-DISPLACEMENT steps only"),
+         r"supported in \*COUPLED TEMPERATURE-DISPLACEMENT and \*HEAT TRANSFER steps only"),
         (f"*CONDUCTIVITY\n{K}\n", "", ValueError, r"material M needs \*CONDUCTIVITY"),
         (f"*CONDUCTIVITY\n{K}\n", f"*CONDUCTIVITY\n{K}, 0.\n{K}, 100.\n", NotImplementedError,
          r"only one constant value"),

@@ -14,6 +14,7 @@ class Checks(ReaderState):
     """Cross-references, numbering and completeness checks; builds the ``Deck``."""
 
     def _finish(self) -> Deck:
+        shells = self._expand_shells()  # ShellCards (shells.py): S8 -> C3D20 bricks
         node_ids, node_coords = self._assemble_nodes()
         elements = self._assemble_elements()
         all_elements = (
@@ -68,6 +69,7 @@ class Checks(ReaderState):
             cyclic_symmetries=tuple(self.cyclic_symmetries),
             initial_temperatures=tuple(self.initial_temperatures),
             temperature_boundaries=tuple(self.temperature_boundaries),
+            shells=shells,
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

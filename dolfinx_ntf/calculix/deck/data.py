@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..elements import ElementType
+from ..shell_expansion import ShellExpansion
 from .errors import DeckWarning, Location
 
 
@@ -240,19 +241,24 @@ class Frequency:
 
 @dataclass(frozen=True, eq=False)
 class Coupled:
-    """A ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments are the step's ``static``).
+    """A ``*COUPLED TEMPERATURE-DISPLACEMENT`` or ``*HEAT TRANSFER`` procedure.
+
+    Its increments are the step's ``static``.
 
     Attributes:
         steady: ``STEADY STATE`` (no heat capacity), else transient (backward Euler).
         deltmx: DELTMX, the largest temperature change per increment, or None.
         location: The card.
         alpha: The HHT parameter of the transient step's mechanics (ccx's ALPHA, -0.05).
+        heat: A ``*HEAT TRANSFER`` step: the temperature alone, the mechanics not solved
+            (docs/method.md §20.9).
     """
 
     steady: bool
     deltmx: float | None
     location: Location
     alpha: float = -0.05
+    heat: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -503,6 +509,8 @@ class Deck:
         ties: ``*TIE`` cards in deck order; cyclic_symmetries: ``*CYCLIC SYMMETRY MODEL`` cards.
         initial_temperatures: ``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` data lines, in order.
         temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
+        shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
+            (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
     """
 
     path: str
@@ -529,6 +537,7 @@ class Deck:
     cyclic_symmetries: tuple[CyclicSymmetry, ...] = ()
     initial_temperatures: tuple[InitialTemperature, ...] = ()
     temperature_boundaries: tuple[Boundary, ...] = ()
+    shells: ShellExpansion | None = None
 
     @property
     def num_elements(self) -> int:

@@ -80,8 +80,8 @@ class LoadCards(ReaderState):
                 temperatures.append(Boundary(frozen_array(nodes, np.int64), 11, 11, value,
                                              amplitude, op, fields[0], loc))  # fmt: skip
                 continue
-            first = self._dof(fields[1], loc)
-            last = self._dof(fields[2], loc) if len(fields) > 2 and fields[2] else first
+            first = self._boundary_dof(fields[1], loc)
+            last = self._boundary_dof(fields[2], loc) if len(fields) > 2 and fields[2] else first
             if last < first:
                 raise DeckError(f"*BOUNDARY: last dof {last} < first dof {first}", loc)
             value = self._optional_float(fields, 3, "prescribed value", loc) or 0.0
@@ -203,7 +203,7 @@ class LoadCards(ReaderState):
             label = fields[1] if len(fields) > 1 else ""
             if label and not re.fullmatch(r"P[1-6]", label):
                 raise DeckError(
-                    f"*DLOAD load type {label} is not supported yet (only uniform pressure P1..P6)",
+                    f"*DLOAD, {label} is not supported yet (load types: uniform pressure P1..P6)",
                     loc,
                 )
             if len(fields) != 3:

@@ -12,6 +12,7 @@ from ..elements import ELEMENT_TYPES, REFUSED_ELEMENTS, frozen_array
 from .data import Surface
 from .errors import DeckError, Location
 from .lexer import INT_RE, Card
+from .shells import SHELL_FACES, SHELL_TYPES
 from .springs import SPRING_TYPES
 from .state import ReaderState
 
@@ -125,8 +126,11 @@ class MeshCards(ReaderState):
         if type_name in SPRING_TYPES:  # no mesh cells: springs.py
             self._spring_elements(card, type_name)
             return
+        if type_name in SHELL_TYPES:  # expanded into bricks once read: shells.py
+            self._shell_elements(card, type_name)
+            return
         if type_name not in ELEMENT_TYPES:
-            supported = ", ".join([*ELEMENT_TYPES, *SPRING_TYPES])
+            supported = ", ".join([*ELEMENT_TYPES, *SHELL_TYPES, *SPRING_TYPES])
             why = REFUSED_ELEMENTS.get(type_name, "")
             raise DeckError(
                 f"element type {type_name} is not supported{why} (supported: {supported})",
@@ -242,12 +246,15 @@ class MeshCards(ReaderState):
                     "*SURFACE data line: element or element set, face label S1..S6", loc
                 )
             label = fields[1]
-            if not re.fullmatch(r"S[1-6]", label):
-                raise DeckError(f"bad face label {label!r}: use S1..S6", loc)
+            if not (re.fullmatch(r"S[1-6]", label) or label in SHELL_FACES):
+                raise DeckError(f"bad face label {label!r}: use S1..S6 (SPOS, SNEG on shells)", loc)
             ids = self._elements_of(fields[0], card, loc)
             self.element_refs.append((f"{card.name} face {label}", ids, loc))
             elements.append(ids)
-            faces.append(np.full(ids.size, int(label[1]), dtype=np.int64))
+            if label in SHELL_FACES:  # the expanded brick's bottom or top face
+                self.shell_face_refs.append((ids, loc))
+            face = SHELL_FACES.get(label) or int(label[1])
+            faces.append(np.full(ids.size, face, dtype=np.int64))
         self.surfaces[name] = Surface(
             name=name,
             type=stype,

@@ -28,6 +28,7 @@ from .loads import LoadCards
 from .materials import MaterialCards
 from .mesh import MeshCards
 from .output import OutputCards
+from .shells import ShellCards
 from .springs import SpringCards
 from .steps import StepCards
 from .ties import TieCards
@@ -43,6 +44,7 @@ class _Reader(
     FrequencyCards,
     OutputCards,
     TieCards,
+    ShellCards,
     Checks,
 ):
     """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""

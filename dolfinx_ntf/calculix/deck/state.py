@@ -97,6 +97,11 @@ class ReaderState:
         self.element_locs: dict[str, list[Location]] = {t: [] for t in ELEMENT_TYPES}
         #: Spring elements by type: (element number, nodes, location) (``springs.py``).
         self.spring_rows: dict[str, list[tuple[int, list[int], Location]]] = {}
+        #: Shell elements in deck order: (type, element number, nodes, location) (``shells.py``).
+        self.shell_rows: list[tuple[str, int, list[int], Location]] = []
+        #: ``*SHELL SECTION`` cards (``shells.ShellSection``) and SPOS/SNEG faces (ids, location).
+        self.shell_sections: list = []
+        self.shell_face_refs: list[tuple[np.ndarray, Location]] = []
         #: ``*SPRING`` cards: (card, dofs, stiffness or None, table or None).
         self._spring_behaviors: list[
             tuple[Card, tuple[int, ...], float | None, np.ndarray | None]
@@ -202,6 +207,13 @@ class ReaderState:
             raise DeckError(
                 f"degree of freedom {dof} is not supported (solid elements have dofs 1, 2, 3)", loc
             )
+        return dof
+
+    def _boundary_dof(self, token: str, loc: Location) -> int:
+        """A ``*BOUNDARY`` dof: 1..6 (4..6, rotations, only on shell nodes: ``shells.py``)."""
+        dof = self._int(token, "degree of freedom", loc)
+        if dof not in range(1, 7):
+            raise DeckError(f"degree of freedom {dof} is not supported (dofs are 1 to 6)", loc)
         return dof
 
     def _op(self, card: Card) -> str:

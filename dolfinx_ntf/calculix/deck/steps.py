@@ -1,6 +1,6 @@
 """Step cards: procedures, controls and changes between steps.
 
-``*STEP``, ``*STATIC``, ``*DYNAMIC``, ``*COUPLED TEMPERATURE-DISPLACEMENT``,
+``*STEP``, ``*STATIC``, ``*DYNAMIC``, ``*COUPLED TEMPERATURE-DISPLACEMENT``, ``*HEAT TRANSFER``,
 ``*CONTROLS``, ``*CHANGE FRICTION``, ``*MODEL CHANGE``,
 ``*END STEP``.
 """
@@ -111,8 +111,17 @@ class StepCards(ReaderState):
 
     def _k_COUPLEDTEMPERATURE_DISPLACEMENT(self, card: Card) -> None:
         """Initial increment, period, minimum, maximum, DELTMX; ``STEADY STATE`` or transient."""
-        step = self._in_step(card)
         self._check_params(card, allowed={"STEADYSTATE", "SOLVER", "DIRECT", "ALPHA"})
+        self._thermal_procedure(card, "*COUPLED TEMPERATURE-DISPLACEMENT", heat=False)
+
+    def _k_HEATTRANSFER(self, card: Card) -> None:
+        """As the coupled step, the mechanics not solved (docs/method.md §20.9)."""
+        self._check_params(card, allowed={"STEADYSTATE", "SOLVER", "DIRECT"})
+        self._thermal_procedure(card, "*HEAT TRANSFER", heat=True)
+
+    def _thermal_procedure(self, card: Card, name: str, *, heat: bool) -> None:
+        """The data line and parameters shared by the two thermal procedures."""
+        step = self._in_step(card)
         if step.static is not None or step.frequency is not None:
             raise DeckError("a step can have only one procedure card", card.location)
         alpha = -0.05
@@ -125,17 +134,16 @@ class StepCards(ReaderState):
             fields, _, loc = card.lines[0]
             if len(card.lines) > 1 or len(fields) > 5:
                 raise DeckError(
-                    "*COUPLED TEMPERATURE-DISPLACEMENT data line: initial increment, period, "
-                    "minimum, maximum, DELTMX",
+                    f"{name} data line: initial increment, period, minimum, maximum, DELTMX",
                     loc,
                 )
-            values = self._floats_line(fields, "*COUPLED TEMPERATURE-DISPLACEMENT", loc)
+            values = self._floats_line(fields, name, loc)
         values = values + (None,) * (5 - len(values))
-        for name, value in zip(("initial increment", "period", "maximum", "DELTMX"),
+        for what, value in zip(("initial increment", "period", "maximum", "DELTMX"),
                                (values[0], values[1], values[3], values[4])):  # fmt: skip
             if value is not None and value <= 0.0:
                 raise DeckError(
-                    f"*COUPLED TEMPERATURE-DISPLACEMENT {name} must be > 0, got {value}",
+                    f"{name} {what} must be > 0, got {value}",
                     card.location,
                 )
         step.static = Static(
@@ -145,7 +153,9 @@ class StepCards(ReaderState):
             maximum=values[3],
             direct="DIRECT" in card.params,
         )
-        step.coupled = Coupled("STEADYSTATE" in card.params, values[4], card.location, alpha)
+        step.coupled = Coupled(
+            "STEADYSTATE" in card.params, values[4], card.location, alpha, heat=heat
+        )
 
     def _k_CONTROLS(self, card: Card) -> None:
         self._in_step(card)
@@ -194,8 +204,8 @@ class StepCards(ReaderState):
         self._no_data(card)
         if step.static is None and step.frequency is None:
             raise DeckError(
-                "the step has no *STATIC, *DYNAMIC, *FREQUENCY or *COUPLED TEMPERATURE-"
-                "DISPLACEMENT procedure (the only ones supported)",
+                "the step has no *STATIC, *DYNAMIC, *FREQUENCY, *COUPLED TEMPERATURE-"
+                "DISPLACEMENT or *HEAT TRANSFER procedure (the only ones supported)",
                 step.location,
             )
         if step.pending_friction is not None:

@@ -1,4 +1,4 @@
-"""The temperature field of a deck with ``*COUPLED TEMPERATURE-DISPLACEMENT`` steps.
+"""The temperature field of a deck with thermal steps (coupled or ``*HEAT TRANSFER``).
 
 docs/method.md §20.8. :class:`ThermalModel` holds the temperature ``T`` (a scalar Lagrange space
 numbered like the displacement's), the material data per cell (``*CONDUCTIVITY``, ``*SPECIFIC
@@ -46,17 +46,24 @@ def is_thermal(deck: Deck) -> bool:
         *deck.temperature_boundaries,
         *(b for step in deck.steps for b in step.temperatures),
     ]
+    heat = {step.coupled.heat for step in deck.steps if step.coupled is not None}
+    if len(heat) > 1:
+        raise NotImplementedError(
+            f"{deck.steps[0].location}: *HEAT TRANSFER and *COUPLED TEMPERATURE-DISPLACEMENT "
+            "steps in one deck are not supported yet"
+        )
     if any(coupled) and not all(coupled):
         step = deck.steps[coupled.index(False)]
         raise NotImplementedError(
-            f"{step.location}: step {step.number} is not *COUPLED TEMPERATURE-DISPLACEMENT while "
-            "another step is: mixing coupled and other steps is not supported yet"
+            f"{step.location}: step {step.number} is not *COUPLED TEMPERATURE-DISPLACEMENT or "
+            "*HEAT TRANSFER while another step is: mixing thermal and other steps is not "
+            "supported yet"
         )
     if inputs and not any(coupled):
         where = inputs[0].location
         raise NotImplementedError(
             f"{where}: temperatures (*INITIAL CONDITIONS, TYPE=TEMPERATURE or *BOUNDARY dof 11) "
-            "are supported in *COUPLED TEMPERATURE-DISPLACEMENT steps only"
+            "are supported in *COUPLED TEMPERATURE-DISPLACEMENT and *HEAT TRANSFER steps only"
         )
     return any(coupled)
 
@@ -159,7 +166,7 @@ def _cell_values(
             if needed:
                 raise ValueError(
                     f"{section.location}: material {section.material} needs {card} for a "
-                    "*COUPLED TEMPERATURE-DISPLACEMENT step"
+                    "thermal step"
                 )
             continue
         if len(lines) != 1 or not lines[0] or lines[0][0] is None or len(lines[0]) > 2:
@@ -205,6 +212,21 @@ def _bc_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
     return np.array(nodes, dtype=np.int64), per_step
 
 
+def _check_heat_boundaries(deck: Deck) -> None:
+    """Refuse prescribed displacements other than 0 in a deck of ``*HEAT TRANSFER`` steps.
+
+    ccx 2.20 prints their values as U without solving the mechanics (measured); the runner's
+    displacement stays 0 (docs/method.md §20.9).
+    """
+    cards = [*deck.boundaries, *(b for step in deck.steps for b in step.boundaries)]
+    for b in cards:
+        if b.value != 0.0:
+            raise NotImplementedError(
+                f"{b.location}: a prescribed displacement ({b.value}) in a *HEAT TRANSFER deck "
+                "is not supported yet (the mechanics is not solved; ccx prints the value as U)"
+            )
+
+
 def _check_boundary(b: Boundary) -> None:
     if b.amplitude is not None:
         raise NotImplementedError(
@@ -236,12 +258,15 @@ def thermal_model(
     Q = compat.scalar_space(mesh, "Lagrange", degree)
     T = dolfinx.fem.Function(Q, name="temperature")
     Q0 = compat.scalar_space(mesh, "DG", 0)
-    if block.type.name != "C3D8":
+    heat = all(s.coupled.heat for s in deck.steps)  # no thermal strain: C3D8I conducts as C3D8
+    if block.type.name != "C3D8" and not (heat and block.type.name == "C3D8I"):
+        procedure = "*HEAT TRANSFER" if heat else "*COUPLED TEMPERATURE-DISPLACEMENT"
         raise NotImplementedError(
-            f"{block.locations[0]}: *COUPLED TEMPERATURE-DISPLACEMENT with {block.type.name} "
-            "elements is not supported yet (ccx's thermal strain is measured for C3D8 only: the "
-            "element mean temperature)"
+            f"{block.locations[0]}: {procedure} with {block.type.name} elements is not supported "
+            "yet (measured against ccx for C3D8 only, and C3D8I in heat transfer)"
         )
+    if heat:
+        _check_heat_boundaries(deck)
     transient = any(not s.coupled.steady for s in deck.steps)
     for step in deck.steps:
         if step.coupled.deltmx is not None and not step.coupled.steady:
