@@ -28,7 +28,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 from helpers.ccx_2d_decks import Deck2D, block_difference, dat_pairs  # noqa: E402
 
 #: (label, deck, run_job options)
-CCX_AREAS = {"area_weights": "ccx"}
+CCX_AREAS = {"area_weights": "ccx"}  # the runner's default, named where it matters
+CONSISTENT_AREAS = {"area_weights": "consistent"}
 
 CASES = [
     ("CPE4 LINEAR", Deck2D("cpe4", "CPE4"), {}),
@@ -37,7 +38,7 @@ CASES = [
     ("CPE3 LINEAR", Deck2D("cpe3", "CPE3"), {}),
     ("CPE4 pressure (*DLOAD)", Deck2D("cpe4", "CPE4", load="dload"), {}),
     ("CPE4 point forces (*CLOAD)", Deck2D("cpe4", "CPE4", load="cload"), {}),
-    ("CPE6 LINEAR", Deck2D("cpe6", "CPE6"), {}),
+    ("CPE6 LINEAR, consistent areas", Deck2D("cpe6", "CPE6"), CONSISTENT_AREAS),
     ("CPE6 LINEAR, area_weights=ccx", Deck2D("cpe6", "CPE6"), CCX_AREAS),
     ("CPE6 EXPONENTIAL, area_weights=ccx", Deck2D("cpe6", "CPE6", law="EXPONENTIAL"), CCX_AREAS),
     ("CPE8 LINEAR, area_weights=ccx", Deck2D("cpe8", "CPE8"), CCX_AREAS),
@@ -51,7 +52,7 @@ CASES = [
     ("CPS6 LINEAR, area_weights=ccx", Deck2D("cps6", "CPS6"), CCX_AREAS),
     ("CPS8R LINEAR, area_weights=ccx", Deck2D("cps8r", "CPS8R"), CCX_AREAS),
     ("CAX4 without contact", Deck2D("cax4", "CAX4", contact=False), {}),
-    ("CAX4 LINEAR", Deck2D("cax4", "CAX4"), {}),
+    ("CAX4 LINEAR, consistent areas", Deck2D("cax4", "CAX4"), CONSISTENT_AREAS),
     ("CAX4 LINEAR, area_weights=ccx", Deck2D("cax4", "CAX4"), CCX_AREAS),
     ("CAX4 EXPONENTIAL, area_weights=ccx", Deck2D("cax4", "CAX4", law="EXPONENTIAL"), CCX_AREAS),
     ("CAX3 LINEAR, area_weights=ccx", Deck2D("cax3", "CAX3"), CCX_AREAS),

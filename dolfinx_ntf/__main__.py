@@ -108,11 +108,11 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--area-weights",
         choices=("consistent", "ccx"),
-        default="consistent",
-        help="spring areas of 2D decks: 'consistent' (default) each edge's consistent shares "
-        "(rings 2 pi int r phi ds); 'ccx' the fixed shares of the faces ccx expands 2D edges "
-        "into (1/2, 1/2; 26/100, 26/100, 48/100 on 3-node edges; rings by the edge's mean "
-        "radius), which reproduce ccx's results",
+        default="ccx",
+        help="spring areas of 2D decks: 'ccx' (default) the fixed shares of the faces ccx expands "
+        "2D edges into (1/2, 1/2; 26/100, 26/100, 48/100 on 3-node edges; rings by the edge's "
+        "mean radius), which reproduce ccx's results; 'consistent' each edge's consistent "
+        "shares (rings 2 pi int r phi ds), which pass the patch test",
     )
     run.add_argument(
         "--predictor",

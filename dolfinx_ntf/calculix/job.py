@@ -584,7 +584,7 @@ def run_job(
     tangent: str = "ccx",
     line_search: bool = False,
     solver_options: dict | None = None,
-    area_weights: str = "consistent",
+    area_weights: str = "ccx",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -618,10 +618,10 @@ def run_job(
         line_search: Line-search the Newton corrections (beyond ccx, the Python API's default:
             :class:`~dolfinx_ntf.ContactNewtonSolver`); off by default, as in ccx.
         solver_options: Extra :class:`~dolfinx_ntf.ContactNewtonSolver` options.
-        area_weights: Spring areas of 2D decks: ``"consistent"`` (default: the consistent shares
-            of each edge, rings ``2 pi ∫ r phi_p ds``) or ``"ccx"``, the fixed shares of the faces
-            ccx expands 2D edges into, which reproduce its results (``ContactPair.area_weights``,
-            docs/method.md §23.3).
+        area_weights: Spring areas of 2D decks: ``"ccx"`` (default: the fixed shares of the faces
+            ccx expands 2D edges into, which reproduce its results) or ``"consistent"`` (the
+            consistent shares of each edge, rings ``2 pi ∫ r phi_p ds``, which pass the patch
+            test; the Python API's default) (``ContactPair.area_weights``, docs/method.md §23.3).
 
     Returns:
         The :class:`JobResult`.

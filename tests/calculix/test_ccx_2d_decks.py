@@ -101,9 +101,9 @@ def test_plane_strain_decks_match_ccx(tmp_path, case):
 @pytest.mark.serial
 def test_quadratic_plane_strain_needs_ccx_edge_shares(tmp_path):
     """CPE6: ccx shares a 3-node edge 26/100, 26/100, 48/100 (its expanded quad8 face), not 1/6,
-    1/6, 2/3 as the consistent loads: the default areas give other pressures."""
+    1/6, 2/3 as the consistent loads: the consistent areas give other pressures."""
     deck = Deck2D("cpe6", "CPE6")
-    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    ccx_dir, ntf_dir = _run(deck, tmp_path, area_weights="consistent")
     blocks = {(r.name, r.time): (r, m) for r, m in dat_pairs(ccx_dir, ntf_dir, deck.name)}
     assert block_difference(*blocks[("CSTR", 1.0)], [0]) > 0.1  # measured 0.29
     assert block_difference(*blocks[("U", 1.0)]) > 1e-3  # measured 2.2e-2
@@ -182,7 +182,7 @@ def test_axisymmetric_bulk_is_ccx_sector_turned_by_one_degree(tmp_path):
 @pytest.mark.serial
 def test_axisymmetric_contact_with_ccx_ring_areas(tmp_path):
     """ccx's sector face weights (``area_weights="ccx"``) give ccx's CAX contact solution."""
-    consistent = _cax_results(tmp_path / "consistent")
+    consistent = _cax_results(tmp_path / "consistent", area_weights="consistent")
     weighted = _cax_results(tmp_path / "ccx", area_weights="ccx")
     u_consistent = block_difference(*consistent[("U", 1.0)])
     reference, mine = weighted[("U", 1.0)]

@@ -388,7 +388,7 @@ def check_incompatible_modes(deck: Deck) -> None:
 
 
 def build_model(
-    deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD, *, area_weights: str = "consistent"
+    deck: Deck, comm: MPI.Comm = MPI.COMM_WORLD, *, area_weights: str = "ccx"
 ) -> CalculixModel:
     """Build the dolfinx model of a parsed CalculiX deck (collective).
 
@@ -396,8 +396,8 @@ def build_model(
         deck: The deck (``read_deck``).
         comm: Communicator. On several processes the mesh is distributed by dolfinx from rank
             0's cells (docs/method.md §14.5); every process must have read the same deck.
-        area_weights: Spring areas of 2D decks, ``"consistent"`` or ``"ccx"`` (the shares of
-            ccx's expanded faces, ``ContactPair.area_weights``, docs/method.md §23.3).
+        area_weights: Spring areas of 2D decks, ``"ccx"`` (default: the shares of ccx's expanded
+            faces) or ``"consistent"`` (``ContactPair.area_weights``, docs/method.md §23.3).
 
     Returns:
         The :class:`CalculixModel` (its ``deck`` has the slave nodes ADJUST of ``*TIE`` moved).
