@@ -104,7 +104,7 @@ class ElementType:
 
     @property
     def tdim(self) -> int:
-        """Topological dimension of the element: 2 for ccx's 2D elements, else 3."""
+        """The element's topological dimension (2 for ccx's 2D elements, else 3)."""
         return 2 if self.cell in ("triangle", "quadrilateral") else 3
 
     @property

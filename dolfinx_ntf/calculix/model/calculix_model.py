@@ -146,7 +146,7 @@ class CalculixModel:
 
     @property
     def gdim(self) -> int:
-        """Components of the displacement: 2 for ccx's 2D elements, else 3."""
+        """The number of displacement components (2 for ccx's 2D elements, else 3)."""
         return int(self.mesh.geometry.dim)
 
     thermal: ThermalModel | None = None
