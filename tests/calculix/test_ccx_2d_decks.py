@@ -9,6 +9,8 @@ laws) run with ccx, which expands the 2D elements into one layer of 3D elements,
 - plane stress (CPS4): a homogeneous state agrees to 1e-6; with contact the expanded element is
   not plane stress (its out-of-plane strain is a bilinear field of its nodes, not zero stress at
   each point): ccx prints ``s_zz != 0`` where the 2D model has 0;
+- friction (CPE4, CPE8R, pressed then dragged; ``*CHANGE FRICTION``): ccx's expansion is exact
+  in plane strain, the frictional blocks agree to 1e-6 as well;
 - axisymmetric (CAX4): ccx's 2-degree sector prints ``u_r cos(1 deg)`` (the mean x of its two
   node lines) and forces per sector; its spring areas are its sector's face weights, which
   ``area_weights="ccx"`` reproduces.
@@ -214,6 +216,47 @@ def test_quadratic_axisymmetric_contact_with_ccx_shares(tmp_path, element):
     assert block_difference(*blocks[("RF", 1.0)]) < 3e-4
 
 
+#: Pressed, then dragged sideways with friction mu 0.2 (stick slope 1e5): stick at the first
+#: increment of the drag, slip from the second on; ccx's area weights (the runner's default).
+FRICTIONAL = {
+    "cpe4_friction": Deck2D("fcpe4", "CPE4", friction=(0.2, 1e5)),
+    "cpe8r_friction": Deck2D("fcpe8r", "CPE8R", friction=(0.2, 1e5)),
+    "cpe4_change_friction": Deck2D("fchange", "CPE4", friction=(0.2, 1e5), change_mu=0.3),
+}
+
+
+@needs_ccx
+@pytest.mark.serial
+@pytest.mark.parametrize("case", sorted(FRICTIONAL))
+def test_frictional_plane_strain_decks_match_ccx(tmp_path, case):
+    """Friction on 2D decks: U, RF, S, CDIS, CSTR (both tangential columns) and CELS to 1e-6.
+
+    Measured (largest over all increments, relative to the block's largest value): U 5e-8,
+    RF 1.5e-8, S 2.6e-8, CDIS 1.9e-8, CSTR 2.8e-9, CELS 4.8e-7 (ccx prints each expanded node's
+    half to 7 digits). ccx's tang2 is round-off (1e-16 of the block), the 2D model's exactly 0.
+    """
+    deck = FRICTIONAL[case]
+    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    names, states = set(), set()
+    for reference, mine in dat_pairs(ccx_dir, ntf_dir, deck.name):
+        if reference.name == "RF_TOTAL":  # zero: ccx's round-off against 0
+            assert np.abs(reference.values).max() < 1e-9 * 100
+            continue
+        names.add(reference.name)
+        assert block_difference(reference, mine) < 1e-6, (reference.name, reference.time)
+        if reference.name in ("CDIS", "CSTR"):
+            assert np.all(mine.values[:, 2] == 0.0)  # no out-of-plane tangent in 2D
+            tang2 = np.abs(reference.values[:, 2]).max() / np.abs(reference.values).max()
+            assert tang2 < 1e-12, reference.name  # ccx's expansion: round-off only
+        if reference.name == "CSTR" and reference.time > 1.0:  # the drag step
+            mu = deck.change_mu or deck.friction[0]
+            slip = np.isclose(np.abs(mine.values[:, 1]), mu * mine.values[:, 0], rtol=1e-6)
+            states.add("slip" if np.all(slip) else "stick" if not np.any(slip) else "mixed")
+            assert np.abs(mine.values[:, 1]).max() > 0.05 * np.abs(mine.values[:, 0]).max()
+    assert names == {"U", "RF", "S", "CDIS", "CSTR", "CELS"}
+    assert {"stick", "slip"} <= states  # the comparison covers both friction states
+
+
 def _refused(tmp_path: Path, text: str, error: type[Exception], match: str) -> None:
     path = tmp_path / "refused.inp"
     path.write_text(text)
@@ -231,8 +274,10 @@ def test_unsupported_two_d_features_are_refused(tmp_path):
         DeckError,
         "CPE4R is not supported: its one",
     )
-    friction = text.replace("*CONTACT PAIR", "*FRICTION\n0.2, 1e5\n*CONTACT PAIR")
-    _refused(tmp_path, friction, NotImplementedError, "FRICTION with CPE4 elements")
+    change = text.replace(
+        "*END STEP", "*MODEL CHANGE, TYPE=CONTACT PAIR, REMOVE\nSLAVE, MASTER\n*END STEP"
+    )
+    _refused(tmp_path, change, NotImplementedError, "MODEL CHANGE with CPE4 elements")
     nlgeom = text.replace("*STEP\n", "*STEP, NLGEOM\n")
     _refused(tmp_path, nlgeom, NotImplementedError, "NLGEOM with CPE4 elements")
     lifted = text.replace("27, 1.3, 2.0, 0.0", "27, 1.3, 2.0, 0.5")
@@ -250,11 +295,14 @@ def test_unsupported_two_d_features_are_refused(tmp_path):
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("element", ["CPE4", "CAX4", "CPE8R", "CAX6"])
-def test_two_d_decks_give_the_serial_files_on_all_processes(tmp_path, element):
+@pytest.mark.parametrize(
+    "element, friction",
+    [("CPE4", None), ("CAX4", None), ("CPE8R", None), ("CAX6", None), ("CPE4", (0.2, 1e5))],
+)
+def test_two_d_decks_give_the_serial_files_on_all_processes(tmp_path, element, friction):
     """The .dat of a 2D deck on all processes is the serial run's, digit for digit."""
     root = Path(COMM.bcast(str(tmp_path)))
-    deck = Deck2D("plane", element)
+    deck = Deck2D("plane", element, friction=friction)
     _, every = _run(deck, root / "all", ccx=False)
     serial = root / "serial"
     if COMM.rank == 0:
