@@ -275,10 +275,11 @@ def test_axisymmetric_friction_against_ccx_sector(tmp_path):
 
     ccx's radial slip and shear at its node lines at +-1 degree have tang1 ``cos(1 deg)`` and
     tang2 ``+-sin(1 deg)`` of ours (opposite signs on the two lines). Measured up to the
-    lift-off: U 6.6e-5, CSTR 6.1e-5, CDIS 1.7e-4 (the frictionless CAX4 differences of §23.4),
-    tang2 7e-7. At t = 1.875 the innermost slave node lifts off: ccx drops its spring at a re-pairing (its cutoff
-    ``c0 sqrt(A)`` takes the 2-degree sector's area, 1/180 of the ring's), the 2D pair keeps it
-    open in the LINEAR law's tension tail: U then differs by 2.3e-3.
+    lift-off: U 6.6e-5, CSTR 6.1e-5, CDIS 1.7e-4 (the frictionless CAX4 differences of
+    §23.4), tang2 7e-7. At t = 1.875 the innermost slave node lifts off: ccx drops its spring
+    at a re-pairing (its cutoff ``c0 sqrt(A)`` takes the 2-degree sector's area, 1/180 of the
+    ring's), the 2D pair keeps it open in the LINEAR law's tension tail: U then differs by
+    2.3e-3.
     """
     deck = Deck2D("fcax4", "CAX4", friction=(0.2, 1e5))
     ccx_dir, ntf_dir = _run(deck, tmp_path)
