@@ -308,6 +308,32 @@ def test_axisymmetric_friction_against_ccx_sector(tmp_path):
     assert lifted.values[list(lifted.labels).index(16), 0] > 0.0  # open: a tension-tail spring
 
 
+@needs_ccx
+@pytest.mark.serial
+def test_plane_stress_friction_against_ccx_expansion(tmp_path):
+    """CPS4 pressed, then dragged with friction: ccx's expanded bodies also slip along z.
+
+    ccx's one layer of C3D8 of each block thins or thickens by Poisson's effect, the two apart: its
+    front and back slave lines slip along z against the master (tang2, opposite signs on the two
+    lines) and friction resists that slip; plane stress has no such slip. Measured: ccx's tang2
+    is up to 0.33 of the CDIS block (the press) and 1.7e-2 of CSTR; U differs by up to 1.2e-2,
+    CSTR's normal and tang1 columns by 6.9e-3 and 2.9e-3 (frictionless CPS4: U 6.3e-3).
+    """
+    deck = Deck2D("fcps4", "CPS4", friction=(0.2, 1e5))
+    ccx_dir, ntf_dir = _run(deck, tmp_path)
+    tang2 = {"CDIS": 0.0, "CSTR": 0.0}
+    for reference, mine in dat_pairs(ccx_dir, ntf_dir, deck.name):
+        if reference.name == "U":
+            assert 1e-3 < block_difference(reference, mine) < 2e-2, reference.time
+        if reference.name in tang2:
+            assert np.all(mine.values[:, 2] == 0.0)
+            scale = np.abs(reference.values).max()
+            tang2[reference.name] = max(tang2[reference.name], reference.values[:, 2].max() / scale)
+            if reference.name == "CSTR":
+                assert block_difference(reference, mine, [0, 1]) < 1.5e-2, reference.time
+    assert tang2["CDIS"] > 0.1 and tang2["CSTR"] > 5e-3  # z slip and its friction in ccx
+
+
 def _refused(tmp_path: Path, text: str, error: type[Exception], match: str) -> None:
     path = tmp_path / "refused.inp"
     path.write_text(text)

@@ -247,16 +247,17 @@ def _largest_node(path: Path) -> int:
     return max(int(line.split(",")[0]) for line in lines)
 
 
-def _collapse(block: DatBlock, base: int, sector: bool = False) -> DatBlock:
+def _collapse(block: DatBlock, base: int, mirrored: bool = False) -> DatBlock:
     """ccx's contact rows at its expanded nodes as rows of the 2D slave nodes.
 
     ccx numbers three expanded nodes per 2D node above the deck's largest node number (front,
     mid-plane, back); a 2D node has rows at the front and back (and at the mid-plane for the
     corners of quadratic edges), all with the same clearance and pressure; energies are summed.
-    Their tangential columns agree to ccx's round-off (tang2 of a plane deck: +-1e-16 of the
-    block, where the 2D model prints 0). On a CAX deck (``sector``) the front and back node lines
-    lie at -1 and +1 degree: a radial slip or shear has tang2 components of opposite signs there
-    (``+-sin(1 deg)`` of it), which sum to 0; the collapsed tang2 is their magnitude.
+    Their tangential columns agree to ccx's round-off (tang2 of a plane-strain deck: +-1e-16 of
+    the block, where the 2D model prints 0). With ``mirrored`` (CAX and CPS decks) tang2 has
+    opposite signs on the front and back lines and sums to 0; the collapsed tang2 is its
+    magnitude: on CAX decks the lines lie at -1 and +1 degree (``+-sin(1 deg)`` of a radial slip
+    or shear), on CPS decks the two plane-stress bodies thin or thicken apart (a z slip).
     """
     node = (block.labels - base - 1) // 3 + 1
     nodes, inverse, counts = np.unique(node, return_inverse=True, return_counts=True)
@@ -268,10 +269,10 @@ def _collapse(block: DatBlock, base: int, sector: bool = False) -> DatBlock:
         first[inverse] = block.values
         scale = np.abs(block.values).max()
         mean = values / counts[:, None]
-        if sector and block.name in ("CDIS", "CSTR"):  # tang2 sums to 0 over the node lines
+        if mirrored and block.name in ("CDIS", "CSTR"):  # tang2 sums to 0 over the node lines
             first[:, 2] = 0.0
         np.testing.assert_allclose(mean, first, rtol=1e-12, atol=1e-12 * scale)
-        if sector and block.name in ("CDIS", "CSTR"):  # tang2: opposite signs, largest |value|
+        if mirrored and block.name in ("CDIS", "CSTR"):  # tang2: opposite signs, largest |value|
             first[:, 2] = 0.0
             np.maximum.at(first[:, 2], inverse, np.abs(block.values[:, 2]))
         values = first
@@ -289,11 +290,12 @@ def dat_pairs(
     theirs, ours = read_dat(ccx_dir / f"{name}.dat"), read_dat(ntf_dir / f"{name}.dat")
     assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
     base = _largest_node(ccx_dir / f"{name}.inp")
-    sector = "TYPE=CAX" in (ccx_dir / f"{name}.inp").read_text()
+    text = (ccx_dir / f"{name}.inp").read_text()
+    mirrored = "TYPE=CAX" in text or "TYPE=CPS" in text
     pairs = []
     for reference, mine in zip(theirs, ours):
         if reference.name in ("CDIS", "CSTR", "CELS"):
-            reference = _collapse(reference, base, sector)
+            reference = _collapse(reference, base, mirrored)
         if reference.name == "CNUM":  # two or three contact elements per 2D slave node
             if not common_nodes:
                 assert mine.values[0, 0] * 2 <= reference.values[0, 0] <= mine.values[0, 0] * 3
