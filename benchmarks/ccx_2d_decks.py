@@ -73,6 +73,7 @@ FRICTION_CASES = [
         "CPE4 friction, *CHANGE FRICTION mu 0.3",
         Deck2D("fchange", "CPE4", friction=(0.2, 1e5), change_mu=0.3),
     ),
+    ("CPS4 friction", Deck2D("fcps4", "CPS4", friction=(0.2, 1e5))),
 ]
 
 FRICTION_COLUMNS = (
