@@ -5,8 +5,10 @@ Runs the generated two-block decks of ``tests/helpers/ccx_2d_decks.py`` with ccx
 largest value of the block (last increment), as a Markdown table (docs/validation.md, "ccx's 2D
 elements"). For CAX decks the column ``U turned`` compares after multiplying our ``u_r`` by
 ``cos(1 deg)``, what ccx prints for its sector's two node lines (docs/method.md §23).
+A second table (``--friction`` prints it alone) takes the frictional decks, pressed then dragged
+sideways with mu 0.2, over every increment, with the tangential columns of CDIS and CSTR.
 
-    .venv/bin/python benchmarks/ccx_2d_decks.py
+    .venv/bin/python benchmarks/ccx_2d_decks.py [--friction]
 """
 
 from __future__ import annotations
@@ -63,6 +65,30 @@ CASES = [
     ("CAX4 point forces, area_weights=ccx", Deck2D("cax4", "CAX4", load="cload"), CCX_AREAS),
 ]
 
+#: Pressed, then dragged sideways with friction mu 0.2 (stick slope 1e5): (label, deck)
+FRICTION_CASES = [
+    ("CPE4 friction", Deck2D("fcpe4", "CPE4", friction=(0.2, 1e5))),
+    ("CPE8R friction", Deck2D("fcpe8r", "CPE8R", friction=(0.2, 1e5))),
+    (
+        "CPE4 friction, *CHANGE FRICTION mu 0.3",
+        Deck2D("fchange", "CPE4", friction=(0.2, 1e5), change_mu=0.3),
+    ),
+    ("CPS4 friction", Deck2D("fcps4", "CPS4", friction=(0.2, 1e5))),
+]
+
+FRICTION_COLUMNS = (
+    "U",
+    "RF",
+    "S",
+    "CDIS n",
+    "CDIS t1",
+    "CDIS t2",
+    "CSTR n",
+    "CSTR t1",
+    "CSTR t2",
+    "CELS",
+)
+
 COLUMNS = ("U", "U turned", "RF", "S", "S zz", "CDIS", "CSTR", "CELS")
 
 
@@ -94,10 +120,48 @@ def measure(deck: Deck2D, options: dict, directory: Path) -> dict[str, float]:
     return out
 
 
+def measure_friction(deck: Deck2D, directory: Path) -> dict[str, float]:
+    """Largest relative difference of each block (column) over every increment."""
+    ccx_dir, ntf_dir = directory / "ccx", directory / "ntf"
+    for d in (ccx_dir, ntf_dir):
+        d.mkdir(parents=True)
+        deck.write(d)
+    run_ccx(ccx_dir, deck.name, timeout=120)
+    run_job(deck.name, ntf_dir, comm=MPI.COMM_SELF, progress=False)
+    out: dict[str, float] = {}
+    for reference, mine in dat_pairs(ccx_dir, ntf_dir, deck.name):
+        if reference.name in ("CDIS", "CSTR"):
+            for k, column in enumerate(("n", "t1", "t2")):
+                key = f"{reference.name} {column}"
+                out[key] = max(out.get(key, 0.0), block_difference(reference, mine, [k]))
+        elif reference.name != "RF_TOTAL":
+            out[reference.name] = max(
+                out.get(reference.name, 0.0), block_difference(reference, mine)
+            )
+    return out
+
+
+def _table(columns: tuple[str, ...]) -> None:
+    print("| deck | " + " | ".join(columns) + " |")
+    print("|---" * (len(columns) + 1) + "|")
+
+
 def main() -> None:
     logging.getLogger("dolfinx_ntf").setLevel(logging.WARNING)
-    print("| deck | " + " | ".join(COLUMNS) + " |")
-    print("|---" * (len(COLUMNS) + 1) + "|")
+    if "--friction" not in sys.argv[1:]:
+        _main_table()
+        print()
+    _table(FRICTION_COLUMNS)
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (label, deck) in enumerate(FRICTION_CASES):
+            values = measure_friction(deck, Path(tmp) / str(k))
+            cells = [f"{values[c]:.1e}" if c in values else "" for c in FRICTION_COLUMNS]
+            print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
+
+
+def _main_table() -> None:
+    """The frictionless decks, last increment."""
+    _table(COLUMNS)
     with tempfile.TemporaryDirectory() as tmp:
         for k, (label, deck, options) in enumerate(CASES):
             values = measure(deck, options, Path(tmp) / str(k))

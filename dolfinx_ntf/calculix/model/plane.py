@@ -61,8 +61,8 @@ def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
     """Refuse what the 2D deck runner does not do (``NotImplementedError``/``ValueError``).
 
     The nodes must lie in ``z = 0`` (ccx's rule for 2D elements); no NLGEOM, dynamic or frequency
-    steps, friction, ``*EQUATION``, ``*TIE``, spring elements, out-of-plane loads or ``.frd``
-    output.
+    steps, ``*MODEL CHANGE``, ``*EQUATION``, ``*TIE``, spring elements, out-of-plane loads or
+    ``.frd`` output. ``*FRICTION`` and ``*CHANGE FRICTION`` pass to the 2D pairs as in 3D.
     """
     name = block.type.name
     coords = np.asarray(deck.node_coords, dtype=np.float64)
@@ -89,19 +89,11 @@ def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
     for what, cards in features:
         if cards:
             raise not_supported(f"{what} with {name} elements", _where(cards[0], deck))
-    for interaction in deck.interactions.values():
-        if interaction.friction is not None:
-            raise not_supported(
-                f"*FRICTION with {name} elements (2D friction is not in the deck runner yet)",
-                interaction.friction.location,
-            )
     for step in deck.steps:
         if step.nlgeom:
             raise not_supported(f"NLGEOM with {name} elements", step.location)
-        for change in (*step.friction_changes, *step.model_changes):
-            raise not_supported(
-                f"*CHANGE FRICTION and *MODEL CHANGE with {name} elements", _where(change, deck)
-            )
+        for change in step.model_changes:
+            raise not_supported(f"*MODEL CHANGE with {name} elements", _where(change, deck))
         if step.dynamic is not None or step.frequency is not None:
             raise not_supported(
                 f"*DYNAMIC and *FREQUENCY steps with {name} elements", step.location
