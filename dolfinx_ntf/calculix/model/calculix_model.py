@@ -544,7 +544,7 @@ def build_model(
         springs=springs,
         internal_force=internal_force,
         printed_force=printed_force,
-        printed_scale=printed_scale(etype.model),
+        printed_scale=printed_scale(etype.model, etype.num_nodes > etype.num_corners),
         thermal=thermal,
         incompatible_modes=modes,
     )

@@ -148,15 +148,25 @@ def plane_kinematics(
     return ufl.as_tensor([[g[0, 0], g[0, 1], 0], [g[1, 0], g[1, 1], 0], [0, 0, zz]])
 
 
-def printed_scale(model: str) -> float:
+def printed_scale(model: str, quadratic: bool = False) -> float:
     """Factor from the 2D model's forces and energies to those ccx prints.
 
-    ccx prints the forces and spring energies of its expanded CAX sector: a wedge of angle
-    ``theta`` = 2 degrees with straight chords, whose volume is ``sin(theta)/(2 pi)`` of the ring's
-    (``r^2 sin(theta)/2`` against ``r^2 theta/2`` per unit area of the meridian section), so its
-    forces are the ring's times ``sin(theta)/(2 pi)`` (measured to 7 digits, docs/method.md §23).
-    Plane elements: 1 (the 2D model has the thickness already).
+    ccx prints the forces and spring energies of its expanded CAX sector of angle ``theta`` =
+    2 degrees. A linear element (CAX3, CAX4) becomes a wedge with straight chords, whose volume is
+    ``sin(theta)/(2 pi)`` of the ring's (``r^2 sin(theta)/2`` against ``r^2 theta/2`` per unit
+    area of the meridian section): its forces are the ring's times ``sin(theta)/(2 pi)`` (measured
+    to 7 digits, docs/method.md §23). A quadratic element (CAX6, CAX8, CAX8R) becomes a C3D15 or
+    C3D20 whose mid-plane nodes lie on the arc: its hoop sides are parabolas through the arc, and
+    its forces are ``theta/(2 pi)`` = 1/180 of the ring's (measured: to 7.5e-8, where
+    ``sin(theta)/(2 pi)`` is 2.0e-4 off).
+
+    Args:
+        model: ``axisymmetric``, ``plane strain`` or ``plane stress``; plane elements: 1 (the
+            2D model has the thickness already).
+        quadratic: The 2D element has midside nodes (its expansion has mid-plane nodes).
     """
     if model == "axisymmetric":
+        if quadratic:
+            return AXISYMMETRIC_SECTOR / (2 * math.pi)
         return math.sin(AXISYMMETRIC_SECTOR) / (2 * math.pi)
     return 1.0
