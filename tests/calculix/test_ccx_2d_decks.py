@@ -252,6 +252,57 @@ def test_quadratic_axisymmetric_bulk_is_one_180th_of_the_ring(tmp_path):
     assert block_difference(reference, mine) < 1e-6
 
 
+def _poisson_zero(deck: Deck2D, directory: Path, radius: float) -> None:
+    """Rewrite the generated deck in ``directory``: nu = 0, every node moved out by ``radius``."""
+    path = directory / f"{deck.name}.inp"
+    head, rest = path.read_text().split("*NODE\n", 1)
+    nodes, tail = rest.split("*ELEMENT", 1)
+    moved = []
+    for line in nodes.splitlines():
+        n, x, y, z = (s.strip() for s in line.split(","))
+        moved.append(f"{n}, {float(x) + radius!r}, {y}, {z}")
+    tail = tail.replace("210000.0, 0.3", "210000.0, 0.0")
+    path.write_text(head + "*NODE\n" + "\n".join(moved) + "\n*ELEMENT" + tail)
+
+
+@needs_ccx
+@pytest.mark.serial
+def test_linear_axisymmetric_remainder_comes_with_contact(tmp_path):
+    """CAX4, nu = 0, off the axis (R0 = 1): the bulk alone is ccx's to round-off, contact is not.
+
+    Without contact (a uniform axial compression, no radial displacement with nu = 0) the
+    straight-sided sector is the ring times ``sin(theta)/theta`` exactly (measured 3e-16); the same
+    deck with contact differs by 3.8e-5 in u_z and 4.7e-5 in the pressures: the CAX3/CAX4 remainder
+    comes with the contact in ccx's straight-sided sector, not with its bulk (docs/method.md §23.3).
+    """
+    results = {}
+    for contact in (False, True):
+        deck = Deck2D(f"nu0_{int(contact)}", "CAX4", contact=contact)
+        directory = tmp_path / deck.name
+        ccx_dir, ntf_dir = directory / "ccx", directory / "ntf"
+        for d in (ccx_dir, ntf_dir):
+            d.mkdir(parents=True)
+            deck.write(d)
+            _poisson_zero(deck, d, 1.0)
+        run_ccx(ccx_dir, deck.name, timeout=120)
+        assert run_job(deck.name, ntf_dir, progress=False, comm=MPI.COMM_SELF).completed
+        results[contact] = {
+            (r.name, r.time): (r, m) for r, m in dat_pairs(ccx_dir, ntf_dir, deck.name)
+        }
+    for contact, blocks in results.items():
+        reference, mine = blocks[("U", 1.0)]
+        scale = np.abs(reference.values).max()
+        axial = np.abs(mine.values[:, 1] - reference.values[:, 1]).max() / scale
+        if contact:
+            assert 1e-5 < axial < 1e-4  # measured 3.8e-5
+            assert 1e-5 < block_difference(*blocks[("CSTR", 1.0)], [0]) < 1e-4  # 4.7e-5
+        else:
+            assert axial < 1e-12
+            turned = mine.values[:, 0] * np.cos(HALF_SECTOR)
+            assert np.abs(turned - reference.values[:, 0]).max() < 1e-12 * scale
+            assert block_difference(*blocks[("RF", 1.0)]) < 1e-12
+
+
 #: Pressed, then dragged sideways with friction mu 0.2 (stick slope 1e5): stick at the first
 #: increment of the drag, slip from the second on; ccx's area weights (the runner's default).
 FRICTIONAL = {
