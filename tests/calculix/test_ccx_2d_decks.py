@@ -193,7 +193,8 @@ def test_axisymmetric_contact_with_ccx_ring_areas(tmp_path):
     u_ccx = np.abs(turned - reference.values).max() / np.abs(reference.values).max()
     assert u_consistent > 1e-3  # measured 3.9e-3: the consistent ring shares differ from ccx's
     # measured 2.7e-5 (u_z), CSTR and CDIS 4.2e-5, CELS 8.4e-5: the rest of ccx's 3D sector
-    # (docs/method.md §23.4), not explained yet; 100 times less than with consistent areas
+    # (docs/method.md §23.3 "The remainder": it comes with contact in the straight-sided sector);
+    # 100 times less than with consistent areas
     assert u_ccx < 4e-5
     for name in ("CSTR", "CDIS"):
         assert block_difference(*weighted[(name, 1.0)], [0]) < 6e-5, name
