@@ -205,7 +205,7 @@ def build_plates(
     points, cells = np.vstack([p1, p2]), np.vstack([c1, c2 + p1.shape[0]])
     if comm.rank != 0:
         points, cells = np.empty((0, dim)), np.empty((0, cells.shape[1]), dtype=np.int64)
-    domain = compat.coordinate_element("hexahedron" if dim == 3 else "triangle", 1)
+    domain = compat.coordinate_element("hexahedron" if dim == 3 else "triangle", 1, gdim=dim)
     mesh = compat.create_mesh(comm, cells.astype(np.int64), points, domain)
 
     tdim = dim
