@@ -329,7 +329,7 @@ class _Job:
             return
         static = step.static
         period = static.period
-        linear = not step.nlgeom and not model.pairs
+        linear = not step.nlgeom and not model.pairs and not model.plasticity
         initial = period if linear else static.initial_increment
         maximum = min(static.maximum if static.maximum is not None else period, period)
         initial = min(initial, maximum)

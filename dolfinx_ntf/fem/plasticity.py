@@ -58,6 +58,11 @@ class J2Plasticity:
             ``IsotropicHardening.linear(250.0, 1000.0)``.
         quadrature_degree: Degree of the quadrature rule the stresses live at; default
             ``2 * degree(u)`` (2x2x2 Gauss points on hexahedra of degree 1, as CalculiX's C3D8).
+        cell_tags: Cell tags of the mesh (local cells, ghosts included) and ``tag``: the
+            law covers the cells tagged ``tag`` and its forms integrate over them only; default
+            every cell. Forms of other materials on the other cells use the same tags (UFL
+            needs one ``subdomain_data`` per form), as a deck's sections do.
+        tag: The value of this material's cells in ``cell_tags``.
 
     Attributes:
         stress: The stress at the last evaluation, Mandel 6-vectors (a quadrature Function).
@@ -73,6 +78,8 @@ class J2Plasticity:
         hardening: IsotropicHardening,
         *,
         quadrature_degree: int | None = None,
+        cell_tags: compat.MeshTags | None = None,
+        tag: int = 1,
     ) -> None:
         owner = "J2Plasticity"
         validation.check_type(u, dolfinx.fem.Function, f"{owner}: u")
@@ -97,18 +104,26 @@ class J2Plasticity:
         self.hardening = hardening
         self.quadrature_degree = degree
         mesh = u.function_space.mesh
-        self.dx = ufl.dx(
-            domain=mesh,
-            metadata={"quadrature_degree": degree, "quadrature_scheme": "default"},
-        )
+        tdim = mesh.topology.dim
+        cell_map = mesh.topology.index_map(tdim)
+        num_cells = cell_map.size_local + cell_map.num_ghosts
+        metadata = {"quadrature_degree": degree, "quadrature_scheme": "default"}
+        if cell_tags is None:
+            self._cells = np.arange(num_cells, dtype=np.int32)
+            self.dx = ufl.dx(domain=mesh, metadata=metadata)
+        else:
+            if cell_tags.dim != tdim or not compat.tags_on_mesh(cell_tags, mesh):
+                raise ValueError(f"{owner}: cell_tags must be cell tags of u's mesh")
+            self._cells = np.asarray(cell_tags.indices[cell_tags.values == tag], dtype=np.int32)
+            self.dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags, metadata=metadata)(
+                int(tag)
+            )
         self.stress = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6,)))
         self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6, 6)))
         self.stress.name = "stress"
         points = compat.quadrature_points(mesh, degree)
         self._strain = dolfinx.fem.Expression(mandel_strain(u), points)
-        cells = mesh.topology.index_map(mesh.topology.dim)
-        self._cells = np.arange(cells.size_local + cells.num_ghosts, dtype=np.int32)
-        #: Quadrature points of every local cell (owned and ghost), in the stress's block dofs.
+        #: Quadrature points of the material's local cells (owned and ghost), in block dofs.
         self._dofs = compat.cell_dofs(self.stress.function_space)[self._cells].reshape(-1)
         n = self._dofs.size
         #: Committed plastic strain, Mandel (n, 6), one row per local quadrature point.

@@ -191,7 +191,9 @@ class Checks(ReaderState):
             )
             raise DeckError(f"element {element} has no *SOLID SECTION (no material)", loc)
         return {
-            name: Material(m.name, m.elastic, dict(m.extra), m.location)
+            name: Material(
+                m.name, m.elastic, dict(m.extra), m.location, m.plastic, m.plastic_location
+            )
             for name, m in self.materials.items()
         }
 

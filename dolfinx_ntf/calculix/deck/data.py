@@ -63,12 +63,18 @@ class Surface:
 
 @dataclass(frozen=True, eq=False)
 class Material:
-    """A ``*MATERIAL``: isotropic ``elastic = (E, nu)`` plus data a static step does not use."""
+    """A ``*MATERIAL``: isotropic ``elastic = (E, nu)`` plus data a static step does not use.
+
+    ``plastic`` is the ``*PLASTIC`` table (isotropic hardening) as ``(yield stress, equivalent
+    plastic strain)`` rows, None for an elastic material; ``plastic_location`` its card.
+    """
 
     name: str
     elastic: tuple[float, float] | None
     extra: dict[str, tuple[tuple[float | None, ...], ...]]
     location: Location
+    plastic: tuple[tuple[float, float], ...] | None = None
+    plastic_location: Location | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -69,6 +69,8 @@ class MaterialBuilder:
     location: Location
     elastic: tuple[float, float] | None = None
     elastic_location: Location | None = None
+    plastic: tuple[tuple[float, float], ...] | None = None
+    plastic_location: Location | None = None
     extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
 
 

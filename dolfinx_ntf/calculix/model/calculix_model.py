@@ -26,6 +26,7 @@ from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
+from dolfinx_ntf.fem.plasticity import J2Plasticity
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
@@ -46,6 +47,7 @@ from .plane import (
     section_thickness,
     volume_weight,
 )
+from .plasticity import check_plastic_deck, plastic_laws
 from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
 from .thermal import ThermalModel, is_thermal, thermal_model
@@ -105,6 +107,10 @@ class CalculixModel:
             None.
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
+        plasticity: One J2 law per ``*PLASTIC`` section (the problem's history; its cells are
+            left out of the elastic form, docs/method.md §21.6).
+        jacobian: The bulk Jacobian when the residual has plastic terms (``ufl.derivative``
+            cannot see through their stress), else None.
     """
 
     deck: Deck
@@ -151,6 +157,8 @@ class CalculixModel:
 
     thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
+    plasticity: list[J2Plasticity] = field(default_factory=list)
+    jacobian: ufl.Form | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -356,6 +364,9 @@ class CalculixModel:
             options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_options``).
         """
         options.setdefault("constraints", self.constraints)
+        if self.plasticity:
+            options.setdefault("J", self.jacobian)
+            options.setdefault("history", self.plasticity)
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
         problem.element_terms.extend(self.springs)
@@ -433,6 +444,7 @@ def build_model(
         springs_follow = check_springs(deck, maps.meshed)
         if etype.name == "C3D8I":
             check_incompatible_modes(deck)
+        check_plastic_deck(deck, etype)
     except (ValueError, NotImplementedError) as exc:
         error = exc
     validation.raise_collectively(comm, error)
@@ -465,6 +477,17 @@ def build_model(
             u, mu, lmbda, kinematics, None if thermal is None else thermal.thermal_strain()
         )
         internal_force = ufl.inner(P, ufl.grad(v)) * dx
+    laws: list[J2Plasticity] = []
+    if etype.tdim == 3:  # *PLASTIC sections: their own law, the elastic form elsewhere (§21.6)
+        laws, tags = plastic_laws(deck, block, u, element_cell, etype.quadrature_degree)
+    if laws:
+        dx_elastic = ufl.Measure(
+            "dx",
+            domain=mesh,
+            subdomain_data=tags,
+            metadata={"quadrature_degree": etype.quadrature_degree},
+        )(0)
+        internal_force = ufl.inner(P, ufl.grad(v)) * dx_elastic
     residual = internal_force
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     if pressures:
@@ -481,6 +504,14 @@ def build_model(
             traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
+    jacobian = None
+    if laws:  # the plastic terms' consistent tangent (ufl.derivative cannot see through them)
+        du = ufl.TrialFunction(V)
+        jacobian = ufl.derivative(residual, u, du)
+        for law in laws:
+            jacobian += law.jacobian(du, v)
+            residual += law.residual(v)
+            internal_force += law.residual(v)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = equation_constraints(deck, maps.meshed)
     # terms on ccx node numbers, held by any process: global dofs (docs/method.md §14.9)
@@ -547,4 +578,6 @@ def build_model(
         printed_scale=printed_scale(etype.model, etype.num_nodes > etype.num_corners),
         thermal=thermal,
         incompatible_modes=modes,
+        plasticity=laws,
+        jacobian=jacobian,
     )
