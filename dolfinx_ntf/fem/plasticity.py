@@ -19,12 +19,13 @@ import numbers
 import numpy as np
 
 import dolfinx.fem
+import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.kernels.plasticity import IsotropicHardening, elastic_matrix, return_map
 
-__all__ = ["J2Plasticity", "mandel_strain"]
+__all__ = ["J2Plasticity", "mandel_strain", "material_cells"]
 
 _SQRT2 = float(np.sqrt(2.0))
 
@@ -45,6 +46,38 @@ def mandel_strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
     if ufl.shape(u) == (2,):
         return ufl.as_vector([e[0, 0], e[1, 1], 0.0, _SQRT2 * e[0, 1], 0.0, 0.0])
     raise ValueError(f"mandel_strain: a 2D or 3D displacement is needed, got shape {ufl.shape(u)}")
+
+
+def material_cells(
+    mesh: dolfinx.mesh.Mesh,
+    degree: int,
+    cell_tags: compat.MeshTags | None,
+    tag: int,
+    owner: str,
+) -> tuple[np.ndarray, ufl.Measure]:
+    """The local cells (ghosts included) of a material and its measure with the default rule.
+
+    Every cell without ``cell_tags``, else the cells tagged ``tag`` and ``dx(tag)`` over those
+    tags (so that other materials' forms can use the same ``subdomain_data``).
+
+    Args:
+        mesh: The mesh.
+        degree: The quadrature degree of the measure.
+        cell_tags: Cell tags of ``mesh``, or None.
+        tag: The material's value in ``cell_tags``.
+        owner: Name for error messages.
+    """
+    tdim = mesh.topology.dim
+    metadata = {"quadrature_degree": degree, "quadrature_scheme": "default"}
+    if cell_tags is None:
+        cell_map = mesh.topology.index_map(tdim)
+        cells = np.arange(cell_map.size_local + cell_map.num_ghosts, dtype=np.int32)
+        return cells, ufl.dx(domain=mesh, metadata=metadata)
+    if cell_tags.dim != tdim or not compat.tags_on_mesh(cell_tags, mesh):
+        raise ValueError(f"{owner}: cell_tags must be cell tags of u's mesh")
+    cells = np.asarray(cell_tags.indices[cell_tags.values == tag], dtype=np.int32)
+    measure = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags, metadata=metadata)
+    return cells, measure(int(tag))
 
 
 class J2Plasticity:
@@ -104,20 +137,7 @@ class J2Plasticity:
         self.hardening = hardening
         self.quadrature_degree = degree
         mesh = u.function_space.mesh
-        tdim = mesh.topology.dim
-        cell_map = mesh.topology.index_map(tdim)
-        num_cells = cell_map.size_local + cell_map.num_ghosts
-        metadata = {"quadrature_degree": degree, "quadrature_scheme": "default"}
-        if cell_tags is None:
-            self._cells = np.arange(num_cells, dtype=np.int32)
-            self.dx = ufl.dx(domain=mesh, metadata=metadata)
-        else:
-            if cell_tags.dim != tdim or not compat.tags_on_mesh(cell_tags, mesh):
-                raise ValueError(f"{owner}: cell_tags must be cell tags of u's mesh")
-            self._cells = np.asarray(cell_tags.indices[cell_tags.values == tag], dtype=np.int32)
-            self.dx = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags, metadata=metadata)(
-                int(tag)
-            )
+        self._cells, self.dx = material_cells(mesh, degree, cell_tags, tag, owner)
         self.stress = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6,)))
         self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6, 6)))
         self.stress.name = "stress"

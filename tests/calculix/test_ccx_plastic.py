@@ -2,10 +2,10 @@
 
 A bar of two C3D8 on symmetry rollers pulled past yield, then partly unloaded (U and RF at every
 increment), and a plastic block pressed and dragged by an elastic punch with friction
-(``friction_cases``' meshes, tight controls: U, CDIS and CSTR). Both without NLGEOM: ccx's
-plasticity is the small-strain radial return there, so the results agree to round-off. The
-refusals (NLGEOM, *EL PRINT, kinematic hardening) and the reader's checks of the table are tested
-without ccx.
+(``friction_cases``' meshes, tight controls: U, CDIS and CSTR), each without NLGEOM (ccx's
+small-strain radial return) and with it (Simo's finite-strain law, docs/method.md §21.7). The
+refusals (steps mixing NLGEOM and small strain, *EL PRINT, kinematic hardening) and the reader's
+checks of the table are tested without ccx.
 """
 
 from __future__ import annotations
@@ -76,6 +76,8 @@ Z0, 3, 3
 *STEP{nlgeom}
 *STATIC
 0.125, 1.0
+*CONTROLS, PARAMETERS=FIELD
+1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12
 *BOUNDARY
 END, 1, 1, 0.1
 *NODE PRINT, NSET=NALL
@@ -84,6 +86,8 @@ U, RF
 *STEP{nlgeom}
 *STATIC
 0.25, 1.0
+*CONTROLS, PARAMETERS=FIELD
+1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12
 *BOUNDARY
 END, 1, 1, 0.08
 *NODE PRINT, NSET=NALL
@@ -132,7 +136,7 @@ def _largest_difference(ccx_dat: Path, ntf_dat: Path, name: str) -> tuple[float,
 @pytest.mark.ccx
 @needs_ccx
 def test_plastic_bar_agrees_with_ccx(tmp_path: Path) -> None:
-    """U and RF of every increment at 1e-6 (ccx prints 7 digits); the bar really yields."""
+    """Small strain: U and RF of every increment at 1e-6 (ccx prints 7 digits); the bar yields."""
     text = BAR.format(material=SHEET, nlgeom="")
     ccx_dir, ntf_dir, result = _both(text, "bar", tmp_path, tight=True)
     for block in ("U", "RF"):
@@ -152,7 +156,28 @@ def test_plastic_bar_agrees_with_ccx(tmp_path: Path) -> None:
     assert np.all(law.equivalent_plastic_strain > 0.03)
 
 
-def _punch_deck(directory: Path) -> None:
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+def test_plastic_bar_agrees_with_ccx_under_nlgeom(tmp_path: Path) -> None:
+    """NLGEOM (Simo's finite-strain law): U and RF of every increment at 1e-6; the end force is
+    not the small-strain one (the cross-section shrinks), the law is the finite-strain one."""
+    text = BAR.format(material=SHEET, nlgeom=", NLGEOM")
+    ccx_dir, ntf_dir, result = _both(text, "bar", tmp_path, tight=True)
+    for block in ("U", "RF"):
+        worst, count = _largest_difference(ccx_dir / "bar.dat", ntf_dir / "bar.dat", block)
+        assert count > 2
+        assert worst < 1e-6, (block, worst)
+    assert type(result.model.plasticity[0]).__name__ == "FiniteStrainJ2Plasticity"
+    forces = [b for b in read_dat(ntf_dir / "bar.dat") if b.name == "RF"]
+    loaded = next(b for b in forces if b.time == pytest.approx(1.0))
+    end = np.isin(loaded.labels, [9, 10, 11, 12])
+    hardening = 50.0 / 0.3
+    small = 50.0 + 5000.0 * hardening / (5000.0 + hardening) * 0.04
+    assert abs(loaded.values[end, 0].sum() - small) > 1e-3 * small
+
+
+def _punch_deck(directory: Path, nlgeom: bool = False) -> None:
     """The block of ``friction_cases`` made of the sheet metal, pressed and dragged by a punch."""
     V, ct, ft = blocks([((0.0, 0.0, -0.5), (1.0, 1.0, 0.5), (4, 4, 2)), PUNCH])
     pair = ntf.ContactPair(
@@ -189,18 +214,23 @@ def _punch_deck(directory: Path) -> None:
     elastic = "*MATERIAL, NAME=M_E1\n*ELASTIC\n"
     start = text.index(elastic)
     line_end = text.index("\n", start + len(elastic)) + 1
-    path.write_text(text[:line_end] + "*PLASTIC\n50.0, 0.0\n100.0, 0.3\n" + text[line_end:])
+    text = text[:line_end] + "*PLASTIC\n50.0, 0.0\n100.0, 0.3\n" + text[line_end:]
+    if nlgeom:
+        text = text.replace("*STEP, NLGEOM=NO", "*STEP, NLGEOM")
+    path.write_text(text)
 
 
 @pytest.mark.serial
 @pytest.mark.ccx
 @needs_ccx
-def test_plastic_block_under_punch_agrees_with_ccx(tmp_path: Path) -> None:
+@pytest.mark.parametrize("nlgeom", [False, True], ids=["small", "nlgeom"])
+def test_plastic_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path) -> None:
     """U, CDIS and CSTR of every increment, pressed and dragged; points yield."""
     ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
     for d in (ccx_dir, ntf_dir):
         d.mkdir()
-        _punch_deck(d)
+        _punch_deck(d, nlgeom)
+    assert ("NLGEOM=NO" in (ccx_dir / "plastic_punch.inp").read_text()) != nlgeom
     run_ccx(ccx_dir, "plastic_punch", timeout=300)
     result = _run("plastic_punch", ntf_dir, tight=True)
     assert result.completed
@@ -229,11 +259,14 @@ def _refusal(text: str, tmp_path: Path) -> str:
 
 
 @pytest.mark.serial
-def test_nlgeom_with_plastic_is_refused(tmp_path: Path) -> None:
-    text = BAR.format(material=SHEET, nlgeom=", NLGEOM")
+def test_mixed_nlgeom_with_plastic_is_refused(tmp_path: Path) -> None:
+    text = BAR.format(material=SHEET, nlgeom="")
+    first = text.index("*STEP")
+    second = text.index("*STEP", first + 1)
+    text = text[:second] + "*STEP, NLGEOM" + text[second + len("*STEP") :]
     line = text.splitlines().index("*STEP, NLGEOM") + 1
     message = _refusal(text, tmp_path)
-    assert f"deck.inp:{line}:" in message and "NLGEOM" in message and "finite-strain" in message
+    assert f"deck.inp:{line}:" in message and "mixes NLGEOM" in message
 
 
 @pytest.mark.serial

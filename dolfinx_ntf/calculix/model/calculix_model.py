@@ -25,6 +25,7 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
+from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.plasticity import J2Plasticity
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
@@ -151,13 +152,22 @@ class CalculixModel:
     printed_scale: float = 1.0
 
     @property
+    def symmetric_bulk(self) -> bool:
+        """Whether the bulk Jacobian is symmetric.
+
+        Not with finite-strain plastic laws, whose algorithmic tangent ``dP/dF`` is not
+        (docs/method.md §21.7).
+        """
+        return not any(isinstance(law, FiniteStrainJ2Plasticity) for law in self.plasticity)
+
+    @property
     def gdim(self) -> int:
         """The number of displacement components (2 for ccx's 2D elements, else 3)."""
         return int(self.mesh.geometry.dim)
 
     thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
-    plasticity: list[J2Plasticity] = field(default_factory=list)
+    plasticity: list[J2Plasticity | FiniteStrainJ2Plasticity] = field(default_factory=list)
     jacobian: ufl.Form | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
@@ -477,9 +487,11 @@ def build_model(
             u, mu, lmbda, kinematics, None if thermal is None else thermal.thermal_strain()
         )
         internal_force = ufl.inner(P, ufl.grad(v)) * dx
-    laws: list[J2Plasticity] = []
+    laws: list[J2Plasticity | FiniteStrainJ2Plasticity] = []
     if etype.tdim == 3:  # *PLASTIC sections: their own law, the elastic form elsewhere (§21.6)
-        laws, tags = plastic_laws(deck, block, u, element_cell, etype.quadrature_degree)
+        laws, tags = plastic_laws(
+            deck, block, u, element_cell, etype.quadrature_degree, finite=True in kinds
+        )
     if laws:
         dx_elastic = ufl.Measure(
             "dx",

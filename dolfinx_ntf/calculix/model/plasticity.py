@@ -1,10 +1,12 @@
-"""The ``*PLASTIC`` sections of a deck: one :class:`~dolfinx_ntf.J2Plasticity` per material.
+"""The ``*PLASTIC`` sections of a deck: one J2 law per plastic section.
 
-docs/method.md §21.6. Each section whose material has a ``*PLASTIC`` table gets a small-strain J2
-law over its cells, at ccx's integration points (C3D8: 2x2x2 Gauss); the elastic form covers the
-other cells only. What the law cannot reproduce of ccx 2.20 is refused before anything runs:
-``NLGEOM`` (ccx's plasticity is then a finite-strain one, measured in §21.6), element types other
-than C3D8, coupled, dynamic and frequency steps.
+docs/method.md §21.6, §21.7. Each section whose material has a ``*PLASTIC`` table gets a J2 law
+over its cells, at ccx's integration points (C3D8: 2x2x2 Gauss): the small-strain
+:class:`~dolfinx_ntf.J2Plasticity` without NLGEOM, Simo's finite-strain
+:class:`~dolfinx_ntf.fem.finite_plasticity.FiniteStrainJ2Plasticity` with it, as ccx 2.20 does.
+The elastic form covers the other cells only. What the laws cannot reproduce of ccx is refused
+before anything runs: decks mixing NLGEOM and small-strain steps, element types other than
+C3D8, ``*EL PRINT``, coupled, dynamic and frequency steps.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
 from dolfinx_ntf.fem.plasticity import J2Plasticity
 from dolfinx_ntf.kernels.plasticity import IsotropicHardening
 
@@ -46,14 +49,15 @@ def check_plastic_deck(deck: Deck, etype: ElementType) -> None:
             f"{where}: *PLASTIC with {etype.name} elements is not supported yet (only "
             f"{', '.join(PLASTIC_ELEMENT_TYPES)})"
         )
+    kinds = {step.nlgeom for step in deck.steps}
+    if len(kinds) > 1:
+        step = next(s for s in deck.steps if s.nlgeom != deck.steps[0].nlgeom)
+        raise NotImplementedError(
+            f"{step.location}: a *PLASTIC material (first at {where}) in a deck that mixes NLGEOM "
+            "and small-strain steps is not supported yet (ccx switches between its finite- and "
+            "small-strain plasticity; the history would have to pass between them)"
+        )
     for step in deck.steps:
-        if step.nlgeom:
-            raise NotImplementedError(
-                f"{step.location}: NLGEOM with a *PLASTIC material (first at {where}) is not "
-                "supported yet: ccx 2.20's plasticity is then a finite-strain one (a bar pulled "
-                "to 5 % strain: 0.2 % lower stress, 4 % less contraction than the small-strain "
-                "law, docs/method.md §21.6)"
-            )
         what = (
             "*DYNAMIC"
             if step.dynamic is not None
@@ -83,7 +87,8 @@ def plastic_laws(
     u: dolfinx.fem.Function,
     element_cell: np.ndarray,
     quadrature_degree: int,
-) -> tuple[list[J2Plasticity], compat.MeshTags]:
+    finite: bool = False,
+) -> tuple[list[J2Plasticity | FiniteStrainJ2Plasticity], compat.MeshTags]:
     """One J2 law per plastic section, and the cell tags of the materials.
 
     Every local cell (ghosts included) is tagged 0 (elastic) or ``k + 1`` (the ``k``-th law);
@@ -95,6 +100,7 @@ def plastic_laws(
         u: The displacement.
         element_cell: Local cell of each element of ``block`` (-1 elsewhere).
         quadrature_degree: ccx's volume rule of the element type.
+        finite: Simo's finite-strain laws (the deck's steps are NLGEOM), else small-strain ones.
 
     Returns:
         The laws (plastic sections in deck order) and the cell tags.
@@ -120,8 +126,9 @@ def plastic_laws(
         stress, strain = zip(*material.plastic)
         young, nu = material.elastic
         hardening = IsotropicHardening(yield_stress=stress, plastic_strain=strain)
+        law = FiniteStrainJ2Plasticity if finite else J2Plasticity
         laws.append(
-            J2Plasticity(
+            law(
                 u,
                 young,
                 nu,
