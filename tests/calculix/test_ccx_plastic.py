@@ -303,3 +303,40 @@ def test_reader_keeps_the_table(tmp_path: Path) -> None:
     material = read_deck(path).materials["SHEET"]
     assert material.plastic == ((50.0, 0.0), (100.0, 0.3))
     assert material.elastic == (5000.0, 0.3)
+
+
+@pytest.mark.mpi
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("nlgeom", ["", ", NLGEOM"], ids=["small", "nlgeom"])
+def test_plastic_bar_on_all_processes(nlgeom: str, tmp_path: Path) -> None:
+    """The bar on 1 or 2 processes (one element each): the .dat blocks ccx prints, U and RF of
+    every increment, within 1e-6 of the block's largest value (rank 0 compares)."""
+    comm = MPI.COMM_WORLD
+    root = Path(comm.bcast(str(tmp_path), root=0))
+    text = BAR.format(material=SHEET, nlgeom=nlgeom)
+    ccx_dir, ntf_dir = root / "ccx", root / "ntf"
+    if comm.rank == 0:
+        for d in (ccx_dir, ntf_dir):
+            d.mkdir()
+            (d / "bar.inp").write_text(text)
+        run_ccx(ccx_dir, "bar", timeout=300)
+    comm.barrier()
+    logger = logging.getLogger("dolfinx_ntf")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        result = run_job("bar", ntf_dir, comm=comm, progress=False, tight=True)
+    finally:
+        logger.setLevel(level)
+    assert result.completed
+    yielded = comm.allreduce(
+        float(result.model.plasticity[0].equivalent_plastic_strain.max(initial=0.0)), op=MPI.MAX
+    )
+    assert yielded > 0.03
+    if comm.rank == 0:
+        ours, theirs = read_dat(ntf_dir / "bar.dat"), read_dat(ccx_dir / "bar.dat")
+        assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
+        for a, b in zip(ours, theirs):
+            np.testing.assert_array_equal(a.labels, b.labels)
+            assert np.abs(a.values - b.values).max() <= 1e-6 * np.abs(b.values).max(), a.name
