@@ -27,6 +27,7 @@ class Checks(ReaderState):
                               block.locations)  # fmt: skip
         for what, ids, loc in self.node_refs:
             self._check_known(node_ids, ids, "node", what, (loc,))
+        self._apply_transforms(node_ids, node_coords)  # TransformCards: *BOUNDARY in global dofs
         springs = self._finish_springs(all_elements)
         known_elements = np.sort(np.concatenate([all_elements, *(s.ids for s in springs)]))
         for what, ids, loc in self.element_refs:
@@ -70,7 +71,13 @@ class Checks(ReaderState):
             initial_temperatures=tuple(self.initial_temperatures),
             temperature_boundaries=tuple(self.temperature_boundaries),
             shells=shells,
+            transformed_nodes=self._transformed_nodes(),
         )
+
+    def _transformed_nodes(self) -> np.ndarray:
+        """Sorted numbers of the nodes of every ``*TRANSFORM`` card."""
+        sets = [np.asarray(self.nsets[t.nset], np.int64) for t in self.transforms]
+        return frozen_array(np.unique(np.concatenate([np.zeros(0, np.int64), *sets])), np.int64)
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:
         ids_array = np.array(self.node_ids, dtype=np.int64)

@@ -6,7 +6,7 @@ See docs/method.md §8.5. Every object keeps the ``Location`` of its card.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -515,6 +515,8 @@ class Deck:
         ties: ``*TIE`` cards in deck order; cyclic_symmetries: ``*CYCLIC SYMMETRY MODEL`` cards.
         initial_temperatures: ``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` data lines, in order.
         temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
+        transformed_nodes: sorted numbers of the nodes of a ``*TRANSFORM`` (their ``*BOUNDARY``
+            lines are rewritten in global dofs, ``deck/transforms.py``).
         shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
     """
@@ -544,6 +546,7 @@ class Deck:
     initial_temperatures: tuple[InitialTemperature, ...] = ()
     temperature_boundaries: tuple[Boundary, ...] = ()
     shells: ShellExpansion | None = None
+    transformed_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
     def num_elements(self) -> int:

@@ -122,6 +122,8 @@ class ReaderState:
         self.initial_temperatures: list[InitialTemperature] = []
         self.temperature_boundaries: list[Boundary] = []
         self.equations: list[Equation] = []
+        #: ``*TRANSFORM`` cards (``transforms.Transform``), in deck order.
+        self.transforms: list = []
         self.ties: dict[str, Tie] = {}
         self.cyclic_symmetries: list[CyclicSymmetry] = []
         self.steps: list[Step] = []
