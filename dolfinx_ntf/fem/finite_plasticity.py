@@ -22,7 +22,7 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.kernels.finite_plasticity import finite_return_map
 from dolfinx_ntf.kernels.plasticity import IsotropicHardening, elastic_matrix
 
-from .plasticity import material_cells
+from .plasticity import _cell_rows, material_cells
 
 __all__ = ["FiniteStrainJ2Plasticity"]
 
@@ -154,3 +154,16 @@ class FiniteStrainJ2Plasticity:
     def yielding(self) -> np.ndarray:
         """Whether each local quadrature point yielded at the last evaluation, (n,) bool."""
         return self._trial.plastic.copy()
+
+    @property
+    def cells(self) -> np.ndarray:
+        """The law's local cells (owned and ghost), ascending."""
+        return self._cells.copy()
+
+    def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
+        """Cauchy stresses ``(n, q, 3, 3)`` of the last evaluation at the points of ``cells``.
+
+        Args:
+            cells: Local cells of the law (``ValueError`` for others).
+        """
+        return _cell_rows(self._cells, self._trial.cauchy, cells, "FiniteStrainJ2Plasticity")

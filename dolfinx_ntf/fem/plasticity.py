@@ -23,7 +23,12 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.kernels.plasticity import IsotropicHardening, elastic_matrix, return_map
+from dolfinx_ntf.kernels.plasticity import (
+    IsotropicHardening,
+    elastic_matrix,
+    return_map,
+    tensor_from_mandel,
+)
 
 __all__ = ["J2Plasticity", "mandel_strain", "material_cells"]
 
@@ -78,6 +83,24 @@ def material_cells(
     cells = np.asarray(cell_tags.indices[cell_tags.values == tag], dtype=np.int32)
     measure = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags, metadata=metadata)
     return cells, measure(int(tag))
+
+
+def _cell_rows(
+    law_cells: np.ndarray, values: np.ndarray, cells: np.ndarray, owner: str
+) -> np.ndarray:
+    """The rows ``(n, q, ...)`` of ``cells`` in per-point ``values``.
+
+    ``values`` hold q points per cell of ``law_cells``, in that order.
+    """
+    cells = np.asarray(cells, dtype=np.int64).reshape(-1)
+    q = values.shape[0] // max(law_cells.size, 1)
+    pos = np.searchsorted(law_cells, cells)
+    inside = pos < law_cells.size
+    inside[inside] = law_cells[pos[inside]] == cells[inside]
+    if not np.all(inside):
+        raise ValueError(f"{owner}: cell {int(cells[~inside][0])} is not one of the law's cells")
+    per_cell = values.reshape(law_cells.size, q, *values.shape[1:])
+    return per_cell[pos]
 
 
 class J2Plasticity:
@@ -224,3 +247,18 @@ class J2Plasticity:
     def yielding(self) -> np.ndarray:
         """Whether each local quadrature point yielded at the last evaluation, (n,) bool."""
         return self._trial.plastic.copy()
+
+    @property
+    def cells(self) -> np.ndarray:
+        """The law's local cells (owned and ghost), ascending."""
+        return self._cells.copy()
+
+    def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
+        """Stresses ``(n, q, 3, 3)`` of the last evaluation at the rule's points of ``cells``.
+
+        Args:
+            cells: Local cells of the law (``ValueError`` for others).
+        """
+        return _cell_rows(
+            self._cells, tensor_from_mandel(self._trial.stress), cells, "J2Plasticity"
+        )

@@ -91,6 +91,15 @@ def test_cell_tags_split_the_law() -> None:
     scale = mesh.comm.allreduce(np.abs(expected).max(initial=0.0), op=MPI.MAX)
     assert scale > 0
     np.testing.assert_allclose(split, expected, rtol=0, atol=1e-12 * scale)
+    # the Cauchy stresses per cell are the whole law's, and only the law's cells have them
+    for half in halves:
+        if half.cells.size:
+            np.testing.assert_allclose(
+                half.cell_stresses(half.cells), whole.cell_stresses(half.cells), rtol=1e-12
+            )
+    if halves[1].cells.size:
+        with pytest.raises(ValueError, match="not one of the law's cells"):
+            halves[0].cell_stresses(halves[1].cells[:1])
 
 
 @pytest.mark.mpi

@@ -6,7 +6,7 @@ over its cells, at ccx's integration points (C3D8: 2x2x2 Gauss): the small-strai
 :class:`~dolfinx_ntf.fem.finite_plasticity.FiniteStrainJ2Plasticity` with it, as ccx 2.20 does.
 The elastic form covers the other cells only. What the laws cannot reproduce of ccx is refused
 before anything runs: decks mixing NLGEOM and small-strain steps, element types other than
-C3D8, ``*EL PRINT``, coupled, dynamic and frequency steps.
+C3D8, coupled, dynamic and frequency steps.
 """
 
 from __future__ import annotations
@@ -72,13 +72,6 @@ def check_plastic_deck(deck: Deck, etype: ElementType) -> None:
                 f"{step.location}: {what} steps with a *PLASTIC material (first at {where}) are "
                 "not supported yet (static steps only)"
             )
-    for step in deck.steps:
-        for request in step.prints:
-            if request.kind == "EL":
-                raise NotImplementedError(
-                    f"{request.location}: *EL PRINT with a *PLASTIC material (first at {where}) "
-                    "is not supported yet (the plastic stresses are not printed)"
-                )
 
 
 def plastic_laws(
