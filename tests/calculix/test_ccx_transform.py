@@ -178,10 +178,30 @@ def test_unsupported_boundaries_are_refused(tmp_path, model_bc, step_bc, what) -
     assert "deck.inp:" in str(info.value) and "local direction" in str(info.value)
 
 
-def test_node_on_the_axis_is_refused(tmp_path: Path) -> None:
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+def test_nodes_on_the_axis_keep_the_global_directions(tmp_path: Path) -> None:
+    """The axis through two nodes of the left face: ccx 2.20 holds them along global y (their
+    local 2 is global y); every printed block equals ccx's."""
     text = _block().replace("0., 0., 0., 0., 0., 1.", "1., -0.2, 0., 1., -0.2, 1.")
-    with pytest.raises(DeckError, match="lies on the axis"):
-        _deck(tmp_path, text)
+    deck = _deck(tmp_path, text)
+    on_axis = {1, 10}
+    held = {(int(b.nodes[0]), b.first_dof) for b in deck.boundaries if b.nodes.size == 1}
+    assert {(n, 2) for n in on_axis} <= held
+    assert on_axis.isdisjoint(int(e.nodes[0]) for e in deck.equations)
+    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
+    for d in (ccx_dir, ntf_dir):
+        d.mkdir()
+        (d / "block.inp").write_text(text)
+    run_ccx(ccx_dir, "block", timeout=120)
+    result = run_job("block", ntf_dir, comm=MPI.COMM_SELF, progress=False)
+    assert result.completed
+    ours, theirs = read_dat(ntf_dir / "block.dat"), read_dat(ccx_dir / "block.dat")
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
+    for a, b in zip(ours, theirs):
+        np.testing.assert_array_equal(a.labels, b.labels)
+        assert np.abs(a.values - b.values).max() <= 1e-6 * np.abs(b.values).max(), a.name
 
 
 def test_node_print_of_transformed_nodes_is_refused(tmp_path: Path) -> None:

@@ -1,13 +1,14 @@
 """``*TRANSFORM``: local directions of nodes, and the ``*BOUNDARY`` lines written in them.
 
-docs/method.md §25. ``TYPE=R`` (rectangular: point a on the local x axis, point b in the local x-y
-plane) or ``TYPE=C`` (cylindrical: a and b on the axis; local 1 radial, 2 circumferential, 3
-axial, at each node). The reader rewrites the ``*BOUNDARY`` lines of transformed nodes in global
-terms: a local direction along a global axis becomes that global dof (its value times the
-direction's sign); the zero-valued local directions of a node in the model definition become
-linear equations (``*EQUATION`` terms, reduced per node so that each has its own dependent dof,
-one-term rows becoming global ``*BOUNDARY`` lines). Other cases are refused: nonzero values along
-directions that are not global axes, and step ``*BOUNDARY`` lines along such directions.
+docs/method.md §25. ``TYPE=R`` (rectangular: point a on the local x axis, point b in the local
+x-y plane) or ``TYPE=C`` (cylindrical: a and b on the axis; local 1 radial, 2 circumferential,
+3 axial, at each node; a node on the axis keeps the global directions). The reader rewrites the
+``*BOUNDARY`` lines of transformed nodes in global terms: a local direction along a global axis
+becomes that global dof (its value times the direction's sign); the zero-valued local directions
+of a node in the model definition become linear equations (``*EQUATION`` terms, reduced per node
+so that each has its own dependent dof, one-term rows becoming global ``*BOUNDARY`` lines). Other
+cases are refused: nonzero values along directions that are not global axes, and step
+``*BOUNDARY`` lines along such directions.
 """
 
 from __future__ import annotations
@@ -43,8 +44,11 @@ class Transform:
 def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     """The local unit directions ``(n, 3, 3)`` (rows: local 1, 2, 3) at nodes ``coords (n, 3)``.
 
+    A node on a cylinder's axis has no radial direction: it keeps the global directions, as in
+    ccx 2.20 (measured, docs/method.md §25).
+
     Raises:
-        ValueError: degenerate points, or (``TYPE=C``) a node on the axis (no radial direction).
+        ValueError: degenerate points.
     """
     a, b = np.asarray(transform.a, float), np.asarray(transform.b, float)
     n = coords.shape[0]
@@ -64,14 +68,12 @@ def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     offset = coords - a
     radial = offset - np.outer(offset @ axis, axis)
     length = np.linalg.norm(radial, axis=1)
-    if np.any(length == 0):
-        raise ValueError(
-            f"*TRANSFORM, TYPE=C: node row {int(np.flatnonzero(length == 0)[0])} lies on the "
-            "axis (no radial direction)"
-        )
-    radial /= length[:, None]
+    on_axis = length == 0
+    radial[~on_axis] /= length[~on_axis, None]
     tangential = np.cross(axis, radial)
-    return np.stack([radial, tangential, np.broadcast_to(axis, radial.shape)], axis=1)
+    out = np.stack([radial, tangential, np.broadcast_to(axis, radial.shape)], axis=1)
+    out[on_axis] = np.eye(3)  # no radial direction: ccx 2.20 keeps the global ones (measured)
+    return out
 
 
 class TransformCards(ReaderState):
