@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..elements import ELEMENT_TYPES, frozen_array
@@ -78,6 +80,24 @@ class Checks(ReaderState):
         """Sorted numbers of the nodes of every ``*TRANSFORM`` card."""
         sets = [np.asarray(self.nsets[t.nset], np.int64) for t in self.transforms]
         return frozen_array(np.unique(np.concatenate([np.zeros(0, np.int64), *sets])), np.int64)
+
+    def _split_overridden_sections(self, owner: dict[int, SolidSection]) -> None:
+        """Give a section whose elements a later section takes the rest only (docs/method.md §25.1).
+
+        ccx 2.20 lets a later ``*SOLID SECTION`` hold an element of an earlier one (measured on
+        metalforming); the earlier section gets the element set ``<ELSET>#<k>`` of the elements
+        it keeps, so that the sections the model sees are disjoint.
+        """
+        sections = []
+        for k, section in enumerate(self.sections):
+            members = np.asarray(self.elsets[section.elset], np.int64)
+            kept = np.array([e for e in members.tolist() if owner[e] is section], np.int64)
+            if kept.size != np.unique(members).size:
+                name = f"{section.elset}#{k + 1}"
+                self.elsets[name] = kept.tolist()
+                section = dataclasses.replace(section, elset=name)
+            sections.append(section)
+        self.sections = sections
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:
         ids_array = np.array(self.node_ids, dtype=np.int64)
@@ -181,13 +201,8 @@ class Checks(ReaderState):
                     self.materials[section.material].location,
                 )
             for element in self.elsets[section.elset]:
-                if element in owner and owner[element] is not section:
-                    raise DeckError(
-                        f"element {element} is in two solid sections (the other at "
-                        f"{owner[element].location})",
-                        section.location,
-                    )
-                owner[element] = section
+                owner[element] = section  # a later section holds, as in ccx 2.20 (measured)
+        self._split_overridden_sections(owner)
         missing = all_elements[~np.isin(all_elements, np.fromiter(owner, np.int64, len(owner)))]
         if missing.size:
             element = int(missing[0])
