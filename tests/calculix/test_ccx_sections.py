@@ -2,7 +2,7 @@
 
 Two C3D8 in a row, both in a stiff section, the second then in a soft one (metalforming's
 pattern: steel by element type, then the sheet): the runner prints ccx's U, RF and S, and the
-reader gives the earlier section the elements it keeps (docs/method.md §25.1).
+reader gives the earlier section the elements it keeps (docs/method.md §28.1).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ held in the circumferential direction (zero: equations), one also radially (alon
 global dof) and one lifted along the axis (a nonzero value along a global axis), under forces on
 the right face. The nodes without a transform print U and RF as ccx's to its digits; the
 transformed nodes' displacements, turned into their local directions, equal the rows ccx prints
-for them with its ``L`` mark; the refusals are tested without ccx (docs/method.md §25).
+for them with its ``L`` mark; the refusals are tested without ccx (docs/method.md §28).
 """
 
 from __future__ import annotations

@@ -82,7 +82,7 @@ class Checks(ReaderState):
         return frozen_array(np.unique(np.concatenate([np.zeros(0, np.int64), *sets])), np.int64)
 
     def _split_overridden_sections(self, owner: dict[int, SolidSection]) -> None:
-        """Give a section whose elements a later section takes the rest only (docs/method.md §25.1).
+        """Give a section whose elements a later section takes the rest only (docs/method.md §28.1).
 
         ccx 2.20 lets a later ``*SOLID SECTION`` hold an element of an earlier one (measured on
         metalforming); the earlier section gets the element set ``<ELSET>#<k>`` of the elements

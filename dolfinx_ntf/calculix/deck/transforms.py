@@ -1,6 +1,6 @@
 """``*TRANSFORM``: local directions of nodes, and the ``*BOUNDARY`` lines written in them.
 
-docs/method.md §25. ``TYPE=R`` (rectangular: point a on the local x axis, point b in the local
+docs/method.md §28. ``TYPE=R`` (rectangular: point a on the local x axis, point b in the local
 x-y plane) or ``TYPE=C`` (cylindrical: a and b on the axis; local 1 radial, 2 circumferential,
 3 axial, at each node; a node on the axis keeps the global directions). The reader rewrites the
 ``*BOUNDARY`` lines of transformed nodes in global terms: a local direction along a global axis
@@ -45,7 +45,7 @@ def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     """The local unit directions ``(n, 3, 3)`` (rows: local 1, 2, 3) at nodes ``coords (n, 3)``.
 
     A node on a cylinder's axis has no radial direction: it keeps the global directions, as in
-    ccx 2.20 (measured, docs/method.md §25).
+    ccx 2.20 (measured, docs/method.md §28).
 
     Raises:
         ValueError: degenerate points.
