@@ -13,9 +13,16 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-import gmsh
 import numpy as np
 import pytest
+from helpers.gmsh_blocks_2d import (
+    LEFT,
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    stacked_rectangles,
+)
 from helpers.jacobian_check import directional_derivative
 
 import dolfinx.fem
@@ -30,40 +37,18 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 E, NU = 1000.0, 0.3
 RADIUS = 1.0
-LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, LOWER_BOTTOM, AXIS = 3, 4, 5, 6, 7
+AXIS = LEFT
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
-
-
-def _rectangle(x0: float, y0: float, x1: float, y1: float, nx: int, ny: int) -> tuple:
-    """A structured triangulated rectangle: its surface and lines (bottom, right, top, left)."""
-    g = gmsh.model.geo
-    p = [g.addPoint(x0, y0, 0), g.addPoint(x1, y0, 0), g.addPoint(x1, y1, 0), g.addPoint(x0, y1, 0)]
-    lines = [g.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
-    surface = g.addPlaneSurface([g.addCurveLoop(lines)])
-    for line, n in zip(lines, (nx, ny, nx, ny)):
-        g.mesh.setTransfiniteCurve(line, n + 1)
-    g.mesh.setTransfiniteSurface(surface)
-    return surface, lines
 
 
 def _build_cylinder_on_block(
     order: int, x0: float = 0.0, upper_radius: float = RADIUS, nx_upper: int = 5
 ) -> None:
     """Meridian section: a cylinder r <= R, 0 <= z <= 0.4 on a block r <= R, -0.5 <= z <= 0."""
-    gmsh.model.add("cylinder_axisymmetric")
-    lower, lower_lines = _rectangle(x0, -0.5, x0 + RADIUS, 0.0, 5, 2)
-    upper, upper_lines = _rectangle(x0, 0.0, x0 + upper_radius, 0.4, nx_upper, 2)
-    gmsh.model.geo.synchronize()
-    model = gmsh.model
-    model.addPhysicalGroup(2, [lower], 1)
-    model.addPhysicalGroup(2, [upper], 2)
-    model.addPhysicalGroup(1, [lower_lines[2]], LOWER_TOP)
-    model.addPhysicalGroup(1, [upper_lines[0]], UPPER_BOTTOM)
-    model.addPhysicalGroup(1, [upper_lines[2]], UPPER_TOP)
-    model.addPhysicalGroup(1, [lower_lines[0]], LOWER_BOTTOM)
-    model.addPhysicalGroup(1, [lower_lines[3], upper_lines[3]], AXIS)
-    model.mesh.generate(2)
-    model.mesh.setOrder(order)
+    lower = (x0, -0.5, x0 + RADIUS, 0.0, 5, 2)
+    stacked_rectangles(
+        "cylinder_axisymmetric", lower, (x0, 0.0, x0 + upper_radius, 0.4, nx_upper, 2), order
+    )
 
 
 def _cylinder_problem(
