@@ -26,7 +26,7 @@ pytestmark = pytest.mark.skipif(
 
 @pytest.mark.mpi
 def test_contact5_frequency_step_matches_its_reference(tmp_path):
-    """The deck's second step (*MODAL DYNAMIC, refused) is cut off.
+    """The deck's second step (*MODAL DYNAMIC, test_modal_dynamic_ccx.py) is cut off.
 
     The modes come in degenerate groups (two equal beams, two bending planes): participation
     factors differ inside a group (any basis of it is right), the effective masses summed over a
