@@ -79,7 +79,12 @@ from dolfinx_ntf.solvers.errors import (
     ContactDivergenceError,
     ContactSolverError,
 )
-from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
+from dolfinx_ntf.solvers.modal_dynamics import (
+    ModalContactForces,
+    ModalDynamics,
+    RayleighDamping,
+    modal_forces,
+)
 from dolfinx_ntf.solvers.modes import Modes, contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.newton_loop import NewtonSolver
@@ -127,6 +132,7 @@ __all__ = [
     "LinearLaw",
     "LinearSpringLaw",
     "Load",
+    "ModalContactForces",
     "ModalDynamics",
     "Modes",
     "NewtonSolver",

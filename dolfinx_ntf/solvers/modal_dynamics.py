@@ -6,7 +6,11 @@ of the mass-normalized modes of :func:`~dolfinx_ntf.solvers.modes.contact_modes`
 are linear within each increment (CalculiX's ``*MODAL DYNAMIC``, docs/method.md §25). The damping
 is Rayleigh's ``C = alpha M + beta K`` (``c_i = alpha + beta omega_i^2``, ``*MODAL DAMPING,
 RAYLEIGH``) or given per mode. The response starts from rest and is a perturbation about the
-state the modes were computed at. All methods are collective on the modes' communicator.
+state the modes were computed at. :class:`ModalContactForces` adds the forces of a
+:class:`~dolfinx_ntf.ContactProblem`'s springs as nonlinear loads, evaluated at the current
+physical displacement and projected on the modes (:meth:`ModalDynamics.advance_with_contact`
+iterates them to the end of each increment). All methods are collective on the modes'
+communicator.
 """
 
 from __future__ import annotations
@@ -18,15 +22,17 @@ import numpy.typing as npt
 
 import dolfinx.fem
 
-from dolfinx_ntf import compat
+from dolfinx_ntf import compat, validation
+from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.kernels.modal_integration import (
     increment_propagator,
     modal_increment,
     rayleigh_modal_damping,
 )
+from dolfinx_ntf.solvers.errors import ContactConvergenceError
 from dolfinx_ntf.solvers.modes import Modes
 
-__all__ = ["ModalDynamics", "RayleighDamping", "modal_forces"]
+__all__ = ["ModalContactForces", "ModalDynamics", "RayleighDamping", "modal_forces"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -106,6 +112,8 @@ class ModalDynamics:
         self.v = np.zeros_like(eigenvalues)
         self.force = np.zeros_like(eigenvalues)
         self._propagators: dict[float, np.ndarray] = {}
+        self._load = np.zeros_like(eigenvalues)  # the load part of force (with contact)
+        self._contact: np.ndarray | None = None  # the springs' part at ``time``
 
     def advance(
         self, dt: float, force_end: npt.ArrayLike, force_start: npt.ArrayLike | None = None
@@ -160,3 +168,104 @@ class ModalDynamics:
             out: A Function on the modes' space.
         """
         self.combine(self.v, out)
+
+    def advance_with_contact(
+        self,
+        dt: float,
+        force_end: npt.ArrayLike,
+        contact: ModalContactForces,
+        *,
+        force_start: npt.ArrayLike | None = None,
+        rtol: float = 1e-8,
+        max_iterations: int = 50,
+    ) -> int:
+        """Advance by ``dt`` with the springs' modal forces iterated to the increment's end.
+
+        The load is linear from ``force_start`` to ``force_end``; the springs' force is linear
+        from its value at the start to its value at the end state, found by fixed-point
+        iteration: the end state under a guess of the force, the force there, until the force
+        changes by at most ``rtol`` of the largest modal force. Returns the iterations taken.
+
+        Args:
+            dt: The increment [time], > 0.
+            force_end: Modal load at ``time + dt``.
+            contact: The springs' modal forces.
+            force_start: Modal load at ``time`` (default: the last ``force_end``).
+            rtol: Convergence tolerance, relative to the largest modal force.
+            max_iterations: Iterations before :class:`ContactConvergenceError` (a smaller
+                increment helps: the iteration contracts for ``dt`` small against the springs'
+                period).
+
+        Raises:
+            ContactConvergenceError: No convergence within ``max_iterations``.
+        """
+        load_end = np.asarray(force_end, dtype=float)
+        load_start = self._load if force_start is None else np.asarray(force_start, dtype=float)
+        if self._contact is None:
+            self._contact = contact(self.q)
+        start = load_start + self._contact
+        guess = self._contact.copy()
+        q0, v0, time0 = self.q, self.v, self.time
+        for iteration in range(1, max_iterations + 1):
+            self.q, self.v, self.time = q0, v0, time0
+            self.advance(dt, load_end + guess, start)
+            new = contact(self.q)
+            scale = max(np.abs(new).max(), np.abs(load_end).max(), np.abs(guess).max())
+            change = np.abs(new - guess).max()
+            guess = new
+            if change <= rtol * scale:
+                self._contact, self._load = new, load_end.copy()
+                self.force = load_end + new
+                return iteration
+        raise ContactConvergenceError(
+            f"ModalDynamics.advance_with_contact: the springs' modal forces did not converge in "
+            f"{max_iterations} iterations (last change {change:.3e}); take a smaller increment "
+            f"than {dt}"
+        )
+
+
+class ModalContactForces:
+    """The springs' forces projected on the modes, at the displacement ``u0 + sum q_i phi_i``.
+
+    ``u0`` is the problem's displacement when this object is made (the state the modes were
+    computed at, e.g. a preloaded one); the forces are relative to the springs' forces there
+    (which the static loads balance), ``f_c = -Phi^T (r(u) - r(u0))`` with ``r`` the springs'
+    contribution to the residual. Each call re-pairs at the new displacement (node-to-face
+    search, as a Newton iteration does) and leaves the problem's ``u`` there. Use the modes of
+    the bulk stiffness (``contact_modes(..., springs=False)``): the springs' stiffness enters
+    through these forces.
+
+    Args:
+        problem: The contact problem (converged at ``u0``).
+        modes: The mass-normalized modes on the problem's space.
+    """
+
+    def __init__(self, problem: ContactProblem, modes: Modes) -> None:
+        validation.check_type(problem, ContactProblem, "ModalContactForces: problem")
+        if not modes.modes or modes.modes[0].function_space != problem.u.function_space:
+            raise ValueError("ModalContactForces: the modes must live on the problem's space")
+        self.problem, self.modes = problem, modes
+        self.u0 = problem.u.x.array.copy()
+        self._work = dolfinx.fem.Function(problem.u.function_space)
+        self.reference = np.zeros(len(modes.modes))
+        self.reference = self(np.zeros(len(modes.modes)))
+
+    def __call__(self, q: np.ndarray) -> np.ndarray:
+        """``-Phi^T (r(u0 + Phi q) - r(u0))``, shape (number of modes,). Collective.
+
+        Args:
+            q: Modal displacements.
+        """
+        problem = self.problem
+        problem.u.x.array[:] = self.u0
+        for value, mode in zip(q, self.modes.modes):
+            problem.u.x.array[:] += value * mode.x.array
+        problem.u.x.scatter_forward()
+        problem.pair()
+        blocks = problem.evaluate(tangent=False)
+        vector = compat.petsc_vector(self._work)
+        with vector.localForm() as local:
+            local.set(0.0)
+        problem.assembler.add_to_vector(vector, blocks)
+        projected = np.array([-compat.petsc_vector(m).dot(vector) for m in self.modes.modes])
+        return projected - self.reference
