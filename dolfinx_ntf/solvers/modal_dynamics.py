@@ -182,9 +182,10 @@ class ModalDynamics:
         """Advance by ``dt`` with the springs' modal forces iterated to the increment's end.
 
         The load is linear from ``force_start`` to ``force_end``; the springs' force is linear
-        from its value at the start to its value at the end state, found by fixed-point
-        iteration: the end state under a guess of the force, the force there, until the force
-        changes by at most ``rtol`` of the largest modal force. Returns the iterations taken.
+        from its value at the start to its value at the end state, found by Newton iterations on
+        ``f = f_c(q_end(f))`` with the springs' modal tangent ``-Phi^T K_c Phi``, until the guess
+        and the force at the end state differ by at most ``rtol`` of the largest modal force.
+        Returns the iterations taken.
 
         Args:
             dt: The increment [time], > 0.
@@ -193,8 +194,7 @@ class ModalDynamics:
             force_start: Modal load at ``time`` (default: the last ``force_end``).
             rtol: Convergence tolerance, relative to the largest modal force.
             max_iterations: Iterations before :class:`ContactConvergenceError` (a smaller
-                increment helps: the iteration contracts for ``dt`` small against the springs'
-                period).
+                increment helps).
 
         Raises:
             ContactConvergenceError: No convergence within ``max_iterations``.
@@ -206,17 +206,22 @@ class ModalDynamics:
         start = load_start + self._contact
         guess = self._contact.copy()
         q0, v0, time0 = self.q, self.v, self.time
+        change = np.inf
         for iteration in range(1, max_iterations + 1):
             self.q, self.v, self.time = q0, v0, time0
             self.advance(dt, load_end + guess, start)
-            new = contact(self.q)
+            new, stiffness = contact.evaluate(self.q)
             scale = max(np.abs(new).max(), np.abs(load_end).max(), np.abs(guess).max())
-            change = np.abs(new - guess).max()
-            guess = new
+            residual = guess - new
+            change = np.abs(residual).max()
             if change <= rtol * scale:
                 self._contact, self._load = new, load_end.copy()
                 self.force = load_end + new
                 return iteration
+            # Newton on g(f) = f - f_c(q_end(f)): dq_end/df_end = P[:, 0, 3] / dt per mode
+            sensitivity = self._propagators[dt][:, 0, 3] / dt
+            jacobian = np.eye(len(guess)) + stiffness * sensitivity[None, :]
+            guess = guess - np.linalg.solve(jacobian, residual)
         raise ContactConvergenceError(
             f"ModalDynamics.advance_with_contact: the springs' modal forces did not converge in "
             f"{max_iterations} iterations (last change {change:.3e}); take a smaller increment "
@@ -256,16 +261,46 @@ class ModalContactForces:
         Args:
             q: Modal displacements.
         """
+        return self._forces(q, tangent=False)[0]
+
+    def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The modal forces and their derivative ``-Phi^T K_c Phi`` (n, n). Collective.
+
+        ``K_c`` is the springs' tangent at the pairing of ``u0 + Phi q``, the problem's: exact
+        with ``linearize_area=True`` (each evaluation re-pairs, so the spring areas follow the
+        displacement), without the area terms otherwise (docs/method.md §6.3).
+
+        Args:
+            q: Modal displacements.
+        """
+        forces, stiffness = self._forces(q, tangent=True)
+        assert stiffness is not None
+        return forces, stiffness
+
+    def _forces(self, q: np.ndarray, *, tangent: bool) -> tuple[np.ndarray, np.ndarray | None]:
         problem = self.problem
         problem.u.x.array[:] = self.u0
         for value, mode in zip(q, self.modes.modes):
             problem.u.x.array[:] += value * mode.x.array
         problem.u.x.scatter_forward()
         problem.pair()
-        blocks = problem.evaluate(tangent=False)
+        blocks = problem.evaluate(tangent=tangent)
         vector = compat.petsc_vector(self._work)
         with vector.localForm() as local:
             local.set(0.0)
         problem.assembler.add_to_vector(vector, blocks)
-        projected = np.array([-compat.petsc_vector(m).dot(vector) for m in self.modes.modes])
-        return projected - self.reference
+        phis = [compat.petsc_vector(m) for m in self.modes.modes]
+        forces = np.array([-phi.dot(vector) for phi in phis]) - self.reference
+        if not tangent:
+            return forces, None
+        A = problem.ensure_matrix()
+        A.zeroEntries()
+        problem.assembler.add_to_matrix(A, blocks)
+        A.assemble()
+        product = A.createVecLeft()
+        stiffness = np.zeros((len(phis), len(phis)))
+        for j, phi in enumerate(phis):
+            A.mult(phi, product)
+            stiffness[:, j] = [-other.dot(product) for other in phis]
+        product.destroy()
+        return forces, stiffness

@@ -121,7 +121,7 @@ def test_bad_input_is_refused():
     modes.destroy()
 
 
-def _block_on_springs(height: float, E: float, K: float):
+def _block_on_springs(height: float, E: float, K: float, **options):
     """A block [0,1]^2 x [0,H] (2 cells high) on rollers, on LINEAR springs onto the plane z = 0."""
     mesh = dolfinx.mesh.create_box(
         MPI.COMM_WORLD, [[0, 0, 0], [1, 1, height]], [1, 1, 2], dolfinx.mesh.CellType.hexahedron
@@ -151,7 +151,7 @@ def _block_on_springs(height: float, E: float, K: float):
     pair = ntf.ContactPair(
         ntf.FacetSurface(tags, 1), ntf.RigidPlane((0, 0, 0), (0, 0, 1)), ntf.SurfaceInteraction(law)
     )
-    return ntf.ContactProblem(F, u, [pair], bcs), pressure
+    return ntf.ContactProblem(F, u, [pair], bcs, **options), pressure
 
 
 @pytest.mark.mpi
@@ -209,4 +209,34 @@ def test_contact_forces_as_modal_loads_match_the_modes_with_springs():
     diff = V.mesh.comm.allreduce(np.abs(ua.x.array - ub.x.array).max(), op=MPI.MAX)
     assert diff > 0.5 * scale
     for obj in (springs, bulk, solver, problem):
+        obj.destroy()
+
+
+@pytest.mark.mpi
+def test_modal_contact_tangent_matches_finite_differences():
+    """``-Phi^T K_c Phi`` of ModalContactForces.evaluate against central differences.
+
+    Each evaluation re-pairs, so the spring areas follow the displacement: the tangent is exact
+    with ``linearize_area=True`` (without it the area terms are missing, docs/method.md §6.3).
+    """
+    problem, pressure = _block_on_springs(0.2, 1e5, 1e3, linearize_area=True)
+    solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
+    ntf.StaticStep(lambda t: setattr(pressure, "value", 5.0 * t)).run(solver, problem.u)
+    V = problem.u.function_space
+    v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
+    bulk = ntf.contact_modes(problem, 3.0 * ufl.inner(w, v) * ufl.dx, 6, springs=False)
+    contact = ntf.ModalContactForces(problem, bulk)
+    q = np.linspace(-1.0, 1.0, 6) * 1e-4  # the springs stay closed (overclosure 5e-3)
+    forces, stiffness = contact.evaluate(q)
+    assert np.abs(stiffness).max() > 0.0
+    np.testing.assert_allclose(forces, contact(q), rtol=1e-14, atol=1e-14 * np.abs(forces).max())
+    h = 1e-7
+    for j in range(6):
+        step = np.zeros(6)
+        step[j] = h
+        column = (contact(q + step) - contact(q - step)) / (2 * h)
+        np.testing.assert_allclose(
+            column, stiffness[:, j], rtol=1e-5, atol=1e-6 * np.abs(stiffness).max()
+        )
+    for obj in (bulk, solver, problem):
         obj.destroy()
