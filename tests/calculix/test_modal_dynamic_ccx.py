@@ -12,7 +12,6 @@ The runner follows it. Serial and on 2 processes (ccx on rank 0).
 
 from __future__ import annotations
 
-import gzip
 import shutil
 from pathlib import Path
 
@@ -20,6 +19,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_suite import suite_file_exists, suite_text
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
@@ -27,7 +27,6 @@ from dolfinx_ntf.calculix.deck import DeckError, read_deck
 from dolfinx_ntf.calculix.job import run_job
 
 COMM = MPI.COMM_WORLD
-CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
 PAIR = "*CONTACT PAIR,INTERACTION=SI1,TYPE=NODE TO SURFACE\nSslav,Smast\n"
 INCREMENTS = "*MODAL DYNAMIC,DIRECT=NO,DELTMX=1.\n1.E-05,0.176e-4,1.E-15,1.E-06\n"
 
@@ -35,13 +34,13 @@ pytestmark = [
     pytest.mark.ccx,
     pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed"),
     pytest.mark.skipif(
-        not (CCX_TESTS / "contact5.inp.gz").exists(), reason="calculix-ccx-test is not installed"
+        not suite_file_exists("contact5.inp"), reason="calculix-ccx-test is not installed"
     ),
 ]
 
 
 def _deck(name: str) -> str:
-    return gzip.decompress((CCX_TESTS / f"{name}.inp.gz").read_bytes()).decode()
+    return suite_text(f"{name}.inp")
 
 
 def _both(directory: Path, job: str, text: str) -> tuple[dict, dict]:
