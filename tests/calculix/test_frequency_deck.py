@@ -11,7 +11,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers.ccx_suite import suite_file_exists, suite_text
+from helpers.ccx_suite import node_to_surface_suite_deck, suite_text
 
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.modal_dat import read_frequency_output
@@ -19,7 +19,8 @@ from dolfinx_ntf.calculix.modal_dat import read_frequency_output
 COMM = MPI.COMM_WORLD
 
 pytestmark = pytest.mark.skipif(
-    not suite_file_exists("contact5.inp"), reason="calculix-ccx-test is not installed"
+    not node_to_surface_suite_deck("contact5"),
+    reason="no node-to-surface contact5 (Debian 12's calculix-ccx-test) installed",
 )
 
 
