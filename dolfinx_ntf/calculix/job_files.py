@@ -118,6 +118,23 @@ class JobFiles:
             write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx,
                       heading=heading)  # fmt: skip
 
+    def write_modal_increment(
+        self, step: Step, total: float, displacement: np.ndarray, velocity: np.ndarray
+    ) -> None:
+        """The ``*NODE PRINT`` U and V blocks of a ``*MODAL DYNAMIC`` increment (rank 0 writes).
+
+        ``displacement`` and ``velocity`` (N, 3) are at every deck node (docs/method.md §25).
+        """
+        blocks: list[DatBlock] = []
+        for request in step.node_prints:
+            ids = self.deck.nsets[request.set]
+            rows = self.deck.node_index(ids)
+            for key in request.keys:
+                values = (displacement if key == "U" else velocity)[rows]
+                blocks += node_print_blocks(key, request.set, total, ids, values)
+        if self.root and blocks:
+            write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx)
+
     def close(self) -> None:
         """Close the ``.frd`` file (the others are appended to row by row)."""
         self._frd.close()
@@ -382,6 +399,9 @@ def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
     for step in deck.steps:
+        if step.modal_dynamic is not None:
+            _check_modal_requests(step)
+            continue
         for request in step.prints:
             for key in request.keys:
                 thermal = (request.kind, key) in (("NODE", "NT"), ("EL", "HFL"))
@@ -421,3 +441,18 @@ def check_requests(deck: Deck) -> None:
                         key,
                         request.location,
                     )
+
+
+def _check_modal_requests(step: Step) -> None:
+    """A ``*MODAL DYNAMIC`` step prints ``*NODE PRINT`` U and V (docs/method.md §25)."""
+    for request in step.prints:
+        if request.kind != "NODE" or not set(request.keys) <= {"U", "V"}:
+            raise NotImplementedError(
+                f"{request.location}: *{request.kind} PRINT {', '.join(request.keys)} in the "
+                f"*MODAL DYNAMIC step at {step.location} is not supported yet (U and V only)"
+            )
+    if step.file_requests:
+        logger.warning(
+            " *WARNING: the *MODAL DYNAMIC step at %s writes nothing to the .frd file",
+            step.location,
+        )

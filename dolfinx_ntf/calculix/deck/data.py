@@ -240,6 +240,32 @@ class Frequency:
 
 
 @dataclass(frozen=True, eq=False)
+class ModalDynamic:
+    """``*MODAL DYNAMIC`` parameters; its data line (increments) is the step's ``static``.
+
+    Attributes:
+        variable: DIRECT=NO: increments grow by 1.5 up to the maximum, the last one cut to the
+            step's end; else (ccx 2.20's default, also for a bare ``DIRECT``, which 2.20 does
+            not recognize) fixed increments until the period is reached or passed.
+        deltmx: DELTMX, the largest change of a modal force per increment, or None.
+        location: The card.
+    """
+
+    variable: bool
+    deltmx: float | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class ModalDamping:
+    """``*MODAL DAMPING, RAYLEIGH``: ``C = alpha M + beta K``."""
+
+    alpha: float
+    beta: float
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class Coupled:
     """A ``*COUPLED TEMPERATURE-DISPLACEMENT`` or ``*HEAT TRANSFER`` procedure.
 
@@ -386,6 +412,9 @@ class Step:
         coupled: the ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments in
             ``static``), or None.
         temperatures: the ``*BOUNDARY`` lines of dof 11 (temperatures) of this step.
+        modal_dynamic: the ``*MODAL DYNAMIC`` procedure (its increments in ``static``), or None.
+        modal_damping: the effective ``*MODAL DAMPING`` (carried over from earlier steps), or
+            None.
     """
 
     number: int
@@ -406,6 +435,8 @@ class Step:
     frequency: Frequency | None = None
     coupled: Coupled | None = None
     temperatures: tuple[Boundary, ...] = ()
+    modal_dynamic: ModalDynamic | None = None
+    modal_damping: ModalDamping | None = None
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

@@ -17,7 +17,7 @@ _FILE_KEYWORDS = {
 }
 
 _PRINT_KEYS = {
-    "NODE": ("U", "RF", "NT"),
+    "NODE": ("U", "V", "RF", "NT"),
     "EL": ("S", "HFL"),
     "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM"),
 }

@@ -24,6 +24,8 @@ from .data import (
     FrictionChange,
     InitialTemperature,
     InitialVelocity,
+    ModalDamping,
+    ModalDynamic,
     ModelChange,
     PrintRequest,
     SolidSection,
@@ -50,6 +52,7 @@ class StepBuilder:
     dynamic: Dynamic | None = None
     frequency: Frequency | None = None
     coupled: Coupled | None = None
+    modal_dynamic: ModalDynamic | None = None
     boundaries: list[Boundary] = field(default_factory=list)
     temperatures: list[Boundary] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
@@ -133,6 +136,7 @@ class ReaderState:
         self.controls: dict[str, tuple[tuple[float | None, ...], ...]] = {}
         self.frequency = 1
         self.nlgeom = False
+        self.modal_damping: ModalDamping | None = None
         # checks done once everything is read: (what, ids, location)
         self.node_refs: list[tuple[str, np.ndarray, Location]] = []
         self.element_refs: list[tuple[str, np.ndarray, Location]] = []

@@ -378,6 +378,8 @@ def check_incompatible_modes(deck: Deck) -> None:
             if step.frequency is not None
             else "*DYNAMIC"
             if step.dynamic is not None
+            else "*MODAL DYNAMIC"
+            if step.modal_dynamic is not None
             else None
         )
         if what is not None:

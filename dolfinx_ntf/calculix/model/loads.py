@@ -150,7 +150,12 @@ def end_values(
 
 
 def step_times(deck: Deck) -> list[float]:
-    """Total time at the start of every step (``TOTAL TIME AT START``, ``TIME RESET``)."""
+    """Total time at the start of every step (``TOTAL TIME AT START``, ``TIME RESET``).
+
+    A ``*FREQUENCY`` step takes no time: ccx 2.20 prints its modes at its start plus 1 (its
+    default period) but starts the next step where the frequency step started (measured with a
+    static and with a ``*MODAL DYNAMIC`` step after it, docs/method.md §25.3).
+    """
     starts, total = [], 0.0
     for step in deck.steps:
         static = step.static
@@ -159,7 +164,8 @@ def step_times(deck: Deck) -> list[float]:
         elif static.time_reset:
             total -= static.period
         starts.append(total)
-        total += static.period
+        if step.frequency is None:
+            total += static.period
     return starts
 
 

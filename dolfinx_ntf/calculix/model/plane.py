@@ -94,9 +94,10 @@ def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
             raise not_supported(f"NLGEOM with {name} elements", step.location)
         for change in step.model_changes:
             raise not_supported(f"*MODEL CHANGE with {name} elements", _where(change, deck))
-        if step.dynamic is not None or step.frequency is not None:
+        if step.dynamic is not None or step.frequency is not None or step.modal_dynamic:
             raise not_supported(
-                f"*DYNAMIC and *FREQUENCY steps with {name} elements", step.location
+                f"*DYNAMIC, *FREQUENCY and *MODAL DYNAMIC steps with {name} elements",
+                step.location,
             )
         for request in step.file_requests:
             raise not_supported(
