@@ -13,6 +13,7 @@ displacement gradient before the strain is formed.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,9 +37,12 @@ _CARDS = {"*CONDUCTIVITY": "steady", "*SPECIFIC HEAT": "transient", "*DENSITY": 
 def is_thermal(deck: Deck) -> bool:
     """True if the deck has a coupled step; refuses temperature input without one.
 
+    Initial temperatures alone (no ``*BOUNDARY`` dof 11) in steps that are not coupled are no
+    thermal problem: the temperature never changes, so the thermal strain is 0.
+
     Raises:
-        NotImplementedError: temperatures (initial conditions or dof 11) with steps that are not
-            coupled (their thermal strains are not supported), or mixed step kinds.
+        NotImplementedError: temperature conditions (dof 11) with steps that are not coupled
+            (their thermal strains are not supported), or mixed step kinds.
     """
     coupled = [step.coupled is not None for step in deck.steps]
     inputs = [
@@ -59,6 +63,15 @@ def is_thermal(deck: Deck) -> bool:
             "*HEAT TRANSFER while another step is: mixing thermal and other steps is not "
             "supported yet"
         )
+    changes = [*deck.temperature_boundaries, *(b for step in deck.steps for b in step.temperatures)]
+    if inputs and not changes and not any(coupled):
+        # initial temperatures that never change: ccx's thermal strain alpha (T - T_init) is 0
+        # (measured on the bolt deck: its *EXPANSION changes no printed digit, §25)
+        logging.getLogger("dolfinx_ntf.details").info(
+            " %s: initial temperatures without a temperature change: no thermal strain",
+            inputs[0].location,
+        )
+        return False
     if inputs and not any(coupled):
         where = inputs[0].location
         raise NotImplementedError(
