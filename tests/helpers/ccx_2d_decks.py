@@ -326,6 +326,7 @@ def write_mixed_deck(
     node_slave: bool = False,
     nlgeom: bool = False,
     radius: float = 0.0,
+    law: tuple[float, float] = (1e-3, 1000.0),
 ) -> Path:
     """A quasi-axisymmetric deck: a CAX8R ring (lower block) pressed by a CPS8R block (upper).
 
@@ -333,7 +334,7 @@ def write_mixed_deck(
     block's elements turned into plane-stress ones of ``thickness`` (the whole circumference's
     width, ccx's manual), both blocks moved out by ``radius``; ``node_slave``: the slave surface
     is the upper block's bottom nodes (``TYPE=NODE``, midside nodes included) instead of its
-    bottom faces; ``nlgeom``: the step is NLGEOM.
+    bottom faces; ``nlgeom``: the step is NLGEOM; ``law``: the EXPONENTIAL law's ``c0, p0``.
     """
     path = Deck2D(name, "CAX8R", law="EXPONENTIAL", thickness=thickness).write(directory)
     text = path.read_text()
@@ -379,5 +380,6 @@ def write_mixed_deck(
         text = text.replace("LLEFT, 1, 1\n", "LBOT, 1, 1\n", 1)
     if nlgeom:
         text = text.replace("*STEP\n", "*STEP, NLGEOM\n")
+    text = text.replace("1e-3, 1000.0\n", f"{law[0]!r}, {law[1]!r}\n")
     path.write_text(text)
     return path
