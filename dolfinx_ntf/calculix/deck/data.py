@@ -386,6 +386,9 @@ class Step:
         coupled: the ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments in
             ``static``), or None.
         temperatures: the ``*BOUNDARY`` lines of dof 11 (temperatures) of this step.
+        temperature_fields: the ``*TEMPERATURE`` data lines of this step (node or node set and
+            temperature, in order; the model accepts them where they keep the initial
+            temperatures, docs/method.md §25.2).
     """
 
     number: int
@@ -406,6 +409,7 @@ class Step:
     frequency: Frequency | None = None
     coupled: Coupled | None = None
     temperatures: tuple[Boundary, ...] = ()
+    temperature_fields: tuple[InitialTemperature, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

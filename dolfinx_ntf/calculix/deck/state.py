@@ -52,6 +52,7 @@ class StepBuilder:
     coupled: Coupled | None = None
     boundaries: list[Boundary] = field(default_factory=list)
     temperatures: list[Boundary] = field(default_factory=list)
+    temperature_fields: list[InitialTemperature] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)

@@ -231,6 +231,7 @@ class StepCards(ReaderState):
                 frequency=step.frequency,
                 coupled=step.coupled,
                 temperatures=tuple(step.temperatures),
+                temperature_fields=tuple(step.temperature_fields),
             )
         )
         self.step = None

@@ -47,6 +47,7 @@ def is_thermal(deck: Deck) -> bool:
     coupled = [step.coupled is not None for step in deck.steps]
     inputs = [
         *deck.initial_temperatures,
+        *(t for step in deck.steps for t in step.temperature_fields),
         *deck.temperature_boundaries,
         *(b for step in deck.steps for b in step.temperatures),
     ]
@@ -64,6 +65,14 @@ def is_thermal(deck: Deck) -> bool:
             "supported yet"
         )
     changes = [*deck.temperature_boundaries, *(b for step in deck.steps for b in step.temperatures)]
+    fields = [t for step in deck.steps for t in step.temperature_fields]
+    if fields and any(coupled):
+        raise NotImplementedError(
+            f"{fields[0].location}: *TEMPERATURE in a *COUPLED TEMPERATURE-DISPLACEMENT or *HEAT "
+            "TRANSFER deck is not supported yet"
+        )
+    if fields:
+        _check_unchanged(deck)
     if inputs and not changes and not any(coupled):
         # initial temperatures that never change: ccx's thermal strain alpha (T - T_init) is 0
         # (measured on the bolt deck: its *EXPANSION changes no printed digit, §25)
@@ -79,6 +88,29 @@ def is_thermal(deck: Deck) -> bool:
             "are supported in *COUPLED TEMPERATURE-DISPLACEMENT and *HEAT TRANSFER steps only"
         )
     return any(coupled)
+
+
+def _check_unchanged(deck: Deck) -> None:
+    """Refuse ``*TEMPERATURE`` lines that change a node's temperature from its initial one.
+
+    Such a field would give static steps a thermal strain, which is not supported; lines that
+    restate the initial temperatures (Debian 13's bolt deck) change nothing (§25.2).
+    """
+    initial = {}
+    for card in deck.initial_temperatures:
+        initial.update(dict.fromkeys(card.nodes.tolist(), card.value))
+    for step in deck.steps:
+        current = dict(initial)
+        for card in step.temperature_fields:
+            current.update(dict.fromkeys(card.nodes.tolist(), card.value))
+        for card in step.temperature_fields:
+            changed = [n for n in card.nodes.tolist() if current[n] != initial.get(n)]
+            if changed:
+                raise NotImplementedError(
+                    f"{card.location}: *TEMPERATURE changes the temperature of node {changed[0]} "
+                    f"({initial.get(changed[0])} initially, {current[changed[0]]} in step "
+                    f"{step.number}): thermal strains of static steps are not supported yet"
+                )
 
 
 @dataclass(eq=False)
