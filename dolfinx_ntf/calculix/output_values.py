@@ -214,7 +214,9 @@ class OutputValues:
             return values
         values = values[:, rows]  # ccx's expanded 2D elements
         axisymmetric = self.model.axisymmetric_elements
-        if axisymmetric is not None and rows.size == 2 * np.unique(rows).size:
+        etype = self.model.element_type
+        quadratic = etype.num_nodes > etype.num_corners  # CAX8R; not CAX4's straight wedge
+        if axisymmetric is not None and quadratic and rows.size == 2 * np.unique(rows).size:
             turned = np.isin(np.asarray(element_ids), axisymmetric)
             values[turned] = sector_stresses(values[turned])
         return values
@@ -354,7 +356,7 @@ class OutputValues:
 
 
 def sector_stresses(values: np.ndarray) -> np.ndarray:
-    """ccx's printed stresses of a CAX element expanded into two layers of its 2-degree sector.
+    """ccx's printed stresses of a CAX8R element: two layers of its 2-degree quadratic sector.
 
     ccx's integration points of the two layers lie at ``phi = -+ theta/(2 sqrt 3)`` about the
     axis (rows of the first layer first), where it prints the Cartesian components of the ring's
