@@ -102,6 +102,12 @@ def test_mixed_deck_with_face_slaves_matches_ccx(tmp_path):
     """CPS8R faces on a CAX8R ring: the slave's plane areas, ccx's ring master, 1/180 forces."""
     pairs = _run(tmp_path, "mixf", lambda d: write_mixed_deck(d, "mixf", radius=10.0))
     _check_mixed(pairs, contact=1e-3)  # measured 6.0e-4
+    # U's remainder is the plane-stress block's (ccx's expanded layer): the ring's nodes agree
+    reference, mine = pairs[("U", 1.0, "NALL")]
+    ring = reference.labels <= 37  # Deck2D's lower block (4 x 2 CAX8R) is numbered first
+    scale = np.abs(reference.values).max()
+    assert np.abs(mine.values - reference.values)[ring].max() < 1e-5 * scale  # measured 1.7e-6
+    assert np.abs(mine.values - reference.values)[~ring].max() > 1e-5 * scale  # measured 1.0e-4
     reference, mine = pairs[("S", 1.0, "ERING")]  # ccx's sector stresses, turned as ccx's
     assert np.abs(reference.values[:, 4]).max() > 1e-4 * np.abs(reference.values).max()
     assert block_difference(reference, mine, [4, 5]) < 1e-4  # measured 2.5e-5
