@@ -362,7 +362,7 @@ def sector_stresses(values: np.ndarray) -> np.ndarray:
     axis (rows of the first layer first), where it prints the Cartesian components of the ring's
     stress ``(s_rr, s_zz, s_tt, s_rz)`` turned by ``phi``: ``s_xx = s_rr c^2 + s_tt s^2``,
     ``s_zz = s_rr s^2 + s_tt c^2``, ``s_xz = (s_rr - s_tt) s c``, ``s_xy = s_rz c``,
-    ``s_yz = s_rz s`` (measured on the bolt deck, docs/method.md §25.4).
+    ``s_yz = s_rz s`` (measured on the bolt deck, docs/method.md §26.4).
 
     Args:
         values: ``(E, q, 6)`` the 2D model's stresses (xx, yy, zz, xy, xz, yz) of ccx's rows.

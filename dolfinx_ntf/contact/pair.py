@@ -85,7 +85,7 @@ class ContactPair:
             into, in the current configuration: ``2 |q_ξ|`` times the thickness) or
             ``"ccx_ring"`` (the same of an axisymmetric master's 2-degree sector, scaled to the
             ring: ``2 |q_ξ| 2 pi r sin(1 deg)/(1 deg)`` at the projection point; docs/method.md
-            §25.3).
+            §26.3).
     """
 
     slave: FacetSurface | NodeSurface

@@ -4,7 +4,7 @@ CalculiX's quasi-axisymmetric models (its manual, "disk with holes") mix axisymm
 with plane-stress elements in one meridian plane: the plane-stress cells stand for a part that is
 not a full ring (a row of bolts, the web between holes) and carry the width of that part over
 the whole circumference as their thickness. :class:`PlaneSections` says which cells are which
-and gives the UFL pieces of one residual over the whole mesh (docs/method.md §25):
+and gives the UFL pieces of one residual over the whole mesh (docs/method.md §26):
 
 - the volume weight: ``2 pi r`` on axisymmetric cells, the thickness ``t`` on plane cells
   (:meth:`PlaneSections.weight`), so that every force is the whole ring's;

@@ -102,7 +102,7 @@ class NodeSurface:
         faceless: Every node of the surface takes no share of the faces' area: all springs get
             the fallback area (``ContactPair.fallback_area``). ccx does this to the node sets
             of 2D elements, whose 2D nodes belong to none of its expanded 3D elements
-            (docs/method.md §25.3).
+            (docs/method.md §26.3).
     """
 
     vertices: np.ndarray = field(repr=False)

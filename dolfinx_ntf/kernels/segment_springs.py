@@ -120,7 +120,7 @@ def evaluate_segment_springs(
         symmetric: Return (K + Kᵀ)/2 (exact tangent is unsymmetric only at clamped projections).
         area_fallback: Where A = 0, use |q_ξ| (half the length of a straight edge) times
             ``fallback_factor``, and with ``fallback_ring`` times ``2 pi r`` at the projection
-            point (ccx's 4|m| of an expanded master face, docs/method.md §25.3).
+            point (ccx's 4|m| of an expanded master face, docs/method.md §26.3).
         fallback_factor: Factor of the fallback area (1: |q_ξ|).
         fallback_ring: The fallback is a ring area: times ``2 pi x_0`` of the projection point.
         interior_projection: Differentiate clamped projections as interior ones (CalculiX).

@@ -1,12 +1,12 @@
 """ccx's quasi-axisymmetric decks (plane-stress beside axisymmetric elements) against ccx 2.20.
 
-docs/method.md §25. Generated decks (``helpers/ccx_2d_decks.write_mixed_deck``: a CPS8R block
+docs/method.md §26. Generated decks (``helpers/ccx_2d_decks.write_mixed_deck``: a CPS8R block
 pressed on a CAX8R ring at radius 10) and CalculiX's own ``bolt`` deck (a CPS8R bolt through two
 CAX8R plates, NLGEOM, three node-based pairs, EXPONENTIAL law) run with ccx and the deck runner;
 blocks compared relative to ccx's largest value. What remains (measured):
 
 - U ~1e-4 (generated decks; ccx's CAX sector and its expanded plane stress, docs/method.md
-  §23.3, §25.4); the bolt's plane-stress nodes 4.7e-4: ccx's expanded plane-stress layer (0.61
+  §23.3, §26.4); the bolt's plane-stress nodes 4.7e-4: ccx's expanded plane-stress layer (0.61
   thick against 1.3 long elements) is not plane stress;
 - S of plane-stress elements ~3e-3: ccx's expanded element has ``s_zz != 0`` (§23.3);
 - contact rows ~6e-4 on the face-based deck, 3e-4 on the node-based one.

@@ -1,4 +1,4 @@
-"""Per-cell 2D formulations (``fem.plane_sections.PlaneSections``, docs/method.md §25).
+"""Per-cell 2D formulations (``fem.plane_sections.PlaneSections``, docs/method.md §26).
 
 A unit square at radius ``R0`` split into axisymmetric cells (x < R0 + 0.5) and plane-stress
 cells of thickness ``t`` (the rest): the weight integrates to the ring volume plus the plane

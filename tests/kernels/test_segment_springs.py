@@ -135,7 +135,7 @@ def test_edge_spring_areas_are_tributary_lengths() -> None:
 @pytest.mark.parametrize("edge_type", [LINE2, LINE3], ids=lambda e: e.name)
 def test_fallback_area_of_faceless_nodes(edge_type):
     """A = 0: |q_xi| (default), times a factor, and as a ring times 2 pi r at the projection
-    point (ccx's 4|m| of an expanded master face, docs/method.md §25.3); given areas unchanged."""
+    point (ccx's 4|m| of an expanded master face, docs/method.md §26.3); given areas unchanged."""
     rng = np.random.default_rng(3)
     edges = _edges(edge_type, 6, rng, 0.1) + np.array([20.0, 0.0])  # radius ~20
     xi = rng.uniform(-0.8, 0.8, 6)

@@ -388,7 +388,7 @@ class Step:
         temperatures: the ``*BOUNDARY`` lines of dof 11 (temperatures) of this step.
         temperature_fields: the ``*TEMPERATURE`` data lines of this step (node or node set and
             temperature, in order; the model accepts them where they keep the initial
-            temperatures, docs/method.md §25.2).
+            temperatures, docs/method.md §26.2).
     """
 
     number: int

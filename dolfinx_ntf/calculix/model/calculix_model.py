@@ -109,13 +109,13 @@ class CalculixModel:
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
         axisymmetric_elements: The ccx numbers of the CAX elements (their printed stresses are
-            those of ccx's sector, docs/method.md §25.4), else None.
+            those of ccx's sector, docs/method.md §26.4), else None.
         sections: The per-cell 2D models of a quasi-axisymmetric deck or of NLGEOM on 2D
-            elements (docs/method.md §25), else None.
+            elements (docs/method.md §26), else None.
         spring_only_nodes: ``(k, 2)`` ccx node numbers and components whose ``RF`` is their
             contact springs' force only: the free components of the nodes of node-based slave
             surfaces of 2D elements, which ccx keeps out of its expanded elements
-            (docs/method.md §25.3); else None.
+            (docs/method.md §26.3); else None.
     """
 
     deck: Deck
@@ -424,7 +424,7 @@ def build_model(
     block = element_block(deck)
     etype = block.type
     models = element_models(deck, block)
-    if len(deck.elements) > 1:  # ccx's quasi-axisymmetric mix, one block (docs/method.md §25)
+    if len(deck.elements) > 1:  # ccx's quasi-axisymmetric mix, one block (docs/method.md §26)
         deck = dataclasses.replace(deck, elements={etype.name: block})
     thickness = np.ones(block.ids.size)
     if etype.tdim == 2:  # ccx's 2D elements, natively in 2D (docs/method.md §23)
@@ -474,7 +474,7 @@ def build_model(
     nlgeom_2d = etype.tdim == 2 and True in kinds
     if etype.tdim == 2 and (nlgeom_2d or len(set(models)) > 1 or np.ptp(thickness) > 0.0):
         sections = plane_sections(mesh, models, thickness, element_cell)
-    if sections is not None:  # per-cell models, NLGEOM (docs/method.md §25)
+    if sections is not None:  # per-cell models, NLGEOM (docs/method.md §26)
         weight = sections.weight()
         if nlgeom_2d:
             F = sections.deformation_gradient(u, mu, lmbda)
@@ -512,7 +512,7 @@ def build_model(
             metadata={"quadrature_degree": etype.face_quadrature_degree},
         )
         N = ufl.FacetNormal(mesh)
-        if nlgeom_2d:  # follower: the current ring or layer area J F^-T N (§25)
+        if nlgeom_2d:  # follower: the current ring or layer area J F^-T N (§26)
             t3 = ufl.det(F) * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0])
             traction_map = weight * ufl.as_vector([t3[0], t3[1]])
         elif etype.tdim == 2:  # small strain, per thickness or ring

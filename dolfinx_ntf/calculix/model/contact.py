@@ -137,7 +137,7 @@ def contact_pairs(
     thickness, on CAX elements the ring areas of the whole circumference, consistent or with the
     shares of ccx's expanded faces (``area_weights``, docs/method.md §23). Node-based slave
     surfaces of 2D elements are faceless, as in ccx: every spring gets ccx's fallback area of
-    the master face, a plane layer's or an axisymmetric sector's (docs/method.md §25.3).
+    the master face, a plane layer's or an axisymmetric sector's (docs/method.md §26.3).
 
     Args:
         deck: The deck.

@@ -108,7 +108,7 @@ def element_block(deck: Deck) -> ElementBlock:
     ccx's quasi-axisymmetric models mix plane-stress and axisymmetric elements of one layout
     (CPS8R with CAX8R, CPS4 with CAX4, ...): their blocks are merged into one block of the first
     type, whose cells the model gives per-cell formulations (:func:`element_models`,
-    docs/method.md §25). Other mixes are refused.
+    docs/method.md §26). Other mixes are refused.
     """
     blocks = [b for b in deck.elements.values() if b.ids.size]
     if not blocks:

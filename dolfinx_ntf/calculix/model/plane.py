@@ -42,7 +42,7 @@ def section_thickness(
     Plane elements take their ``*SOLID SECTION``'s first value, one for all of them (a
     thickness that varies between sections is refused); CAX elements 1 (the value has no effect
     in ccx either). In a quasi-axisymmetric deck the plane-stress thickness is the
-    whole circumference's width, as ccx's manual asks (docs/method.md §25).
+    whole circumference's width, as ccx's manual asks (docs/method.md §26).
 
     Args:
         deck: The deck.
@@ -65,7 +65,7 @@ def section_thickness(
         rows = order[np.searchsorted(block.ids, members, sorter=order)]
         thickness[rows] = 1.0 if t is None else t
     plane = models != "axisymmetric"
-    if np.any(plane) and not np.all(plane):  # ccx gives it an effect there (measured, §25)
+    if np.any(plane) and not np.all(plane):  # ccx gives it an effect there (measured, §26)
         rows_of = np.argsort(block.ids)
         for section in deck.sections:
             members = np.unique(deck.elsets[section.elset])
@@ -96,7 +96,7 @@ def check_two_d_deck(deck: Deck, block: ElementBlock, models: np.ndarray | None 
     ``x >= 0``; no dynamic or frequency steps, NLGEOM in some steps only, ``*MODEL CHANGE``,
     ``*EQUATION``, ``*TIE``, spring elements, out-of-plane loads, ``.frd`` output, nodes shared by
     plane-stress and axisymmetric elements (ccx's hinge). ``*FRICTION`` and ``*CHANGE FRICTION``
-    pass to the 2D pairs as in 3D; NLGEOM steps are St.Venant-Kirchhoff (docs/method.md §25).
+    pass to the 2D pairs as in 3D; NLGEOM steps are St.Venant-Kirchhoff (docs/method.md §26).
 
     Args:
         deck: The deck.
@@ -173,7 +173,7 @@ def check_two_d_deck(deck: Deck, block: ElementBlock, models: np.ndarray | None 
 def plane_sections(
     mesh: dolfinx.mesh.Mesh, models: np.ndarray, thickness: np.ndarray, element_cell: np.ndarray
 ) -> PlaneSections:
-    """The per-cell 2D models of a deck's mesh (local cells of its elements, docs/method.md §25).
+    """The per-cell 2D models of a deck's mesh (local cells of its elements, docs/method.md §26).
 
     Args:
         mesh: The deck's 2D mesh.

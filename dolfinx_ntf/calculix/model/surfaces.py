@@ -49,7 +49,7 @@ def deck_surfaces(
             vertices, dofs = node_vertex[rows], maps.node_dof[rows]
             midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)  # quadratic
             # ccx's node sets of 2D elements: the 2D nodes are in none of its expanded
-            # elements, every spring gets the fallback area (docs/method.md §25.3)
+            # elements, every spring gets the fallback area (docs/method.md §26.3)
             faceless = maps.block.type.tdim == 2
             if not np.all(corner[rows]) and maps.block.type.num_nodes != 20 and not faceless:
                 node = int(surface.nodes[np.argmax(~corner[rows])])

@@ -75,7 +75,7 @@ def is_thermal(deck: Deck) -> bool:
         _check_unchanged(deck)
     if inputs and not changes and not any(coupled):
         # initial temperatures that never change: ccx's thermal strain alpha (T - T_init) is 0
-        # (measured on the bolt deck: its *EXPANSION changes no printed digit, §25)
+        # (measured on the bolt deck: its *EXPANSION changes no printed digit, §26)
         logging.getLogger("dolfinx_ntf.details").info(
             " %s: initial temperatures without a temperature change: no thermal strain",
             inputs[0].location,
@@ -94,7 +94,7 @@ def _check_unchanged(deck: Deck) -> None:
     """Refuse ``*TEMPERATURE`` lines that change a node's temperature from its initial one.
 
     Such a field would give static steps a thermal strain, which is not supported; lines that
-    restate the initial temperatures (Debian 13's bolt deck) change nothing (§25.2).
+    restate the initial temperatures (Debian 13's bolt deck) change nothing (§26.2).
     """
     initial = {}
     for card in deck.initial_temperatures:
