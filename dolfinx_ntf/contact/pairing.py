@@ -22,7 +22,7 @@ import dolfinx.fem
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.contact.assembly import SpringBlocks
-from dolfinx_ntf.contact.pair import ContactPair, PairState
+from dolfinx_ntf.contact.pair import ContactPair, PairState, fallback_scale
 from dolfinx_ntf.fem import serendipity
 from dolfinx_ntf.fem.surfaces import (
     NodeSurface,
@@ -146,6 +146,10 @@ class Pairing:
             )
         if pair.area_weights != "consistent":
             raise ValueError(f"{name}: area_weights = 'ccx' is for 2D meshes; this mesh is 3D")
+        if pair.fallback_area != "edge":
+            raise ValueError(
+                f"{name}: fallback_area = {pair.fallback_area!r} is for 2D meshes; this mesh is 3D"
+            )
         if pair.axisymmetric:
             raise ValueError(
                 f"{name}: axisymmetric = True is for 2D meshes of the meridian half-plane; this "
@@ -246,7 +250,7 @@ class Pairing:
         V = self.u.function_space
         comm = V.mesh.comm
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
-        if pair.axisymmetric:
+        if pair.axisymmetric and pair.fallback_area != "ccx_ring":
             midside = slave.faceless is not None and bool(np.any(slave.faceless))
             if comm.allreduce(midside, op=MPI.LOR):
                 raise NotImplementedError(
@@ -286,9 +290,11 @@ class Pairing:
         if master_faces.faces.shape[0] == 0:  # the gathered surface: the same on every process
             raise ValueError(f"{name}: the master surface has no edges")
         reference = self._reference if self.halo is None else self.halo.reference
+        factor, ring = fallback_scale(pair)
         master = MasterCurve(
-            master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference
-        )
+            master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference,
+            fallback_factor=factor, fallback_ring=ring,
+        )  # fmt: skip
         both = np.intersect1d(slave.nodes, master_faces.nodes)
         error = None
         if both.size:

@@ -40,6 +40,9 @@ class MasterCurve:
         faces: (F, n) node ids of the edges, corners oriented with the body on the left.
         name: Surface name for messages.
         coords: Optional (num_nodes, 2 or 3) coordinates: ``update(coords)`` at construction.
+        fallback_factor: The area of a spring whose slave node has none (a faceless node) is
+            ``|q_ξ|`` times this (evaluate_segment_springs).
+        fallback_ring: That area is a ring area: also times ``2 pi r`` of the projection point.
 
     Raises:
         ValueError: If a corner node joins more than two edges or two edges meeting at a node are
@@ -55,7 +58,11 @@ class MasterCurve:
         *,
         name: str = "master",
         coords: np.ndarray | None = None,
+        fallback_factor: float = 1.0,
+        fallback_ring: bool = False,
     ) -> None:
+        self.fallback_factor = float(fallback_factor)
+        self.fallback_ring = bool(fallback_ring)
         faces = np.asarray(faces, dtype=np.int64)
         if faces.ndim != 2 or faces.shape[1] != edge_type.num_nodes or faces.shape[0] == 0:
             raise ValueError(
@@ -238,4 +245,6 @@ class MasterCurve:
             symmetric=symmetric,
             interior_projection=interior_projection,
             friction=friction,
+            fallback_factor=self.fallback_factor,
+            fallback_ring=self.fallback_ring,
         )

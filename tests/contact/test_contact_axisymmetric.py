@@ -8,6 +8,7 @@ the ring areas are the consistent shares of a uniform pressure), Hertz's sphere 
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 from pathlib import Path
 
@@ -187,6 +188,10 @@ def test_axisymmetric_pair_options_are_checked() -> None:
         ntf.ContactPair(*slave_master, interaction, axisymmetric=True, area_weights="sector")
     with pytest.raises(ValueError, match="linearize_area = True is not supported"):
         _cylinder_problem(1, area_weights="ccx", linearize_area=True)
+    with pytest.raises(ValueError, match="fallback_area must be one of"):
+        ntf.ContactPair(*slave_master, interaction, fallback_area="sector")
+    with pytest.raises(TypeError, match="faceless"):
+        ntf.NodeSurface(np.zeros(1, np.int32), faceless="yes")
 
 
 @pytest.mark.serial
@@ -208,6 +213,9 @@ def test_axisymmetric_pair_refuses_3d_meshes_and_negative_radii() -> None:
         axisymmetric=True,
     )
     with pytest.raises(ValueError, match="axisymmetric = True is for 2D meshes"):
+        ntf.ContactProblem(F, u, [pair])
+    pair = dataclasses.replace(pair, axisymmetric=False, fallback_area="ccx_ring")
+    with pytest.raises(ValueError, match="fallback_area = 'ccx_ring' is for 2D meshes"):
         ntf.ContactProblem(F, u, [pair])
     # A meridian mesh reaching x < 0: the slave edges there are named.
     mesh2, _, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=1, x0=-0.5)

@@ -415,6 +415,9 @@ class Step:
         modal_dynamic: the ``*MODAL DYNAMIC`` procedure (its increments in ``static``), or None.
         modal_damping: the effective ``*MODAL DAMPING`` (carried over from earlier steps), or
             None.
+        temperature_fields: the ``*TEMPERATURE`` data lines of this step (node or node set and
+            temperature, in order; the model accepts them where they keep the initial
+            temperatures, docs/method.md §26.2).
     """
 
     number: int
@@ -437,6 +440,7 @@ class Step:
     temperatures: tuple[Boundary, ...] = ()
     modal_dynamic: ModalDynamic | None = None
     modal_damping: ModalDamping | None = None
+    temperature_fields: tuple[InitialTemperature, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

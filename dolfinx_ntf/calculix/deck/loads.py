@@ -182,6 +182,24 @@ class LoadCards(ReaderState):
                 InitialTemperature(frozen_array(nodes, np.int64), value, loc)
             )
 
+    def _k_TEMPERATURE(self, card: Card) -> None:
+        """``*TEMPERATURE`` (a step's temperature field): lines of node or node set, temperature."""
+        step = self._in_step(card)
+        self._check_params(card, allowed=set())
+        self._need_data(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 2:
+                raise DeckError(
+                    "*TEMPERATURE data line: node or node set, temperature (gradients are not "
+                    "supported)",
+                    loc,
+                )
+            nodes = self._nodes_of(fields[0], card, loc)
+            value = self._float(fields[1], "temperature", loc)
+            step.temperature_fields.append(
+                InitialTemperature(frozen_array(nodes, np.int64), value, loc)
+            )
+
     def _k_CLOAD(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"OP", "AMPLITUDE"})

@@ -55,6 +55,7 @@ class StepBuilder:
     modal_dynamic: ModalDynamic | None = None
     boundaries: list[Boundary] = field(default_factory=list)
     temperatures: list[Boundary] = field(default_factory=list)
+    temperature_fields: list[InitialTemperature] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)

@@ -234,6 +234,7 @@ class StepCards(ReaderState):
                 temperatures=tuple(step.temperatures),
                 modal_dynamic=step.modal_dynamic,
                 modal_damping=self.modal_damping,
+                temperature_fields=tuple(step.temperature_fields),
             )
         )
         self.step = None

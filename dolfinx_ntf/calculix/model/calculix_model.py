@@ -10,6 +10,7 @@ step at any time and creates the contact problem.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -26,6 +27,7 @@ from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
+from dolfinx_ntf.fem.plane_sections import PlaneSections
 from dolfinx_ntf.fem.serendipity import serendipity_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
@@ -38,10 +40,11 @@ from .bulk import lame, plane_stress_factor, stresses
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
-from .mesh import create_mesh, element_block, mesh_maps, numbering
+from .mesh import create_mesh, element_block, element_models, mesh_maps, numbering
 from .plane import (
     check_two_d_deck,
     plane_kinematics,
+    plane_sections,
     printed_scale,
     section_thickness,
     volume_weight,
@@ -105,6 +108,14 @@ class CalculixModel:
             None.
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
+        axisymmetric_elements: The ccx numbers of the CAX elements (their printed stresses are
+            those of ccx's sector, docs/method.md §26.4), else None.
+        sections: The per-cell 2D models of a quasi-axisymmetric deck or of NLGEOM on 2D
+            elements (docs/method.md §26), else None.
+        spring_only_nodes: ``(k, 2)`` ccx node numbers and components whose ``RF`` is their
+            contact springs' force only: the free components of the nodes of node-based slave
+            surfaces of 2D elements, which ccx keeps out of its expanded elements
+            (docs/method.md §26.3); else None.
     """
 
     deck: Deck
@@ -151,6 +162,9 @@ class CalculixModel:
 
     thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
+    axisymmetric_elements: np.ndarray | None = None
+    sections: PlaneSections | None = None
+    spring_only_nodes: np.ndarray | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -411,10 +425,13 @@ def build_model(
     """
     block = element_block(deck)
     etype = block.type
-    thickness = 1.0
+    models = element_models(deck, block)
+    if len(deck.elements) > 1:  # ccx's quasi-axisymmetric mix, one block (docs/method.md §26)
+        deck = dataclasses.replace(deck, elements={etype.name: block})
+    thickness = np.ones(block.ids.size)
     if etype.tdim == 2:  # ccx's 2D elements, natively in 2D (docs/method.md §23)
-        check_two_d_deck(deck, block)
-        thickness = section_thickness(deck, block)
+        check_two_d_deck(deck, block, models)
+        thickness = section_thickness(deck, block, models)
     # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §19)
     meshed = np.isin(deck.node_ids, block.connectivity)
     deck, tie_blocks = tie_constraints(deck, meshed, warn=comm.rank == 0)
@@ -430,7 +447,9 @@ def build_model(
     error = None
     try:  # local work: a bad face found by one process is an error on all (no collective inside)
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
-        pairs = contact_pairs(deck, surfaces, maps, thickness=thickness, area_weights=area_weights)
+        pairs = contact_pairs(
+            deck, surfaces, maps, thickness=thickness, models=models, area_weights=area_weights
+        )
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
         springs_follow = check_springs(deck, maps.meshed)
         if etype.name == "C3D8I":
@@ -453,8 +472,26 @@ def build_model(
         thermal = thermal_model(deck, block, mesh, etype.degree, node_dof, element_cell, dx)
     v = ufl.TestFunction(V)
     printed_force = None
-    if etype.tdim == 2:  # small strain; the 3x3 stress of the 2D model, weighted (§23)
-        weight = volume_weight(mesh, etype.model, thickness)
+    sections = None
+    nlgeom_2d = etype.tdim == 2 and True in kinds
+    if etype.tdim == 2 and (nlgeom_2d or len(set(models)) > 1 or np.ptp(thickness) > 0.0):
+        sections = plane_sections(mesh, models, thickness, element_cell)
+    if sections is not None:  # per-cell models, NLGEOM (docs/method.md §26)
+        weight = sections.weight()
+        if nlgeom_2d:
+            F = sections.deformation_gradient(u, mu, lmbda)
+            E = 0.5 * (F.T * F - ufl.Identity(3))
+            P = F * (2 * mu * E + lmbda * ufl.tr(E) * ufl.Identity(3))
+            sigma = P * F.T / ufl.det(F)
+        else:
+            H = sections.grad(u, mu, lmbda)
+            sigma = 2 * mu * ufl.sym(H) + lmbda * ufl.tr(H) * ufl.Identity(3)
+            P = sigma
+        internal_force = ufl.inner(P, sections.grad(v)) * weight * dx
+        if "axisymmetric" in set(models):  # ccx's RF: without the hoop term (§23)
+            printed_force = ufl.inner(P, plane_kinematics(v, "plane strain")) * weight * dx
+    elif etype.tdim == 2:  # small strain; the 3x3 stress of the 2D model, weighted (§23)
+        weight = volume_weight(mesh, etype.model, float(thickness[0]) if thickness.size else 1.0)
         H = plane_kinematics(u, etype.model, plane_stress_factor(mu, lmbda))
         sigma = 2 * mu * ufl.sym(H) + lmbda * ufl.tr(H) * ufl.Identity(3)
         P = sigma
@@ -477,7 +514,10 @@ def build_model(
             metadata={"quadrature_degree": etype.face_quadrature_degree},
         )
         N = ufl.FacetNormal(mesh)
-        if etype.tdim == 2:  # small strain, per thickness or ring
+        if nlgeom_2d:  # follower: the current ring or layer area J F^-T N (§26)
+            t3 = ufl.det(F) * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0])
+            traction_map = weight * ufl.as_vector([t3[0], t3[1]])
+        elif etype.tdim == 2:  # small strain, per thickness or ring
             traction_map = weight * N
         else:
             traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
@@ -546,7 +586,33 @@ def build_model(
         springs=springs,
         internal_force=internal_force,
         printed_force=printed_force,
-        printed_scale=printed_scale(etype.model, etype.num_nodes > etype.num_corners),
+        printed_scale=printed_scale(
+            "axisymmetric" if "axisymmetric" in set(models) else etype.model,
+            etype.num_nodes > etype.num_corners,
+        ),
         thermal=thermal,
         incompatible_modes=modes,
+        axisymmetric_elements=block.ids[models == "axisymmetric"] if etype.tdim == 2 else None,
+        sections=sections,
+        spring_only_nodes=_node_slaves(deck) if etype.tdim == 2 else None,
     )
+
+
+def _node_slaves(deck: Deck) -> np.ndarray | None:
+    """``(k, 2)`` node and component (0-based) of the free components of node-based slaves.
+
+    The components of the deck's node-based slave surfaces without a ``*BOUNDARY`` in any step
+    (ccx prints the reaction at a prescribed one); None without any.
+    """
+    names = {pair.slave for pair in deck.contact_pairs}
+    nodes = [deck.surfaces[n].nodes for n in names if deck.surfaces[n].type == "NODE"]
+    if not nodes:
+        return None
+    ids = np.unique(np.concatenate(nodes))
+    free = np.ones((ids.size, 2), dtype=bool)
+    for card in [*deck.boundaries, *(b for step in deck.steps for b in step.boundaries)]:
+        held = np.isin(ids, card.nodes)
+        for dof in range(card.first_dof, min(card.last_dof, 2) + 1):
+            free[held, dof - 1] = False
+    node, component = np.nonzero(free)
+    return np.column_stack([ids[node], component])
