@@ -168,6 +168,8 @@ class DynamicStep(Step):
             increments as in :class:`~dolfinx_ntf.StaticStep` (no CalculiX impact rules).
         on_increment: Called with the :class:`~dolfinx_ntf.IncrementResult` of each converged
             increment (``velocity``/``acceleration`` then hold that increment's values).
+        time_points: Step times the increments end on (CalculiX ``*TIME POINTS``,
+            docs/method.md §25), as :class:`~dolfinx_ntf.StaticStep`'s.
     """
 
     mass: ufl.Form
@@ -186,6 +188,7 @@ class DynamicStep(Step):
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
+    time_points: typing.Sequence[float] | None = None
 
     def _check_own(self, owner: str) -> None:
         """The mass form and ``alpha``."""

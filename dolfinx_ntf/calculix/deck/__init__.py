@@ -42,6 +42,7 @@ from .data import (
     Frequency,
     Friction,
     FrictionChange,
+    Gravity,
     InitialTemperature,
     InitialVelocity,
     Material,
@@ -55,6 +56,7 @@ from .data import (
     SurfaceBehavior,
     SurfaceInteraction,
     Tie,
+    TimePoints,
 )
 from .errors import DeckError, DeckWarning, Location, not_supported
 from .faces import external_faces, face_nodes, node_surface_faces, surface_nodes
@@ -84,6 +86,7 @@ __all__ = [
     "Frequency",
     "Friction",
     "FrictionChange",
+    "Gravity",
     "InitialTemperature",
     "InitialVelocity",
     "Location",
@@ -98,6 +101,7 @@ __all__ = [
     "SurfaceBehavior",
     "SurfaceInteraction",
     "Tie",
+    "TimePoints",
     "external_faces",
     "face_nodes",
     "node_surface_faces",

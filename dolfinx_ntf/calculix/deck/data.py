@@ -6,7 +6,7 @@ See docs/method.md §8.5. Every object keeps the ``Location`` of its card.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -285,7 +285,8 @@ class PrintRequest:
     """A ``*NODE PRINT`` (kind ``NODE``), ``*EL PRINT`` (``EL``) or ``*CONTACT PRINT`` card.
 
     ``keys`` are in card order; ccx writes the blocks in that order, cards in deck order.
-    ``totals`` is ``NO``, ``YES`` or ``ONLY``; ``set`` is None for contact prints.
+    ``totals`` is ``NO``, ``YES`` or ``ONLY``; ``set`` is None for contact prints;
+    ``time_points`` names the ``*TIME POINTS`` at which it prints (instead of ``frequency``).
     """
 
     kind: str
@@ -293,6 +294,32 @@ class PrintRequest:
     set: str | None
     totals: str
     frequency: int | None
+    location: Location
+    time_points: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class TimePoints:
+    """A ``*TIME POINTS`` card: step times (ascending) at which requests with its name print."""
+
+    name: str
+    times: np.ndarray
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Gravity:
+    """A ``*DLOAD ... GRAV`` line: the acceleration ``value * direction`` on ``elements``.
+
+    The load is density times that acceleration per unit volume (ccx's gravity load).
+    """
+
+    elements: np.ndarray
+    value: float
+    direction: np.ndarray
+    amplitude: str | None
+    op: str
+    target: str
     location: Location
 
 
@@ -386,6 +413,7 @@ class Step:
         coupled: the ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments in
             ``static``), or None.
         temperatures: the ``*BOUNDARY`` lines of dof 11 (temperatures) of this step.
+        gravity: the ``*DLOAD ... GRAV`` lines of this step, in deck order.
     """
 
     number: int
@@ -406,6 +434,7 @@ class Step:
     frequency: Frequency | None = None
     coupled: Coupled | None = None
     temperatures: tuple[Boundary, ...] = ()
+    gravity: tuple[Gravity, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:
@@ -439,8 +468,10 @@ class Step:
 
     @property
     def dload_op(self) -> str:
-        """OP of the first ``*DLOAD`` card of the step (``MOD`` if none)."""
-        return self.dloads[0].op if self.dloads else "MOD"
+        """OP of the first ``*DLOAD`` card of the step, pressure or gravity (``MOD`` if none)."""
+        first = min((*self.dloads[:1], *self.gravity[:1]), key=lambda d: d.location.line,
+                    default=None)  # fmt: skip
+        return first.op if first is not None else "MOD"
 
     def field_controls(self) -> dict[str, float | None]:
         """``*CONTROLS, PARAMETERS=FIELD`` values by name, ccx defaults where not given."""
@@ -511,6 +542,7 @@ class Deck:
         temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
         shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
+        time_points: ``*TIME POINTS`` cards by upper-case name.
     """
 
     path: str
@@ -538,6 +570,7 @@ class Deck:
     initial_temperatures: tuple[InitialTemperature, ...] = ()
     temperature_boundaries: tuple[Boundary, ...] = ()
     shells: ShellExpansion | None = None
+    time_points: dict[str, TimePoints] = field(default_factory=dict)
 
     @property
     def num_elements(self) -> int:

@@ -231,6 +231,7 @@ class StepCards(ReaderState):
                 frequency=step.frequency,
                 coupled=step.coupled,
                 temperatures=tuple(step.temperatures),
+                gravity=tuple(step.gravity),
             )
         )
         self.step = None

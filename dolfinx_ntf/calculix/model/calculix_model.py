@@ -26,19 +26,20 @@ from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
-from dolfinx_ntf.fem.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.serendipity import serendipity_constraints, trilinear_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
-from ..deck import Deck
+from ..deck import Deck, not_supported
 from ..elements import ElementType
-from .bulk import lame, plane_stress_factor, stresses
+from .bulk import density, lame, plane_stress_factor, stresses
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
 from .mesh import create_mesh, element_block, mesh_maps, numbering
+from .mixed import CellMeasures, check_mixed_deck, mixed_hexahedra
 from .plane import (
     check_two_d_deck,
     plane_kinematics,
@@ -105,6 +106,8 @@ class CalculixModel:
             None.
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
+        gravity: The ``*DLOAD ... GRAV`` acceleration per cell (DG0 vector; the residual holds
+            ``-rho inner(g, v) dx``), or None for decks without gravity (docs/method.md §25).
     """
 
     deck: Deck
@@ -151,6 +154,7 @@ class CalculixModel:
 
     thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
+    gravity: dolfinx.fem.Function | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -236,6 +240,13 @@ class CalculixModel:
             self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
         ):
             constant.value = value
+        if self.gravity is not None:
+            self.gravity.x.array[:] = 0.0
+            if loads.gravity is not None and loads.gravity_keys.size:
+                cells = compat.cell_dofs(self.gravity.function_space)[loads.gravity_keys // 3, 0]
+                self.gravity.x.array[3 * cells + loads.gravity_keys % 3] = self._evaluate(
+                    loads.gravity, fraction, step_time, total
+                )
         values = self._evaluate(loads.bc, fraction, step_time, total)
         for component, (_, inverse, g) in enumerate(self._bc_spaces):
             mask = loads.bc_dofs % self.gdim == component
@@ -407,6 +418,9 @@ def build_model(
         NotImplementedError: features not supported yet,
             naming the keyword and ``file:line``. Raised on every process.
     """
+    deck, mixed = mixed_hexahedra(deck)  # C3D8 beside C3D20(R): 20-node cells (§25)
+    if mixed is not None:
+        check_mixed_deck(deck)
     block = element_block(deck)
     etype = block.type
     thickness = 1.0
@@ -441,6 +455,11 @@ def build_model(
     kinds = {step.nlgeom for step in deck.steps}
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
+    linear_cells = np.zeros(0, np.int64)
+    if mixed is not None:
+        linear_cells = element_cell[mixed.linear & (element_cell >= 0)]
+        if etype.name == "C3D20":  # C3D8's 2x2x2 beside C3D20's 3x3x3 Gauss points
+            dx = _mixed_measure(mesh, element_cell[element_cell >= 0], linear_cells)
     thermal = None
     if collectives.collectively(comm, is_thermal, deck):
         if etype.tdim == 2:
@@ -481,12 +500,18 @@ def build_model(
             traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
+    gravity = None
+    if any(step.gravity for step in deck.steps):
+        gravity, body_force = _gravity(deck, block, mesh, element_cell)
+        residual -= ufl.inner(body_force, v) * dx
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = equation_constraints(deck, maps.meshed)
     # terms on ccx node numbers, held by any process: global dofs (docs/method.md §14.9)
     constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
+    if mixed is not None:  # C3D8 cells: trilinear (§25)
+        constraints.append(trilinear_constraints(V, linear_cells))
     if etype.tdim == 2 and etype.num_nodes == 8:
         constraints += quad_serendipity_constraints(V)  # CPE8's space (§23)
     for tie in tie_blocks:  # every process read them: rank 0 gives them
@@ -547,4 +572,43 @@ def build_model(
         printed_scale=printed_scale(etype.model, etype.num_nodes > etype.num_corners),
         thermal=thermal,
         incompatible_modes=modes,
+        gravity=gravity,
     )
+
+
+def _mixed_measure(
+    mesh: dolfinx.mesh.Mesh, cells: np.ndarray, linear_cells: np.ndarray
+) -> CellMeasures:
+    """``dx`` with 2x2x2 Gauss points on the C3D8 cells and 3x3x3 on the C3D20 ones."""
+    values = np.full(cells.size, 2, dtype=np.int32)
+    values[np.isin(cells, linear_cells)] = 1
+    order = np.argsort(cells)
+    tags = dolfinx.mesh.meshtags(
+        mesh, mesh.topology.dim, cells[order].astype(np.int32), values[order]
+    )
+    return CellMeasures(mesh, tags, {1: 2, 2: 5})
+
+
+def _gravity(
+    deck: Deck, block, mesh: dolfinx.mesh.Mesh, element_cell: np.ndarray
+) -> tuple[dolfinx.fem.Function, ufl.core.expr.Expr]:
+    """The cellwise ``GRAV`` acceleration and the body force ``rho g`` (docs/method.md §25).
+
+    Every element a ``GRAV`` line loads needs a ``*DENSITY`` (an error naming the line).
+    """
+    if block.type.tdim == 2:
+        line = next(g for step in deck.steps for g in step.gravity)
+        raise not_supported(f"*DLOAD, GRAV with {block.type.name} elements", line.location)
+    rho, given = density(deck, block, mesh, element_cell)
+    order = np.argsort(block.ids)
+    for step in deck.steps:
+        for line in step.gravity:
+            rows = order[np.searchsorted(block.ids, line.elements, sorter=order)]
+            if not np.all(given[rows]):
+                element = int(line.elements[np.argmax(~given[rows])])
+                raise ValueError(
+                    f"{line.location}: *DLOAD, GRAV on element {element}, whose material has "
+                    "no *DENSITY"
+                )
+    acceleration = dolfinx.fem.Function(compat.vector_space(mesh, "DG", 0), name="gravity")
+    return acceleration, rho * acceleration
