@@ -29,13 +29,14 @@ def _cube_lines(z0: float) -> list[str]:
     lines = ["*NODE, NSET=NCUBE"]
     lines += [f"{k + 1}, {x - 0.4:.6f}, {y - 0.45:.6f}, {z + z0:.6f}" for k, (x, y, z) in
               enumerate(_CUBE)]  # fmt: skip
-    return lines + ["*ELEMENT, TYPE=C3D8, ELSET=ECUBE", "1, 1, 2, 3, 4, 5, 6, 7, 8"]
+    return [*lines, "*ELEMENT, TYPE=C3D8, ELSET=ECUBE", "1, 1, 2, 3, 4, 5, 6, 7, 8"]
 
 
 def _s8_floor() -> list[str]:
     lines = ["*NODE, NSET=NFLOOR"]
     lines += [f"{101 + k}, {x}, {y}, 0.0" for k, (x, y) in enumerate(_FLOOR)]
-    return lines + [
+    return [
+        *lines,
         "*ELEMENT, TYPE=S8, ELSET=EFLOOR", "101, 101, 102, 103, 104, 105, 106, 107, 108",
         "*BOUNDARY", "NFLOOR, 1, 6",
     ]  # fmt: skip
@@ -52,7 +53,8 @@ def _c3d20r_floor() -> list[str]:
     ]
     lines = ["*NODE, NSET=NFLOOR"]
     lines += [f"{101 + k}, {x}, {y}, {z}" for k, (x, y, z) in enumerate(points)]
-    return lines + [
+    return [
+        *lines,
         "*ELEMENT, TYPE=C3D20R, ELSET=EFLOOR",
         "101, " + ", ".join(str(101 + k) for k in range(15)) + ",",
         ", ".join(str(101 + k) for k in range(15, 20)),
