@@ -108,6 +108,8 @@ class CalculixModel:
             term of the problem, docs/method.md §22), else None.
         gravity: The ``*DLOAD ... GRAV`` acceleration per cell (DG0 vector; the residual holds
             ``-rho inner(g, v) dx``), or None for decks without gravity (docs/method.md §25).
+        mass_dx: The measure of the mass form: C3D8's 2x2x2 Gauss points on C3D8 cells (ccx's
+            C3D8 mass, measured: docs/method.md §25.4), UFL's estimate on the others.
     """
 
     deck: Deck
@@ -155,6 +157,7 @@ class CalculixModel:
     thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
     gravity: dolfinx.fem.Function | None = None
+    mass_dx: ufl.Measure | CellMeasures | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -329,7 +332,11 @@ class CalculixModel:
     # -- dynamics ---------------------------------------------------------------------------------
 
     def mass_form(self) -> ufl.Form:
-        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (ccx quadrature)."""
+        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (``mass_dx``).
+
+        The consistent mass; C3D8 cells with their 2x2x2 Gauss points as ccx (docs/method.md
+        §25.4), the other elements with UFL's estimate (exact on undistorted cells).
+        """
         Q = compat.scalar_space(self.mesh, "DG", 0)
         rho = dolfinx.fem.Function(Q, name="density")
         block_ids = self.deck.elements[self.element_type.name].ids
@@ -345,7 +352,7 @@ class CalculixModel:
             cells = cells[cells >= 0]  # this process's (owned and ghost) cells
             rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
         w, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-        return rho * ufl.inner(w, v) * ufl.dx(domain=self.mesh)  # consistent mass, exact
+        return rho * ufl.inner(w, v) * self.mass_dx
 
     def initial_velocity(self) -> dolfinx.fem.Function:
         """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
@@ -456,10 +463,13 @@ def build_model(
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
     linear_cells = np.zeros(0, np.int64)
+    mass_dx = dx if etype.name == "C3D8" else ufl.dx(domain=mesh)  # ccx's C3D8 mass (§25.4)
     if mixed is not None:
         linear_cells = element_cell[mixed.linear & (element_cell >= 0)]
+        cells = element_cell[element_cell >= 0]
+        mass_dx = _mixed_measure(mesh, cells, linear_cells, None)
         if etype.name == "C3D20":  # C3D8's 2x2x2 beside C3D20's 3x3x3 Gauss points
-            dx = _mixed_measure(mesh, element_cell[element_cell >= 0], linear_cells)
+            dx = _mixed_measure(mesh, cells, linear_cells, 5)
     thermal = None
     if collectives.collectively(comm, is_thermal, deck):
         if etype.tdim == 2:
@@ -573,20 +583,21 @@ def build_model(
         thermal=thermal,
         incompatible_modes=modes,
         gravity=gravity,
+        mass_dx=mass_dx,
     )
 
 
 def _mixed_measure(
-    mesh: dolfinx.mesh.Mesh, cells: np.ndarray, linear_cells: np.ndarray
+    mesh: dolfinx.mesh.Mesh, cells: np.ndarray, linear_cells: np.ndarray, degree: int | None
 ) -> CellMeasures:
-    """``dx`` with 2x2x2 Gauss points on the C3D8 cells and 3x3x3 on the C3D20 ones."""
+    """``dx`` with 2x2x2 Gauss points on the C3D8 cells, ``degree`` on the others."""
     values = np.full(cells.size, 2, dtype=np.int32)
     values[np.isin(cells, linear_cells)] = 1
     order = np.argsort(cells)
     tags = dolfinx.mesh.meshtags(
         mesh, mesh.topology.dim, cells[order].astype(np.int32), values[order]
     )
-    return CellMeasures(mesh, tags, {1: 2, 2: 5})
+    return CellMeasures(mesh, tags, {1: 2, 2: degree})
 
 
 def _gravity(

@@ -101,12 +101,15 @@ class CellMeasures:
     """
 
     def __init__(
-        self, mesh: dolfinx.mesh.Mesh, tags: compat.MeshTags, degrees: dict[int, int]
+        self, mesh: dolfinx.mesh.Mesh, tags: compat.MeshTags, degrees: dict[int, int | None]
     ) -> None:
-        """Measures ``dx(tag)`` of quadrature degree ``degrees[tag]`` for each tag."""
+        """Measures ``dx(tag)`` of quadrature degree ``degrees[tag]`` (None: UFL's estimate)."""
         self.measures = [
             ufl.Measure(
-                "dx", domain=mesh, subdomain_data=tags, metadata={"quadrature_degree": degree}
+                "dx",
+                domain=mesh,
+                subdomain_data=tags,
+                metadata={} if degree is None else {"quadrature_degree": degree},
             )(tag)
             for tag, degree in degrees.items()
         ]

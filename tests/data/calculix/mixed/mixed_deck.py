@@ -113,3 +113,29 @@ def falling_cube_deck() -> str:
         "*NODE PRINT, NSET=NCUBE, TIME POINTS=T", "U", "*END STEP",
     ]  # fmt: skip
     return "\n".join(lines) + "\n"
+
+
+def spinning_cube_deck(floor: bool = True) -> str:
+    """The distorted C3D8 cube thrown spinning (no load), beside the S8 floor or alone.
+
+    Nodal initial velocities of a rotation about z (0.5) plus a shear; ``*DYNAMIC, DIRECT``
+    with NLGEOM, 10 increments of 0.02. The motion depends on the mass matrix: ccx's C3D8 mass
+    is integrated with the element's 2x2x2 Gauss points (docs/method.md §25.4).
+    """
+    lines = _cube_lines(0.05) + (_s8_floor() if floor else [])
+    lines += [
+        "*MATERIAL, NAME=M", "*ELASTIC", "1000.0, 0.3", "*DENSITY", "1.0",
+        "*SOLID SECTION, ELSET=ECUBE, MATERIAL=M",
+    ]  # fmt: skip
+    if floor:
+        lines += ["*SHELL SECTION, ELSET=EFLOOR, MATERIAL=M", "0.1"]
+    lines.append("*INITIAL CONDITIONS, TYPE=VELOCITY")
+    for k, (x, y, z) in enumerate(_CUBE):
+        x, y = x - 0.4, y - 0.45
+        lines += [f"{k + 1}, 1, {-0.5 * y + 0.3 * z:.6f}", f"{k + 1}, 2, {0.5 * x:.6f}",
+                  f"{k + 1}, 3, {0.2 * x * y:.6f}"]  # fmt: skip
+    lines += [
+        "*STEP, NLGEOM, INC=100", "*DYNAMIC, DIRECT", "0.02, 0.2", "*NODE PRINT, NSET=NCUBE",
+        "U", "*END STEP",
+    ]  # fmt: skip
+    return "\n".join(lines) + "\n"
