@@ -1,10 +1,10 @@
 """C3D8 beside C3D20/C3D20R, GRAV and *TIME POINTS in the deck runner, against ccx 2.20.
 
-docs/method.md §25. The C3D8 cells are 20-node cells whose midside nodes are fixed to their
-edges' means; their integration points stay C3D8's 2x2x2 (measured: with C3D20's 3x3x3 on the
-distorted cube instead, U differs from ccx by 8.7e-4 of its largest value, CSTR by 1.7e-4), and
-the cube's bottom faces are quad4 slave faces (quad8's corner weight 1/100 instead of 1/4 would
-give the corners 1/25 of their spring area). The decks are in
+docs/method.md §25 (1 and 2 processes). The C3D8 cells are 20-node cells whose midside nodes
+are fixed to their edges' means; their integration points stay C3D8's 2x2x2 (measured: with
+C3D20's 3x3x3 on the distorted cube instead, U differs from ccx by 8.7e-4 of its largest value,
+CSTR by 1.7e-4), and the cube's bottom faces are quad4 slave faces (quad8's corner weight 1/100
+instead of 1/4 would give the corners 1/25 of their spring area). The decks are in
 ``tests/data/calculix/mixed/mixed_deck.py``.
 """
 
@@ -112,14 +112,18 @@ def test_spinning_cube_mass_matches_ccx(tmp_path, floor):
     assert len(ntf) == 10 and np.abs(ntf[-1].values).max() > 0.05  # it moved
 
 
+@pytest.mark.mpi
 @pytest.mark.ccx
 @needs_ccx
 @pytest.mark.skipif(not BALL.exists(), reason="calculix-ccx-test is not installed")
 def test_ball_deck_matches_ccx(tmp_path):
     """CalculiX's own ball deck (C3D8 ball, S8 floor, GRAV, time points): ccx's U to 1e-6."""
     text = gzip.decompress(BALL.read_bytes()).decode("latin-1")
-    ccx_dir, ntf_dir = _run_both(tmp_path, "ball", text)
-    assert run_job("ball", ntf_dir, progress=False).completed
+    root = Path(COMM.bcast(str(tmp_path), root=0))
+    ccx_dir, ntf_dir = _run_both(root, "ball", text)
+    assert run_job("ball", ntf_dir, comm=COMM, progress=False).completed
+    if COMM.rank != 0:
+        return
     ntf = _compare(ccx_dir / "ball.dat", ntf_dir / "ball.dat", 1e-6)
     (block,) = ntf
     assert block.values.shape == (1017, 3)  # the ball's nodes, no added midside node
