@@ -24,6 +24,7 @@ from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import read_deck
 from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.calculix.model import build_model
 from dolfinx_ntf.calculix.model.mixed import mixed_hexahedra
 
 COMM = MPI.COMM_WORLD
@@ -162,3 +163,15 @@ def test_mixed_hexahedra_refuses_shared_edges(tmp_path):
     path.write_text(text)
     with pytest.raises(NotImplementedError, match=r"the edge between nodes 105 and 106"):
         mixed_hexahedra(read_deck(path))
+
+
+def test_mixed_deck_refuses_element_output(tmp_path):
+    """*EL PRINT in a mixed deck is refused, naming its line (not measured against ccx)."""
+    text = cube_on_floor_deck("S8").replace(
+        "*CONTACT PRINT", "*EL PRINT, ELSET=ECUBE\nS\n*CONTACT PRINT"
+    )
+    path = tmp_path / "elprint.inp"
+    path.write_text(text)
+    line = text.split("\n").index("*EL PRINT, ELSET=ECUBE") + 1
+    with pytest.raises(NotImplementedError, match=rf"elprint.inp:{line}: \*EL PRINT in a deck"):
+        build_model(read_deck(path), MPI.COMM_SELF)
