@@ -363,7 +363,7 @@ class _Job:
     def _time_points(self, step: Step) -> np.ndarray | None:
         """The step times the increments must end on: the print requests' ``*TIME POINTS``.
 
-        ccx 2.20 shortens an increment that would pass one (docs/method.md §25).
+        ccx 2.20 shortens an increment that would pass one (docs/method.md §27).
         """
         names = {p.time_points for p in step.prints if p.time_points is not None}
         if not names:
@@ -566,7 +566,7 @@ class _Job:
             )
 
     def _at_time_point(self, request: PrintRequest, step: Step, step_time: float) -> bool:
-        """Whether ``step_time`` is one of the request's ``*TIME POINTS`` (docs/method.md §25)."""
+        """Whether ``step_time`` is one of the request's ``*TIME POINTS`` (docs/method.md §27)."""
         points = self.deck.time_points[request.time_points].times
         return bool(np.any(np.abs(points - step_time) <= 1e-9 * step.static.period))
 

@@ -80,7 +80,7 @@ class Pairing:
         u: The displacement (3D vector Lagrange).
         pairs: The contact pairs, already checked.
         face_centres: Face-centre nodes of C3D20's space (docs/method.md §13.5), maybe empty.
-        linear_midsides: Midside nodes of C3D8 cells in that space (§25): their faces are quad4
+        linear_midsides: Midside nodes of C3D8 cells in that space (§27): their faces are quad4
             faces and they are never slave nodes; None: none.
         extend_numbering: Called with the halo (several processes) once the pairs are resolved
             and whenever the halo grows, so that the contact numbering follows. Collective.

@@ -13,7 +13,7 @@ with them, :class:`~dolfinx_ntf.ContactProblem` solves in the serendipity space 
 (docs/method.md §13.1) while every ccx node keeps a point-value dof (basix's own serendipity element
 has edge moments as dofs instead, which node-to-face springs cannot use).
 
-C3D8 cells in the same mesh (a deck mixing C3D8 with C3D20/C3D20R, docs/method.md §25) are cells
+C3D8 cells in the same mesh (a deck mixing C3D8 with C3D20/C3D20R, docs/method.md §27) are cells
 of the same space whose midside nodes are also fixed, each to the mean of its edge's end nodes
 (:func:`trilinear_constraints`): the field on them is then exactly trilinear (the face and cell
 centre rows above then give the bilinear and trilinear centre values).
@@ -194,7 +194,7 @@ def as_quad8(
 
     The centre's value is the quad8 interpolation of the other 8 nodes, so the face is the
     quad8 face (docs/method.md §13.5); other faces are returned unchanged. Faces whose four
-    midside nodes are among ``midsides`` (:func:`linear_midsides`, C3D8 cells, §25) are
+    midside nodes are among ``midsides`` (:func:`linear_midsides`, C3D8 cells, §27) are
     bilinear: they become quad4 faces of their corners. A surface of both kinds is refused; on
     several processes a process without faces returns quad8 faces.
     """

@@ -169,7 +169,7 @@ class DynamicStep(Step):
         on_increment: Called with the :class:`~dolfinx_ntf.IncrementResult` of each converged
             increment (``velocity``/``acceleration`` then hold that increment's values).
         time_points: Step times the increments end on (CalculiX ``*TIME POINTS``,
-            docs/method.md §25), as :class:`~dolfinx_ntf.StaticStep`'s.
+            docs/method.md §27), as :class:`~dolfinx_ntf.StaticStep`'s.
     """
 
     mass: ufl.Form

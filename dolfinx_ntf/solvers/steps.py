@@ -402,7 +402,7 @@ class StaticStep(Step):
             ``growth_iterations`` iterations.
         on_increment: Called with the :class:`IncrementResult` of each converged increment.
         time_points: Step times the increments end on (CalculiX ``*TIME POINTS``): an increment
-            that would pass one is shortened to end there (docs/method.md §25); None: none.
+            that would pass one is shortened to end there (docs/method.md §27); None: none.
         guard_predictor: With ``predictor`` and without ``pair_after_predictor``: start from
             ``u_n`` instead when the predicted displacement brings slave nodes into contact that
             the increment-start pairing gave no spring (the growing contact zones on which the

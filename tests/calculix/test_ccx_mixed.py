@@ -1,6 +1,6 @@
 """C3D8 beside C3D20/C3D20R, GRAV and *TIME POINTS in the deck runner, against ccx 2.20.
 
-docs/method.md §25 (1 and 2 processes). The C3D8 cells are 20-node cells whose midside nodes
+docs/method.md §27 (1 and 2 processes). The C3D8 cells are 20-node cells whose midside nodes
 are fixed to their edges' means; their integration points stay C3D8's 2x2x2 (measured: with
 C3D20's 3x3x3 on the distorted cube instead, U differs from ccx by 8.7e-4 of its largest value,
 CSTR by 1.7e-4), and the cube's bottom faces are quad4 slave faces (quad8's corner weight 1/100

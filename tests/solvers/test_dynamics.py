@@ -148,7 +148,7 @@ def test_dynamic_linear_law_has_no_tension_and_exact_energy():
 def test_time_points_shorten_increments():
     """Increments that would pass a time point end on it; the next one takes the size before.
 
-    ccx 2.20 on its deck: 0.03 over points 0.05 apart gives 0.03, 0.02, 0.03, 0.02 (method §25).
+    ccx 2.20 on its deck: 0.03 over points 0.05 apart gives 0.03, 0.02, 0.03, 0.02 (method §27).
     """
     u, F, bcs, mass, _ = _cantilever()
     problem = ntf.ContactProblem(F, u, [], bcs)

@@ -107,9 +107,9 @@ class CalculixModel:
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
         gravity: The ``*DLOAD ... GRAV`` acceleration per cell (DG0 vector; the residual holds
-            ``-rho inner(g, v) dx``), or None for decks without gravity (docs/method.md §25).
+            ``-rho inner(g, v) dx``), or None for decks without gravity (docs/method.md §27).
         mass_dx: The measure of the mass form: C3D8's 2x2x2 Gauss points on C3D8 cells (ccx's
-            C3D8 mass, measured: docs/method.md §25.4), UFL's estimate on the others.
+            C3D8 mass, measured: docs/method.md §27.4), UFL's estimate on the others.
     """
 
     deck: Deck
@@ -335,7 +335,7 @@ class CalculixModel:
         """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (``mass_dx``).
 
         The consistent mass; C3D8 cells with their 2x2x2 Gauss points as ccx (docs/method.md
-        §25.4), the other elements with UFL's estimate (exact on undistorted cells).
+        §27.4), the other elements with UFL's estimate (exact on undistorted cells).
         """
         Q = compat.scalar_space(self.mesh, "DG", 0)
         rho = dolfinx.fem.Function(Q, name="density")
@@ -425,7 +425,7 @@ def build_model(
         NotImplementedError: features not supported yet,
             naming the keyword and ``file:line``. Raised on every process.
     """
-    deck, mixed = mixed_hexahedra(deck)  # C3D8 beside C3D20(R): 20-node cells (§25)
+    deck, mixed = mixed_hexahedra(deck)  # C3D8 beside C3D20(R): 20-node cells (§27)
     if mixed is not None:
         check_mixed_deck(deck)
     block = element_block(deck)
@@ -463,7 +463,7 @@ def build_model(
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
     linear_cells = np.zeros(0, np.int64)
-    mass_dx = dx if etype.name == "C3D8" else ufl.dx(domain=mesh)  # ccx's C3D8 mass (§25.4)
+    mass_dx = dx if etype.name == "C3D8" else ufl.dx(domain=mesh)  # ccx's C3D8 mass (§27.4)
     if mixed is not None:
         linear_cells = element_cell[mixed.linear & (element_cell >= 0)]
         cells = element_cell[element_cell >= 0]
@@ -520,7 +520,7 @@ def build_model(
     constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
-    if mixed is not None:  # C3D8 cells: trilinear (§25)
+    if mixed is not None:  # C3D8 cells: trilinear (§27)
         constraints.append(trilinear_constraints(V, linear_cells))
     if etype.tdim == 2 and etype.num_nodes == 8:
         constraints += quad_serendipity_constraints(V)  # CPE8's space (§23)
@@ -603,7 +603,7 @@ def _mixed_measure(
 def _gravity(
     deck: Deck, block, mesh: dolfinx.mesh.Mesh, element_cell: np.ndarray
 ) -> tuple[dolfinx.fem.Function, ufl.core.expr.Expr]:
-    """The cellwise ``GRAV`` acceleration and the body force ``rho g`` (docs/method.md §25).
+    """The cellwise ``GRAV`` acceleration and the body force ``rho g`` (docs/method.md §27).
 
     Every element a ``GRAV`` line loads needs a ``*DENSITY`` (an error naming the line).
     """

@@ -14,7 +14,7 @@ Load rules (ccx manual, ``*AMPLITUDE``, ``*BOUNDARY``, ``*CLOAD``, ``*DLOAD``, `
     - Model-definition ``*BOUNDARY`` cards act as if given at the start of step 1.
 
 ``*DLOAD`` faces with the same history in every step share one pressure Constant (a group).
-``*DLOAD ... GRAV`` lines (docs/method.md §25) follow the same rules per element and component of
+``*DLOAD ... GRAV`` lines (docs/method.md §27) follow the same rules per element and component of
 the acceleration; repeated lines on an element add up, and their OP is the step's ``*DLOAD`` OP.
 """
 

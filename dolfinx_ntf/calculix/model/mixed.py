@@ -6,7 +6,7 @@ C3D8 element, at its midpoint, and the model fixes it to the mean of the edge's 
 (``serendipity.trilinear_constraints``), so the field on those cells is C3D8's trilinear one.
 Their integration points stay C3D8's (2x2x2 Gauss): with C3D20R that is the quadratic cells'
 rule too, with C3D20 the volume integrals are split by cell (:class:`CellMeasures`).
-See docs/method.md §25.
+See docs/method.md §27.
 """
 
 from __future__ import annotations
@@ -140,5 +140,5 @@ def check_mixed_deck(deck: Deck) -> None:
         if what is not None:
             raise NotImplementedError(
                 f"{where}: {what} in a deck that mixes C3D8 and C3D20/C3D20R elements is not "
-                "supported yet (docs/method.md §25)"
+                "supported yet (docs/method.md §27)"
             )

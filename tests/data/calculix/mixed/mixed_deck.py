@@ -1,6 +1,6 @@
 """Small decks that mix C3D8 with C3D20/C3D20R elements, for the tests against ccx 2.20.
 
-docs/method.md §25. ``cube_on_floor_deck``: a distorted C3D8 cube pressed 0.01 onto a floor
+docs/method.md §27. ``cube_on_floor_deck``: a distorted C3D8 cube pressed 0.01 onto a floor
 that is either a fully fixed S8 shell (ccx expands it into a C3D20 brick: ball's configuration)
 or a C3D20R block fixed at its bottom; the cube's bottom corners are a node slave surface on
 the floor's top face. ``falling_cube_deck``: the C3D8 cube in a ``*DYNAMIC`` step with an
@@ -120,7 +120,7 @@ def spinning_cube_deck(floor: bool = True) -> str:
 
     Nodal initial velocities of a rotation about z (0.5) plus a shear; ``*DYNAMIC, DIRECT``
     with NLGEOM, 10 increments of 0.02. The motion depends on the mass matrix: ccx's C3D8 mass
-    is integrated with the element's 2x2x2 Gauss points (docs/method.md §25.4).
+    is integrated with the element's 2x2x2 Gauss points (docs/method.md §27.4).
     """
     lines = _cube_lines(0.05) + (_s8_floor() if floor else [])
     lines += [
