@@ -58,7 +58,7 @@ from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 from .controls import relaxation_iteration, solver_controls
 from .coupled import CoupledIncrementSolver, HeatIncrementSolver
 from .dat import CCX_FORMATS
-from .deck import Deck, Step, read_deck
+from .deck import Deck, PrintRequest, Step, read_deck
 from .gather import CcxNumbering
 from .job_files import JobFiles, check_requests
 from .modal_dat import frequency_output
@@ -353,6 +353,7 @@ class _Job:
 
         driver = StaticStep(
             set_load,
+            time_points=self._time_points(step),
             period=period,
             initial_increment=initial,
             min_increment=minimum,
@@ -364,6 +365,16 @@ class _Job:
             guard_predictor=self.guard_predictor,
         )
         driver.run(self.solver, model.u)
+
+    def _time_points(self, step: Step) -> np.ndarray | None:
+        """The step times the increments must end on: the print requests' ``*TIME POINTS``.
+
+        ccx 2.20 shortens an increment that would pass one (docs/method.md §27).
+        """
+        names = {p.time_points for p in step.prints if p.time_points is not None}
+        if not names:
+            return None
+        return np.unique(np.concatenate([self.deck.time_points[n].times for n in names]))
 
     def _set_laws(self, *, dynamic: bool) -> None:
         """ccx's LINEAR law has no tension in ``*DYNAMIC`` steps (docs/method.md §12.3).
@@ -408,6 +419,7 @@ class _Job:
         driver = DynamicStep(
             model.mass_form(),
             set_load,
+            time_points=self._time_points(step),
             period=period,
             initial_increment=initial,
             min_increment=minimum,
@@ -580,7 +592,13 @@ class _Job:
         self.writer.write(total)
         frequency = step.output_frequency
         last = result.time_fraction >= 1 - 1e-12
-        if frequency > 0 and (result.increment % frequency == 0 or last):
+        regular = frequency > 0 and (result.increment % frequency == 0 or last)
+        prints = [
+            p
+            for p in step.prints
+            if (regular if p.time_points is None else self._at_time_point(p, step, result.time))
+        ]
+        if regular or prints:
             self.files.write_increment(
                 step,
                 result.increment,
@@ -589,7 +607,14 @@ class _Job:
                 self.values,
                 load_time=self._load_time,
                 largest_residual=self.solver.largest_residual,
+                prints=prints,
+                files=regular,
             )
+
+    def _at_time_point(self, request: PrintRequest, step: Step, step_time: float) -> bool:
+        """Whether ``step_time`` is one of the request's ``*TIME POINTS`` (docs/method.md §27)."""
+        points = self.deck.time_points[request.time_points].times
+        return bool(np.any(np.abs(points - step_time) <= 1e-9 * step.static.period))
 
 
 def _first_large(values: np.ndarray) -> float:

@@ -202,15 +202,19 @@ class JobFiles:
         *,
         load_time: tuple[int, float],
         largest_residual: float,
+        prints: Sequence[PrintRequest] | None = None,
+        files: bool = True,
     ) -> None:
         """The ``.dat`` and ``.frd`` blocks of a printed increment at total time ``total``.
 
         ``contact`` are the increment's contact rows, ``load_time`` its ``(step index, step
-        time)``, ``largest_residual`` that of its converged iterate. Collective.
+        time)``, ``largest_residual`` that of its converged iterate; ``prints`` the print
+        requests to write (default: the step's), ``files`` whether the ``.frd`` blocks are
+        written too. Collective.
         """
         contact = [clean_contact(rows) for rows in contact]  # printed values (§14.5)
         results = _Increment(self.deck, values, load_time, largest_residual)
-        blocks = results.dat_blocks(step, total, contact)
+        blocks = results.dat_blocks(step, total, contact, step.prints if prints is None else prints)
         if self.root:
             heading = ""
             if self.ccx == "2.23" and blocks:
@@ -221,7 +225,7 @@ class JobFiles:
                 heading += increment_heading(increment)
             write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx,
                       heading=heading)  # fmt: skip
-        for block in results.frd_blocks(step, increment, total, contact):
+        for block in results.frd_blocks(step, increment, total, contact) if files else ():
             self._frd.write(clean_frd_block(block))
 
 
@@ -281,12 +285,18 @@ class _Increment:
             )
         return blocks
 
-    def dat_blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
-        """The ``.dat`` blocks of the print requests, in the deck's order."""
+    def dat_blocks(
+        self,
+        step: Step,
+        total: float,
+        contact: list[ContactRows],
+        prints: Sequence[PrintRequest],
+    ) -> list[DatBlock]:
+        """The ``.dat`` blocks of the print requests ``prints`` of ``step``, in the deck's order."""
         blocks: list[DatBlock] = []
         forces, floor = None, 0.0
         displacement = self.values.displacements()
-        for request in step.prints:
+        for request in prints:
             if request.kind == "NODE":
                 ids = self.deck.nsets[request.set]
                 for key in request.keys:

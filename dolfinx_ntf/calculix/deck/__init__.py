@@ -42,6 +42,7 @@ from .data import (
     Frequency,
     Friction,
     FrictionChange,
+    Gravity,
     InitialTemperature,
     InitialVelocity,
     Material,
@@ -57,6 +58,7 @@ from .data import (
     SurfaceBehavior,
     SurfaceInteraction,
     Tie,
+    TimePoints,
 )
 from .errors import DeckError, DeckWarning, Location, not_supported
 from .faces import external_faces, face_nodes, node_surface_faces, surface_nodes
@@ -86,6 +88,7 @@ __all__ = [
     "Frequency",
     "Friction",
     "FrictionChange",
+    "Gravity",
     "InitialTemperature",
     "InitialVelocity",
     "Location",
@@ -102,6 +105,7 @@ __all__ = [
     "SurfaceBehavior",
     "SurfaceInteraction",
     "Tie",
+    "TimePoints",
     "external_faces",
     "face_nodes",
     "node_surface_faces",

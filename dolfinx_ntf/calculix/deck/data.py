@@ -6,7 +6,7 @@ See docs/method.md §8.5. Every object keeps the ``Location`` of its card.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -311,7 +311,8 @@ class PrintRequest:
     """A ``*NODE PRINT`` (kind ``NODE``), ``*EL PRINT`` (``EL``) or ``*CONTACT PRINT`` card.
 
     ``keys`` are in card order; ccx writes the blocks in that order, cards in deck order.
-    ``totals`` is ``NO``, ``YES`` or ``ONLY``; ``set`` is None for contact prints.
+    ``totals`` is ``NO``, ``YES`` or ``ONLY``; ``set`` is None for contact prints;
+    ``time_points`` names the ``*TIME POINTS`` at which it prints (instead of ``frequency``).
     """
 
     kind: str
@@ -319,6 +320,32 @@ class PrintRequest:
     set: str | None
     totals: str
     frequency: int | None
+    location: Location
+    time_points: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class TimePoints:
+    """A ``*TIME POINTS`` card: step times (ascending) at which requests with its name print."""
+
+    name: str
+    times: np.ndarray
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Gravity:
+    """A ``*DLOAD ... GRAV`` line: the acceleration ``value * direction`` on ``elements``.
+
+    The load is density times that acceleration per unit volume (ccx's gravity load).
+    """
+
+    elements: np.ndarray
+    value: float
+    direction: np.ndarray
+    amplitude: str | None
+    op: str
+    target: str
     location: Location
 
 
@@ -418,6 +445,7 @@ class Step:
         temperature_fields: the ``*TEMPERATURE`` data lines of this step (node or node set and
             temperature, in order; the model accepts them where they keep the initial
             temperatures, docs/method.md §26.2).
+        gravity: the ``*DLOAD ... GRAV`` lines of this step, in deck order.
     """
 
     number: int
@@ -441,6 +469,7 @@ class Step:
     modal_dynamic: ModalDynamic | None = None
     modal_damping: ModalDamping | None = None
     temperature_fields: tuple[InitialTemperature, ...] = ()
+    gravity: tuple[Gravity, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:
@@ -474,8 +503,10 @@ class Step:
 
     @property
     def dload_op(self) -> str:
-        """OP of the first ``*DLOAD`` card of the step (``MOD`` if none)."""
-        return self.dloads[0].op if self.dloads else "MOD"
+        """OP of the first ``*DLOAD`` card of the step, pressure or gravity (``MOD`` if none)."""
+        first = min((*self.dloads[:1], *self.gravity[:1]), key=lambda d: d.location.line,
+                    default=None)  # fmt: skip
+        return first.op if first is not None else "MOD"
 
     def field_controls(self) -> dict[str, float | None]:
         """``*CONTROLS, PARAMETERS=FIELD`` values by name, ccx defaults where not given."""
@@ -546,6 +577,7 @@ class Deck:
         temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
         shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
+        time_points: ``*TIME POINTS`` cards by upper-case name.
     """
 
     path: str
@@ -573,6 +605,7 @@ class Deck:
     initial_temperatures: tuple[InitialTemperature, ...] = ()
     temperature_boundaries: tuple[Boundary, ...] = ()
     shells: ShellExpansion | None = None
+    time_points: dict[str, TimePoints] = field(default_factory=dict)
 
     @property
     def num_elements(self) -> int:

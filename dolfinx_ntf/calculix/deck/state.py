@@ -22,6 +22,7 @@ from .data import (
     Frequency,
     Friction,
     FrictionChange,
+    Gravity,
     InitialTemperature,
     InitialVelocity,
     ModalDamping,
@@ -34,6 +35,7 @@ from .data import (
     Surface,
     SurfaceBehavior,
     Tie,
+    TimePoints,
 )
 from .errors import DeckError, DeckWarning, Location
 from .leniency import SETS_FREQUENCY
@@ -58,6 +60,7 @@ class StepBuilder:
     temperature_fields: list[InitialTemperature] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
+    gravity: list[Gravity] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)
     new_files: list[FileRequest] = field(default_factory=list)
     friction_changes: list[FrictionChange] = field(default_factory=list)
@@ -119,6 +122,7 @@ class ReaderState:
         self.interactions: dict[str, InteractionBuilder] = {}
         self.contact_pairs: list[ContactPair] = []
         self.amplitudes: dict[str, Amplitude] = {}
+        self.time_points: dict[str, TimePoints] = {}
         self.boundaries: list[Boundary] = []
         self.initial_velocities: list[InitialVelocity] = []
         self.initial_temperatures: list[InitialTemperature] = []

@@ -235,6 +235,7 @@ class StepCards(ReaderState):
                 modal_dynamic=step.modal_dynamic,
                 modal_damping=self.modal_damping,
                 temperature_fields=tuple(step.temperature_fields),
+                gravity=tuple(step.gravity),
             )
         )
         self.step = None

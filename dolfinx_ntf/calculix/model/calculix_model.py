@@ -28,19 +28,20 @@ from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock,
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.plane_sections import PlaneSections
-from dolfinx_ntf.fem.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.serendipity import serendipity_constraints, trilinear_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
-from ..deck import Deck
+from ..deck import Deck, not_supported
 from ..elements import ElementType
-from .bulk import lame, plane_stress_factor, stresses
+from .bulk import density, lame, plane_stress_factor, stresses
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
 from .mesh import create_mesh, element_block, element_models, mesh_maps, numbering
+from .mixed import CellMeasures, check_mixed_deck, mixed_hexahedra
 from .plane import (
     check_two_d_deck,
     plane_kinematics,
@@ -116,6 +117,10 @@ class CalculixModel:
             contact springs' force only: the free components of the nodes of node-based slave
             surfaces of 2D elements, which ccx keeps out of its expanded elements
             (docs/method.md §26.3); else None.
+        gravity: The ``*DLOAD ... GRAV`` acceleration per cell (DG0 vector; the residual holds
+            ``-rho inner(g, v) dx``), or None for decks without gravity (docs/method.md §27).
+        mass_dx: The measure of the mass form: C3D8's 2x2x2 Gauss points on C3D8 cells (ccx's
+            C3D8 mass, measured: docs/method.md §27.4), UFL's estimate on the others.
     """
 
     deck: Deck
@@ -165,6 +170,8 @@ class CalculixModel:
     axisymmetric_elements: np.ndarray | None = None
     sections: PlaneSections | None = None
     spring_only_nodes: np.ndarray | None = None
+    gravity: dolfinx.fem.Function | None = None
+    mass_dx: ufl.Measure | CellMeasures | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -250,6 +257,13 @@ class CalculixModel:
             self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
         ):
             constant.value = value
+        if self.gravity is not None:
+            self.gravity.x.array[:] = 0.0
+            if loads.gravity is not None and loads.gravity_keys.size:
+                cells = compat.cell_dofs(self.gravity.function_space)[loads.gravity_keys // 3, 0]
+                self.gravity.x.array[3 * cells + loads.gravity_keys % 3] = self._evaluate(
+                    loads.gravity, fraction, step_time, total
+                )
         values = self._evaluate(loads.bc, fraction, step_time, total)
         for component, (_, inverse, g) in enumerate(self._bc_spaces):
             mask = loads.bc_dofs % self.gdim == component
@@ -332,7 +346,11 @@ class CalculixModel:
     # -- dynamics ---------------------------------------------------------------------------------
 
     def mass_form(self) -> ufl.Form:
-        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (ccx quadrature)."""
+        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (``mass_dx``).
+
+        The consistent mass; C3D8 cells with their 2x2x2 Gauss points as ccx (docs/method.md
+        §27.4), the other elements with UFL's estimate (exact on undistorted cells).
+        """
         Q = compat.scalar_space(self.mesh, "DG", 0)
         rho = dolfinx.fem.Function(Q, name="density")
         block_ids = self.deck.elements[self.element_type.name].ids
@@ -348,7 +366,7 @@ class CalculixModel:
             cells = cells[cells >= 0]  # this process's (owned and ghost) cells
             rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
         w, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-        return rho * ufl.inner(w, v) * ufl.dx(domain=self.mesh)  # consistent mass, exact
+        return rho * ufl.inner(w, v) * self.mass_dx
 
     def initial_velocity(self) -> dolfinx.fem.Function:
         """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
@@ -423,6 +441,9 @@ def build_model(
         NotImplementedError: features not supported yet,
             naming the keyword and ``file:line``. Raised on every process.
     """
+    deck, mixed = mixed_hexahedra(deck)  # C3D8 beside C3D20(R): 20-node cells (§27)
+    if mixed is not None:
+        check_mixed_deck(deck)
     block = element_block(deck)
     etype = block.type
     models = element_models(deck, block)
@@ -462,6 +483,14 @@ def build_model(
     kinds = {step.nlgeom for step in deck.steps}
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
+    linear_cells = np.zeros(0, np.int64)
+    mass_dx = dx if etype.name == "C3D8" else ufl.dx(domain=mesh)  # ccx's C3D8 mass (§27.4)
+    if mixed is not None:
+        linear_cells = element_cell[mixed.linear & (element_cell >= 0)]
+        cells = element_cell[element_cell >= 0]
+        mass_dx = _mixed_measure(mesh, cells, linear_cells, None)
+        if etype.name == "C3D20":  # C3D8's 2x2x2 beside C3D20's 3x3x3 Gauss points
+            dx = _mixed_measure(mesh, cells, linear_cells, 5)
     thermal = None
     if collectives.collectively(comm, is_thermal, deck):
         if etype.tdim == 2:
@@ -523,12 +552,18 @@ def build_model(
             traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
+    gravity = None
+    if any(step.gravity for step in deck.steps):
+        gravity, body_force = _gravity(deck, block, mesh, element_cell)
+        residual -= ufl.inner(body_force, v) * dx
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = equation_constraints(deck, maps.meshed)
     # terms on ccx node numbers, held by any process: global dofs (docs/method.md §14.9)
     constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
+    if mixed is not None:  # C3D8 cells: trilinear (§27)
+        constraints.append(trilinear_constraints(V, linear_cells))
     if etype.tdim == 2 and etype.num_nodes == 8:
         constraints += quad_serendipity_constraints(V)  # CPE8's space (§23)
     for tie in tie_blocks:  # every process read them: rank 0 gives them
@@ -595,6 +630,8 @@ def build_model(
         axisymmetric_elements=block.ids[models == "axisymmetric"] if etype.tdim == 2 else None,
         sections=sections,
         spring_only_nodes=_node_slaves(deck) if etype.tdim == 2 else None,
+        gravity=gravity,
+        mass_dx=mass_dx,
     )
 
 
@@ -616,3 +653,41 @@ def _node_slaves(deck: Deck) -> np.ndarray | None:
             free[held, dof - 1] = False
     node, component = np.nonzero(free)
     return np.column_stack([ids[node], component])
+
+
+def _mixed_measure(
+    mesh: dolfinx.mesh.Mesh, cells: np.ndarray, linear_cells: np.ndarray, degree: int | None
+) -> CellMeasures:
+    """``dx`` with 2x2x2 Gauss points on the C3D8 cells, ``degree`` on the others."""
+    values = np.full(cells.size, 2, dtype=np.int32)
+    values[np.isin(cells, linear_cells)] = 1
+    order = np.argsort(cells)
+    tags = dolfinx.mesh.meshtags(
+        mesh, mesh.topology.dim, cells[order].astype(np.int32), values[order]
+    )
+    return CellMeasures(mesh, tags, {1: 2, 2: degree})
+
+
+def _gravity(
+    deck: Deck, block, mesh: dolfinx.mesh.Mesh, element_cell: np.ndarray
+) -> tuple[dolfinx.fem.Function, ufl.core.expr.Expr]:
+    """The cellwise ``GRAV`` acceleration and the body force ``rho g`` (docs/method.md §27).
+
+    Every element a ``GRAV`` line loads needs a ``*DENSITY`` (an error naming the line).
+    """
+    if block.type.tdim == 2:
+        line = next(g for step in deck.steps for g in step.gravity)
+        raise not_supported(f"*DLOAD, GRAV with {block.type.name} elements", line.location)
+    rho, given = density(deck, block, mesh, element_cell)
+    order = np.argsort(block.ids)
+    for step in deck.steps:
+        for line in step.gravity:
+            rows = order[np.searchsorted(block.ids, line.elements, sorter=order)]
+            if not np.all(given[rows]):
+                element = int(line.elements[np.argmax(~given[rows])])
+                raise ValueError(
+                    f"{line.location}: *DLOAD, GRAV on element {element}, whose material has "
+                    "no *DENSITY"
+                )
+    acceleration = dolfinx.fem.Function(compat.vector_space(mesh, "DG", 0), name="gravity")
+    return acceleration, rho * acceleration
