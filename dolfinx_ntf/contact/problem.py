@@ -258,6 +258,7 @@ class ContactProblem:
             u,
             pairs,
             face_centres=self._face_centres,
+            linear_midsides=serendipity.linear_midsides(constraints),
             extend_numbering=lambda halo: self.assembler.extend(halo, u),
             max_depth=max_depth,
             walk_from_previous_face=walk_from_previous_face,

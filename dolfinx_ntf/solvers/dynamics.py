@@ -168,6 +168,8 @@ class DynamicStep(Step):
             increments as in :class:`~dolfinx_ntf.StaticStep` (no CalculiX impact rules).
         on_increment: Called with the :class:`~dolfinx_ntf.IncrementResult` of each converged
             increment (``velocity``/``acceleration`` then hold that increment's values).
+        time_points: Step times the increments end on (CalculiX ``*TIME POINTS``,
+            docs/method.md §27), as :class:`~dolfinx_ntf.StaticStep`'s.
     """
 
     mass: ufl.Form
@@ -186,6 +188,7 @@ class DynamicStep(Step):
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
+    time_points: typing.Sequence[float] | None = None
 
     def _check_own(self, owner: str) -> None:
         """The mass form and ``alpha``."""
@@ -344,9 +347,18 @@ def _initial_acceleration(
     residual: PETSc.Vec,
     acceleration: dolfinx.fem.Function,
 ) -> None:
-    """Solve ``M a_0 = -r_0`` (zero at constrained dofs) by a direct solver."""
+    """Solve ``M a_0 = -r_0`` (zero at constrained dofs) by a direct solver.
+
+    With linear constraints (``problem.elimination``) in the constrained space, as the residual
+    ``r_0`` is: ``T'^T M T'`` with a unit diagonal at dependent dofs, whose values then follow
+    from the independent ones (C3D20's centres, the midside nodes of C3D8 cells beside them).
+    """
     M = dolfinx.fem.petsc.assemble_matrix(mass, problem.bcs)
     M.assemble()
+    if problem.elimination is not None:
+        reduced = problem.elimination.project(M, diagonal=1.0)
+        M.destroy()
+        M = reduced
     ksp = PETSc.KSP().create(problem.u.function_space.mesh.comm)
     ksp.setOperators(M)
     ksp.setType("preonly")
@@ -360,6 +372,8 @@ def _initial_acceleration(
         raise ValueError(
             "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere?)"
         )
+    if problem.elimination is not None:
+        problem.elimination.expand(a0)
     acceleration.x.scatter_forward()
     for obj in (ksp, M, rhs):
         obj.destroy()

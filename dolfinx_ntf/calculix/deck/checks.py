@@ -74,6 +74,7 @@ class Checks(ReaderState):
             temperature_boundaries=tuple(self.temperature_boundaries),
             shells=shells,
             transformed_nodes=self._transformed_nodes(),
+            time_points=dict(self.time_points),
         )
 
     def _transformed_nodes(self) -> np.ndarray:

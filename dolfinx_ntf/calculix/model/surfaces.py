@@ -3,7 +3,7 @@
 Element-face surfaces become facet tags (one ``MeshTags`` per ccx surface, value 1) wrapped in
 :class:`~dolfinx_ntf.FacetSurface`, with the ccx node numbers of each face for the contact-element
 output; ``TYPE=NODE`` surfaces become :class:`~dolfinx_ntf.NodeSurface` (corner vertices, and the
-midside nodes of C3D20 elements).
+midside nodes of C3D20 elements; on 2D elements all of them faceless, as in ccx).
 """
 
 from __future__ import annotations
@@ -48,7 +48,10 @@ def deck_surfaces(
                 )
             vertices, dofs = node_vertex[rows], maps.node_dof[rows]
             midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)  # quadratic
-            if not np.all(corner[rows]) and maps.block.type.num_nodes != 20:  # C3D20 only
+            # ccx's node sets of 2D elements: the 2D nodes are in none of its expanded
+            # elements, every spring gets the fallback area (docs/method.md §26.3)
+            faceless = maps.block.type.tdim == 2
+            if not np.all(corner[rows]) and maps.block.type.num_nodes != 20 and not faceless:
                 node = int(surface.nodes[np.argmax(~corner[rows])])
                 raise not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
@@ -57,7 +60,7 @@ def deck_surfaces(
                     surface.location,
                 )
             vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)  # this process's
-            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside)
+            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside, faceless=faceless)
             continue
         facets, nodes = element_faces_to_facets(
             deck, maps, surface.elements, surface.faces, f"*SURFACE {name}", surface.location
