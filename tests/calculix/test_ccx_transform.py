@@ -204,6 +204,13 @@ def test_nodes_on_the_axis_keep_the_global_directions(tmp_path: Path) -> None:
         assert np.abs(a.values - b.values).max() <= 1e-6 * np.abs(b.values).max(), a.name
 
 
+def test_cload_on_transformed_nodes_is_refused(tmp_path: Path) -> None:
+    text = _block().replace("*CLOAD\nRIGHT, 1, 1.0", "*CLOAD\nLIFT, 1, 1.0\nRIGHT, 1, 1.0")
+    with pytest.raises(DeckError, match=r"CLOAD on node \d+, which has a \*TRANSFORM") as info:
+        _deck(tmp_path, text)
+    assert "deck.inp:" in str(info.value)
+
+
 def test_node_print_of_transformed_nodes_is_refused(tmp_path: Path) -> None:
     (tmp_path / "deck.inp").write_text(_block("NALL"))
     with pytest.raises(NotImplementedError, match="local directions"):

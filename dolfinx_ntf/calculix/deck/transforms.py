@@ -7,8 +7,8 @@ x-y plane) or ``TYPE=C`` (cylindrical: a and b on the axis; local 1 radial, 2 ci
 becomes that global dof (its value times the direction's sign); the zero-valued local directions
 of a node in the model definition become linear equations (``*EQUATION`` terms, reduced per node
 so that each has its own dependent dof, one-term rows becoming global ``*BOUNDARY`` lines). Other
-cases are refused: nonzero values along directions that are not global axes, and step
-``*BOUNDARY`` lines along such directions.
+cases are refused: nonzero values along directions that are not global axes, step
+``*BOUNDARY`` lines along such directions, and ``*CLOAD`` on transformed nodes.
 """
 
 from __future__ import annotations
@@ -113,6 +113,15 @@ class TransformCards(ReaderState):
             self.boundaries, node_ids, directions, transformed, model=True
         )
         for k, step in enumerate(self.steps):
+            for load in step.cloads:  # ccx applies them in the local directions too
+                rows = np.searchsorted(node_ids, load.nodes)
+                if transformed[rows].any():
+                    node = int(load.nodes[transformed[rows]][0])
+                    raise DeckError(
+                        f"*CLOAD on node {node}, which has a *TRANSFORM, is not supported yet "
+                        "(ccx applies it in the node's local directions)",
+                        load.location,
+                    )
             lines = self._global_boundaries(
                 list(step.boundaries), node_ids, directions, transformed, model=False
             )
