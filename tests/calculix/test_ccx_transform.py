@@ -211,6 +211,14 @@ def test_cload_on_transformed_nodes_is_refused(tmp_path: Path) -> None:
     assert "deck.inp:" in str(info.value)
 
 
+def test_equation_on_transformed_nodes_is_refused(tmp_path: Path) -> None:
+    text = _block().replace(
+        "*BOUNDARY\nLEFT, 2, 2", "*EQUATION\n2\nLIFT, 1, 1.0, 2, 1, -1.0\n*BOUNDARY\nLEFT, 2, 2"
+    )
+    with pytest.raises(DeckError, match=r"EQUATION on node \d+, which has a \*TRANSFORM"):
+        _deck(tmp_path, text)
+
+
 def test_node_print_of_transformed_nodes_is_refused(tmp_path: Path) -> None:
     (tmp_path / "deck.inp").write_text(_block("NALL"))
     with pytest.raises(NotImplementedError, match="local directions"):

@@ -8,7 +8,8 @@ becomes that global dof (its value times the direction's sign); the zero-valued 
 of a node in the model definition become linear equations (``*EQUATION`` terms, reduced per node
 so that each has its own dependent dof, one-term rows becoming global ``*BOUNDARY`` lines). Other
 cases are refused: nonzero values along directions that are not global axes, step
-``*BOUNDARY`` lines along such directions, and ``*CLOAD`` on transformed nodes.
+``*BOUNDARY`` lines along such directions, and ``*CLOAD``, ``*EQUATION`` and initial velocities on
+transformed nodes.
 """
 
 from __future__ import annotations
@@ -109,6 +110,17 @@ class TransformCards(ReaderState):
             except ValueError as error:
                 raise DeckError(str(error), transform.location) from None
             transformed[rows] = True
+        held = node_ids[transformed]
+        others = [("*EQUATION", e.nodes, e.location) for e in self.equations]
+        others += [("*INITIAL CONDITIONS", c.nodes, c.location) for c in self.initial_velocities]
+        for keyword, nodes, location in others:  # ccx reads their dofs in the local directions
+            if np.isin(nodes, held).any():
+                node = int(np.asarray(nodes)[np.isin(nodes, held)][0])
+                raise DeckError(
+                    f"{keyword} on node {node}, which has a *TRANSFORM, is not supported yet "
+                    "(ccx writes a transformed node's SPCs, MPCs and forces in its local system)",
+                    location,
+                )
         self.boundaries = self._global_boundaries(
             self.boundaries, node_ids, directions, transformed, model=True
         )

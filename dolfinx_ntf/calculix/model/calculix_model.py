@@ -472,6 +472,11 @@ def build_model(
         deck = dataclasses.replace(deck, elements={etype.name: block})
     thickness = np.ones(block.ids.size)
     if etype.tdim == 2:  # ccx's 2D elements, natively in 2D (docs/method.md §23)
+        if deck.transformed_nodes.size:
+            raise NotImplementedError(
+                f"{deck.path}: *TRANSFORM with {etype.name} elements is not supported yet "
+                "(docs/method.md §28)"
+            )
         check_two_d_deck(deck, block, models)
         thickness = section_thickness(deck, block, models)
     # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §19)
