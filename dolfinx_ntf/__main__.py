@@ -115,6 +115,14 @@ def _parser() -> argparse.ArgumentParser:
         "shares (rings 2 pi int r phi ds), which pass the patch test",
     )
     run.add_argument(
+        "--initial-acceleration",
+        choices=("ccx", "exact"),
+        default="ccx",
+        help="start of *DYNAMIC steps: 'ccx' (default) the acceleration of an alpha-method "
+        "increment of a tenth of the initial increment, which reproduces ccx's results; 'exact' "
+        "M a0 = f_ext - f(u0) (the Python API's default)",
+    )
+    run.add_argument(
         "--predictor",
         choices=("ccx", "guarded", "off"),
         default="ccx",
@@ -229,6 +237,7 @@ def _run_one(job: str, args: argparse.Namespace, comm: object) -> int:
             pair_after_predictor=args.pair_after_predictor,
             ccx_format=args.ccx_format,
             area_weights=args.area_weights,
+            initial_acceleration=args.initial_acceleration,
         )
     except JobError as error:
         if root:

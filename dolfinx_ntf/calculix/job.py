@@ -48,7 +48,7 @@ from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
 from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
-from dolfinx_ntf.solvers.dynamics import DynamicStep
+from dolfinx_ntf.solvers.dynamics import CCX_START_INCREMENT_FRACTION, DynamicStep
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
 from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
 from dolfinx_ntf.solvers.modes import Modes, contact_modes
@@ -82,6 +82,9 @@ SYMMETRIC_MIN_DOFS = 10_000
 
 #: The deck runner's spring tangents (``run_job(tangent=...)``, ``--tangent``).
 TANGENTS: tuple[str, ...] = ("ccx", "exact", "auto")
+
+#: Initial accelerations of ``*DYNAMIC`` steps (``run_job(initial_acceleration=...)``).
+INITIAL_ACCELERATIONS: tuple[str, ...] = ("ccx", "exact")
 
 
 class JobError(RuntimeError):
@@ -211,8 +214,10 @@ class _Job:
         guard_predictor: bool = True,
         ccx_format: str = "2.20",
         solver_options: dict | None = None,
+        initial_acceleration: str = "ccx",
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
+        self.initial_acceleration = initial_acceleration
         self.predictor = predictor
         self.guard_predictor = guard_predictor
         self.pair_after_predictor = pair_after_predictor
@@ -428,9 +433,20 @@ class _Job:
             alpha=step.dynamic.alpha if step.dynamic is not None else step.coupled.alpha,
             velocity=self.velocity,
             acceleration=self.acceleration,
+            initial_acceleration_increment=self._start_increment(step, initial),
             on_increment=on_increment,
         )
         driver.run(self.solver, model.u)
+
+    def _start_increment(self, step: Step, initial: float) -> float | None:
+        """The ``initial_acceleration_increment`` of a dynamic step, ccx's or None (exact).
+
+        ccx's initial acceleration is that of an alpha-method increment of a tenth of the initial
+        increment (docs/method.md §12.7); coupled steps keep the exact one (not measured).
+        """
+        if self.initial_acceleration != "ccx" or step.dynamic is None:
+            return None
+        return CCX_START_INCREMENT_FRACTION * initial
 
     def _run_frequency_step(self, index: int, step: Step) -> None:
         """A ``*FREQUENCY`` step: the modes at the current state (docs/method.md §16).
@@ -656,6 +672,7 @@ def run_job(
     line_search: bool = False,
     solver_options: dict | None = None,
     area_weights: str = "ccx",
+    initial_acceleration: str = "ccx",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -693,6 +710,11 @@ def run_job(
             ccx expands 2D edges into, which reproduce its results) or ``"consistent"`` (the
             consistent shares of each edge, rings ``2 pi ∫ r phi_p ds``, which pass the patch
             test; the Python API's default) (``ContactPair.area_weights``, docs/method.md §23.3).
+        initial_acceleration: The start of ``*DYNAMIC`` steps: ``"ccx"`` (default: the
+            acceleration of an alpha-method increment of a tenth of the initial increment,
+            ``(M + beta (1 + alpha) h^2 K) a_0 = f_ext - f(u_0)``, which reproduces ccx's results)
+            or ``"exact"`` (``M a_0 = f_ext - f(u_0)``, the Python API's default)
+            (``DynamicStep.initial_acceleration_increment``, docs/method.md §12.7).
 
     Returns:
         The :class:`JobResult`.
@@ -707,6 +729,11 @@ def run_job(
         raise ValueError(f"ccx_format {ccx_format!r}: one of {', '.join(CCX_FORMATS)}")
     if tangent not in TANGENTS:
         raise ValueError(f"tangent {tangent!r}: one of {', '.join(TANGENTS)}")
+    if initial_acceleration not in INITIAL_ACCELERATIONS:
+        raise ValueError(
+            f"initial_acceleration {initial_acceleration!r}: one of "
+            f"{', '.join(INITIAL_ACCELERATIONS)}"
+        )
     start = _time.perf_counter()
     if progress:
         log_progress(details=True)  # ccx's lines: attempts, pairings
@@ -749,6 +776,7 @@ def run_job(
         guard_predictor=guard_predictor,
         ccx_format=ccx_format,
         solver_options={"line_search": line_search, **(solver_options or {})},
+        initial_acceleration=initial_acceleration,
     )
     try:
         return job.run()

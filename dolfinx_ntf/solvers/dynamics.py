@@ -34,12 +34,22 @@ from dolfinx_ntf.solvers.steps import (
     no_load,
 )
 
-__all__ = ["CCX_ALPHA", "DynamicStep", "kinetic_energy", "newmark_parameters"]
+__all__ = [
+    "CCX_ALPHA",
+    "CCX_START_INCREMENT_FRACTION",
+    "DynamicStep",
+    "kinetic_energy",
+    "newmark_parameters",
+]
 
 logger = logging.getLogger("dolfinx_ntf")
 
 #: CalculiX's default ``ALPHA`` of ``*DYNAMIC``.
 CCX_ALPHA = -0.05
+
+#: ccx 2.20's initial acceleration is that of an alpha-method increment of this fraction of the
+#: step's initial increment (measured, docs/method.md §12.7): ``initial_acceleration_increment``.
+CCX_START_INCREMENT_FRACTION = 0.1
 
 
 def newmark_parameters(alpha: float) -> tuple[float, float]:
@@ -164,6 +174,11 @@ class DynamicStep(Step):
         initial_acceleration: Solve ``M a_0 = f_ext(0) - f(u_0)`` at the start (CalculiX does), with
             zero acceleration at constrained dofs and at ``u_0`` as it is (prescribed values that
             jump at the start are left out, as in CalculiX).
+        initial_acceleration_increment: With ``initial_acceleration``, solve for the acceleration
+            at the end of an alpha-method increment of this size ``h`` from rest at ``u_0``:
+            ``(M + beta (1 + alpha) h^2 K(u_0)) a_0 = f_ext(0) - f(u_0)``, ``K`` the Jacobian of
+            the problem at ``u_0``. CalculiX 2.20 does so with a tenth of the initial increment
+            (measured, docs/method.md §12.7); None: the exact ``M a_0 = f_ext(0) - f(u_0)``.
         cutback_factor, divergence_cutback_factor, growth_factor, growth_iterations: Automatic
             increments as in :class:`~dolfinx_ntf.StaticStep` (no CalculiX impact rules).
         on_increment: Called with the :class:`~dolfinx_ntf.IncrementResult` of each converged
@@ -183,6 +198,7 @@ class DynamicStep(Step):
     velocity: dolfinx.fem.Function | None = None
     acceleration: dolfinx.fem.Function | None = None
     initial_acceleration: bool = True
+    initial_acceleration_increment: float | None = None
     cutback_factor: float = 0.5
     divergence_cutback_factor: float = 0.25
     growth_factor: float = 1.5
@@ -200,6 +216,14 @@ class DynamicStep(Step):
             )
         if not (isinstance(self.alpha, (int, float)) and -1.0 / 3.0 <= self.alpha <= 0.0):
             raise ValueError(f"{owner}: alpha must be in [-1/3, 0] (ccx), got {self.alpha!r}")
+        h = self.initial_acceleration_increment
+        if h is not None and not (
+            isinstance(h, (int, float)) and not isinstance(h, bool) and math.isfinite(h) and h > 0
+        ):
+            raise ValueError(
+                f"{owner}: initial_acceleration_increment must be a positive number or None, "
+                f"got {h!r}"
+            )
 
     def minimum_increment(self) -> float | None:
         """The minimum increment, CalculiX's default when none is given."""
@@ -279,7 +303,16 @@ class DynamicStep(Step):
         problem.begin_increment(0.0, static=False)
         if self.initial_acceleration:  # from u_0 as it is, a jump of prescribed values left out
             _static_residual(problem, inertia, x, start=True)
-            _initial_acceleration(mass, problem, inertia.last_residual, acceleration)
+            stiffness = None
+            if self.initial_acceleration_increment is not None:
+                h = self.initial_acceleration_increment
+                stiffness = (
+                    _jacobian(problem, inertia, x),
+                    inertia.beta * (1.0 + inertia.alpha) * h * h,
+                )
+            _initial_acceleration(
+                mass, problem, inertia.last_residual, acceleration, stiffness=stiffness
+            )
         _static_residual(problem, inertia, x)  # r_0 of the alpha method, with such a jump
 
         def start(t_new: float, dt: float, u_start: np.ndarray) -> None:
@@ -341,20 +374,45 @@ def _static_residual(
         raise ContactConvergenceError("the residual of the converged state is not finite")
 
 
+def _jacobian(problem: ContactProblem, inertia: _Inertia, x: PETSc.Vec) -> PETSc.Mat:
+    """A copy of the problem's Jacobian at ``x`` without the inertia.
+
+    With a unit diagonal at constrained dofs and the springs :meth:`ContactProblem.form` last
+    evaluated.
+    """
+    inertia.enabled = False
+    try:
+        A = problem.ensure_matrix()
+        problem.assemble_jacobian(x, A)
+    finally:
+        inertia.enabled = True
+    return A.copy()
+
+
 def _initial_acceleration(
     mass: compat.Form,
     problem: ContactProblem,
     residual: PETSc.Vec,
     acceleration: dolfinx.fem.Function,
+    *,
+    stiffness: tuple[PETSc.Mat, float] | None = None,
 ) -> None:
     """Solve ``M a_0 = -r_0`` (zero at constrained dofs) by a direct solver.
 
-    With linear constraints (``problem.elimination``) in the constrained space, as the residual
-    ``r_0`` is: ``T'^T M T'`` with a unit diagonal at dependent dofs, whose values then follow
-    from the independent ones (C3D20's centres, the midside nodes of C3D8 cells beside them).
+    ``stiffness = (K, c)`` solves ``(M + c K) a_0 = -r_0`` instead (CalculiX's start, with
+    ``c = beta (1 + alpha) h^2``; ``K`` is destroyed). With linear constraints
+    (``problem.elimination``) in the constrained space, as the residual ``r_0`` is:
+    ``T'^T M T'`` with a unit diagonal at dependent dofs, whose values then follow from the
+    independent ones (C3D20's centres, the midside nodes of C3D8 cells beside them).
     """
     M = dolfinx.fem.petsc.assemble_matrix(mass, problem.bcs)
     M.assemble()
+    if stiffness is not None:  # K's pattern holds M's (the inertia is added to it likewise)
+        K, c = stiffness
+        K.scale(c)
+        K.axpy(1.0, M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        M.destroy()
+        M = K
     if problem.elimination is not None:
         reduced = problem.elimination.project(M, diagonal=1.0)
         M.destroy()

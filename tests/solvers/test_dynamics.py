@@ -89,6 +89,63 @@ def test_hht_matches_numpy_reference(alpha):
 
 
 @pytest.mark.serial
+@pytest.mark.parametrize("alpha", [-0.05, 0.0])
+@pytest.mark.parametrize("start_increment", [None, 0.02])
+def test_load_from_the_start_matches_numpy_reference(alpha, start_increment):
+    """A body force from the step start: the start ``(M + beta (1 + alpha) h^2 K) a_0 = f``.
+
+    ``initial_acceleration_increment=h`` (ccx takes a tenth of the initial increment,
+    docs/method.md §12.7; here h = dt, to make the effect large); None: the exact ``M a_0 = f``.
+    The histories equal a numpy HHT with that start to 1e-9, and the two starts differ by more
+    than 1e-3 of max |u| (measured 3.9e-3 to 4.3e-3).
+    """
+    u, F, bcs, mass, clamped = _cantilever(MPI.COMM_SELF)
+    V = u.function_space
+    v = ufl.TestFunction(V)
+    load = ufl.as_vector([0.0, 0.0, -3.0])
+    problem = ntf.ContactProblem(F - ufl.inner(load, v) * ufl.dx, u, [], bcs)
+    dt, steps = 0.02, 5
+    history = []
+    with ntf.ContactNewtonSolver(MPI.COMM_SELF, problem) as solver:
+        ntf.DynamicStep(
+            mass,
+            period=dt * steps,
+            initial_increment=dt,
+            fixed=True,
+            alpha=alpha,
+            initial_acceleration_increment=start_increment,
+            on_increment=lambda r: history.append(u.x.array.copy()),
+        ).run(solver, u)
+    K = _matrix(ufl.derivative(F, u))
+    M = _matrix(mass)
+    f = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(ufl.inner(load, v) * ufl.dx))
+    free = np.setdiff1d(np.arange(K.shape[0]), (clamped[:, None] * 3 + np.arange(3)).ravel())
+    K, M, f = K[np.ix_(free, free)], M[np.ix_(free, free)], f.array[free]
+    beta, gamma = newmark_parameters(alpha)
+    lhs = M / (beta * dt * dt) + (1 + alpha) * K
+
+    def reference(h: float | None) -> list[np.ndarray]:
+        c = 0.0 if h is None else beta * (1 + alpha) * h * h
+        x, vel, acc = np.zeros(free.size), np.zeros(free.size), np.linalg.solve(M + c * K, f)
+        out = []
+        for _ in range(steps):
+            pred = x + dt * vel + dt * dt * (0.5 - beta) * acc
+            x_new = np.linalg.solve(lhs, M @ pred / (beta * dt * dt) + f + alpha * K @ x)
+            acc_new = (x_new - pred) / (beta * dt * dt)
+            vel = vel + dt * ((1 - gamma) * acc + gamma * acc_new)
+            x, acc = x_new, acc_new
+            out.append(x)
+        return out
+
+    ours = reference(start_increment)
+    other = reference(0.02 if start_increment is None else None)
+    scale = max(np.abs(x).max() for x in ours)
+    assert scale > 1e-3  # the bar moved
+    assert max(np.abs(h[free] - x).max() for h, x in zip(history, ours)) <= 1e-9 * scale
+    assert max(np.abs(y - x).max() for y, x in zip(other, ours)) > 1e-3 * scale
+
+
+@pytest.mark.serial
 def test_cutback_restores_the_state():
     """A failed first attempt leaves no trace: the end state of a run with the smaller increment."""
     runs = []
@@ -176,6 +233,9 @@ def test_wrong_configuration_is_named():
         ntf.DynamicStep(F)
     with pytest.raises(ValueError, match="min_increment"):
         ntf.DynamicStep(mass, initial_increment=1e-9, min_increment=1e-8)
+    for h in (0.0, -1.0, float("nan"), True):
+        with pytest.raises(ValueError, match="initial_acceleration_increment"):
+            ntf.DynamicStep(mass, initial_acceleration_increment=h)
 
 
 @pytest.mark.serial
