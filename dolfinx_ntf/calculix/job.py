@@ -421,10 +421,11 @@ class _Job:
         def on_increment(result: IncrementResult) -> None:
             self._end_attempt(index, step, result)
 
+        time_points = self._time_points(step)
         driver = DynamicStep(
             model.mass_form(),
             set_load,
-            time_points=self._time_points(step),
+            time_points=time_points,
             period=period,
             initial_increment=initial,
             min_increment=minimum,
@@ -433,20 +434,27 @@ class _Job:
             alpha=step.dynamic.alpha if step.dynamic is not None else step.coupled.alpha,
             velocity=self.velocity,
             acceleration=self.acceleration,
-            initial_acceleration_increment=self._start_increment(step, initial),
+            initial_acceleration_increment=self._start_increment(step, initial, time_points),
             on_increment=on_increment,
         )
         driver.run(self.solver, model.u)
 
-    def _start_increment(self, step: Step, initial: float) -> float | None:
+    def _start_increment(
+        self, step: Step, initial: float, time_points: np.ndarray | None
+    ) -> float | None:
         """The ``initial_acceleration_increment`` of a dynamic step, ccx's or None (exact).
 
-        ccx's initial acceleration is that of an alpha-method increment of a tenth of the initial
-        increment (docs/method.md §12.7); coupled steps keep the exact one (not measured).
+        ccx's initial acceleration is that of an alpha-method increment of a tenth of the first
+        increment: the initial one, or shorter if it would pass the first time point
+        (docs/method.md §12.7); coupled steps keep the exact one (not measured).
         """
         if self.initial_acceleration != "ccx" or step.dynamic is None:
             return None
-        return CCX_START_INCREMENT_FRACTION * initial
+        first = initial
+        if time_points is not None:
+            ahead = time_points[time_points > 1e-9 * step.static.period]
+            first = min(first, float(ahead[0])) if ahead.size else first
+        return CCX_START_INCREMENT_FRACTION * first
 
     def _run_frequency_step(self, index: int, step: Step) -> None:
         """A ``*FREQUENCY`` step: the modes at the current state (docs/method.md §16).

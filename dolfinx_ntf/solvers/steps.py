@@ -200,7 +200,8 @@ class Step:
         """``dt`` shortened to end on the first time point after ``t`` that it would pass.
 
         CalculiX's ``*TIME POINTS`` (measured with ccx 2.20: "the increment size exceeds a time
-        point and is decreased"); the increment size kept for the next increment is not changed.
+        point and is decreased"); the increment size kept for the next increment is not changed,
+        except after the step's first increment (docs/method.md §27.2).
         """
         if self.time_points is None:
             return dt
@@ -307,6 +308,8 @@ class Step:
                 attempt += 1
                 dt = min(dt, self.period - t)
                 desired, dt = dt, self._time_point_limit(t, dt)
+                if increment == 1 and attempt == 1:  # ccx: the step starts with the shorter size
+                    desired = dt
                 t_new = t + dt
                 details_logger.info(
                     " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
@@ -402,7 +405,8 @@ class StaticStep(Step):
             ``growth_iterations`` iterations.
         on_increment: Called with the :class:`IncrementResult` of each converged increment.
         time_points: Step times the increments end on (CalculiX ``*TIME POINTS``): an increment
-            that would pass one is shortened to end there (docs/method.md §27); None: none.
+            that would pass one is shortened to end there, and a shortened first increment is
+            the size kept for the next ones, as in CalculiX (docs/method.md §27.2); None: none.
         guard_predictor: With ``predictor`` and without ``pair_after_predictor``: start from
             ``u_n`` instead when the predicted displacement brings slave nodes into contact that
             the increment-start pairing gave no spring (the growing contact zones on which the

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from loaded_column_deck import loaded_column_deck
 
-from dolfinx_ntf.calculix.ccx import run_ccx
+from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.job import run_job
 
@@ -39,6 +39,9 @@ CASES = {
     "alpha_third_velocity": {"alpha": -0.3, "velocity": True},
     "small_increments": {"increment": 0.01},
     "nlgeom": {"nlgeom": True},
+    # the first increment (0.03) shortened to the first point: ccx keeps 0.02 and starts from a
+    # tenth of it (measured: 4e-4 with a tenth of 0.03, increments 0.02, 0.03, ... before)
+    "first_time_point": {"direct": False, "time_points": "0.02, 0.05, 0.1, 0.2, 0.3"},
 }
 
 
@@ -86,6 +89,9 @@ def test_load_from_step_start_matches_ccx(tmp_path, case):
         return
     assert _largest_difference(ccx, ntf) <= 1e-6
     assert max(np.abs(b.values[:, 2]).max() for b in ccx) > 1e-3  # the column moved
+    ccx_sta, ntf_sta = (read_sta(root / side / "column.sta") for side in ("ccx", "ntf"))
+    assert len(ccx_sta) == len(ntf_sta)
+    np.testing.assert_allclose([r.step_time for r in ntf_sta], [r.step_time for r in ccx_sta])
 
 
 @pytest.mark.serial

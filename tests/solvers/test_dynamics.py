@@ -206,6 +206,7 @@ def test_time_points_shorten_increments():
     """Increments that would pass a time point end on it; the next one takes the size before.
 
     ccx 2.20 on its deck: 0.03 over points 0.05 apart gives 0.03, 0.02, 0.03, 0.02 (method §27).
+    Except the first: shortened, it is the size kept (0.02, 0.02, then growth; method §27.2).
     """
     u, F, bcs, mass, _ = _cantilever()
     problem = ntf.ContactProblem(F, u, [], bcs)
@@ -219,8 +220,14 @@ def test_time_points_shorten_increments():
             period=1.0, initial_increment=0.4, max_increment=0.4, time_points=[0.5]
         )
         static_times = [r.time for r in static.run(solver, u)]
+        # a first increment shortened by a point is the step's size from then on (ccx 2.20)
+        first = ntf.DynamicStep(
+            mass, period=0.1, initial_increment=0.03, max_increment=0.03, time_points=[0.02, 0.1]
+        )
+        first_times = [r.time for r in first.run(solver, u)]
     np.testing.assert_allclose(times, [0.03, 0.05, 0.08, 0.1], rtol=1e-12)
     np.testing.assert_allclose(static_times, [0.4, 0.5, 0.9, 1.0], rtol=1e-12)
+    np.testing.assert_allclose(first_times, [0.02, 0.04, 0.07, 0.1], rtol=1e-12)
     with pytest.raises(ValueError, match="time_points must be increasing"):
         ntf.DynamicStep(mass, time_points=[0.5, 0.2])
 

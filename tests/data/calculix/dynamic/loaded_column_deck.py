@@ -22,6 +22,7 @@ def loaded_column_deck(
     period: float = 0.3,
     velocity: bool = False,
     nlgeom: bool = False,
+    time_points: str | None = None,
 ) -> str:
     """The deck's text.
 
@@ -32,6 +33,7 @@ def loaded_column_deck(
         increment, period: The initial increment and the step time.
         velocity: Give the top nodes an initial upwards velocity that stretches the column.
         nlgeom: ``*STEP, NLGEOM``.
+        time_points: A ``*TIME POINTS`` data line for the node print (needs automatic increments).
     """
     lines = ["*NODE, NSET=NALL"]
     lines += [
@@ -52,6 +54,8 @@ def loaded_column_deck(
     if velocity:
         lines += ["*INITIAL CONDITIONS, TYPE=VELOCITY", "9, 3, 0.05", "10, 3, 0.05"]
         lines += ["11, 3, 0.1", "12, 3, 0.1"]
+    if time_points is not None:
+        lines += ["*TIME POINTS, NAME=T1", time_points]
     dynamic = "*DYNAMIC" + (", DIRECT" if direct else "")
     dynamic += f", ALPHA={alpha}" if alpha is not None else ""
     lines += [
@@ -67,5 +71,6 @@ def loaded_column_deck(
         lines += ["*DLOAD", "EALL, GRAV, 2.0, 0.0, 0.0, -1.0"]
     else:
         raise ValueError(f"loaded_column_deck: load must be CLOAD or GRAV, got {load!r}")
-    lines += ["*NODE PRINT, NSET=NALL", "U", "*END STEP"]
+    lines += ["*NODE PRINT, NSET=NALL" + (", TIME POINTS=T1" if time_points else ""), "U"]
+    lines += ["*END STEP"]
     return "\n".join(lines) + "\n"
