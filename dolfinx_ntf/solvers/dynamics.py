@@ -25,6 +25,7 @@ import ufl
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.contact.velocity import NodeVelocity
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
 from dolfinx_ntf.solvers.steps import (
     IncrementResult,
@@ -87,6 +88,14 @@ class _Inertia:
         self._acceleration.array[:] = v_n / dt
         self.M.mult(self._acceleration, self._momentum_rate)
         self._force.zeroEntries()
+
+    def velocity_offset(self, v_n: np.ndarray, a_n: np.ndarray) -> tuple[np.ndarray, float]:
+        """``(v0, rate)`` with the Newmark velocity ``v(x) = v0 + rate x`` of this increment.
+
+        ``v = v_n + dt ((1 - gamma) a_n + gamma a(x))``, ``rate = gamma/(beta dt)`` (owned values).
+        """
+        rate = self.gamma / (self.beta * self.dt)
+        return v_n + self.dt * (1.0 - self.gamma) * a_n - rate * self.prediction.array_r, rate
 
     def acceleration(self, x: np.ndarray) -> np.ndarray:
         """Newmark acceleration of the owned displacement values ``x``."""
@@ -222,12 +231,16 @@ class DynamicStep(Step):
         for matrix in (inertia.M, inertia.M_bc):
             matrix.assemble()
         problem.extra_terms.append(inertia)
+        offset = dolfinx.fem.Function(V)  # v = offset + rate u: the contact damping's (§25)
+        offset.x.array[:] = velocity.x.array
+        problem.node_velocity = NodeVelocity(offset, 0.0)
         try:
             return self._integrate(
                 solver, problem, u, velocity, acceleration, mass, inertia, start_time
             )
         finally:
             problem.extra_terms.remove(inertia)
+            problem.node_velocity = None
             inertia.destroy()
 
     def _check_mass_space(self, V: dolfinx.fem.FunctionSpace) -> None:
@@ -286,6 +299,12 @@ class DynamicStep(Step):
             inertia.predict(
                 u_start[:owned], velocity.x.array[:owned], acceleration.x.array[:owned], dt
             )
+            node_velocity = problem.node_velocity
+            v0, node_velocity.rate = inertia.velocity_offset(
+                velocity.x.array[:owned], acceleration.x.array[:owned]
+            )
+            node_velocity.offset.x.array[:owned] = v0
+            node_velocity.offset.x.scatter_forward()
 
         def converged(dt: float, u_start: np.ndarray) -> None:
             self._advance(u, velocity, acceleration, inertia, owned)
