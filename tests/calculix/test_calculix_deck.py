@@ -185,7 +185,8 @@ def test_features_materials_and_interactions(features):
     exp = deck.interactions["EXP"]
     assert exp.behavior.values == (1e-3, 5.0)
     assert (exp.friction.mu, exp.friction.stick_slope) == (0.3, 1000.0)
-    assert exp.extra == {"*CONTACT DAMPING": ((1e-3,),)}
+    assert exp.extra == {}
+    assert (exp.damping.coefficient, exp.damping.tangent_fraction) == (1e-3, 0.0)
     np.testing.assert_allclose(deck.interactions["TAB"].behavior.table,
                                [[0, 0], [10, 1e-3], [100, 2e-3]])  # fmt: skip
     assert deck.interactions["HARD"].behavior.pressure_overclosure == "HARD"
