@@ -153,7 +153,9 @@ class DynamicStep(Step):
     internal force, so they enter at the same time levels as the bulk forces, and the initial
     overlap acts in full from the first increment (no ramp, docs/method.md §3.5). The step holds
     configuration only, except that it reads the initial velocity and acceleration from
-    ``velocity``/``acceleration`` and leaves the final ones there.
+    ``velocity``/``acceleration`` and leaves the final ones there. While it runs, the problem's
+    ``node_velocity`` is the Newmark velocity, so pairs with ``ContactDamping`` are damped
+    (docs/method.md §25).
 
     Args:
         mass: Bilinear mass form on the displacement space, e.g.
