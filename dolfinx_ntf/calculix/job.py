@@ -382,6 +382,7 @@ class _Job:
                 self.problem.elimination.expand(compat.petsc_vector(self.velocity))
                 self.velocity.x.scatter_forward()
             self.acceleration = dolfinx.fem.Function(model.V, name="acceleration")
+            self.values.velocity = self.velocity
         increments = step.static
         period = increments.period
         maximum = min(increments.maximum or period, period)

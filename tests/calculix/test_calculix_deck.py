@@ -568,3 +568,16 @@ def test_mesh_cards_read_card_wide_as_line_by_line(tmp_path, monkeypatch):
     line_by_line = read_deck(path)
     assert card_wide.node_ids.size == 28 and card_wide.node_coords[-1].tolist() == [1.0, 0.0, 3.0]
     assert _same(card_wide, line_by_line)
+
+
+def test_velocity_print_needs_a_dynamic_step(tmp_path):
+    """``*NODE PRINT V`` is read; outside ``*DYNAMIC`` steps the runner refuses it at its line."""
+    from dolfinx_ntf.calculix.job_files import check_requests
+
+    text = (DATA / "two_cubes.inp").read_text()
+    text = text.replace("*END STEP", "*NODE PRINT, NSET=NALL\nV\n*END STEP")
+    (tmp_path / "velocities.inp").write_text(text)
+    deck = read_deck(tmp_path / "velocities.inp")
+    assert any(r.keys == ("V",) for r in deck.steps[0].prints)
+    with pytest.raises(NotImplementedError, match=r"velocities.inp:\d+: \*NODE PRINT V"):
+        check_requests(deck)

@@ -17,7 +17,7 @@ _FILE_KEYWORDS = {
 }
 
 _PRINT_KEYS = {
-    "NODE": ("U", "RF", "NT"),
+    "NODE": ("U", "RF", "NT", "V"),
     "EL": ("S", "HFL"),
     "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM"),
 }
