@@ -40,7 +40,7 @@ from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.frd import read_frd
 
 SUITE = Path("/usr/share/doc/calculix-ccx-test/examples/test")
-BLOCKS = ("U", "RF", "S", "NT", "CDIS", "CSTR", "CELS")
+BLOCKS = ("U", "V", "RF", "S", "NT", "CDIS", "CSTR", "CELS")
 
 
 @dataclass

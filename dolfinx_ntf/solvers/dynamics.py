@@ -365,11 +365,23 @@ def _initial_acceleration(
     residual: PETSc.Vec,
     acceleration: dolfinx.fem.Function,
 ) -> None:
-    """Solve ``M a_0 = -r_0`` (zero at constrained dofs) by a direct solver."""
+    """Solve ``M a_0 = -r_0`` (zero at constrained dofs) by a direct solver.
+
+    With linear constraints (``problem.elimination``) the reduced system ``T^T M T a = -T^T r``
+    (``r`` comes reduced), then the dependent dofs from the independent ones: a node without
+    mass whose dofs a constraint ties to massive ones (a spring end in ccx's contdamp decks,
+    docs/method.md §25.6) has its acceleration too.
+    """
     M = dolfinx.fem.petsc.assemble_matrix(mass, problem.bcs)
     M.assemble()
+    elimination = problem.elimination
+    operator = M
+    if elimination is not None:
+        operator = elimination.reduce_matrix(M, ("initial acceleration", M.handle)).copy()
+        elimination.release()  # the Jacobian's reduction is made anew at the next assembly
+        problem.reduced_matrix = None
     ksp = PETSc.KSP().create(problem.u.function_space.mesh.comm)
-    ksp.setOperators(M)
+    ksp.setOperators(operator)
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
@@ -381,6 +393,8 @@ def _initial_acceleration(
         raise ValueError(
             "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere?)"
         )
+    if elimination is not None:
+        elimination.expand(a0)
     acceleration.x.scatter_forward()
-    for obj in (ksp, M, rhs):
+    for obj in {id(o): o for o in (ksp, M, operator, rhs)}.values():
         obj.destroy()

@@ -47,9 +47,13 @@ def deck_surfaces(
                     "element"
                 )
             vertices, dofs = node_vertex[rows], maps.node_dof[rows]
-            midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)  # quadratic
-            if not np.all(corner[rows]) and maps.block.type.num_nodes != 20:  # C3D20 only
-                node = int(surface.nodes[np.argmax(~corner[rows])])
+            # midside nodes of quadratic elements, and nodes in no element (on carrier cells,
+            # §25.6): no face area, ccx's fallback
+            carried = maps.carried[rows] if maps.carried is not None else np.zeros(rows.size, bool)
+            midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)
+            vertices = np.where(carried, -1, vertices)
+            if not np.all(corner[rows] | carried) and maps.block.type.num_nodes != 20:
+                node = int(surface.nodes[np.argmax(~(corner[rows] | carried))])
                 raise not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
                     f"corner, on {maps.block.type.name} elements (midside nodes of "
