@@ -391,7 +391,8 @@ def _initial_acceleration(
     ksp.solve(rhs, a0)
     if ksp.getConvergedReason() < 0:
         raise ValueError(
-            "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere?)"
+            "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere? "
+            "a node without mass needs a constraint to one)"
         )
     if elimination is not None:
         elimination.expand(a0)
