@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_springs import CASE_IDS, CASES, SIZE, _penetrating
+from helpers.spring_faces import CASE_IDS, CASES, SIZE
+from helpers.spring_faces import penetrating as _penetrating
 
 from dolfinx_ntf.kernels.contact_damping import DampingInput
 from dolfinx_ntf.kernels.faces import FACE_TYPES
