@@ -120,3 +120,22 @@ def test_bad_velocities_are_named():
     v[1, 2, 0] = np.nan
     with pytest.raises(ValueError, match=r"velocities not finite at springs \[1\]"):
         evaluate_springs(ft, coords, slave, areas, LAW, damping=DampingInput(v, 0.0, 1.0))
+
+
+def test_rigid_and_2d_masters_refuse_damping():
+    """Damping is built for meshed 3D masters; the others say so instead of ignoring it."""
+    from dolfinx_ntf.kernels.edges import EDGE_TYPES
+    from dolfinx_ntf.kernels.rigid import RigidPlane, rigid_master
+    from dolfinx_ntf.kernels.segment_search import MasterCurve
+
+    _, master = rigid_master(RigidPlane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), lambda: 1.0, "plane")
+    damping = DampingInput(np.zeros((1, 2, 3)), 0.0, 1.0)
+    with pytest.raises(NotImplementedError, match="plane: contact damping against a rigid"):
+        master.evaluate_springs(
+            None, np.zeros((1, 0, 3)), np.zeros((1, 3)), np.ones(1), LAW, damping=damping
+        )
+    with pytest.raises(NotImplementedError, match="not supported on 2D meshes"):
+        MasterCurve.evaluate_springs(
+            None, EDGE_TYPES["line2"], np.zeros((1, 2, 2)), np.zeros((1, 2)), np.ones(1), LAW,
+            damping=damping,
+        )  # fmt: skip
