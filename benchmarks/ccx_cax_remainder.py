@@ -5,7 +5,10 @@ Runs the generated two-block decks of ``tests/helpers/ccx_2d_decks.py`` with ccx
 block relative to ccx's largest value (U after ccx's turn: ``u_r cos(1 deg)``, at corner nodes of
 quadratic elements ``u_r (2 + cos(1 deg))/3``), varying what could cause the remainder: the mesh
 size, the radius (the whole deck moved out by ``R0``), Poisson's ratio (0: no radial displacement in
-the uniform state), contact or not, linear or quadratic elements.
+the uniform state), contact or not, linear or quadratic elements. A second table compares the
+runner's CAX4 with ccx's sector written out as a 3D deck (``tests/helpers/cax_sector.py``) at
+several sector angles: at 2 degrees that deck is ccx's CAX4, and the difference to the runner falls
+with the angle squared.
 
     .venv/bin/python benchmarks/ccx_cax_remainder.py
 """
@@ -22,10 +25,12 @@ from mpi4py import MPI
 import numpy as np
 
 from dolfinx_ntf.calculix.ccx import run_ccx
+from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.job import run_job
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+from helpers.cax_sector import SECOND_LINE, CaxBlocks  # noqa: E402
 from helpers.ccx_2d_decks import Deck2D, dat_pairs  # noqa: E402
 
 HALF_SECTOR = np.pi / 180.0
@@ -108,6 +113,54 @@ CASES = [
 COLUMNS = ("U x", "U z", "RF", "CDIS", "CSTR", "CELS")
 
 
+SECTOR_ANGLES = (4.0, 2.0, 1.0, 0.5, 0.25)
+
+
+def _printed(directory: Path, name: str, deck: str, ccx: bool = True) -> np.ndarray:
+    """The printed displacements of ``deck`` (local ones of a ``*TRANSFORM`` unflagged), by node."""
+    directory.mkdir(parents=True)
+    (directory / f"{name}.inp").write_text(deck)
+    if ccx:
+        run_ccx(directory, name, timeout=120)
+    else:
+        run_job(name, directory, comm=MPI.COMM_SELF, progress=False)
+    path = directory / f"{name}.dat"
+    path.write_text(path.read_text().replace(" L\n", "\n"))
+    block = read_dat(path)[-1]
+    order = np.argsort(block.labels)
+    return block.labels[order], block.values[order]
+
+
+def sector_table(directory: Path) -> None:
+    """The runner's CAX4 against ccx's sector of each angle; ccx's CAX4 against its 2 degrees."""
+    print(
+        "\n| R0 | ccx CAX4 vs its 2-degree sector (u_r, u_z) | "
+        + " | ".join(f"runner vs {a:g}-degree sector (u_r, u_z)" for a in SECTOR_ANGLES)
+        + " |"
+    )
+    print("|---" * (len(SECTOR_ANGLES) + 2) + "|")
+    for r0 in (0.0, 10.0):
+        blocks = CaxBlocks(r0)
+        base = directory / f"sector-{r0:g}"
+        _, cax4 = _printed(base / "ccx", "cax4", blocks.cax4_deck())
+        _, ours = _printed(base / "ntf", "cax4", blocks.cax4_deck(), ccx=False)
+        scale = np.abs(cax4).max()
+        cells = []
+        for angle in SECTOR_ANGLES:
+            labels, sector = _printed(base / f"{angle:g}", "sector", blocks.sector_deck(angle))
+            first = sector[labels < SECOND_LINE]
+            if angle == 2.0:
+                same = (
+                    np.abs(first[:, 0] * np.cos(HALF_SECTOR) - cax4[:, 0]).max() / scale,
+                    np.abs(first[:, 2] - cax4[:, 1]).max() / scale,
+                )
+            cells.append(
+                f"{np.abs(ours[:, 0] - first[:, 0]).max() / scale:.1e}, "
+                f"{np.abs(ours[:, 1] - first[:, 2]).max() / scale:.1e}"
+            )
+        print(f"| {r0:g} | {same[0]:.1e}, {same[1]:.1e} | " + " | ".join(cells) + " |", flush=True)
+
+
 def main() -> None:
     logging.getLogger("dolfinx_ntf").setLevel(logging.WARNING)
     print("| deck | " + " | ".join(COLUMNS) + " |")
@@ -117,6 +170,7 @@ def main() -> None:
             out = measure(deck, radius, nu, Path(tmp) / str(k))
             cells = [f"{out[c]:.1e}" if c in out else "" for c in COLUMNS]
             print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
+        sector_table(Path(tmp))
 
 
 if __name__ == "__main__":

@@ -80,6 +80,12 @@ from dolfinx_ntf.solvers.errors import (
     ContactDivergenceError,
     ContactSolverError,
 )
+from dolfinx_ntf.solvers.modal_dynamics import (
+    ModalContactForces,
+    ModalDynamics,
+    RayleighDamping,
+    modal_forces,
+)
 from dolfinx_ntf.solvers.modes import Modes, contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.newton_loop import NewtonSolver
@@ -128,10 +134,13 @@ __all__ = [
     "LinearLaw",
     "LinearSpringLaw",
     "Load",
+    "ModalContactForces",
+    "ModalDynamics",
     "Modes",
     "NewtonSolver",
     "NodeSurface",
     "PressureOverclosureLaw",
+    "RayleighDamping",
     "RemovePair",
     "RigidCylinder",
     "RigidPlane",
@@ -159,6 +168,7 @@ __all__ = [
     "kinetic_energy",
     "log_progress",
     "mandel_strain",
+    "modal_forces",
     "reaction",
     "run_steps",
     "serendipity_constraints",

@@ -263,7 +263,7 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     outputs = _python_blocks("guide/outputs.md")
     order = [
         ("quickstart.md", quick[0]),
-        ("guide/modes.md", _python_blocks("guide/modes.md")[0]),
+        *(("guide/modes.md", block) for block in _python_blocks("guide/modes.md")),
         ("guide/laws.md", _python_blocks("guide/laws.md")[0]),
         ("guide/steps.md", steps[0]),
         *(("guide/outputs.md", block) for block in outputs),
@@ -294,6 +294,11 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     frequencies, floating = namespace["modes"].frequencies, namespace["floating"].frequencies
     assert np.all(np.diff(frequencies) >= 0) and frequencies[0] > 0
     assert abs(floating[0]) < 1e-3 * frequencies[0]
+    # Modal dynamics: 100 increments of 1e-5 from rest under the step load, towards -z.
+    dynamics = namespace["dynamics"]
+    assert dynamics.time == pytest.approx(1e-3) and np.all(np.isfinite(dynamics.q))
+    u_dyn = namespace["u_dyn"]
+    assert MPI.COMM_WORLD.allreduce(u_dyn.x.array[2::3].min(), op=MPI.MIN) < 0.0
     # Prescribed displacement and outputs: the reactions balance the contact force.
     problem2 = namespace["problem2"]
     top = ntf.reaction(problem2, dofs=namespace["top_bc"])

@@ -83,8 +83,8 @@ class DatBlock:
 # name -> (title template, number of label columns, number of value columns)
 _BLOCKS: dict[str, tuple[str, int, int]] = {
     "U": (" displacements (vx,vy,vz) for set {set} and time {time}", 1, 3),
-    "RF": (" forces (fx,fy,fz) for set {set} and time {time}", 1, 3),
     "V": (" velocities (vx,vy,vz) for set {set} and time {time}", 1, 3),
+    "RF": (" forces (fx,fy,fz) for set {set} and time {time}", 1, 3),
     "NT": (" temperatures for set {set} and time {time}", 1, 1),
     "RF_TOTAL": (" total force (fx,fy,fz) for set {set} and time {time}", 0, 3),
     "S": (
@@ -256,19 +256,18 @@ def _rows(labels, values, width: int, what: str) -> tuple[np.ndarray, np.ndarray
 def node_print_blocks(
     key: str, set_name: str, time: float, nodes, values, *, totals: str = "NO"
 ) -> list[DatBlock]:
-    """Blocks of a ``*NODE PRINT`` key (``U``, ``RF``, ``NT`` or ``V``) for one set and time.
+    """Blocks of a ``*NODE PRINT`` key (``U``, ``V``, ``RF`` or ``NT``) for one set and time.
 
     Args:
-        key: ``U``, ``RF``, ``NT`` (temperatures) or ``V`` (velocities).
+        key: ``U``, ``V`` (velocities), ``RF`` or ``NT`` (temperatures).
         set_name: node set name as printed (upper case).
         time: total time.
         nodes: ``(n,)`` node numbers in set order.
-        values: ``(n, 3)`` displacements, external forces or velocities, ``(n, 1)``
-            temperatures.
+        values: ``(n, 3)`` displacements or external forces, ``(n, 1)`` temperatures.
         totals: ``NO``, ``YES`` or ``ONLY``; ccx applies it to RF only (a sum row).
     """
-    if key not in ("U", "RF", "NT", "V"):
-        raise ValueError(f"*NODE PRINT key must be U, RF, NT or V, got {key!r}")
+    if key not in ("U", "V", "RF", "NT"):
+        raise ValueError(f"*NODE PRINT key must be U, V, RF or NT, got {key!r}")
     totals = _totals(totals)
     nodes, values = _rows(nodes, values, 1 if key == "NT" else 3, f"*NODE PRINT {key}")
     blocks = []

@@ -218,8 +218,10 @@ class CcxNumbering:
         """Internal force of the elements plus the springs at every deck node ``(N, 3)``.
 
         Summed in ccx order (elements by number, springs by pair and slave node), whatever the
-        partition. Collective. C3D20/C3D20R: each 27-node cell's face- and cell-centre forces
-        move to its 20 ccx nodes first (``serendipity.element_forces_on_nodes``, §13.5, §14.10).
+        partition. Collective. At the free components of the nodes of node-based slave surfaces
+        of 2D elements only the springs, as ccx prints them (docs/method.md §26.3). C3D20/C3D20R:
+        each 27-node cell's face- and cell-centre forces move to its 20 ccx nodes first
+        (``serendipity.element_forces_on_nodes``, §13.5, §14.10).
         """
         elements, rows, values = self.allgather(*self._element_forces())
         order = np.argsort(elements, kind="stable")
@@ -229,6 +231,10 @@ class CcxNumbering:
         order = np.lexsort(keys.T[::-1])
         contact = np.zeros_like(bulk)
         np.add.at(contact, rows[order], values[order])
+        if self.model.spring_only_nodes is not None:  # ccx: the 2D node's spring only (§26.3)
+            nodes, component = self.model.spring_only_nodes.T
+            rows = self.deck.node_index(nodes)
+            bulk[rows, component] = -2.0 * contact[rows, component]  # ccx's sign: on the spring
         return bulk + contact + self._discrete_spring_forces()
 
     def _discrete_spring_forces(self) -> np.ndarray:

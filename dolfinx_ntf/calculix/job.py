@@ -51,17 +51,19 @@ from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.solvers.dynamics import DynamicStep
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
-from dolfinx_ntf.solvers.modes import contact_modes
+from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
+from dolfinx_ntf.solvers.modes import Modes, contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
 from .coupled import CoupledIncrementSolver, HeatIncrementSolver
 from .dat import CCX_FORMATS
-from .deck import Deck, Step, read_deck
+from .deck import Deck, PrintRequest, Step, read_deck
 from .gather import CcxNumbering
 from .job_files import JobFiles, check_requests
 from .modal_dat import frequency_output
+from .modal_increments import modal_increments
 from .model import CalculixModel, build_model, friction_of
 from .output_values import ContactRows, OutputValues
 
@@ -249,6 +251,7 @@ class _Job:
         self._static_interactions = [pair.interaction for pair in model.pairs]
         self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
         self.acceleration: dolfinx.fem.Function | None = None
+        self.stored_modes: Modes | None = None  # of the last *FREQUENCY, STORAGE=YES step
         self._attempt: tuple | None = None  # (step, increment, attempt, start, dt, step index)
         self._load_time = (0, 0.0)  # (step index, step time) of the current attempt
         self._step_time = 0.0
@@ -304,7 +307,7 @@ class _Job:
     def _run_step(self, index: int, step: Step) -> None:
         model, problem = self.model, self.problem
         self.counters = _Counters(step=step.number)
-        kind = "Static" if step.dynamic is None else "Dynamic"
+        kind = "Static" if step.dynamic is None and step.modal_dynamic is None else "Dynamic"
         if step.frequency is not None:
             kind = "Frequency"
         if step.coupled is not None:
@@ -328,6 +331,9 @@ class _Job:
         if step.frequency is not None:
             self._run_frequency_step(index, step)
             return
+        if step.modal_dynamic is not None:
+            self._run_modal_dynamic_step(index, step)
+            return
         static = step.static
         period = static.period
         linear = not step.nlgeom and not model.pairs
@@ -348,6 +354,7 @@ class _Job:
 
         driver = StaticStep(
             set_load,
+            time_points=self._time_points(step),
             period=period,
             initial_increment=initial,
             min_increment=minimum,
@@ -359,6 +366,16 @@ class _Job:
             guard_predictor=self.guard_predictor,
         )
         driver.run(self.solver, model.u)
+
+    def _time_points(self, step: Step) -> np.ndarray | None:
+        """The step times the increments must end on: the print requests' ``*TIME POINTS``.
+
+        ccx 2.20 shortens an increment that would pass one (docs/method.md §27).
+        """
+        names = {p.time_points for p in step.prints if p.time_points is not None}
+        if not names:
+            return None
+        return np.unique(np.concatenate([self.deck.time_points[n].times for n in names]))
 
     def _set_laws(self, *, dynamic: bool) -> None:
         """ccx's LINEAR law has no tension in ``*DYNAMIC`` steps (docs/method.md §12.3).
@@ -404,6 +421,7 @@ class _Job:
         driver = DynamicStep(
             model.mass_form(),
             set_load,
+            time_points=self._time_points(step),
             period=period,
             initial_increment=initial,
             min_increment=minimum,
@@ -447,6 +465,46 @@ class _Job:
             u.x.array[:] = state
             modes.destroy()
         self.result.eigenvalues = modes.eigenvalues
+        if step.frequency.storage:
+            self.stored_modes = modes
+
+    def _run_modal_dynamic_step(self, index: int, step: Step) -> None:
+        """A ``*MODAL DYNAMIC`` step: the stored modes superposed (docs/method.md §25).
+
+        From rest, under the step's concentrated loads in full from its start, with its Rayleigh
+        damping, exactly integrated over ccx 2.20's increments. As ccx 2.20 measured on contact5
+        and on a longer run of it (§25.4), contact pairs exert no force in the step.
+        """
+        if self.stored_modes is None:  # the deck reader requires the earlier step
+            raise ValueError(f"{step.location}: no stored modes for the *MODAL DYNAMIC step")
+        if self.model.pairs:
+            logger.info(
+                " *WARNING: contact pairs exert no force in the *MODAL DYNAMIC step at %s (as in "
+                "ccx 2.20)",
+                step.location,
+            )
+        damping = None
+        if step.modal_damping is not None:
+            damping = RayleighDamping(step.modal_damping.alpha, step.modal_damping.beta)
+        modes = self.stored_modes
+        dynamics = ModalDynamics(modes, damping)
+        self.model.set_time(index, step.static.period, ramp=False)  # constant loads
+        force = modal_forces(modes, self.model.nodal_loads)
+        sizes = modal_increments(
+            step.static, variable=step.modal_dynamic.variable, max_increments=step.max_increments
+        )
+        u = self.model.u
+        frequency = step.output_frequency
+        for increment, dt in enumerate(sizes, 1):
+            dynamics.advance(dt, force, force)
+            if frequency > 0 and (increment % frequency == 0 or increment == len(sizes)):
+                dynamics.velocity(u)
+                velocity = self.values.displacements()
+                dynamics.displacement(u)
+                displacement = self.values.displacements()
+                total = self.model.total_time(index, dynamics.time)
+                self.files.write_modal_increment(step, total, displacement, velocity)
+        dynamics.displacement(u)
 
     def _begin_attempt(self, index: int, step: Step, t: float, *, ramp: bool = True) -> None:
         """Count an attempt at step time ``t``, set its loads and open its ``.sta`` row."""
@@ -536,7 +594,13 @@ class _Job:
         self.writer.write(total)
         frequency = step.output_frequency
         last = result.time_fraction >= 1 - 1e-12
-        if frequency > 0 and (result.increment % frequency == 0 or last):
+        regular = frequency > 0 and (result.increment % frequency == 0 or last)
+        prints = [
+            p
+            for p in step.prints
+            if (regular if p.time_points is None else self._at_time_point(p, step, result.time))
+        ]
+        if regular or prints:
             self.files.write_increment(
                 step,
                 result.increment,
@@ -545,7 +609,14 @@ class _Job:
                 self.values,
                 load_time=self._load_time,
                 largest_residual=self.solver.largest_residual,
+                prints=prints,
+                files=regular,
             )
+
+    def _at_time_point(self, request: PrintRequest, step: Step, step_time: float) -> bool:
+        """Whether ``step_time`` is one of the request's ``*TIME POINTS`` (docs/method.md §27)."""
+        points = self.deck.time_points[request.time_points].times
+        return bool(np.any(np.abs(points - step_time) <= 1e-9 * step.static.period))
 
 
 def _first_large(values: np.ndarray) -> float:

@@ -118,6 +118,23 @@ class JobFiles:
             write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx,
                       heading=heading)  # fmt: skip
 
+    def write_modal_increment(
+        self, step: Step, total: float, displacement: np.ndarray, velocity: np.ndarray
+    ) -> None:
+        """The ``*NODE PRINT`` U and V blocks of a ``*MODAL DYNAMIC`` increment (rank 0 writes).
+
+        ``displacement`` and ``velocity`` (N, 3) are at every deck node (docs/method.md §25).
+        """
+        blocks: list[DatBlock] = []
+        for request in step.node_prints:
+            ids = self.deck.nsets[request.set]
+            rows = self.deck.node_index(ids)
+            for key in request.keys:
+                values = (displacement if key == "U" else velocity)[rows]
+                blocks += node_print_blocks(key, request.set, total, ids, values)
+        if self.root and blocks:
+            write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx)
+
     def close(self) -> None:
         """Close the ``.frd`` file (the others are appended to row by row)."""
         self._frd.close()
@@ -185,15 +202,19 @@ class JobFiles:
         *,
         load_time: tuple[int, float],
         largest_residual: float,
+        prints: Sequence[PrintRequest] | None = None,
+        files: bool = True,
     ) -> None:
         """The ``.dat`` and ``.frd`` blocks of a printed increment at total time ``total``.
 
         ``contact`` are the increment's contact rows, ``load_time`` its ``(step index, step
-        time)``, ``largest_residual`` that of its converged iterate. Collective.
+        time)``, ``largest_residual`` that of its converged iterate; ``prints`` the print
+        requests to write (default: the step's), ``files`` whether the ``.frd`` blocks are
+        written too. Collective.
         """
         contact = [clean_contact(rows) for rows in contact]  # printed values (§14.5)
         results = _Increment(self.deck, values, load_time, largest_residual)
-        blocks = results.dat_blocks(step, total, contact)
+        blocks = results.dat_blocks(step, total, contact, step.prints if prints is None else prints)
         if self.root:
             heading = ""
             if self.ccx == "2.23" and blocks:
@@ -204,7 +225,7 @@ class JobFiles:
                 heading += increment_heading(increment)
             write_dat(self.dat, clean_dat_blocks(blocks), append=True, ccx=self.ccx,
                       heading=heading)  # fmt: skip
-        for block in results.frd_blocks(step, increment, total, contact):
+        for block in results.frd_blocks(step, increment, total, contact) if files else ():
             self._frd.write(clean_frd_block(block))
 
 
@@ -264,12 +285,18 @@ class _Increment:
             )
         return blocks
 
-    def dat_blocks(self, step: Step, total: float, contact: list[ContactRows]) -> list[DatBlock]:
-        """The ``.dat`` blocks of the print requests, in the deck's order."""
+    def dat_blocks(
+        self,
+        step: Step,
+        total: float,
+        contact: list[ContactRows],
+        prints: Sequence[PrintRequest],
+    ) -> list[DatBlock]:
+        """The ``.dat`` blocks of the print requests ``prints`` of ``step``, in the deck's order."""
         blocks: list[DatBlock] = []
         forces, floor = None, 0.0
         displacement = self.values.displacements()
-        for request in step.prints:
+        for request in prints:
             if request.kind == "NODE":
                 ids = self.deck.nsets[request.set]
                 for key in request.keys:
@@ -385,6 +412,9 @@ def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {"NODE": {"U", "RF", "V"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
     for step in deck.steps:
+        if step.modal_dynamic is not None:
+            _check_modal_requests(step)
+            continue
         for request in step.prints:
             for key in request.keys:
                 thermal = (request.kind, key) in (("NODE", "NT"), ("EL", "HFL"))
@@ -429,3 +459,18 @@ def check_requests(deck: Deck) -> None:
                         key,
                         request.location,
                     )
+
+
+def _check_modal_requests(step: Step) -> None:
+    """A ``*MODAL DYNAMIC`` step prints ``*NODE PRINT`` U and V (docs/method.md §25)."""
+    for request in step.prints:
+        if request.kind != "NODE" or not set(request.keys) <= {"U", "V"}:
+            raise NotImplementedError(
+                f"{request.location}: *{request.kind} PRINT {', '.join(request.keys)} in the "
+                f"*MODAL DYNAMIC step at {step.location} is not supported yet (U and V only)"
+            )
+    if step.file_requests:
+        logger.warning(
+            " *WARNING: the *MODAL DYNAMIC step at %s writes nothing to the .frd file",
+            step.location,
+        )

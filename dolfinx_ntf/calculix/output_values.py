@@ -25,6 +25,7 @@ from dolfinx_ntf.kernels.friction import output_tangents
 from dolfinx_ntf.outputs.results import contact_results
 
 from .deck import Deck
+from .elements import AXISYMMETRIC_SECTOR
 from .gather import CcxNumbering
 from .model import CalculixModel
 from .roundoff import (
@@ -36,7 +37,7 @@ from .roundoff import (
     law_accuracy,
 )
 
-__all__ = ["ContactRows", "OutputValues"]
+__all__ = ["ContactRows", "OutputValues", "sector_stresses"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -220,7 +221,16 @@ class OutputValues:
 
         values = self.numbering.element_values(element_ids, evaluate, (q, 6))
         rows = self.model.element_type.print_rows
-        return values if rows is None else values[:, rows]  # ccx's expanded 2D elements
+        if rows is None:
+            return values
+        values = values[:, rows]  # ccx's expanded 2D elements
+        axisymmetric = self.model.axisymmetric_elements
+        etype = self.model.element_type
+        quadratic = etype.num_nodes > etype.num_corners  # CAX8R; not CAX4's straight wedge
+        if axisymmetric is not None and quadratic and rows.size == 2 * np.unique(rows).size:
+            turned = np.isin(np.asarray(element_ids), axisymmetric)
+            values[turned] = sector_stresses(values[turned])
+        return values
 
     def heat_fluxes(self, element_ids: np.ndarray) -> np.ndarray:
         """Heat fluxes ``-k grad T`` ``(E, q, 3)`` at ccx's integration points (coupled steps).
@@ -354,3 +364,29 @@ class OutputValues:
             order = np.argsort(slaves, kind="stable")
             elements.append((faces[order], slaves[order]))
         return elements
+
+
+def sector_stresses(values: np.ndarray) -> np.ndarray:
+    """ccx's printed stresses of a CAX8R element: two layers of its 2-degree quadratic sector.
+
+    ccx's integration points of the two layers lie at ``phi = -+ theta/(2 sqrt 3)`` about the
+    axis (rows of the first layer first), where it prints the Cartesian components of the ring's
+    stress ``(s_rr, s_zz, s_tt, s_rz)`` turned by ``phi``: ``s_xx = s_rr c^2 + s_tt s^2``,
+    ``s_zz = s_rr s^2 + s_tt c^2``, ``s_xz = (s_rr - s_tt) s c``, ``s_xy = s_rz c``,
+    ``s_yz = s_rz s`` (measured on the bolt deck, docs/method.md §26.4).
+
+    Args:
+        values: ``(E, q, 6)`` the 2D model's stresses (xx, yy, zz, xy, xz, yz) of ccx's rows.
+    """
+    q = values.shape[1]
+    phi = np.where(np.arange(q) < q // 2, -1.0, 1.0) * AXISYMMETRIC_SECTOR / (2 * np.sqrt(3.0))
+    s, c = np.sin(phi), np.cos(phi)
+    rr, zz, tt, rz = values[..., 0], values[..., 1], values[..., 2], values[..., 3]
+    out = np.empty_like(values)
+    out[..., 0] = rr * c**2 + tt * s**2
+    out[..., 1] = zz
+    out[..., 2] = rr * s**2 + tt * c**2
+    out[..., 3] = rz * c
+    out[..., 4] = (rr - tt) * s * c
+    out[..., 5] = rz * s
+    return out

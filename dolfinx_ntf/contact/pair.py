@@ -19,7 +19,28 @@ from dolfinx_ntf.kernels.master import ContactMaster
 from dolfinx_ntf.kernels.rigid import RigidSurface
 from dolfinx_ntf.kernels.springs import SpringEvaluation
 
-__all__ = ["ContactPair", "PairState"]
+__all__ = ["FALLBACK_AREAS", "ContactPair", "PairState", "fallback_scale"]
+
+#: ccx's sector of an expanded axisymmetric element (2 degrees, its manual).
+_CCX_SECTOR = np.pi / 90.0
+
+#: The fallback areas of faceless slave nodes on a 2D mesh (:class:`ContactPair`).
+FALLBACK_AREAS = ("edge", "ccx_plane", "ccx_ring")
+
+
+def fallback_scale(pair: ContactPair) -> tuple[float, bool]:
+    """``(factor, ring)`` of a 2D pair's fallback area: ``factor |q_ξ|`` (times ``2 pi r``).
+
+    ccx's ``4|m|`` of the expanded master face: ``|q_η|`` is half the layer's thickness, or
+    ``r sin(theta/2)`` across the sector of angle ``theta`` (its mid-plane at ``η = 0``), whose
+    forces are ``theta/(2 pi)`` of the ring's.
+    """
+    if pair.fallback_area == "ccx_plane":
+        return 2.0 * pair.thickness, False
+    if pair.fallback_area == "ccx_ring":
+        half = 0.5 * _CCX_SECTOR
+        return 2.0 * np.sin(half) / half, True
+    return 1.0, False
 
 
 @dataclass
@@ -57,6 +78,14 @@ class ContactPair:
             26/100, 26/100, 48/100; rings shared by the edge's mean radius), to reproduce ccx
             (docs/method.md §23.3); the areas are then held between pairings (no
             ``linearize_area``).
+        fallback_area: On a 2D mesh, the area of a spring whose slave node takes no share of the
+            faces' area (a ``NodeSurface`` with ``faceless=True`` or its midside nodes):
+            ``"edge"`` (default: ``|q_ξ|`` of the master edge at the projection point),
+            ``"ccx_plane"`` (CalculiX's ``4|m|`` of the master face it expands a plane edge
+            into, in the current configuration: ``2 |q_ξ|`` times the thickness) or
+            ``"ccx_ring"`` (the same of an axisymmetric master's 2-degree sector, scaled to the
+            ring: ``2 |q_ξ| 2 pi r sin(1 deg)/(1 deg)`` at the projection point; docs/method.md
+            §26.3).
     """
 
     slave: FacetSurface | NodeSurface
@@ -69,6 +98,7 @@ class ContactPair:
     thickness: float = 1.0
     axisymmetric: bool = False
     area_weights: str = "consistent"
+    fallback_area: str = "edge"
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -98,6 +128,11 @@ class ContactPair:
         if self.area_weights not in ("consistent", "ccx"):
             raise ValueError(
                 f"{owner}: area_weights must be 'consistent' or 'ccx', got {self.area_weights!r}"
+            )
+        if self.fallback_area not in FALLBACK_AREAS:
+            raise ValueError(
+                f"{owner}: fallback_area must be one of {sorted(FALLBACK_AREAS)}, got "
+                f"{self.fallback_area!r}"
             )
         if self.axisymmetric and self.thickness != 1.0:
             raise ValueError(

@@ -22,11 +22,12 @@ import dolfinx.fem
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.adjust import adjusted_nodes, move_reference_nodes
 from dolfinx_ntf.contact.assembly import SpringBlocks
-from dolfinx_ntf.contact.pair import ContactPair, PairState
+from dolfinx_ntf.contact.pair import ContactPair, PairState, fallback_scale
 from dolfinx_ntf.fem import serendipity
 from dolfinx_ntf.fem.surfaces import (
     NodeSurface,
     SlaveSurface,
+    SurfaceFaces,
     reference_coordinates,
     resolve_master,
     resolve_slave,
@@ -37,6 +38,7 @@ from dolfinx_ntf.kernels.edges import (
     ccx_edge_spring_areas,
     edge_spring_areas,
 )
+from dolfinx_ntf.kernels.faces import QUAD4
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.rigid import RigidSurface, check_in_plane, rigid_master
 from dolfinx_ntf.kernels.search import MasterSurface
@@ -78,6 +80,8 @@ class Pairing:
         u: The displacement (3D vector Lagrange).
         pairs: The contact pairs, already checked.
         face_centres: Face-centre nodes of C3D20's space (docs/method.md §13.5), maybe empty.
+        linear_midsides: Midside nodes of C3D8 cells in that space (§27): their faces are quad4
+            faces and they are never slave nodes; None: none.
         extend_numbering: Called with the halo (several processes) once the pairs are resolved
             and whenever the halo grows, so that the contact numbering follows. Collective.
         max_depth: Reject nodes deeper than this below the master face.
@@ -93,6 +97,7 @@ class Pairing:
         pairs: typing.Sequence[ContactPair],
         *,
         face_centres: np.ndarray,
+        linear_midsides: np.ndarray | None = None,
         extend_numbering: typing.Callable[[NodeHalo], None],
         max_depth: float | None = None,
         walk_from_previous_face: bool = True,
@@ -126,6 +131,7 @@ class Pairing:
         #: Contact nodes of other processes (docs/method.md §14); None in serial.
         self.halo = NodeHalo(V) if V.mesh.comm.size > 1 else None
         self._face_centres = face_centres
+        self._midsides = np.zeros(0, np.int64) if linear_midsides is None else linear_midsides
         self._serendipity = bool(V.mesh.comm.allreduce(face_centres.size, op=MPI.MAX))
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
         if self.halo is not None:
@@ -133,6 +139,15 @@ class Pairing:
             extend_numbering(self.halo)
         self._check_distinct_pairs()
         self._increment_start_u = self._displacement().copy()
+
+    def _as_quad8(self, faces: SurfaceFaces) -> SurfaceFaces:
+        """C3D20's quad9 facets as quad8 faces, C3D8's as quad4 (collective: one face type)."""
+        faces = serendipity.as_quad8(faces, self._face_centres, self._midsides)
+        comm = self.u.function_space.mesh.comm
+        if comm.size > 1 and comm.allreduce(faces.face_type is QUAD4, op=MPI.LOR):
+            if faces.faces.shape[0] == 0:  # a process without faces: the others' type
+                return SurfaceFaces(QUAD4, np.zeros((0, 4), faces.faces.dtype), faces.facets)
+        return faces
 
     def _resolve(self, index: int, pair: ContactPair) -> PairState:
         name = pair.name or f"pair {index + 1}"
@@ -146,6 +161,10 @@ class Pairing:
             )
         if pair.area_weights != "consistent":
             raise ValueError(f"{name}: area_weights = 'ccx' is for 2D meshes; this mesh is 3D")
+        if pair.fallback_area != "edge":
+            raise ValueError(
+                f"{name}: fallback_area = {pair.fallback_area!r} is for 2D meshes; this mesh is 3D"
+            )
         if pair.axisymmetric:
             raise ValueError(
                 f"{name}: axisymmetric = True is for 2D meshes of the meridian half-plane; this "
@@ -153,8 +172,8 @@ class Pairing:
             )
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
         if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
-            faces = serendipity.as_quad8(slave.faces, self._face_centres)
-            keep = ~np.isin(slave.nodes, self._face_centres)
+            faces = self._as_quad8(slave.faces)
+            keep = ~np.isin(slave.nodes, self._face_centres) & ~np.isin(slave.nodes, self._midsides)
             faceless = None if slave.faceless is None else slave.faceless[keep]
             slave = SlaveSurface(slave.nodes[keep], faces, faceless)
         if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
@@ -183,7 +202,7 @@ class Pairing:
             comm, resolve_master, V, pair.master, what=f"{name} master"
         )
         if self._serendipity:
-            master_faces = serendipity.as_quad8(master_faces, self._face_centres)
+            master_faces = self._as_quad8(master_faces)
         patch = None
         if self.halo is not None and master_exchange.uses_exchange(comm, master_faces):  # §14.8
             slave, patch = collectives.collectively(
@@ -246,7 +265,7 @@ class Pairing:
         V = self.u.function_space
         comm = V.mesh.comm
         slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
-        if pair.axisymmetric:
+        if pair.axisymmetric and pair.fallback_area != "ccx_ring":
             midside = slave.faceless is not None and bool(np.any(slave.faceless))
             if comm.allreduce(midside, op=MPI.LOR):
                 raise NotImplementedError(
@@ -286,9 +305,11 @@ class Pairing:
         if master_faces.faces.shape[0] == 0:  # the gathered surface: the same on every process
             raise ValueError(f"{name}: the master surface has no edges")
         reference = self._reference if self.halo is None else self.halo.reference
+        factor, ring = fallback_scale(pair)
         master = MasterCurve(
-            master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference
-        )
+            master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference,
+            fallback_factor=factor, fallback_ring=ring,
+        )  # fmt: skip
         both = np.intersect1d(slave.nodes, master_faces.nodes)
         error = None
         if both.size:
@@ -468,7 +489,7 @@ class Pairing:
     def nodal_vectors(self, f: dolfinx.fem.Function) -> np.ndarray:
         """A Function on u's space at the local nodes with ghosts, then the halo's (N, 3).
 
-        Collective (e.g. the velocity of the contact damping, docs/method.md §25).
+        Collective (e.g. the velocity of the contact damping, docs/method.md §28).
         """
         if self.halo is not None:
             return self.halo.displacement(f)

@@ -259,6 +259,7 @@ class ContactProblem:
             u,
             pairs,
             face_centres=self._face_centres,
+            linear_midsides=serendipity.linear_midsides(constraints),
             extend_numbering=lambda halo: self.assembler.extend(halo, u),
             max_depth=max_depth,
             walk_from_previous_face=walk_from_previous_face,
@@ -299,7 +300,7 @@ class ContactProblem:
         self.extra_terms: list[ResidualTerm] = []
         #: The nodal velocity of the running dynamic step (set by
         #: :class:`~dolfinx_ntf.DynamicStep`); the pairs' contact damping acts only while it is
-        #: set (docs/method.md §25).
+        #: set (docs/method.md §28).
         self.node_velocity: NodeVelocity | None = None
         #: Elements between arbitrary nodes assembled with the springs (e.g. discrete springs,
         #: docs/method.md §18); add them before the first step.

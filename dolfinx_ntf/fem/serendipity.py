@@ -12,6 +12,11 @@ these 7 constraints per cell (each face once) for a degree-2 vector Lagrange spa
 with them, :class:`~dolfinx_ntf.ContactProblem` solves in the serendipity space by elimination
 (docs/method.md §13.1) while every ccx node keeps a point-value dof (basix's own serendipity element
 has edge moments as dofs instead, which node-to-face springs cannot use).
+
+C3D8 cells in the same mesh (a deck mixing C3D8 with C3D20/C3D20R, docs/method.md §27) are cells
+of the same space whose midside nodes are also fixed, each to the mean of its edge's end nodes
+(:func:`trilinear_constraints`): the field on them is then exactly trilinear (the face and cell
+centre rows above then give the bilinear and trilinear centre values).
 """
 
 from __future__ import annotations
@@ -26,14 +31,16 @@ import dolfinx.mesh
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.constraints import LinearConstraintBlock
 from dolfinx_ntf.fem.surfaces import SurfaceFaces
-from dolfinx_ntf.kernels.faces import QUAD8, QUAD9
+from dolfinx_ntf.kernels.faces import QUAD4, QUAD8, QUAD9
 
 __all__ = [
     "add_centres",
     "as_quad8",
     "face_centres",
+    "linear_midsides",
     "serendipity_centres",
     "serendipity_constraints",
+    "trilinear_constraints",
 ]
 
 # basix reference hexahedron: vertices in tensor order, edges and faces by their vertices.
@@ -111,6 +118,51 @@ def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstrai
     return blocks
 
 
+#: Coefficients of a trilinear midside row: the midside node, then its edge's two end nodes.
+_EDGE_ROW = np.array([1.0, -0.5, -0.5])
+
+
+def trilinear_constraints(V: dolfinx.fem.FunctionSpace, cells: np.ndarray) -> LinearConstraintBlock:
+    """Constraints that make ``V`` trilinear on ``cells``: each midside node the mean of its edge.
+
+    Args:
+        V: Vector Lagrange space of degree 2 on a hexahedral mesh (with
+            :func:`serendipity_constraints` on every cell, the space of C3D20 there and of C3D8
+            on ``cells``).
+        cells: Local cells (owned and ghost) to make trilinear.
+
+    Returns:
+        One block of 3-term rows (each edge once, three components), the midside dof first (the
+        dependent one). A midside node shared with a cell not in ``cells`` is constrained too
+        (the neighbour's edge becomes straight and linear): decks refuse that case.
+    """
+    if V.mesh.topology.cell_type != dolfinx.mesh.CellType.hexahedron:
+        raise ValueError("trilinear_constraints: a hexahedral mesh is needed")
+    if compat.space_degree(V) != 2 or V.dofmap.index_map_bs != 3:
+        raise ValueError("trilinear_constraints: a degree-2 vector Lagrange space is needed")
+    dofs = compat.cell_dofs(V).astype(np.int64)[np.asarray(cells, dtype=np.int64)]
+    local = np.array([[8 + e, a, b] for e, (a, b) in enumerate(_EDGES)])
+    nodes = dofs[:, local].reshape(-1, 3)
+    _, first = np.unique(nodes[:, 0], return_index=True)  # a shared edge once
+    nodes = nodes[np.sort(first)]
+    return LinearConstraintBlock(
+        np.repeat(nodes, 3, axis=0),
+        np.tile(np.arange(3), nodes.shape[0])[:, None],
+        _EDGE_ROW,
+        name="C3D8 midside nodes",
+    )
+
+
+def linear_midsides(constraints: typing.Sequence) -> np.ndarray:
+    """Sorted midside nodes fixed by :func:`trilinear_constraints` rows (maybe none)."""
+    found = [
+        c.nodes[np.all(np.isclose(c.coefficients, _EDGE_ROW), axis=1), 0]
+        for c in constraints
+        if isinstance(c, LinearConstraintBlock) and c.nodes.shape[1] == 3 and c.block_size == 3
+    ]
+    return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int64)
+
+
 def serendipity_centres(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
     """Sorted local block dofs of the face and cell centres of a degree-2 hexahedral space."""
     dofs = compat.cell_dofs(V)
@@ -135,11 +187,16 @@ def face_centres(constraints: typing.Sequence) -> np.ndarray:
     return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int64)
 
 
-def as_quad8(faces: SurfaceFaces, centres: np.ndarray) -> SurfaceFaces:
+def as_quad8(
+    faces: SurfaceFaces, centres: np.ndarray, midsides: np.ndarray | None = None
+) -> SurfaceFaces:
     """quad9 faces whose centre node is a serendipity face centre as ccx's quad8 faces.
 
     The centre's value is the quad8 interpolation of the other 8 nodes, so the face is the
-    quad8 face (docs/method.md §13.5); other faces are returned unchanged.
+    quad8 face (docs/method.md §13.5); other faces are returned unchanged. Faces whose four
+    midside nodes are among ``midsides`` (:func:`linear_midsides`, C3D8 cells, §27) are
+    bilinear: they become quad4 faces of their corners. A surface of both kinds is refused; on
+    several processes a process without faces returns quad8 faces.
     """
     if faces.face_type is not QUAD9:
         return faces
@@ -153,6 +210,15 @@ def as_quad8(faces: SurfaceFaces, centres: np.ndarray) -> SurfaceFaces:
             "a surface mixes serendipity (C3D20) and triquadratic faces: "
             f"{int(np.sum(~constrained))} of {constrained.size} face centres are free"
         )
+    if midsides is not None and midsides.size:
+        linear = np.all(np.isin(faces.faces[:, 4:8], midsides), axis=1)
+        if np.all(linear):
+            return SurfaceFaces(QUAD4, np.ascontiguousarray(faces.faces[:, :4]), faces.facets)
+        if np.any(linear):
+            raise ValueError(
+                "a surface mixes faces of C3D8 and C3D20 elements: "
+                f"{int(np.sum(linear))} of {linear.size} faces are C3D8 faces"
+            )
     return SurfaceFaces(QUAD8, np.ascontiguousarray(faces.faces[:, :8]), faces.facets)
 
 

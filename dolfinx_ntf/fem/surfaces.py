@@ -96,18 +96,24 @@ class NodeSurface:
         name: Label used in messages.
         midside_nodes: Local block dofs of the displacement space at the surface's other nodes
             (midside nodes of quadratic elements, which a ccx node set lists too, or the deck
-            runner's nodes in no element, §25.6); they are slave nodes as well and must lie on
+            runner's nodes in no element, §28.6); they are slave nodes as well and must lie on
             the boundary. As in ccx, they take no share of the faces' area (their springs get
             the fallback area, docs/method.md §2.2). One process only.
+        faceless: Every node of the surface takes no share of the faces' area: all springs get
+            the fallback area (``ContactPair.fallback_area``). ccx does this to the node sets
+            of 2D elements, whose 2D nodes belong to none of its expanded 3D elements
+            (docs/method.md §26.3).
     """
 
     vertices: np.ndarray = field(repr=False)
     name: str = "nodes"
     midside_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32), repr=False)
+    faceless: bool = False
 
     def __post_init__(self) -> None:
         """Check the indices and store them as an int32 array."""
         validation.check_type(self.name, str, "NodeSurface: name")
+        validation.check_type(self.faceless, bool, "NodeSurface: faceless")
         owner = f"NodeSurface '{self.name}'"
         object.__setattr__(self, "vertices", validation.vertex_indices(self.vertices, owner))
         midside = np.asarray(self.midside_nodes).ravel()
@@ -401,7 +407,10 @@ def resolve_slave(
                 f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
             )
         nodes = np.union1d(nodes, midside).astype(nodes.dtype)
-        return SlaveSurface(nodes, faces, np.isin(nodes, midside))
+        faceless = np.ones(nodes.size, bool) if surface.faceless else np.isin(nodes, midside)
+        return SlaveSurface(nodes, faces, faceless)
+    if surface.faceless:
+        return SlaveSurface(nodes, faces, np.ones(nodes.size, dtype=bool))
     return SlaveSurface(nodes, faces)
 
 

@@ -4,7 +4,10 @@ The 2D counterpart of ``search.py`` (docs/method.md §2.3, §3.2). Every corner 
 curve has an averaged unit normal; the line through the node along that normal bounds the two
 edges meeting there, so the regions of neighbouring edges tile the plane near the curve without
 gaps. A slave node is located by walking from the edge with the nearest midpoint across violated
-bounding lines, as the triangle walk does in 3D.
+bounding lines, as the triangle walk does in 3D. Midpoints equally near (to ``TIE_DIGITS`` digits
+of the curve's size) are taken in ``(x, y)`` order, so the start, and the edge of a node exactly
+above a master node, depend neither on the order of the edges (which follows the partition) nor
+on k-d tree internals.
 
 Pure numpy/scipy; nodes are integer ids indexing rows of a coordinate array (2 or 3 columns, a
 third, z = 0, is ignored).
@@ -18,6 +21,7 @@ from scipy.spatial import cKDTree
 from dolfinx_ntf.kernels.edges import EdgeType
 from dolfinx_ntf.kernels.friction import FrictionInput
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
+from dolfinx_ntf.kernels.search import TIE_CANDIDATES, TIE_DIGITS
 from dolfinx_ntf.kernels.segment_springs import evaluate_segment_springs
 from dolfinx_ntf.kernels.springs import SpringEvaluation
 from dolfinx_ntf.kernels.tie_frame import TieFrame
@@ -36,6 +40,9 @@ class MasterCurve:
         faces: (F, n) node ids of the edges, corners oriented with the body on the left.
         name: Surface name for messages.
         coords: Optional (num_nodes, 2 or 3) coordinates: ``update(coords)`` at construction.
+        fallback_factor: The area of a spring whose slave node has none (a faceless node) is
+            ``|q_ξ|`` times this (evaluate_segment_springs).
+        fallback_ring: That area is a ring area: also times ``2 pi r`` of the projection point.
 
     Raises:
         ValueError: If a corner node joins more than two edges or two edges meeting at a node are
@@ -51,7 +58,11 @@ class MasterCurve:
         *,
         name: str = "master",
         coords: np.ndarray | None = None,
+        fallback_factor: float = 1.0,
+        fallback_ring: bool = False,
     ) -> None:
+        self.fallback_factor = float(fallback_factor)
+        self.fallback_ring = bool(fallback_ring)
         faces = np.asarray(faces, dtype=np.int64)
         if faces.ndim != 2 or faces.shape[1] != edge_type.num_nodes or faces.shape[0] == 0:
             raise ValueError(
@@ -119,8 +130,25 @@ class MasterCurve:
         self._chord_normal = (
             np.stack([chord[:, 1], -chord[:, 0]], axis=1) / np.linalg.norm(chord, axis=1)[:, None]
         )
-        self._tree = cKDTree(0.5 * (a + b))
+        midpoints = 0.5 * (a + b)
+        self._tree = cKDTree(midpoints)
+        corners = x[self._nodes]
+        origin = corners.min(axis=0)
+        scale = float(np.ptp(corners, axis=0).max()) or 1.0
+        self._tie_width = 10.0**-TIE_DIGITS * scale
+        rounded = np.round((midpoints - origin) / scale, TIE_DIGITS)
+        self._midpoint_rank = np.empty(midpoints.shape[0], dtype=np.int64)
+        self._midpoint_rank[np.lexsort(rounded.T[::-1])] = np.arange(midpoints.shape[0])
         self._updated = True
+
+    def _nearest_midpoints(self, points: np.ndarray) -> np.ndarray:
+        """The edge with the nearest midpoint to each point, ties taken in ``(x, y)`` order."""
+        k = min(TIE_CANDIDATES, self.num_faces)
+        distance, nearest = self._tree.query(points, k=k)
+        distance, nearest = distance.reshape(-1, k), nearest.reshape(-1, k)
+        tied = distance <= distance[:, :1] + self._tie_width
+        rank = np.where(tied, self._midpoint_rank[nearest], np.iinfo(np.int64).max)
+        return nearest[np.arange(nearest.shape[0]), np.argmin(rank, axis=1)].astype(np.int64)
 
     def locate(
         self,
@@ -142,7 +170,7 @@ class MasterCurve:
         result = np.full(num, -1, dtype=np.int64)
         if num == 0:
             return result
-        current = self._tree.query(points, k=1)[1].astype(np.int64)
+        current = self._nearest_midpoints(points)
         if start_faces is not None:
             start = np.asarray(start_faces, dtype=np.int64)
             current = np.where(start >= 0, start, current)
@@ -186,7 +214,7 @@ class MasterCurve:
         return which[keep], around.ravel()[keep]
 
     def surface_moments(self) -> None:
-        """No tie frame in 2D: ties of the nearest midpoint are decided by the k-d tree."""
+        """No tie frame in 2D: ties of the nearest midpoint are taken in ``(x, y)`` order."""
         return None
 
     def evaluate_springs(
@@ -207,11 +235,11 @@ class MasterCurve:
     ) -> SpringEvaluation:
         """:func:`~dolfinx_ntf.kernels.segment_springs.evaluate_segment_springs` on these edges.
 
-        Contact ``damping`` is refused: not supported on 2D meshes yet (docs/method.md §25).
+        Contact ``damping`` is refused: not supported on 2D meshes yet (docs/method.md §28).
         """
         if damping is not None:
             raise NotImplementedError(
-                "contact damping is not supported on 2D meshes yet (docs/method.md §25)"
+                "contact damping is not supported on 2D meshes yet (docs/method.md §28)"
             )
         return evaluate_segment_springs(
             face_type,
@@ -225,4 +253,6 @@ class MasterCurve:
             symmetric=symmetric,
             interior_projection=interior_projection,
             friction=friction,
+            fallback_factor=self.fallback_factor,
+            fallback_ring=self.fallback_ring,
         )

@@ -100,6 +100,8 @@ def evaluate_segment_springs(
     tangent: bool = True,
     symmetric: bool = False,
     area_fallback: bool = True,
+    fallback_factor: float = 1.0,
+    fallback_ring: bool = False,
     interior_projection: bool = False,
     friction: FrictionInput | None = None,
 ) -> SpringEvaluation:
@@ -116,7 +118,11 @@ def evaluate_segment_springs(
         xi0: Optional (N, 1) start points of the projection (line3).
         tangent: Compute the stiffness matrix.
         symmetric: Return (K + Kᵀ)/2 (exact tangent is unsymmetric only at clamped projections).
-        area_fallback: Where A = 0, use |q_ξ| (half the length of a straight edge).
+        area_fallback: Where A = 0, use |q_ξ| (half the length of a straight edge) times
+            ``fallback_factor``, and with ``fallback_ring`` times ``2 pi r`` at the projection
+            point (ccx's 4|m| of an expanded master face, docs/method.md §26.3).
+        fallback_factor: Factor of the fallback area (1: |q_ξ|).
+        fallback_ring: The fallback is a ring area: times ``2 pi x_0`` of the projection point.
         interior_projection: Differentiate clamped projections as interior ones (CalculiX).
         friction: Friction state and parameters (vectors of 2 or 3 components, a third one
             ignored): adds the tangential force F_T along the edge to f_p and its derivative to
@@ -154,7 +160,10 @@ def evaluate_segment_springs(
     gap = np.einsum("nc,nc->n", r, normal)
 
     if area_fallback:
-        area = np.where(area == 0.0, m_norm, area)
+        fallback = fallback_factor * m_norm
+        if fallback_ring:
+            fallback = fallback * (2.0 * np.pi * q[:, 0])
+        area = np.where(area == 0.0, fallback, area)
     overclosure = -(gap - shift)
     force, dforce = law.spring_force(overclosure, area)
     force = np.asarray(force, dtype=float) * np.ones_like(area)

@@ -9,7 +9,8 @@ them on that loop), :mod:`~dolfinx_ntf.solvers.snes` (:class:`ContactSNESSolver`
 the driver),
 :mod:`~dolfinx_ntf.solvers.steps` (the step base and :class:`StaticStep`),
 :mod:`~dolfinx_ntf.solvers.dynamics`, :mod:`~dolfinx_ntf.solvers.modes` (natural frequencies
-with contact), :mod:`~dolfinx_ntf.solvers.analysis`,
+with contact), :mod:`~dolfinx_ntf.solvers.modal_dynamics` (modal superposition),
+:mod:`~dolfinx_ntf.solvers.analysis`,
 :mod:`~dolfinx_ntf.solvers.active_set` and :mod:`~dolfinx_ntf.solvers.nullspace`.
 
 The names below are those of the former ``dolfinx_ntf.solver`` module, which still imports (as

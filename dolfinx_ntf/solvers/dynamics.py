@@ -155,7 +155,7 @@ class DynamicStep(Step):
     configuration only, except that it reads the initial velocity and acceleration from
     ``velocity``/``acceleration`` and leaves the final ones there. While it runs, the problem's
     ``node_velocity`` is the Newmark velocity, so pairs with ``ContactDamping`` are damped
-    (docs/method.md §25).
+    (docs/method.md §28).
 
     Args:
         mass: Bilinear mass form on the displacement space, e.g.
@@ -179,6 +179,8 @@ class DynamicStep(Step):
             increments as in :class:`~dolfinx_ntf.StaticStep` (no CalculiX impact rules).
         on_increment: Called with the :class:`~dolfinx_ntf.IncrementResult` of each converged
             increment (``velocity``/``acceleration`` then hold that increment's values).
+        time_points: Step times the increments end on (CalculiX ``*TIME POINTS``,
+            docs/method.md §27), as :class:`~dolfinx_ntf.StaticStep`'s.
     """
 
     mass: ufl.Form
@@ -197,6 +199,7 @@ class DynamicStep(Step):
     growth_factor: float = 1.5
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
+    time_points: typing.Sequence[float] | None = None
 
     def _check_own(self, owner: str) -> None:
         """The mass form and ``alpha``."""
@@ -233,7 +236,7 @@ class DynamicStep(Step):
         for matrix in (inertia.M, inertia.M_bc):
             matrix.assemble()
         problem.extra_terms.append(inertia)
-        offset = dolfinx.fem.Function(V)  # v = offset + rate u: the contact damping's (§25)
+        offset = dolfinx.fem.Function(V)  # v = offset + rate u: the contact damping's (§28)
         offset.x.array[:] = velocity.x.array
         problem.node_velocity = NodeVelocity(offset, 0.0)
         try:
@@ -367,21 +370,18 @@ def _initial_acceleration(
 ) -> None:
     """Solve ``M a_0 = -r_0`` (zero at constrained dofs) by a direct solver.
 
-    With linear constraints (``problem.elimination``) the reduced system ``T^T M T a = -T^T r``
-    (``r`` comes reduced), then the dependent dofs from the independent ones: a node without
-    mass whose dofs a constraint ties to massive ones (a spring end in ccx's contdamp decks,
-    docs/method.md §25.6) has its acceleration too.
+    With linear constraints (``problem.elimination``) in the constrained space, as the residual
+    ``r_0`` is: ``T'^T M T'`` with a unit diagonal at dependent dofs, whose values then follow
+    from the independent ones (C3D20's centres, the midside nodes of C3D8 cells beside them).
     """
     M = dolfinx.fem.petsc.assemble_matrix(mass, problem.bcs)
     M.assemble()
-    elimination = problem.elimination
-    operator = M
-    if elimination is not None:
-        operator = elimination.reduce_matrix(M, ("initial acceleration", M.handle)).copy()
-        elimination.release()  # the Jacobian's reduction is made anew at the next assembly
-        problem.reduced_matrix = None
+    if problem.elimination is not None:
+        reduced = problem.elimination.project(M, diagonal=1.0)
+        M.destroy()
+        M = reduced
     ksp = PETSc.KSP().create(problem.u.function_space.mesh.comm)
-    ksp.setOperators(operator)
+    ksp.setOperators(M)
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
@@ -394,8 +394,8 @@ def _initial_acceleration(
             "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere? "
             "a node without mass needs a constraint to one)"
         )
-    if elimination is not None:
-        elimination.expand(a0)
+    if problem.elimination is not None:
+        problem.elimination.expand(a0)
     acceleration.x.scatter_forward()
-    for obj in {id(o): o for o in (ksp, M, operator, rhs)}.values():
+    for obj in (ksp, M, rhs):
         obj.destroy()

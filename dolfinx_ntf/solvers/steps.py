@@ -131,6 +131,7 @@ class Step:
     growth_factor: float
     growth_iterations: int
     on_increment: typing.Callable[[IncrementResult], None] | None
+    time_points: typing.Sequence[float] | None
 
     def __post_init__(self) -> None:
         """Check the configuration (``TypeError``/``ValueError`` naming the field)."""
@@ -173,6 +174,13 @@ class Step:
                 f"divergence_cutback_factor ({self.divergence_cutback_factor}) < 1 <= "
                 f"growth_factor ({self.growth_factor})"
             )
+        if self.time_points is not None:
+            points = np.asarray(self.time_points, dtype=np.float64)
+            if points.ndim != 1 or not np.all(np.isfinite(points)) or np.any(np.diff(points) <= 0):
+                raise ValueError(
+                    f"{owner}: time_points must be increasing finite step times, got "
+                    f"{validation.describe(self.time_points)}"
+                )
         if isinstance(self.growth_iterations, bool) or not isinstance(
             self.growth_iterations, numbers.Integral
         ):
@@ -187,6 +195,21 @@ class Step:
     def minimum_increment(self) -> float | None:
         """The smallest increment a cutback may reach."""
         return self.min_increment
+
+    def _time_point_limit(self, t: float, dt: float) -> float:
+        """``dt`` shortened to end on the first time point after ``t`` that it would pass.
+
+        CalculiX's ``*TIME POINTS`` (measured with ccx 2.20: "the increment size exceeds a time
+        point and is decreased"); the increment size kept for the next increment is not changed.
+        """
+        if self.time_points is None:
+            return dt
+        points = np.asarray(self.time_points, dtype=np.float64)
+        tolerance = 1e-9 * self.period
+        ahead = points[points > t + tolerance]
+        if ahead.size and t + dt > ahead[0] + tolerance:
+            return float(ahead[0] - t)
+        return dt
 
     def run(
         self, solver: IncrementSolver, u: dolfinx.fem.Function, *, start_time: float = 0.0
@@ -283,6 +306,7 @@ class Step:
             while True:
                 attempt += 1
                 dt = min(dt, self.period - t)
+                desired, dt = dt, self._time_point_limit(t, dt)
                 t_new = t + dt
                 details_logger.info(
                     " increment %d attempt %d\n increment size= %.6e\n actual step time= %.6e",
@@ -308,10 +332,11 @@ class Step:
                         f"failed after {attempt} attempt(s)"
                     )
                     dt = self._cut_back(error, first_failure, dt, minimum, failed)
+                    desired = dt
                     fast_in_a_row = 0
                     logger.info(" %s; cutting back to %.6e", error, dt)
             converged(dt, u_start)
-            t = t_new
+            t, dt = t_new, desired
             result = IncrementResult(
                 increment,
                 attempt,
@@ -376,6 +401,8 @@ class StaticStep(Step):
             ``growth_factor`` after two consecutive increments that each converged in at most
             ``growth_iterations`` iterations.
         on_increment: Called with the :class:`IncrementResult` of each converged increment.
+        time_points: Step times the increments end on (CalculiX ``*TIME POINTS``): an increment
+            that would pass one is shortened to end there (docs/method.md §27); None: none.
         guard_predictor: With ``predictor`` and without ``pair_after_predictor``: start from
             ``u_n`` instead when the predicted displacement brings slave nodes into contact that
             the increment-start pairing gave no spring (the growing contact zones on which the
@@ -397,6 +424,7 @@ class StaticStep(Step):
     growth_iterations: int = 4
     on_increment: typing.Callable[[IncrementResult], None] | None = None
     guard_predictor: bool = False
+    time_points: typing.Sequence[float] | None = None
 
     def _run(
         self, solver: IncrementSolver, u: dolfinx.fem.Function, start_time: float

@@ -256,7 +256,7 @@ def test_round_trip_through_read_dat(tmp_path):
 
 
 def test_writer_input_errors():
-    with pytest.raises(ValueError, match="U, RF, NT or V"):
+    with pytest.raises(ValueError, match="U, V, RF or NT"):
         node_print_blocks("HFL", "N", 1.0, [1], [[0, 0, 0]])
     with pytest.raises(ValueError, match=r"NT: values must have shape \(1, 1\)"):
         node_print_blocks("NT", "N", 1.0, [1], [[0, 0, 0]])

@@ -253,9 +253,10 @@ def test_features_step_two_carries_over(features):
     (model,) = step.model_changes
     assert (model.action, model.slave, model.master) == ("REMOVE", "SNODE", "MASTER")
     kinds = [k for k, _, _ in deck.ignored]
-    assert kinds == ["*TIME POINTS", "*OUTPUT", "*RESTART"]
-    assert deck.ignored[1][1].endswith("features.inp")
-    assert deck.ignored[1][2] == _line_of(DATA / "features.inp", "*OUTPUT, FIELD")
+    assert kinds == ["*OUTPUT", "*RESTART"]
+    assert deck.ignored[0][1].endswith("features.inp")
+    assert deck.ignored[0][2] == _line_of(DATA / "features.inp", "*OUTPUT, FIELD")
+    np.testing.assert_array_equal(deck.time_points["TP"].times, [0.5, 1.0])
 
 
 def test_node_surface_faces_rule_of_spec_2_1(tmp_path):
@@ -352,8 +353,12 @@ BAD_DECKS = [
      "*CLOAD", r"\*CLOAD is a step keyword"),
     ("model keyword in step", ("*STATIC\n", "*NSET, NSET=X\n1\n*STATIC\n"), "*NSET, NSET=X",
      r"\*NSET is a model definition keyword"),
-    ("dload label", ("*END STEP", "*DLOAD\n1, GRAV, 9.81, 0., 0., -1.\n*END STEP"), "1, GRAV",
-     r"\*DLOAD, GRAV is not supported yet"),
+    ("dload label", ("*END STEP", "*DLOAD\n1, BX, 9.81\n*END STEP"), "1, BX",
+     r"\*DLOAD, BX is not supported yet"),
+    ("gravity line", ("*END STEP", "*DLOAD\n1, GRAV, 9.81, 0., -1.\n*END STEP"), "1, GRAV",
+     r"GRAV data line: element or element set, GRAV, magnitude, x, y, z"),
+    ("gravity direction", ("*END STEP", "*DLOAD\n1, GRAV, 9.81, 0., 0., 0.\n*END STEP"),
+     "1, GRAV", r"GRAV: the direction is the zero vector"),
     ("dload face", ("*END STEP", "*DLOAD\nEALL, P7, 1.\n*END STEP"), "EALL, P7",
      r"\*DLOAD, P7 is not supported yet"),
     ("tied behavior", ("PRESSURE-OVERCLOSURE=LINEAR", "PRESSURE-OVERCLOSURE=TIED"),
@@ -367,7 +372,11 @@ BAD_DECKS = [
      r"parameter PERTURBATION of \*STEP is not supported"),
     ("time points", ("*CONTACT PRINT\n", "*CONTACT PRINT, TIME POINTS=T1\n"),
      "*CONTACT PRINT, TIME",
-     r"TIME POINTS is not supported yet"),
+     r"time points T1 are not defined \(before this line\)"),
+    ("time points order", ("*STEP\n", "*TIME POINTS, NAME=T1\n0.5, 0.2\n*STEP\n"),
+     "*TIME POINTS", r"\*TIME POINTS must increase"),
+    ("time points total", ("*STEP\n", "*TIME POINTS, NAME=T1, TIME=TOTAL TIME\n0.5\n*STEP\n"),
+     "*TIME POINTS", r"TIME=TOTAL TIME is not supported yet"),
     ("duplicate node", ("12, 0.75, 0.25, 1.0", "12, 0.75, 0.25, 1.0\n11, 0., 0., 0."),
      "11, 0., 0., 0.",
      r"node 11 is defined twice"),
@@ -568,6 +577,55 @@ def test_mesh_cards_read_card_wide_as_line_by_line(tmp_path, monkeypatch):
     line_by_line = read_deck(path)
     assert card_wide.node_ids.size == 28 and card_wide.node_coords[-1].tolist() == [1.0, 0.0, 3.0]
     assert _same(card_wide, line_by_line)
+
+
+_GRAVITY_DECK = """*NODE, NSET=NALL
+1, 0., 0., 0.
+2, 1., 0., 0.
+3, 1., 1., 0.
+4, 0., 1., 0.
+5, 0., 0., 1.
+6, 1., 0., 1.
+7, 1., 1., 1.
+8, 0., 1., 1.
+*ELEMENT, TYPE=C3D8, ELSET=EALL
+1, 1, 2, 3, 4, 5, 6, 7, 8
+*MATERIAL, NAME=M
+*ELASTIC
+1000., 0.3
+*DENSITY
+2.
+*SOLID SECTION, ELSET=EALL, MATERIAL=M
+*TIME POINTS, NAME=T, GENERATE
+0.0, 0.3, 0.1
+*TIME POINTS, NAME=LIST
+0.05, 0.25
+*STEP
+*DYNAMIC
+0.03, 0.3
+*DLOAD
+EALL, GRAV, 9.81, 0., 3., -4.
+*NODE PRINT, NSET=NALL, TIME POINTS=T
+U
+*END STEP
+"""
+
+
+def test_gravity_and_time_points_are_read(tmp_path):
+    """GRAV lines keep magnitude and normed direction; GENERATE includes the end point."""
+    path = tmp_path / "gravity.inp"
+    path.write_text(_GRAVITY_DECK)
+    deck = read_deck(path)
+    np.testing.assert_allclose(deck.time_points["T"].times, [0.0, 0.1, 0.2, 0.3], atol=1e-15)
+    np.testing.assert_array_equal(deck.time_points["LIST"].times, [0.05, 0.25])
+    (step,) = deck.steps
+    (gravity,) = step.gravity
+    assert gravity.value == 9.81 and gravity.target == "EALL"
+    np.testing.assert_allclose(gravity.direction, [0.0, 0.6, -0.8])
+    np.testing.assert_array_equal(gravity.elements, [1])
+    assert step.dloads == () and step.dload_op == "MOD"
+    (request,) = step.node_prints
+    assert request.time_points == "T"
 
 
 def test_velocity_print_needs_a_dynamic_step(tmp_path):

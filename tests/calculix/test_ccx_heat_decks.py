@@ -9,7 +9,6 @@ geometry. CalculiX's contact7 (C3D8I cubes, transient) runs and agrees with ccx 
 from __future__ import annotations
 
 import gzip
-import logging
 import shutil
 from pathlib import Path
 
@@ -17,11 +16,10 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import largest_differences, run_ccx_and_ours
 
-from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import DatBlock, read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
-from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.model import build_model
 
 CCX = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
@@ -85,22 +83,7 @@ def _run_both(
     tmp_path: Path, name: str, text: str, comm: MPI.Comm = MPI.COMM_SELF
 ) -> tuple[list[DatBlock], list[DatBlock], int]:
     """ccx's and our ``.dat`` blocks and our largest number of springs (rank 0; others: [])."""
-    root = Path(comm.bcast(str(tmp_path), root=0))
-    ccx_dir, ntf_dir = root / "ccx", root / "ntf"
-    if comm.rank == 0:
-        for d in (ccx_dir, ntf_dir):
-            d.mkdir()
-            (d / f"{name}.inp").write_text(text)
-        run_ccx(ccx_dir, name, timeout=120)
-    comm.barrier()
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        result = run_job(name, ntf_dir, comm=comm, progress=False)
-        assert result.completed
-    finally:
-        logger.setLevel(level)
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, name, text, comm)
     if comm.rank != 0:
         return [], [], 0
     rows = _cvg_rows(ntf_dir / f"{name}.cvg")
@@ -111,24 +94,6 @@ def _run_both(
 def _cvg_rows(path: Path) -> list[str]:
     """The iteration rows of a ``.cvg`` file (step, increment, attempt, iteration, springs...)."""
     return [line for line in path.read_text().splitlines() if line.split()[:1] == ["1"]]
-
-
-def _differences(ccx: list[DatBlock], ntf: list[DatBlock]) -> dict[str, float]:
-    """Largest difference per block name relative to ccx's largest value of that name.
-
-    The blocks must be the same: names, times (ccx's increments) and rows in the same order.
-    """
-    assert [(b.name, b.labels.tolist()) for b in ntf] == [(b.name, b.labels.tolist()) for b in ccx]
-    for a, b in zip(ccx, ntf):
-        assert b.time == pytest.approx(a.time, rel=1e-6)
-    scale: dict[str, float] = {}
-    for a in ccx:
-        scale[a.name] = max(scale.get(a.name, 0.0), float(np.abs(a.values).max()))
-    worst: dict[str, float] = {}
-    for a, b in zip(ccx, ntf):
-        d = float(np.abs(a.values - b.values).max()) / (scale[a.name] or 1.0)
-        worst[a.name] = max(worst.get(a.name, 0.0), d)
-    return worst
 
 
 # -- reader and model ----------------------------------------------------------------------------
@@ -203,7 +168,7 @@ def test_steady_bars_agree_with_closed_form_and_ccx(tmp_path):
     if MPI.COMM_WORLD.rank != 0:
         return
     assert springs == 4
-    worst = _differences(ccx, ntf)
+    worst = largest_differences(ccx, ntf)
     assert worst["NT"] < 1e-6 and worst["HFL"] < 1e-6  # ccx prints 7 digits
     q = (T_HIGH - T_LOW) / (2 * LENGTH / K + 1 / H)
     (hfl,) = [b for b in ntf if b.name == "HFL"]
@@ -234,7 +199,7 @@ def test_transient_bars_agree_with_ccx(tmp_path):
     assert springs == 4
     times = [b.time for b in ccx]
     assert len(times) == 14 and times[:3] == pytest.approx([0.01, 0.02, 0.035])
-    assert _differences(ccx, ntf)["NT"] < 1e-6
+    assert largest_differences(ccx, ntf)["NT"] < 1e-6
 
 
 @pytest.mark.mpi
@@ -250,7 +215,7 @@ def test_steady_ramp_and_pressure_table_agree_with_ccx(tmp_path):
     if MPI.COMM_WORLD.rank != 0:
         return
     assert springs == 4 and len(ccx) == 4
-    assert _differences(ccx, ntf)["NT"] < 1e-6
+    assert largest_differences(ccx, ntf)["NT"] < 1e-6
     q = (T_HIGH - T_LOW) / (2 * LENGTH / K + 1 / 120.0)  # h(p = 50) = 120
     (last,) = [b for b in ntf if b.time == 1.0]
     jump = last.values[8:16, 0].reshape(2, 4)  # lower bar's top, upper bar's bottom nodes
@@ -268,7 +233,7 @@ def test_open_gap_is_not_closed_by_expansion(tmp_path):
     if MPI.COMM_WORLD.rank != 0:
         return
     assert springs == 0
-    assert _differences(ccx, ntf)["NT"] < 1e-6
+    assert largest_differences(ccx, ntf)["NT"] < 1e-6
 
 
 @pytest.mark.mpi
@@ -288,4 +253,4 @@ def test_contact7_agrees_with_ccx(tmp_path):
     if MPI.COMM_WORLD.rank != 0:
         return
     assert springs == 4 and len(ccx) == 10
-    assert _differences(ccx, ntf)["NT"] < 1e-6
+    assert largest_differences(ccx, ntf)["NT"] < 1e-6

@@ -158,24 +158,17 @@ def test_expanded_nodes_match_ccx_frd(tmp_path, which):
     assert np.abs(ours - theirs).max() <= 5e-6 * max(1.0, np.abs(theirs).max())
 
 
+#: An S8 element of 2 x 1 in the plane z = 0: corners, then midside nodes.
+FLAT_S8 = np.array(
+    [[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0], [1, 0, 0], [2, 0.5, 0], [1, 1, 0], [0, 0.5, 0]],
+    float,
+)
+
+
 def _flat_s8(offset: float = 0.0, thickness: float = 0.2):
     ids = np.arange(1, 9)
-    coords = np.array(
-        [
-            [0, 0, 0],
-            [2, 0, 0],
-            [2, 1, 0],
-            [0, 1, 0],
-            [1, 0, 0],
-            [2, 0.5, 0],
-            [1, 1, 0],
-            [0, 0.5, 0],
-        ],
-        float,
-    )
-    conn = ids[None, :]
     return expand_shells(
-        conn, ids, coords, np.array([thickness]), np.array([offset]), np.array([1])
+        ids[None, :], ids, FLAT_S8, np.array([thickness]), np.array([offset]), np.array([1])
     )
 
 
@@ -198,19 +191,7 @@ def test_expansion_levels_and_weights():
 def test_normal_of_a_tilted_plate():
     """The nodal normal of a plane element is the plane's, whichever way it is tilted."""
     ids = np.arange(1, 9)
-    base = np.array(
-        [
-            [0, 0, 0],
-            [2, 0, 0],
-            [2, 1, 0],
-            [0, 1, 0],
-            [1, 0, 0],
-            [2, 0.5, 0],
-            [1, 1, 0],
-            [0, 0.5, 0],
-        ],
-        float,
-    )
+    base = FLAT_S8
     angle = 0.3
     rotation = np.array(
         [[1, 0, 0], [0, np.cos(angle), -np.sin(angle)], [0, np.sin(angle), np.cos(angle)]]

@@ -11,7 +11,6 @@ displacements. CalculiX's contact8 and contact9 (ccx's own decks) run and agree 
 from __future__ import annotations
 
 import gzip
-import logging
 import re
 import shutil
 from pathlib import Path
@@ -20,11 +19,10 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import largest_differences, run_ccx_and_ours
 
-from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import DatBlock, read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
-from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.model import build_model
 
 CCX = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
@@ -95,45 +93,10 @@ def _run_both(
 ) -> tuple[list[DatBlock], list[DatBlock]]:
     """ccx's and our ``.dat`` blocks of the deck ``text`` (ours run on ``comm``; the files are
     written and read by its rank 0, the others get empty lists)."""
-    root = Path(comm.bcast(str(tmp_path), root=0))
-    ccx_dir, ntf_dir = root / "ccx", root / "ntf"
-    if comm.rank == 0:
-        for d in (ccx_dir, ntf_dir):
-            d.mkdir()
-            (d / f"{name}.inp").write_text(text)
-        run_ccx(ccx_dir, name, timeout=120)
-    comm.barrier()
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        assert run_job(name, ntf_dir, comm=comm, progress=False).completed
-    finally:
-        logger.setLevel(level)
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, name, text, comm)
     if comm.rank != 0:
         return [], []
     return read_dat(ccx_dir / f"{name}.dat"), read_dat(ntf_dir / f"{name}.dat")
-
-
-def _differences(ccx: list[DatBlock], ntf: list[DatBlock]) -> dict[str, float]:
-    """Largest difference per block name relative to ccx's largest value of that name (the run;
-    absolute where that is zero).
-
-    The blocks must be the same: names, times and rows (node numbers) in the same order.
-    """
-    assert [(b.name, b.labels.tolist()) for b in ntf] == [(b.name, b.labels.tolist()) for b in ccx]
-    for a, b in zip(ccx, ntf):
-        assert b.time == pytest.approx(a.time, rel=1e-6)
-    scale: dict[str, float] = {}
-    for a in ccx:
-        if a.values.size:
-            scale[a.name] = max(scale.get(a.name, 0.0), float(np.abs(a.values).max()))
-    worst: dict[str, float] = {}
-    for a, b in zip(ccx, ntf):
-        if a.values.size:
-            d = float(np.abs(a.values - b.values).max()) / (scale[a.name] or 1.0)
-            worst[a.name] = max(worst.get(a.name, 0.0), d)
-    return worst
 
 
 # -- reader and model ----------------------------------------------------------------------------
@@ -221,7 +184,7 @@ def test_steady_bars_agree_with_closed_form_and_ccx(tmp_path):
     ccx, ntf = _run_both(tmp_path, "bars", deck_text, MPI.COMM_WORLD)
     if MPI.COMM_WORLD.rank != 0:
         return
-    worst = _differences(ccx, ntf)
+    worst = largest_differences(ccx, ntf)
     assert worst["NT"] < 1e-6  # ccx prints 7 digits
     assert worst["HFL"] < 1e-6
     (nt,) = [b for b in ntf if b.name == "NT"]
@@ -267,7 +230,7 @@ def test_transient_bars_agree_with_ccx(tmp_path):
     if MPI.COMM_WORLD.rank != 0:
         return
     assert len({b.time for b in ccx}) == 10
-    worst = _differences(ccx, ntf)
+    worst = largest_differences(ccx, ntf)
     assert worst["NT"] < 1e-6
     assert worst["U"] < 1e-3
     assert worst["CDIS"] < 1e-2
@@ -299,7 +262,7 @@ def test_contact9_agrees_with_ccx(tmp_path):
     ccx's by the same amount."""
     ccx, ntf = _run_both(tmp_path, "contact9", _ccx_deck("contact9", tight=True))
     assert len({b.time for b in ccx}) == 57
-    worst = _differences(ccx, ntf)
+    worst = largest_differences(ccx, ntf)
     assert worst["U"] < 1e-5 and worst["NT"] < 1e-5 and worst["CDIS"] < 1e-5
     assert worst["HFL"] < 1e-5  # the reference configuration's flux, as ccx's (measured 2.5e-8)
 
@@ -315,6 +278,6 @@ def test_contact8_agrees_with_ccx(tmp_path):
     amount by which ccx's own answer moves when its controls are tightened)."""
     ccx, ntf = _run_both(tmp_path, "contact8", _ccx_deck("contact8", tight=False))
     assert len({b.time for b in ccx}) == 57
-    worst = _differences(ccx, ntf)
+    worst = largest_differences(ccx, ntf)
     assert worst["U"] < 1e-3 and worst["NT"] < 1e-3 and worst["CDIS"] < 1e-3
     assert worst["HFL"] < 1e-3

@@ -5,28 +5,28 @@ Serial and on all processes (``-m mpi``); no ccx needed: the reference is the on
 
 from __future__ import annotations
 
-import gzip
 from pathlib import Path
 
 from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_suite import node_to_surface_suite_deck, suite_text
 
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.modal_dat import read_frequency_output
 
 COMM = MPI.COMM_WORLD
-CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
 
 pytestmark = pytest.mark.skipif(
-    not (CCX_TESTS / "contact5.inp.gz").exists(), reason="calculix-ccx-test is not installed"
+    not node_to_surface_suite_deck("contact5"),
+    reason="no node-to-surface contact5 (Debian 12's calculix-ccx-test) installed",
 )
 
 
 @pytest.mark.mpi
 def test_contact5_frequency_step_matches_its_reference(tmp_path):
-    """The deck's second step (*MODAL DYNAMIC, refused) is cut off.
+    """The deck's second step (*MODAL DYNAMIC, test_modal_dynamic_ccx.py) is cut off.
 
     The modes come in degenerate groups (two equal beams, two bending planes): participation
     factors differ inside a group (any basis of it is right), the effective masses summed over a
@@ -34,9 +34,9 @@ def test_contact5_frequency_step_matches_its_reference(tmp_path):
     """
     directory = Path(COMM.bcast(str(tmp_path), root=0))
     if COMM.rank == 0:
-        text = gzip.decompress((CCX_TESTS / "contact5.inp.gz").read_bytes()).decode()
+        text = suite_text("contact5.inp")
         (directory / "c5.inp").write_text(text[: text.index("*STEP,INC=1000000")])
-        reference = gzip.decompress((CCX_TESTS / "contact5.dat.ref.gz").read_bytes()).decode()
+        reference = suite_text("contact5.dat.ref")
         (directory / "reference.dat").write_text(reference)
     COMM.barrier()
     result = run_job("c5", directory, comm=COMM, progress=False)

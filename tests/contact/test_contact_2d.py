@@ -10,6 +10,14 @@ from __future__ import annotations
 import gmsh
 import numpy as np
 import pytest
+from helpers.gmsh_blocks_2d import (
+    LEFT,
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    stacked_rectangles,
+)
 
 import dolfinx.fem
 import dolfinx.fem.petsc
@@ -23,37 +31,14 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 pytestmark = pytest.mark.serial
 
 E, NU = 1000.0, 0.3
-LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, LOWER_BOTTOM, SYMMETRY = 3, 4, 5, 6, 7
-
-
-def _rectangle(x0: float, y0: float, x1: float, y1: float, nx: int, ny: int) -> tuple:
-    """A structured triangulated rectangle: its surface and lines (bottom, right, top, left)."""
-    g = gmsh.model.geo
-    p = [g.addPoint(x0, y0, 0), g.addPoint(x1, y0, 0), g.addPoint(x1, y1, 0), g.addPoint(x0, y1, 0)]
-    lines = [g.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
-    surface = g.addPlaneSurface([g.addCurveLoop(lines)])
-    for line, n in zip(lines, (nx, ny, nx, ny)):
-        g.mesh.setTransfiniteCurve(line, n + 1)
-    g.mesh.setTransfiniteSurface(surface)
-    return surface, lines
+SYMMETRY = LEFT
 
 
 def _build_blocks(nx_upper: int, order: int) -> None:
     """A 1 x 0.4 block on a 1 x 0.5 block, touching along y = 0 (separate nodes)."""
-    gmsh.model.add("blocks_2d")
-    lower, lower_lines = _rectangle(0.0, -0.5, 1.0, 0.0, 4, 2)
-    upper, upper_lines = _rectangle(0.0, 0.0, 1.0, 0.4, nx_upper, 2)
-    gmsh.model.geo.synchronize()
-    model = gmsh.model
-    model.addPhysicalGroup(2, [lower], 1)
-    model.addPhysicalGroup(2, [upper], 2)
-    model.addPhysicalGroup(1, [lower_lines[2]], LOWER_TOP)
-    model.addPhysicalGroup(1, [upper_lines[0]], UPPER_BOTTOM)
-    model.addPhysicalGroup(1, [upper_lines[2]], UPPER_TOP)
-    model.addPhysicalGroup(1, [lower_lines[0]], LOWER_BOTTOM)
-    model.addPhysicalGroup(1, [lower_lines[3], upper_lines[3]], SYMMETRY)
-    model.mesh.generate(2)
-    model.mesh.setOrder(order)
+    stacked_rectangles(
+        "blocks_2d", (0.0, -0.5, 1.0, 0.0, 4, 2), (0.0, 0.0, 1.0, 0.4, nx_upper, 2), order
+    )
 
 
 def _problem(mesh, facet_tags, order, bcs_of, load_form, pair_options=None):

@@ -8,14 +8,23 @@ the ring areas are the consistent shares of a uniform pressure), Hertz's sphere 
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 from pathlib import Path
 
 from mpi4py import MPI
 
-import gmsh
 import numpy as np
 import pytest
+from helpers.gmsh_blocks_2d import (
+    LEFT,
+    LOWER_BOTTOM,
+    LOWER_TOP,
+    UPPER_BOTTOM,
+    UPPER_TOP,
+    stacked_rectangles,
+)
+from helpers.jacobian_check import directional_derivative
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -29,40 +38,18 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 E, NU = 1000.0, 0.3
 RADIUS = 1.0
-LOWER_TOP, UPPER_BOTTOM, UPPER_TOP, LOWER_BOTTOM, AXIS = 3, 4, 5, 6, 7
+AXIS = LEFT
 DEMOS = Path(__file__).resolve().parents[2] / "demos"
-
-
-def _rectangle(x0: float, y0: float, x1: float, y1: float, nx: int, ny: int) -> tuple:
-    """A structured triangulated rectangle: its surface and lines (bottom, right, top, left)."""
-    g = gmsh.model.geo
-    p = [g.addPoint(x0, y0, 0), g.addPoint(x1, y0, 0), g.addPoint(x1, y1, 0), g.addPoint(x0, y1, 0)]
-    lines = [g.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
-    surface = g.addPlaneSurface([g.addCurveLoop(lines)])
-    for line, n in zip(lines, (nx, ny, nx, ny)):
-        g.mesh.setTransfiniteCurve(line, n + 1)
-    g.mesh.setTransfiniteSurface(surface)
-    return surface, lines
 
 
 def _build_cylinder_on_block(
     order: int, x0: float = 0.0, upper_radius: float = RADIUS, nx_upper: int = 5
 ) -> None:
     """Meridian section: a cylinder r <= R, 0 <= z <= 0.4 on a block r <= R, -0.5 <= z <= 0."""
-    gmsh.model.add("cylinder_axisymmetric")
-    lower, lower_lines = _rectangle(x0, -0.5, x0 + RADIUS, 0.0, 5, 2)
-    upper, upper_lines = _rectangle(x0, 0.0, x0 + upper_radius, 0.4, nx_upper, 2)
-    gmsh.model.geo.synchronize()
-    model = gmsh.model
-    model.addPhysicalGroup(2, [lower], 1)
-    model.addPhysicalGroup(2, [upper], 2)
-    model.addPhysicalGroup(1, [lower_lines[2]], LOWER_TOP)
-    model.addPhysicalGroup(1, [upper_lines[0]], UPPER_BOTTOM)
-    model.addPhysicalGroup(1, [upper_lines[2]], UPPER_TOP)
-    model.addPhysicalGroup(1, [lower_lines[0]], LOWER_BOTTOM)
-    model.addPhysicalGroup(1, [lower_lines[3], upper_lines[3]], AXIS)
-    model.mesh.generate(2)
-    model.mesh.setOrder(order)
+    lower = (x0, -0.5, x0 + RADIUS, 0.0, 5, 2)
+    stacked_rectangles(
+        "cylinder_axisymmetric", lower, (x0, 0.0, x0 + upper_radius, 0.4, nx_upper, 2), order
+    )
 
 
 def _cylinder_problem(
@@ -158,34 +145,8 @@ def test_global_jacobian_matches_finite_differences_2d(
         solver, problem.u
     )
     assert problem.states[0].num_springs == 5
-    problem.iteration = 100  # past the re-pairing schedule: the pairing stays fixed
-    x = compat.petsc_vector(problem.u)
-    base = x.copy()
-    problem.form(x)
-    A = problem.ensure_matrix()
-    problem.J(x, A)
-    rng = np.random.default_rng(1)
-    step = x.copy()
-    step.array[:] = rng.standard_normal(step.array.size) * 1e-3
-    bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in problem.bcs])
-    step.array[bc_dofs] = 0.0
-    Jw = A.createVecLeft()
-    A.mult(step, Jw)
-
-    def residual(scale: float) -> np.ndarray:
-        x.array[:] = base.array + scale * step.array
-        problem.u.x.scatter_forward()
-        problem.form(x)
-        b = x.copy()
-        problem.F(x, b)
-        return b.array.copy()
-
-    h = 1e-4
-    fd = (residual(h) - residual(-h)) / (2 * h)
-    x.array[:] = base.array
-    contact_rows = np.unique(2 * problem.states[0].element_nodes[:, :, None] + np.arange(2))
-    scale = np.abs(Jw.array[contact_rows]).max()
-    np.testing.assert_allclose(Jw.array, fd, atol=1e-6 * scale)
+    check = directional_derivative(problem, amplitude=1e-3, h=1e-4, seed=1)
+    np.testing.assert_allclose(check.product, check.difference, atol=1e-6 * check.contact_scale)
 
 
 @pytest.mark.serial
@@ -227,6 +188,10 @@ def test_axisymmetric_pair_options_are_checked() -> None:
         ntf.ContactPair(*slave_master, interaction, axisymmetric=True, area_weights="sector")
     with pytest.raises(ValueError, match="linearize_area = True is not supported"):
         _cylinder_problem(1, area_weights="ccx", linearize_area=True)
+    with pytest.raises(ValueError, match="fallback_area must be one of"):
+        ntf.ContactPair(*slave_master, interaction, fallback_area="sector")
+    with pytest.raises(TypeError, match="faceless"):
+        ntf.NodeSurface(np.zeros(1, np.int32), faceless="yes")
 
 
 @pytest.mark.serial
@@ -248,6 +213,9 @@ def test_axisymmetric_pair_refuses_3d_meshes_and_negative_radii() -> None:
         axisymmetric=True,
     )
     with pytest.raises(ValueError, match="axisymmetric = True is for 2D meshes"):
+        ntf.ContactProblem(F, u, [pair])
+    pair = dataclasses.replace(pair, axisymmetric=False, fallback_area="ccx_ring")
+    with pytest.raises(ValueError, match="fallback_area = 'ccx_ring' is for 2D meshes"):
         ntf.ContactProblem(F, u, [pair])
     # A meridian mesh reaching x < 0: the slave edges there are named.
     mesh2, _, facet_tags = mesh_from_gmsh(_build_cylinder_on_block, gdim=2, order=1, x0=-0.5)

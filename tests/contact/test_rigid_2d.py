@@ -12,7 +12,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers.blocks_2d import rectangle_grid
+from helpers.blocks_2d import tagged_block
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -36,24 +36,8 @@ LAW = ntf.LinearLaw(slope=1e4 * E, tension=E / 70000)
 
 def _block(degree: int):
     """The block [0, 1] x [0, HEIGHT] (4 x 2 squares, 2 triangles each) with its edge tags."""
-    points, cells = rectangle_grid((0.0, 0.0), (1.0, HEIGHT), (4, 2))
-    element = compat.coordinate_element("triangle", 1, gdim=2)
-    mesh = compat.create_mesh(MPI.COMM_SELF, cells.astype(np.int64), points, element)
-    mesh.topology.create_connectivity(1, 2)
-    facets, values = [], []
-    for tag, where in (
-        (BOTTOM, lambda x: np.isclose(x[1], 0.0)),
-        (TOP, lambda x: np.isclose(x[1], HEIGHT)),
-        (LEFT, lambda x: np.isclose(x[0], 0.0)),
-    ):
-        found = dolfinx.mesh.locate_entities_boundary(mesh, 1, where)
-        facets.append(found)
-        values.append(np.full(found.size, tag, dtype=np.int32))
-    facets, values = np.concatenate(facets), np.concatenate(values)
-    order = np.argsort(facets)
-    ft = dolfinx.mesh.meshtags(mesh, 1, facets[order], values[order])
-    V = compat.vector_space(mesh, "Lagrange", degree)
-    return mesh, ft, V
+    mesh, ft = tagged_block(HEIGHT, MPI.COMM_SELF, tags=(BOTTOM, TOP, LEFT))
+    return mesh, ft, compat.vector_space(mesh, "Lagrange", degree)
 
 
 def _solve(problem, constant, value, increment):

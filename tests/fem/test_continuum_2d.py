@@ -17,7 +17,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers.blocks_2d import rectangle_grid
+from helpers.blocks_2d import tagged_block
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -41,31 +41,9 @@ BOTTOM, TOP, LEFT = 1, 2, 3
 LINE = ntf.RigidPlane((0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
 
 
-def _block(comm=MPI.COMM_WORLD):
-    """[0, 1] x [0, HEIGHT] in 4 x 2 squares of 2 triangles, with its edge tags."""
-    points, cells = rectangle_grid((0.0, 0.0), (1.0, HEIGHT), (4, 2))
-    if comm.rank != 0:
-        points, cells = np.empty((0, 2)), np.empty((0, 3), dtype=np.int64)
-    element = compat.coordinate_element("triangle", 1, gdim=2)
-    mesh = compat.create_mesh(comm, cells.astype(np.int64), points, element)
-    mesh.topology.create_connectivity(1, 2)
-    facets, values = [], []
-    for tag, where in (
-        (BOTTOM, lambda x: np.isclose(x[1], 0.0)),
-        (TOP, lambda x: np.isclose(x[1], HEIGHT)),
-        (LEFT, lambda x: np.isclose(x[0], 0.0)),
-    ):
-        found = dolfinx.mesh.locate_entities_boundary(mesh, 1, where)
-        facets.append(found)
-        values.append(np.full(found.size, tag, dtype=np.int32))
-    facets, values = np.concatenate(facets), np.concatenate(values)
-    order = np.argsort(facets)
-    return mesh, dolfinx.mesh.meshtags(mesh, 1, facets[order], values[order])
-
-
 def _press_block(method: str, *, axisymmetric: bool = False, theta: int = 1, penalty=10 * E):
     """The block's top moved DEPTH down in two solves: (u, recovered pressure, top reaction)."""
-    mesh, tags = _block()
+    mesh, tags = tagged_block(HEIGHT, tags=(BOTTOM, TOP, LEFT))
     V = compat.vector_space(mesh, "Lagrange", 1)
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     if axisymmetric:
@@ -302,14 +280,14 @@ def test_axisymmetric_hertz_sphere_by_penalty_nitsche_and_springs():
     ],
 )
 def test_an_obstacle_out_of_the_plane_is_refused(surface, message):
-    mesh, _ = _block(MPI.COMM_SELF)
+    mesh, _ = tagged_block(HEIGHT, MPI.COMM_SELF)
     with pytest.raises(ValueError, match=f"RigidObstacle: on a 2D mesh .*{message}"):
         continuum.RigidObstacle(surface, mesh)
 
 
 @pytest.mark.serial
 def test_an_obstacle_moving_out_of_the_plane_is_refused():
-    mesh, _ = _block(MPI.COMM_SELF)
+    mesh, _ = tagged_block(HEIGHT, MPI.COMM_SELF)
     line = ntf.RigidPlane((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), motion=lambda t: (0.0, -t, 0.1 * t))
     obstacle = continuum.RigidObstacle(line, mesh)  # at t = 0 still in the plane
     with pytest.raises(ValueError, match=r"must move in the xy-plane.*step time 0\.5"):
@@ -319,7 +297,7 @@ def test_an_obstacle_moving_out_of_the_plane_is_refused():
 @pytest.mark.serial
 def test_circle_obstacle_gap_and_normal_in_2d():
     """A circle (a cylinder along z) as UFL gap and normal equals the numpy surface's."""
-    mesh, _ = _block(MPI.COMM_SELF)
+    mesh, _ = tagged_block(HEIGHT, MPI.COMM_SELF)
     circle = ntf.RigidCylinder(
         (0.3, 1.5, 0.0), (0.0, 0.0, 1.0), 1.0, motion=lambda t: (0.1 * t, -0.2 * t, 0.0)
     )

@@ -137,6 +137,30 @@ def _uniaxial_stress(strain: float, hardening: ntf.IsotropicHardening) -> float:
     return float(values[j] + slopes[j] * (alpha - starts[j]))
 
 
+def _pulled_bar(mesh, hardening: ntf.IsotropicHardening):
+    """J2 plasticity on ``mesh`` with rollers on the planes x, y (, z) = 0 and the end x = LENGTH
+    pulled by a prescribed displacement: ``(problem, material, end)``, ``end`` the displacement."""
+    fdim = mesh.topology.dim - 1
+    V = compat.vector_space(mesh)
+    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    material = ntf.J2Plasticity(u, E, NU, hardening)
+
+    def side(axis, where):
+        return dolfinx.mesh.locate_entities_boundary(
+            mesh, fdim, lambda x: np.isclose(x[axis], where)
+        )
+
+    bcs = [ntf.component_bc(V, axis, side(axis, 0.0)) for axis in range(mesh.geometry.dim)]
+    Vx, _ = compat.component_space(V, 0)
+    end = dolfinx.fem.Function(Vx)
+    dofs = dolfinx.fem.locate_dofs_topological((V.sub(0), Vx), fdim, side(0, LENGTH))
+    bcs.append(dolfinx.fem.dirichletbc(end, dofs, V.sub(0)))
+    problem = ntf.ContactProblem(
+        material.residual(v), u, [], bcs, J=material.jacobian(du, v), history=[material]
+    )
+    return problem, material, end
+
+
 @pytest.mark.mpi
 @pytest.mark.parametrize("hardening", [ntf.IsotropicHardening.linear(SIGMA_Y0, H), TABLE])
 @pytest.mark.parametrize("driver", [ntf.ContactNewtonSolver, ntf.ContactSNESSolver])
@@ -146,22 +170,9 @@ def test_uniaxial_bar_closed_form(hardening: ntf.IsotropicHardening, driver: typ
     increment, each plastic increment in two Newton iterations (the elastic predictor's, then the
     consistent tangent's exact one: the curve is linear within a piece), with the package's Newton
     and with PETSc's SNES as the driver."""
-    mesh = _mesh()
-    V = compat.vector_space(mesh)
-    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
-    material = ntf.J2Plasticity(u, E, NU, hardening)
-
-    def plane(axis, where):
-        return dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[axis], where))
-
-    bcs = [ntf.component_bc(V, axis, plane(axis, 0.0)) for axis in range(3)]
-    Vx, _ = compat.component_space(V, 0)
-    end = dolfinx.fem.Function(Vx)
-    dofs = dolfinx.fem.locate_dofs_topological((V.sub(0), Vx), 2, plane(0, LENGTH))
-    bcs.append(dolfinx.fem.dirichletbc(end, dofs, V.sub(0)))
-    problem = ntf.ContactProblem(
-        material.residual(v), u, [], bcs, J=material.jacobian(du, v), history=[material]
-    )
+    problem, material, end = _pulled_bar(_mesh(), hardening)
+    u = problem.u
+    mesh = u.function_space.mesh
     solver = driver(mesh.comm, problem)
     largest = 6 * SIGMA_Y0 / E  # about 0.0075, past the table's second point
     checked = []
@@ -221,21 +232,8 @@ def test_plane_strain_bar() -> None:
         [4, 2],
         dolfinx.mesh.CellType.quadrilateral,
     )
-    V = compat.vector_space(mesh)
-    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
-    material = ntf.J2Plasticity(u, E, NU, TABLE)
-
-    def line(axis, where):
-        return dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda x: np.isclose(x[axis], where))
-
-    bcs = [ntf.component_bc(V, axis, line(axis, 0.0)) for axis in range(2)]
-    Vx, _ = compat.component_space(V, 0)
-    end = dolfinx.fem.Function(Vx)
-    dofs = dolfinx.fem.locate_dofs_topological((V.sub(0), Vx), 1, line(0, LENGTH))
-    bcs.append(dolfinx.fem.dirichletbc(end, dofs, V.sub(0)))
-    problem = ntf.ContactProblem(
-        material.residual(v), u, [], bcs, J=material.jacobian(du, v), history=[material]
-    )
+    problem, material, end = _pulled_bar(mesh, TABLE)
+    u = problem.u
     solver = ntf.ContactNewtonSolver(mesh.comm, problem)
     largest = 8 * SIGMA_Y0 / E
     times = np.arange(1, 11) / 10

@@ -172,3 +172,47 @@ def test_quad9_faces_with_serendipity_centres_become_quad8():
     assert as_quad8(faces, np.zeros(0, np.int64)) is faces  # plain Q2: unchanged
     with pytest.raises(ValueError, match="mixes serendipity"):
         as_quad8(faces, centres[~np.isin(centres, faces.faces[:1, 8])])
+
+
+@pytest.mark.mpi
+def test_trilinear_midsides_solve_like_q1():
+    """Q2 with the serendipity and midside constraints on every cell is the Q1 space (C3D8)."""
+    from dolfinx_ntf.fem.serendipity import trilinear_constraints
+
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD, [[0, 0, 0], [1, 1, 1]], [2, 2, 2], dolfinx.mesh.CellType.hexahedron
+    )
+    mesh.geometry.x[:, 0] += 0.1 * mesh.geometry.x[:, 1] * mesh.geometry.x[:, 2]  # distorted
+    Q = compat.vector_space(mesh, "Lagrange", 2)
+    num_cells = mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts
+    edges = trilinear_constraints(Q, np.arange(num_cells))
+    u_q = _solve(mesh, Q, [*serendipity_constraints(Q), edges])
+    u_1 = _solve(mesh, compat.vector_space(mesh, "Lagrange", 1))
+    w_q = dolfinx.fem.Function(u_1.function_space)
+    w_q.interpolate(u_q)
+    scale = np.abs(u_1.x.array).max()
+    assert scale > 1e-2
+    assert np.abs(w_q.x.array - u_1.x.array).max() < 1e-10 * scale
+    w_s = dolfinx.fem.Function(u_1.function_space)  # the serendipity space alone is not Q1
+    w_s.interpolate(_solve(mesh, Q, serendipity_constraints(Q)))
+    assert np.abs(w_s.x.array - u_1.x.array).max() > 1e-4 * scale
+    # the midside values are the means of their edges' ends
+    values = u_q.x.array.reshape(-1, 3)
+    np.testing.assert_allclose(
+        values[edges.nodes[:, 0]], 0.5 * (values[edges.nodes[:, 1]] + values[edges.nodes[:, 2]]),
+        atol=1e-12 * scale,
+    )  # fmt: skip
+    # faces of these cells are quad4 faces of their corners
+    from dolfinx_ntf.fem.serendipity import as_quad8, face_centres, linear_midsides
+    from dolfinx_ntf.fem.surfaces import boundary_faces
+
+    mesh.topology.create_connectivity(2, 3)
+    top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda p: np.isclose(p[2], 1.0))
+    faces = boundary_faces(Q, top)
+    centres = face_centres(serendipity_constraints(Q))
+    midsides = linear_midsides([edges])
+    if faces.faces.shape[0]:
+        quad4 = as_quad8(faces, centres, midsides)
+        assert quad4.face_type.name == "quad4"
+        np.testing.assert_array_equal(quad4.faces, faces.faces[:, :4])
+        assert as_quad8(faces, centres).face_type.name == "quad8"  # without the midsides

@@ -36,6 +36,34 @@ def rectangle_grid(origin, size, divisions):
     return points, np.vstack([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
 
 
+def tagged_block(height: float, comm=MPI.COMM_WORLD, *, tags=(1, 2, 3)):
+    """The block [0, 1] x [0, height] in 4 x 2 squares of 2 triangles (on rank 0 of ``comm``).
+
+    Returns the mesh and its edge tags: ``tags`` = (bottom, top, left).
+    """
+    points, cells = rectangle_grid((0.0, 0.0), (1.0, height), (4, 2))
+    if comm.rank != 0:
+        points, cells = np.empty((0, 2)), np.empty((0, 3), dtype=np.int64)
+    element = compat.coordinate_element("triangle", 1, gdim=2)
+    mesh = compat.create_mesh(comm, cells.astype(np.int64), points, element)
+    mesh.topology.create_connectivity(1, 2)
+    facets, values = [], []
+    for tag, where in zip(
+        tags,
+        (
+            lambda x: np.isclose(x[1], 0.0),
+            lambda x: np.isclose(x[1], height),
+            lambda x: np.isclose(x[0], 0.0),
+        ),
+    ):
+        found = dolfinx.mesh.locate_entities_boundary(mesh, 1, where)
+        facets.append(found)
+        values.append(np.full(found.size, tag, dtype=np.int32))
+    facets, values = np.concatenate(facets), np.concatenate(values)
+    order = np.argsort(facets)
+    return mesh, dolfinx.mesh.meshtags(mesh, 1, facets[order], values[order])
+
+
 def by_body(x):
     """The lower block on rank 0, the upper (slave) block on the others (sliced along x)."""
     size = MPI.COMM_WORLD.size

@@ -316,3 +316,70 @@ def block_difference(reference: DatBlock, mine: DatBlock, columns=slice(None)) -
     scale = np.abs(reference.values).max()
     difference = np.abs(mine.values[:, columns] - reference.values[:, columns]).max()
     return float(difference / scale) if scale > 0 else float(difference)
+
+
+def write_mixed_deck(
+    directory: Path,
+    name: str,
+    *,
+    thickness: float = 2.0,
+    node_slave: bool = False,
+    nlgeom: bool = False,
+    radius: float = 0.0,
+    law: tuple[float, float] = (1e-3, 1000.0),
+) -> Path:
+    """A quasi-axisymmetric deck: a CAX8R ring (lower block) pressed by a CPS8R block (upper).
+
+    The deck of :class:`Deck2D` (EXPONENTIAL law, the top edge pushed down) with the upper
+    block's elements turned into plane-stress ones of ``thickness`` (the whole circumference's
+    width, ccx's manual), both blocks moved out by ``radius``; ``node_slave``: the slave surface
+    is the upper block's bottom nodes (``TYPE=NODE``, midside nodes included) instead of its
+    bottom faces; ``nlgeom``: the step is NLGEOM; ``law``: the EXPONENTIAL law's ``c0, p0``.
+    """
+    path = Deck2D(name, "CAX8R", law="EXPONENTIAL", thickness=thickness).write(directory)
+    text = path.read_text()
+    head, rest = text.split("*ELEMENT, TYPE=CAX8R, ELSET=EALL\n", 1)
+    lines = rest.splitlines(keepends=True)
+    count = next(k for k, line in enumerate(lines) if line.startswith("*"))
+    elements, tail = lines[:count], lines[count:]
+    lower = [e for e in elements if int(e.split(",")[0]) <= 8]  # Deck2D's lower block: 4 x 2
+    upper = [e for e in elements if int(e.split(",")[0]) > 8]
+    nodes = {}
+    for line in head.split("*NODE\n", 1)[1].splitlines():
+        n, x, y, _ = line.split(",")
+        nodes[int(n)] = (float(x) + radius, float(y))
+    head = head.split("*NODE\n", 1)[0] + "*NODE\n"
+    head += "".join(f"{n}, {x!r}, {y!r}, 0.0\n" for n, (x, y) in nodes.items())
+    text = (
+        head
+        + "*ELEMENT, TYPE=CAX8R, ELSET=EALL\n"
+        + "".join(lower)
+        + "*ELEMENT, TYPE=CPS8R, ELSET=EALL\n"
+        + "".join(upper)
+        + "".join(tail)
+    )
+    # one section per block: the ring's without a thickness (as in ccx's bolt deck)
+    text = text.replace("TYPE=CAX8R, ELSET=EALL", "TYPE=CAX8R, ELSET=ERING")
+    text = text.replace("TYPE=CPS8R, ELSET=EALL", "TYPE=CPS8R, ELSET=EPLATE")
+    text = text.replace(
+        f"*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n{thickness!r}\n",
+        "*SOLID SECTION, ELSET=ERING, MATERIAL=STEEL\n"
+        f"*SOLID SECTION, ELSET=EPLATE, MATERIAL=STEEL\n{thickness!r}\n",
+    )
+    text = text.replace(
+        "*EL PRINT, ELSET=EALL", "*EL PRINT, ELSET=ERING\nS\n*EL PRINT, ELSET=EPLATE"
+    )
+    if node_slave:  # one node per line: ccx's rule for node surfaces
+        used = {int(n) for e in upper for n in e.split(",")[1:]}
+        bottom = sorted(n for n in used if np.isclose(nodes[n][1], 1.0))
+        text = text.replace(
+            "*SURFACE, NAME=SLAVE\nSBOT, S1\n",
+            "*SURFACE, NAME=SLAVE, TYPE=NODE\n" + _lines(bottom, per_line=1),
+        )
+    if radius:  # the ring no longer touches the axis: no radial support at x = radius
+        text = text.replace("LLEFT, 1, 1\n", "LBOT, 1, 1\n", 1)
+    if nlgeom:
+        text = text.replace("*STEP\n", "*STEP, NLGEOM\n")
+    text = text.replace("1e-3, 1000.0\n", f"{law[0]!r}, {law[1]!r}\n")
+    path.write_text(text)
+    return path

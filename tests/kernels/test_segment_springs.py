@@ -130,3 +130,30 @@ def test_edge_spring_areas_are_tributary_lengths() -> None:
     assert np.allclose(areas, [0.5, 2.0, 1.5])
     quadratic = edge_spring_areas(LINE3, np.array([[0, 1, 3]]), coords, np.array([3, 0, 1]))
     assert np.allclose(quadratic, [2 / 3, 1 / 6, 1 / 6])
+
+
+@pytest.mark.parametrize("edge_type", [LINE2, LINE3], ids=lambda e: e.name)
+def test_fallback_area_of_faceless_nodes(edge_type):
+    """A = 0: |q_xi| (default), times a factor, and as a ring times 2 pi r at the projection
+    point (ccx's 4|m| of an expanded master face, docs/method.md §26.3); given areas unchanged."""
+    rng = np.random.default_rng(3)
+    edges = _edges(edge_type, 6, rng, 0.1) + np.array([20.0, 0.0])  # radius ~20
+    xi = rng.uniform(-0.8, 0.8, 6)
+    slaves = _slaves(edge_type, edges, xi, np.full(6, -0.01))
+    areas = np.array([0.0, 0.0, 0.0, 1.5, 0.0, 2.5])
+    law = LAWS["exponential"]
+    plain = evaluate_segment_springs(edge_type, edges, slaves, areas, law, tangent=False)
+    q = np.einsum("nj,njc->nc", edge_type.shape_functions(plain.xi), edges)
+    t = np.einsum("nj,njc->nc", edge_type.shape_derivatives(plain.xi), edges)
+    length = np.linalg.norm(t, axis=1)
+    zero = areas == 0.0
+    np.testing.assert_allclose(plain.area[zero], length[zero], rtol=1e-12)
+    ring = evaluate_segment_springs(
+        edge_type, edges, slaves, areas, law, tangent=False, fallback_factor=2.0,
+        fallback_ring=True,
+    )  # fmt: skip
+    expected = 2.0 * length * 2 * np.pi * q[:, 0]
+    np.testing.assert_allclose(ring.area[zero], expected[zero], rtol=1e-12)
+    np.testing.assert_array_equal(ring.area[~zero], areas[~zero])
+    ratio = ring.normal_force[zero] / plain.normal_force[zero]
+    np.testing.assert_allclose(ratio, (expected / length)[zero], rtol=1e-12)  # F = A p(d)

@@ -144,6 +144,30 @@ def test_dynamic_linear_law_has_no_tension_and_exact_energy():
     np.testing.assert_allclose(law.pressure_derivative(d[2:]), slope, rtol=1e-5)
 
 
+@pytest.mark.mpi
+def test_time_points_shorten_increments():
+    """Increments that would pass a time point end on it; the next one takes the size before.
+
+    ccx 2.20 on its deck: 0.03 over points 0.05 apart gives 0.03, 0.02, 0.03, 0.02 (method §27).
+    """
+    u, F, bcs, mass, _ = _cantilever()
+    problem = ntf.ContactProblem(F, u, [], bcs)
+    points = [0.0, 0.05, 0.1]
+    with ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem) as solver:
+        dynamic = ntf.DynamicStep(
+            mass, period=0.1, initial_increment=0.03, max_increment=0.03, time_points=points
+        )
+        times = [r.time for r in dynamic.run(solver, u)]
+        static = ntf.StaticStep(
+            period=1.0, initial_increment=0.4, max_increment=0.4, time_points=[0.5]
+        )
+        static_times = [r.time for r in static.run(solver, u)]
+    np.testing.assert_allclose(times, [0.03, 0.05, 0.08, 0.1], rtol=1e-12)
+    np.testing.assert_allclose(static_times, [0.4, 0.5, 0.9, 1.0], rtol=1e-12)
+    with pytest.raises(ValueError, match="time_points must be increasing"):
+        ntf.DynamicStep(mass, time_points=[0.5, 0.2])
+
+
 def test_wrong_configuration_is_named():
     _, F, _, mass, _ = _cantilever(MPI.COMM_SELF)
     with pytest.raises(ValueError, match="alpha"):

@@ -70,6 +70,7 @@ class Checks(ReaderState):
             initial_temperatures=tuple(self.initial_temperatures),
             temperature_boundaries=tuple(self.temperature_boundaries),
             shells=shells,
+            time_points=dict(self.time_points),
         )
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:

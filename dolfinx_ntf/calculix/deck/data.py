@@ -6,7 +6,7 @@ See docs/method.md §8.5. Every object keeps the ``Location`` of its card.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -250,6 +250,32 @@ class Frequency:
 
 
 @dataclass(frozen=True, eq=False)
+class ModalDynamic:
+    """``*MODAL DYNAMIC`` parameters; its data line (increments) is the step's ``static``.
+
+    Attributes:
+        variable: DIRECT=NO: increments grow by 1.5 up to the maximum, the last one cut to the
+            step's end; else (ccx 2.20's default, also for a bare ``DIRECT``, which 2.20 does
+            not recognize) fixed increments until the period is reached or passed.
+        deltmx: DELTMX, the largest change of a modal force per increment, or None.
+        location: The card.
+    """
+
+    variable: bool
+    deltmx: float | None
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class ModalDamping:
+    """``*MODAL DAMPING, RAYLEIGH``: ``C = alpha M + beta K``."""
+
+    alpha: float
+    beta: float
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class Coupled:
     """A ``*COUPLED TEMPERATURE-DISPLACEMENT`` or ``*HEAT TRANSFER`` procedure.
 
@@ -295,7 +321,8 @@ class PrintRequest:
     """A ``*NODE PRINT`` (kind ``NODE``), ``*EL PRINT`` (``EL``) or ``*CONTACT PRINT`` card.
 
     ``keys`` are in card order; ccx writes the blocks in that order, cards in deck order.
-    ``totals`` is ``NO``, ``YES`` or ``ONLY``; ``set`` is None for contact prints.
+    ``totals`` is ``NO``, ``YES`` or ``ONLY``; ``set`` is None for contact prints;
+    ``time_points`` names the ``*TIME POINTS`` at which it prints (instead of ``frequency``).
     """
 
     kind: str
@@ -303,6 +330,32 @@ class PrintRequest:
     set: str | None
     totals: str
     frequency: int | None
+    location: Location
+    time_points: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class TimePoints:
+    """A ``*TIME POINTS`` card: step times (ascending) at which requests with its name print."""
+
+    name: str
+    times: np.ndarray
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Gravity:
+    """A ``*DLOAD ... GRAV`` line: the acceleration ``value * direction`` on ``elements``.
+
+    The load is density times that acceleration per unit volume (ccx's gravity load).
+    """
+
+    elements: np.ndarray
+    value: float
+    direction: np.ndarray
+    amplitude: str | None
+    op: str
+    target: str
     location: Location
 
 
@@ -396,6 +449,13 @@ class Step:
         coupled: the ``*COUPLED TEMPERATURE-DISPLACEMENT`` procedure (its increments in
             ``static``), or None.
         temperatures: the ``*BOUNDARY`` lines of dof 11 (temperatures) of this step.
+        modal_dynamic: the ``*MODAL DYNAMIC`` procedure (its increments in ``static``), or None.
+        modal_damping: the effective ``*MODAL DAMPING`` (carried over from earlier steps), or
+            None.
+        temperature_fields: the ``*TEMPERATURE`` data lines of this step (node or node set and
+            temperature, in order; the model accepts them where they keep the initial
+            temperatures, docs/method.md §26.2).
+        gravity: the ``*DLOAD ... GRAV`` lines of this step, in deck order.
     """
 
     number: int
@@ -416,6 +476,10 @@ class Step:
     frequency: Frequency | None = None
     coupled: Coupled | None = None
     temperatures: tuple[Boundary, ...] = ()
+    modal_dynamic: ModalDynamic | None = None
+    modal_damping: ModalDamping | None = None
+    temperature_fields: tuple[InitialTemperature, ...] = ()
+    gravity: tuple[Gravity, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:
@@ -449,8 +513,10 @@ class Step:
 
     @property
     def dload_op(self) -> str:
-        """OP of the first ``*DLOAD`` card of the step (``MOD`` if none)."""
-        return self.dloads[0].op if self.dloads else "MOD"
+        """OP of the first ``*DLOAD`` card of the step, pressure or gravity (``MOD`` if none)."""
+        first = min((*self.dloads[:1], *self.gravity[:1]), key=lambda d: d.location.line,
+                    default=None)  # fmt: skip
+        return first.op if first is not None else "MOD"
 
     def field_controls(self) -> dict[str, float | None]:
         """``*CONTROLS, PARAMETERS=FIELD`` values by name, ccx defaults where not given."""
@@ -521,6 +587,7 @@ class Deck:
         temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
         shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
+        time_points: ``*TIME POINTS`` cards by upper-case name.
     """
 
     path: str
@@ -548,6 +615,7 @@ class Deck:
     initial_temperatures: tuple[InitialTemperature, ...] = ()
     temperature_boundaries: tuple[Boundary, ...] = ()
     shells: ShellExpansion | None = None
+    time_points: dict[str, TimePoints] = field(default_factory=dict)
 
     @property
     def num_elements(self) -> int:

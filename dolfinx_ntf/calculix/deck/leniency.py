@@ -30,13 +30,9 @@ LENIENCY: dict[str, dict[str, tuple[str, str]]] = {
     "*NODE OUTPUT": _FILE_RULES,
     "*ELEMENT OUTPUT": _FILE_RULES,
     "*CONTACT OUTPUT": _FILE_RULES,
-    "*NODE PRINT": {"TIME POINTS": ("refuse", _TIME_POINTS)},
-    "*EL PRINT": {"TIME POINTS": ("refuse", _TIME_POINTS)},
-    "*CONTACT PRINT": {"TIME POINTS": ("refuse", _TIME_POINTS)},
     "*OUTPUT": {"": ("warn", "output database only"), "TIME POINTS": ("refuse", _TIME_POINTS)},
     "*FACE PRINT": {"": ("warn", "output only"), "TIME POINTS": ("refuse", _TIME_POINTS)},
     "*SECTION PRINT": {"": ("warn", "output only"), "TIME POINTS": ("refuse", _TIME_POINTS)},
-    "*TIME POINTS": {"": ("warn", "used only by output requests with TIME POINTS")},
     "*PREPRINT": {"": ("warn", "Abaqus printout control: ccx ignores it")},
     "*RESTART": {
         "": ("warn", "restart files are not written"),

@@ -1,6 +1,7 @@
 """Load, constraint and initial condition cards.
 
-``*AMPLITUDE``, ``*BOUNDARY``, ``*EQUATION``, ``*INITIAL CONDITIONS``, ``*CLOAD``, ``*DLOAD``.
+``*AMPLITUDE``, ``*TIME POINTS``, ``*BOUNDARY``, ``*EQUATION``, ``*INITIAL CONDITIONS``,
+``*CLOAD``, ``*DLOAD`` (face pressures and ``GRAV``).
 """
 
 from __future__ import annotations
@@ -16,10 +17,12 @@ from .data import (
     CLoad,
     DLoad,
     Equation,
+    Gravity,
     InitialTemperature,
     InitialVelocity,
+    TimePoints,
 )
-from .errors import DeckError
+from .errors import DeckError, Location
 from .lexer import Card
 from .state import ReaderState
 
@@ -51,6 +54,35 @@ class LoadCards(ReaderState):
             time == "TOTALTIME",
             card.location,
         )
+
+    def _k_TIMEPOINTS(self, card: Card) -> None:
+        """Step times, listed or ``GENERATE`` (start, end, increment lines); step time only."""
+        self._check_params(card, allowed={"NAME", "GENERATE", "TIME"}, required={"NAME"})
+        if card.params.get("TIME") not in (None, "STEPTIME"):
+            raise DeckError(
+                f"*TIME POINTS, TIME={card.raw_params['TIME']} is not supported yet (step time "
+                "only)",
+                card.location,
+            )
+        self._need_data(card)
+        times: list[float] = []
+        for fields, _, loc in card.lines:
+            values = [self._float(t, "time point", loc) for t in fields if t != ""]
+            if "GENERATE" not in card.params:
+                times.extend(values)
+                continue
+            if len(values) != 3 or values[2] <= 0.0 or values[1] < values[0]:
+                raise DeckError(
+                    "*TIME POINTS, GENERATE data line: start, end >= start, increment > 0", loc
+                )
+            start, end, step = values
+            count = int(np.floor((end - start) / step * (1.0 + 1e-12) + 1e-9))
+            times.extend(start + step * np.arange(count + 1))
+        points = np.array(times, dtype=np.float64)
+        if np.any(np.diff(points) <= 0.0):
+            raise DeckError("*TIME POINTS must increase", card.location)
+        name = card.params["NAME"] or ""
+        self.time_points[name] = TimePoints(name, frozen_array(points, np.float64), card.location)
 
     def _amplitude_param(self, card: Card) -> str | None:
         name = card.params.get("AMPLITUDE")
@@ -182,6 +214,24 @@ class LoadCards(ReaderState):
                 InitialTemperature(frozen_array(nodes, np.int64), value, loc)
             )
 
+    def _k_TEMPERATURE(self, card: Card) -> None:
+        """``*TEMPERATURE`` (a step's temperature field): lines of node or node set, temperature."""
+        step = self._in_step(card)
+        self._check_params(card, allowed=set())
+        self._need_data(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 2:
+                raise DeckError(
+                    "*TEMPERATURE data line: node or node set, temperature (gradients are not "
+                    "supported)",
+                    loc,
+                )
+            nodes = self._nodes_of(fields[0], card, loc)
+            value = self._float(fields[1], "temperature", loc)
+            step.temperature_fields.append(
+                InitialTemperature(frozen_array(nodes, np.int64), value, loc)
+            )
+
     def _k_CLOAD(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"OP", "AMPLITUDE"})
@@ -201,9 +251,13 @@ class LoadCards(ReaderState):
         op, amplitude = self._op(card), self._amplitude_param(card)
         for fields, _, loc in card.lines:
             label = fields[1] if len(fields) > 1 else ""
+            if label == "GRAV":
+                step.gravity.append(self._gravity(card, fields, loc, op, amplitude))
+                continue
             if label and not re.fullmatch(r"P[1-6]", label):
                 raise DeckError(
-                    f"*DLOAD, {label} is not supported yet (load types: uniform pressure P1..P6)",
+                    f"*DLOAD, {label} is not supported yet (load types: uniform pressure P1..P6, "
+                    "GRAV)",
                     loc,
                 )
             if len(fields) != 3:
@@ -213,3 +267,22 @@ class LoadCards(ReaderState):
             value = self._float(fields[2], "pressure", loc)
             step.dloads.append(DLoad(frozen_array(elements, np.int64), int(label[1]), value,
                                      amplitude, op, fields[0], loc))  # fmt: skip
+
+    def _gravity(
+        self, card: Card, fields: list[str], loc: Location, op: str, amplitude: str | None
+    ) -> Gravity:
+        """A ``GRAV`` data line: element set, GRAV, magnitude, direction (normed by ccx)."""
+        if len(fields) != 6:
+            raise DeckError(
+                "*DLOAD, GRAV data line: element or element set, GRAV, magnitude, x, y, z", loc
+            )
+        elements = self._elements_of(fields[0], card, loc)
+        self.element_refs.append((f"{card.name} GRAV", elements, loc))
+        value = self._float(fields[2], "gravity magnitude", loc)
+        direction = np.array([self._float(t, "gravity direction", loc) for t in fields[3:6]])
+        length = float(np.linalg.norm(direction))
+        if length == 0.0:
+            raise DeckError("*DLOAD, GRAV: the direction is the zero vector", loc)
+        return Gravity(frozen_array(elements, np.int64), value,
+                       frozen_array(direction / length, np.float64), amplitude, op, fields[0],
+                       loc)  # fmt: skip

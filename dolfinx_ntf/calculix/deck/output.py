@@ -17,7 +17,7 @@ _FILE_KEYWORDS = {
 }
 
 _PRINT_KEYS = {
-    "NODE": ("U", "RF", "NT", "V"),
+    "NODE": ("U", "V", "RF", "NT"),
     "EL": ("S", "HFL"),
     "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM"),
 }
@@ -29,7 +29,7 @@ class OutputCards(ReaderState):
     def _print_card(self, card: Card, kind: str) -> None:
         step = self._in_step(card)
         set_param = {"NODE": "NSET", "EL": "ELSET", "CONTACT": "NSET"}[kind]
-        allowed = {set_param, "TOTALS", "FREQUENCY", "FREQUENCYF", "GLOBAL"}
+        allowed = {set_param, "TOTALS", "FREQUENCY", "FREQUENCYF", "GLOBAL", "TIMEPOINTS"}
         required = {set_param} if kind != "CONTACT" else set()
         self._check_params(card, allowed=allowed, required=required)
         totals = card.params.get("TOTALS") or "NO"
@@ -57,9 +57,13 @@ class OutputCards(ReaderState):
                     card.location,
                 )
         frequency = self._frequency(card)
+        time_points = card.params.get("TIMEPOINTS")
+        if time_points is not None and time_points not in self.time_points:
+            raise DeckError(f"time points {time_points} are not defined (before this line)",
+                            card.location)  # fmt: skip
         if not any(p.kind == kind for p in step.new_prints):
             self.prints = [p for p in self.prints if p.kind != kind]
-        request = PrintRequest(kind, keys, set_name, totals, frequency, card.location)
+        request = PrintRequest(kind, keys, set_name, totals, frequency, card.location, time_points)
         step.new_prints.append(request)
         self.prints.append(request)
 

@@ -23,8 +23,11 @@ from .data import (
     Frequency,
     Friction,
     FrictionChange,
+    Gravity,
     InitialTemperature,
     InitialVelocity,
+    ModalDamping,
+    ModalDynamic,
     ModelChange,
     PrintRequest,
     SolidSection,
@@ -33,6 +36,7 @@ from .data import (
     Surface,
     SurfaceBehavior,
     Tie,
+    TimePoints,
 )
 from .errors import DeckError, DeckWarning, Location
 from .leniency import SETS_FREQUENCY
@@ -51,10 +55,13 @@ class StepBuilder:
     dynamic: Dynamic | None = None
     frequency: Frequency | None = None
     coupled: Coupled | None = None
+    modal_dynamic: ModalDynamic | None = None
     boundaries: list[Boundary] = field(default_factory=list)
     temperatures: list[Boundary] = field(default_factory=list)
+    temperature_fields: list[InitialTemperature] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
+    gravity: list[Gravity] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)
     new_files: list[FileRequest] = field(default_factory=list)
     friction_changes: list[FrictionChange] = field(default_factory=list)
@@ -117,6 +124,7 @@ class ReaderState:
         self.interactions: dict[str, InteractionBuilder] = {}
         self.contact_pairs: list[ContactPair] = []
         self.amplitudes: dict[str, Amplitude] = {}
+        self.time_points: dict[str, TimePoints] = {}
         self.boundaries: list[Boundary] = []
         self.initial_velocities: list[InitialVelocity] = []
         self.initial_temperatures: list[InitialTemperature] = []
@@ -135,6 +143,7 @@ class ReaderState:
         self.controls: dict[str, tuple[tuple[float | None, ...], ...]] = {}
         self.frequency = 1
         self.nlgeom = False
+        self.modal_damping: ModalDamping | None = None
         # checks done once everything is read: (what, ids, location)
         self.node_refs: list[tuple[str, np.ndarray, Location]] = []
         self.element_refs: list[tuple[str, np.ndarray, Location]] = []

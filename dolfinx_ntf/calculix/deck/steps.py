@@ -2,7 +2,7 @@
 
 ``*STEP``, ``*STATIC``, ``*DYNAMIC``, ``*COUPLED TEMPERATURE-DISPLACEMENT``, ``*HEAT TRANSFER``,
 ``*CONTROLS``, ``*CHANGE FRICTION``, ``*MODEL CHANGE``,
-``*END STEP``.
+``*END STEP`` (with the checks of a ``*MODAL DYNAMIC`` step's cards).
 """
 
 from __future__ import annotations
@@ -196,10 +196,11 @@ class StepCards(ReaderState):
         self._no_data(card)
         if step.static is None and step.frequency is None:
             raise DeckError(
-                "the step has no *STATIC, *DYNAMIC, *FREQUENCY, *COUPLED TEMPERATURE-"
-                "DISPLACEMENT or *HEAT TRANSFER procedure (the only ones supported)",
+                "the step has no *STATIC, *DYNAMIC, *FREQUENCY, *MODAL DYNAMIC, *COUPLED "
+                "TEMPERATURE-DISPLACEMENT or *HEAT TRANSFER procedure (the only ones supported)",
                 step.location,
             )
+        self._check_modal_step(step)
         if step.pending_friction is not None:
             raise DeckError("*CHANGE FRICTION without a following *FRICTION",
                             step.pending_friction[1])  # fmt: skip
@@ -223,6 +224,34 @@ class StepCards(ReaderState):
                 frequency=step.frequency,
                 coupled=step.coupled,
                 temperatures=tuple(step.temperatures),
+                modal_dynamic=step.modal_dynamic,
+                modal_damping=self.modal_damping,
+                temperature_fields=tuple(step.temperature_fields),
+                gravity=tuple(step.gravity),
             )
         )
         self.step = None
+
+    def _check_modal_step(self, step: StepBuilder) -> None:
+        """What a ``*MODAL DYNAMIC`` step cannot hold yet, refused at ``*END STEP``."""
+        if step.modal_dynamic is None:
+            return
+        if step.boundaries:
+            raise DeckError(
+                "*BOUNDARY in a *MODAL DYNAMIC step (base motion) is not supported yet",
+                step.boundaries[0].location,
+            )
+        if step.dloads or step.temperatures:
+            raise DeckError(
+                "*DLOAD and temperatures in a *MODAL DYNAMIC step are not supported yet "
+                "(concentrated loads only)",
+                step.location,
+            )
+        for cload in step.cloads:
+            if cload.amplitude is not None:
+                raise DeckError(
+                    f"*CLOAD with AMPLITUDE={cload.amplitude} in a *MODAL DYNAMIC step is not "
+                    "supported yet (loads constant over the step, as ccx applies them without "
+                    "an amplitude)",
+                    cload.location,
+                )

@@ -16,7 +16,7 @@ from dolfinx_ntf import compat
 
 from ..deck import Deck, ElementBlock
 
-__all__ = ["lame", "plane_stress_factor", "stresses"]
+__all__ = ["density", "lame", "plane_stress_factor", "stresses"]
 
 
 def lame(
@@ -36,6 +36,36 @@ def lame(
         mu.x.array[dofs] = young / (2 * (1 + nu))
         lmbda.x.array[dofs] = young * nu / ((1 + nu) * (1 - 2 * nu))
     return mu, lmbda
+
+
+def density(
+    deck: Deck, block: ElementBlock, mesh: dolfinx.mesh.Mesh, element_cell: np.ndarray
+) -> tuple[dolfinx.fem.Function, np.ndarray]:
+    """Density per cell (DG0) from each section's ``*DENSITY``, and which elements have one.
+
+    Returns the density (0 where a material has none) and a flag per element of ``block``;
+    a temperature-dependent or non-positive ``*DENSITY`` is a ``ValueError`` naming its section.
+    """
+    Q = compat.scalar_space(mesh, "DG", 0)
+    rho = dolfinx.fem.Function(Q, name="density")
+    given = np.zeros(block.ids.size, dtype=bool)
+    order = np.argsort(block.ids)
+    for section in deck.sections:
+        data = deck.materials[section.material].extra.get("*DENSITY")
+        if not data:
+            continue
+        if len(data) != 1 or data[0][0] is None or data[0][0] <= 0.0:
+            raise ValueError(
+                f"{section.location}: material {section.material} needs one positive *DENSITY "
+                "(temperature-dependent densities are not supported)"
+            )
+        members = np.unique(deck.elsets[section.elset])
+        members = members[np.isin(members, block.ids)]
+        rows = order[np.searchsorted(block.ids, members, sorter=order)]
+        given[rows] = True
+        cells = element_cell[rows]
+        rho.x.array[compat.cell_dofs(Q)[cells[cells >= 0], 0]] = data[0][0]
+    return rho, given
 
 
 def stresses(

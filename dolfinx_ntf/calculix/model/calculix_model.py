@@ -10,6 +10,7 @@ step at any time and creates the contact problem.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -26,23 +27,26 @@ from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
-from dolfinx_ntf.fem.serendipity import serendipity_constraints
+from dolfinx_ntf.fem.plane_sections import PlaneSections
+from dolfinx_ntf.fem.serendipity import serendipity_constraints, trilinear_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
-from ..deck import Deck
+from ..deck import Deck, not_supported
 from ..elements import ElementType
-from .bulk import lame, plane_stress_factor, stresses
+from .bulk import density, lame, plane_stress_factor, stresses
 from .carriers import carried_nodes, carrier_dofs
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
-from .mesh import create_mesh, element_block, mesh_maps, numbering
+from .mesh import create_mesh, element_block, element_models, mesh_maps, numbering
+from .mixed import CellMeasures, check_mixed_deck, mixed_hexahedra
 from .plane import (
     check_two_d_deck,
     plane_kinematics,
+    plane_sections,
     printed_scale,
     section_thickness,
     volume_weight,
@@ -106,6 +110,18 @@ class CalculixModel:
             None.
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
+        axisymmetric_elements: The ccx numbers of the CAX elements (their printed stresses are
+            those of ccx's sector, docs/method.md §26.4), else None.
+        sections: The per-cell 2D models of a quasi-axisymmetric deck or of NLGEOM on 2D
+            elements (docs/method.md §26), else None.
+        spring_only_nodes: ``(k, 2)`` ccx node numbers and components whose ``RF`` is their
+            contact springs' force only: the free components of the nodes of node-based slave
+            surfaces of 2D elements, which ccx keeps out of its expanded elements
+            (docs/method.md §26.3); else None.
+        gravity: The ``*DLOAD ... GRAV`` acceleration per cell (DG0 vector; the residual holds
+            ``-rho inner(g, v) dx``), or None for decks without gravity (docs/method.md §27).
+        mass_dx: The measure of the mass form: C3D8's 2x2x2 Gauss points on C3D8 cells (ccx's
+            C3D8 mass, measured: docs/method.md §27.4), UFL's estimate on the others.
     """
 
     deck: Deck
@@ -138,7 +154,7 @@ class CalculixModel:
         default_factory=list, repr=False
     )
     constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
-    #: Local block dofs of the carrier cells' new points, held at zero (§25.6).
+    #: Local block dofs of the carrier cells' new points, held at zero (§28.6).
     carrier_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
@@ -154,6 +170,11 @@ class CalculixModel:
 
     thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
+    axisymmetric_elements: np.ndarray | None = None
+    sections: PlaneSections | None = None
+    spring_only_nodes: np.ndarray | None = None
+    gravity: dolfinx.fem.Function | None = None
+    mass_dx: ufl.Measure | CellMeasures | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -242,6 +263,13 @@ class CalculixModel:
             self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
         ):
             constant.value = value
+        if self.gravity is not None:
+            self.gravity.x.array[:] = 0.0
+            if loads.gravity is not None and loads.gravity_keys.size:
+                cells = compat.cell_dofs(self.gravity.function_space)[loads.gravity_keys // 3, 0]
+                self.gravity.x.array[3 * cells + loads.gravity_keys % 3] = self._evaluate(
+                    loads.gravity, fraction, step_time, total
+                )
         values = self._evaluate(loads.bc, fraction, step_time, total)
         for component, (_, inverse, g) in enumerate(self._bc_spaces):
             mask = loads.bc_dofs % self.gdim == component
@@ -324,7 +352,11 @@ class CalculixModel:
     # -- dynamics ---------------------------------------------------------------------------------
 
     def mass_form(self) -> ufl.Form:
-        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (ccx quadrature)."""
+        """``rho inner(w, v) dx`` with each section's ``*DENSITY`` (``mass_dx``).
+
+        The consistent mass; C3D8 cells with their 2x2x2 Gauss points as ccx (docs/method.md
+        §27.4), the other elements with UFL's estimate (exact on undistorted cells).
+        """
         Q = compat.scalar_space(self.mesh, "DG", 0)
         rho = dolfinx.fem.Function(Q, name="density")
         block_ids = self.deck.elements[self.element_type.name].ids
@@ -340,7 +372,7 @@ class CalculixModel:
             cells = cells[cells >= 0]  # this process's (owned and ghost) cells
             rho.x.array[compat.cell_dofs(Q)[cells, 0]] = density[0][0]
         w, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-        return rho * ufl.inner(w, v) * ufl.dx(domain=self.mesh)  # consistent mass, exact
+        return rho * ufl.inner(w, v) * self.mass_dx
 
     def initial_velocity(self) -> dolfinx.fem.Function:
         """The ``*INITIAL CONDITIONS, TYPE=VELOCITY`` of the deck as a Function (zero elsewhere)."""
@@ -384,6 +416,8 @@ def check_incompatible_modes(deck: Deck) -> None:
             if step.frequency is not None
             else "*DYNAMIC"
             if step.dynamic is not None
+            else "*MODAL DYNAMIC"
+            if step.modal_dynamic is not None
             else None
         )
         if what is not None:
@@ -413,16 +447,22 @@ def build_model(
         NotImplementedError: features not supported yet,
             naming the keyword and ``file:line``. Raised on every process.
     """
+    deck, mixed = mixed_hexahedra(deck)  # C3D8 beside C3D20(R): 20-node cells (§27)
+    if mixed is not None:
+        check_mixed_deck(deck)
     block = element_block(deck)
     etype = block.type
-    thickness = 1.0
+    models = element_models(deck, block)
+    if len(deck.elements) > 1:  # ccx's quasi-axisymmetric mix, one block (docs/method.md §26)
+        deck = dataclasses.replace(deck, elements={etype.name: block})
+    thickness = np.ones(block.ids.size)
     if etype.tdim == 2:  # ccx's 2D elements, natively in 2D (docs/method.md §23)
-        check_two_d_deck(deck, block)
-        thickness = section_thickness(deck, block)
+        check_two_d_deck(deck, block, models)
+        thickness = section_thickness(deck, block, models)
     # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §19)
     meshed = np.isin(deck.node_ids, block.connectivity)
     deck, tie_blocks = tie_constraints(deck, meshed, warn=comm.rank == 0)
-    carried = collectives.collectively(comm, carried_nodes, deck, block)  # in no element (§25.6)
+    carried = collectives.collectively(comm, carried_nodes, deck, block)  # in no element (§28.6)
     mesh = create_mesh(deck, block, comm, carried)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
@@ -438,7 +478,9 @@ def build_model(
     error = None
     try:  # local work: a bad face found by one process is an error on all (no collective inside)
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
-        pairs = contact_pairs(deck, surfaces, maps, thickness=thickness, area_weights=area_weights)
+        pairs = contact_pairs(
+            deck, surfaces, maps, thickness=thickness, models=models, area_weights=area_weights
+        )
         steps, amplitude_names, pressure_tags, num_groups = schedules(deck, maps, mesh)
         springs_follow = check_springs(deck, maps.meshed)
         if etype.name == "C3D8I":
@@ -451,6 +493,14 @@ def build_model(
     kinds = {step.nlgeom for step in deck.steps}
     nlgeom = dolfinx.fem.Constant(mesh, 0.0) if len(kinds) > 1 else None
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
+    linear_cells = np.zeros(0, np.int64)
+    mass_dx = dx if etype.name == "C3D8" else ufl.dx(domain=mesh)  # ccx's C3D8 mass (§27.4)
+    if mixed is not None:
+        linear_cells = element_cell[mixed.linear & (element_cell >= 0)]
+        cells = element_cell[element_cell >= 0]
+        mass_dx = _mixed_measure(mesh, cells, linear_cells, None)
+        if etype.name == "C3D20":  # C3D8's 2x2x2 beside C3D20's 3x3x3 Gauss points
+            dx = _mixed_measure(mesh, cells, linear_cells, 5)
     thermal = None
     if collectives.collectively(comm, is_thermal, deck):
         if etype.tdim == 2:
@@ -461,8 +511,26 @@ def build_model(
         thermal = thermal_model(deck, block, mesh, etype.degree, node_dof, element_cell, dx)
     v = ufl.TestFunction(V)
     printed_force = None
-    if etype.tdim == 2:  # small strain; the 3x3 stress of the 2D model, weighted (§23)
-        weight = volume_weight(mesh, etype.model, thickness)
+    sections = None
+    nlgeom_2d = etype.tdim == 2 and True in kinds
+    if etype.tdim == 2 and (nlgeom_2d or len(set(models)) > 1 or np.ptp(thickness) > 0.0):
+        sections = plane_sections(mesh, models, thickness, element_cell)
+    if sections is not None:  # per-cell models, NLGEOM (docs/method.md §26)
+        weight = sections.weight()
+        if nlgeom_2d:
+            F = sections.deformation_gradient(u, mu, lmbda)
+            E = 0.5 * (F.T * F - ufl.Identity(3))
+            P = F * (2 * mu * E + lmbda * ufl.tr(E) * ufl.Identity(3))
+            sigma = P * F.T / ufl.det(F)
+        else:
+            H = sections.grad(u, mu, lmbda)
+            sigma = 2 * mu * ufl.sym(H) + lmbda * ufl.tr(H) * ufl.Identity(3)
+            P = sigma
+        internal_force = ufl.inner(P, sections.grad(v)) * weight * dx
+        if "axisymmetric" in set(models):  # ccx's RF: without the hoop term (§23)
+            printed_force = ufl.inner(P, plane_kinematics(v, "plane strain")) * weight * dx
+    elif etype.tdim == 2:  # small strain; the 3x3 stress of the 2D model, weighted (§23)
+        weight = volume_weight(mesh, etype.model, float(thickness[0]) if thickness.size else 1.0)
         H = plane_kinematics(u, etype.model, plane_stress_factor(mu, lmbda))
         sigma = 2 * mu * ufl.sym(H) + lmbda * ufl.tr(H) * ufl.Identity(3)
         P = sigma
@@ -485,18 +553,27 @@ def build_model(
             metadata={"quadrature_degree": etype.face_quadrature_degree},
         )
         N = ufl.FacetNormal(mesh)
-        if etype.tdim == 2:  # small strain, per thickness or ring
+        if nlgeom_2d:  # follower: the current ring or layer area J F^-T N (§26)
+            t3 = ufl.det(F) * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0])
+            traction_map = weight * ufl.as_vector([t3[0], t3[1]])
+        elif etype.tdim == 2:  # small strain, per thickness or ring
             traction_map = weight * N
         else:
             traction_map = ufl.det(F) * ufl.inv(F).T * N  # J F^-T N; N itself when nlgeom = 0
         for g, p in enumerate(pressures):
             residual += p * ufl.inner(traction_map, v) * ds(g + 1)
+    gravity = None
+    if any(step.gravity for step in deck.steps):
+        gravity, body_force = _gravity(deck, block, mesh, element_cell)
+        residual -= ufl.inner(body_force, v) * dx
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = equation_constraints(deck, maps.meshed)
     # terms on ccx node numbers, held by any process: global dofs (docs/method.md §14.9)
     constraints = global_constraints(V, constraints, node_ids=dof_node)
     if etype.num_nodes == 20:
         constraints += serendipity_constraints(V)  # C3D20's space (docs/method.md §13.5)
+    if mixed is not None:  # C3D8 cells: trilinear (§27)
+        constraints.append(trilinear_constraints(V, linear_cells))
     if etype.tdim == 2 and etype.num_nodes == 8:
         constraints += quad_serendipity_constraints(V)  # CPE8's space (§23)
     for tie in tie_blocks:  # every process read them: rank 0 gives them
@@ -555,7 +632,73 @@ def build_model(
         springs=springs,
         internal_force=internal_force,
         printed_force=printed_force,
-        printed_scale=printed_scale(etype.model, etype.num_nodes > etype.num_corners),
+        printed_scale=printed_scale(
+            "axisymmetric" if "axisymmetric" in set(models) else etype.model,
+            etype.num_nodes > etype.num_corners,
+        ),
         thermal=thermal,
         incompatible_modes=modes,
+        axisymmetric_elements=block.ids[models == "axisymmetric"] if etype.tdim == 2 else None,
+        sections=sections,
+        spring_only_nodes=_node_slaves(deck) if etype.tdim == 2 else None,
+        gravity=gravity,
+        mass_dx=mass_dx,
     )
+
+
+def _node_slaves(deck: Deck) -> np.ndarray | None:
+    """``(k, 2)`` node and component (0-based) of the free components of node-based slaves.
+
+    The components of the deck's node-based slave surfaces without a ``*BOUNDARY`` in any step
+    (ccx prints the reaction at a prescribed one); None without any.
+    """
+    names = {pair.slave for pair in deck.contact_pairs}
+    nodes = [deck.surfaces[n].nodes for n in names if deck.surfaces[n].type == "NODE"]
+    if not nodes:
+        return None
+    ids = np.unique(np.concatenate(nodes))
+    free = np.ones((ids.size, 2), dtype=bool)
+    for card in [*deck.boundaries, *(b for step in deck.steps for b in step.boundaries)]:
+        held = np.isin(ids, card.nodes)
+        for dof in range(card.first_dof, min(card.last_dof, 2) + 1):
+            free[held, dof - 1] = False
+    node, component = np.nonzero(free)
+    return np.column_stack([ids[node], component])
+
+
+def _mixed_measure(
+    mesh: dolfinx.mesh.Mesh, cells: np.ndarray, linear_cells: np.ndarray, degree: int | None
+) -> CellMeasures:
+    """``dx`` with 2x2x2 Gauss points on the C3D8 cells, ``degree`` on the others."""
+    values = np.full(cells.size, 2, dtype=np.int32)
+    values[np.isin(cells, linear_cells)] = 1
+    order = np.argsort(cells)
+    tags = dolfinx.mesh.meshtags(
+        mesh, mesh.topology.dim, cells[order].astype(np.int32), values[order]
+    )
+    return CellMeasures(mesh, tags, {1: 2, 2: degree})
+
+
+def _gravity(
+    deck: Deck, block, mesh: dolfinx.mesh.Mesh, element_cell: np.ndarray
+) -> tuple[dolfinx.fem.Function, ufl.core.expr.Expr]:
+    """The cellwise ``GRAV`` acceleration and the body force ``rho g`` (docs/method.md §27).
+
+    Every element a ``GRAV`` line loads needs a ``*DENSITY`` (an error naming the line).
+    """
+    if block.type.tdim == 2:
+        line = next(g for step in deck.steps for g in step.gravity)
+        raise not_supported(f"*DLOAD, GRAV with {block.type.name} elements", line.location)
+    rho, given = density(deck, block, mesh, element_cell)
+    order = np.argsort(block.ids)
+    for step in deck.steps:
+        for line in step.gravity:
+            rows = order[np.searchsorted(block.ids, line.elements, sorter=order)]
+            if not np.all(given[rows]):
+                element = int(line.elements[np.argmax(~given[rows])])
+                raise ValueError(
+                    f"{line.location}: *DLOAD, GRAV on element {element}, whose material has "
+                    "no *DENSITY"
+                )
+    acceleration = dolfinx.fem.Function(compat.vector_space(mesh, "DG", 0), name="gravity")
+    return acceleration, rho * acceleration

@@ -30,6 +30,7 @@ __all__ = [
     "first_youngs_modulus",
     "friction_of",
     "pressure_overclosure_law",
+    "surface_section",
 ]
 
 
@@ -85,7 +86,7 @@ def friction_of(deck: Deck, data: FrictionCard) -> Friction:
 
 
 def damping_of(deck: Deck, interaction_name: str) -> ContactDamping | None:
-    """The ``*CONTACT DAMPING`` of an interaction (it acts in ``*DYNAMIC`` steps only, §25)."""
+    """The ``*CONTACT DAMPING`` of an interaction (it acts in ``*DYNAMIC`` steps only, §28)."""
     data = deck.interactions[interaction_name].damping
     return None if data is None else ContactDamping(data.coefficient, data.tangent_fraction)
 
@@ -106,30 +107,79 @@ def adjust_of(deck: Deck, pair: ContactPairCard, maps: MeshMaps) -> float | Node
     return NodeSurface(np.unique(vertices[vertices >= 0]).astype(np.int32), pair.adjust)
 
 
+def surface_section(
+    deck: Deck, maps: MeshMaps, name: str, models: np.ndarray, thickness: np.ndarray
+) -> tuple[str, float]:
+    """The 2D model and thickness of an element-face surface's elements (one of each).
+
+    Raises:
+        NotImplementedError: the surface's elements mix models or thicknesses (its springs
+            would need them per node).
+    """
+    surface = deck.surfaces[name]
+    block = maps.block
+    order = np.argsort(block.ids)
+    rows = order[np.searchsorted(block.ids, np.unique(surface.elements), sorter=order)]
+    kinds, widths = np.unique(models[rows]), np.unique(thickness[rows])
+    if kinds.size != 1 or widths.size != 1:
+        raise not_supported(
+            f"*SURFACE {name} on elements of different 2D models or thicknesses "
+            f"({', '.join(map(str, kinds))}; {', '.join(f'{t:g}' for t in widths)})",
+            surface.location,
+        )
+    return str(kinds[0]), float(widths[0])
+
+
 def contact_pairs(
     deck: Deck,
     surfaces: dict[str, FacetSurface | NodeSurface],
     maps: MeshMaps,
     *,
-    thickness: float = 1.0,
+    thickness: np.ndarray | None = None,
+    models: np.ndarray | None = None,
     area_weights: str = "consistent",
 ) -> list[ContactPair]:
     """The deck's ``*CONTACT PAIR`` cards as contact pairs, in deck order.
 
-    On CPE/CPS decks the spring areas are the edge shares times ``thickness``, on CAX decks
-    the ring areas of the whole circumference, consistent or with the shares of ccx's expanded
-    faces (``area_weights``, docs/method.md §23).
+    On CPE/CPS elements the spring areas are the edge shares times the slave elements'
+    thickness, on CAX elements the ring areas of the whole circumference, consistent or with the
+    shares of ccx's expanded faces (``area_weights``, docs/method.md §23). Node-based slave
+    surfaces of 2D elements are faceless, as in ccx: every spring gets ccx's fallback area of
+    the master face, a plane layer's or an axisymmetric sector's (docs/method.md §26.3).
+
+    Args:
+        deck: The deck.
+        surfaces: Its dolfinx surfaces.
+        maps: The mesh maps.
+        thickness: The thickness of each element of the block (2D decks; default 1).
+        models: The 2D model of each element of the block (default: the block type's).
+        area_weights: ``"ccx"`` or ``"consistent"`` (2D decks).
     """
-    two_d = {}
-    if maps.block.type.tdim == 2:
-        axisymmetric = maps.block.type.model == "axisymmetric"
-        two_d = {"axisymmetric": True} if axisymmetric else {"thickness": thickness}
-        two_d["area_weights"] = area_weights
+    block = maps.block
+    two_d_deck = block.type.tdim == 2
+    if models is None:
+        models = np.full(block.ids.size, block.type.model, dtype=object)
+    if thickness is None:
+        thickness = np.ones(block.ids.size)
     pairs = []
     for pair in deck.contact_pairs:
         law = pressure_overclosure_law(deck, pair.interaction)
         data = deck.interactions[pair.interaction].friction
         friction = None if data is None else friction_of(deck, data)
+        two_d: dict = {}
+        if two_d_deck:
+            master_model, master_t = surface_section(deck, maps, pair.master, models, thickness)
+            two_d["area_weights"] = area_weights
+            if isinstance(surfaces[pair.slave], NodeSurface):  # faceless: the master's area
+                if master_model == "axisymmetric":
+                    two_d["fallback_area"] = "ccx_ring"
+                else:
+                    two_d.update(fallback_area="ccx_plane", thickness=master_t)
+            else:
+                model, t = surface_section(deck, maps, pair.slave, models, thickness)
+                two_d.update(
+                    {"axisymmetric": True} if model == "axisymmetric" else {"thickness": t}
+                )
         pairs.append(
             ContactPair(
                 surfaces[pair.slave],

@@ -14,6 +14,8 @@ Load rules (ccx manual, ``*AMPLITUDE``, ``*BOUNDARY``, ``*CLOAD``, ``*DLOAD``, `
     - Model-definition ``*BOUNDARY`` cards act as if given at the start of step 1.
 
 ``*DLOAD`` faces with the same history in every step share one pressure Constant (a group).
+``*DLOAD ... GRAV`` lines (docs/method.md §27) follow the same rules per element and component of
+the acceleration; repeated lines on an element add up, and their OP is the step's ``*DLOAD`` OP.
 """
 
 from __future__ import annotations
@@ -67,6 +69,8 @@ class StepLoads:
             nodes in no element (reference nodes of ``*EQUATION``); ``reference`` their history,
             from their value at the end of the previous step; ``reference_force_keys`` and
             ``reference_force`` likewise for their ``*CLOAD`` forces.
+        gravity_keys: ``(G,)`` keys ``3 local cell + component`` of the ``GRAV`` accelerations
+            on this process's cells (owned and ghost); ``gravity`` their history.
     """
 
     step: Step
@@ -80,6 +84,8 @@ class StepLoads:
     reference: Schedule | None = None
     reference_force_keys: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     reference_force: Schedule | None = None
+    gravity_keys: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    gravity: Schedule | None = None
 
     @property
     def period(self) -> float:
@@ -150,7 +156,12 @@ def end_values(
 
 
 def step_times(deck: Deck) -> list[float]:
-    """Total time at the start of every step (``TOTAL TIME AT START``, ``TIME RESET``)."""
+    """Total time at the start of every step (``TOTAL TIME AT START``, ``TIME RESET``).
+
+    A ``*FREQUENCY`` step takes no time: ccx 2.20 prints its modes at its start plus 1 (its
+    default period) but starts the next step where the frequency step started (measured with a
+    static and with a ``*MODAL DYNAMIC`` step after it, docs/method.md §25.3).
+    """
     starts, total = [], 0.0
     for step in deck.steps:
         static = step.static
@@ -159,7 +170,8 @@ def step_times(deck: Deck) -> list[float]:
         elif static.time_reset:
             total -= static.period
         starts.append(total)
-        total += static.period
+        if step.frequency is None:
+            total += static.period
     return starts
 
 
@@ -179,9 +191,11 @@ def schedules(
     cload = ScheduleBuilder(3 * num_nodes, amp_total, add_within_step=True)
     dload = ScheduleBuilder(6 * block.ids.size, amp_total, add_within_step=True)
     bound = ScheduleBuilder(3 * num_nodes, amp_total, add_within_step=False)
+    grav = ScheduleBuilder(3 * block.ids.size, amp_total, add_within_step=True)
     order = np.argsort(block.ids)
     starts = step_times(deck)
     raw = []
+    gravity: list[Schedule] = []
     for s, step in enumerate(deck.steps):
         period = step.static.period
         total_end = starts[s] + period
@@ -216,6 +230,15 @@ def schedules(
                 6 * rows + card.face - 1, card.value, amplitude_index(deck, names, card.amplitude)
             )
         pressures = dload.finish(end)
+
+        grav.begin(new=step.dload_op == "NEW" and bool(step.dloads or step.gravity))
+        for card in step.gravity:
+            rows = order[np.searchsorted(block.ids, np.unique(card.elements), sorter=order)]
+            for k in range(3):
+                if card.direction[k] != 0.0:
+                    grav.card(3 * rows + k, card.value * card.direction[k],
+                              amplitude_index(deck, names, card.amplitude))  # fmt: skip
+        gravity.append(grav.finish(end))
         raw.append((bc, bc_active, forces, pressures))
 
     # Pressure groups: faces with the same history in every step share one Constant.
@@ -257,7 +280,9 @@ def schedules(
         )
 
     steps = []
+    cell_keys = 3 * np.repeat(maps.element_cell, 3) + np.tile(np.arange(3), block.ids.size)
     for s, (step, (bc, bc_active, forces, pressure)) in enumerate(zip(deck.steps, raw)):
+        accelerated = ((gravity[s].ref != 0) | (gravity[s].start != 0)) & (cell_keys >= 0)
         gdim = block.type.tdim  # 2D elements: no z dofs (their z conditions are checked, §23)
         component = np.tile(np.arange(3), num_nodes)
         dofs3 = gdim * np.repeat(node_dof, 3) + component  # unrolled dof of each key
@@ -288,6 +313,12 @@ def schedules(
                     forces.start[loaded & ~valid],
                     forces.ref[loaded & ~valid],
                     forces.amplitude[loaded & ~valid],
+                ),
+                gravity_keys=cell_keys[accelerated],
+                gravity=Schedule(
+                    gravity[s].start[accelerated],
+                    gravity[s].ref[accelerated],
+                    gravity[s].amplitude[accelerated],
                 ),
                 reference_keys=np.flatnonzero(bc_active & ~valid),
                 reference=Schedule(

@@ -35,6 +35,7 @@ __all__ = [
     "create_mesh",
     "element_block",
     "element_faces_to_facets",
+    "element_models",
     "exterior",
     "facet_finder",
     "mesh_maps",
@@ -66,7 +67,7 @@ class MeshMaps:
         find: Local facet of facet corner vertices (:func:`facet_finder`).
         meshed: ``(N,)`` the deck node belongs to an element (on any process).
         corner: ``(N,)`` the deck node is an element corner (on any process).
-        carried: ``(N,)`` the deck node is in no element but on a carrier cell (§25.6).
+        carried: ``(N,)`` the deck node is in no element but on a carrier cell (§28.6).
     """
 
     block: ElementBlock
@@ -114,16 +115,60 @@ def mesh_maps(
 
 
 def element_block(deck: Deck) -> ElementBlock:
-    """The deck's one element block (an error for none or mixed element types)."""
+    """The deck's element block (an error for none or mixed element types).
+
+    ccx's quasi-axisymmetric models mix plane-stress and axisymmetric elements of one layout
+    (CPS8R with CAX8R, CPS4 with CAX4, ...): their blocks are merged into one block of the first
+    type, whose cells the model gives per-cell formulations (:func:`element_models`,
+    docs/method.md §26). Other mixes are refused.
+    """
     blocks = [b for b in deck.elements.values() if b.ids.size]
     if not blocks:
         raise ValueError(f"{deck.path}: the deck has no elements")
     if len(blocks) > 1:
         names = ", ".join(f"{b.type.name} (first at {b.locations[0]})" for b in blocks)
-        raise ValueError(
-            f"{deck.path}: the mesh mixes element types {names}; use one element type per deck"
+        if not _quasi_axisymmetric(blocks):
+            raise ValueError(
+                f"{deck.path}: the mesh mixes element types {names}; use one element type per "
+                "deck (or plane-stress and axisymmetric elements of one layout, e.g. CPS8R with "
+                "CAX8R)"
+            )
+        return ElementBlock(
+            blocks[0].type,
+            np.concatenate([b.ids for b in blocks]),
+            np.concatenate([b.connectivity for b in blocks]),
+            tuple(loc for b in blocks for loc in b.locations),
         )
     return blocks[0]
+
+
+def _quasi_axisymmetric(blocks: list[ElementBlock]) -> bool:
+    """The blocks are CPS and CAX elements of one layout (cell, nodes, integration, rows)."""
+    first = blocks[0].type
+    if {b.type.model for b in blocks} != {"plane stress", "axisymmetric"}:
+        return False
+
+    def same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+        return (a is None) == (b is None) and (a is None or np.array_equal(a, b))
+
+    return all(
+        b.type.name[3:] == first.name[3:]
+        and b.type.cell == first.cell
+        and b.type.num_nodes == first.num_nodes
+        and b.type.quadrature_degree == first.quadrature_degree
+        and same(b.type.to_dolfinx, first.to_dolfinx)
+        and same(b.type.integration_points, first.integration_points)
+        and same(b.type.print_rows, first.print_rows)
+        for b in blocks
+    )
+
+
+def element_models(deck: Deck, block: ElementBlock) -> np.ndarray:
+    """The 2D model of each element of ``block`` (rows of ``block.ids``) from the deck's types."""
+    models = np.full(block.ids.size, block.type.model, dtype=object)
+    for other in deck.elements.values():
+        models[np.isin(block.ids, other.ids)] = other.type.model
+    return models
 
 
 def create_mesh(
@@ -132,7 +177,7 @@ def create_mesh(
     """The dolfinx mesh of ``block``, distributed from rank 0's cells (collective).
 
     ``carried``: deck rows of nodes in no element that get a carrier cell each (``carriers.py``,
-    docs/method.md §25.6), appended after the element cells; their new points follow the deck's.
+    docs/method.md §28.6), appended after the element cells; their new points follow the deck's.
     """
     gdim = block.type.tdim  # ccx's 2D elements: a 2D mesh of the plane z = 0 (§23)
     domain = compat.coordinate_element(block.type.cell, block.type.degree, gdim)

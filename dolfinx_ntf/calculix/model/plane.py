@@ -19,28 +19,40 @@ import dolfinx.fem
 import dolfinx.mesh
 import ufl
 
+from dolfinx_ntf.fem.plane_sections import PlaneSections
+
 from ..deck import Deck, ElementBlock, not_supported
 from ..elements import AXISYMMETRIC_SECTOR
 
 __all__ = [
     "check_two_d_deck",
     "plane_kinematics",
+    "plane_sections",
     "printed_scale",
     "section_thickness",
     "volume_weight",
 ]
 
 
-def section_thickness(deck: Deck, block: ElementBlock) -> float:
-    """The out-of-plane thickness of a CPE/CPS deck's sections (ccx's default 1).
+def section_thickness(
+    deck: Deck, block: ElementBlock, models: np.ndarray | None = None
+) -> np.ndarray:
+    """The out-of-plane thickness of each element of ``block`` (ccx's default 1).
 
-    One value for every section: a thickness that varies between sections is refused (ccx allows
-    it for plane stress; its springs would need a thickness per slave node). 1 for CAX decks,
-    whose ``*SOLID SECTION`` value has no effect in ccx either.
+    Plane elements take their ``*SOLID SECTION``'s first value, one for all of them (a
+    thickness that varies between sections is refused); CAX elements 1 (the value has no effect
+    in ccx either). In a quasi-axisymmetric deck the plane-stress thickness is the
+    whole circumference's width, as ccx's manual asks (docs/method.md §26).
+
+    Args:
+        deck: The deck.
+        block: Its (merged) element block.
+        models: The 2D model of each element of ``block`` (default: its type's).
     """
-    if block.type.model == "axisymmetric":
-        return 1.0
-    values = {1.0 if s.thickness is None else s.thickness for s in deck.sections}
+    if models is None:
+        models = np.full(block.ids.size, block.type.model, dtype=object)
+    thickness = np.ones(block.ids.size)
+    order = np.argsort(block.ids)
     for section in deck.sections:
         t = section.thickness
         if t is not None and not (np.isfinite(t) and t > 0.0):
@@ -48,23 +60,61 @@ def section_thickness(deck: Deck, block: ElementBlock) -> float:
                 f"{section.location}: *SOLID SECTION thickness of {block.type.name} elements must "
                 "be a positive number"
             )
-    if len(values) > 1:
+        members = np.unique(deck.elsets[section.elset])
+        members = members[np.isin(members, block.ids)]
+        rows = order[np.searchsorted(block.ids, members, sorter=order)]
+        thickness[rows] = 1.0 if t is None else t
+    plane = models != "axisymmetric"
+    if np.any(plane) and not np.all(plane):  # ccx gives it an effect there (measured, §26)
+        rows_of = np.argsort(block.ids)
+        for section in deck.sections:
+            members = np.unique(deck.elsets[section.elset])
+            members = members[np.isin(members, block.ids)]
+            rows = rows_of[np.searchsorted(block.ids, members, sorter=rows_of)]
+            if section.thickness is not None and np.any(~plane[rows]):
+                raise not_supported(
+                    "a *SOLID SECTION thickness on axisymmetric elements beside plane-stress "
+                    "ones (ccx then changes the forces: measured 3 times the plane-stress "
+                    "section's alone); give the CAX elements a section without a thickness",
+                    section.location,
+                )
+    values = np.unique(thickness[plane])
+    if values.size > 1:  # ccx allows it; its springs would need a thickness per slave node
         raise not_supported(
-            f"*SOLID SECTION thicknesses {sorted(values)} that differ between sections of "
+            f"*SOLID SECTION thicknesses {values.tolist()} that differ between sections of "
             f"{block.type.name} elements",
             deck.sections[0].location,
         )
-    return values.pop() if values else 1.0
+    thickness[~plane] = 1.0
+    return thickness
 
 
-def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
+def check_two_d_deck(deck: Deck, block: ElementBlock, models: np.ndarray | None = None) -> None:
     """Refuse what the 2D deck runner does not do (``NotImplementedError``/``ValueError``).
 
-    The nodes must lie in ``z = 0`` (ccx's rule for 2D elements); no NLGEOM, dynamic or frequency
-    steps, ``*MODEL CHANGE``, ``*EQUATION``, ``*TIE``, spring elements, out-of-plane loads or
-    ``.frd`` output. ``*FRICTION`` and ``*CHANGE FRICTION`` pass to the 2D pairs as in 3D.
+    The nodes must lie in ``z = 0`` (ccx's rule for 2D elements), those of CAX elements at
+    ``x >= 0``; no dynamic or frequency steps, NLGEOM in some steps only, ``*MODEL CHANGE``,
+    ``*EQUATION``, ``*TIE``, spring elements, out-of-plane loads, ``.frd`` output, nodes shared by
+    plane-stress and axisymmetric elements (ccx's hinge). ``*FRICTION`` and ``*CHANGE FRICTION``
+    pass to the 2D pairs as in 3D; NLGEOM steps are St.Venant-Kirchhoff (docs/method.md §26).
+
+    Args:
+        deck: The deck.
+        block: Its (merged) element block.
+        models: The 2D model of each element of ``block`` (default: its type's).
     """
     name = block.type.name
+    if models is None:
+        models = np.full(block.ids.size, block.type.model, dtype=object)
+    axi = models == "axisymmetric"
+    if np.any(axi) and not np.all(axi):
+        shared = np.intersect1d(block.connectivity[axi], block.connectivity[~axi])
+        if shared.size:
+            raise not_supported(
+                f"node {int(shared[0])} shared by plane-stress and axisymmetric elements (ccx "
+                "connects them by a hinge)",
+                block.locations[0] if block.locations else deck.path,
+            )
     coords = np.asarray(deck.node_coords, dtype=np.float64)
     used = deck.node_index(np.unique(block.connectivity))
     off = np.abs(coords[used, 2]) > 0.0
@@ -74,8 +124,9 @@ def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
             f"{deck.path}: node {int(deck.node_ids[row])} of a {name} element has z = "
             f"{coords[row, 2]}; structures of 2D elements must lie in the plane z = 0"
         )
-    if block.type.model == "axisymmetric" and np.any(coords[used, 0] < 0.0):
-        node = int(deck.node_ids[used[np.argmax(coords[used, 0] < 0.0)]])
+    used_axi = deck.node_index(np.unique(block.connectivity[axi]))
+    if np.any(coords[used_axi, 0] < 0.0):
+        node = int(deck.node_ids[used_axi[np.argmax(coords[used_axi, 0] < 0.0)]])
         raise ValueError(
             f"{deck.path}: node {node} of a {name} element has a negative radius x "
             f"= {coords[deck.node_index([node])[0], 0]}"
@@ -89,14 +140,18 @@ def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
     for what, cards in features:
         if cards:
             raise not_supported(f"{what} with {name} elements", _where(cards[0], deck))
+    if len({step.nlgeom for step in deck.steps}) > 1:
+        step = next(s for s in deck.steps if s.nlgeom)
+        raise not_supported(
+            f"NLGEOM in some steps only with {name} elements (all steps or none)", step.location
+        )
     for step in deck.steps:
-        if step.nlgeom:
-            raise not_supported(f"NLGEOM with {name} elements", step.location)
         for change in step.model_changes:
             raise not_supported(f"*MODEL CHANGE with {name} elements", _where(change, deck))
-        if step.dynamic is not None or step.frequency is not None:
+        if step.dynamic is not None or step.frequency is not None or step.modal_dynamic:
             raise not_supported(
-                f"*DYNAMIC and *FREQUENCY steps with {name} elements", step.location
+                f"*DYNAMIC, *FREQUENCY and *MODAL DYNAMIC steps with {name} elements",
+                step.location,
             )
         for request in step.file_requests:
             raise not_supported(
@@ -114,6 +169,30 @@ def check_two_d_deck(deck: Deck, block: ElementBlock) -> None:
                 f"{card.location}: *BOUNDARY prescribes a displacement in direction 3 on a "
                 f"structure of {name} elements, which lies in the xy-plane"
             )
+
+
+def plane_sections(
+    mesh: dolfinx.mesh.Mesh, models: np.ndarray, thickness: np.ndarray, element_cell: np.ndarray
+) -> PlaneSections:
+    """The per-cell 2D models of a deck's mesh (local cells of its elements, docs/method.md §26).
+
+    Args:
+        mesh: The deck's 2D mesh.
+        models: The 2D model of each element (rows of the block).
+        thickness: The thickness of each element.
+        element_cell: The local cell of each element, -1 on other processes.
+    """
+    here = element_cell >= 0
+    cells, kinds = element_cell[here], models[here]
+    index_map = mesh.topology.index_map(mesh.topology.dim)
+    per_cell = np.ones(index_map.size_local + index_map.num_ghosts)
+    per_cell[cells] = thickness[here]
+    return PlaneSections.from_cells(
+        mesh,
+        axisymmetric=cells[kinds == "axisymmetric"],
+        plane_stress=cells[kinds == "plane stress"],
+        thickness=per_cell,
+    )
 
 
 def _where(card: object, deck: Deck) -> str:

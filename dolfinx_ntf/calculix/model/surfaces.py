@@ -3,7 +3,7 @@
 Element-face surfaces become facet tags (one ``MeshTags`` per ccx surface, value 1) wrapped in
 :class:`~dolfinx_ntf.FacetSurface`, with the ccx node numbers of each face for the contact-element
 output; ``TYPE=NODE`` surfaces become :class:`~dolfinx_ntf.NodeSurface` (corner vertices, and the
-midside nodes of C3D20 elements).
+midside nodes of C3D20 elements; on 2D elements all of them faceless, as in ccx).
 """
 
 from __future__ import annotations
@@ -48,12 +48,16 @@ def deck_surfaces(
                 )
             vertices, dofs = node_vertex[rows], maps.node_dof[rows]
             # midside nodes of quadratic elements, and nodes in no element (on carrier cells,
-            # §25.6): no face area, ccx's fallback
+            # §28.6): no face area, ccx's fallback
             carried = maps.carried[rows] if maps.carried is not None else np.zeros(rows.size, bool)
             midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)
             vertices = np.where(carried, -1, vertices)
-            if not np.all(corner[rows] | carried) and maps.block.type.num_nodes != 20:
-                node = int(surface.nodes[np.argmax(~(corner[rows] | carried))])
+            # ccx's node sets of 2D elements: the 2D nodes are in none of its expanded
+            # elements, every spring gets the fallback area (docs/method.md §26.3)
+            faceless = maps.block.type.tdim == 2
+            known = corner[rows] | carried
+            if not np.all(known) and maps.block.type.num_nodes != 20 and not faceless:
+                node = int(surface.nodes[np.argmax(~known)])
                 raise not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
                     f"corner, on {maps.block.type.name} elements (midside nodes of "
@@ -61,7 +65,7 @@ def deck_surfaces(
                     surface.location,
                 )
             vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)  # this process's
-            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside)
+            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside, faceless=faceless)
             continue
         facets, nodes = element_faces_to_facets(
             deck, maps, surface.elements, surface.faces, f"*SURFACE {name}", surface.location

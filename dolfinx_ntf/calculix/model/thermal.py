@@ -13,6 +13,7 @@ displacement gradient before the strain is formed.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,13 +37,17 @@ _CARDS = {"*CONDUCTIVITY": "steady", "*SPECIFIC HEAT": "transient", "*DENSITY": 
 def is_thermal(deck: Deck) -> bool:
     """True if the deck has a coupled step; refuses temperature input without one.
 
+    Initial temperatures alone (no ``*BOUNDARY`` dof 11) in steps that are not coupled are no
+    thermal problem: the temperature never changes, so the thermal strain is 0.
+
     Raises:
-        NotImplementedError: temperatures (initial conditions or dof 11) with steps that are not
-            coupled (their thermal strains are not supported), or mixed step kinds.
+        NotImplementedError: temperature conditions (dof 11) with steps that are not coupled
+            (their thermal strains are not supported), or mixed step kinds.
     """
     coupled = [step.coupled is not None for step in deck.steps]
     inputs = [
         *deck.initial_temperatures,
+        *(t for step in deck.steps for t in step.temperature_fields),
         *deck.temperature_boundaries,
         *(b for step in deck.steps for b in step.temperatures),
     ]
@@ -59,6 +64,23 @@ def is_thermal(deck: Deck) -> bool:
             "*HEAT TRANSFER while another step is: mixing thermal and other steps is not "
             "supported yet"
         )
+    changes = [*deck.temperature_boundaries, *(b for step in deck.steps for b in step.temperatures)]
+    fields = [t for step in deck.steps for t in step.temperature_fields]
+    if fields and any(coupled):
+        raise NotImplementedError(
+            f"{fields[0].location}: *TEMPERATURE in a *COUPLED TEMPERATURE-DISPLACEMENT or *HEAT "
+            "TRANSFER deck is not supported yet"
+        )
+    if fields:
+        _check_unchanged(deck)
+    if inputs and not changes and not any(coupled):
+        # initial temperatures that never change: ccx's thermal strain alpha (T - T_init) is 0
+        # (measured on the bolt deck: its *EXPANSION changes no printed digit, §26)
+        logging.getLogger("dolfinx_ntf.details").info(
+            " %s: initial temperatures without a temperature change: no thermal strain",
+            inputs[0].location,
+        )
+        return False
     if inputs and not any(coupled):
         where = inputs[0].location
         raise NotImplementedError(
@@ -66,6 +88,29 @@ def is_thermal(deck: Deck) -> bool:
             "are supported in *COUPLED TEMPERATURE-DISPLACEMENT and *HEAT TRANSFER steps only"
         )
     return any(coupled)
+
+
+def _check_unchanged(deck: Deck) -> None:
+    """Refuse ``*TEMPERATURE`` lines that change a node's temperature from its initial one.
+
+    Such a field would give static steps a thermal strain, which is not supported; lines that
+    restate the initial temperatures (Debian 13's bolt deck) change nothing (§26.2).
+    """
+    initial = {}
+    for card in deck.initial_temperatures:
+        initial.update(dict.fromkeys(card.nodes.tolist(), card.value))
+    for step in deck.steps:
+        current = dict(initial)
+        for card in step.temperature_fields:
+            current.update(dict.fromkeys(card.nodes.tolist(), card.value))
+        for card in step.temperature_fields:
+            changed = [n for n in card.nodes.tolist() if current[n] != initial.get(n)]
+            if changed:
+                raise NotImplementedError(
+                    f"{card.location}: *TEMPERATURE changes the temperature of node {changed[0]} "
+                    f"({initial.get(changed[0])} initially, {current[changed[0]]} in step "
+                    f"{step.number}): thermal strains of static steps are not supported yet"
+                )
 
 
 @dataclass(eq=False)
