@@ -18,10 +18,13 @@ evaluation, the ``.cel`` lines inside a pairing) counts in the inner one only.
 
 Serial, one thread (``OMP_NUM_THREADS`` and ``OPENBLAS_NUM_THREADS`` = 1), the checkout
 byte-compiled first (``startup.compile_bytecode``). The machine's 1-minute load average is printed
-with the table: on a shared machine the CPU times are what to compare.
+with the table: on a shared machine the CPU times are what to compare. One more, untimed run asks
+MUMPS for its statistics (``-mat_mumps_icntl_4 2``): the ordering it used, the entries of the
+factors and the operations of one factorization, which set the linear solve's time.
 
     .venv/bin/python benchmarks/job_phases.py                  # punch_20, 5 runs
     .venv/bin/python benchmarks/job_phases.py DECK.inp --runs 3
+    .venv/bin/python benchmarks/job_phases.py --write          # its section of docs/performance.md
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -144,10 +148,13 @@ def _driver(job: str) -> None:
     os._exit(0)
 
 
-def _run(deck: Path, workdir: Path) -> dict:
-    """One run of ``deck`` in ``workdir`` (its own process); the driver's measurements."""
+def _run(deck: Path, workdir: Path, petsc_options: str = "") -> tuple[dict, str]:
+    """One run of ``deck`` in ``workdir`` (its own process): the driver's measurements and the
+    process's standard output."""
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
+    if petsc_options:
+        env["PETSC_OPTIONS"] = petsc_options
     done = subprocess.run(
         [sys.executable, __file__, "--driver", deck.stem],
         cwd=workdir,
@@ -159,7 +166,23 @@ def _run(deck: Path, workdir: Path) -> dict:
     lines = [line for line in done.stderr.splitlines() if line.startswith("PHASES ")]
     if done.returncode != 0 or not lines:
         raise RuntimeError(f"{deck.name}: exit {done.returncode}\n{done.stderr[-2000:]}")
-    return json.loads(lines[-1][7:])
+    return json.loads(lines[-1][7:]), done.stdout
+
+
+def mumps_statistics(output: str) -> str:
+    """MUMPS's ordering, factor entries and operations per factorization from its statistics
+    (``-mat_mumps_icntl_4 2``), as a sentence; empty if it printed none."""
+    ordering = re.findall(r"Ordering based on (\S+)", output)
+    entries = re.findall(r"INFOG\(29\)\s+Number of entries in factors\s*=\s*(\d+)", output)
+    operations = re.findall(r"\(3\)\s+Operations in node elimination\s*=\s*(\S+)", output)
+    if not operations:  # the analysis's estimate
+        operations = re.findall(r"RINFOG\(1\) Operations during elimination[^=]*=\s*(\S+)", output)
+    if not (ordering and entries and operations):
+        return ""
+    flops = float(operations[-1].replace("D", "E"))
+    return (f"MUMPS (LDL^T or LU of the Jacobian): ordering {ordering[-1]}, "
+            f"{int(entries[-1]):.3g} entries in the factors, {flops:.3g} operations per "
+            "factorization")  # fmt: skip
 
 
 def table(runs: list[dict]) -> list[str]:
@@ -182,6 +205,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("deck", nargs="?", type=Path, metavar="DECK.inp",
                         help="deck (default: benchmarks/ccx_decks.py's punch_20)")  # fmt: skip
     parser.add_argument("--runs", type=int, default=5, help="timed runs (median)")
+    parser.add_argument("--write", nargs="?", const=ROOT / "docs" / "performance.md", type=Path,
+                        help="write its section of docs/performance.md (or this file)")  # fmt: skip
     args = parser.parse_args(argv)
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from startup import compile_bytecode
@@ -202,11 +227,38 @@ def main(argv: list[str] | None = None) -> int:
         loads = [os.getloadavg()[0]]
         runs = []
         for _ in range(args.runs):
-            runs.append(_run(deck, workdir))
+            runs.append(_run(deck, workdir)[0])
             loads.append(os.getloadavg()[0])
-    print(f"{deck.stem}: {runs[0]['iterations']} Newton iterations; median of {args.runs} runs; "
-          f"1-minute load average {min(loads):.1f} to {max(loads):.1f} (2 cores)")  # fmt: skip
-    print("\n".join(table(runs)))
+        mumps = mumps_statistics(_run(deck, workdir, "-mat_mumps_icntl_4 2")[1])
+    solve = statistics.median(r["clock"]["linear solve"][0] for r in runs)
+    iterations = runs[0]["iterations"]
+    lines = [
+        f"`{deck.stem}`, {iterations} Newton iterations; median of {args.runs} runs after a "
+        f"warm-up; 1-minute load average {min(loads):.1f} to {max(loads):.1f} on "
+        f"{os.cpu_count()} cores.",
+        "",
+        *table(runs),
+        "",
+        f"The linear solve: {solve / max(iterations, 1):.3f} s CPU per Newton iteration. "
+        + (f"{mumps}." if mumps else ""),
+    ]
+    print("\n".join(lines))
+    if args.write:
+        import vs_ccx
+
+        env = vs_ccx.environment()
+        section = [
+            f"## Phases of one run ({env['os']}, dolfinx {env['dolfinx']}, PETSc {env['petsc']})",
+            "",
+            f"Written by `.venv/bin/python benchmarks/job_phases.py --write` on {env['cpu']} "
+            f"({env['cores']} cores), {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC: "
+            "`python -m dolfinx_ntf run`'s work phase by phase, each phase's own time "
+            "(`benchmarks/job_phases.py`).",
+            "",
+            *lines,
+        ]
+        vs_ccx.write_report(args.write, f"Phases of one run: {env['os']}", section)
+        print(f"wrote {args.write}")
     return 0
 
 
