@@ -19,8 +19,9 @@ evaluation, the ``.cel`` lines inside a pairing) counts in the inner one only.
 Serial, one thread (``OMP_NUM_THREADS`` and ``OPENBLAS_NUM_THREADS`` = 1), the checkout
 byte-compiled first (``startup.compile_bytecode``). The machine's 1-minute load average is printed
 with the table: on a shared machine the CPU times are what to compare. One more, untimed run asks
-MUMPS for its statistics (``-mat_mumps_icntl_4 2``): the ordering it used, the entries of the
-factors and the operations of one factorization, which set the linear solve's time.
+MUMPS for its statistics (``-ntf_mat_mumps_icntl_4 2``, under the Newton solver's prefix): the
+ordering it used, the entries of the factors and the operations of one factorization, which set
+the linear solve's time.
 
     .venv/bin/python benchmarks/job_phases.py                  # punch_20, 5 runs
     .venv/bin/python benchmarks/job_phases.py DECK.inp --runs 3
@@ -155,6 +156,7 @@ def _run(deck: Path, workdir: Path, petsc_options: str = "") -> tuple[dict, str]
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
     if petsc_options:
         env["PETSC_OPTIONS"] = petsc_options
+        env["GFORTRAN_UNBUFFERED_ALL"] = "1"  # MUMPS's lines before the driver's os._exit
     done = subprocess.run(
         [sys.executable, __file__, "--driver", deck.stem],
         cwd=workdir,
@@ -169,20 +171,21 @@ def _run(deck: Path, workdir: Path, petsc_options: str = "") -> tuple[dict, str]
     return json.loads(lines[-1][7:]), done.stdout
 
 
-def mumps_statistics(output: str) -> str:
+def mumps_statistics(output: str) -> tuple[str, float]:
     """MUMPS's ordering, factor entries and operations per factorization from its statistics
-    (``-mat_mumps_icntl_4 2``), as a sentence; empty if it printed none."""
+    (``-ntf_mat_mumps_icntl_4 2``) as a sentence, and the operations; ("", 0) if it printed none.
+    """
     ordering = re.findall(r"Ordering based on (\S+)", output)
     entries = re.findall(r"INFOG\(29\)\s+Number of entries in factors\s*=\s*(\d+)", output)
     operations = re.findall(r"\(3\)\s+Operations in node elimination\s*=\s*(\S+)", output)
     if not operations:  # the analysis's estimate
         operations = re.findall(r"RINFOG\(1\) Operations during elimination[^=]*=\s*(\S+)", output)
     if not (ordering and entries and operations):
-        return ""
+        return "", 0.0
     flops = float(operations[-1].replace("D", "E"))
     return (f"MUMPS (LDL^T or LU of the Jacobian): ordering {ordering[-1]}, "
             f"{int(entries[-1]):.3g} entries in the factors, {flops:.3g} operations per "
-            "factorization")  # fmt: skip
+            "factorization", flops)  # fmt: skip
 
 
 def table(runs: list[dict]) -> list[str]:
@@ -229,7 +232,7 @@ def main(argv: list[str] | None = None) -> int:
         for _ in range(args.runs):
             runs.append(_run(deck, workdir)[0])
             loads.append(os.getloadavg()[0])
-        mumps = mumps_statistics(_run(deck, workdir, "-mat_mumps_icntl_4 2")[1])
+        mumps, flops = mumps_statistics(_run(deck, workdir, "-ntf_mat_mumps_icntl_4 2")[1])
     solve = statistics.median(r["clock"]["linear solve"][0] for r in runs)
     iterations = runs[0]["iterations"]
     lines = [
@@ -240,7 +243,11 @@ def main(argv: list[str] | None = None) -> int:
         *table(runs),
         "",
         f"The linear solve: {solve / max(iterations, 1):.3f} s CPU per Newton iteration. "
-        + (f"{mumps}." if mumps else ""),
+        + (
+            f"{mumps}: {flops * iterations / solve / 1e9:.0f} GFlop/s over the solves."
+            if mumps
+            else ""
+        ),
     ]
     print("\n".join(lines))
     if args.write:
