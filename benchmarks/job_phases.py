@@ -176,7 +176,8 @@ def mumps_statistics(output: str) -> tuple[str, float]:
     (``-ntf_mat_mumps_icntl_4 2``) as a sentence, and the operations; ("", 0) if it printed none.
     """
     ordering = re.findall(r"Ordering based on (\S+)", output)
-    entries = re.findall(r"INFOG\(29\)\s+Number of entries in factors\s*=\s*(\d+)", output)
+    # MUMPS 5.5 prints "INFOG(29)", 5.7 "INFOG (29)"
+    entries = re.findall(r"INFOG\s*\(29\)\s+Number of entries in factors\s*=\s*(\d+)", output)
     operations = re.findall(r"\(3\)\s+Operations in node elimination\s*=\s*(\S+)", output)
     if not operations:  # the analysis's estimate
         operations = re.findall(r"RINFOG\(1\) Operations during elimination[^=]*=\s*(\S+)", output)
