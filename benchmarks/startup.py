@@ -267,7 +267,8 @@ def main(argv: list[str] | None = None) -> int:
         "seconds: each phase's own duration (median, or least, over the runs); `first "
         "assembly`: from spawning the process (wall) or the process's CPU time by then; `floor`: "
         f"`python -c 'import dolfinx'` (`{args.python}`), run alternately with the decks; load: "
-        "1-minute load average (2 and more on this machine's cores means other work shared them)."
+        "1-minute load average (2 and more on this machine's cores means other work shared them). "
+        "Every checkout is byte-compiled first, as an installed package is (`compile_bytecode`)."
     )
     print("\n".join([*lines, "", notes]))
     batch = _batch(args.checkout.resolve(), max(1, args.runs // 2)) if args.batch else []
