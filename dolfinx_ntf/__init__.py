@@ -17,6 +17,7 @@ from dolfinx_ntf.contact.ties import Tie, tie_constraints
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.plasticity import J2Plasticity, mandel_strain
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
@@ -122,6 +123,7 @@ __all__ = [
     "DynamicStep",
     "ExponentialLaw",
     "FacetSurface",
+    "FiniteStrainJ2Plasticity",
     "Friction",
     "GapConductance",
     "GlobalLinearConstraint",

@@ -87,7 +87,7 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
     (
         "Plasticity",
         "dolfinx_ntf",
-        ["J2Plasticity", "IsotropicHardening", "mandel_strain"],
+        ["J2Plasticity", "FiniteStrainJ2Plasticity", "IsotropicHardening", "mandel_strain"],
     ),
     (
         "Rigid master surfaces",

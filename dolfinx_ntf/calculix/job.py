@@ -336,7 +336,7 @@ class _Job:
             return
         static = step.static
         period = static.period
-        linear = not step.nlgeom and not model.pairs
+        linear = not step.nlgeom and not model.pairs and not model.plasticity
         initial = period if linear else static.initial_increment
         maximum = min(static.maximum if static.maximum is not None else period, period)
         initial = min(initial, maximum)
@@ -730,9 +730,13 @@ def run_job(
         problem_options={
             "walk_from_previous_face": False,
             "contact_start_slope": False,
-            # ccx's tangent, or its symmetrized one on large decks only (docs/method.md §7.4)
-            "symmetric": tangent == "ccx"
-            or (tangent == "auto" and 3 * deck.node_ids.size >= SYMMETRIC_MIN_DOFS),
+            # ccx's tangent, or its symmetrized one on large decks only (docs/method.md §7.4);
+            # never with an unsymmetric bulk tangent (finite-strain plasticity, §21.7)
+            "symmetric": model.symmetric_bulk
+            and (
+                tangent == "ccx"
+                or (tangent == "auto" and 3 * deck.node_ids.size >= SYMMETRIC_MIN_DOFS)
+            ),
             "projection_tangent": "ccx" if tangent == "ccx" else "exact",
             "small_sliding_rule": "last_pair",
             # ccx's friction (docs/method.md §11): stale state, friction in tension, its tangent

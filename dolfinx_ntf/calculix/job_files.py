@@ -408,6 +408,24 @@ def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWr
     )
 
 
+def _check_transformed_outputs(deck: Deck) -> None:
+    """Refuse node outputs of ``*TRANSFORM`` nodes: ccx prints them in the local directions."""
+    if deck.transformed_nodes.size == 0:
+        return
+    for step in deck.steps:
+        requests = [r for r in step.prints if r.kind == "NODE"]
+        requests += [r for r in step.file_requests if r.kind == "NODE"]
+        for request in requests:
+            members = deck.nsets.get(request.set) if request.set is not None else None
+            held = deck.node_ids if members is None else members
+            if np.isin(held, deck.transformed_nodes).any():
+                raise NotImplementedError(
+                    f"{request.location}: node output of nodes with a *TRANSFORM is not "
+                    "supported yet (ccx prints them in their local directions); request a set "
+                    "without them"
+                )
+
+
 def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {"NODE": {"U", "RF", "V"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
@@ -448,6 +466,7 @@ def check_requests(deck: Deck) -> None:
                 "file",
                 step.location,
             )
+    _check_transformed_outputs(deck)
     written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
     for step in deck.steps:
         for request in step.file_requests:

@@ -213,10 +213,16 @@ class OutputValues:
         expression, q = self._stress
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
 
+        order = self._plastic_point_order()
+
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(
                 expression, self.model.mesh, cells.astype(np.int32)
             ).reshape(cells.size, q, 3, 3)
+            for law in self.model.plasticity:  # their stresses at ccx's points (§21.6)
+                mine = np.isin(cells, law.cells)
+                if mine.any():
+                    values[mine] = law.cell_stresses(cells[mine])[:, order]
             return values[:, :, index[0], index[1]]
 
         values = self.numbering.element_values(element_ids, evaluate, (q, 6))
@@ -231,6 +237,22 @@ class OutputValues:
             turned = np.isin(np.asarray(element_ids), axisymmetric)
             values[turned] = sector_stresses(values[turned])
         return values
+
+    def _plastic_point_order(self) -> np.ndarray | None:
+        """The plastic laws' point of each of ccx's integration points (same rule, other order)."""
+        if not self.model.plasticity:
+            return None
+        ccx = self.model.element_type.integration_points
+        law = self.model.plasticity[0]
+        points = compat.quadrature_points(self.model.mesh, law.quadrature_degree)
+        distance = np.linalg.norm(ccx[:, None, :] - points[None, :, :], axis=2)
+        order = np.argmin(distance, axis=1)
+        if points.shape != ccx.shape or np.any(distance[np.arange(order.size), order] > 1e-10):
+            raise ValueError(
+                f"the plastic laws' quadrature points are not ccx's {self.model.element_type.name} "
+                "integration points"
+            )
+        return order
 
     def heat_fluxes(self, element_ids: np.ndarray) -> np.ndarray:
         """Heat fluxes ``-k grad T`` ``(E, q, 3)`` at ccx's integration points (coupled steps).

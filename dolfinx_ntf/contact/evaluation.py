@@ -55,7 +55,7 @@ def evaluate_pair(
         projection_tangent: ``"exact"`` or ``"ccx"`` (the interior-projection formula also at
             projections clamped to the face boundary, docs/method.md §6.1).
         velocities: (N, 3) node velocities (a dynamic step's): the pair's contact damping acts
-            (docs/method.md §28); None: no damping (static steps).
+            (docs/method.md §29); None: no damping (static steps).
         velocity_rate: ``dv/du`` of ``velocities`` (the damping's tangent).
     """
     nodes = state.element_nodes

@@ -489,7 +489,7 @@ class Pairing:
     def nodal_vectors(self, f: dolfinx.fem.Function) -> np.ndarray:
         """A Function on u's space at the local nodes with ghosts, then the halo's (N, 3).
 
-        Collective (e.g. the velocity of the contact damping, docs/method.md §28).
+        Collective (e.g. the velocity of the contact damping, docs/method.md §29).
         """
         if self.halo is not None:
             return self.halo.displacement(f)

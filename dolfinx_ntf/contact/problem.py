@@ -300,7 +300,7 @@ class ContactProblem:
         self.extra_terms: list[ResidualTerm] = []
         #: The nodal velocity of the running dynamic step (set by
         #: :class:`~dolfinx_ntf.DynamicStep`); the pairs' contact damping acts only while it is
-        #: set (docs/method.md §28).
+        #: set (docs/method.md §29).
         self.node_velocity: NodeVelocity | None = None
         #: Elements between arbitrary nodes assembled with the springs (e.g. discrete springs,
         #: docs/method.md §18); add them before the first step.

@@ -1,6 +1,6 @@
 """The nodal velocity a dynamic step gives the contact springs: :class:`NodeVelocity`.
 
-Contact damping (docs/method.md §28) needs the velocity of every spring node at every iterate.
+Contact damping (docs/method.md §29) needs the velocity of every spring node at every iterate.
 A Newmark-type integrator makes it an affine function of the displacement within an increment,
 ``v = offset + rate u`` (``rate = gamma/(beta dt)``); the step driver updates ``offset`` and
 ``rate`` at every increment start, and :class:`~dolfinx_ntf.ContactProblem` evaluates it at the

@@ -19,12 +19,18 @@ import numbers
 import numpy as np
 
 import dolfinx.fem
+import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
-from dolfinx_ntf.kernels.plasticity import IsotropicHardening, elastic_matrix, return_map
+from dolfinx_ntf.kernels.plasticity import (
+    IsotropicHardening,
+    elastic_matrix,
+    return_map,
+    tensor_from_mandel,
+)
 
-__all__ = ["J2Plasticity", "mandel_strain"]
+__all__ = ["J2Plasticity", "mandel_strain", "material_cells"]
 
 _SQRT2 = float(np.sqrt(2.0))
 
@@ -47,6 +53,56 @@ def mandel_strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
     raise ValueError(f"mandel_strain: a 2D or 3D displacement is needed, got shape {ufl.shape(u)}")
 
 
+def material_cells(
+    mesh: dolfinx.mesh.Mesh,
+    degree: int,
+    cell_tags: compat.MeshTags | None,
+    tag: int,
+    owner: str,
+) -> tuple[np.ndarray, ufl.Measure]:
+    """The local cells (ghosts included) of a material and its measure with the default rule.
+
+    Every cell without ``cell_tags``, else the cells tagged ``tag`` and ``dx(tag)`` over those
+    tags (so that other materials' forms can use the same ``subdomain_data``).
+
+    Args:
+        mesh: The mesh.
+        degree: The quadrature degree of the measure.
+        cell_tags: Cell tags of ``mesh``, or None.
+        tag: The material's value in ``cell_tags``.
+        owner: Name for error messages.
+    """
+    tdim = mesh.topology.dim
+    metadata = {"quadrature_degree": degree, "quadrature_scheme": "default"}
+    if cell_tags is None:
+        cell_map = mesh.topology.index_map(tdim)
+        cells = np.arange(cell_map.size_local + cell_map.num_ghosts, dtype=np.int32)
+        return cells, ufl.dx(domain=mesh, metadata=metadata)
+    if cell_tags.dim != tdim or not compat.tags_on_mesh(cell_tags, mesh):
+        raise ValueError(f"{owner}: cell_tags must be cell tags of u's mesh")
+    cells = np.asarray(cell_tags.indices[cell_tags.values == tag], dtype=np.int32)
+    measure = ufl.Measure("dx", domain=mesh, subdomain_data=cell_tags, metadata=metadata)
+    return cells, measure(int(tag))
+
+
+def _cell_rows(
+    law_cells: np.ndarray, values: np.ndarray, cells: np.ndarray, owner: str
+) -> np.ndarray:
+    """The rows ``(n, q, ...)`` of ``cells`` in per-point ``values``.
+
+    ``values`` hold q points per cell of ``law_cells``, in that order.
+    """
+    cells = np.asarray(cells, dtype=np.int64).reshape(-1)
+    q = values.shape[0] // max(law_cells.size, 1)
+    pos = np.searchsorted(law_cells, cells)
+    inside = pos < law_cells.size
+    inside[inside] = law_cells[pos[inside]] == cells[inside]
+    if not np.all(inside):
+        raise ValueError(f"{owner}: cell {int(cells[~inside][0])} is not one of the law's cells")
+    per_cell = values.reshape(law_cells.size, q, *values.shape[1:])
+    return per_cell[pos]
+
+
 class J2Plasticity:
     """Small-strain J2 plasticity with isotropic hardening at the quadrature points of ``u``'s mesh.
 
@@ -58,6 +114,11 @@ class J2Plasticity:
             ``IsotropicHardening.linear(250.0, 1000.0)``.
         quadrature_degree: Degree of the quadrature rule the stresses live at; default
             ``2 * degree(u)`` (2x2x2 Gauss points on hexahedra of degree 1, as CalculiX's C3D8).
+        cell_tags: Cell tags of the mesh (local cells, ghosts included) and ``tag``: the
+            law covers the cells tagged ``tag`` and its forms integrate over them only; default
+            every cell. Forms of other materials on the other cells use the same tags (UFL
+            needs one ``subdomain_data`` per form), as a deck's sections do.
+        tag: The value of this material's cells in ``cell_tags``.
 
     Attributes:
         stress: The stress at the last evaluation, Mandel 6-vectors (a quadrature Function).
@@ -73,6 +134,8 @@ class J2Plasticity:
         hardening: IsotropicHardening,
         *,
         quadrature_degree: int | None = None,
+        cell_tags: compat.MeshTags | None = None,
+        tag: int = 1,
     ) -> None:
         owner = "J2Plasticity"
         validation.check_type(u, dolfinx.fem.Function, f"{owner}: u")
@@ -97,18 +160,13 @@ class J2Plasticity:
         self.hardening = hardening
         self.quadrature_degree = degree
         mesh = u.function_space.mesh
-        self.dx = ufl.dx(
-            domain=mesh,
-            metadata={"quadrature_degree": degree, "quadrature_scheme": "default"},
-        )
+        self._cells, self.dx = material_cells(mesh, degree, cell_tags, tag, owner)
         self.stress = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6,)))
         self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6, 6)))
         self.stress.name = "stress"
         points = compat.quadrature_points(mesh, degree)
         self._strain = dolfinx.fem.Expression(mandel_strain(u), points)
-        cells = mesh.topology.index_map(mesh.topology.dim)
-        self._cells = np.arange(cells.size_local + cells.num_ghosts, dtype=np.int32)
-        #: Quadrature points of every local cell (owned and ghost), in the stress's block dofs.
+        #: Quadrature points of the material's local cells (owned and ghost), in block dofs.
         self._dofs = compat.cell_dofs(self.stress.function_space)[self._cells].reshape(-1)
         n = self._dofs.size
         #: Committed plastic strain, Mandel (n, 6), one row per local quadrature point.
@@ -189,3 +247,18 @@ class J2Plasticity:
     def yielding(self) -> np.ndarray:
         """Whether each local quadrature point yielded at the last evaluation, (n,) bool."""
         return self._trial.plastic.copy()
+
+    @property
+    def cells(self) -> np.ndarray:
+        """The law's local cells (owned and ghost), ascending."""
+        return self._cells.copy()
+
+    def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
+        """Stresses ``(n, q, 3, 3)`` of the last evaluation at the rule's points of ``cells``.
+
+        Args:
+            cells: Local cells of the law (``ValueError`` for others).
+        """
+        return _cell_rows(
+            self._cells, tensor_from_mandel(self._trial.stress), cells, "J2Plasticity"
+        )

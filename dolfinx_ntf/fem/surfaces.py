@@ -96,7 +96,7 @@ class NodeSurface:
         name: Label used in messages.
         midside_nodes: Local block dofs of the displacement space at the surface's other nodes
             (midside nodes of quadratic elements, which a ccx node set lists too, or the deck
-            runner's nodes in no element, §28.6); they are slave nodes as well and must lie on
+            runner's nodes in no element, §29.6); they are slave nodes as well and must lie on
             the boundary. As in ccx, they take no share of the faces' area (their springs get
             the fallback area, docs/method.md §2.2). One process only.
         faceless: Every node of the surface takes no share of the faces' area: all springs get

@@ -1,6 +1,6 @@
 """Contact damping of node-to-face springs (CalculiX ``*CONTACT DAMPING``): force and tangent.
 
-Pure numpy, vectorized over N springs (docs/method.md §28). For each spring, with element nodes
+Pure numpy, vectorized over N springs (docs/method.md §29). For each spring, with element nodes
 ``k = 0..n`` (master face nodes, then the slave node), weights ``w_k`` (``-phi_j`` for master node
 ``j``, ``+1`` for the slave) and nodal velocities ``v_k``:
 

@@ -533,7 +533,7 @@ class ContactDamping:
     contact spring then adds the force ``c A [(v_rel.n) n + f (v_rel - (v_rel.n) n)]`` on its
     slave node (the master face gets the opposite force through the projection weights), ``A``
     the spring area and ``v_rel`` the slave node's velocity relative to the master point
-    (docs/method.md §28). Static steps ignore it, as CalculiX does.
+    (docs/method.md §29). Static steps ignore it, as CalculiX does.
 
     Attributes:
         coefficient: ``c > 0`` [force time/length^3]: a dashpot of ``c A`` per spring, normally.

@@ -74,5 +74,5 @@ class ContactMaster(typing.Protocol):
 
         ``interior_projection``: CalculiX's tangent at projections clamped to a face boundary
         (meshed masters; a rigid master has no face boundary). ``damping``: contact damping
-        (``kernels.contact_damping.DampingInput``, docs/method.md §28; 3D meshed masters only).
+        (``kernels.contact_damping.DampingInput``, docs/method.md §29; 3D meshed masters only).
         """

@@ -506,7 +506,7 @@ class RigidMaster:
         if damping is not None:
             raise NotImplementedError(
                 f"{self.name}: contact damping against a rigid analytical master is not supported "
-                "yet; use a meshed master (docs/method.md §28)"
+                "yet; use a meshed master (docs/method.md §29)"
             )
         if friction is not None:
             raise NotImplementedError(

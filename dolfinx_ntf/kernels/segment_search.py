@@ -235,11 +235,11 @@ class MasterCurve:
     ) -> SpringEvaluation:
         """:func:`~dolfinx_ntf.kernels.segment_springs.evaluate_segment_springs` on these edges.
 
-        Contact ``damping`` is refused: not supported on 2D meshes yet (docs/method.md §28).
+        Contact ``damping`` is refused: not supported on 2D meshes yet (docs/method.md §29).
         """
         if damping is not None:
             raise NotImplementedError(
-                "contact damping is not supported on 2D meshes yet (docs/method.md §28)"
+                "contact damping is not supported on 2D meshes yet (docs/method.md §29)"
             )
         return evaluate_segment_springs(
             face_type,

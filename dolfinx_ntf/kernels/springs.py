@@ -80,7 +80,7 @@ class SpringEvaluation:
         dxi: (N, n+1, 2, 3) ∂ξ/∂x with the tangent (else None); the thermal springs' coupling to
             the displacement (docs/method.md §20).
         dpressure: (N, n+1, 3) ∂p/∂x of the pressure p = F_N/A with the tangent (else None).
-        damping: Contact damping results (docs/method.md §28), or None without damping.
+        damping: Contact damping results (docs/method.md §29), or None without damping.
     """
 
     xi: np.ndarray
@@ -161,7 +161,7 @@ def evaluate_springs(
             clamped to the face boundary, as CalculiX does (its Newton path; docs/method.md §6.1).
         damping: Nodal velocities and damping constants: adds the damping force ``c A P v_rel``
             to f_p and its derivative (through the velocities' ``rate``, the projection, the
-            normal and a fallback area) to the tangent (docs/method.md §28); the tangent is then
+            normal and a fallback area) to the tangent (docs/method.md §29); the tangent is then
             never symmetrized.
 
     Returns:

@@ -155,7 +155,7 @@ class DynamicStep(Step):
     configuration only, except that it reads the initial velocity and acceleration from
     ``velocity``/``acceleration`` and leaves the final ones there. While it runs, the problem's
     ``node_velocity`` is the Newmark velocity, so pairs with ``ContactDamping`` are damped
-    (docs/method.md §28).
+    (docs/method.md §29).
 
     Args:
         mass: Bilinear mass form on the displacement space, e.g.
@@ -236,7 +236,7 @@ class DynamicStep(Step):
         for matrix in (inertia.M, inertia.M_bc):
             matrix.assemble()
         problem.extra_terms.append(inertia)
-        offset = dolfinx.fem.Function(V)  # v = offset + rate u: the contact damping's (§28)
+        offset = dolfinx.fem.Function(V)  # v = offset + rate u: the contact damping's (§29)
         offset.x.array[:] = velocity.x.array
         problem.node_velocity = NodeVelocity(offset, 0.0)
         try:

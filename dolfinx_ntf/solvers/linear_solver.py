@@ -115,7 +115,7 @@ def galerkin_products(ksp: PETSc.KSP) -> typing.Iterator[None]:
 def expects_symmetric(problem: object, petsc_options: object) -> bool:
     """Whether the default options may use Cholesky or CG: a ``symmetric`` frictionless problem.
 
-    Contact damping (unsymmetric tangent, docs/method.md §28) rules them out too.
+    Contact damping (unsymmetric tangent, docs/method.md §29) rules them out too.
     """
     return (
         petsc_options is None

@@ -1,10 +1,10 @@
-"""CalculiX's own contact-damping decks contdamp1 and contdamp2 against ccx 2.20 (§28).
+"""CalculiX's own contact-damping decks contdamp1 and contdamp2 against ccx 2.20 (§29).
 
 Both hold a SPRINGA from a fixed node to node 2, which belongs to no element and is the slave
 node of a node-to-surface pair (``*SURFACE, TYPE=NODE``) with ``*CONTACT DAMPING`` (contdamp1:
 normal; contdamp2: ``TANGENT FRACTION=1``, the motion tangential to the master face); a C3D8
 mass tied to node 2 by ``*EQUATION``; ``*DYNAMIC, DIRECT``, 100 increments, ``*NODE PRINT`` U
-and V every 10. Nodes 1 and 2 get their dofs from carrier cells (§28.6). ccx 2.20 runs each deck
+and V every 10. Nodes 1 and 2 get their dofs from carrier cells (§29.6). ccx 2.20 runs each deck
 in a scratch directory; every printed U and V block agrees within 1e-3 of its largest value
 (measured: U 3.3e-7, V 1.7e-5, ccx's 200 Newton iterations in 100 increments), serial and on 2
 processes.

@@ -125,7 +125,7 @@ def test_nonlinear_springs_without_nlgeom_are_refused(tmp_path):
 
 @pytest.mark.serial
 def test_contact_damping_card_is_read_and_checked(tmp_path):
-    """``*CONTACT DAMPING[, TANGENT FRACTION=f]`` is read into the interaction (§28); bad data
+    """``*CONTACT DAMPING[, TANGENT FRACTION=f]`` is read into the interaction (§29); bad data
     is refused at its line."""
     text = spring_deck(nlgeom=True, nonlinear=False).replace(
         "*STEP",

@@ -157,13 +157,13 @@ def test_prescribed_jump_matches_ccx(tmp_path):
 
 @pytest.mark.parametrize("tangent_fraction", [None, 1.0], ids=["normal", "tangent-fraction-1"])
 def test_contact_damping_matches_ccx(tmp_path, tangent_fraction):
-    """``*CONTACT DAMPING`` (docs/method.md §28): the impact deck with damping, against ccx 2.20.
+    """``*CONTACT DAMPING`` (docs/method.md §29): the impact deck with damping, against ccx 2.20.
 
     The damping changes the displacements by 7.6 % of the largest (measured); ccx and the deck
     runner agree to 5.5e-5 (normal damping) and 6.8e-4 (``TANGENT FRACTION=1``) of it in every
     increment (without damping: 3.3e-7). ``*NODE PRINT V``: the velocities agree to 1.7e-4 of
     the largest (normal damping; with ``TANGENT FRACTION=1`` 1.0e-3: the tangential velocities
-    differ by 1 %, not reproduced, docs/method.md §28.2).
+    differ by 1 %, not reproduced, docs/method.md §29.2).
     """
     ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
     ccx_dir.mkdir()
@@ -190,7 +190,7 @@ def test_contact_damping_matches_ccx(tmp_path, tangent_fraction):
         scale = np.abs(a.displacements).max()
         assert np.abs(a.displacements - b.displacements).max() <= 1e-3 * scale
     if tangent_fraction is not None:
-        return  # its V: 1.0e-3 of the largest, 1 % of the tangential velocities (§28.2)
+        return  # its V: 1.0e-3 of the largest, 1 % of the tangential velocities (§29.2)
     velocities = [
         [b for b in read_dat(d / "damped.dat") if b.name == "V"] for d in (ccx_dir, ntf_dir)
     ]

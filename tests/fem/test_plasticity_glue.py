@@ -288,6 +288,55 @@ def test_rejected_increment_rolls_back() -> None:
     np.testing.assert_array_equal(material.equivalent_plastic_strain, committed)
 
 
+@pytest.mark.mpi
+def test_cell_tags_split_the_material() -> None:
+    """Two laws on the two halves of the cells (one set of tags) give the residual, the Jacobian
+    and the history of one law on every cell, at a yielding state; tags of another dimension are
+    refused."""
+    mesh = _mesh()
+    V = compat.vector_space(mesh)
+    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    u.interpolate(lambda x: _smooth_field(x, 5e-3))
+    tdim = mesh.topology.dim
+    cell_map = mesh.topology.index_map(tdim)
+    cells = np.arange(cell_map.size_local + cell_map.num_ghosts, dtype=np.int32)
+    midpoints = dolfinx.mesh.compute_midpoints(mesh, tdim, cells)
+    values = np.where(midpoints[:, 0] < 0.5 * LENGTH, 1, 2).astype(np.int32)
+    tags = dolfinx.mesh.meshtags(mesh, tdim, cells, values)
+    whole = ntf.J2Plasticity(u, E, NU, TABLE)
+    left = ntf.J2Plasticity(u, E, NU, TABLE, cell_tags=tags, tag=1)
+    right = ntf.J2Plasticity(u, E, NU, TABLE, cell_tags=tags, tag=2)
+    assert mesh.comm.allreduce(int(whole.yielding.sum()), op=MPI.SUM) > 0
+    assert left.yielding.size + right.yielding.size == whole.yielding.size
+    expected = _vector(whole.residual(v))
+    split = _vector(left.residual(v) + right.residual(v))
+    scale = mesh.comm.allreduce(np.abs(expected).max(initial=0.0), op=MPI.MAX)
+    np.testing.assert_allclose(split, expected, rtol=0, atol=1e-12 * scale)
+    direction = dolfinx.fem.Function(V)
+    direction.interpolate(lambda x: _smooth_field(x, 1.0))
+    jacobians = []
+    for form in (whole.jacobian(du, v), left.jacobian(du, v) + right.jacobian(du, v)):
+        A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(form))
+        A.assemble()
+        y = A.createVecLeft()
+        A.mult(compat.petsc_vector(direction), y)
+        jacobians.append(y.array.copy())
+        A.destroy()
+        y.destroy()
+    np.testing.assert_allclose(
+        jacobians[1], jacobians[0], rtol=0, atol=1e-10 * np.abs(jacobians[0]).max(initial=1.0)
+    )
+    left.increment_converged()
+    right.increment_converged()
+    whole.increment_converged()
+    total = mesh.comm.allreduce(whole.equivalent_plastic_strain.sum(), op=MPI.SUM)
+    halves = left.equivalent_plastic_strain.sum() + right.equivalent_plastic_strain.sum()
+    assert mesh.comm.allreduce(halves, op=MPI.SUM) == pytest.approx(total, rel=1e-12)
+    facets = dolfinx.mesh.meshtags(mesh, tdim - 1, np.zeros(0, np.int32), np.zeros(0, np.int32))
+    with pytest.raises(ValueError, match="cell_tags"):
+        ntf.J2Plasticity(u, E, NU, TABLE, cell_tags=facets)
+
+
 def test_bad_arguments() -> None:
     """A history without its Jacobian, and wrong materials, are refused with the reason."""
     mesh = _mesh()

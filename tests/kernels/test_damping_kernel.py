@@ -1,7 +1,7 @@
 """Contact damping of node-to-face springs (dolfinx_ntf.kernels.contact_damping), pure numpy.
 
 The force ``c A P v_rel`` and its tangent through the Newmark velocity ``v = v0 + rate u``,
-checked against central finite differences (docs/method.md §28).
+checked against central finite differences (docs/method.md §29).
 """
 
 from __future__ import annotations

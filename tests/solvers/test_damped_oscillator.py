@@ -1,4 +1,4 @@
-"""Contact damping in dynamic steps (docs/method.md §28): a mass on a damped contact spring.
+"""Contact damping in dynamic steps (docs/method.md §29): a mass on a damped contact spring.
 
 A stiff block rests on a clamped base through node-to-face springs (LINEAR law, slope K) with
 ``ContactDamping(c)`` and is pressed down by a constant traction from t = 0. It moves as a rigid

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..elements import ELEMENT_TYPES, frozen_array
@@ -27,6 +29,7 @@ class Checks(ReaderState):
                               block.locations)  # fmt: skip
         for what, ids, loc in self.node_refs:
             self._check_known(node_ids, ids, "node", what, (loc,))
+        self._apply_transforms(node_ids, node_coords)  # TransformCards: *BOUNDARY in global dofs
         springs = self._finish_springs(all_elements)
         known_elements = np.sort(np.concatenate([all_elements, *(s.ids for s in springs)]))
         for what, ids, loc in self.element_refs:
@@ -70,8 +73,32 @@ class Checks(ReaderState):
             initial_temperatures=tuple(self.initial_temperatures),
             temperature_boundaries=tuple(self.temperature_boundaries),
             shells=shells,
+            transformed_nodes=self._transformed_nodes(),
             time_points=dict(self.time_points),
         )
+
+    def _transformed_nodes(self) -> np.ndarray:
+        """Sorted numbers of the nodes of every ``*TRANSFORM`` card."""
+        sets = [np.asarray(self.nsets[t.nset], np.int64) for t in self.transforms]
+        return frozen_array(np.unique(np.concatenate([np.zeros(0, np.int64), *sets])), np.int64)
+
+    def _split_overridden_sections(self, owner: dict[int, SolidSection]) -> None:
+        """Give a section whose elements a later section takes the rest only (docs/method.md §28.1).
+
+        ccx 2.20 lets a later ``*SOLID SECTION`` hold an element of an earlier one (measured on
+        metalforming); the earlier section gets the element set ``<ELSET>#<k>`` of the elements
+        it keeps, so that the sections the model sees are disjoint.
+        """
+        sections = []
+        for k, section in enumerate(self.sections):
+            members = np.asarray(self.elsets[section.elset], np.int64)
+            kept = np.array([e for e in members.tolist() if owner[e] is section], np.int64)
+            if kept.size != np.unique(members).size:
+                name = f"{section.elset}#{k + 1}"
+                self.elsets[name] = kept.tolist()
+                section = dataclasses.replace(section, elset=name)
+            sections.append(section)
+        self.sections = sections
 
     def _assemble_nodes(self) -> tuple[np.ndarray, np.ndarray]:
         ids_array = np.array(self.node_ids, dtype=np.int64)
@@ -175,13 +202,8 @@ class Checks(ReaderState):
                     self.materials[section.material].location,
                 )
             for element in self.elsets[section.elset]:
-                if element in owner and owner[element] is not section:
-                    raise DeckError(
-                        f"element {element} is in two solid sections (the other at "
-                        f"{owner[element].location})",
-                        section.location,
-                    )
-                owner[element] = section
+                owner[element] = section  # a later section holds, as in ccx 2.20 (measured)
+        self._split_overridden_sections(owner)
         missing = all_elements[~np.isin(all_elements, np.fromiter(owner, np.int64, len(owner)))]
         if missing.size:
             element = int(missing[0])
@@ -192,7 +214,9 @@ class Checks(ReaderState):
             )
             raise DeckError(f"element {element} has no *SOLID SECTION (no material)", loc)
         return {
-            name: Material(m.name, m.elastic, dict(m.extra), m.location)
+            name: Material(
+                m.name, m.elastic, dict(m.extra), m.location, m.plastic, m.plastic_location
+            )
             for name, m in self.materials.items()
         }
 

@@ -63,12 +63,18 @@ class Surface:
 
 @dataclass(frozen=True, eq=False)
 class Material:
-    """A ``*MATERIAL``: isotropic ``elastic = (E, nu)`` plus data a static step does not use."""
+    """A ``*MATERIAL``: isotropic ``elastic = (E, nu)`` plus data a static step does not use.
+
+    ``plastic`` is the ``*PLASTIC`` table (isotropic hardening) as ``(yield stress, equivalent
+    plastic strain)`` rows, None for an elastic material; ``plastic_location`` its card.
+    """
 
     name: str
     elastic: tuple[float, float] | None
     extra: dict[str, tuple[tuple[float | None, ...], ...]]
     location: Location
+    plastic: tuple[tuple[float, float], ...] | None = None
+    plastic_location: Location | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -585,6 +591,8 @@ class Deck:
         ties: ``*TIE`` cards in deck order; cyclic_symmetries: ``*CYCLIC SYMMETRY MODEL`` cards.
         initial_temperatures: ``*INITIAL CONDITIONS, TYPE=TEMPERATURE`` data lines, in order.
         temperature_boundaries: ``*BOUNDARY`` lines of dof 11 of the model definition.
+        transformed_nodes: sorted numbers of the nodes of a ``*TRANSFORM`` (their ``*BOUNDARY``
+            lines are rewritten in global dofs, ``deck/transforms.py``).
         shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
         time_points: ``*TIME POINTS`` cards by upper-case name.
@@ -615,6 +623,7 @@ class Deck:
     initial_temperatures: tuple[InitialTemperature, ...] = ()
     temperature_boundaries: tuple[Boundary, ...] = ()
     shells: ShellExpansion | None = None
+    transformed_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     time_points: dict[str, TimePoints] = field(default_factory=dict)
 
     @property

@@ -99,7 +99,7 @@ class InteractionCards(ReaderState):
         interaction.friction = self._friction_data(card)
 
     def _k_CONTACTDAMPING(self, card: Card) -> None:
-        """``*CONTACT DAMPING[, TANGENT FRACTION=f]`` with the damping constant (§28)."""
+        """``*CONTACT DAMPING[, TANGENT FRACTION=f]`` with the damping constant (§29)."""
         interaction = self._interaction(card)
         self._check_params(card, allowed={"TANGENTFRACTION"})
         self._need_data(card)

@@ -1,4 +1,4 @@
-"""Material cards: ``*MATERIAL``, ``*ELASTIC``, unused material data, ``*SOLID SECTION``."""
+"""Material cards: ``*MATERIAL``, ``*ELASTIC``, ``*PLASTIC``, unused data, ``*SOLID SECTION``."""
 
 from __future__ import annotations
 
@@ -51,6 +51,59 @@ class MaterialCards(ReaderState):
             )
         material.elastic = (young, nu)
         material.elastic_location = card.location
+
+    def _k_PLASTIC(self, card: Card) -> None:
+        """``*PLASTIC``: isotropic hardening, one temperature (docs/method.md §21.6)."""
+        material = self._material(card)
+        self._check_params(card, allowed={"HARDENING"})
+        hardening = card.params.get("HARDENING") or "ISOTROPIC"
+        if hardening != "ISOTROPIC":
+            raise DeckError(
+                f"*PLASTIC, HARDENING={hardening} is not supported yet (only ISOTROPIC)",
+                card.location,
+            )
+        self._need_data(card)
+        rows, temperatures = [], set()
+        for fields, _, loc in card.lines:
+            if not 2 <= len(fields) <= 3:
+                raise DeckError(
+                    "*PLASTIC data line: yield stress, plastic strain[, temperature]", loc
+                )
+            stress = self._float(fields[0], "yield stress", loc)
+            strain = self._float(fields[1], "equivalent plastic strain", loc)
+            if len(fields) == 3 and fields[2].strip():
+                temperatures.add(self._float(fields[2], "temperature", loc))
+            if len(temperatures) > 1:
+                raise DeckError(
+                    "temperature-dependent *PLASTIC (several temperatures) is not supported yet",
+                    loc,
+                )
+            if stress <= 0.0 or strain < 0.0:
+                raise DeckError(
+                    f"*PLASTIC needs a yield stress > 0 and a plastic strain >= 0, got {stress}, "
+                    f"{strain}",
+                    loc,
+                )
+            if rows and strain <= rows[-1][1]:
+                raise DeckError(
+                    f"*PLASTIC: the plastic strains must increase, {strain} follows {rows[-1][1]}",
+                    loc,
+                )
+            rows.append((stress, strain))
+        if rows[0][1] != 0.0:
+            raise DeckError(
+                f"*PLASTIC: the first line's plastic strain must be 0 (initial yield), got "
+                f"{rows[0][1]}",
+                card.lines[0][2],
+            )
+        if material.plastic is not None:
+            raise DeckError(
+                f"material {material.name} has two *PLASTIC cards (first at "
+                f"{material.plastic_location})",
+                card.location,
+            )
+        material.plastic = tuple(rows)
+        material.plastic_location = card.location
 
     def _unused_material(self, card: Card) -> None:
         material = self._material(card)

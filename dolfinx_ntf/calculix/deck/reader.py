@@ -32,6 +32,7 @@ from .shells import ShellCards
 from .springs import SpringCards
 from .steps import StepCards
 from .ties import TieCards
+from .transforms import TransformCards
 
 
 class _Reader(
@@ -45,6 +46,7 @@ class _Reader(
     OutputCards,
     TieCards,
     ShellCards,
+    TransformCards,
     Checks,
 ):
     """Keyword-by-keyword deck reader; one method ``_k_<KEYWORD>`` per supported keyword."""

@@ -77,6 +77,8 @@ class MaterialBuilder:
     location: Location
     elastic: tuple[float, float] | None = None
     elastic_location: Location | None = None
+    plastic: tuple[tuple[float, float], ...] | None = None
+    plastic_location: Location | None = None
     extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
 
 
@@ -130,6 +132,8 @@ class ReaderState:
         self.initial_temperatures: list[InitialTemperature] = []
         self.temperature_boundaries: list[Boundary] = []
         self.equations: list[Equation] = []
+        #: ``*TRANSFORM`` cards (``transforms.Transform``), in deck order.
+        self.transforms: list = []
         self.ties: dict[str, Tie] = {}
         self.cyclic_symmetries: list[CyclicSymmetry] = []
         self.steps: list[Step] = []

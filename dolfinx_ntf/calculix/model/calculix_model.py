@@ -26,8 +26,10 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
+from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.plane_sections import PlaneSections
+from dolfinx_ntf.fem.plasticity import J2Plasticity
 from dolfinx_ntf.fem.serendipity import serendipity_constraints, trilinear_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
@@ -51,6 +53,7 @@ from .plane import (
     section_thickness,
     volume_weight,
 )
+from .plasticity import check_plastic_deck, plastic_laws
 from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
 from .thermal import ThermalModel, is_thermal, thermal_model
@@ -110,6 +113,10 @@ class CalculixModel:
             None.
         incompatible_modes: C3D8I's condensed internal modes on every owned cell (an element
             term of the problem, docs/method.md §22), else None.
+        plasticity: One J2 law per ``*PLASTIC`` section (the problem's history; its cells are
+            left out of the elastic form, docs/method.md §21.6).
+        jacobian: The bulk Jacobian when the residual has plastic terms (``ufl.derivative``
+            cannot see through their stress), else None.
         axisymmetric_elements: The ccx numbers of the CAX elements (their printed stresses are
             those of ccx's sector, docs/method.md §26.4), else None.
         sections: The per-cell 2D models of a quasi-axisymmetric deck or of NLGEOM on 2D
@@ -154,7 +161,7 @@ class CalculixModel:
         default_factory=list, repr=False
     )
     constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
-    #: Local block dofs of the carrier cells' new points, held at zero (§28.6).
+    #: Local block dofs of the carrier cells' new points, held at zero (§29.6).
     carrier_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
@@ -164,12 +171,23 @@ class CalculixModel:
     printed_scale: float = 1.0
 
     @property
+    def symmetric_bulk(self) -> bool:
+        """Whether the bulk Jacobian is symmetric.
+
+        Not with finite-strain plastic laws, whose algorithmic tangent ``dP/dF`` is not
+        (docs/method.md §21.7).
+        """
+        return not any(isinstance(law, FiniteStrainJ2Plasticity) for law in self.plasticity)
+
+    @property
     def gdim(self) -> int:
         """The number of displacement components (2 for ccx's 2D elements, else 3)."""
         return int(self.mesh.geometry.dim)
 
     thermal: ThermalModel | None = None
     incompatible_modes: IncompatibleModes | None = None
+    plasticity: list[J2Plasticity | FiniteStrainJ2Plasticity] = field(default_factory=list)
+    jacobian: ufl.Form | None = None
     axisymmetric_elements: np.ndarray | None = None
     sections: PlaneSections | None = None
     spring_only_nodes: np.ndarray | None = None
@@ -394,6 +412,9 @@ class CalculixModel:
             options: :class:`~dolfinx_ntf.ContactProblem` options (``symmetric``, ``jit_options``).
         """
         options.setdefault("constraints", self.constraints)
+        if self.plasticity:
+            options.setdefault("J", self.jacobian)
+            options.setdefault("history", self.plasticity)
         problem = ContactProblem(self.residual, self.u, self.pairs, bcs, **options)
         problem.nodal_loads = self.nodal_loads
         problem.element_terms.extend(self.springs)
@@ -457,12 +478,17 @@ def build_model(
         deck = dataclasses.replace(deck, elements={etype.name: block})
     thickness = np.ones(block.ids.size)
     if etype.tdim == 2:  # ccx's 2D elements, natively in 2D (docs/method.md §23)
+        if deck.transformed_nodes.size:
+            raise NotImplementedError(
+                f"{deck.path}: *TRANSFORM with {etype.name} elements is not supported yet "
+                "(docs/method.md §28)"
+            )
         check_two_d_deck(deck, block, models)
         thickness = section_thickness(deck, block, models)
     # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §19)
     meshed = np.isin(deck.node_ids, block.connectivity)
     deck, tie_blocks = tie_constraints(deck, meshed, warn=comm.rank == 0)
-    carried = collectives.collectively(comm, carried_nodes, deck, block)  # in no element (§28.6)
+    carried = collectives.collectively(comm, carried_nodes, deck, block)  # in no element (§29.6)
     mesh = create_mesh(deck, block, comm, carried)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
@@ -485,6 +511,7 @@ def build_model(
         springs_follow = check_springs(deck, maps.meshed)
         if etype.name == "C3D8I":
             check_incompatible_modes(deck)
+        check_plastic_deck(deck, etype)
     except (ValueError, NotImplementedError) as exc:
         error = exc
     validation.raise_collectively(comm, error)
@@ -543,6 +570,19 @@ def build_model(
             u, mu, lmbda, kinematics, None if thermal is None else thermal.thermal_strain()
         )
         internal_force = ufl.inner(P, ufl.grad(v)) * dx
+    laws: list[J2Plasticity | FiniteStrainJ2Plasticity] = []
+    if etype.tdim == 3:  # *PLASTIC sections: their own law, the elastic form elsewhere (§21.6)
+        laws, tags = plastic_laws(
+            deck, block, u, element_cell, etype.quadrature_degree, finite=True in kinds
+        )
+    if laws:
+        dx_elastic = ufl.Measure(
+            "dx",
+            domain=mesh,
+            subdomain_data=tags,
+            metadata={"quadrature_degree": etype.quadrature_degree},
+        )(0)
+        internal_force = ufl.inner(P, ufl.grad(v)) * dx_elastic
     residual = internal_force
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     if pressures:
@@ -566,6 +606,14 @@ def build_model(
     if any(step.gravity for step in deck.steps):
         gravity, body_force = _gravity(deck, block, mesh, element_cell)
         residual -= ufl.inner(body_force, v) * dx
+    jacobian = None
+    if laws:  # the plastic terms' consistent tangent (ufl.derivative cannot see through them)
+        du = ufl.TrialFunction(V)
+        jacobian = ufl.derivative(residual, u, du)
+        for law in laws:
+            jacobian += law.jacobian(du, v)
+            residual += law.residual(v)
+            internal_force += law.residual(v)
     nodal_loads = dolfinx.fem.Function(V, name="nodal_loads")
     constraints, reference_terms, free_references = equation_constraints(deck, maps.meshed)
     # terms on ccx node numbers, held by any process: global dofs (docs/method.md §14.9)
@@ -638,6 +686,8 @@ def build_model(
         ),
         thermal=thermal,
         incompatible_modes=modes,
+        plasticity=laws,
+        jacobian=jacobian,
         axisymmetric_elements=block.ids[models == "axisymmetric"] if etype.tdim == 2 else None,
         sections=sections,
         spring_only_nodes=_node_slaves(deck) if etype.tdim == 2 else None,

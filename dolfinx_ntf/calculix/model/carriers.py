@@ -1,4 +1,4 @@
-"""Dofs for deck nodes in no element: one massless, stiffless carrier cell per node (§28.6).
+"""Dofs for deck nodes in no element: one massless, stiffless carrier cell per node (§29.6).
 
 ccx gives every node three dofs; a dolfinx space has dofs only at the nodes of its cells. Spring
 ends and node-based slave nodes that belong to no element (ccx's contdamp1 and contdamp2: the

@@ -86,7 +86,7 @@ def friction_of(deck: Deck, data: FrictionCard) -> Friction:
 
 
 def damping_of(deck: Deck, interaction_name: str) -> ContactDamping | None:
-    """The ``*CONTACT DAMPING`` of an interaction (it acts in ``*DYNAMIC`` steps only, §28)."""
+    """The ``*CONTACT DAMPING`` of an interaction (it acts in ``*DYNAMIC`` steps only, §29)."""
     data = deck.interactions[interaction_name].damping
     return None if data is None else ContactDamping(data.coefficient, data.tangent_fraction)
 

@@ -67,7 +67,7 @@ class MeshMaps:
         find: Local facet of facet corner vertices (:func:`facet_finder`).
         meshed: ``(N,)`` the deck node belongs to an element (on any process).
         corner: ``(N,)`` the deck node is an element corner (on any process).
-        carried: ``(N,)`` the deck node is in no element but on a carrier cell (§28.6).
+        carried: ``(N,)`` the deck node is in no element but on a carrier cell (§29.6).
     """
 
     block: ElementBlock
@@ -177,7 +177,7 @@ def create_mesh(
     """The dolfinx mesh of ``block``, distributed from rank 0's cells (collective).
 
     ``carried``: deck rows of nodes in no element that get a carrier cell each (``carriers.py``,
-    docs/method.md §28.6), appended after the element cells; their new points follow the deck's.
+    docs/method.md §29.6), appended after the element cells; their new points follow the deck's.
     """
     gdim = block.type.tdim  # ccx's 2D elements: a 2D mesh of the plane z = 0 (§23)
     domain = compat.coordinate_element(block.type.cell, block.type.degree, gdim)

@@ -48,7 +48,7 @@ def deck_surfaces(
                 )
             vertices, dofs = node_vertex[rows], maps.node_dof[rows]
             # midside nodes of quadratic elements, and nodes in no element (on carrier cells,
-            # §28.6): no face area, ccx's fallback
+            # §29.6): no face area, ccx's fallback
             carried = maps.carried[rows] if maps.carried is not None else np.zeros(rows.size, bool)
             midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)
             vertices = np.where(carried, -1, vertices)

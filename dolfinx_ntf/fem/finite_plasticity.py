@@ -1,0 +1,169 @@
+"""Finite-strain J2 plasticity at quadrature points: the dolfinx glue of its kernel.
+
+The kernel is :mod:`dolfinx_ntf.kernels.finite_plasticity`.
+docs/method.md §21.7. :class:`FiniteStrainJ2Plasticity` evaluates the deformation gradient of the
+displacement at the quadrature points, runs Simo's multiplicative return (CalculiX's ``*PLASTIC``
+under NLGEOM) on all of them at once and keeps the first Piola-Kirchhoff stress (9 components,
+row-major) and its derivative ``dP/dF`` (9x9) in quadrature-space Functions. The residual is
+``inner(P, grad v) dx`` and the Jacobian ``inner(A grad du, grad v) dx``, total Lagrangian; the
+history (``Cp^-1`` and the equivalent plastic strain) is committed as
+:class:`~dolfinx_ntf.J2Plasticity`'s, through the problem's ``history`` (the
+:class:`~dolfinx_ntf.contact.problem.MaterialHistory` role). 3D only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dolfinx.fem
+import ufl
+
+from dolfinx_ntf import compat, validation
+from dolfinx_ntf.kernels.finite_plasticity import finite_return_map
+from dolfinx_ntf.kernels.plasticity import IsotropicHardening, elastic_matrix
+
+from .plasticity import _cell_rows, material_cells
+
+__all__ = ["FiniteStrainJ2Plasticity"]
+
+
+def _flat(tensor: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """A 3x3 UFL tensor as a 9-vector, row-major."""
+    return ufl.as_vector([tensor[i, j] for i in range(3) for j in range(3)])
+
+
+class FiniteStrainJ2Plasticity:
+    """Simo's finite-strain J2 plasticity with isotropic hardening at the quadrature points.
+
+    Args:
+        u: The 3D displacement (``F = I + grad u``).
+        youngs_modulus: E > 0.
+        poisson_ratio: -1 < nu < 0.5.
+        hardening: The yield stress table (true stress against equivalent plastic strain).
+        quadrature_degree: Degree of the default rule the stresses live at; default
+            ``2 * degree(u)`` (2x2x2 Gauss points on linear hexahedra, as CalculiX's C3D8).
+        cell_tags: Cell tags and ``tag``: the law covers the cells tagged ``tag`` (default every
+            cell), as :class:`~dolfinx_ntf.J2Plasticity`'s.
+        tag: The value of this material's cells in ``cell_tags``.
+
+    Attributes:
+        first_piola: P at the last evaluation, 9 components row-major (a quadrature Function).
+        tangent: ``dP/dF`` at the last evaluation, 9x9 (a quadrature Function).
+        dx: The measure of that rule over the law's cells.
+    """
+
+    def __init__(
+        self,
+        u: dolfinx.fem.Function,
+        youngs_modulus: float,
+        poisson_ratio: float,
+        hardening: IsotropicHardening,
+        *,
+        quadrature_degree: int | None = None,
+        cell_tags: compat.MeshTags | None = None,
+        tag: int = 1,
+    ) -> None:
+        owner = "FiniteStrainJ2Plasticity"
+        validation.check_type(u, dolfinx.fem.Function, f"{owner}: u")
+        validation.check_type(hardening, IsotropicHardening, f"{owner}: hardening")
+        elastic_matrix(youngs_modulus, poisson_ratio)  # checks E and nu
+        if ufl.shape(u) != (3,):
+            raise ValueError(f"{owner}: u must be a 3D displacement, got shape {ufl.shape(u)}")
+        degree = 2 * compat.space_degree(u.function_space)
+        if quadrature_degree is not None:
+            if isinstance(quadrature_degree, bool) or not isinstance(quadrature_degree, int):
+                raise ValueError(f"{owner}: quadrature_degree must be an integer >= 0")
+            if quadrature_degree < 0:
+                raise ValueError(f"{owner}: quadrature_degree must be an integer >= 0")
+            degree = quadrature_degree
+        self.u = u
+        self.youngs_modulus = float(youngs_modulus)
+        self.poisson_ratio = float(poisson_ratio)
+        self.hardening = hardening
+        self.quadrature_degree = degree
+        mesh = u.function_space.mesh
+        self._cells, self.dx = material_cells(mesh, degree, cell_tags, tag, owner)
+        self.first_piola = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (9,)))
+        self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (9, 9)))
+        self.first_piola.name = "first_piola"
+        points = compat.quadrature_points(mesh, degree)
+        self._gradient = dolfinx.fem.Expression(ufl.Identity(3) + ufl.grad(u), points)
+        #: Quadrature points of the law's local cells (owned and ghost), in block dofs.
+        self._dofs = compat.cell_dofs(self.first_piola.function_space)[self._cells].reshape(-1)
+        n = self._dofs.size
+        #: Committed inverse plastic right Cauchy-Green tensors ``Cp^-1``, (n, 3, 3).
+        self.inverse_plastic_metric = np.tile(np.eye(3), (n, 1, 1))
+        #: Committed equivalent plastic strain (CalculiX's PEEQ), (n,).
+        self.equivalent_plastic_strain = np.zeros(n)
+        self._trial = None
+        self.evaluate()
+
+    # -- the forms -----------------------------------------------------------------------------
+
+    def residual(self, v: ufl.Argument) -> ufl.Form:
+        """The internal virtual work ``inner(P, grad v) dx`` at the quadrature points.
+
+        Args:
+            v: The test function of ``u``'s space.
+        """
+        return ufl.inner(self.first_piola, _flat(ufl.grad(v))) * self.dx
+
+    def jacobian(self, du: ufl.Argument, v: ufl.Argument) -> ufl.Form:
+        """The consistent Jacobian ``inner(dP/dF grad du, grad v) dx`` of :meth:`residual`.
+
+        Args:
+            du: The trial function of ``u``'s space.
+            v: The test function.
+        """
+        return ufl.inner(ufl.dot(self.tangent, _flat(ufl.grad(du))), _flat(ufl.grad(v))) * self.dx
+
+    # -- the history (the MaterialHistory role) -------------------------------------------------
+
+    def deformation_gradient(self) -> np.ndarray:
+        """``F`` of ``u`` at every local quadrature point of the law, (n, 3, 3)."""
+        if self._cells.size == 0:
+            return np.zeros((0, 3, 3))
+        values = compat.evaluate_expression(self._gradient, self.u.function_space.mesh, self._cells)
+        return np.asarray(values).reshape(-1, 3, 3)
+
+    def evaluate(self) -> None:
+        """Return-map the current ``u`` from the committed history into P and ``dP/dF``."""
+        result = finite_return_map(
+            self.deformation_gradient(),
+            self.inverse_plastic_metric,
+            self.equivalent_plastic_strain,
+            self.youngs_modulus,
+            self.poisson_ratio,
+            self.hardening,
+        )
+        self.first_piola.x.array.reshape(-1, 9)[self._dofs] = result.first_piola.reshape(-1, 9)
+        self.tangent.x.array.reshape(-1, 81)[self._dofs] = result.tangent.reshape(-1, 81)
+        self._trial = result
+
+    def increment_converged(self) -> None:
+        """Commit the history of the converged increment."""
+        self.evaluate()
+        self.inverse_plastic_metric = self._trial.inverse_plastic_metric.copy()
+        self.equivalent_plastic_strain = self._trial.equivalent_plastic_strain.copy()
+
+    def increment_rejected(self) -> None:
+        """Drop the trial history: the stress goes back to the committed state at ``u``."""
+        self.evaluate()
+
+    @property
+    def yielding(self) -> np.ndarray:
+        """Whether each local quadrature point yielded at the last evaluation, (n,) bool."""
+        return self._trial.plastic.copy()
+
+    @property
+    def cells(self) -> np.ndarray:
+        """The law's local cells (owned and ghost), ascending."""
+        return self._cells.copy()
+
+    def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
+        """Cauchy stresses ``(n, q, 3, 3)`` of the last evaluation at the points of ``cells``.
+
+        Args:
+            cells: Local cells of the law (``ValueError`` for others).
+        """
+        return _cell_rows(self._cells, self._trial.cauchy, cells, "FiniteStrainJ2Plasticity")
