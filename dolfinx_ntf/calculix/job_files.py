@@ -439,7 +439,7 @@ def check_requests(deck: Deck) -> None:
                 if (request.kind, key) == ("NODE", "V") and step.dynamic is None:
                     raise NotImplementedError(
                         f"{request.location}: *NODE PRINT V (velocities) is supported in *DYNAMIC "
-                        "steps only"
+                        "and *MODAL DYNAMIC steps only"
                     )
                 if thermal and step.coupled is None:
                     raise NotImplementedError(
