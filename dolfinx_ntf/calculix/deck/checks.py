@@ -241,6 +241,8 @@ class Checks(ReaderState):
                     pair.location,
                 )
         return {
-            name: SurfaceInteraction(i.name, i.behavior, i.friction, dict(i.extra), i.location)
+            name: SurfaceInteraction(
+                i.name, i.behavior, i.friction, dict(i.extra), i.location, i.damping
+            )
             for name, i in self.interactions.items()
         }

@@ -120,14 +120,24 @@ class Friction:
 
 
 @dataclass(frozen=True, eq=False)
+class ContactDamping:
+    """A ``*CONTACT DAMPING`` card: damping constant and ``TANGENT FRACTION`` (default 0)."""
+
+    coefficient: float
+    tangent_fraction: float
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class SurfaceInteraction:
-    """A ``*SURFACE INTERACTION`` with its behavior, optional friction and unused extra data."""
+    """A ``*SURFACE INTERACTION`` with its behavior, optional friction, damping and extra data."""
 
     name: str
     behavior: SurfaceBehavior | None
     friction: Friction | None
     extra: dict[str, tuple[tuple[float | None, ...], ...]]
     location: Location
+    damping: ContactDamping | None = None
 
 
 @dataclass(frozen=True, eq=False)
