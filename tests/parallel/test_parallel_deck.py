@@ -263,9 +263,11 @@ def test_equation_decks_give_the_serial_files(name, shared):
     _assert_serial_files(path)
 
 
-def _sliced_mesh(deck, block, comm):
+def _sliced_mesh(deck, block, comm, carried=None):
     """``create_mesh`` with the ``empty`` partition: slices along x on all processes but
-    the last, which holds no cell (on one process, everything on it)."""
+    the last, which holds no cell (on one process, everything on it). Decks with nodes in no
+    element (``carried``) are not among its decks."""
+    assert carried is None or len(carried) == 0
     domain = compat.coordinate_element(block.type.cell, block.type.degree)
     cells = np.zeros((0, block.type.num_nodes), dtype=np.int64)
     x, owners = np.zeros((0, 3)), np.zeros(0, dtype=np.int32)
