@@ -13,7 +13,6 @@ from .data import (
     ElementBlock,
     Material,
     SolidSection,
-    Surface,
     SurfaceInteraction,
 )
 from .errors import DeckError, Location
@@ -47,7 +46,7 @@ class Checks(ReaderState):
         wedges = self._check_wedges(elements, node_ids, node_coords, rotation)
         self._check_faces(elements)
         materials = self._check_materials(elements, all_elements)
-        interactions = self._check_contact(wedges)
+        interactions = self._check_contact()
         for step in self.steps:
             for load in step.dloads:
                 if np.any(np.isin(load.elements, wedges)):
@@ -256,23 +255,6 @@ class Checks(ReaderState):
                         location,
                     )
 
-    @staticmethod
-    def _refuse_wedge_triangles(surface: Surface, wedges: np.ndarray, location: Location) -> None:
-        """Refuse a master surface holding a C3D6 triangle (docs/method.md §29).
-
-        Such a face is a quad4 with a repeated corner, which the master triangulation and nodal
-        normals do not take.
-        """
-        triangle = np.isin(surface.elements, wedges) & (surface.faces <= 2)  # C3D8 S1, S2
-        if np.any(triangle):
-            k = int(np.argmax(triangle))
-            raise DeckError(
-                f"master surface {surface.name} ({surface.location}) holds the triangular face "
-                f"S{int(surface.faces[k])} of C3D6 element {int(surface.elements[k])}: wedge "
-                "triangles as master faces are not supported (their quadrilateral faces are)",
-                location,
-            )
-
     def _check_materials(self, elements: dict[str, ElementBlock],
                          all_elements: np.ndarray) -> dict[str, Material]:  # fmt: skip
         owner: dict[int, SolidSection] = {}
@@ -303,7 +285,7 @@ class Checks(ReaderState):
             for name, m in self.materials.items()
         }
 
-    def _check_contact(self, wedges: np.ndarray) -> dict[str, SurfaceInteraction]:
+    def _check_contact(self) -> dict[str, SurfaceInteraction]:
         self.contact_pairs = [
             dataclasses.replace(pair, slave=pair.slave + NODE_TWIN)
             if pair.slave + NODE_TWIN in self.surfaces
@@ -329,7 +311,6 @@ class Checks(ReaderState):
                     f"master surface {pair.master} must be made of element faces, not TYPE=NODE",
                     pair.location,
                 )
-            self._refuse_wedge_triangles(self.surfaces[pair.master], wedges, pair.location)
         return {
             name: SurfaceInteraction(i.name, i.behavior, i.friction, dict(i.extra), i.location)
             for name, i in self.interactions.items()
