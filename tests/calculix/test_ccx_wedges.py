@@ -125,6 +125,14 @@ def test_wedges_refused_with_a_clear_error(tmp_path: Path) -> None:
         read_deck(path)
 
 
+@pytest.mark.parametrize("request_card", ["*EL PRINT, ELSET=EALL\nS", "*EL FILE\nS"])
+def test_element_outputs_of_wedges_refused(tmp_path: Path, request_card: str) -> None:
+    text = _block(surfaces=False)[0].replace("*END STEP", f"{request_card}\n*END STEP")
+    (tmp_path / "w.inp").write_text(text)
+    with pytest.raises(NotImplementedError, match="of C3D6 element 1 is not supported"):
+        run_job("w", tmp_path, comm=MPI.COMM_SELF, progress=False)
+
+
 TWINS = """*NODE, NSET=NALL
 1, 0, 0, 0
 2, 1, 0, 0
