@@ -30,7 +30,9 @@ Per deck and code:
   with another master face or with a contact element in one code only.
 
 Both codes run on one thread (``--threads``: ``OMP_NUM_THREADS`` for ccx, and the OpenMP/OpenBLAS
-thread counts for dolfinx_ntf's MUMPS). Serial; needs ``ccx`` on the PATH. From the repository
+thread counts for dolfinx_ntf's MUMPS). The checkout's package is byte-compiled first
+(``startup.compile_bytecode``), so that its start-up is that of an installed package also where
+``PYTHONDONTWRITEBYTECODE`` is set. Serial; needs ``ccx`` on the PATH. From the repository
 root::
 
     .venv/bin/python benchmarks/vs_ccx.py                  # every deck (about 15 minutes)
@@ -851,6 +853,9 @@ def main(argv: typing.Sequence[str] | None = None) -> list[DeckResult]:
         raise SystemExit("ccx not found: apt-get install calculix-ccx (or set $CCX)")
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import ccx_decks
+    from startup import compile_bytecode
+
+    compile_bytecode(ROOT)
 
     suite = suite_decks()
     by_name = {d.name: d for d in suite}

@@ -32,6 +32,7 @@ from dolfinx_ntf.kernels.discrete_springs import (
 )
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 from dolfinx_ntf.kernels.laws import (
+    ContactDamping,
     DynamicLinearLaw,
     ExponentialLaw,
     Friction,
@@ -106,6 +107,7 @@ __all__ = [
     "CellTemperature",
     "ChangeFriction",
     "ContactConvergenceError",
+    "ContactDamping",
     "ContactDivergenceError",
     "ContactFields",
     "ContactNewtonSolver",

@@ -51,6 +51,7 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
             "ExponentialLaw",
             "TabularLaw",
             "Friction",
+            "ContactDamping",
             "SurfaceInteraction",
         ],
     ),

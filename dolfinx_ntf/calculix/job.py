@@ -29,6 +29,7 @@ numbering (``gather.py``) and written by rank 0: the files are those of the seri
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time as _time
 from collections.abc import Sequence
@@ -44,7 +45,7 @@ import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
-from dolfinx_ntf.kernels.laws import LinearLaw, SurfaceInteraction
+from dolfinx_ntf.kernels.laws import LinearLaw
 from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
@@ -246,7 +247,7 @@ class _Job:
         else:
             self.solver = self._mechanical_solver(comm, petsc_options, tight, solver_options)
         # no JOB.xdmf with wedges: dolfinx cannot write fields on collapsed hexahedra (its
-        # pull-back of their nodes fails at the collapsed edge, docs/method.md §29)
+        # pull-back of their nodes fails at the collapsed edge, docs/method.md §30)
         self.writer: ContactWriter | None = None
         if deck.wedges.size == 0:
             self.result.xdmf = directory / f"{jobname}.xdmf"
@@ -391,7 +392,7 @@ class _Job:
             if dynamic and isinstance(law, LinearLaw):
                 law = law.dynamic()
             if pair.interaction.law is not law:
-                pair.interaction = SurfaceInteraction(law, pair.interaction.friction)
+                pair.interaction = dataclasses.replace(pair.interaction, law=law)
 
     def _run_dynamic_step(self, index: int, step: Step) -> None:
         """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
@@ -403,6 +404,7 @@ class _Job:
                 self.problem.elimination.expand(compat.petsc_vector(self.velocity))
                 self.velocity.x.scatter_forward()
             self.acceleration = dolfinx.fem.Function(model.V, name="acceleration")
+            self.values.velocity = self.velocity
         increments = step.static
         period = increments.period
         maximum = min(increments.maximum or period, period)
@@ -558,7 +560,7 @@ class _Job:
             friction = friction_of(self.deck, change.friction)
             for pair, spec in zip(self.model.pairs, self.deck.contact_pairs):
                 if spec.interaction == change.interaction:
-                    pair.interaction = SurfaceInteraction(pair.interaction.law, friction)
+                    pair.interaction = dataclasses.replace(pair.interaction, friction=friction)
         for change in step.model_changes:
             for pair, spec in zip(self.model.pairs, self.deck.contact_pairs):
                 if (spec.slave, spec.master) == (change.slave, change.master):

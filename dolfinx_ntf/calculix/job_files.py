@@ -302,8 +302,11 @@ class _Increment:
                 for key in request.keys:
                     if key == "RF" and forces is None:
                         forces, floor = self.values.printed_forces(self.largest_residual)
-                    if key == "NT":
-                        values = self.values.temperatures()[self.deck.node_index(ids)]
+                    if key in ("NT", "V"):
+                        nodal = self.values.temperatures() if key == "NT" else None
+                        if key == "V":
+                            nodal = self.values.velocities()
+                        values = nodal[self.deck.node_index(ids)]
                         blocks += node_print_blocks(key, request.set, total, ids, values)
                         continue
                     values = (displacement if key == "U" else forces)[self.deck.node_index(ids)]
@@ -424,7 +427,7 @@ def _check_transformed_outputs(deck: Deck) -> None:
 
 
 def _check_wedge_outputs(deck: Deck) -> None:
-    """Refuse element outputs of C3D6 wedges (docs/method.md §29).
+    """Refuse element outputs of C3D6 wedges (docs/method.md §30).
 
     ccx's come from its two-point wedge rule, ours would be the collapsed hexahedron's 8 points.
     """
@@ -447,7 +450,7 @@ def _check_wedge_outputs(deck: Deck) -> None:
 
 def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
-    supported = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
+    supported = {"NODE": {"U", "RF", "V"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
     for step in deck.steps:
         if step.modal_dynamic is not None:
             _check_modal_requests(step)
@@ -455,6 +458,11 @@ def check_requests(deck: Deck) -> None:
         for request in step.prints:
             for key in request.keys:
                 thermal = (request.kind, key) in (("NODE", "NT"), ("EL", "HFL"))
+                if (request.kind, key) == ("NODE", "V") and step.dynamic is None:
+                    raise NotImplementedError(
+                        f"{request.location}: *NODE PRINT V (velocities) is supported in *DYNAMIC "
+                        "and *MODAL DYNAMIC steps only"
+                    )
                 if thermal and step.coupled is None:
                     raise NotImplementedError(
                         f"{request.location}: *{request.kind} PRINT {key} needs a *COUPLED "

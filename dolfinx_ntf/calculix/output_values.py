@@ -102,6 +102,8 @@ class OutputValues:
         self._stress: tuple[dolfinx.fem.Expression, int] | None = None
         self._heat_flux: tuple[dolfinx.fem.Expression, int] | None = None
         self._field_scales: tuple[float, float, tuple[float, float]] | None = None
+        #: The velocity of the job's dynamic steps (``*NODE PRINT V``), None before the first.
+        self.velocity: dolfinx.fem.Function | None = None
 
     # -- forces ------------------------------------------------------------------------------------
 
@@ -158,6 +160,15 @@ class OutputValues:
         if self.deck.shells is not None:
             values = self.deck.shells.printed(self.deck.node_ids, values)
         return values
+
+    def velocities(self) -> np.ndarray:
+        """``(N, 3)`` velocity of every deck node (after a dynamic step began). Collective.
+
+        Nodes without dofs (reference nodes of ``*EQUATION``) print 0.
+        """
+        if self.velocity is None:
+            raise ValueError("no velocity: *NODE PRINT V needs a *DYNAMIC step")
+        return self.numbering.nodal(self.velocity.x.array.reshape(-1, 3))
 
     def temperatures(self) -> np.ndarray:
         """``(N, 1)`` temperature of every deck node (coupled steps only). Collective."""

@@ -157,21 +157,46 @@ class ContactAssembler:
 
         ``couplings``: more (K, 2) global node pairs to hold (element terms).
         """
-        A = dolfinx.fem.petsc.create_matrix(self._form)
-        # Fix the bulk pattern with explicit zeros: the first final assembly squeezes out unused
-        # preallocation.
-        offsets, columns = compat.sparsity_graph(self._form)
-        A.setValuesBlockedCSR(  # owned rows, global columns
-            offsets.astype(PETSc.IntType),
-            columns.astype(PETSc.IntType),
-            np.zeros(columns.size * self._bs**2),
-        )
+        A = dolfinx.fem.petsc.create_matrix(self._form)  # sizes, block size, local-to-global map
+        offsets, columns = compat.sparsity_graph(self._form)  # owned rows, global block columns
         keys = np.union1d(self._coupling_keys(blocks, couplings), self._pattern_keys)
-        self._pattern_keys = np.empty(0, dtype=np.int64)
-        self._merge(A, keys)
+        bulk = scipy.sparse.csr_matrix(
+            (np.ones(columns.size, dtype=np.int8), columns, offsets),
+            shape=(self._num_owned, self._num_global),
+        )
+        # The bulk and contact pattern in one preallocation, fixed by explicit zeros (the first
+        # final assembly would squeeze out unused preallocation): one pass, where the bulk's zeros
+        # and a merge of the contact pattern took twice as long (docs/method.md §14.3)
+        indptr, indices = self._scalar_pattern(bulk + self._owned_couplings(keys))
+        A.setPreallocationCSR((indptr, indices))
+        self._pattern_keys = keys
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        if A.getBlockSize() != self._bs or A.getLGMap()[0].getBlockSize() != self._bs:
+            raise RuntimeError("the matrix pattern lost the block structure")
         self.matrix_rebuilds += 1
         return A
+
+    def _owned_couplings(self, keys: np.ndarray) -> scipy.sparse.csr_matrix:
+        """Block pattern ``(owned nodes, global nodes)`` of the node couplings ``keys``.
+
+        In parallel each coupling goes to the process owning its row. Collective.
+        """
+        first = int(self._first_nodes[self._comm.rank])
+        if self._comm.size > 1:
+            owner = np.searchsorted(self._first_nodes, keys // self._num_global, side="right") - 1
+            keys = np.unique(collectives.send_to_owners(self._comm, keys, owner))
+        rows = keys // self._num_global
+        return scipy.sparse.csr_matrix(
+            (np.ones(keys.size, dtype=np.int8), (rows - first, keys % self._num_global)),
+            shape=(self._num_owned, self._num_global),
+        )
+
+    def _scalar_pattern(self, block: scipy.sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:
+        """CSR ``(indptr, indices)`` in PETSc's integers of the dofs of a block pattern, sorted."""
+        bs = self._bs
+        pattern = scipy.sparse.kron(block, np.ones((bs, bs), dtype=np.int8), format="csr")
+        pattern.sort_indices()
+        return pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType)
 
     def _merge(
         self, A: PETSc.Mat, keys: np.ndarray, blocks: typing.Sequence[SpringBlocks] = ()
@@ -182,23 +207,11 @@ class ContactAssembler:
         solver bound to it keeps working).
         """
         bs = self._bs
-        first = int(self._first_nodes[self._comm.rank])
-        local_keys = keys
-        if self._comm.size > 1:  # couplings go to the process owning their row
-            owner = np.searchsorted(self._first_nodes, keys // self._num_global, side="right") - 1
-            keys = np.unique(collectives.send_to_owners(self._comm, keys, owner))
-        rows = keys // self._num_global
-        block = scipy.sparse.csr_matrix(
-            (np.ones(keys.size, dtype=np.int8), (rows - first, keys % self._num_global)),
-            shape=(self._num_owned, self._num_global),
-        )
-        pattern = scipy.sparse.kron(block, np.ones((bs, bs), dtype=np.int8), format="csr")
-        pattern.sort_indices()
         n_local, n_global = bs * self._num_owned, bs * self._num_global
         C = PETSc.Mat().createAIJ(
             ((n_local, n_global), (n_local, n_global)),
             bsize=bs,
-            csr=(pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType)),
+            csr=self._scalar_pattern(self._owned_couplings(keys)),
             comm=self._comm,
         )
         self._set_values(C, blocks)
@@ -208,7 +221,7 @@ class ContactAssembler:
         C.destroy()
         if A.getBlockSize() != bs or A.getLGMap()[0].getBlockSize() != bs:
             raise RuntimeError("merging the contact pattern lost the matrix block structure")
-        self._pattern_keys = np.union1d(self._pattern_keys, local_keys)
+        self._pattern_keys = np.union1d(self._pattern_keys, keys)
 
     # -- values ------------------------------------------------------------------------------------
 

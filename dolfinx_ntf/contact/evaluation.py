@@ -13,6 +13,7 @@ import numpy as np
 from dolfinx_ntf.contact.assembly import SpringBlocks
 from dolfinx_ntf.contact.pair import PairState
 from dolfinx_ntf.contact.pairing import slave_areas
+from dolfinx_ntf.kernels.contact_damping import DampingInput
 from dolfinx_ntf.kernels.edges import EdgeType, edge_spring_area_gradients
 from dolfinx_ntf.kernels.friction import FrictionInput
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
@@ -34,6 +35,8 @@ def evaluate_pair(
     friction_in_tension: bool,
     friction_tangent: str,
     projection_tangent: str = "exact",
+    velocities: np.ndarray | None = None,
+    velocity_rate: float = 0.0,
 ) -> list[SpringBlocks]:
     """Evaluate the springs of one pair at ``coords``; returns the blocks to assemble.
 
@@ -51,6 +54,9 @@ def evaluate_pair(
         friction_tangent: ``"consistent"`` or ``"ccx"`` (docs/method.md §11.2).
         projection_tangent: ``"exact"`` or ``"ccx"`` (the interior-projection formula also at
             projections clamped to the face boundary, docs/method.md §6.1).
+        velocities: (N, 3) node velocities (a dynamic step's): the pair's contact damping acts
+            (docs/method.md §29); None: no damping (static steps).
+        velocity_rate: ``dv/du`` of ``velocities`` (the damping's tangent).
     """
     nodes = state.element_nodes
     friction = _friction_input(
@@ -71,6 +77,7 @@ def evaluate_pair(
         symmetric=symmetric,
         friction=friction,
         **({"interior_projection": True} if projection_tangent == "ccx" else {}),
+        **_damping_input(state, nodes, velocities, velocity_rate),
     )
     state.evaluation = ev
     state.xi = ev.xi
@@ -88,6 +95,20 @@ def evaluate_pair(
     if tangent and linearize_area:
         blocks.append(area_block(state, coords))
     return blocks
+
+
+def _damping_input(
+    state: PairState, nodes: np.ndarray, velocities: np.ndarray | None, rate: float
+) -> dict[str, DampingInput]:
+    """``{"damping": ...}`` for a damped pair with velocities, else ``{}``."""
+    damping = state.pair.interaction.damping
+    if damping is None or velocities is None:
+        return {}
+    return {
+        "damping": DampingInput(
+            velocities[nodes], rate, damping.coefficient, damping.tangent_fraction
+        )
+    }
 
 
 def _friction_input(

@@ -484,9 +484,16 @@ class Pairing:
 
     def _displacement(self) -> np.ndarray:
         """u at the local nodes with ghosts, then at the halo's, shape (N, 3). Collective."""
+        return self.nodal_vectors(self.u)
+
+    def nodal_vectors(self, f: dolfinx.fem.Function) -> np.ndarray:
+        """A Function on u's space at the local nodes with ghosts, then the halo's (N, 3).
+
+        Collective (e.g. the velocity of the contact damping, docs/method.md §29).
+        """
         if self.halo is not None:
-            return self.halo.displacement(self.u)
-        return planar_padded(self.u.x.array.reshape(-1, self.u.function_space.dofmap.index_map_bs))
+            return self.halo.displacement(f)
+        return planar_padded(f.x.array.reshape(-1, f.function_space.dofmap.index_map_bs))
 
     def _halo_grew(self) -> None:
         """Nodes were appended to the halo (a master patch grew, docs/method.md §14.8). Collective.

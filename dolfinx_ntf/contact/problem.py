@@ -32,6 +32,7 @@ from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.contact.evaluation import area_block, evaluate_pair
 from dolfinx_ntf.contact.pair import ContactPair, PairState
 from dolfinx_ntf.contact.pairing import Pairing
+from dolfinx_ntf.contact.velocity import NodeVelocity
 from dolfinx_ntf.fem import serendipity, serendipity_quad
 from dolfinx_ntf.fem.bulk_jacobian import BulkJacobian
 from dolfinx_ntf.fem.constraints import (
@@ -297,6 +298,10 @@ class ContactProblem:
         #: Extra terms added to the residual and the Jacobian after the bulk form and the springs
         #: (e.g. the inertia of a dynamic step, docs/method.md §12).
         self.extra_terms: list[ResidualTerm] = []
+        #: The nodal velocity of the running dynamic step (set by
+        #: :class:`~dolfinx_ntf.DynamicStep`); the pairs' contact damping acts only while it is
+        #: set (docs/method.md §29).
+        self.node_velocity: NodeVelocity | None = None
         #: Elements between arbitrary nodes assembled with the springs (e.g. discrete springs,
         #: docs/method.md §18); add them before the first step.
         self.element_terms: list[ElementTerm] = []
@@ -412,6 +417,11 @@ class ContactProblem:
         return self.pairing.has_friction
 
     @property
+    def has_damping(self) -> bool:
+        """Whether any pair has contact damping (an unsymmetric tangent in dynamic steps)."""
+        return any(s.pair.interaction.damping is not None for s in self.states)
+
+    @property
     def face_changes(self) -> int:
         """Slave nodes that kept a spring at the last pairing but moved to another master face."""
         return self.pairing.face_changes
@@ -520,6 +530,7 @@ class ContactProblem:
         coords = self.current_coordinates()
         blocks = []
         symmetric = self.symmetric and not self.has_friction
+        velocities, rate = self._velocities(coords)
         for state in self.states:
             law = state.pair.interaction.law
             blocks += evaluate_pair(
@@ -534,8 +545,18 @@ class ContactProblem:
                 friction_in_tension=self.friction_in_tension,
                 friction_tangent=self.friction_tangent,
                 projection_tangent=self.projection_tangent,
+                velocities=velocities,
+                velocity_rate=rate,
             )  # the start slope: contact_start_slope, docs/method.md §7.1
         return blocks
+
+    def _velocities(self, coords: np.ndarray) -> tuple[np.ndarray | None, float]:
+        """Node velocities (like ``coords``) and ``dv/du`` when a damped pair needs them."""
+        if self.node_velocity is None or not self.has_damping:
+            return None, 0.0
+        velocity = self.node_velocity
+        offset = self.pairing.nodal_vectors(velocity.offset)
+        return offset + velocity.rate * (coords - self.pairing.reference), float(velocity.rate)
 
     def ensure_matrix(self) -> PETSc.Mat:
         """The Jacobian matrix, recreated when the current springs need couplings it lacks."""

@@ -95,10 +95,10 @@ class NodeSurface:
             boundary of the mesh; non-integer, negative or out-of-range indices are errors.
         name: Label used in messages.
         midside_nodes: Local block dofs of the displacement space at the surface's other nodes
-            (midside nodes of quadratic elements, which a ccx node set lists too); they are slave
-            nodes as well and must lie on the boundary. As in ccx, they take no share of the
-            faces' area (their springs get the fallback area, docs/method.md §2.2). One process
-            only.
+            (midside nodes of quadratic elements, which a ccx node set lists too, or the deck
+            runner's nodes in no element, §29.6); they are slave nodes as well and must lie on
+            the boundary. As in ccx, they take no share of the faces' area (their springs get
+            the fallback area, docs/method.md §2.2). One process only.
         faceless: Every node of the surface takes no share of the faces' area: all springs get
             the fallback area (``ContactPair.fallback_area``). ccx does this to the node sets
             of 2D elements, whose 2D nodes belong to none of its expanded 3D elements
@@ -379,7 +379,7 @@ def resolve_slave(
         if outside.size
         else None,
     )
-    if comm.allreduce(int(vertices.size), op=MPI.SUM) == 0:
+    if comm.allreduce(int(vertices.size + surface.midside_nodes.size), op=MPI.SUM) == 0:
         raise ValueError(f"{label} has no vertices")
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(0, tdim)

@@ -32,6 +32,7 @@ __all__ = [
     "TABULAR_C0",
     "TABULAR_MIN_INCREMENT",
     "ZERO_AREA_CUTOFF",
+    "ContactDamping",
     "DynamicLinearLaw",
     "ExponentialLaw",
     "Friction",
@@ -525,6 +526,38 @@ class TabularLaw(PressureOverclosureLaw):
 
 
 @dataclass(frozen=True)
+class ContactDamping:
+    """``*CONTACT DAMPING`` data: damping constant ``c`` and tangent fraction ``f``.
+
+    Used as ``SurfaceInteraction(law, damping=ContactDamping(c, f))``. In dynamic steps every
+    contact spring then adds the force ``c A [(v_rel.n) n + f (v_rel - (v_rel.n) n)]`` on its
+    slave node (the master face gets the opposite force through the projection weights), ``A``
+    the spring area and ``v_rel`` the slave node's velocity relative to the master point
+    (docs/method.md §29). Static steps ignore it, as CalculiX does.
+
+    Attributes:
+        coefficient: ``c > 0`` [force time/length^3]: a dashpot of ``c A`` per spring, normally.
+        tangent_fraction: ``f >= 0`` (default 0: normal damping only); the tangential dashpot is
+            ``f c A``.
+    """
+
+    coefficient: float
+    tangent_fraction: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Validate the parameters."""
+        owner = "ContactDamping"
+        coefficient = _check_scalar(owner, "coefficient", self.coefficient)
+        fraction = _check_scalar(owner, "tangent_fraction", self.tangent_fraction)
+        if coefficient <= 0.0:
+            raise ValueError(f"{owner}: coefficient must be > 0, got {coefficient!r}")
+        if fraction < 0.0:
+            raise ValueError(f"{owner}: tangent_fraction must be >= 0, got {fraction!r}")
+        object.__setattr__(self, "coefficient", coefficient)
+        object.__setattr__(self, "tangent_fraction", fraction)
+
+
+@dataclass(frozen=True)
 class Friction:
     """``*FRICTION`` data: Coulomb coefficient ``mu`` and stick slope ``lambda``.
 
@@ -579,15 +612,17 @@ class Friction:
 
 @dataclass(frozen=True)
 class SurfaceInteraction:
-    """``*SURFACE INTERACTION``: a pressure-overclosure law and optional friction.
+    """``*SURFACE INTERACTION``: a pressure-overclosure law, optional friction and damping.
 
     Attributes:
         law: The ``*SURFACE BEHAVIOR`` law.
         friction: The ``*FRICTION`` data, or ``None`` for frictionless contact.
+        damping: The ``*CONTACT DAMPING`` data (acts in dynamic steps only), or ``None``.
     """
 
     law: PressureOverclosureLaw
     friction: Friction | None = None
+    damping: ContactDamping | None = None
 
     def __post_init__(self) -> None:
         """Check the types, so that a deck-reader mistake fails here and not in the solver."""
@@ -598,4 +633,9 @@ class SurfaceInteraction:
         if self.friction is not None and not isinstance(self.friction, Friction):
             raise ValueError(
                 f"SurfaceInteraction: friction must be a Friction or None, got {self.friction!r}"
+            )
+        if self.damping is not None and not isinstance(self.damping, ContactDamping):
+            raise ValueError(
+                "SurfaceInteraction: damping must be a ContactDamping or None, got "
+                f"{self.damping!r}"
             )

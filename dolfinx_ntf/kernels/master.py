@@ -68,9 +68,11 @@ class ContactMaster(typing.Protocol):
         symmetric: bool = False,
         friction: object | None = None,
         interior_projection: bool = False,
+        damping: object | None = None,
     ) -> SpringEvaluation:
         """Forces (and tangent) of springs between slave nodes and this surface (§5, §6).
 
         ``interior_projection``: CalculiX's tangent at projections clamped to a face boundary
-        (meshed masters; a rigid master has no face boundary).
+        (meshed masters; a rigid master has no face boundary). ``damping``: contact damping
+        (``kernels.contact_damping.DampingInput``, docs/method.md §29; 3D meshed masters only).
         """

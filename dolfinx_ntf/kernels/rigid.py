@@ -496,11 +496,18 @@ class RigidMaster:
         symmetric: bool = False,
         friction: object | None = None,
         interior_projection: bool = False,
+        damping: object | None = None,
     ) -> SpringEvaluation:
         """:func:`evaluate_rigid_springs` with the signature of ``evaluate_springs``.
 
-        ``interior_projection`` has no effect: the surface has no face boundary.
+        ``interior_projection`` has no effect: the surface has no face boundary. Contact
+        ``damping`` is refused (not supported against a rigid master yet).
         """
+        if damping is not None:
+            raise NotImplementedError(
+                f"{self.name}: contact damping against a rigid analytical master is not supported "
+                "yet; use a meshed master (docs/method.md §29)"
+            )
         if friction is not None:
             raise NotImplementedError(
                 f"{self.name}: friction against a rigid analytical master is not supported yet; "

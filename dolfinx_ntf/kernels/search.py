@@ -73,7 +73,7 @@ class MasterSurface(springs.MeshedMasterSprings):
         corners = faces[:, :nc]
         face_edges = np.stack([corners, np.roll(corners, -1, axis=1)], axis=2).reshape(-1, 2)
         # a quad4 face with a repeated corner (a collapsed wedge's triangle, docs/method.md
-        # §29) has a zero-length edge, which borders nothing
+        # §30) has a zero-length edge, which borders nothing
         _group_edges(
             face_edges, nc, name, ref, "face", "faces", face_edges[:, 0] != face_edges[:, 1]
         )
@@ -291,7 +291,7 @@ class MasterSurface(springs.MeshedMasterSprings):
         """Normalized sum of the unit face normals at each master node's parametric position.
 
         A face with a repeated corner (a collapsed wedge's triangle) counts once per node with
-        its plane's normal, as ccx's 3-node triangle (docs/method.md §29).
+        its plane's normal, as ccx's 3-node triangle (docs/method.md §30).
         """
         ft = self._face_type
         dphi = np.asarray(ft.shape_derivatives(np.asarray(ft.node_parameters, dtype=float)))

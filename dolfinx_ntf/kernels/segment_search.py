@@ -231,8 +231,16 @@ class MasterCurve:
         symmetric: bool = False,
         friction: FrictionInput | None = None,
         interior_projection: bool = False,
+        damping: object | None = None,
     ) -> SpringEvaluation:
-        """:func:`~dolfinx_ntf.kernels.segment_springs.evaluate_segment_springs` on these edges."""
+        """:func:`~dolfinx_ntf.kernels.segment_springs.evaluate_segment_springs` on these edges.
+
+        Contact ``damping`` is refused: not supported on 2D meshes yet (docs/method.md §29).
+        """
+        if damping is not None:
+            raise NotImplementedError(
+                "contact damping is not supported on 2D meshes yet (docs/method.md §29)"
+            )
         return evaluate_segment_springs(
             face_type,
             master_coords,

@@ -140,7 +140,7 @@ def _slave_index(slaves: np.ndarray, nodes: np.ndarray) -> np.ndarray:
 def _area_weights(face_type: FaceType, faces: np.ndarray) -> np.ndarray:
     """``(F, n)`` area weights of each face node: ``face_type.area_weights`` in general.
 
-    A quad4 face with a repeated corner (a collapsed wedge's triangle, docs/method.md §29) gives
+    A quad4 face with a repeated corner (a collapsed wedge's triangle, docs/method.md §30) gives
     each of its three nodes 1/3, as ccx's triangle does (1/6 in each slot of the repeated node).
     """
     weights = np.broadcast_to(face_type.area_weights, faces.shape).astype(float)

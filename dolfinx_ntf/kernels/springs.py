@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dolfinx_ntf.kernels.contact_damping import DampingForce, DampingInput, damping_forces
 from dolfinx_ntf.kernels.faces import FaceType, face_coords_array
 from dolfinx_ntf.kernels.friction import FrictionInput, TangentialForce, tangential_forces
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw
@@ -79,6 +80,7 @@ class SpringEvaluation:
         dxi: (N, n+1, 2, 3) ∂ξ/∂x with the tangent (else None); the thermal springs' coupling to
             the displacement (docs/method.md §20).
         dpressure: (N, n+1, 3) ∂p/∂x of the pressure p = F_N/A with the tangent (else None).
+        damping: Contact damping results (docs/method.md §29), or None without damping.
     """
 
     xi: np.ndarray
@@ -94,6 +96,7 @@ class SpringEvaluation:
     tangential: TangentialForce | None = None
     dxi: np.ndarray | None = None
     dpressure: np.ndarray | None = None
+    damping: DampingForce | None = None
 
 
 @dataclass
@@ -133,6 +136,7 @@ def evaluate_springs(
     area_fallback: bool = True,
     friction: FrictionInput | None = None,
     interior_projection: bool = False,
+    damping: DampingInput | None = None,
 ) -> SpringEvaluation:
     """Evaluate internal forces and tangent of N node-to-face springs (docs/method.md §5, §6).
 
@@ -155,6 +159,10 @@ def evaluate_springs(
             derivative to the tangent (docs/method.md §11); the tangent is then never symmetrized.
         interior_projection: Differentiate every projection as an interior one, also where it is
             clamped to the face boundary, as CalculiX does (its Newton path; docs/method.md §6.1).
+        damping: Nodal velocities and damping constants: adds the damping force ``c A P v_rel``
+            to f_p and its derivative (through the velocities' ``rate``, the projection, the
+            normal and a fallback area) to the tangent (docs/method.md §29); the tangent is then
+            never symmetrized.
 
     Returns:
         The evaluation; ``stiffness`` is None if ``tangent`` is False.
@@ -176,11 +184,12 @@ def evaluate_springs(
         interior_projection=interior_projection,
     )
 
+    fallback = np.zeros(area.shape, dtype=bool)
+    factor = 0.5 if face_type.num_nodes == 3 else 4.0
     if area_fallback:
-        zero = area == 0.0
-        if np.any(zero):
-            factor = 0.5 if face_type.num_nodes == 3 else 4.0
-            area = np.where(zero, factor * kin.m_norm, area)
+        fallback = area == 0.0
+        if np.any(fallback):
+            area = np.where(fallback, factor * kin.m_norm, area)
 
     overclosure = -(kin.gap - shift)
     force, dforce = law.spring_force(overclosure, area)
@@ -205,6 +214,11 @@ def evaluate_springs(
         )
         slave_force = slave_force + tangential.force
         symmetric = False
+    damped = None
+    if damping is not None:
+        damped = _damping(kin, area, damping, fallback, factor)
+        slave_force = slave_force + damped.force
+        symmetric = False
     forces = kin.weights[:, :, None] * slave_force[:, None, :]
     force_per_area = _force_per_area(forces, force, area, overclosure, kin.weights, kin.normal, law)
 
@@ -215,6 +229,8 @@ def evaluate_springs(
         dslave_force -= force[:, None, None, None] * kin.dnormal
         if tangential is not None:
             dslave_force += tangential.dforce
+        if damped is not None:
+            dslave_force += damped.dforce
         stiffness = _element_stiffness(kin, slave_force, dslave_force)
         _check_finite("stiffness", stiffness)
         if symmetric:
@@ -237,6 +253,26 @@ def evaluate_springs(
         if kin.dgap is None
         else -np.divide(dforce, area, out=np.zeros_like(area), where=area > 0)[:, None, None]
         * kin.dgap,
+        damping=damped,
+    )
+
+
+def _damping(
+    kin: _Kinematics, area: np.ndarray, damping: DampingInput, fallback: np.ndarray, factor: float
+) -> DampingForce:
+    """The damping force at the kinematics ``kin``; the fallback areas ``factor |m|`` vary."""
+    darea = None
+    if kin.dm is not None and np.any(fallback):  # d|m|/dx = n . dm/dx
+        darea = np.einsum("ni,nkic->nkc", kin.normal, kin.dm) * (factor * fallback)[:, None, None]
+    return damping_forces(
+        kin.weights,
+        kin.normal,
+        area,
+        damping,
+        dphi=kin.dphi,
+        dxi=kin.dxi,
+        dnormal=kin.dnormal,
+        darea=darea,
     )
 
 
@@ -486,6 +522,7 @@ class MeshedMasterSprings:
         symmetric: bool = False,
         friction: FrictionInput | None = None,
         interior_projection: bool = False,
+        damping: DampingInput | None = None,
     ) -> SpringEvaluation:
         """:func:`evaluate_springs` on faces of this master."""
         return evaluate_springs(
@@ -500,4 +537,5 @@ class MeshedMasterSprings:
             symmetric=symmetric,
             friction=friction,
             interior_projection=interior_projection,
+            damping=damping,
         )

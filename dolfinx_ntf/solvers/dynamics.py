@@ -25,6 +25,7 @@ import ufl
 
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.contact.velocity import NodeVelocity
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
 from dolfinx_ntf.solvers.steps import (
     IncrementResult,
@@ -88,6 +89,14 @@ class _Inertia:
         self.M.mult(self._acceleration, self._momentum_rate)
         self._force.zeroEntries()
 
+    def velocity_offset(self, v_n: np.ndarray, a_n: np.ndarray) -> tuple[np.ndarray, float]:
+        """``(v0, rate)`` with the Newmark velocity ``v(x) = v0 + rate x`` of this increment.
+
+        ``v = v_n + dt ((1 - gamma) a_n + gamma a(x))``, ``rate = gamma/(beta dt)`` (owned values).
+        """
+        rate = self.gamma / (self.beta * self.dt)
+        return v_n + self.dt * (1.0 - self.gamma) * a_n - rate * self.prediction.array_r, rate
+
     def acceleration(self, x: np.ndarray) -> np.ndarray:
         """Newmark acceleration of the owned displacement values ``x``."""
         return (x - self.prediction.array_r) / (self.beta * self.dt * self.dt)
@@ -144,7 +153,9 @@ class DynamicStep(Step):
     internal force, so they enter at the same time levels as the bulk forces, and the initial
     overlap acts in full from the first increment (no ramp, docs/method.md §3.5). The step holds
     configuration only, except that it reads the initial velocity and acceleration from
-    ``velocity``/``acceleration`` and leaves the final ones there.
+    ``velocity``/``acceleration`` and leaves the final ones there. While it runs, the problem's
+    ``node_velocity`` is the Newmark velocity, so pairs with ``ContactDamping`` are damped
+    (docs/method.md §29).
 
     Args:
         mass: Bilinear mass form on the displacement space, e.g.
@@ -225,12 +236,16 @@ class DynamicStep(Step):
         for matrix in (inertia.M, inertia.M_bc):
             matrix.assemble()
         problem.extra_terms.append(inertia)
+        offset = dolfinx.fem.Function(V)  # v = offset + rate u: the contact damping's (§29)
+        offset.x.array[:] = velocity.x.array
+        problem.node_velocity = NodeVelocity(offset, 0.0)
         try:
             return self._integrate(
                 solver, problem, u, velocity, acceleration, mass, inertia, start_time
             )
         finally:
             problem.extra_terms.remove(inertia)
+            problem.node_velocity = None
             inertia.destroy()
 
     def _check_mass_space(self, V: dolfinx.fem.FunctionSpace) -> None:
@@ -289,6 +304,12 @@ class DynamicStep(Step):
             inertia.predict(
                 u_start[:owned], velocity.x.array[:owned], acceleration.x.array[:owned], dt
             )
+            node_velocity = problem.node_velocity
+            v0, node_velocity.rate = inertia.velocity_offset(
+                velocity.x.array[:owned], acceleration.x.array[:owned]
+            )
+            node_velocity.offset.x.array[:owned] = v0
+            node_velocity.offset.x.scatter_forward()
 
         def converged(dt: float, u_start: np.ndarray) -> None:
             self._advance(u, velocity, acceleration, inertia, owned)
@@ -370,7 +391,8 @@ def _initial_acceleration(
     ksp.solve(rhs, a0)
     if ksp.getConvergedReason() < 0:
         raise ValueError(
-            "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere?)"
+            "DynamicStep: the mass matrix cannot be factored (is the density positive everywhere? "
+            "a node without mass needs a constraint to one)"
         )
     if problem.elimination is not None:
         problem.elimination.expand(a0)

@@ -113,11 +113,15 @@ def galerkin_products(ksp: PETSc.KSP) -> typing.Iterator[None]:
 
 
 def expects_symmetric(problem: object, petsc_options: object) -> bool:
-    """Whether the default options may use Cholesky or CG: a ``symmetric`` frictionless problem."""
+    """Whether the default options may use Cholesky or CG: a ``symmetric`` frictionless problem.
+
+    Contact damping (unsymmetric tangent, docs/method.md §29) rules them out too.
+    """
     return (
         petsc_options is None
         and getattr(problem, "symmetric", False)
         and not getattr(problem, "has_friction", False)  # friction: never Cholesky
+        and not getattr(problem, "has_damping", False)
     )
 
 

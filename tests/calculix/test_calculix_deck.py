@@ -185,7 +185,8 @@ def test_features_materials_and_interactions(features):
     exp = deck.interactions["EXP"]
     assert exp.behavior.values == (1e-3, 5.0)
     assert (exp.friction.mu, exp.friction.stick_slope) == (0.3, 1000.0)
-    assert exp.extra == {"*CONTACT DAMPING": ((1e-3,),)}
+    assert exp.extra == {}
+    assert (exp.damping.coefficient, exp.damping.tangent_fraction) == (1e-3, 0.0)
     np.testing.assert_allclose(deck.interactions["TAB"].behavior.table,
                                [[0, 0], [10, 1e-3], [100, 2e-3]])  # fmt: skip
     assert deck.interactions["HARD"].behavior.pressure_overclosure == "HARD"
@@ -625,3 +626,16 @@ def test_gravity_and_time_points_are_read(tmp_path):
     assert step.dloads == () and step.dload_op == "MOD"
     (request,) = step.node_prints
     assert request.time_points == "T"
+
+
+def test_velocity_print_needs_a_dynamic_step(tmp_path):
+    """``*NODE PRINT V`` is read; outside ``*DYNAMIC`` steps the runner refuses it at its line."""
+    from dolfinx_ntf.calculix.job_files import check_requests
+
+    text = (DATA / "two_cubes.inp").read_text()
+    text = text.replace("*END STEP", "*NODE PRINT, NSET=NALL\nV\n*END STEP")
+    (tmp_path / "velocities.inp").write_text(text)
+    deck = read_deck(tmp_path / "velocities.inp")
+    assert any(r.keys == ("V",) for r in deck.steps[0].prints)
+    with pytest.raises(NotImplementedError, match=r"velocities.inp:\d+: \*NODE PRINT V"):
+        check_requests(deck)

@@ -124,16 +124,25 @@ def test_nonlinear_springs_without_nlgeom_are_refused(tmp_path):
 
 
 @pytest.mark.serial
-def test_contact_damping_in_a_dynamic_step_is_refused(tmp_path):
-    """ccx damps the contact springs in ``*DYNAMIC`` steps only; not reproduced yet (§18.4)."""
+def test_contact_damping_card_is_read_and_checked(tmp_path):
+    """``*CONTACT DAMPING[, TANGENT FRACTION=f]`` is read into the interaction (§29); bad data
+    is refused at its line."""
     text = spring_deck(nlgeom=True, nonlinear=False).replace(
         "*STEP",
         "*SURFACE INTERACTION, NAME=SI1\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n1.e5\n"
         "*CONTACT DAMPING, TANGENT FRACTION=0.5\n1.e-4\n*STEP",
     )
     path = tmp_path / "damped.inp"
-    path.write_text(text)
-    read_deck(path)  # a static step does not use it (ccx ignores it there)
     path.write_text(text.replace("*STATIC\n0.25,1.", "*DYNAMIC\n0.25,1."))
-    with pytest.raises(DeckError, match=r"\*CONTACT DAMPING is not supported yet in a \*DYNAMIC"):
+    damping = read_deck(path).interactions["SI1"].damping
+    assert (damping.coefficient, damping.tangent_fraction) == (1e-4, 0.5)
+    for data, message in (
+        ("0.", "damping constant > 0"),
+        ("1.e-4, 2.", "one data line with the damping constant"),
+    ):
+        path.write_text(text.replace("1.e-4\n*STEP", f"{data}\n*STEP"))
+        with pytest.raises(DeckError, match=message):
+            read_deck(path)
+    path.write_text(text.replace("FRACTION=0.5", "FRACTION=-1"))
+    with pytest.raises(DeckError, match="TANGENT FRACTION must be >= 0"):
         read_deck(path)

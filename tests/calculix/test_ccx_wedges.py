@@ -1,4 +1,4 @@
-"""C3D6 wedges read as C3D8 with one collapsed edge, and surfaces named twice (docs/method.md §29).
+"""C3D6 wedges read as C3D8 with one collapsed edge, and surfaces named twice (docs/method.md §30).
 
 A 2 x 2 x 2 block of hexahedra, each split into two wedges, sheared and compressed: the runner
 prints the displacements and reactions of ccx 2.20 on the same block written as collapsed C3D8
@@ -243,7 +243,7 @@ def test_metalforming_against_ccx(tmp_path: Path, simplified: bool) -> None:
     Elastic and frictionless, every block agrees to 2e-6 of its largest value. The deck itself
     (plastic sheet, friction, NLGEOM): the normal columns to 6e-5; the tangential ones are 2.8e-3
     apart (we cut the increment back where ccx does not, and friction follows the path), not
-    asserted here (docs/method.md §29.4).
+    asserted here (docs/method.md §30.4).
     """
     ours_dir, ccx_dir = tmp_path / "ntf", tmp_path / "ccx"
     for d in (ours_dir, ccx_dir):

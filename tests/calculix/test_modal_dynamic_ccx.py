@@ -213,5 +213,8 @@ def test_velocity_prints_outside_modal_dynamic_steps_are_refused(tmp_path):
         "*STEP\n*STATIC\n*NODE PRINT, NSET=NALL\nV\n*END STEP\n*STEP\n*FREQUENCY",
     )
     (tmp_path / "v.inp").write_text(text)
-    with pytest.raises(NotImplementedError, match=r"\*NODE PRINT key V is not supported yet"):
+    with pytest.raises(
+        NotImplementedError,
+        match=r"v\.inp:\d+: \*NODE PRINT V .* \*DYNAMIC and \*MODAL DYNAMIC steps",
+    ):
         run_job("v", tmp_path, progress=False)

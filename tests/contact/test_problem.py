@@ -252,3 +252,36 @@ def test_initial_overlap_is_ramped_in_the_first_increment_only():
     problem.begin_increment(0.5)
     problem.evaluate(tangent=False)
     np.testing.assert_allclose(ntf.contact_results(problem)[0].clearance, -overlap, rtol=1e-12)
+
+
+def test_matrix_pattern_holds_bulk_and_contact_couplings_without_mallocs():
+    """The contact matrix is preallocated in one pass with the bulk pattern and the springs'
+    couplings (explicit zeros kept): it holds both, adds entries between contact nodes only, and
+    its assemblies never allocate."""
+    problem, pressure, _ = _setup("hexahedron")
+    solve_increments(problem, pressure, increments=1)
+    A = problem.ensure_matrix()
+    assert A.getInfo()["mallocs"] == 0
+    assert A.getBlockSize() == 3
+    indptr, indices, _ = A.getValuesCSR()
+    n = A.getSize()[0] // 3
+    got = scipy.sparse.csr_matrix((np.ones(indices.size), indices, indptr), shape=A.getSize())
+    offsets, columns = compat.sparsity_graph(problem.a)
+    bulk = scipy.sparse.csr_matrix((np.ones(columns.size), columns, offsets), shape=(n, n))
+    rows, cols = [], []
+    for state in problem.states:
+        nodes = state.element_nodes
+        rows.append(np.repeat(nodes, nodes.shape[1], axis=1).ravel())
+        cols.append(np.tile(nodes, (1, nodes.shape[1])).ravel())
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    assert rows.size > 0
+    contact = scipy.sparse.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
+    expected = scipy.sparse.kron((bulk + contact) > 0, np.ones((3, 3)), format="csr") > 0
+    assert ((expected > 0).astype(int) - (got > 0).astype(int) > 0).nnz == 0  # all held
+    # entries beyond the bulk pattern couple contact nodes only
+    extra = ((got > 0).astype(int) - scipy.sparse.kron(bulk > 0, np.ones((3, 3))) > 0).tocoo()
+    contact_dofs = np.zeros(A.getSize()[0], dtype=bool)
+    for state in problem.states:
+        contact_dofs[(3 * state.element_nodes[..., None] + np.arange(3)).ravel()] = True
+    assert extra.nnz > 0
+    assert contact_dofs[extra.row].all() and contact_dofs[extra.col].all()

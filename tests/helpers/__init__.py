@@ -3,6 +3,7 @@
 - ``blocks``: two blocks stacked along z without gmsh, the punch and drag problems on them.
 - ``serial_answer``: partitions, and runs on several processes compared with the serial run.
 - ``decks``: decks with every output request, run serially and on all processes.
+- ``spring_faces``: random master faces and slave nodes of the spring-kernel tests.
 
 The names most tests use are imported here: ``from helpers import punch_problem``.
 """

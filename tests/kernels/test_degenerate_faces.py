@@ -1,4 +1,4 @@
-"""quad4 faces with a repeated corner (C3D6 triangles read as collapsed C3D8, docs/method.md §29).
+"""quad4 faces with a repeated corner (C3D6 triangles read as collapsed C3D8, docs/method.md §30).
 
 Oracle: the same triangle as a tri3 face, which is what ccx uses for a wedge's triangle.
 """

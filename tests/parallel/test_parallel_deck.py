@@ -92,7 +92,7 @@ def test_deck_gives_the_serial_files(name, shared):
 
 
 def test_wedge_deck_gives_the_serial_files(shared):
-    """C3D6 wedges (collapsed C3D8, docs/method.md §29), their triangles the master faces."""
+    """C3D6 wedges (collapsed C3D8, docs/method.md §30), their triangles the master faces."""
     path = shared / "wedge_punch" / "wedge_punch.inp"
     if COMM.rank == 0:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -117,7 +117,7 @@ class Checks(ReaderState):
                       node_coords: np.ndarray, rotation: np.ndarray) -> np.ndarray:  # fmt: skip
         """Check the C3D6 elements' orientation and give their surface faces C3D8 numbers.
 
-        Returns the sorted wedge numbers (docs/method.md §29).
+        Returns the sorted wedge numbers (docs/method.md §30).
         """
         ids = np.asarray(self.wedge_ids, np.int64)
         order = np.argsort(ids)
@@ -291,7 +291,7 @@ class Checks(ReaderState):
             if pair.slave + NODE_TWIN in self.surfaces
             else pair
             for pair in self.contact_pairs
-        ]  # ccx's slave: the node surface of a name that also has faces (docs/method.md §29)
+        ]  # ccx's slave: the node surface of a name that also has faces (docs/method.md §30)
         for pair in self.contact_pairs:
             if pair.interaction not in self.interactions:
                 raise DeckError(
@@ -312,6 +312,8 @@ class Checks(ReaderState):
                     pair.location,
                 )
         return {
-            name: SurfaceInteraction(i.name, i.behavior, i.friction, dict(i.extra), i.location)
+            name: SurfaceInteraction(
+                i.name, i.behavior, i.friction, dict(i.extra), i.location, i.damping
+            )
             for name, i in self.interactions.items()
         }

@@ -50,7 +50,7 @@ class SpringElements:
 
 
 #: Key suffix of a ``TYPE=NODE`` surface that shares its name with an element surface: ccx
-#: takes the node surface as a contact pair's slave and the element one as master (§29).
+#: takes the node surface as a contact pair's slave and the element one as master (§30).
 NODE_TWIN = "#NODES"
 
 
@@ -125,14 +125,24 @@ class Friction:
 
 
 @dataclass(frozen=True, eq=False)
+class ContactDamping:
+    """A ``*CONTACT DAMPING`` card: damping constant and ``TANGENT FRACTION`` (default 0)."""
+
+    coefficient: float
+    tangent_fraction: float
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class SurfaceInteraction:
-    """A ``*SURFACE INTERACTION`` with its behavior, optional friction and unused extra data."""
+    """A ``*SURFACE INTERACTION`` with its behavior, optional friction, damping and extra data."""
 
     name: str
     behavior: SurfaceBehavior | None
     friction: Friction | None
     extra: dict[str, tuple[tuple[float | None, ...], ...]]
     location: Location
+    damping: ContactDamping | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -592,7 +602,7 @@ class Deck:
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
         time_points: ``*TIME POINTS`` cards by upper-case name.
         wedges: sorted numbers of the C3D6 elements, which ``elements`` holds as C3D8 with one
-            collapsed edge (``deck/wedges.py``, docs/method.md §29).
+            collapsed edge (``deck/wedges.py``, docs/method.md §30).
     """
 
     path: str

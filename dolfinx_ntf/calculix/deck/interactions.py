@@ -10,7 +10,7 @@ import re
 import numpy as np
 
 from ..elements import frozen_array
-from .data import ContactPair, Friction, FrictionChange, SurfaceBehavior
+from .data import ContactDamping, ContactPair, Friction, FrictionChange, SurfaceBehavior
 from .errors import DeckError
 from .lexer import Card
 from .state import InteractionBuilder, ReaderState
@@ -97,6 +97,32 @@ class InteractionCards(ReaderState):
             return
         interaction = self._interaction(card)
         interaction.friction = self._friction_data(card)
+
+    def _k_CONTACTDAMPING(self, card: Card) -> None:
+        """``*CONTACT DAMPING[, TANGENT FRACTION=f]`` with the damping constant (§29)."""
+        interaction = self._interaction(card)
+        self._check_params(card, allowed={"TANGENTFRACTION"})
+        self._need_data(card)
+        fields, _, loc = card.lines[0]
+        if len(card.lines) != 1 or len(fields) != 1:
+            raise DeckError("*CONTACT DAMPING: one data line with the damping constant", loc)
+        coefficient = self._float(fields[0], "damping constant", loc)
+        if not coefficient > 0.0:
+            raise DeckError(
+                f"*CONTACT DAMPING needs a damping constant > 0, got {coefficient}", loc
+            )
+        fraction = 0.0
+        if "TANGENTFRACTION" in card.params:
+            token = card.params["TANGENTFRACTION"] or ""
+            fraction = self._float(token, "TANGENT FRACTION", card.location)
+            if not fraction >= 0.0:
+                raise DeckError(f"TANGENT FRACTION must be >= 0, got {fraction}", card.location)
+        if interaction.damping is not None:
+            raise DeckError(
+                f"surface interaction {interaction.name} has two *CONTACT DAMPING cards",
+                card.location,
+            )
+        interaction.damping = ContactDamping(coefficient, fraction, card.location)
 
     def _unused_interaction(self, card: Card) -> None:
         interaction = self._interaction(card)

@@ -248,7 +248,7 @@ class MeshCards(ReaderState):
         twin = self.surfaces.get(name)
         if twin is not None and twin.type != stype and name + NODE_TWIN not in self.surfaces:
             # a node and an element surface of one name: the element one keeps the name, the
-            # node one (the slave of a contact pair, as in ccx) is NAME#NODES (docs/method.md §29)
+            # node one (the slave of a contact pair, as in ccx) is NAME#NODES (docs/method.md §30)
             if stype == "ELEMENT":
                 self.surfaces[name + NODE_TWIN] = self.surfaces.pop(name)
             key = name if stype == "ELEMENT" else name + NODE_TWIN

@@ -12,6 +12,7 @@ from .data import (
     Amplitude,
     Boundary,
     CLoad,
+    ContactDamping,
     ContactPair,
     Coupled,
     CyclicSymmetry,
@@ -89,6 +90,7 @@ class InteractionBuilder:
     location: Location
     behavior: SurfaceBehavior | None = None
     friction: Friction | None = None
+    damping: ContactDamping | None = None
     extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
 
 

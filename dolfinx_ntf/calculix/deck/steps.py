@@ -75,14 +75,6 @@ class StepCards(ReaderState):
             )
         if step.static is not None or step.frequency is not None:
             raise DeckError("a step can have only one procedure card", card.location)
-        for interaction in self.interactions.values():  # ccx damps contact in *DYNAMIC only
-            if "*CONTACT DAMPING" in interaction.extra:
-                raise DeckError(
-                    "*CONTACT DAMPING is not supported yet in a *DYNAMIC step (ccx's damping of "
-                    f"the contact springs, in *SURFACE INTERACTION {interaction.name}; see "
-                    "docs/method.md §18.4)",
-                    interaction.location,
-                )
         alpha = -0.05
         if "ALPHA" in card.params:
             alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)

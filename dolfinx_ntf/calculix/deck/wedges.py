@@ -1,4 +1,4 @@
-"""C3D6 wedges read as C3D8 hexahedra with one collapsed edge (docs/method.md §29).
+"""C3D6 wedges read as C3D8 hexahedra with one collapsed edge (docs/method.md §30).
 
 ccx's wedge ``1..6`` (triangle ``1-2-3`` below ``4-5-6``) becomes the hexahedron
 ``1, 2, 3, 3, 4, 5, 6, 6``: its face S5 (``3-3-6-6``) collapses into the edge ``3-6``, its faces

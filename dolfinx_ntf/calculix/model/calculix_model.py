@@ -39,6 +39,7 @@ from dolfinx_ntf.parallel.global_constraints import global_constraint_block, glo
 from ..deck import Deck, not_supported
 from ..elements import ElementType
 from .bulk import density, lame, plane_stress_factor, stresses
+from .carriers import carried_nodes, carrier_dofs
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
 from .loads import Schedule, StepLoads, schedules
@@ -160,6 +161,8 @@ class CalculixModel:
         default_factory=list, repr=False
     )
     constraints: list[LinearConstraint | LinearConstraintBlock] = field(default_factory=list)
+    #: Local block dofs of the carrier cells' new points, held at zero (§29.6).
+    carrier_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     reference_terms: list[tuple[int, np.ndarray, np.ndarray]] = field(default_factory=list)
     free_references: list[FreeReference] = field(default_factory=list)
     springs: list[DiscreteSprings] = field(default_factory=list)
@@ -241,6 +244,9 @@ class CalculixModel:
         bcs = []
         for component, (Vi, inverse, g) in enumerate(self._bc_spaces):
             dofs = loads.bc_dofs[loads.bc_dofs % self.gdim == component].astype(np.int32)
+            if self.carrier_dofs.size:  # zero: g is set at loads.bc_dofs only
+                held = self.gdim * self.carrier_dofs + component
+                dofs = np.union1d(dofs, held).astype(np.int32)
             if dofs.size:
                 pair = [dofs, inverse[dofs].astype(np.int32)]
                 bcs.append(dolfinx.fem.dirichletbc(g, pair, self.V.sub(component)))
@@ -482,15 +488,19 @@ def build_model(
     # *TIE: ADJUST moves slave nodes before the mesh is made (docs/method.md §19)
     meshed = np.isin(deck.node_ids, block.connectivity)
     deck, tie_blocks = tie_constraints(deck, meshed, warn=comm.rank == 0)
-    mesh = create_mesh(deck, block, comm)
+    carried = collectives.collectively(comm, carried_nodes, deck, block)  # in no element (§29.6)
+    mesh = create_mesh(deck, block, comm, carried)
     V = compat.vector_space(mesh, "Lagrange", etype.degree)
     u = dolfinx.fem.Function(V, name="displacement")
     node_dof, dof_node, node_vertex, original = numbering(deck, mesh, V)
     element_cell = np.full(block.ids.size, -1, dtype=np.int64)
-    element_cell[original] = np.arange(original.size)
-    cell_element = block.ids[original]
+    element = original < block.ids.size  # the others are carrier cells
+    element_cell[original[element]] = np.flatnonzero(element)
+    cell_element = np.full(original.size, -1, dtype=np.int64)
+    cell_element[element] = block.ids[original[element]]
+    held = carrier_dofs(mesh, V, deck, carried)
 
-    maps = mesh_maps(deck, block, mesh, node_vertex, node_dof, element_cell)
+    maps = mesh_maps(deck, block, mesh, node_vertex, node_dof, element_cell, carried)
     error = None
     try:  # local work: a bad face found by one process is an error on all (no collective inside)
         surfaces, surface_tags, surface_faces = deck_surfaces(deck, mesh, maps)
@@ -664,6 +674,7 @@ def build_model(
         amplitude_names=amplitude_names,
         _bc_spaces=bc_spaces,
         constraints=constraints,
+        carrier_dofs=held,
         reference_terms=reference_terms,
         free_references=free_references,
         springs=springs,

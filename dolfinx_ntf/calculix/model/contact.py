@@ -9,6 +9,7 @@ import numpy as np
 from dolfinx_ntf.contact.problem import ContactPair
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.kernels.laws import (
+    ContactDamping,
     ExponentialLaw,
     Friction,
     LinearLaw,
@@ -25,6 +26,7 @@ from .mesh import MeshMaps
 __all__ = [
     "adjust_of",
     "contact_pairs",
+    "damping_of",
     "first_youngs_modulus",
     "friction_of",
     "pressure_overclosure_law",
@@ -81,6 +83,12 @@ def friction_of(deck: Deck, data: FrictionCard) -> Friction:
         )
         return Friction(data.mu, 0.5 * e)
     return Friction(data.mu, data.stick_slope)
+
+
+def damping_of(deck: Deck, interaction_name: str) -> ContactDamping | None:
+    """The ``*CONTACT DAMPING`` of an interaction (it acts in ``*DYNAMIC`` steps only, §29)."""
+    data = deck.interactions[interaction_name].damping
+    return None if data is None else ContactDamping(data.coefficient, data.tangent_fraction)
 
 
 def adjust_of(deck: Deck, pair: ContactPairCard, maps: MeshMaps) -> float | NodeSurface | None:
@@ -176,7 +184,7 @@ def contact_pairs(
             ContactPair(
                 surfaces[pair.slave],
                 surfaces[pair.master],
-                SurfaceInteraction(law, friction),
+                SurfaceInteraction(law, friction, damping_of(deck, pair.interaction)),
                 small_sliding=pair.small_sliding,
                 name=f"{pair.slave}-{pair.master}",
                 adjust=adjust_of(deck, pair, maps),

@@ -25,6 +25,7 @@ from dolfinx_ntf.fem.serendipity_quad import add_quad_centres
 
 from ..deck import Deck, ElementBlock, Location
 from ..elements import ELEMENT_TYPES
+from .carriers import carrier_cells
 
 __all__ = [
     "CELL_PERMUTATIONS",
@@ -66,6 +67,7 @@ class MeshMaps:
         find: Local facet of facet corner vertices (:func:`facet_finder`).
         meshed: ``(N,)`` the deck node belongs to an element (on any process).
         corner: ``(N,)`` the deck node is an element corner (on any process).
+        carried: ``(N,)`` the deck node is in no element but on a carrier cell (§29.6).
     """
 
     block: ElementBlock
@@ -75,6 +77,7 @@ class MeshMaps:
     find: FacetFinder
     meshed: np.ndarray
     corner: np.ndarray
+    carried: np.ndarray | None = None
 
 
 def mesh_maps(
@@ -84,11 +87,19 @@ def mesh_maps(
     node_vertex: np.ndarray,
     node_dof: np.ndarray,
     element_cell: np.ndarray,
+    carried: np.ndarray | None = None,
 ) -> MeshMaps:
-    """The :class:`MeshMaps` of a deck's mesh: adds the node flags and the facet finder."""
+    """The :class:`MeshMaps` of a deck's mesh: adds the node flags and the facet finder.
+
+    ``carried`` nodes (deck rows, on carrier cells) count as meshed, not as corners.
+    """
     # over all processes (from the deck): nodes of an element, element corners
     meshed = np.zeros(deck.node_ids.size, dtype=bool)
     meshed[deck.node_index(block.connectivity)] = True
+    flags = np.zeros(deck.node_ids.size, dtype=bool)
+    if carried is not None:
+        flags[carried] = True
+        meshed |= flags
     corner = np.zeros(deck.node_ids.size, dtype=bool)
     corner[deck.node_index(block.connectivity[:, : block.type.num_corners])] = True
     return MeshMaps(
@@ -99,6 +110,7 @@ def mesh_maps(
         find=facet_finder(mesh),
         meshed=meshed,
         corner=corner,
+        carried=flags,
     )
 
 
@@ -159,8 +171,14 @@ def element_models(deck: Deck, block: ElementBlock) -> np.ndarray:
     return models
 
 
-def create_mesh(deck: Deck, block: ElementBlock, comm: MPI.Comm) -> dolfinx.mesh.Mesh:
-    """The dolfinx mesh of ``block``, distributed from rank 0's cells (collective)."""
+def create_mesh(
+    deck: Deck, block: ElementBlock, comm: MPI.Comm, carried: np.ndarray | None = None
+) -> dolfinx.mesh.Mesh:
+    """The dolfinx mesh of ``block``, distributed from rank 0's cells (collective).
+
+    ``carried``: deck rows of nodes in no element that get a carrier cell each (``carriers.py``,
+    docs/method.md §29.6), appended after the element cells; their new points follow the deck's.
+    """
     gdim = block.type.tdim  # ccx's 2D elements: a 2D mesh of the plane z = 0 (§23)
     domain = compat.coordinate_element(block.type.cell, block.type.degree, gdim)
     serendipity = block.type.num_nodes == 20  # C3D20(R): 27-node cells (docs/method.md §13.5)
@@ -173,6 +191,9 @@ def create_mesh(deck: Deck, block: ElementBlock, comm: MPI.Comm) -> dolfinx.mesh
             cells, x = add_centres(cells, x)
         if quad8:
             cells, x = add_quad_centres(cells, x)
+        if carried is not None and carried.size:
+            points, extra = carrier_cells(deck, block, carried, x.shape[0])
+            cells, x = np.vstack([cells, extra]), np.vstack([x, points])
     else:
         cells = np.zeros((0, width), dtype=np.int64)
         x = np.zeros((0, gdim))
@@ -207,7 +228,9 @@ def numbering(
     vertices = np.arange(num_vertices, dtype=np.int32)
     vertex_geometry = compat.entities_to_geometry(mesh, 0, vertices).ravel()
     node_vertex = np.full(deck.node_ids.size, -1, dtype=np.int64)
-    node_vertex[input_index[vertex_geometry]] = vertices
+    vertex_input = input_index[vertex_geometry]
+    deck_vertex = vertex_input < deck.node_ids.size  # not the points of carrier cells
+    node_vertex[vertex_input[deck_vertex]] = vertices[deck_vertex]
 
     original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
     return node_dof, dof_node, node_vertex, original

@@ -47,12 +47,17 @@ def deck_surfaces(
                     "element"
                 )
             vertices, dofs = node_vertex[rows], maps.node_dof[rows]
-            midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)  # quadratic
+            # midside nodes of quadratic elements, and nodes in no element (on carrier cells,
+            # §29.6): no face area, ccx's fallback
+            carried = maps.carried[rows] if maps.carried is not None else np.zeros(rows.size, bool)
+            midside = np.unique(dofs[~corner[rows] & (dofs >= 0)]).astype(np.int32)
+            vertices = np.where(carried, -1, vertices)
             # ccx's node sets of 2D elements: the 2D nodes are in none of its expanded
             # elements, every spring gets the fallback area (docs/method.md §26.3)
             faceless = maps.block.type.tdim == 2
-            if not np.all(corner[rows]) and maps.block.type.num_nodes != 20 and not faceless:
-                node = int(surface.nodes[np.argmax(~corner[rows])])
+            known = corner[rows] | carried
+            if not np.all(known) and maps.block.type.num_nodes != 20 and not faceless:
+                node = int(surface.nodes[np.argmax(~known)])
                 raise not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
                     f"corner, on {maps.block.type.name} elements (midside nodes of "

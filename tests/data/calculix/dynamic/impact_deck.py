@@ -57,6 +57,8 @@ def write_impact_deck(
     direct: bool = True,
     tight: bool = True,
     load: float = 0.0,
+    damping: float | None = None,
+    tangent_fraction: float | None = None,
 ) -> Path:
     """Write ``directory/name.inp`` and return its path.
 
@@ -69,6 +71,8 @@ def write_impact_deck(
         tight: Field controls at round-off level, so that converged solutions are compared.
         load: A ``*CLOAD`` along z on every node of the block top (ccx applies it in full from
             the step start).
+        damping: A ``*CONTACT DAMPING`` constant (None: no card).
+        tangent_fraction: Its ``TANGENT FRACTION`` parameter (None: not given).
     """
     _, base_nodes, base_elements = _box((0, 0, -1), (2, 2, 0), (3, 3, 1), 1, 1)
     first_node = max(base_nodes) + 1
@@ -103,6 +107,11 @@ def write_impact_deck(
         "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL",
         "*SURFACE INTERACTION, NAME=SI",
         "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
+    ]
+    if damping is not None:
+        fraction = "" if tangent_fraction is None else f", TANGENT FRACTION={tangent_fraction}"
+        lines += [f"*CONTACT DAMPING{fraction}", f"{damping}"]
+    lines += [
         "*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE",
         "SLAVE, MASTER",
         "*BOUNDARY",
