@@ -251,8 +251,12 @@ class _Job:
             self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
         else:
             self.solver = self._mechanical_solver(comm, petsc_options, tight, solver_options)
-        self.result.xdmf = directory / f"{jobname}.xdmf"
-        self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
+        # no JOB.xdmf with wedges: dolfinx cannot write fields on collapsed hexahedra (its
+        # pull-back of their nodes fails at the collapsed edge, docs/method.md §30)
+        self.writer: ContactWriter | None = None
+        if deck.wedges.size == 0:
+            self.result.xdmf = directory / f"{jobname}.xdmf"
+            self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
         self._static_interactions = [pair.interaction for pair in model.pairs]
         self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
         self.acceleration: dolfinx.fem.Function | None = None
@@ -305,7 +309,8 @@ class _Job:
             logger.info("\n *ERROR: %s\n", message)
             raise JobError(message, exit_code=2, result=self.result) from error
         finally:
-            self.writer.close()
+            if self.writer is not None:
+                self.writer.close()
             self.files.close()
         return self.result
 
@@ -615,7 +620,8 @@ class _Job:
                 contact=contact,
             )
         )
-        self.writer.write(total)
+        if self.writer is not None:
+            self.writer.write(total)
         frequency = step.output_frequency
         last = result.time_fraction >= 1 - 1e-12
         regular = frequency > 0 and (result.increment % frequency == 0 or last)

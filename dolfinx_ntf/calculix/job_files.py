@@ -426,6 +426,28 @@ def _check_transformed_outputs(deck: Deck) -> None:
                 )
 
 
+def _check_wedge_outputs(deck: Deck) -> None:
+    """Refuse element outputs of C3D6 wedges (docs/method.md §30).
+
+    ccx's come from its two-point wedge rule, ours would be the collapsed hexahedron's 8 points.
+    """
+    if deck.wedges.size == 0:
+        return
+    for step in deck.steps:
+        for request in [*step.prints, *step.file_requests]:
+            if request.kind != "EL":
+                continue
+            members = deck.elsets.get(request.set or "", None) if request.set else None
+            hit = deck.wedges if members is None else deck.wedges[np.isin(deck.wedges, members)]
+            if hit.size:
+                keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
+                raise NotImplementedError(
+                    f"{request.location}: {keyword} of C3D6 element {int(hit[0])} is not "
+                    "supported (the wedges run as collapsed C3D8 with 8 integration points, "
+                    "ccx's C3D6 has 2)"
+                )
+
+
 def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {"NODE": {"U", "RF", "V"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
@@ -467,6 +489,7 @@ def check_requests(deck: Deck) -> None:
                 step.location,
             )
     _check_transformed_outputs(deck)
+    _check_wedge_outputs(deck)
     written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
     for step in deck.steps:
         for request in step.file_requests:

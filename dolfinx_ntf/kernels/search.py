@@ -72,14 +72,28 @@ class MasterSurface(springs.MeshedMasterSprings):
         nc = face_type.num_corners
         corners = faces[:, :nc]
         face_edges = np.stack([corners, np.roll(corners, -1, axis=1)], axis=2).reshape(-1, 2)
-        _group_edges(face_edges, nc, name, ref, "face", "faces")
+        # a quad4 face with a repeated corner (a collapsed wedge's triangle, docs/method.md
+        # §30) has a zero-length edge, which borders nothing
+        _group_edges(
+            face_edges, nc, name, ref, "face", "faces", face_edges[:, 0] != face_edges[:, 1]
+        )
 
         tri_local = np.asarray(face_type.triangles, dtype=np.int64)
         t_per_face = tri_local.shape[0]
-        self._triangle_faces = np.repeat(np.arange(faces.shape[0]), t_per_face)
-        self._first_triangle_of_face = np.arange(faces.shape[0]) * t_per_face
-        self._triangles = faces[:, tri_local].reshape(-1, 3)
-        self._local_triangles = self._local_faces[:, tri_local].reshape(-1, 3)
+        triangles = faces[:, tri_local].reshape(-1, 3)
+        # ... and one sub-triangle with a repeated node, left out: such a face has one triangle
+        kept = (triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
+        kept &= triangles[:, 2] != triangles[:, 0]
+        self._degenerate = ~kept.reshape(-1, t_per_face).all(axis=1)  # (F,) faces
+        if np.any(~kept.reshape(-1, t_per_face).any(axis=1)):
+            f = int(np.flatnonzero(~kept.reshape(-1, t_per_face).any(axis=1))[0])
+            raise ValueError(f"Master surface '{name}': face {f} ({faces[f].tolist()}) has no area")
+        self._triangle_faces = np.repeat(np.arange(faces.shape[0]), t_per_face)[kept]
+        self._first_triangle_of_face = np.searchsorted(
+            self._triangle_faces, np.arange(faces.shape[0])
+        )
+        self._triangles = triangles[kept]
+        self._local_triangles = self._local_faces[:, tri_local].reshape(-1, 3)[kept]
         tri_edges = np.stack(
             [self._triangles, np.roll(self._triangles, -1, axis=1)], axis=2
         ).reshape(-1, 2)
@@ -140,7 +154,7 @@ class MasterSurface(springs.MeshedMasterSprings):
 
     @property
     def triangles(self) -> np.ndarray:
-        """(T, 3) node ids of the sub-triangles, outward order; face f owns rows f*t..f*t+t-1."""
+        """(T, 3) node ids of the sub-triangles, outward order, by face (`triangle_faces`)."""
         return self._triangles
 
     @property
@@ -274,13 +288,26 @@ class MasterSurface(springs.MeshedMasterSprings):
         self._updated = True
 
     def _compute_nodal_normals(self, x: np.ndarray) -> np.ndarray:
-        """Normalized sum of the unit face normals at each master node's parametric position."""
+        """Normalized sum of the unit face normals at each master node's parametric position.
+
+        A face with a repeated corner (a collapsed wedge's triangle) counts once per node with
+        its plane's normal, as ccx's 3-node triangle (docs/method.md §30).
+        """
         ft = self._face_type
         dphi = np.asarray(ft.shape_derivatives(np.asarray(ft.node_parameters, dtype=float)))
         xf = x[self._local_faces]  # (F, n, 3)
         q_xi = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 0])
         q_eta = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 1])
         m = np.cross(q_xi, q_eta)  # (F, n, 3)
+        counted = np.ones(self._local_faces.shape, dtype=bool)
+        if np.any(self._degenerate):
+            faces = np.flatnonzero(self._degenerate)
+            tri = self._local_triangles[np.searchsorted(self._triangle_faces, faces)]
+            a, b, c = (x[tri[:, k]] for k in range(3))
+            m[faces] = np.cross(b - a, c - a)[:, None, :]
+            local = self._local_faces[faces]
+            repeat = np.triu(local[:, :, None] == local[:, None, :], 1).any(axis=1)
+            counted[faces] = ~repeat  # a repeated node's later slots
         norm = np.linalg.norm(m, axis=2)
         if np.any(~(norm > 0.0)):
             f, k = (int(v[0]) for v in np.nonzero(~(norm > 0.0)))
@@ -290,7 +317,7 @@ class MasterSurface(springs.MeshedMasterSprings):
             )
         unit = m / norm[:, :, None]
         acc = np.zeros((self._nodes.size, 3))
-        np.add.at(acc, self._local_faces.ravel(), unit.reshape(-1, 3))
+        np.add.at(acc, self._local_faces[counted], unit[counted])
         anorm = np.linalg.norm(acc, axis=1)
         if np.any(~(anorm > 1e-12)):
             k = int(np.flatnonzero(~(anorm > 1e-12))[0])
@@ -558,6 +585,9 @@ def _check_faces(face_type: FaceType, faces: np.ndarray, name: str) -> np.ndarra
         raise ValueError(f"Master surface '{name}': face {f} has a negative node id {arr[f]}")
     srt = np.sort(arr, axis=1)
     dup = np.any(srt[:, 1:] == srt[:, :-1], axis=1)
+    if face_type.name == "quad4":  # a collapsed wedge's triangle: two neighbouring corners
+        adjacent = np.sum(arr == np.roll(arr, -1, axis=1), axis=1) == 1
+        dup &= ~(adjacent & (np.sum(srt[:, 1:] == srt[:, :-1], axis=1) == 1))
     if np.any(dup):
         f = int(np.flatnonzero(dup)[0])
         raise ValueError(f"Master surface '{name}': face {f} repeats a node: {arr[f].tolist()}")
@@ -571,6 +601,7 @@ def _group_edges(
     coords: np.ndarray | None,
     item: str,
     items: str,
+    real: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Group directed edges by node pair and check they are shared consistently.
 
@@ -581,6 +612,8 @@ def _group_edges(
         coords: Optional coordinates for messages.
         item: Singular item name for messages.
         items: Plural item name for messages.
+        real: Optional (E,) mask; edges outside it (zero-length edges of faces with a repeated
+            corner) are grouped with none.
 
     Returns:
         Representative edge index per unique edge, unique-edge id per edge, sign (+1 if the
@@ -589,6 +622,8 @@ def _group_edges(
     """
     lo, hi = edges.min(axis=1), edges.max(axis=1)
     keys = lo * (int(edges.max()) + 1) + hi
+    if real is not None:
+        keys = np.where(real, keys, -1 - np.arange(keys.size))
     order = np.argsort(keys, kind="stable")
     sk = keys[order]
     new = np.ones(sk.size, dtype=bool)

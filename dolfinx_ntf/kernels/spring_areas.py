@@ -4,7 +4,8 @@ The method is described in docs/method.md §2.2.
 
 ``A_p = Σ_{f∋p} w_{p,f} |f|``: every slave face f hands the fraction ``w_{p,f}`` of its area to each
 of its nodes p, with the ccx weights ``FaceType.area_weights`` (tri3 1/3, quad4 1/4, tri6 1/999 and
-332/999, quad8 1/100 and 24/100). ``|f| = Σ_q w_q |q_ξ × q_η|`` uses the face type's area
+332/999, quad8 1/100 and 24/100; a quad4 face with a repeated corner, a collapsed wedge's
+triangle, 1/3 per node as ccx's tri3). ``|f| = Σ_q w_q |q_ξ × q_η|`` uses the face type's area
 quadrature and the coordinates passed in (the current configuration ``X + u``; ccx recomputes the
 areas at every pairing).
 
@@ -136,6 +137,23 @@ def _slave_index(slaves: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     return index
 
 
+def _area_weights(face_type: FaceType, faces: np.ndarray) -> np.ndarray:
+    """``(F, n)`` area weights of each face node: ``face_type.area_weights`` in general.
+
+    A quad4 face with a repeated corner (a collapsed wedge's triangle, docs/method.md §30) gives
+    each of its three nodes 1/3, as ccx's triangle does (1/6 in each slot of the repeated node).
+    """
+    weights = np.broadcast_to(face_type.area_weights, faces.shape).astype(float)
+    if face_type.name != "quad4" or faces.shape[0] == 0:
+        return weights
+    same = faces[:, :, None] == faces[:, None, :]  # (F, 4, 4)
+    multiplicity = same.sum(axis=2)  # (F, 4)
+    distinct = np.sum(1.0 / multiplicity, axis=1)  # (F,)
+    degenerate = distinct < 4.0 - 1e-12
+    weights[degenerate] = 1.0 / (distinct[degenerate, None] * multiplicity[degenerate])
+    return weights
+
+
 def spring_areas(
     face_type: FaceType,
     faces: npt.ArrayLike,
@@ -153,7 +171,7 @@ def spring_areas(
     """
     faces_arr, coords_arr, slaves = _check_mesh(face_type, faces, coords, slave_nodes)
     areas = face_areas(face_type, coords_arr[faces_arr])  # (F,)
-    shares = areas[:, None] * face_type.area_weights[None, :]  # (F, n)
+    shares = areas[:, None] * _area_weights(face_type, faces_arr)  # (F, n)
     index = _slave_index(slaves, faces_arr)
     hit = index >= 0
     return np.bincount(index[hit], weights=shares[hit], minlength=slaves.size).astype(float)
@@ -182,7 +200,8 @@ def spring_area_gradients(
     # every (face, slave a, node b) triple: w_a ∂|f|/∂x_b
     rows = np.repeat(index[face_of, local_of], n)
     cols = faces_arr[face_of].reshape(-1)
-    values = (face_type.area_weights[local_of][:, None, None] * grads[face_of]).reshape(-1, 3)
+    weights = _area_weights(face_type, faces_arr)[face_of, local_of]
+    values = (weights[:, None, None] * grads[face_of]).reshape(-1, 3)
     num_nodes = coords_arr.shape[0]
     keys = rows * num_nodes + cols
     unique_keys, inverse = np.unique(keys, return_inverse=True)

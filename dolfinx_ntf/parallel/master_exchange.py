@@ -213,10 +213,8 @@ class MasterPatch(springs.MeshedMasterSprings):
         core = self._core[self._held] | self.complete
         faces = self.faces.faces[self._held]
         self.surface = MasterSurface(self._face_type, faces, name=self.name)
-        per_face = len(self._face_type.triangles)
-        ring = np.flatnonzero(~core)
-        self.surface.mark_not_held((ring[:, None] * per_face + np.arange(per_face)).ravel())
-        self._core_triangle = np.repeat(core, per_face)
+        self._core_triangle = core[self.surface.triangle_faces]
+        self.surface.mark_not_held(np.flatnonzero(~self._core_triangle))
 
     # -- the MasterSurface interface ---------------------------------------------------------------
 

@@ -394,8 +394,8 @@ def test_bad_input():
         MasterSurface(quad, np.zeros((0, 4), dtype=int))
     with pytest.raises(ValueError, match="negative"):
         MasterSurface(quad, np.array([[0, 1, -2, 3]]))
-    with pytest.raises(ValueError, match="repeats a node"):
-        MasterSurface(quad, np.array([[0, 1, 1, 3]]))
+    with pytest.raises(ValueError, match="repeats a node"):  # [0, 1, 1, 3]: a wedge's triangle
+        MasterSurface(quad, np.array([[0, 1, 0, 3]]))  # (tests/kernels/test_degenerate_faces.py)
     with pytest.raises(ValueError, match="integer"):
         MasterSurface(quad, np.array([[0.0, 1.0, 2.0, 3.0]]))
     s = MasterSurface(quad, np.array([[0, 1, 2, 3]]))

@@ -91,6 +91,16 @@ def test_deck_gives_the_serial_files(name, shared):
     _assert_serial_files(path)
 
 
+def test_wedge_deck_gives_the_serial_files(shared):
+    """C3D6 wedges (collapsed C3D8, docs/method.md §30), their triangles the master faces."""
+    path = shared / "wedge_punch" / "wedge_punch.inp"
+    if COMM.rank == 0:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text((DATA / "wedge_punch.inp").read_text())
+    COMM.barrier()
+    _assert_serial_files(path)
+
+
 def _interior_face(path: Path) -> tuple[int, int]:
     """An element face between two elements of the deck: (element, face number)."""
     deck = read_deck(path)

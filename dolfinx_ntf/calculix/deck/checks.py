@@ -7,9 +7,17 @@ import dataclasses
 import numpy as np
 
 from ..elements import ELEMENT_TYPES, frozen_array
-from .data import Deck, ElementBlock, Material, SolidSection, SurfaceInteraction
+from .data import (
+    NODE_TWIN,
+    Deck,
+    ElementBlock,
+    Material,
+    SolidSection,
+    SurfaceInteraction,
+)
 from .errors import DeckError, Location
 from .state import ReaderState
+from .wedges import C3D6_AS_C3D8, check_wedge_orientation, wedge_faces, wedge_rotations
 
 
 class Checks(ReaderState):
@@ -18,6 +26,7 @@ class Checks(ReaderState):
     def _finish(self) -> Deck:
         shells = self._expand_shells()  # ShellCards (shells.py): S8 -> C3D20 bricks
         node_ids, node_coords = self._assemble_nodes()
+        rotation = self._collapse_wedges()
         elements = self._assemble_elements()
         all_elements = (
             np.sort(np.concatenate([b.ids for b in elements.values()]))
@@ -34,13 +43,22 @@ class Checks(ReaderState):
         known_elements = np.sort(np.concatenate([all_elements, *(s.ids for s in springs)]))
         for what, ids, loc in self.element_refs:
             self._check_known(known_elements, ids, "element", what, (loc,))
+        wedges = self._check_wedges(elements, node_ids, node_coords, rotation)
         self._check_faces(elements)
         materials = self._check_materials(elements, all_elements)
         interactions = self._check_contact()
         for step in self.steps:
             for load in step.dloads:
+                if np.any(np.isin(load.elements, wedges)):
+                    raise DeckError("*DLOAD on a C3D6 element is not supported", load.location)
                 self._check_face_numbers(elements, load.elements, load.face, load.location)
             for change in step.model_changes:
+                if change.slave + NODE_TWIN in self.surfaces:
+                    raise DeckError(
+                        f"*MODEL CHANGE of a contact pair whose slave {change.slave} names a node "
+                        "and an element surface is not supported",
+                        change.location,
+                    )
                 if not any((p.slave, p.master) == (change.slave, change.master)
                            for p in self.contact_pairs):  # fmt: skip
                     raise DeckError(
@@ -75,7 +93,53 @@ class Checks(ReaderState):
             shells=shells,
             transformed_nodes=self._transformed_nodes(),
             time_points=dict(self.time_points),
+            wedges=wedges,
         )
+
+    def _collapse_wedges(self) -> np.ndarray:
+        """Append the C3D6 elements to the C3D8 rows, turned and collapsed (``wedges.py``).
+
+        Returns each wedge's rotation, in the order of ``wedge_ids``.
+        """
+        if not self.wedge_ids:
+            return np.zeros(0, np.int64)
+        ids = np.asarray(self.wedge_ids, np.int64)
+        rows = np.asarray(self.wedge_rows, np.int64)
+        rotation = wedge_rotations(ids, rows, tuple(self.wedge_locs))
+        turn = (np.arange(3)[None, :] + rotation[:, None]) % 3
+        turned = np.take_along_axis(rows, np.hstack([turn, 3 + turn]), axis=1)
+        self.element_ids["C3D8"].extend(self.wedge_ids)
+        self.element_rows["C3D8"].extend(turned[:, C3D6_AS_C3D8].tolist())
+        self.element_locs["C3D8"].extend(self.wedge_locs)
+        return rotation
+
+    def _check_wedges(self, elements: dict[str, ElementBlock], node_ids: np.ndarray,
+                      node_coords: np.ndarray, rotation: np.ndarray) -> np.ndarray:  # fmt: skip
+        """Check the C3D6 elements' orientation and give their surface faces C3D8 numbers.
+
+        Returns the sorted wedge numbers (docs/method.md §30).
+        """
+        ids = np.asarray(self.wedge_ids, np.int64)
+        order = np.argsort(ids)
+        wedges = frozen_array(ids[order], np.int64)
+        if wedges.size == 0:
+            return wedges
+        block = elements["C3D8"]
+        rows = np.flatnonzero(np.isin(block.ids, wedges))
+        coords = node_coords[np.searchsorted(node_ids, block.connectivity[rows])]
+        check_wedge_orientation(block.ids[rows], coords, tuple(block.locations[k] for k in rows))
+        for name, surface in self.surfaces.items():
+            if surface.type != "ELEMENT":
+                continue
+            position = np.minimum(np.searchsorted(wedges, surface.elements), wedges.size - 1)
+            hit = wedges[position] == surface.elements
+            turn = np.where(hit, rotation[order][position], -1)
+            faces = wedge_faces(surface.faces, turn, f"surface {name}", surface.location)
+            if faces is not surface.faces:
+                self.surfaces[name] = dataclasses.replace(
+                    surface, faces=frozen_array(faces, np.int64)
+                )
+        return wedges
 
     def _transformed_nodes(self) -> np.ndarray:
         """Sorted numbers of the nodes of every ``*TRANSFORM`` card."""
@@ -134,7 +198,8 @@ class Checks(ReaderState):
             if bad.size:
                 raise DeckError(f"element {int(ids[bad[0]])} must be > 0", locations[bad[0]])
             ordered = np.sort(conn, axis=1)
-            repeats = np.flatnonzero(np.any(ordered[:, 1:] == ordered[:, :-1], axis=1))
+            repeated = np.any(ordered[:, 1:] == ordered[:, :-1], axis=1)
+            repeats = np.flatnonzero(repeated & ~np.isin(ids, self.wedge_ids))  # read checked
             if repeats.size:
                 k = repeats[0]
                 raise DeckError(f"element {int(ids[k])} repeats a node", locations[k])
@@ -221,6 +286,12 @@ class Checks(ReaderState):
         }
 
     def _check_contact(self) -> dict[str, SurfaceInteraction]:
+        self.contact_pairs = [
+            dataclasses.replace(pair, slave=pair.slave + NODE_TWIN)
+            if pair.slave + NODE_TWIN in self.surfaces
+            else pair
+            for pair in self.contact_pairs
+        ]  # ccx's slave: the node surface of a name that also has faces (docs/method.md §30)
         for pair in self.contact_pairs:
             if pair.interaction not in self.interactions:
                 raise DeckError(

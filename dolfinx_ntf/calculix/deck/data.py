@@ -49,6 +49,11 @@ class SpringElements:
     location: Location
 
 
+#: Key suffix of a ``TYPE=NODE`` surface that shares its name with an element surface: ccx
+#: takes the node surface as a contact pair's slave and the element one as master (§30).
+NODE_TWIN = "#NODES"
+
+
 @dataclass(frozen=True, eq=False)
 class Surface:
     """A ``*SURFACE``: element faces (``elements``, 1-based ``faces``) or nodes (``TYPE=NODE``)."""
@@ -596,6 +601,8 @@ class Deck:
         shells: the shell nodes and their expanded nodes when the deck had S8/S8R elements
             (replaced by their C3D20/C3D20R bricks in ``elements``, docs/method.md §24), else None.
         time_points: ``*TIME POINTS`` cards by upper-case name.
+        wedges: sorted numbers of the C3D6 elements, which ``elements`` holds as C3D8 with one
+            collapsed edge (``deck/wedges.py``, docs/method.md §30).
     """
 
     path: str
@@ -625,6 +632,7 @@ class Deck:
     shells: ShellExpansion | None = None
     transformed_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     time_points: dict[str, TimePoints] = field(default_factory=dict)
+    wedges: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
     def num_elements(self) -> int:

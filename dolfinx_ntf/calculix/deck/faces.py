@@ -89,6 +89,13 @@ def external_faces(deck: Deck) -> np.ndarray:
     all_faces = np.concatenate(faces)
     corners = 3 if all_faces.shape[1] in (3, 6) else 4
     key = np.sort(all_faces[:, :corners], axis=1)
+    # collapsed wedges (docs/method.md §30): a triangle face repeats a corner, in a different
+    # slot in each of its two wedges, so a repeat is keyed as -1; the collapsed face (two
+    # distinct corners) is no face at all
+    repeat = np.zeros(key.shape, dtype=bool)
+    repeat[:, 1:] = key[:, 1:] == key[:, :-1]
+    all_faces = all_faces[np.sum(~repeat, axis=1) >= 3]
+    key = np.sort(np.where(repeat, -1, key)[np.sum(~repeat, axis=1) >= 3], axis=1)
     _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
     return all_faces[counts[inverse.ravel()] == 1]
 

@@ -9,12 +9,13 @@ import re
 import numpy as np
 
 from ..elements import ELEMENT_TYPES, REFUSED_ELEMENTS, frozen_array
-from .data import Surface
+from .data import NODE_TWIN, Surface
 from .errors import DeckError, Location
 from .lexer import INT_RE, Card
 from .shells import SHELL_FACES, SHELL_TYPES
 from .springs import SPRING_TYPES
 from .state import ReaderState
+from .wedges import C3D6_NODES
 
 
 def _plain_ints(tokens: list[str]) -> list[int] | None:
@@ -129,22 +130,23 @@ class MeshCards(ReaderState):
         if type_name in SHELL_TYPES:  # expanded into bricks once read: shells.py
             self._shell_elements(card, type_name)
             return
-        if type_name not in ELEMENT_TYPES:
-            supported = ", ".join([*ELEMENT_TYPES, *SHELL_TYPES, *SPRING_TYPES])
+        wedge = type_name == "C3D6"  # read as collapsed C3D8 (wedges.py)
+        if type_name not in ELEMENT_TYPES and not wedge:
+            supported = ", ".join([*ELEMENT_TYPES, "C3D6", *SHELL_TYPES, *SPRING_TYPES])
             why = REFUSED_ELEMENTS.get(type_name, "")
             raise DeckError(
                 f"element type {type_name} is not supported{why} (supported: {supported})",
                 card.location,
             )
-        etype = ELEMENT_TYPES[type_name]
-        needed = etype.num_nodes + 1
+        num_nodes = C3D6_NODES if wedge else ELEMENT_TYPES[type_name].num_nodes
+        block = "C3D8" if wedge else type_name
+        needed = num_nodes + 1
         ids: list[int] = []
         plain = _plain_elements(card.lines, needed)
         if plain is not None:  # the common case, read card-wide
             rows, starts = plain
             ids = [row[0] for row in rows]
-            self.element_rows[type_name].extend(row[1:] for row in rows)
-            self.element_locs[type_name].extend(starts)
+            self._element_rows(block, [row[1:] for row in rows], wedge, ids, starts)
             card_lines: list = []
         else:
             card_lines = card.lines
@@ -158,26 +160,37 @@ class MeshCards(ReaderState):
                 continue
             if len(tokens) > needed:
                 raise DeckError(
-                    f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has "
-                    f"{etype.num_nodes}",
+                    f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has {num_nodes}",
                     start,
                 )
             numbers = _plain_ints(tokens) or [
                 self._int(t, "element or node number", start) for t in tokens
             ]
             ids.append(numbers[0])
-            self.element_rows[type_name].append(numbers[1:])
-            self.element_locs[type_name].append(start)
+            self._element_rows(block, [numbers[1:]], wedge, [numbers[0]], [start])
             tokens = []
         if tokens:
             raise DeckError(
-                f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has "
-                f"{etype.num_nodes}",
+                f"element {tokens[0]} has {len(tokens) - 1} nodes, {type_name} has {num_nodes}",
                 start,
             )
-        self.element_ids[type_name].extend(ids)
         if card.params.get("ELSET"):
             self._add_set(self.elsets, "element", card.params["ELSET"], ids, card.location)
+
+    def _element_rows(self, block: str, rows: list[list[int]], wedge: bool, ids: list[int],
+                      locations: list[Location]) -> None:  # fmt: skip
+        """Append elements ``ids`` (node rows ``rows``) to ``block``, or to the wedges (C3D6)."""
+        if wedge:
+            for number, row, loc in zip(ids, rows, locations):
+                if len(set(row)) != C3D6_NODES:
+                    raise DeckError(f"element {number} repeats a node", loc)
+            self.wedge_ids.extend(ids)
+            self.wedge_rows.extend(rows)
+            self.wedge_locs.extend(locations)
+            return
+        self.element_ids[block].extend(ids)
+        self.element_rows[block].extend(rows)
+        self.element_locs[block].extend(locations)
 
     def _add_set(self, sets: dict, kind: str, name: str, ids: list[int], loc: Location) -> None:
         sets.setdefault(name, []).extend(ids)
@@ -231,7 +244,16 @@ class MeshCards(ReaderState):
         stype = card.params.get("TYPE") or "ELEMENT"
         if stype not in ("ELEMENT", "NODE"):
             raise DeckError(f"*SURFACE TYPE={stype}: use TYPE=ELEMENT or TYPE=NODE", card.location)
-        name = self._new_name(card, self.surfaces, "surface")
+        name = card.params["NAME"] or ""
+        twin = self.surfaces.get(name)
+        if twin is not None and twin.type != stype and name + NODE_TWIN not in self.surfaces:
+            # a node and an element surface of one name: the element one keeps the name, the
+            # node one (the slave of a contact pair, as in ccx) is NAME#NODES (docs/method.md §30)
+            if stype == "ELEMENT":
+                self.surfaces[name + NODE_TWIN] = self.surfaces.pop(name)
+            key = name if stype == "ELEMENT" else name + NODE_TWIN
+        else:
+            key = self._new_name(card, self.surfaces, "surface")
         elements: list[np.ndarray] = []
         faces: list[np.ndarray] = []
         nodes: list[np.ndarray] = []
@@ -255,7 +277,7 @@ class MeshCards(ReaderState):
                 self.shell_face_refs.append((ids, loc))
             face = SHELL_FACES.get(label) or int(label[1])
             faces.append(np.full(ids.size, face, dtype=np.int64))
-        self.surfaces[name] = Surface(
+        self.surfaces[key] = Surface(
             name=name,
             type=stype,
             elements=frozen_array(np.concatenate(elements) if elements else [], np.int64),

@@ -106,6 +106,11 @@ class ReaderState:
         self.element_rows: dict[str, list[list[int]]] = {t: [] for t in ELEMENT_TYPES}
         self.element_ids: dict[str, list[int]] = {t: [] for t in ELEMENT_TYPES}
         self.element_locs: dict[str, list[Location]] = {t: [] for t in ELEMENT_TYPES}
+        #: The C3D6 elements (numbers, node rows, locations), made collapsed C3D8 once read
+        #: (``wedges.py``).
+        self.wedge_ids: list[int] = []
+        self.wedge_rows: list[list[int]] = []
+        self.wedge_locs: list[Location] = []
         #: Spring elements by type: (element number, nodes, location) (``springs.py``).
         self.spring_rows: dict[str, list[tuple[int, list[int], Location]]] = {}
         #: Shell elements in deck order: (type, element number, nodes, location) (``shells.py``).

@@ -2,7 +2,7 @@
 
 docs/method.md §28. ``TYPE=R`` (rectangular: point a on the local x axis, point b in the local
 x-y plane) or ``TYPE=C`` (cylindrical: a and b on the axis; local 1 radial, 2 circumferential,
-3 axial, at each node; a node on the axis keeps the global directions). The reader rewrites the
+3 axial, at each node; on the axis local 3 is still the axis, §30.4). The reader rewrites the
 ``*BOUNDARY`` lines of transformed nodes in global terms: a local direction along a global axis
 becomes that global dof (its value times the direction's sign); the zero-valued local directions
 of a node in the model definition become linear equations (``*EQUATION`` terms, reduced per node
@@ -45,8 +45,8 @@ class Transform:
 def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     """The local unit directions ``(n, 3, 3)`` (rows: local 1, 2, 3) at nodes ``coords (n, 3)``.
 
-    A node on a cylinder's axis has no radial direction: it keeps the global directions, as in
-    ccx 2.20 (measured, docs/method.md §28).
+    A node on a cylinder's axis has no radial direction: local 3 is the axis there too, local 1
+    the global axis least along it made normal to it (docs/method.md §30.4).
 
     Raises:
         ValueError: degenerate points.
@@ -71,9 +71,13 @@ def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     length = np.linalg.norm(radial, axis=1)
     on_axis = length == 0
     radial[~on_axis] /= length[~on_axis, None]
+    # on the axis: local 3 stays the axis (ccx 2.20 moves metalforming's axis nodes along it,
+    # measured, docs/method.md §30.4); local 1 the global axis least along it, made normal to it
+    e = np.eye(3)[int(np.argmin(np.abs(axis)))]
+    e = e - (e @ axis) * axis
+    radial[on_axis] = e / np.linalg.norm(e)
     tangential = np.cross(axis, radial)
     out = np.stack([radial, tangential, np.broadcast_to(axis, radial.shape)], axis=1)
-    out[on_axis] = np.eye(3)  # no radial direction: ccx 2.20 keeps the global ones (measured)
     return out
 
 

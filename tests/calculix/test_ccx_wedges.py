@@ -1,0 +1,263 @@
+"""C3D6 wedges read as C3D8 with one collapsed edge, and surfaces named twice (docs/method.md §30).
+
+A 2 x 2 x 2 block of hexahedra, each split into two wedges, sheared and compressed: the runner
+prints the displacements and reactions of ccx 2.20 on the same block written as collapsed C3D8
+(to its printed digits), and differs from ccx's C3D6 (its two-point rule) by a few percent.
+ccx's metalforming deck (28 wedges, surfaces named twice) against ccx 2.20.
+"""
+
+from __future__ import annotations
+
+import gzip
+import logging
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf.calculix.ccx import run_ccx
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.deck import DeckError, face_nodes, read_deck
+from dolfinx_ntf.calculix.job import run_job
+
+# ccx's wedge faces S1..S5 (manual): 1-2-3, 4-5-6, 1-2-5-4, 2-3-6-5, 3-1-4-6
+WEDGE_FACES = ((0, 1, 2), (3, 4, 5), (0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5))
+
+
+def _block(
+    n: int = 2, layers: int = 2, element: str = "C3D6", surfaces: bool = True
+) -> tuple[str, list[list[int]]]:
+    """The wedge block deck (``element`` C3D6, or C3D8 with nodes 1,2,3,3,4,5,6,6) and wedges.
+
+    ``surfaces``: one surface per wedge face label S1..S5 (some inside the block).
+    """
+
+    def nid(i: int, j: int, k: int) -> int:
+        return 1 + i + (n + 1) * (j + (n + 1) * k)
+
+    lines = ["*NODE, NSET=NALL"]
+    for k in range(layers + 1):
+        for j in range(n + 1):
+            for i in range(n + 1):
+                x = i / n + (0.05 * np.sin(3 * j / n + k / layers) if 0 < i < n else 0.0)
+                lines.append(f"{nid(i, j, k)}, {x:.6f}, {j / n:.6f}, {k / layers:.6f}")
+    wedges = []
+    for k in range(layers):
+        for j in range(n):
+            for i in range(n):
+                a, b, c, d = nid(i, j, k), nid(i + 1, j, k), nid(i + 1, j + 1, k), nid(i, j + 1, k)
+                A, B, C, D = (nid(i, j, k + 1), nid(i + 1, j, k + 1), nid(i + 1, j + 1, k + 1),
+                              nid(i, j + 1, k + 1))  # fmt: skip
+                if (i + j) % 2 == 0:
+                    wedges += [[a, b, c, A, B, C], [a, c, d, A, C, D]]
+                else:
+                    wedges += [[a, b, d, A, B, D], [b, c, d, B, C, D]]
+    lines.append(f"*ELEMENT, TYPE={element}, ELSET=EALL")
+    for e, w in enumerate(wedges, start=1):
+        row = w if element == "C3D6" else [w[0], w[1], w[2], w[2], w[3], w[4], w[5], w[5]]
+        lines.append(", ".join(map(str, [e, *row])))
+    bottom = [nid(i, j, 0) for j in range(n + 1) for i in range(n + 1)]
+    top = [nid(i, j, layers) for j in range(n + 1) for i in range(n + 1)]
+    lines += ["*NSET, NSET=BOT", ", ".join(map(str, bottom)), "*NSET, NSET=TOP"]
+    lines += [", ".join(map(str, top))]
+    if surfaces:
+        lines += [f"*SURFACE, NAME=S{k}\n{e}, S{k}" for k, e in zip(range(1, 6), (1, 3, 5, 6, 8))]
+    lines.append("""*MATERIAL, NAME=EL
+*ELASTIC
+210000., 0.3
+*SOLID SECTION, ELSET=EALL, MATERIAL=EL
+*BOUNDARY
+BOT, 1, 3
+*STEP
+*STATIC
+*BOUNDARY
+TOP, 3, 3, -0.01
+TOP, 1, 1, 0.02
+TOP, 2, 2, 0.0
+*NODE PRINT, NSET=NALL
+U
+*NODE PRINT, NSET=TOP, TOTALS=ONLY
+RF
+*END STEP""")
+    return "\n".join(lines) + "\n", wedges
+
+
+def test_wedges_become_collapsed_hexahedra(tmp_path: Path) -> None:
+    text, wedges = _block()
+    path = tmp_path / "w.inp"
+    path.write_text(text)
+    deck = read_deck(path)
+    block = deck.elements["C3D8"]
+    assert deck.wedges.tolist() == list(range(1, len(wedges) + 1))
+    for e, wedge in enumerate(wedges, start=1):
+        row = block.connectivity[block.ids.tolist().index(e)]
+        assert sorted(set(row.tolist())) == sorted(wedge)  # the wedge's nodes, one edge twice
+        assert row[2] == row[3] and row[6] == row[7]
+        # turned (cyclically) but in ccx's order: triangle below triangle
+        assert set(row[:4].tolist()) == set(wedge[:3]) and set(row[4:].tolist()) == set(wedge[3:])
+    collapsed = {frozenset(row[[2, 6]].tolist()) for row in block.connectivity}
+    assert len(collapsed) == len(wedges)  # no edge collapsed twice (dolfinx cannot mesh that)
+    for k, element in zip(range(1, 6), (1, 3, 5, 6, 8)):  # each label names the wedge's face
+        nodes = set(face_nodes(deck, f"S{k}")[0].tolist())
+        assert nodes == {wedges[element - 1][i] for i in WEDGE_FACES[k - 1]}, k
+
+
+def test_wedges_refused_with_a_clear_error(tmp_path: Path) -> None:
+    text, _ = _block()
+    path = tmp_path / "w.inp"
+    mirrored = text.replace("\n1, 1, 2, 5, 10, 11, 14\n", "\n1, 2, 1, 5, 11, 10, 14\n")
+    assert mirrored != text
+    path.write_text(mirrored)
+    with pytest.raises(DeckError, match="C3D6 element 1 has a Jacobian <= 0"):
+        read_deck(path)
+    path.write_text(text.replace("\n1, 1, 2, 5, 10, 11, 14\n", "\n1, 1, 2, 5, 10, 11, 5\n"))
+    with pytest.raises(DeckError, match="element 1 repeats a node"):
+        read_deck(path)
+    path.write_text(text.replace("5, S5", "5, S6").replace("8, S5", "8, S6"))
+    with pytest.raises(DeckError, match="face S6 of a C3D6 element"):
+        read_deck(path)
+    # one layer of 3 x 3 split hexahedra: 18 wedges, 16 vertical edges to collapse
+    path.write_text(_block(n=3, layers=1)[0])
+    with pytest.raises(DeckError, match="collapsed edges apart"):
+        read_deck(path)
+
+
+@pytest.mark.parametrize("request_card", ["*EL PRINT, ELSET=EALL\nS", "*EL FILE\nS"])
+def test_element_outputs_of_wedges_refused(tmp_path: Path, request_card: str) -> None:
+    text = _block(surfaces=False)[0].replace("*END STEP", f"{request_card}\n*END STEP")
+    (tmp_path / "w.inp").write_text(text)
+    with pytest.raises(NotImplementedError, match="of C3D6 element 1 is not supported"):
+        run_job("w", tmp_path, comm=MPI.COMM_SELF, progress=False)
+
+
+TWINS = """*NODE, NSET=NALL
+1, 0, 0, 0
+2, 1, 0, 0
+3, 1, 1, 0
+4, 0, 1, 0
+5, 0, 0, 1
+6, 1, 0, 1
+7, 1, 1, 1
+8, 0, 1, 1
+*ELEMENT, TYPE=C3D8, ELSET=EALL
+1, 1, 2, 3, 4, 5, 6, 7, 8
+*SURFACE, NAME=TOP, TYPE=NODE
+5, 6
+*SURFACE, NAME=TOP
+1, S2
+*SURFACE, NAME=BOTTOM
+1, S1
+*SURFACE, NAME=BOTTOM, TYPE=NODE
+1, 2, 3
+*MATERIAL, NAME=EL
+*ELASTIC
+1000., 0.3
+*SOLID SECTION, ELSET=EALL, MATERIAL=EL
+*SURFACE INTERACTION, NAME=SI
+*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR
+1.E5
+*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE
+TOP, BOTTOM
+BOTTOM, TOP
+*STEP
+*STATIC
+*END STEP
+"""
+
+
+def test_node_and_element_surface_of_one_name(tmp_path: Path) -> None:
+    path = tmp_path / "t.inp"
+    path.write_text(TWINS)
+    deck = read_deck(path)
+    first, second = deck.contact_pairs
+    assert (first.slave, first.master) == ("TOP#NODES", "BOTTOM")
+    assert (second.slave, second.master) == ("BOTTOM#NODES", "TOP")
+    assert deck.surfaces["TOP#NODES"].type == "NODE" and deck.surfaces["TOP"].type == "ELEMENT"
+    assert deck.surfaces["TOP#NODES"].nodes.tolist() == [5, 6]
+    assert deck.surfaces["BOTTOM#NODES"].nodes.tolist() == [1, 2, 3]
+    assert deck.surfaces["BOTTOM"].faces.tolist() == [1]
+    path.write_text(TWINS.replace("*MATERIAL", "*SURFACE, NAME=TOP\n1, S3\n*MATERIAL"))
+    with pytest.raises(DeckError, match="surface TOP is defined twice"):
+        read_deck(path)
+
+
+def _run_ours(directory: Path, job: str) -> None:
+    logger = logging.getLogger("dolfinx_ntf")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        result = run_job(job, directory, comm=MPI.COMM_SELF, progress=False)
+    finally:
+        logger.setLevel(level)
+    assert result.completed
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
+def test_wedge_block_against_ccx(tmp_path: Path) -> None:
+    ours_dir, hex_dir, wedge_dir = (tmp_path / d for d in ("ntf", "hex", "wedge"))
+    for d, element in ((ours_dir, "C3D6"), (hex_dir, "C3D8"), (wedge_dir, "C3D6")):
+        d.mkdir()
+        (d / "w.inp").write_text(_block(element=element, surfaces=False)[0])
+    run_ccx(hex_dir, "w", timeout=120)
+    run_ccx(wedge_dir, "w", timeout=120)
+    _run_ours(ours_dir, "w")
+    ours = read_dat(ours_dir / "w.dat")
+    collapsed, wedge = read_dat(hex_dir / "w.dat"), read_dat(wedge_dir / "w.dat")
+    assert [b.name for b in ours] == [b.name for b in collapsed] == ["U", "RF_TOTAL"]
+    for a, b, c in zip(ours, collapsed, wedge):
+        np.testing.assert_array_equal(a.labels, b.labels)
+        scale = np.abs(b.values).max()
+        assert np.abs(a.values - b.values).max() <= 2e-6 * scale, a.name  # ccx's collapsed C3D8
+        # ccx's C3D6 integrates with 2 points: measured 2.8e-2 (U) and 1.6e-2 (RF) here
+        difference = np.abs(a.values - c.values).max() / scale
+        assert 1e-3 < difference < 5e-2, (a.name, difference)
+
+
+SUITE = Path("/usr/share/doc/calculix-ccx-test/examples/test")
+
+
+def _metalforming(simplified: bool) -> str:
+    """ccx's metalforming deck; ``simplified``: without friction, plasticity and NLGEOM."""
+    text = gzip.decompress((SUITE / "metalforming.inp.gz").read_bytes()).decode("latin-1")
+    if simplified:
+        for old, new in (("*friction\n0.2,0.001\n", ""), ("*plastic\n50.0, 0.0\n100.0, 0.3\n", ""),
+                         ("*step,nlgeom,inc=99999", "*step,inc=99999")):  # fmt: skip
+            assert old in text
+            text = text.replace(old, new)
+    return text
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
+@pytest.mark.skipif(not (SUITE / "metalforming.inp.gz").exists(), reason="no calculix-ccx-test")
+@pytest.mark.parametrize("simplified", [True, False], ids=["elastic", "deck"])
+def test_metalforming_against_ccx(tmp_path: Path, simplified: bool) -> None:
+    """28 wedges on the axis of a cylindrical ``*TRANSFORM``, surfaces named twice.
+
+    Elastic and frictionless, every block agrees to 2e-6 of its largest value. The deck itself
+    (plastic sheet, friction, NLGEOM): the normal columns to 6e-5; the tangential ones are 2.8e-3
+    apart (we cut the increment back where ccx does not, and friction follows the path), not
+    asserted here (docs/method.md §30.4).
+    """
+    ours_dir, ccx_dir = tmp_path / "ntf", tmp_path / "ccx"
+    for d in (ours_dir, ccx_dir):
+        d.mkdir()
+        (d / "mf.inp").write_text(_metalforming(simplified))
+    run_ccx(ccx_dir, "mf", timeout=300)
+    _run_ours(ours_dir, "mf")
+    theirs = read_dat(ccx_dir / "mf.dat")
+    ours = {(b.name, b.time): b for b in read_dat(ours_dir / "mf.dat")}
+    assert [b.name for b in theirs] == ["CDIS", "CSTR"]
+    for block in theirs:
+        mine = ours[(block.name, block.time)]
+        np.testing.assert_array_equal(mine.labels, block.labels)  # 147 springs, node 1020 too
+        scale = np.abs(block.values).max()
+        columns = slice(None) if simplified else slice(0, 1)
+        difference = np.abs(mine.values - block.values)[:, columns].max() / scale
+        assert difference <= (1e-5 if simplified else 1e-4), (block.name, difference)
