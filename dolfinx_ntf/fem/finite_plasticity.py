@@ -18,11 +18,11 @@ import numpy as np
 import dolfinx.fem
 import ufl
 
-from dolfinx_ntf import compat, validation
+from dolfinx_ntf import compat
 from dolfinx_ntf.kernels.finite_plasticity import finite_return_map
-from dolfinx_ntf.kernels.plasticity import IsotropicHardening, elastic_matrix
+from dolfinx_ntf.kernels.plasticity import IsotropicHardening
 
-from .plasticity import _cell_rows, material_cells
+from .plasticity import QuadratureLaw, _cell_rows
 
 __all__ = ["FiniteStrainJ2Plasticity"]
 
@@ -32,7 +32,7 @@ def _flat(tensor: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
     return ufl.as_vector([tensor[i, j] for i in range(3) for j in range(3)])
 
 
-class FiniteStrainJ2Plasticity:
+class FiniteStrainJ2Plasticity(QuadratureLaw):
     """Simo's finite-strain J2 plasticity with isotropic hardening at the quadrature points.
 
     Args:
@@ -64,25 +64,13 @@ class FiniteStrainJ2Plasticity:
         tag: int = 1,
     ) -> None:
         owner = "FiniteStrainJ2Plasticity"
-        validation.check_type(u, dolfinx.fem.Function, f"{owner}: u")
-        validation.check_type(hardening, IsotropicHardening, f"{owner}: hardening")
-        elastic_matrix(youngs_modulus, poisson_ratio)  # checks E and nu
         if ufl.shape(u) != (3,):
             raise ValueError(f"{owner}: u must be a 3D displacement, got shape {ufl.shape(u)}")
-        degree = 2 * compat.space_degree(u.function_space)
-        if quadrature_degree is not None:
-            if isinstance(quadrature_degree, bool) or not isinstance(quadrature_degree, int):
-                raise ValueError(f"{owner}: quadrature_degree must be an integer >= 0")
-            if quadrature_degree < 0:
-                raise ValueError(f"{owner}: quadrature_degree must be an integer >= 0")
-            degree = quadrature_degree
-        self.u = u
-        self.youngs_modulus = float(youngs_modulus)
-        self.poisson_ratio = float(poisson_ratio)
-        self.hardening = hardening
-        self.quadrature_degree = degree
+        self._set_up(
+            owner, u, youngs_modulus, poisson_ratio, hardening, quadrature_degree, cell_tags, tag
+        )
+        degree = self.quadrature_degree
         mesh = u.function_space.mesh
-        self._cells, self.dx = material_cells(mesh, degree, cell_tags, tag, owner)
         self.first_piola = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (9,)))
         self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (9, 9)))
         self.first_piola.name = "first_piola"
@@ -145,20 +133,6 @@ class FiniteStrainJ2Plasticity:
         self.evaluate()
         self.inverse_plastic_metric = self._trial.inverse_plastic_metric.copy()
         self.equivalent_plastic_strain = self._trial.equivalent_plastic_strain.copy()
-
-    def increment_rejected(self) -> None:
-        """Drop the trial history: the stress goes back to the committed state at ``u``."""
-        self.evaluate()
-
-    @property
-    def yielding(self) -> np.ndarray:
-        """Whether each local quadrature point yielded at the last evaluation, (n,) bool."""
-        return self._trial.plastic.copy()
-
-    @property
-    def cells(self) -> np.ndarray:
-        """The law's local cells (owned and ghost), ascending."""
-        return self._cells.copy()
 
     def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(n, q, 3, 3)`` of the last evaluation at the points of ``cells``.

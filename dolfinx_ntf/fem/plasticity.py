@@ -15,6 +15,7 @@ out-of-plane strains are zero, the out-of-plane stress is kept in :attr:`J2Plast
 from __future__ import annotations
 
 import numbers
+import typing
 
 import numpy as np
 
@@ -103,7 +104,69 @@ def _cell_rows(
     return per_cell[pos]
 
 
-class J2Plasticity:
+class QuadratureLaw:
+    """What the plasticity laws share: their arguments, cells and measure, and the trial state.
+
+    A subclass sets ``self._trial`` (a return map's result with a ``plastic`` mask) in
+    ``evaluate()``; the history it commits is its own.
+    """
+
+    _cells: np.ndarray
+    _trial: typing.Any
+
+    def _set_up(
+        self,
+        owner: str,
+        u: dolfinx.fem.Function,
+        youngs_modulus: float,
+        poisson_ratio: float,
+        hardening: IsotropicHardening,
+        quadrature_degree: int | None,
+        cell_tags: compat.MeshTags | None,
+        tag: int,
+    ) -> None:
+        """Check the arguments, store them and pick the law's cells and measure."""
+        validation.check_type(u, dolfinx.fem.Function, f"{owner}: u")
+        validation.check_type(hardening, IsotropicHardening, f"{owner}: hardening")
+        elastic_matrix(youngs_modulus, poisson_ratio)  # checks E and nu
+        degree = 2 * compat.space_degree(u.function_space)
+        if quadrature_degree is not None:
+            if (
+                isinstance(quadrature_degree, bool)
+                or not isinstance(quadrature_degree, numbers.Integral)
+                or quadrature_degree < 0
+            ):
+                raise ValueError(
+                    f"{owner}: quadrature_degree must be an integer >= 0, got {quadrature_degree!r}"
+                )
+            degree = int(quadrature_degree)
+        self.u = u
+        self.youngs_modulus = float(youngs_modulus)
+        self.poisson_ratio = float(poisson_ratio)
+        self.hardening = hardening
+        self.quadrature_degree = degree
+        self._cells, self.dx = material_cells(u.function_space.mesh, degree, cell_tags, tag, owner)
+
+    def evaluate(self) -> None:
+        """Return-map the current ``u`` from the committed history (the subclass's)."""
+        raise NotImplementedError
+
+    def increment_rejected(self) -> None:
+        """Drop the trial history: the stress goes back to the committed state at ``u``."""
+        self.evaluate()
+
+    @property
+    def yielding(self) -> np.ndarray:
+        """Whether each local quadrature point yielded at the last evaluation, (n,) bool."""
+        return self._trial.plastic.copy()
+
+    @property
+    def cells(self) -> np.ndarray:
+        """The law's local cells (owned and ghost), ascending."""
+        return self._cells.copy()
+
+
+class J2Plasticity(QuadratureLaw):
     """Small-strain J2 plasticity with isotropic hardening at the quadrature points of ``u``'s mesh.
 
     Args:
@@ -138,29 +201,13 @@ class J2Plasticity:
         tag: int = 1,
     ) -> None:
         owner = "J2Plasticity"
-        validation.check_type(u, dolfinx.fem.Function, f"{owner}: u")
-        validation.check_type(hardening, IsotropicHardening, f"{owner}: hardening")
-        elastic_matrix(youngs_modulus, poisson_ratio)  # checks E and nu
         if ufl.shape(u) not in ((2,), (3,)):
             raise ValueError(f"{owner}: u must be a 2D or 3D displacement, got {ufl.shape(u)}")
-        degree = 2 * compat.space_degree(u.function_space)
-        if quadrature_degree is not None:
-            if (
-                isinstance(quadrature_degree, bool)
-                or not isinstance(quadrature_degree, numbers.Integral)
-                or quadrature_degree < 0
-            ):
-                raise ValueError(
-                    f"{owner}: quadrature_degree must be an integer >= 0, got {quadrature_degree!r}"
-                )
-            degree = int(quadrature_degree)
-        self.u = u
-        self.youngs_modulus = float(youngs_modulus)
-        self.poisson_ratio = float(poisson_ratio)
-        self.hardening = hardening
-        self.quadrature_degree = degree
+        self._set_up(
+            owner, u, youngs_modulus, poisson_ratio, hardening, quadrature_degree, cell_tags, tag
+        )
+        degree = self.quadrature_degree
         mesh = u.function_space.mesh
-        self._cells, self.dx = material_cells(mesh, degree, cell_tags, tag, owner)
         self.stress = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6,)))
         self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6, 6)))
         self.stress.name = "stress"
@@ -238,20 +285,6 @@ class J2Plasticity:
         self.evaluate()  # at the converged u, whatever was evaluated last
         self.plastic_strain = self._trial.plastic_strain.copy()
         self.equivalent_plastic_strain = self._trial.equivalent_plastic_strain.copy()
-
-    def increment_rejected(self) -> None:
-        """Drop the trial history: the stress goes back to the committed state at ``u``."""
-        self.evaluate()
-
-    @property
-    def yielding(self) -> np.ndarray:
-        """Whether each local quadrature point yielded at the last evaluation, (n,) bool."""
-        return self._trial.plastic.copy()
-
-    @property
-    def cells(self) -> np.ndarray:
-        """The law's local cells (owned and ghost), ascending."""
-        return self._cells.copy()
 
     def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
         """Stresses ``(n, q, 3, 3)`` of the last evaluation at the rule's points of ``cells``.

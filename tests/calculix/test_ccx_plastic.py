@@ -19,6 +19,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from cases import BOTTOM, PUNCH, TOP, blocks, facet_tag
+from helpers.decks import TWO_C3D8
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
@@ -41,25 +42,13 @@ needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx
 OUTPUT = OutputSpec(node_print=("U",), contact_print=("CDIS", "CSTR", "CELS", "CNUM"))
 SHEET = "*ELASTIC\n5000.0, 0.3\n*PLASTIC\n50.0, 0.0\n100.0, 0.3\n"
 
-BAR = """*HEADING
+BAR = (
+    """*HEADING
 two C3D8 on symmetry rollers pulled to 5 % strain (yield at 1 %), then back to 4 %
 *NODE, NSET=NALL
-1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 1
-6, 1, 0, 1
-7, 1, 1, 1
-8, 0, 1, 1
-9, 2, 0, 0
-10, 2, 1, 0
-11, 2, 0, 1
-12, 2, 1, 1
-*ELEMENT, TYPE=C3D8, ELSET=EALL
-1, 1, 2, 3, 4, 5, 6, 7, 8
-2, 2, 9, 10, 3, 6, 11, 12, 7
-*NSET, NSET=X0
+"""
+    + TWO_C3D8
+    + """*NSET, NSET=X0
 1, 4, 5, 8
 *NSET, NSET=Y0
 1, 2, 5, 6, 9, 11
@@ -98,6 +87,7 @@ U, RF
 S
 *END STEP
 """
+)
 
 
 def _run(name: str, directory: Path, **options):

@@ -15,29 +15,18 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.decks import TWO_C3D8
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import read_deck
 from dolfinx_ntf.calculix.job import run_job
 
-DECK = """*NODE, NSET=NALL
-1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 1
-6, 1, 0, 1
-7, 1, 1, 1
-8, 0, 1, 1
-9, 2, 0, 0
-10, 2, 1, 0
-11, 2, 0, 1
-12, 2, 1, 1
-*ELEMENT, TYPE=C3D8, ELSET=EALL
-1, 1, 2, 3, 4, 5, 6, 7, 8
-2, 2, 9, 10, 3, 6, 11, 12, 7
-*ELSET, ELSET=SOFT
+DECK = (
+    """*NODE, NSET=NALL
+"""
+    + TWO_C3D8
+    + """*ELSET, ELSET=SOFT
 2
 *MATERIAL, NAME=STIFF
 *ELASTIC
@@ -66,6 +55,7 @@ U, RF
 S
 *END STEP
 """
+)
 
 
 def test_earlier_section_keeps_the_rest(tmp_path: Path) -> None:

@@ -24,6 +24,25 @@ REQUESTS = (
     "*NODE FILE, CONTACT ELEMENTS\nU, RF\n*EL FILE\nS\n*CONTACT FILE\nCDIS, CSTR\n*END STEP"
 )
 
+#: Two unit C3D8 cubes side by side along x (nodes 1-12, elements 1, 2 in ELSET EALL), to follow
+#: ``*NODE, NSET=NALL``.
+TWO_C3D8 = """1, 0, 0, 0
+2, 1, 0, 0
+3, 1, 1, 0
+4, 0, 1, 0
+5, 0, 0, 1
+6, 1, 0, 1
+7, 1, 1, 1
+8, 0, 1, 1
+9, 2, 0, 0
+10, 2, 1, 0
+11, 2, 0, 1
+12, 2, 1, 1
+*ELEMENT, TYPE=C3D8, ELSET=EALL
+1, 1, 2, 3, 4, 5, 6, 7, 8
+2, 2, 9, 10, 3, 6, 11, 12, 7
+"""
+
 _CLOCK = re.compile(r"^\s*1U(TIME|DATE)")  # .frd header lines with the wall-clock time
 
 
