@@ -212,6 +212,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Per-cell 2D formulations (quasi-axisymmetric models)", "dolfinx_ntf.fem.plane_sections"),
     ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
+    ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
     ("The Hertz geometry of the demos", "dolfinx_ntf.meshes.hertz"),
@@ -321,6 +322,9 @@ def _directive(module: str, name: str) -> str:
     obj = getattr(importlib.import_module(module), name)
     if inspect.isclass(obj):
         extra = "   :show-inheritance:\n" if issubclass(obj, Exception) else ""
+        own_bases = [b for b in obj.__mro__[1:-1] if b.__module__.startswith("dolfinx_ntf.")]
+        if own_bases and not issubclass(obj, Exception):  # members a package base holds
+            extra += "   :inherited-members:\n"
         return f".. autoclass:: {module}.{name}\n   :members:\n{extra}"
     if callable(obj):
         return f".. autofunction:: {module}.{name}\n"
