@@ -71,7 +71,8 @@ class CaxBlocks:
     def cax4_deck(self) -> str:
         """The CAX4 deck."""
         out = ["*NODE, NSET=NALL\n"]
-        out += [f"{n}, {x!r}, {y!r}, 0.0\n" for n, x, y in zip(self.ids, self.x, self.y)]
+        coords = zip(self.ids, self.x.tolist(), self.y.tolist())  # Python floats: repr is a number
+        out += [f"{n}, {x!r}, {y!r}, 0.0\n" for n, x, y in coords]
         out.append("*ELEMENT, TYPE=CAX4, ELSET=EALL\n")
         out += [f"{e + 1}, " + ", ".join(map(str, c)) + "\n" for e, c in enumerate(self.cells)]
         out += self._common("S3", "S1")
@@ -83,8 +84,9 @@ class CaxBlocks:
         """The C3D8 sector of ``theta_degrees``, printing radial, hoop and axial displacements."""
         half = np.radians(theta_degrees) / 2
         out = ["*NODE, NSET=NALL\n"]
-        for n, x, y in zip(self.ids, self.x, self.y):
+        for n, x, y in zip(self.ids, self.x.tolist(), self.y.tolist()):  # Python floats
             c, s = x * np.cos(half), x * np.sin(half)
+            c, s = float(c), float(s)
             out.append(f"{n}, {c!r}, {y!r}, {-s!r}\n{n + SECOND_LINE}, {c!r}, {y!r}, {s!r}\n")
         out.append("*ELEMENT, TYPE=C3D8, ELSET=EALL\n")
         for e, c in enumerate(self.cells):
