@@ -3,6 +3,12 @@
 dolfinx 0.5.2 imports only the cells and facets that belong to gmsh physical groups, and its
 ``gmshio.read_from_msh`` is broken; this module wraps ``gmshio.model_to_mesh`` instead.
 
+Prisms (6-node wedges, e.g. from ``extrude(..., recombine=True)`` of a triangulated surface),
+alone or beside hexahedra, are read as hexahedra with one collapsed edge, as the deck runner reads
+C3D6 (``kernels/collapsed_wedges.py``, docs/method.md §30 and §32): one mesh of hexahedra on every
+dolfinx release. Their triangles are facets (quadrilaterals with a repeated corner) that facet
+tags, contact surfaces and ``ds`` take like any other.
+
 Shared rules:
     * Every public function is collective over ``comm``. gmsh is touched on rank ``rank`` only,
       so the other ranks need neither gmsh initialized nor a model.
@@ -28,16 +34,30 @@ from mpi4py import MPI
 import gmsh
 import numpy as np
 
+import dolfinx.mesh
 from dolfinx.mesh import Mesh
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.compat import MeshTags
+from dolfinx_ntf.kernels.collapsed_wedges import (
+    WedgeRotationError,
+    collapse_wedges,
+    collapsed_jacobians,
+    wedge_rotations,
+)
 
 __all__ = ["gmsh_session", "mesh_from_gmsh", "model_to_mesh", "read_msh", "write_msh"]
 
 _model_counter = itertools.count()
 #: gmsh's serendipity cell types, which dolfinx has no coordinate element for.
 _INCOMPLETE = {16: "8-node quadrilaterals", 17: "20-node hexahedra"}
+#: gmsh element types of the prism path: 3-node triangles, 4-node quadrilaterals, 8-node
+#: hexahedra, 6-node prisms.
+_TRIANGLE, _QUADRILATERAL, _HEXAHEDRON, _PRISM = 2, 3, 5, 6
+#: Prisms the collapsed-hexahedron reading cannot take (gmsh element type: what it is).
+_OTHER_PRISMS = {13: "18-node prisms", 18: "15-node prisms"}
+#: gmsh's hexahedron (and ccx's C3D8) corner order to dolfinx's.
+_HEX_TO_DOLFINX = np.array([0, 1, 3, 2, 4, 5, 7, 6])
 
 
 def _track_initialization() -> dict[str, bool] | None:
@@ -126,20 +146,26 @@ def model_to_mesh(
     Returns:
         ``(mesh, cell_tags, facet_tags)``.
 
+    Prisms, alone or beside hexahedra, become hexahedra with a collapsed edge (the module's
+    docstring); their facets may then be triangles and quadrilaterals.
+
     Raises:
         ValueError: The model has no physical groups or no mesh, an entity sits in two physical
-            groups of the same dimension, or the cells (facets) are not all of one element type.
+            groups of the same dimension, the cells (facets) are not all of one element type
+            (other than prisms beside hexahedra), or prisms cannot be collapsed (naming them).
     """
     _check_rank(comm, rank)
     if gdim not in (1, 2, 3):
         raise ValueError(f"gdim must be 1, 2 or 3, got {gdim!r}")
-    error = None
+    error, prisms = None, False
     if comm.rank == rank:
         try:
-            _prepare_model()
+            prisms = _prepare_model()
         except ValueError as exc:
             error = exc
     _raise_everywhere(comm, rank, error)
+    if comm.bcast(prisms, root=rank):
+        return _collapsed_prism_mesh(comm, rank, gdim)
     return compat.model_to_mesh(gmsh.model, comm, rank, gdim)
 
 
@@ -272,11 +298,12 @@ def _raise_everywhere(comm: MPI.Comm, rank: int, error: Exception | None) -> Non
     raise rebuilt
 
 
-def _prepare_model() -> None:
+def _prepare_model() -> bool:
     """Check the current gmsh model can go through dolfinx's ``model_to_mesh``; renumber nodes.
 
     dolfinx reads the elements of every physical group, keeps the highest dimension as cells and
-    the next one as facets, assumes one element type for each and contiguous node tags.
+    the next one as facets, assumes one element type for each and contiguous node tags. Prisms
+    (with or without hexahedra) take the collapsed-hexahedron path instead: returns True then.
 
     Raises:
         ValueError: Naming the model and the offending group or entity.
@@ -289,6 +316,7 @@ def _prepare_model() -> None:
             "physical groups (add them with gmsh.model.addPhysicalGroup)"
         )
     tdim = max(dim for dim, _ in groups)
+    prisms = False
     for dim in (tdim, tdim - 1):
         owner: dict[int, int] = {}
         types: set[int] = set()
@@ -309,6 +337,17 @@ def _prepare_model() -> None:
                         f"mixes element types {list(entity_types)}"
                     )
                 types.update(int(t) for t in entity_types)
+        other = sorted(types & set(_OTHER_PRISMS)) if dim == tdim else []
+        if other:
+            raise ValueError(
+                f"gmsh model '{model}': its cells are {_OTHER_PRISMS[other[0]]}; only 6-node "
+                "prisms are read (as hexahedra with a collapsed edge, docs/method.md §32)"
+            )
+        if dim == tdim == 3 and _PRISM in types and types <= {_PRISM, _HEXAHEDRON}:
+            prisms = True
+            continue
+        if prisms and types <= {_TRIANGLE, _QUADRILATERAL}:
+            continue
         if len(types) > 1:
             names = [gmsh.model.mesh.getElementProperties(t)[0] for t in sorted(types)]
             raise ValueError(
@@ -331,6 +370,126 @@ def _prepare_model() -> None:
     node_tags, _, _ = gmsh.model.mesh.getNodes()
     if not np.array_equal(np.sort(node_tags), np.arange(1, node_tags.size + 1)):
         gmsh.model.mesh.renumberNodes()
+    return prisms
+
+
+def _group_elements(dim: int) -> dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    """Elements of the physical groups of ``dim`` by gmsh type: ``(tags, rows, group)`` lists.
+
+    ``rows`` hold 0-based node indices (node tags are contiguous after :func:`_prepare_model`).
+    """
+    found: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
+    for group_dim, group in gmsh.model.getPhysicalGroups():
+        if group_dim != dim:
+            continue
+        for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, group):
+            types, tags, nodes = gmsh.model.mesh.getElements(dim, entity)
+            for kind, element_tags, node_tags in zip(types, tags, nodes):
+                element_tags = np.asarray(element_tags, dtype=np.int64)
+                rows = np.asarray(node_tags, dtype=np.int64).reshape(element_tags.size, -1) - 1
+                values = np.full(element_tags.size, group, dtype=np.int32)
+                found.setdefault(int(kind), []).append((element_tags, rows, values))
+    return found
+
+
+def _stacked(parts: list, width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(tags, rows, groups)`` of a list from :func:`_group_elements` joined (empty if none)."""
+    if not parts:
+        return np.zeros(0, np.int64), np.zeros((0, width), np.int64), np.zeros(0, np.int32)
+    return tuple(np.concatenate([p[i] for p in parts]) for i in range(3))  # type: ignore[return-value]
+
+
+def _prism_cells(model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Points, hexahedra (dolfinx order), cell groups and tagged facet keys of a prism model.
+
+    Prisms turned so their collapsed edges build (``kernels/collapsed_wedges.py``) and, if the
+    triangle ``1-2-3`` turns clockwise seen from ``4-5-6``, mirrored (the same element).
+    Facet keys: sorted corner nodes, -1 first for a triangle; then the facet's group.
+
+    Raises:
+        ValueError: a prism is flat or inverted at an integration point, or its collapsed edges
+            cannot be placed (naming gmsh element tags).
+    """
+    node_tags, coords, _ = gmsh.model.mesh.getNodes()
+    points = np.zeros((node_tags.size, 3))
+    points[np.asarray(node_tags, dtype=np.int64) - 1] = np.asarray(coords).reshape(-1, 3)
+    cells = _group_elements(3)
+    _, hexes, hex_groups = _stacked(cells.get(_HEXAHEDRON, []), 8)
+    prism_tags, prisms, prism_groups = _stacked(cells.get(_PRISM, []), 6)
+    det = collapsed_jacobians(points[collapse_wedges(prisms, np.zeros(prisms.shape[0], int))])
+    mirrored = np.all(det < 0.0, axis=1)
+    prisms[mirrored] = prisms[mirrored][:, [0, 2, 1, 3, 5, 4]]
+    bad = np.flatnonzero(np.any(det <= 0.0, axis=1) & ~mirrored)
+    if bad.size:
+        raise ValueError(
+            f"gmsh model '{model}': prism {int(prism_tags[bad[0]])} (and {bad.size - 1} more) is "
+            "flat or inverted at an integration point of its collapsed hexahedron"
+        )
+    try:
+        rotation = wedge_rotations(prisms, shared=True)
+    except WedgeRotationError as exc:
+        raise ValueError(
+            f"gmsh model '{model}': prism {int(prism_tags[exc.index])}: {exc} (dolfinx cannot "
+            "build a mesh of hexahedra collapsed otherwise; docs/method.md §32)"
+        ) from None
+    hexahedra = np.vstack([hexes, collapse_wedges(prisms, rotation)])[:, _HEX_TO_DOLFINX]
+    groups = np.concatenate([hex_groups, prism_groups])
+    facets = _group_elements(2)
+    _, triangles, tri_groups = _stacked(facets.get(_TRIANGLE, []), 3)
+    _, quads, quad_groups = _stacked(facets.get(_QUADRILATERAL, []), 4)
+    keys = np.vstack(
+        [np.column_stack([np.full(triangles.shape[0], -1), np.sort(triangles, axis=1)]),
+         np.sort(quads, axis=1)]
+    )  # fmt: skip
+    tagged = np.column_stack([keys, np.concatenate([tri_groups, quad_groups])])
+    return points, hexahedra, groups, tagged
+
+
+def _collapsed_prism_mesh(comm: MPI.Comm, rank: int, gdim: int) -> tuple[Mesh, MeshTags, MeshTags]:
+    """Mesh and tags of a prism model on ``rank``, prisms as collapsed hexahedra. Collective.
+
+    The cell groups and tagged facets are broadcast (set-up data, one integer per cell and five
+    per tagged facet); each process tags its own and ghost cells and facets.
+    """
+    if gdim != 3:
+        raise ValueError(f"a mesh of prisms needs gdim = 3, got {gdim!r}")
+    error, groups, tagged = None, None, None
+    points, cells = np.zeros((0, gdim)), np.zeros((0, 8), np.int64)
+    if comm.rank == rank:
+        try:
+            points, cells, groups, tagged = _prism_cells(gmsh.model.getCurrent() or "<default>")
+        except ValueError as exc:
+            error = exc
+    _raise_everywhere(comm, rank, error)
+    groups, tagged = comm.bcast((groups, tagged), root=rank)
+    domain = compat.coordinate_element("hexahedron", 1, gdim)
+    mesh = compat.create_mesh(comm, cells, points[:, :gdim], domain)
+    tdim = mesh.topology.dim
+    cell_map = mesh.topology.index_map(tdim)
+    num_cells = cell_map.size_local + cell_map.num_ghosts
+    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
+    local = np.arange(original.size, dtype=np.int32)
+    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
+
+    mesh.topology.create_entities(tdim - 1)
+    facet_map = mesh.topology.index_map(tdim - 1)
+    facets = np.arange(facet_map.size_local + facet_map.num_ghosts, dtype=np.int32)
+    nodes = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)[
+        compat.entities_to_geometry(mesh, tdim - 1, facets)
+    ]
+    key = np.sort(nodes, axis=1)
+    repeat = np.zeros(key.shape, dtype=bool)
+    repeat[:, 1:] = key[:, 1:] == key[:, :-1]
+    key = np.sort(np.where(repeat, -1, key), axis=1)  # a triangle: -1 and its three corners
+    both = np.vstack([tagged[:, :4], key])
+    _, inverse = np.unique(both, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    value = np.full(both.shape[0], -1, dtype=np.int64)
+    value[inverse[: tagged.shape[0]]] = tagged[:, 4]
+    found = value[inverse[tagged.shape[0] :]]
+    keep = np.flatnonzero(found >= 0)
+    facet_tags = dolfinx.mesh.meshtags(mesh, tdim - 1, facets[keep], found[keep].astype(np.int32))
+    return mesh, cell_tags, facet_tags
 
 
 def write_msh(path: str | Path) -> None:

@@ -1,0 +1,257 @@
+"""Wedges (6-node prisms) as hexahedra with one collapsed edge (docs/method.md §30, §32).
+
+The wedge ``1..6`` (triangle ``1-2-3`` below ``4-5-6``, ccx's C3D6 and gmsh's 6-node prism
+order) becomes the hexahedron ``1, 2, 3, 3, 4, 5, 6, 6`` (ccx's C3D8 order): its face ``3-3-6-6``
+collapses into the edge ``3-6``. dolfinx then treats it as any hexahedron. The deck runner
+(``calculix/deck/wedges.py``) and the gmsh reader (``meshes/gmsh_io.py``) share this module.
+
+dolfinx corrupts its memory (0.5.2, 0.9 and 0.11, measured) when a collapsed edge is shared by
+more than two cells, or by two cells that also share a face; two cells that share only the
+collapsed edge build. Each wedge is therefore first turned (its corners renumbered cyclically,
+``rotation`` 0..2, which keeps the element and its orientation): wedges stacked on shared
+triangles repeat the same corner there (so the triangle is one facet of both), and the collapsed
+edges are kept apart (``shared=False``) or shared by at most two wedges with no common face
+(``shared=True``, the gmsh reader).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "WEDGE_AS_HEXAHEDRON",
+    "WedgeRotationError",
+    "collapse_wedges",
+    "collapsed_jacobians",
+    "rotated_wedges",
+    "wedge_rotations",
+]
+
+#: Hexahedron node ``k`` (ccx's C3D8 order) of a collapsed wedge is the wedge's node
+#: ``WEDGE_AS_HEXAHEDRON[k]`` (0-based).
+WEDGE_AS_HEXAHEDRON = np.array([0, 1, 2, 2, 3, 4, 5, 5], dtype=np.int64)
+
+# 2x2x2 Gauss points of the unit cube, and the trilinear shape function gradients there.
+_G = 0.5 / np.sqrt(3.0)
+_POINTS = np.array([[0.5 + a, 0.5 + b, 0.5 + c] for c in (-_G, _G) for b in (-_G, _G)
+                    for a in (-_G, _G)])  # fmt: skip
+_CORNERS = np.array(
+    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float
+)
+
+
+class WedgeRotationError(ValueError):
+    """No rotation of the wedges keeps their collapsed edges as dolfinx needs them.
+
+    Attributes:
+        index: Row of a wedge of the stack that could not be placed.
+    """
+
+    def __init__(self, message: str, index: int) -> None:
+        super().__init__(message)
+        self.index = index
+
+
+def _hex_gradients() -> np.ndarray:
+    """``(q, 8, 3)`` reference gradients of the trilinear shape functions (ccx corner order)."""
+    sign = 2.0 * _CORNERS - 1.0  # +1 at the far side of each axis
+    value = 1.0 - _CORNERS[None] + sign[None] * _POINTS[:, None, :]  # (q, 8, 3) 1D factors
+    grads = np.empty((_POINTS.shape[0], 8, 3))
+    for axis in range(3):
+        others = [a for a in range(3) if a != axis]
+        grads[:, :, axis] = sign[None, :, axis] * value[:, :, others[0]] * value[:, :, others[1]]
+    return grads
+
+
+_GRADIENTS = _hex_gradients()
+
+
+def collapsed_jacobians(coords: np.ndarray) -> np.ndarray:
+    """``(e, 8)`` Jacobian determinants of collapsed wedges at the 2x2x2 Gauss points.
+
+    ``coords`` ``(e, 8, 3)``: the collapsed hexahedra's nodes in ccx's C3D8 order (positive for
+    a wedge whose triangle ``1-2-3`` turns counter-clockwise seen from ``4-5-6``).
+    """
+    jac = np.einsum("eki,qkj->eqij", coords, _GRADIENTS)
+    return np.linalg.det(jac)
+
+
+def rotated_wedges(rows: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """The wedges ``rows`` ``(e, 6)`` with their corners renumbered cyclically by ``rotation``."""
+    rows = np.asarray(rows)
+    turn = (np.arange(3)[None, :] + np.asarray(rotation)[:, None]) % 3  # (e, 3)
+    return np.concatenate(
+        [np.take_along_axis(rows[:, :3], turn, 1), np.take_along_axis(rows[:, 3:], turn, 1)],
+        axis=1,
+    )
+
+
+def collapse_wedges(rows: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """``(e, 8)`` collapsed hexahedra (ccx's C3D8 order) of the wedges turned by ``rotation``."""
+    return rotated_wedges(rows, rotation)[:, WEDGE_AS_HEXAHEDRON]
+
+
+def _rotated(row: np.ndarray, rotation: int) -> np.ndarray:
+    """The wedge ``row`` (6 nodes) with its corners renumbered cyclically by ``rotation``."""
+    turn = (np.arange(3) + rotation) % 3
+    return np.concatenate([row[turn], row[3 + turn]])
+
+
+def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
+    """Rotation 0..2 of each wedge (rows ``(e, 6)`` in ccx order) for its collapsed hexahedron.
+
+    Wedges stacked on shared triangles are turned together so that they repeat the same corner
+    there. ``shared=False``: no two wedges collapse onto the same edge (depth-first over the
+    stacks; the deck runner's rule). ``shared=True``: an edge may be the collapsed edge of two
+    wedges that share no face (a seeded local search over the stacks; needed where a layer has more
+    stacks than vertical edges, as every extruded triangulation). Set-up work, once per mesh.
+
+    Raises:
+        WedgeRotationError: no rotation satisfies the rule (``index``: a wedge that is in the way).
+    """
+    rows = np.asarray(rows, dtype=np.int64)
+    triangles: dict[frozenset, list[int]] = {}
+    for k, row in enumerate(rows.tolist()):
+        for tri in (row[:3], row[3:]):
+            triangles.setdefault(frozenset(tri), []).append(k)
+    rotation = np.full(rows.shape[0], -1, dtype=np.int64)
+    stacks: list[list[dict[int, int]]] = []  # per stack, its choices (wedge -> rotation)
+    for start in range(rows.shape[0]):
+        if rotation[start] >= 0:
+            continue
+        choices = []
+        for first in range(3):
+            chosen = _stack(start, first, rows, triangles)
+            edges = [_edge(rows[k], r) for k, r in chosen.items()]
+            if len(set(edges)) == len(edges):
+                choices.append(chosen)
+        rotation[list(chosen)] = 0  # visited
+        stacks.append(choices)
+    if shared:
+        picks = _pick_shared(stacks, rows)
+    else:
+        picks = _pick([[{_edge(rows[k], r) for k, r in c.items()} for c in ch] for ch in stacks])
+    if isinstance(picks, int) or picks is None:
+        stack = 0 if picks is None else picks
+        index = int(next(iter(stacks[stack][0]))) if stacks and stacks[stack] else 0
+        rule = "at most two wedges with no common face" if shared else "apart"
+        raise WedgeRotationError(
+            "no numbering of the wedges' corners keeps their collapsed edges " + rule, index
+        )
+    for choices, pick in zip(stacks, picks):
+        for k, r in choices[pick].items():
+            rotation[k] = r
+    return rotation
+
+
+def _edge(row: np.ndarray, rotation: int) -> frozenset:
+    """The collapsed edge (nodes 3 and 6 after turning) of the wedge ``row``."""
+    return frozenset(_rotated(row, rotation)[[2, 5]].tolist())
+
+
+def _pick(edge_sets: list[list[set[frozenset]]], limit: int = 100000) -> list[int] | None:
+    """One choice per stack whose collapsed edges are all distinct (depth-first), or None.
+
+    ``edge_sets[s][c]``: the collapsed edges of choice ``c`` of stack ``s``.
+    """
+    picks: list[int] = []
+    used: list[set[frozenset]] = []
+    steps = 0
+    next_choice = 0
+    while len(picks) < len(edge_sets):
+        steps += 1
+        if steps > limit:
+            return None
+        taken = set().union(*used) if used else set()
+        choices = edge_sets[len(picks)]
+        for c in range(next_choice, len(choices)):
+            if not taken & choices[c]:
+                picks.append(c)
+                used.append(choices[c])
+                next_choice = 0
+                break
+        else:
+            if not picks:
+                return None
+            next_choice = picks.pop() + 1
+            used.pop()
+    return picks
+
+
+def _pick_shared(
+    stacks: list, rows: np.ndarray, sweeps: int = 200, seed: int = 0
+) -> list[int] | int:
+    """One choice per stack under the shared rule, or a stack still in conflict.
+
+    A min-conflicts local search (seeded, so the same mesh gives the same rotations): a greedy
+    start, then a stack in conflict moves to its least conflicting choice (a random one with
+    probability 0.2) until none is left or ``sweeps`` times the number of stacks moves are done.
+    """
+    rng = np.random.default_rng(seed)
+    nodes = [set(row) for row in rows.tolist()]
+    options = [[[(k, _edge(rows[k], r)) for k, r in c.items()] for c in ch] for ch in stacks]
+    users: dict[frozenset, list[tuple[int, int]]] = {}  # edge -> [(stack, wedge)]
+    pick = [-1] * len(stacks)
+    for s, choices in enumerate(options):
+        if not choices:
+            return s
+
+    def cost(s: int, c: int) -> int:
+        """Conflicts of choice ``c`` of stack ``s`` with the other stacks' current choices."""
+        total = 0
+        for k, edge in options[s][c]:
+            others = [w for t, w in users.get(edge, ()) if t != s]
+            total += len(others) if len(others) >= 2 else 0
+            total += sum(len(nodes[k] & nodes[w]) >= 3 for w in others)  # a common face
+        return total
+
+    def move(s: int, c: int) -> None:
+        if pick[s] >= 0:
+            for _, edge in options[s][pick[s]]:
+                users[edge] = [(t, w) for t, w in users[edge] if t != s]
+        pick[s] = c
+        for k, edge in options[s][c]:
+            users.setdefault(edge, []).append((s, k))
+
+    for s in range(len(stacks)):  # greedy start
+        move(s, min(range(len(options[s])), key=lambda c: cost(s, c)))
+    bad = {s for s in range(len(stacks)) if cost(s, pick[s])}
+    for _ in range(sweeps * len(stacks)):
+        if not bad:
+            return pick
+        s = sorted(bad)[int(rng.integers(len(bad)))]
+        if rng.random() < 0.2:
+            c = int(rng.integers(len(options[s])))
+        else:
+            costs = [cost(s, c) for c in range(len(options[s]))]
+            best = [c for c, value in enumerate(costs) if value == min(costs)]
+            c = best[int(rng.integers(len(best)))]
+        touched = {t for _, edge in options[s][pick[s]] for t, _ in users[edge]}
+        move(s, c)
+        touched |= {t for _, edge in options[s][c] for t, _ in users[edge]}
+        for t in touched:
+            if cost(t, pick[t]):
+                bad.add(t)
+            else:
+                bad.discard(t)
+    return min(bad)
+
+
+def _stack(start: int, first: int, rows: np.ndarray, triangles: dict) -> dict[int, int]:
+    """Rotations of the wedges stacked on ``start``'s triangles when ``start`` takes ``first``.
+
+    A neighbour repeats the corner the wedge repeats on their shared triangle.
+    """
+    chosen = {start: first}
+    todo = [start]
+    while todo:
+        k = todo.pop()
+        row = _rotated(rows[k], chosen[k])
+        for tri, repeated in ((row[:3], row[2]), (row[3:], row[5])):
+            for other in triangles[frozenset(tri.tolist())]:
+                if other in chosen:
+                    continue
+                position = int(np.flatnonzero(rows[other] == repeated)[0]) % 3
+                chosen[other] = (position - 2) % 3  # its corner 3 after turning
+                todo.append(other)
+    return chosen
