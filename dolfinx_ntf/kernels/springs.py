@@ -354,10 +354,11 @@ def _kinematics(
     """Projection-point kinematics and (optionally) their exact derivatives w.r.t. the nodes."""
     num = master.shape[0]
     phi = face_type.shape_functions(xi)  # (N, n)
-    dphi_master = face_type.shape_derivatives(xi)  # (N, n, 2)
     q = (phi[:, None, :] @ master)[:, 0]
-    tangents = dphi_master.transpose(0, 2, 1) @ master  # (N, 2, 3): q_ξ, q_η
     r = slave - q
+    at_collapse, xi_frame = _collapsed_corners(face_type, master, xi)
+    dphi_master = face_type.shape_derivatives(xi_frame)  # (N, n, 2)
+    tangents = dphi_master.transpose(0, 2, 1) @ master  # (N, 2, 3): q_ξ, q_η
     m = np.cross(tangents[:, 0], tangents[:, 1])
     m_norm = np.linalg.norm(m, axis=1)
     degenerate = np.flatnonzero(~(m_norm > 0.0))
@@ -376,14 +377,16 @@ def _kinematics(
         return kin
 
     # Second derivatives q_αβ as (N, 2, 2, 3).
-    d2 = face_type.shape_second_derivatives(xi).transpose(0, 2, 1) @ master  # (N, 3, 3)
+    d2 = face_type.shape_second_derivatives(xi_frame).transpose(0, 2, 1) @ master  # (N, 3, 3)
     second = np.stack([np.stack([d2[:, 0], d2[:, 1]], 1), np.stack([d2[:, 1], d2[:, 2]], 1)], 1)
 
     # Projection derivatives (docs/method.md §6.1). Stationarity r·q_α = 0 gives H δξ = Σ_k b_k δx_k
     # with H_αβ = q_α·q_β − r·q_αβ and b_kα = w_k q_α + φ_k,α r; δξ = G b_k with G = H⁻¹ inside the
     # domain, restricted to the free direction on an edge and zero at a corner.
     hessian = tangents @ tangents.transpose(0, 2, 1) - (second @ r[:, None, :, None])[..., 0]
-    compliance = _projection_compliance(face_type, xi, hessian, r, tangents, interior_projection)
+    compliance = _projection_compliance(
+        face_type, xi, hessian, r, tangents, interior_projection, held=at_collapse
+    )
     rhs = weights[:, :, None, None] * tangents[:, None] + dphi[..., None] * r[:, None, None, :]
     dxi = compliance[:, None] @ rhs  # (N, n+1, 2, 3)
 
@@ -408,6 +411,47 @@ def _kinematics(
     return kin
 
 
+#: How far towards the face centre the frame of a point on a collapsed edge is taken.
+_COLLAPSE_NUDGE = 1e-3
+#: Parametric distance from a collapsed edge within which a point counts as on it (closer, the
+#: projection's Hessian is singular to round-off: its q_ξ·q_ξ scales with the distance squared).
+_COLLAPSE_REACH = 1e-6
+
+
+def _collapsed_corners(
+    face_type: FaceType, master: np.ndarray, xi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Springs at the repeated corner of a collapsed quad4 face; where their frame is taken.
+
+    There ``q_ξ x q_η = 0`` (docs/method.md §32). The face is a triangle (a collapsed wedge's,
+    §30) and the point its vertex: the frame (q_ξ, q_η, m) is taken towards the centre (by
+    ``_COLLAPSE_NUDGE``), where the flat collapsed face has the triangle's normal, and with the
+    repeated node's two slots summed the normal's derivatives are the triangle's (``|m|`` and
+    ``∂m`` both vanish linearly towards the collapsed edge). The projection is held at the
+    vertex (``∂ξ/∂x = 0``, as at a corner). Elsewhere the frame is at ``xi`` itself.
+    """
+    at = np.zeros(xi.shape[0], dtype=bool)
+    if face_type.num_nodes != 4 or xi.shape[0] == 0:
+        return at, xi
+    nodes = face_type.node_parameters  # (4, 2)
+    for i in range(4):
+        j = (i + 1) % 4
+        repeated = np.all(master[:, i] == master[:, j], axis=1)
+        if not np.any(repeated):
+            continue
+        # on the edge i-j: the point is the repeated corner itself
+        direction = nodes[j] - nodes[i]
+        offset = xi - nodes[i]
+        along = offset @ direction / (direction @ direction)
+        across = offset - along[:, None] * direction
+        at |= repeated & (np.abs(across).max(axis=1) <= _COLLAPSE_REACH)
+    if not np.any(at):
+        return at, xi
+    frame = np.array(xi, dtype=float)
+    frame[at] += _COLLAPSE_NUDGE * (face_type.center - frame[at])
+    return at, frame
+
+
 def _projection_compliance(
     face_type: FaceType,
     xi: np.ndarray,
@@ -415,10 +459,12 @@ def _projection_compliance(
     r: np.ndarray,
     tangents: np.ndarray,
     interior_only: bool = False,
+    held: np.ndarray | None = None,
 ) -> np.ndarray:
     """The (N, 2, 2) map G with δξ = G b: H⁻¹, t⊗t/(t·H t) on an active edge, 0 at a corner.
 
-    With ``interior_only`` every point takes H⁻¹ (CalculiX's tangent at clamped projections).
+    With ``interior_only`` every point takes H⁻¹ (CalculiX's tangent at clamped projections);
+    ``held`` points (the repeated corner of a collapsed face, :func:`_collapsed_corners`) take 0.
 
     An edge constraint c·ξ <= o is active when ξ lies on it and its Lagrange multiplier is
     positive (the unconstrained closest point is outside the domain). With γ_α = r·q_α, the
@@ -445,6 +491,8 @@ def _projection_compliance(
     for c, active_i in zip(normals, active):
         edge_normal[active_i] = c
 
+    if held is not None:
+        num_active = np.where(held, 2, num_active)  # held like a corner
     compliance = np.zeros_like(hessian)
     interior = num_active == 0
     h = hessian[interior]

@@ -17,37 +17,28 @@ def _box(origin, size, divisions, cell, structured):
 
     Prisms: the square triangulated by gmsh's Delaunay mesher, or with ``structured`` the
     ``nx x ny`` grid with each square cut along one diagonal (the same cut for equal grids).
+    OpenCASCADE boxes: two boxes that touch keep their own nodes (no fragment).
     """
     x0, y0, z0 = origin
     sx, sy, sz = size
     nx, ny, nz = divisions
-    square = gmsh.model.geo.addPlaneSurface(
-        [gmsh.model.geo.addCurveLoop(
-            [gmsh.model.geo.addLine(a, b) for a, b in _corners(x0, y0, z0, sx, sy)])]
-    )  # fmt: skip
-    gmsh.model.geo.synchronize()
+    square = gmsh.model.occ.addRectangle(x0, y0, z0, sx, sy)
+    out = gmsh.model.occ.extrude([(2, square)], 0, 0, sz, numElements=[nz], recombine=True)
+    gmsh.model.occ.synchronize()
     curves = [abs(c[1]) for c in gmsh.model.getBoundary([(2, square)], oriented=False)]
     if cell == "hexahedron" or structured:
-        for curve, n in zip(curves, (nx, ny, nx, ny)):
-            gmsh.model.geo.mesh.setTransfiniteCurve(curve, n + 1)
-        gmsh.model.geo.mesh.setTransfiniteSurface(square)
-        if cell == "hexahedron":
-            gmsh.model.geo.mesh.setRecombine(2, square)
-    else:
         for curve in curves:
-            gmsh.model.geo.mesh.setTransfiniteCurve(curve, max(nx, ny) + 1)
-    out = gmsh.model.geo.extrude([(2, square)], 0, 0, sz, numElements=[nz], recombine=True)
-    gmsh.model.geo.synchronize()
-    top = out[0][1]
-    volume = out[1][1]
-    return volume, square, top
-
-
-def _corners(x0, y0, z0, sx, sy):
-    """The four sides of a rectangle as point pairs (points added to the geo kernel)."""
-    p = [gmsh.model.geo.addPoint(x, y, z0) for x, y in
-         ((x0, y0), (x0 + sx, y0), (x0 + sx, y0 + sy), (x0, y0 + sy))]  # fmt: skip
-    return [(p[i], p[(i + 1) % 4]) for i in range(4)]
+            ends = gmsh.model.getBoundary([(1, curve)], oriented=False)
+            a, b = (gmsh.model.getValue(0, p[1], []) for p in ends)
+            along_x = abs(b[0] - a[0]) > abs(b[1] - a[1])
+            gmsh.model.mesh.setTransfiniteCurve(curve, (nx if along_x else ny) + 1)
+        gmsh.model.mesh.setTransfiniteSurface(square)
+        if cell == "hexahedron":
+            gmsh.model.mesh.setRecombine(2, square)
+    else:
+        gmsh.model.mesh.setSize(gmsh.model.getBoundary([(2, square)], recursive=True),
+                                min(sx / nx, sy / ny))  # fmt: skip
+    return out[1][1], square, out[0][1]
 
 
 def build_prism_on_hex(

@@ -91,6 +91,37 @@ def test_springs_on_a_collapsed_face_equal_the_triangle_springs(slot):
 
 
 @pytest.mark.parametrize("slot", [0, 1, 2])
+def test_springs_at_the_repeated_corner_equal_the_triangle_springs(slot):
+    """A slave node beside the repeated corner projects onto it, where q_xi x q_eta = 0: the
+    frame is taken just inside (docs/method.md §32); the triangle's corner is the oracle."""
+    x, tri = _patch()
+    face = tri[:1]
+    quad = _collapsed(face, slot)[0]
+    corner = x[face[0, slot]]
+    normal = np.cross(x[face[0, 1]] - x[face[0, 0]], x[face[0, 2]] - x[face[0, 0]])
+    normal /= np.linalg.norm(normal)
+    outward = corner - x[face[0]].mean(axis=0)  # beyond the corner, in the plane
+    outward -= (outward @ normal) * normal
+    slaves = corner + 1e-2 * outward / np.linalg.norm(outward) - 1e-3 * normal
+    slaves = np.vstack([slaves, corner - 1e-3 * normal])  # and right below it
+    areas = np.full(2, 0.3)
+    on_tri = evaluate_springs(TRI3, np.repeat(x[face], 2, axis=0), slaves, areas, LAW)
+    on_quad = evaluate_springs(QUAD4, np.repeat(x[quad][None], 2, axis=0), slaves, areas, LAW)
+    np.testing.assert_allclose(on_quad.gap, on_tri.gap, rtol=1e-9)  # as inside the face
+    np.testing.assert_allclose(on_quad.normal, on_tri.normal, atol=1e-9)
+    to_tri = np.zeros((5, 4))
+    for k, node in enumerate([*quad, -1]):
+        to_tri[k, [*face[0], -1].index(node)] = 1.0
+    np.testing.assert_allclose(
+        np.einsum("kt,nkc->ntc", to_tri, on_quad.forces), on_tri.forces, atol=1e-12
+    )
+    # beside the corner both hold the projection there (a corner of the domain): one tangent
+    project = np.kron(to_tri, np.eye(3))
+    reduced = np.einsum("ia,nij,jb->nab", project, on_quad.stiffness, project)
+    np.testing.assert_allclose(reduced[0], on_tri.stiffness[0], rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize("slot", [0, 1, 2])
 def test_spring_areas_of_collapsed_faces_are_the_triangle_shares(slot):
     x, tri = _patch()
     quad = _collapsed(tri, slot)
