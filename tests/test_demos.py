@@ -263,3 +263,18 @@ def test_plastic_indentation_demo_leaves_a_dent(tmp_path):
     assert summary["softer_than_elastic"] and summary["cycle_work"] > 0
     assert max(summary["iterations"]) <= 15  # measured 7-8 in the plastic loading
     assert Path(summary["xdmf"]).exists() and Path(summary["png"]).stat().st_size > 10_000
+
+
+def test_prism_punch_demo_balances_the_load(tmp_path):
+    summary = _demo("prism_punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    assert summary["passed"]
+    # a gmsh mesh of prisms beside hexahedra, read as one mesh of hexahedra
+    assert summary["cells"] == 300
+    assert summary["increments"] == 2
+    assert summary["reaction_error"] < 1e-8
+    assert summary["force_error"] < 1e-7  # measured 1.9e-8: the last Newton residual
+    # every slave node of the prisms' triangles is closed; the flat punch's pressure is lowest at
+    # the centre and highest at its rim (measured 43 and 196 MPa for a mean of 100)
+    assert summary["closed"] == summary["springs"] == 41
+    assert summary["centre_pressure"] < summary["mean_pressure"] < summary["max_pressure"]
+    assert Path(summary["png"]).stat().st_size > 10_000
