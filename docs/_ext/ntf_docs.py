@@ -211,6 +211,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Axisymmetric elasticity in UFL", "dolfinx_ntf.fem.axisymmetric"),
     ("Per-cell 2D formulations (quasi-axisymmetric models)", "dolfinx_ntf.fem.plane_sections"),
     ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
+    ("Wedges as collapsed hexahedra: the numpy kernel", "dolfinx_ntf.kernels.collapsed_wedges"),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
     ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
