@@ -174,7 +174,9 @@ def evaluate_springs(
     master, slave, area, shift = _check_input(
         face_type, master_coords, slave_coords, areas, gap_shift
     )
-    xi = project_points(face_type, master, slave, xi0=xi0)
+    xi = _polish_collapsed(
+        face_type, master, slave, project_points(face_type, master, slave, xi0=xi0)
+    )
     kin = _kinematics(
         face_type,
         master,
@@ -416,6 +418,77 @@ _COLLAPSE_NUDGE = 1e-3
 #: Parametric distance from a collapsed edge within which a point counts as on it (closer, the
 #: projection's Hessian is singular to round-off: its q_ξ·q_ξ scales with the distance squared).
 _COLLAPSE_REACH = 1e-6
+
+
+def _polish_collapsed(
+    face_type: FaceType, master: np.ndarray, slave: np.ndarray, xi: np.ndarray
+) -> np.ndarray:
+    """``xi`` on quad4 faces with a repeated corner made the triangle's exact projection.
+
+    Near the repeated corner the collapsed square squeezes the parameter along the collapsed
+    edge: the projection's test ``r·q_α`` stops with ``r`` still sloping in the plane, which
+    makes the projection's Hessian indefinite there (docs/method.md §32.3). The parameters are
+    taken from the barycentric coordinates of the triangle's closest point instead (the repeated
+    corner's share sets the coordinate across the collapsed edge, the ratio of the other two the
+    one along it, kept where the point is the repeated corner itself).
+    """
+    if face_type.num_nodes != 4 or xi.shape[0] == 0:
+        return xi
+    nodes = face_type.node_parameters  # (4, 2) corners of the square
+    out = np.array(xi, dtype=float)
+    for i in range(4):
+        j, k, m = (i + 1) % 4, (i + 2) % 4, (i + 3) % 4  # k-m: the edge opposite i-j
+        rows = np.flatnonzero(np.all(master[:, i] == master[:, j], axis=1))
+        if rows.size == 0:
+            continue
+        a, b, c = master[rows, k], master[rows, m], master[rows, i]  # c: the repeated node
+        normal = np.cross(b - a, c - a)
+        area2 = np.einsum("ni,ni->n", normal, normal)
+        good = area2 > 0.0
+        p = slave[rows]
+        lam_b = np.einsum("ni,ni->n", np.cross(p - a, c - a), normal) / np.where(good, area2, 1.0)
+        lam_c = np.einsum("ni,ni->n", np.cross(b - a, p - a), normal) / np.where(good, area2, 1.0)
+        lam_a = 1.0 - lam_b - lam_c
+        outside = good & ~((lam_a >= 0.0) & (lam_b >= 0.0) & (lam_c >= 0.0))
+        if np.any(outside):  # the closest point of the triangle is on an edge
+            lam = _closest_on_edges(a[outside], b[outside], c[outside], p[outside])
+            lam_a[outside], lam_b[outside], lam_c[outside] = lam.T
+        polish = good  # a flat (zero-area) triangle keeps the projection's xi
+        if not np.any(polish):
+            continue
+        across = (nodes[i] + nodes[j]) / 2.0 - (nodes[k] + nodes[m]) / 2.0  # to the collapsed edge
+        across /= np.linalg.norm(across)
+        along = nodes[k] - nodes[m]
+        along /= np.linalg.norm(along)
+        s_across = 2.0 * lam_c - 1.0
+        rest = lam_a + lam_b
+        t_k = nodes[k] @ along  # +1 or -1: node k's coordinate along the edge
+        old_t = out[rows] @ along
+        t_along = np.where(
+            rest > 0.0, t_k * (2.0 * lam_a / np.where(rest > 0, rest, 1.0) - 1.0), old_t
+        )
+        centre = (nodes[k] + nodes[m] + nodes[i] + nodes[j]) / 4.0
+        new = centre + s_across[:, None] * across + t_along[:, None] * along
+        out[rows[polish]] = new[polish]
+    return out
+
+
+def _closest_on_edges(a: np.ndarray, b: np.ndarray, c: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` barycentric coordinates (of a, b, c) of the edge points nearest ``p``."""
+    best = np.full(p.shape[0], np.inf)
+    lam = np.zeros((p.shape[0], 3))
+    for first, second in ((0, 1), (1, 2), (2, 0)):
+        x0, x1 = (a, b, c)[first], (a, b, c)[second]
+        edge = x1 - x0
+        u = np.einsum("ni,ni->n", p - x0, edge) / np.einsum("ni,ni->n", edge, edge)
+        u = np.clip(u, 0.0, 1.0)
+        distance = np.linalg.norm(p - x0 - u[:, None] * edge, axis=1)
+        closer = distance < best
+        best = np.where(closer, distance, best)
+        lam[closer] = 0.0
+        lam[closer, first] = 1.0 - u[closer]
+        lam[closer, second] = u[closer]
+    return lam
 
 
 def _collapsed_corners(

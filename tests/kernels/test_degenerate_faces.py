@@ -122,6 +122,42 @@ def test_springs_at_the_repeated_corner_equal_the_triangle_springs(slot):
 
 
 @pytest.mark.parametrize("slot", [0, 1, 2])
+def test_springs_near_the_repeated_corner_equal_the_triangle_springs(slot):
+    """Inside the triangle, 1e-4 to 1e-2 of the way from the repeated corner: the collapsed
+    square squeezes the parameter there, and a projection started elsewhere (a previous
+    iterate) stopped with ``r`` sloping in the plane and an indefinite Hessian ("singular
+    projection"); it is polished from the triangle's barycentric coordinates (§32.3)."""
+    x, tri = _patch()
+    face = tri[:1]
+    quad = _collapsed(face, slot)[0]
+    normal = np.cross(x[face[0, 1]] - x[face[0, 0]], x[face[0, 2]] - x[face[0, 0]])
+    normal /= np.linalg.norm(normal)
+    rng = np.random.default_rng(11)
+    near = np.array([1e-4, 1e-3, 1e-2, 1e-4, 1e-3, 1e-2])
+    bary = rng.dirichlet([1.0, 1.0], size=6) * near[:, None]  # the other two corners' shares
+    weights = np.insert(bary, slot, 1.0 - near, axis=1)
+    slaves = weights @ x[face[0]] - 1e-3 * normal
+    areas = np.full(6, 0.3)
+    on_tri = evaluate_springs(TRI3, np.repeat(x[face], 6, axis=0), slaves, areas, LAW)
+    to_tri = np.zeros((5, 4))
+    for k, node in enumerate([*quad, -1]):
+        to_tri[k, [*face[0], -1].index(node)] = 1.0
+    project = np.kron(to_tri, np.eye(3))
+    for start in (None, (0.9, 0.9), (-0.9, 0.9), (0.9, -0.9)):
+        xi0 = None if start is None else np.tile(start, (6, 1))
+        on_quad = evaluate_springs(
+            QUAD4, np.repeat(x[quad][None], 6, axis=0), slaves, areas, LAW, xi0=xi0
+        )
+        np.testing.assert_allclose(on_quad.gap, on_tri.gap, rtol=1e-9)
+        np.testing.assert_allclose(on_quad.normal, on_tri.normal, atol=1e-9)
+        np.testing.assert_allclose(
+            np.einsum("kt,nkc->ntc", to_tri, on_quad.forces), on_tri.forces, atol=1e-12
+        )
+        reduced = np.einsum("ia,nij,jb->nab", project, on_quad.stiffness, project)
+        np.testing.assert_allclose(reduced, on_tri.stiffness, rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize("slot", [0, 1, 2])
 def test_spring_areas_of_collapsed_faces_are_the_triangle_shares(slot):
     x, tri = _patch()
     quad = _collapsed(tri, slot)
