@@ -413,6 +413,9 @@ def _kinematics(
     return kin
 
 
+#: The repeated corner's barycentric share above which the projection onto a collapsed face is
+#: polished (elsewhere the collapsed square is well conditioned and ``xi`` is kept as it was).
+_POLISH_SHARE = 0.99
 #: How far towards the face centre the frame of a point on a collapsed edge is taken.
 _COLLAPSE_NUDGE = 1e-3
 #: Parametric distance from a collapsed edge within which a point counts as on it (closer, the
@@ -427,8 +430,9 @@ def _polish_collapsed(
 
     Near the repeated corner the collapsed square squeezes the parameter along the collapsed
     edge: the projection's test ``r·q_α`` stops with ``r`` still sloping in the plane, which
-    makes the projection's Hessian indefinite there (docs/method.md §32.3). The parameters are
-    taken from the barycentric coordinates of the triangle's closest point instead (the repeated
+    makes the projection's Hessian indefinite there (docs/method.md §32.3). Where the repeated
+    corner's share is at least ``_POLISH_SHARE`` the parameters are taken from the barycentric
+    coordinates of the triangle's closest point instead (the repeated
     corner's share sets the coordinate across the collapsed edge, the ratio of the other two the
     one along it, kept where the point is the repeated corner itself).
     """
@@ -453,7 +457,8 @@ def _polish_collapsed(
         if np.any(outside):  # the closest point of the triangle is on an edge
             lam = _closest_on_edges(a[outside], b[outside], c[outside], p[outside])
             lam_a[outside], lam_b[outside], lam_c[outside] = lam.T
-        polish = good  # a flat (zero-area) triangle keeps the projection's xi
+        # near the repeated corner only (a flat, zero-area triangle keeps the projection's xi)
+        polish = good & (lam_c >= _POLISH_SHARE)
         if not np.any(polish):
             continue
         across = (nodes[i] + nodes[j]) / 2.0 - (nodes[k] + nodes[m]) / 2.0  # to the collapsed edge
