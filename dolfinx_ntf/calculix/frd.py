@@ -1,11 +1,12 @@
 """CalculiX ``.frd`` result files (ASCII, ccx 2.20's layout): writer and reader.
 
 See docs/method.md §13.2. ``FrdWriter`` writes what ccx writes for ``*NODE FILE`` (U -> ``DISP``,
-RF -> ``FORC``), ``*EL FILE`` (S -> ``STRESS``, integration-point stresses extrapolated to the
-nodes and averaged over the elements around each node) and ``*CONTACT FILE`` (CDIS/CSTR ->
-``CONTACT``): a header, the nodes, the elements, then per written increment one block per result,
-and `` 9999`` at the end. cgx and converters read it like ccx's file. ``read_frd`` reads both
-ccx's files and ours (the tests compare them value by value). Pure Python/numpy.
+RF -> ``FORC``), ``*EL FILE`` (S -> ``STRESS``, PEEQ -> ``PE``: integration-point values
+extrapolated to the nodes and averaged over the elements around each node) and ``*CONTACT
+FILE`` (CDIS/CSTR -> ``CONTACT``): a header, the nodes, the elements, then per written increment
+one block per result, and `` 9999`` at the end. cgx and converters read it like ccx's file.
+``read_frd`` reads both ccx's files and ours (the tests compare them value by value). Pure
+Python/numpy.
 
 Record layout (cgx manual, "Result Format"; widths checked against ccx 2.20's files):
     - ``    2C`` nodes and ``    3C`` elements blocks, rows ``-1`` (and ``-2`` for element nodes);
@@ -54,6 +55,7 @@ _COMPONENTS: dict[str, tuple[tuple[tuple[str, int, int, int], ...], bool]] = {
         ),
         False,
     ),
+    "PE": ((("PE", 1, 0, 0),), False),
     "CONTACT": (
         (
             ("COPEN", 4, 1, 1),
@@ -73,7 +75,8 @@ class FrdBlock:
     """One result block of one increment.
 
     Attributes:
-        name: ``DISP``, ``FORC``, ``STRESS``, ``CONTACT`` (or any name ccx writes, when read).
+        name: ``DISP``, ``FORC``, ``STRESS``, ``PE``, ``CONTACT`` (or any name ccx writes, when
+            read).
         components: Component names in column order (read blocks; the writer knows them).
         step, increment: 1-based step and increment numbers (``1PSTEP`` record).
         time: Total time.

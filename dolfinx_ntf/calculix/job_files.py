@@ -2,10 +2,10 @@
 
 :class:`JobFiles` opens them as ccx does at program start and writes, in ccx 2.20's formats:
 
-    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S) and ``*CONTACT PRINT`` (CDIS,
-      CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
-    - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S) and ``*CONTACT
-      FILE`` (CDIS, CSTR) blocks (docs/method.md §13.2).
+    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, PEEQ) and ``*CONTACT PRINT``
+      (CDIS, CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
+    - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S, PEEQ as ``PE``)
+      and ``*CONTACT FILE`` (CDIS, CSTR) blocks (docs/method.md §13.2).
     - ``JOB.cel``: the contact elements of every pairing when ``CONTACT ELEMENTS`` is requested.
     - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration (§13.3).
 
@@ -245,7 +245,7 @@ class _Increment:
     def frd_blocks(
         self, step: Step, increment: int, total: float, contact: list[ContactRows]
     ) -> list[FrdBlock]:
-        """The ``.frd`` blocks of the file requests, in ccx's order: DISP, STRESS, FORC, CONTACT."""
+        """The ``.frd`` blocks of the requests: DISP, STRESS, FORC, PE, CONTACT (ccx's order)."""
         keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
         blocks = []
 
@@ -263,16 +263,16 @@ class _Increment:
         if ("EL", "S") in keys:
             nodes, values = self.values.nodal_stresses()
             values = zero_below(values, self.values.field_accuracy().stress)
-            if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
-                members = self.deck.nsets[keys["EL", "S"].set]
-                pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
-                keep = nodes[pos] == members
-                nodes, values = members[keep], values[pos[keep]]
+            nodes, values = _in_set(self.deck, keys["EL", "S"], nodes, values)
             blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
         if ("NODE", "RF") in keys:
             node_block(
                 "FORC", keys["NODE", "RF"], self.values.printed_forces(self.largest_residual)[0]
             )
+        if ("EL", "PEEQ") in keys and self.values.model.plasticity:  # else none, as ccx's
+            nodes, values = self.values.nodal_equivalent_plastic_strains()
+            nodes, values = _in_set(self.deck, keys["EL", "PEEQ"], nodes, values)
+            blocks.append(FrdBlock("PE", (), step.number, increment, total, nodes, values))
         if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
             nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
             values = np.zeros((nodes.size, 6))
@@ -331,6 +331,12 @@ class _Increment:
                     "HFL", request.set, total, ids, self.values.heat_fluxes(ids)
                 )
                 continue
+            if key == "PEEQ":
+                if not self.values.model.plasticity:  # ccx 2.20 prints no block without one
+                    continue
+                values = self.values.equivalent_plastic_strains(ids)
+                blocks += el_print_blocks("PEEQ", request.set, total, ids, values)
+                continue
             if key != "S":
                 raise NotImplementedError(
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
@@ -338,6 +344,18 @@ class _Increment:
             stresses = zero_below(self.values.stresses(ids), self.values.field_accuracy().stress)
             blocks += el_print_blocks("S", request.set, total, ids, stresses)
         return blocks
+
+
+def _in_set(
+    deck: Deck, request: FileRequest, nodes: np.ndarray, values: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of the request's node set that have values, in set order (all without a set)."""
+    if request.set is None:
+        return nodes, values
+    members = deck.nsets[request.set]
+    pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
+    keep = nodes[pos] == members
+    return members[keep], values[pos[keep]]
 
 
 def _contact_blocks(
@@ -450,7 +468,11 @@ def _check_wedge_outputs(deck: Deck) -> None:
 
 def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
-    supported = {"NODE": {"U", "RF", "V"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
+    supported = {
+        "NODE": {"U", "RF", "V"},
+        "EL": {"S", "PEEQ"},
+        "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"},
+    }
     for step in deck.steps:
         if step.modal_dynamic is not None:
             _check_modal_requests(step)
@@ -490,7 +512,7 @@ def check_requests(deck: Deck) -> None:
             )
     _check_transformed_outputs(deck)
     _check_wedge_outputs(deck)
-    written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
+    written = {"NODE": {"U", "RF"}, "EL": {"S", "PEEQ"}, "CONTACT": {"CDIS", "CSTR"}}
     for step in deck.steps:
         for request in step.file_requests:
             for key in request.keys:

@@ -255,6 +255,27 @@ def test_round_trip_through_read_dat(tmp_path):
     assert len(read_dat(tmp_path / "job.dat")) == len(blocks) + 1
 
 
+def test_peeq_block_like_ccx(tmp_path):
+    """The PEEQ block as ccx 2.20 wrote it for the bar of test_ccx_plastic (no blank before
+    ``for``: the set name is read all the same)."""
+    text = (
+        "\n equivalent plastic strain (elem, integ.pnt.,pe)for set EALL and time  0.1000000E+01"
+        "\n\n         1   1  6.854688E-02\n         1   2  5.857536E-02\n         2   1  "
+        "0.000000E+00\n"
+    )
+    values = np.array([[[6.854688e-02], [5.857536e-02]], [[0.0], [0.0]]])
+    (block,) = el_print_blocks("PEEQ", "EALL", 1.0, [1, 2], values)
+    assert format_block(block).startswith(text)
+    path = tmp_path / "peeq.dat"
+    write_dat(path, [block])
+    (read,) = read_dat(path)
+    assert (read.name, read.set, read.time) == ("PEEQ", "EALL", 1.0)
+    np.testing.assert_array_equal(read.labels, [[1, 1], [1, 2], [2, 1], [2, 2]])
+    np.testing.assert_array_equal(read.values, values.reshape(-1, 1))
+    with pytest.raises(ValueError, match=r"\(2, q, 1\)"):
+        el_print_blocks("PEEQ", "EALL", 1.0, [1, 2], np.zeros((2, 8, 6)))
+
+
 def test_writer_input_errors():
     with pytest.raises(ValueError, match="U, V, RF or NT"):
         node_print_blocks("HFL", "N", 1.0, [1], [[0, 0, 0]])
