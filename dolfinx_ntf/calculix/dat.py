@@ -17,10 +17,10 @@ Formats, verified byte for byte against ``ccx`` 2.20 output:
     - totals rows (``TOTALS=YES/ONLY`` of RF and CELS) are ``6X`` then the values;
     - the CNUM row is the count right-aligned in 17 columns.
 
-Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``PEEQ``, ``HFL``, ``CDIS``,
-``CSTR``, ``CELS``, ``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no name for
-(the name is then the title text before the first parenthesis) so that any ccx ``.dat`` file can
-be compared.
+Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``E``, ``PEEQ``, ``HFL``,
+``CDIS``, ``CSTR``, ``CELS``, ``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no
+name for (the name is then the title text before the first parenthesis) so that any ccx ``.dat``
+file can be compared.
 """
 
 from __future__ import annotations
@@ -91,6 +91,11 @@ _BLOCKS: dict[str, tuple[str, int, int]] = {
     "RF_TOTAL": (" total force (fx,fy,fz) for set {set} and time {time}", 0, 3),
     "S": (
         " stresses (elem, integ.pnt.,sxx,syy,szz,sxy,sxz,syz) for set {set} and time {time}",
+        2,
+        6,
+    ),
+    "E": (
+        " strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set {set} and time {time}",
         2,
         6,
     ),
@@ -288,22 +293,23 @@ def node_print_blocks(
 
 
 def el_print_blocks(key: str, set_name: str, time: float, elements, values) -> list[DatBlock]:
-    """Block of an ``*EL PRINT`` key at the integration points: ``S``, ``PEEQ`` or ``HFL``.
+    """Block of an ``*EL PRINT`` key at the integration points: ``S``, ``E``, ``PEEQ`` or ``HFL``.
 
-    ``S`` is the Cauchy stress, ``PEEQ`` the equivalent plastic strain, ``HFL`` the heat flux.
+    ``S`` is the Cauchy stress, ``E`` the strain, ``PEEQ`` the equivalent plastic strain, ``HFL``
+    the heat flux.
 
     Args:
-        key: ``S``, ``PEEQ`` or ``HFL``.
+        key: ``S``, ``E``, ``PEEQ`` or ``HFL``.
         set_name: element set name as printed.
         time: total time.
         elements: ``(E,)`` element numbers in set order.
-        values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz``, ``(E, q, 1)``
-            equivalent plastic strains or ``(E, q, 3)`` heat fluxes ``qx, qy, qz`` per
-            integration point (ccx order of the points).
+        values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz`` or strains (tensor
+            components, same order), ``(E, q, 1)`` equivalent plastic strains or ``(E, q, 3)``
+            heat fluxes ``qx, qy, qz`` per integration point (ccx order of the points).
     """
-    widths = {"S": 6, "PEEQ": 1, "HFL": 3}
+    widths = {"S": 6, "E": 6, "PEEQ": 1, "HFL": 3}
     if key not in widths:
-        raise ValueError(f"*EL PRINT key must be S, PEEQ or HFL, got {key!r}")
+        raise ValueError(f"*EL PRINT key must be S, E, PEEQ or HFL, got {key!r}")
     width = widths[key]
     elements = np.asarray(elements, dtype=np.int64).reshape(-1)
     values = np.asarray(values, dtype=np.float64)

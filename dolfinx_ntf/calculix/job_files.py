@@ -2,10 +2,10 @@
 
 :class:`JobFiles` opens them as ccx does at program start and writes, in ccx 2.20's formats:
 
-    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, PEEQ) and ``*CONTACT PRINT``
+    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, E, PEEQ) and ``*CONTACT PRINT``
       (CDIS, CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
-    - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S, PEEQ as ``PE``)
-      and ``*CONTACT FILE`` (CDIS, CSTR) blocks (docs/method.md §13.2).
+    - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S, E as
+      ``TOSTRAIN``, PEEQ as ``PE``) and ``*CONTACT FILE`` (CDIS, CSTR) blocks (§13.2).
     - ``JOB.cel``: the contact elements of every pairing when ``CONTACT ELEMENTS`` is requested.
     - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration (§13.3).
 
@@ -32,6 +32,7 @@ from .dat import (
     write_dat,
 )
 from .deck import Deck, FileRequest, PrintRequest, Step
+from .elements import ELEMENT_TYPES
 from .frd import FrdBlock, FrdWriter
 from .gather import Discard
 from .model import CalculixModel
@@ -245,7 +246,7 @@ class _Increment:
     def frd_blocks(
         self, step: Step, increment: int, total: float, contact: list[ContactRows]
     ) -> list[FrdBlock]:
-        """The ``.frd`` blocks of the requests: DISP, STRESS, FORC, PE, CONTACT (ccx's order)."""
+        """The ``.frd`` blocks in ccx's order: DISP, STRESS, TOSTRAIN, FORC, PE, CONTACT."""
         keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
         blocks = []
 
@@ -265,6 +266,11 @@ class _Increment:
             values = zero_below(values, self.values.field_accuracy().stress)
             nodes, values = _in_set(self.deck, keys["EL", "S"], nodes, values)
             blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
+        if ("EL", "E") in keys:
+            nodes, values = self.values.nodal_strains()
+            values = zero_below(values, self.values.field_accuracy().strain)
+            nodes, values = _in_set(self.deck, keys["EL", "E"], nodes, values)
+            blocks.append(FrdBlock("TOSTRAIN", (), step.number, increment, total, nodes, values))
         if ("NODE", "RF") in keys:
             node_block(
                 "FORC", keys["NODE", "RF"], self.values.printed_forces(self.largest_residual)[0]
@@ -330,6 +336,10 @@ class _Increment:
                 blocks += el_print_blocks(
                     "HFL", request.set, total, ids, self.values.heat_fluxes(ids)
                 )
+                continue
+            if key == "E":
+                strains = zero_below(self.values.strains(ids), self.values.field_accuracy().strain)
+                blocks += el_print_blocks("E", request.set, total, ids, strains)
                 continue
             if key == "PEEQ":
                 if not self.values.model.plasticity:  # ccx 2.20 prints no block without one
@@ -466,11 +476,34 @@ def _check_wedge_outputs(deck: Deck) -> None:
                 )
 
 
+def _check_strain_outputs(deck: Deck) -> None:
+    """Refuse ``E`` where ccx's strain was not measured: 2D, C3D8I, shells, coupled steps."""
+    types = [ELEMENT_TYPES[name] for name in deck.elements if name in ELEMENT_TYPES]
+    why = ""
+    if any(t.tdim == 2 for t in types):
+        why = "2D elements"
+    elif "C3D8I" in deck.elements:
+        why = "C3D8I elements (their incompatible modes)"
+    elif deck.shells is not None:
+        why = "shell elements"
+    for step in deck.steps:
+        for request in [*step.prints, *step.file_requests]:
+            if request.kind != "EL" or "E" not in request.keys:
+                continue
+            reason = why or ("a coupled temperature-displacement step" if step.coupled else "")
+            if reason:
+                keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
+                raise NotImplementedError(
+                    f"{request.location}: {keyword} E (strains) of a deck with {reason} is not "
+                    "supported yet"
+                )
+
+
 def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {
         "NODE": {"U", "RF", "V"},
-        "EL": {"S", "PEEQ"},
+        "EL": {"S", "E", "PEEQ"},
         "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"},
     }
     for step in deck.steps:
@@ -512,7 +545,8 @@ def check_requests(deck: Deck) -> None:
             )
     _check_transformed_outputs(deck)
     _check_wedge_outputs(deck)
-    written = {"NODE": {"U", "RF"}, "EL": {"S", "PEEQ"}, "CONTACT": {"CDIS", "CSTR"}}
+    _check_strain_outputs(deck)
+    written = {"NODE": {"U", "RF"}, "EL": {"S", "E", "PEEQ"}, "CONTACT": {"CDIS", "CSTR"}}
     for step in deck.steps:
         for request in step.file_requests:
             for key in request.keys:

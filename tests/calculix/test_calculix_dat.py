@@ -309,15 +309,22 @@ def test_read_dat_errors(tmp_path):
 
 
 def test_read_dat_unknown_block(tmp_path):
+    """A block without a name here (ccx 2.20's ME) is named by its title; E is known."""
     path = tmp_path / "e.dat"
     path.write_text(
+        "\n mechanical strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time "
+        " 0.1000000E+01"
+        "\n\n         1   1  1.000000E+00  2.000000E+00  3.000000E+00  4.000000E+00  5.000000E+00"
+        "  6.000000E+00\n"
         "\n strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time  0.1000000E+01"
         "\n\n         1   1  1.000000E+00  2.000000E+00  3.000000E+00  4.000000E+00  5.000000E+00"
         "  6.000000E+00\n"
     )
-    (block,) = read_dat(path)
-    assert block.name == "strains" and block.set == "EALL" and block.time == 1.0
-    assert block.labels.tolist() == [[1, 1]] and block.values.tolist() == [[1, 2, 3, 4, 5, 6]]
+    unknown, strains = read_dat(path)
+    assert unknown.name == "mechanical strains" and unknown.set == "EALL" and unknown.time == 1.0
+    assert unknown.labels.tolist() == [[1, 1]] and unknown.values.tolist() == [[1, 2, 3, 4, 5, 6]]
+    assert strains.name == "E" and strains.set == "EALL"
+    assert strains.values.tolist() == [[1, 2, 3, 4, 5, 6]]
 
 
 # ----------------------------------------------------------------------------- .cel

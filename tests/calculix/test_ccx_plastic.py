@@ -331,8 +331,9 @@ def test_plastic_bar_on_all_processes(nlgeom: str, tmp_path: Path) -> None:
 
 # -- PEEQ (docs/method.md §21.6) ------------------------------------------------------------------
 
-#: Element 1 of the bar plastic, element 2 elastic (ccx prints PEEQ 0 there); S and PEEQ printed,
-#: U, RF, S and PEEQ (by its other name PE, as ccx's test deck beampiso2) written to the .frd.
+#: Element 1 of the bar plastic, element 2 elastic (ccx prints PEEQ 0 there); S, E and PEEQ
+#: printed, U, RF, S, E and PEEQ (by its other name PE, as ccx's test deck beampiso2) written to
+#: the .frd.
 MIXED_BAR = (
     BAR.format(material=SHEET, nlgeom="{nlgeom}")
     .replace(
@@ -343,14 +344,14 @@ MIXED_BAR = (
     )
     .replace(
         "*EL PRINT, ELSET=EALL\nS\n",
-        "*EL PRINT, ELSET=EALL\nS, PEEQ\n*NODE FILE\nU, RF\n*EL FILE\nS, PE\n",
+        "*EL PRINT, ELSET=EALL\nS, E, PEEQ\n*NODE FILE\nU, RF\n*EL FILE\nS, E, PE\n",
     )
 )
 
-#: Requests added to the punch deck's steps: PEEQ printed and written beside the others.
+#: Requests added to the punch deck's steps: E and PEEQ printed and written beside the others.
 PEEQ_REQUESTS = (
-    "*EL PRINT, ELSET=EALL\nS, PEEQ\n*NODE FILE\nU, RF\n*EL FILE\nS, PEEQ\n*CONTACT FILE\n"
-    "CDIS, CSTR\n*END STEP"
+    "*EL PRINT, ELSET=EALL\nS, E, PEEQ\n*NODE FILE\nU, RF\n*EL FILE\nS, E, PEEQ\n"
+    "*CONTACT FILE\nCDIS, CSTR\n*END STEP"
 )
 
 
@@ -409,15 +410,43 @@ def _check_peeq(ccx_dir: Path, ntf_dir: Path, name: str) -> float:
     return largest
 
 
+def _check_strains(ccx_dir: Path, ntf_dir: Path, name: str) -> None:
+    """E of the ``.dat`` (within 1e-6 of the largest strain, titles byte for byte) and the
+    ``.frd`` (``TOSTRAIN`` within its 5 digits) against ccx's (small strain, or Green-Lagrange
+    under NLGEOM; tensor shears)."""
+    ours = [b for b in read_dat(ntf_dir / f"{name}.dat") if b.name == "E"]
+    theirs = [b for b in read_dat(ccx_dir / f"{name}.dat") if b.name == "E"]
+    assert len(ours) == len(theirs) > 2
+    largest = max(np.abs(b.values).max() for b in theirs)
+    for a, b in zip(ours, theirs):
+        assert (a.set, a.time) == (b.set, b.time)
+        np.testing.assert_array_equal(a.labels, b.labels)
+        assert np.abs(a.values - b.values).max() <= 1e-6 * largest
+    titles = [
+        [line for line in (d / f"{name}.dat").read_text().splitlines() if " strains (" in line]
+        for d in (ntf_dir, ccx_dir)
+    ]
+    assert titles[0] == titles[1]
+    nodal = read_frd(ccx_dir / f"{name}.frd").blocks_named("TOSTRAIN")
+    top = max(np.abs(b.values).max() for b in nodal)
+    ours_nodal = read_frd(ntf_dir / f"{name}.frd").blocks_named("TOSTRAIN")
+    assert len(ours_nodal) == len(nodal) == len(ours)
+    for a, b in zip(ours_nodal, nodal):
+        assert a.components == b.components == ("EXX", "EYY", "EZZ", "EXY", "EYZ", "EZX")
+        np.testing.assert_array_equal(a.nodes, b.nodes)
+        assert np.abs(a.values - b.values).max() <= 2e-5 * top
+
+
 @pytest.mark.serial
 @pytest.mark.ccx
 @needs_ccx
 @pytest.mark.parametrize("nlgeom", ["", ", NLGEOM"], ids=["small", "nlgeom"])
 def test_peeq_of_bar_agrees_with_ccx(nlgeom: str, tmp_path: Path) -> None:
-    """``*EL PRINT PEEQ`` and ``*EL FILE PE`` of a plastic C3D8 beside an elastic one."""
+    """``*EL PRINT PEEQ, E`` and ``*EL FILE PE, E`` of a plastic C3D8 beside an elastic one."""
     text = MIXED_BAR.format(nlgeom=nlgeom)
     ccx_dir, ntf_dir, result = _both(text, "bar", tmp_path, tight=True)
     largest = _check_peeq(ccx_dir, ntf_dir, "bar")
+    _check_strains(ccx_dir, ntf_dir, "bar")
     assert largest > 0.03  # element 1 yields
     last = [b for b in read_dat(ntf_dir / "bar.dat") if b.name == "PEEQ"][-1]
     assert np.all(last.values[last.labels[:, 0] == 2] == 0.0)  # the elastic element
@@ -432,7 +461,7 @@ def test_peeq_of_bar_agrees_with_ccx(nlgeom: str, tmp_path: Path) -> None:
 @needs_ccx
 @pytest.mark.parametrize("nlgeom", [False, True], ids=["small", "nlgeom"])
 def test_peeq_of_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path) -> None:
-    """PEEQ of the plastic block pressed and dragged by the punch (.dat and .frd with CONTACT)."""
+    """PEEQ and E of the plastic block pressed and dragged by the punch (.dat, .frd)."""
     ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
     for d in (ccx_dir, ntf_dir):
         d.mkdir()
@@ -443,18 +472,29 @@ def test_peeq_of_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path)
     result = _run("plastic_punch", ntf_dir, tight=True)
     assert result.completed
     assert _check_peeq(ccx_dir, ntf_dir, "plastic_punch") > 1e-3
+    _check_strains(ccx_dir, ntf_dir, "plastic_punch")
 
 
 def test_peeq_requests_are_read(tmp_path: Path) -> None:
     """PE is PEEQ in ``*EL PRINT`` and ``*EL FILE``; other plastic keys are still refused."""
     path = tmp_path / "deck.inp"
-    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, PEEQ\n", "S, PE\n"))
+    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, PE\n"))
     step = read_deck(path).steps[0]
     assert [r.keys for r in step.prints if r.kind == "EL"] == [("S", "PEEQ")]
-    assert [r.keys for r in step.file_requests if r.kind == "EL"] == [("S", "PEEQ")]
-    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, PEEQ\n", "S, ENER\n"))
+    assert [r.keys for r in step.file_requests if r.kind == "EL"] == [("S", "E", "PEEQ")]
+    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, ENER\n"))
     with pytest.raises(DeckError, match="key ENER is not supported yet"):
         read_deck(path)
+
+
+@pytest.mark.serial
+def test_strains_of_c3d8i_are_refused(tmp_path: Path) -> None:
+    """E of C3D8I (its condensed modes' strains were not measured against ccx): refused."""
+    text = MIXED_BAR.format(nlgeom="").replace("*PLASTIC\n50.0, 0.0\n100.0, 0.3\n", "")
+    text = text.replace("TYPE=C3D8,", "TYPE=C3D8I,")
+    line = text.splitlines().index("*EL PRINT, ELSET=EALL") + 1
+    message = _refusal(text, tmp_path)
+    assert f"deck.inp:{line}: *EL PRINT E (strains)" in message and "C3D8I" in message
 
 
 @pytest.mark.serial
@@ -475,7 +515,7 @@ def test_no_peeq_block_without_plastic_sections(tmp_path: Path) -> None:
 @needs_ccx
 def test_peeq_on_all_processes(tmp_path: Path) -> None:
     """The mixed bar under NLGEOM on 1 or 2 processes (the plastic and the elastic element on
-    different ones): PEEQ in the .dat and .frd files as ccx's (rank 0 compares)."""
+    different ones): PEEQ and E in the .dat and .frd files as ccx's (rank 0 compares)."""
     comm = MPI.COMM_WORLD
     root = Path(comm.bcast(str(tmp_path), root=0))
     ccx_dir, ntf_dir = root / "ccx", root / "ntf"
@@ -495,3 +535,4 @@ def test_peeq_on_all_processes(tmp_path: Path) -> None:
     assert result.completed
     if comm.rank == 0:
         assert _check_peeq(ccx_dir, ntf_dir, "bar") > 0.03
+        _check_strains(ccx_dir, ntf_dir, "bar")
