@@ -46,7 +46,11 @@ class WedgeDeckWriter:
         self.path = Path(path)
 
     def write(self, t: float) -> None:
-        """Write the displacement and the contact fields at time ``t``. Collective."""
+        """Write the displacement and the contact fields at time ``t``. Collective.
+
+        Args:
+            t: The total time of the increment.
+        """
         values, fields = self.values, self.fields
         fields.update()
         numbering = values.numbering

@@ -181,7 +181,11 @@ class MixedXdmfFile:
         self.path.write_bytes(data + self._TAIL.encode("ascii"))
 
     def write(self, t: float, fields: typing.Mapping[str, np.ndarray]) -> None:
-        """Append time ``t`` with point ``fields``: name -> ``(N,)`` scalars or ``(N, 3)`` vectors.
+        """Append one time step with its point fields.
+
+        Args:
+            t: The time.
+            fields: Name -> ``(N,)`` scalars or ``(N, 3)`` vectors at the points.
 
         Raises:
             ValueError: The file is closed, or a field has another shape.
