@@ -5,7 +5,9 @@ increment), and a plastic block pressed and dragged by an elastic punch with fri
 (``friction_cases``' meshes, tight controls: U, CDIS and CSTR), each without NLGEOM (ccx's
 small-strain radial return) and with it (Simo's finite-strain law, docs/method.md §21.7). The
 refusals (steps mixing NLGEOM and small strain, kinematic hardening) and the reader's
-checks of the table are tested without ccx.
+checks of the table are tested without ccx. PEEQ and E (``*EL PRINT``, ``*EL FILE``) of a plastic
+C3D8 beside an elastic one and of the punch deck against ccx's ``.dat`` and ``.frd`` files
+(docs/method.md §21.6).
 """
 
 from __future__ import annotations
