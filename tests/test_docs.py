@@ -272,6 +272,7 @@ def test_guide_examples_run(tmp_path, monkeypatch):
         ("guide/steps.md", steps[2]),
         ("guide/steps.md", steps[3]),
         ("guide/surfaces.md", _python_blocks("guide/surfaces.md")[0]),
+        ("guide/surfaces.md", _python_blocks("guide/surfaces.md")[1]),
         *(("guide/thermal.md", block) for block in _python_blocks("guide/thermal.md")),
         *(("guide/plasticity.md", block) for block in _python_blocks("guide/plasticity.md")),
     ]
@@ -326,6 +327,10 @@ def test_guide_examples_run(tmp_path, monkeypatch):
     assert namespace["force_pl"][2] == pytest.approx(2.0 * 0.4 * 0.4, rel=1e-8)
     # The gmsh builder of one's own: 3D groups are cell tags, 2D groups facet tags.
     _, cells, facets = mesh_from_gmsh(namespace["build_two_boxes"], MPI.COMM_SELF, size=0.2)
+    assert set(np.unique(cells.values)) == {1, 2} and set(np.unique(facets.values)) == {11, 12}
+    # Prisms beside hexahedra: one mesh of hexahedra, the prisms' triangles tagged (§32).
+    mesh, cells, facets = mesh_from_gmsh(namespace["build_prism_punch"], MPI.COMM_SELF)
+    assert mesh.topology.cell_type.name == "hexahedron"
     assert set(np.unique(cells.values)) == {1, 2} and set(np.unique(facets.values)) == {11, 12}
 
 
