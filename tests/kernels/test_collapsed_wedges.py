@@ -6,6 +6,7 @@ no common face (``shared=True``).
 """
 
 from collections import Counter
+from itertools import combinations
 
 import numpy as np
 import pytest
@@ -93,3 +94,13 @@ def test_the_shared_rule_places_extruded_triangulations(n, layers):
     _check_rules(rows, rotation, shared=True)
     # the same rows give the same rotations (a seeded search)
     assert np.array_equal(rotation, wedge_rotations(rows, shared=True))
+
+
+def test_the_shared_rule_refuses_more_stacks_than_twice_the_lines():
+    """The 20 triangles of 6 points, one wedge each: 20 stacks for 6 vertical lines, each line
+    the collapsed edge of at most two: no rotation exists, the search stops and names a wedge."""
+    triangles = np.array(list(combinations(range(6), 3)))
+    rows = np.hstack([triangles, triangles + 6])
+    with pytest.raises(WedgeRotationError, match="at most two wedges") as caught:
+        wedge_rotations(rows, shared=True)
+    assert 0 <= caught.value.index < rows.shape[0]
