@@ -6,6 +6,8 @@ extruding a square, as prisms (a triangulated square) or hexahedra. Runs in seri
 check of the tangent is serial.
 """
 
+from itertools import combinations
+
 from mpi4py import MPI
 
 import gmsh
@@ -104,6 +106,27 @@ def test_a_flat_prism_is_refused_naming_it():
     with pytest.raises(ValueError, match=r"prism 7 .*flat or inverted"):
         flat = [0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0.2, 1, 0]  # top on the bottom
         mesh_from_gmsh(_one_prism, COMM, x=flat, order=[1, 2, 3, 4, 5, 6])
+
+
+def _overlapping_prisms() -> None:
+    """A prism on each of the 20 triangles of a hexagon's 6 corners (counter-clockwise)."""
+    gmsh.model.add("overlapping")
+    volume = gmsh.model.addDiscreteEntity(3)
+    angles = np.arange(6) * np.pi / 3
+    plane = np.column_stack([np.cos(angles), np.sin(angles)])
+    x = np.vstack([np.column_stack([plane, np.full(6, z)]) for z in (0.0, 1.0)])
+    gmsh.model.mesh.addNodes(3, volume, list(range(1, 13)), x.ravel().tolist())
+    rows = [[*t, *(np.array(t) + 6)] for t in combinations(range(6), 3)]  # increasing: CCW
+    tags = list(range(101, 101 + len(rows)))
+    gmsh.model.mesh.addElementsByType(volume, 6, tags, (np.array(rows) + 1).ravel().tolist())
+    gmsh.model.addPhysicalGroup(3, [volume], 1)
+
+
+@pytest.mark.mpi
+def test_prisms_whose_edges_cannot_be_collapsed_are_refused_naming_one():
+    """20 stacks on 6 vertical lines: no rotation keeps a collapsed edge to two cells (§32.2)."""
+    with pytest.raises(ValueError, match=r"prism 1\d\d: no numbering .* at most two wedges"):
+        mesh_from_gmsh(_overlapping_prisms, COMM)
 
 
 def _patch_problem(punch_cell: str, base_cell: str):
