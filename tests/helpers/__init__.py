@@ -4,6 +4,7 @@
 - ``serial_answer``: partitions, and runs on several processes compared with the serial run.
 - ``decks``: decks with every output request, run serially and on all processes.
 - ``spring_faces``: random master faces and slave nodes of the spring-kernel tests.
+- ``prism_blocks``: gmsh punch-on-base models of prisms and hexahedra (docs/method.md §32).
 
 The names most tests use are imported here: ``from helpers import punch_problem``.
 """
