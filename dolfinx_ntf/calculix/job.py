@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time as _time
+import typing
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,24 +50,26 @@ from dolfinx_ntf.kernels.laws import LinearLaw
 from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
-from dolfinx_ntf.solvers.dynamics import CCX_START_INCREMENT_FRACTION, DynamicStep
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
-from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
-from dolfinx_ntf.solvers.modes import Modes, contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
-from .coupled import CoupledIncrementSolver, HeatIncrementSolver
 from .dat import CCX_FORMATS
 from .deck import Deck, PrintRequest, Step, read_deck
 from .gather import CcxNumbering
 from .job_files import JobFiles, check_requests
-from .modal_dat import frequency_output
-from .modal_increments import modal_increments
 from .model import CalculixModel, build_model, friction_of
 from .output_values import ContactRows, OutputValues
 from .xdmf import WedgeDeckWriter
+
+if typing.TYPE_CHECKING:
+    from dolfinx_ntf.solvers.modes import Modes
+
+    from .coupled import CoupledIncrementSolver, HeatIncrementSolver
+
+# The modules of dynamic, modal and coupled steps are imported where such a step runs: a static
+# deck does not pay for them at start-up (docs/performance.md, "Start-up").
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -246,6 +249,8 @@ class _Job:
         self.numbering = CcxNumbering(model, printed)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
         self.solver: ContactNewtonSolver | CoupledIncrementSolver | HeatIncrementSolver
+        if model.thermal is not None:
+            from .coupled import CoupledIncrementSolver, HeatIncrementSolver
         if model.thermal is not None and deck.steps[0].coupled.heat:  # all *HEAT TRANSFER
             self.solver = HeatIncrementSolver(self.problem, model.thermal)
         elif model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
@@ -406,6 +411,8 @@ class _Job:
 
     def _run_dynamic_step(self, index: int, step: Step) -> None:
         """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
+        from dolfinx_ntf.solvers.dynamics import DynamicStep
+
         model = self.model
         if self.velocity is None:
             self.velocity = model.initial_velocity()
@@ -466,6 +473,8 @@ class _Job:
         if time_points is not None:
             ahead = time_points[time_points > 1e-9 * step.static.period]
             first = min(first, float(ahead[0])) if ahead.size else first
+        from dolfinx_ntf.solvers.dynamics import CCX_START_INCREMENT_FRACTION
+
         return CCX_START_INCREMENT_FRACTION * first
 
     def _run_frequency_step(self, index: int, step: Step) -> None:
@@ -475,6 +484,10 @@ class _Job:
         sign is fixed by the deck's node order (its first component above 1e-3 of its largest is
         positive), so that serial and parallel runs print the same modes.
         """
+        from dolfinx_ntf.solvers.modes import contact_modes
+
+        from .modal_dat import frequency_output
+
         modes = contact_modes(
             self.problem, self.model.mass_form(), step.frequency.num_eigenvalues, springs=False
         )
@@ -509,6 +522,10 @@ class _Job:
         damping, exactly integrated over ccx 2.20's increments. As ccx 2.20 measured on contact5
         and on a longer run of it (§25.4), contact pairs exert no force in the step.
         """
+        from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
+
+        from .modal_increments import modal_increments
+
         if self.stored_modes is None:  # the deck reader requires the earlier step
             raise ValueError(f"{step.location}: no stored modes for the *MODAL DYNAMIC step")
         if self.model.pairs:
