@@ -6,9 +6,11 @@ imports, then calls :func:`dolfinx_ntf.calculix.job.run_job` with timers around 
 - ``imports``: ``import dolfinx`` (the floor) and then dolfinx_ntf's deck runner;
 - ``deck``, ``model``: ``read_deck``, ``build_model``;
 - ``set-up``: the job's files, problem, Newton solver and XDMF writer (``_Job``);
-- per Newton iteration: ``jacobian`` (bulk and springs into the matrix), ``linear solve`` (the
-  Krylov solver's ``solve``: MUMPS's analysis, once, its numeric factorization and the triangular
-  solves), ``residual`` (forms, springs, residual, convergence test), ``pairing``;
+- per Newton iteration: ``jacobian`` (bulk and springs into the matrix), ``linear solve``
+  (``LinearSolver.solve`` and the Krylov solver's ``solve``: MUMPS's analysis, once, its numeric
+  factorizations, the triangular solves and, where an earlier factorization is reused
+  (``solvers/factor_reuse.py``), GMRES), ``residual`` (forms, springs, residual, convergence
+  test), ``pairing``;
 - ``matrix``: the matrix with its contact pattern (``ContactProblem.ensure_matrix``);
 - outputs: ``.dat``/``.frd`` (``JobFiles.write_increment``), ``.cel`` (each pairing's contact
   elements), ``.xdmf`` (``ContactWriter.write``); ``other``: what ``run_job`` spent elsewhere.
@@ -78,7 +80,7 @@ def _driver(job: str) -> None:
     from dolfinx_ntf.calculix import job_files
     from dolfinx_ntf.contact import problem
     from dolfinx_ntf.outputs import results
-    from dolfinx_ntf.solvers import newton, newton_loop
+    from dolfinx_ntf.solvers import linear_solver, newton, newton_loop
 
     gc.freeze()  # as python -m dolfinx_ntf run does
     imported = (time.process_time(), time.perf_counter())
@@ -117,6 +119,7 @@ def _driver(job: str) -> None:
         setattr(newton.ContactNewtonSolver, name, timed("residual", method))
     job_files.JobFiles.write_increment = timed(".dat/.frd", job_files.JobFiles.write_increment)
     results.ContactWriter.write = timed(".xdmf", results.ContactWriter.write)
+    linear_solver.LinearSolver.solve = timed("linear solve", linear_solver.LinearSolver.solve)
 
     class _TimedKrylov:
         """The Newton loop's Krylov solver with its ``solve`` timed."""

@@ -212,6 +212,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Per-cell 2D formulations (quasi-axisymmetric models)", "dolfinx_ntf.fem.plane_sections"),
     ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
+    ("Newton corrections with an earlier factorization", "dolfinx_ntf.solvers.factor_reuse"),
     ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
@@ -229,6 +230,7 @@ ARGS_CHECKED_MODULES = (
     "dolfinx_ntf.fem.pressure_recovery",
     "dolfinx_ntf.kernels.incompatible_modes",
     "dolfinx_ntf.solvers.continuum",
+    "dolfinx_ntf.solvers.factor_reuse",
 )
 
 
