@@ -12,14 +12,21 @@ Decks: the ``.inp`` files under ``tests/data/calculix``, CalculiX's node-to-surf
 (``tests/data/calculix/crossval/cases.py``) and ``benchmarks/ccx_decks.py``'s ``punch_10``,
 ``punch_20`` and ``quarter_sphere_coarse`` (``--decks`` picks others of its decks).
 
+With ``--time DECK ...`` it times ``benchmarks/ccx_decks.py`` decks instead: ``--runs``
+alternating runs of ``python -m dolfinx_ntf run --factorization fresh|auto JOB`` after a warm-up
+of each, one thread, each a process of its own; median wall and CPU (user + system) of the
+process, and the 1-minute load average.
+
     .venv/bin/python benchmarks/factor_reuse.py                 # all of them
     .venv/bin/python benchmarks/factor_reuse.py --only suite    # only CalculiX's decks
+    .venv/bin/python benchmarks/factor_reuse.py --time punch_20 punch_30 --runs 3
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -101,6 +108,59 @@ def run_batch(decks: list[Path], path: str) -> float:
     )
 
 
+def timed_run(deck: Path, path: str) -> tuple[float, float, str]:
+    """One ``python -m dolfinx_ntf run --factorization path`` of ``deck``: wall and CPU seconds,
+    the dofs it printed."""
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
+    before, start = os.times(), time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-m", "dolfinx_ntf", "run", "--factorization", path, deck.name],
+        cwd=deck.parent,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    wall, after = time.perf_counter() - start, os.times()
+    if done.returncode != 0:
+        raise RuntimeError(f"{deck.name} ({path}): exit {done.returncode}\n{done.stderr[-2000:]}")
+    cpu = (after.children_user - before.children_user) + (
+        after.children_system - before.children_system
+    )
+    dofs = re.search(r"(\d+) dofs", done.stdout)
+    return wall, cpu, dofs.group(1) if dofs else "-"
+
+
+def time_decks(root: Path, names: list[str], runs: int) -> list[str]:
+    """Markdown rows: each deck's median wall and CPU with fresh and reused factorizations."""
+    import statistics
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from startup import compile_bytecode
+
+    compile_bytecode(ROOT)
+    rows = ["| deck | dofs | wall fresh [s] | wall auto [s] | CPU fresh [s] | CPU auto [s] | "
+            "CPU auto / fresh | load |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for _, deck in collect_decks(root, ["bench"], names):
+        dofs = timed_run(deck, "fresh")[2]  # warm-up
+        timed_run(deck, "auto")
+        loads = [os.getloadavg()[0]]
+        measured: dict[str, list[tuple[float, float, str]]] = {"fresh": [], "auto": []}
+        for _ in range(runs):
+            for path in measured:
+                measured[path].append(timed_run(deck, path))
+        loads.append(os.getloadavg()[0])
+        wall = {p: statistics.median(r[0] for r in m) for p, m in measured.items()}
+        cpu = {p: statistics.median(r[1] for r in m) for p, m in measured.items()}
+        ratio = cpu["auto"] / cpu["fresh"]
+        rows.append(f"| `{deck.name}` | {dofs} | {wall['fresh']:.2f} | {wall['auto']:.2f} | "
+                    f"{cpu['fresh']:.2f} | {cpu['auto']:.2f} | {ratio:.2f} | "
+                    f"{min(loads):.1f}-{max(loads):.1f} |")  # fmt: skip
+        print(rows[-1], flush=True)
+    return rows
+
+
 def largest_change(first: Path, second: Path) -> float:
     """Largest difference of the printed values over the blocks, relative to each block's largest
     value; inf when the blocks differ in shape or labels."""
@@ -134,7 +194,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--decks", nargs="+", default=["punch_10", "punch_20",
                         "quarter_sphere_coarse"], help="benchmarks/ccx_decks.py decks")  # fmt: skip
     parser.add_argument("--keep", type=Path, help="run in this directory and keep the files")
+    parser.add_argument("--time", nargs="+", metavar="DECK", help="time these ccx_decks decks")
+    parser.add_argument("--runs", type=int, default=3, help="timed runs per path (--time)")
     args = parser.parse_args(argv)
+    if args.time:
+        with tempfile.TemporaryDirectory() as scratch:
+            rows = time_decks(args.keep or Path(scratch), args.time, args.runs)
+        print("\n".join(rows))
+        return 0
     with tempfile.TemporaryDirectory() as scratch:
         root = args.keep or Path(scratch)
         decks = collect_decks(root / "fresh", args.only, args.decks)
@@ -156,6 +223,9 @@ def main(argv: list[str] | None = None) -> int:
                 and reuse_dat.is_file()
                 and fresh_dat.read_bytes() == reuse_dat.read_bytes()
             )
+            if not (fresh_dat.is_file() or reuse_dat.is_file()):  # refused by both paths
+                rows.append(f"| {group} | `{fresh.name}` | - | - | no .dat (refused) | - |")
+                continue
             change = 0.0 if identical else largest_change(fresh_dat, reuse_dat)
             worst = max(worst, change)
             same += identical
@@ -165,7 +235,8 @@ def main(argv: list[str] | None = None) -> int:
                         f"{'yes' if identical else 'no'} | {change:.1e} |")  # fmt: skip
     print("\n".join(rows))
     print(
-        f"\n{total} decks ({start} UTC, 1-min load {load:.1f} to {os.getloadavg()[0]:.1f}): "
+        f"\n{total} decks that ran ({start} UTC, 1-min load {load:.1f} to "
+        f"{os.getloadavg()[0]:.1f}): "
         f"{equal_iterations} with the same Newton iterations, {same} with byte-identical .dat "
         f"files, largest change of a printed value {worst:.1e} (relative to its block's largest); "
         f"CPU of the batch: fresh {cpu['fresh']:.1f} s, reuse {cpu['reuse']:.1f} s"

@@ -737,7 +737,7 @@ def run_job(
             iteration (the exact path); ``"reuse"``, GMRES preconditioned by an earlier
             factorization while it converges in a few iterations (the printed values agree to
             the Krylov tolerance, 1e-11 of the residual); ``"auto"`` (default), reuse from
-            ``REUSE_MIN_DOFS`` dofs on (docs/method.md §14.9).
+            ``REUSE_MIN_DOFS`` dofs on (docs/method.md §31).
 
     Returns:
         The :class:`JobResult`.

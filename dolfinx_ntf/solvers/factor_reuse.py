@@ -1,4 +1,4 @@
-"""Newton corrections solved with an earlier Jacobian's factorization (docs/method.md §14.9).
+"""Newton corrections solved with an earlier Jacobian's factorization (docs/method.md §31).
 
 From about 10k dofs on, MUMPS's numeric factorization is most of a deck's run (0.65 s of the
 0.78 s per Newton iteration of ``punch_20``, 29k dofs), while its triangular solves cost about
