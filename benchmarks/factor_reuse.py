@@ -128,7 +128,7 @@ def timed_run(deck: Path, path: str) -> tuple[float, float, str]:
     cpu = (after.children_user - before.children_user) + (
         after.children_system - before.children_system
     )
-    dofs = re.search(r"(\d+) dofs", done.stdout)
+    dofs = re.search(r"(\d+) dofs", done.stdout + done.stderr)
     return wall, cpu, dofs.group(1) if dofs else "-"
 
 
