@@ -49,15 +49,18 @@ REUSE_MAX_ITERATIONS = 12
 PREDICT_AFTER = 2
 
 
-def reuses_factorization(factorization: object, dofs: int) -> bool:
+def reuses_factorization(factorization: object, dofs: int, owner: str = "factor_reuse") -> bool:
     """Whether ``factorization`` (one of ``FACTORIZATIONS``) reuses factorizations at ``dofs``.
 
     Args:
         factorization: ``"fresh"``, ``"reuse"`` or ``"auto"`` (``ValueError`` otherwise).
         dofs: Global number of dofs of the problem.
+        owner: Who asks, for the error message.
     """
     if not isinstance(factorization, str) or factorization not in FACTORIZATIONS:
-        raise ValueError(f"factorization must be one of {FACTORIZATIONS}, got {factorization!r}")
+        raise ValueError(
+            f"{owner}: factorization must be one of {FACTORIZATIONS}, got {factorization!r}"
+        )
     return factorization == "reuse" or (factorization == "auto" and dofs >= REUSE_MIN_DOFS)
 
 

@@ -135,7 +135,7 @@ class ContactNewtonSolver(NewtonSolver):
             if isinstance(problem, ContactProblem)
             else 0
         )
-        reuse = factor_reuse.reuses_factorization(factorization, dofs)
+        reuse = factor_reuse.reuses_factorization(factorization, dofs, "ContactNewtonSolver")
         symmetric = linear.expects_symmetric(problem, petsc_options)
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
         options = check_arguments(
@@ -455,6 +455,8 @@ class ContactNewtonSolver(NewtonSolver):
                 f"first {self.residual_norms[0]:.3e}){errors.no_support_hint(self.problem)}"
             )
         self.test.end_solve()
+        if self.linear.factor_reuse is not None:
+            logger.debug("linear solves so far: %s", self.linear.factor_reuse.summary())
         return iterations, True
 
 

@@ -80,7 +80,7 @@ def test_auto_reuses_from_the_size_on():
     comm = problem.u.function_space.mesh.comm
     with ntf.ContactNewtonSolver(comm, problem) as solver:  # a small problem: fresh
         assert solver.linear.factor_reuse is None
-    with pytest.raises(ValueError, match="factorization must be one of"):
+    with pytest.raises(ValueError, match="ContactNewtonSolver: factorization must be one of"):
         ntf.ContactNewtonSolver(comm, problem, factorization="stale")
     problem.destroy()
 
