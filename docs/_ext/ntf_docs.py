@@ -214,6 +214,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
     ("Newton corrections with an earlier factorization", "dolfinx_ntf.solvers.factor_reuse"),
     ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
+    ("XDMF files of hexahedra and wedges", "dolfinx_ntf.outputs.xdmf_cells"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
     ("The Hertz geometry of the demos", "dolfinx_ntf.meshes.hertz"),

@@ -67,6 +67,7 @@ from .modal_dat import frequency_output
 from .modal_increments import modal_increments
 from .model import CalculixModel, build_model, friction_of
 from .output_values import ContactRows, OutputValues
+from .xdmf import WedgeDeckWriter
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -252,12 +253,16 @@ class _Job:
             self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
         else:
             self.solver = self._mechanical_solver(comm, petsc_options, tight, solver_options)
-        # no JOB.xdmf with wedges: dolfinx cannot write fields on collapsed hexahedra (its
-        # pull-back of their nodes fails at the collapsed edge, docs/method.md §30)
-        self.writer: ContactWriter | None = None
+        # wedges: dolfinx cannot write fields on collapsed hexahedra (its pull-back of their
+        # nodes fails at the collapsed edge), the deck's mesh is written with wedge cells (§30.6)
+        self.writer: ContactWriter | WedgeDeckWriter | None = None
+        xdmf = directory / f"{jobname}.xdmf"
         if deck.wedges.size == 0:
-            self.result.xdmf = directory / f"{jobname}.xdmf"
-            self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
+            self.result.xdmf = xdmf
+            self.writer = ContactWriter(self.problem, str(xdmf), comm)
+        elif model.element_type.name == "C3D8":
+            self.result.xdmf = xdmf
+            self.writer = WedgeDeckWriter(xdmf, self.values, root=comm.rank == 0)
         self._static_interactions = [pair.interaction for pair in model.pairs]
         self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
         self.acceleration: dolfinx.fem.Function | None = None
