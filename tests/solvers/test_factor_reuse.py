@@ -124,3 +124,19 @@ def test_deck_runner_reuse_matches_fresh(tmp_path):
         assert np.abs(reuse.values - fresh.values).max(initial=0.0) <= 1e-8 * scale
     with pytest.raises(ValueError, match="factorization 'stale'"):
         run_job("two_cubes", tmp_path / "fresh", comm=MPI.COMM_SELF, factorization="stale")
+
+
+@pytest.mark.serial
+def test_command_line_factorization_option(tmp_path, capsys):
+    """``--factorization reuse`` runs the deck; an unknown value is a usage error (exit 1)."""
+    from pathlib import Path
+
+    from dolfinx_ntf.__main__ import main
+    from dolfinx_ntf.calculix.dat import read_dat
+
+    deck = Path(__file__).parents[1] / "data" / "calculix" / "two_cubes.inp"
+    (tmp_path / deck.name).write_bytes(deck.read_bytes())
+    assert main(["run", "--factorization", "reuse", str(tmp_path / "two_cubes")]) == 0
+    assert read_dat(tmp_path / "two_cubes.dat")
+    assert main(["run", "--factorization", "stale", str(tmp_path / "two_cubes")]) == 1
+    assert "--factorization" in capsys.readouterr().err
