@@ -51,6 +51,7 @@ from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
+from dolfinx_ntf.solvers.factor_reuse import FACTORIZATIONS
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
@@ -711,6 +712,7 @@ def run_job(
     solver_options: dict | None = None,
     area_weights: str = "ccx",
     initial_acceleration: str = "ccx",
+    factorization: str = "auto",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -753,6 +755,11 @@ def run_job(
             ``(M + beta (1 + alpha) h^2 K) a_0 = f_ext - f(u_0)``, which reproduces ccx's results)
             or ``"exact"`` (``M a_0 = f_ext - f(u_0)``, the Python API's default)
             (``DynamicStep.initial_acceleration_increment``, docs/method.md §12.7).
+        factorization: The direct linear solver's factorizations: ``"fresh"``, one per Newton
+            iteration (the exact path); ``"reuse"``, GMRES preconditioned by an earlier
+            factorization while it converges in a few iterations (the printed values agree to
+            the Krylov tolerance, 1e-11 of the residual); ``"auto"`` (default), reuse from
+            ``REUSE_MIN_DOFS`` dofs on (docs/method.md §31).
 
     Returns:
         The :class:`JobResult`.
@@ -767,6 +774,8 @@ def run_job(
         raise ValueError(f"ccx_format {ccx_format!r}: one of {', '.join(CCX_FORMATS)}")
     if tangent not in TANGENTS:
         raise ValueError(f"tangent {tangent!r}: one of {', '.join(TANGENTS)}")
+    if factorization not in FACTORIZATIONS:
+        raise ValueError(f"factorization {factorization!r}: one of {', '.join(FACTORIZATIONS)}")
     if initial_acceleration not in INITIAL_ACCELERATIONS:
         raise ValueError(
             f"initial_acceleration {initial_acceleration!r}: one of "
@@ -813,7 +822,11 @@ def run_job(
         pair_after_predictor=pair_after_predictor,
         guard_predictor=guard_predictor,
         ccx_format=ccx_format,
-        solver_options={"line_search": line_search, **(solver_options or {})},
+        solver_options={
+            "line_search": line_search,
+            "factorization": factorization,
+            **(solver_options or {}),
+        },
         initial_acceleration=initial_acceleration,
     )
     try:
