@@ -640,7 +640,9 @@ _HEADER = [
     "",
     "Both codes run the same `.inp` file on one thread: ccx 2.20 as `ccx -i JOB` "
     "(`dolfinx_ntf.calculix.run_ccx`), dolfinx_ntf as `python -m dolfinx_ntf run JOB` with the "
-    "deck's controls. Columns: Newton iterations of each converged increment (ccx's `.sta` file, "
+    "deck's controls and its default options (from 10 000 dofs on, Newton corrections after the "
+    "first reuse an earlier factorization: docs/method.md §31). Columns: Newton iterations of "
+    "each converged increment (ccx's `.sta` file, "
     "dolfinx_ntf's progress lines; a failed run lists its converged increments); mean wall time "
     "of the timed runs from process start to exit (dolfinx_ntf's includes Python start-up, "
     "imports and form loading, with the form cache warm), and for dolfinx_ntf how it splits "

@@ -213,6 +213,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
     ("Wedges as collapsed hexahedra: the numpy kernel", "dolfinx_ntf.kernels.collapsed_wedges"),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
+    ("Newton corrections with an earlier factorization", "dolfinx_ntf.solvers.factor_reuse"),
     ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
     ("XDMF files of hexahedra and wedges", "dolfinx_ntf.outputs.xdmf_cells"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
@@ -231,6 +232,7 @@ ARGS_CHECKED_MODULES = (
     "dolfinx_ntf.fem.pressure_recovery",
     "dolfinx_ntf.kernels.incompatible_modes",
     "dolfinx_ntf.solvers.continuum",
+    "dolfinx_ntf.solvers.factor_reuse",
 )
 
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time as _time
+import typing
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,24 +50,27 @@ from dolfinx_ntf.kernels.laws import LinearLaw
 from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
-from dolfinx_ntf.solvers.dynamics import CCX_START_INCREMENT_FRACTION, DynamicStep
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
-from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
-from dolfinx_ntf.solvers.modes import Modes, contact_modes
+from dolfinx_ntf.solvers.factor_reuse import FACTORIZATIONS
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
-from .coupled import CoupledIncrementSolver, HeatIncrementSolver
 from .dat import CCX_FORMATS
 from .deck import Deck, PrintRequest, Step, read_deck
 from .gather import CcxNumbering
 from .job_files import JobFiles, check_requests
-from .modal_dat import frequency_output
-from .modal_increments import modal_increments
 from .model import CalculixModel, build_model, friction_of
 from .output_values import ContactRows, OutputValues
 from .xdmf import WedgeDeckWriter
+
+if typing.TYPE_CHECKING:
+    from dolfinx_ntf.solvers.modes import Modes
+
+    from .coupled import CoupledIncrementSolver, HeatIncrementSolver
+
+# The modules of dynamic, modal and coupled steps are imported where such a step runs: a static
+# deck does not pay for them at start-up (docs/performance.md, "Start-up").
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -246,6 +250,8 @@ class _Job:
         self.numbering = CcxNumbering(model, printed)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
         self.solver: ContactNewtonSolver | CoupledIncrementSolver | HeatIncrementSolver
+        if model.thermal is not None:
+            from .coupled import CoupledIncrementSolver, HeatIncrementSolver
         if model.thermal is not None and deck.steps[0].coupled.heat:  # all *HEAT TRANSFER
             self.solver = HeatIncrementSolver(self.problem, model.thermal)
         elif model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
@@ -406,6 +412,8 @@ class _Job:
 
     def _run_dynamic_step(self, index: int, step: Step) -> None:
         """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
+        from dolfinx_ntf.solvers.dynamics import DynamicStep
+
         model = self.model
         if self.velocity is None:
             self.velocity = model.initial_velocity()
@@ -466,6 +474,8 @@ class _Job:
         if time_points is not None:
             ahead = time_points[time_points > 1e-9 * step.static.period]
             first = min(first, float(ahead[0])) if ahead.size else first
+        from dolfinx_ntf.solvers.dynamics import CCX_START_INCREMENT_FRACTION
+
         return CCX_START_INCREMENT_FRACTION * first
 
     def _run_frequency_step(self, index: int, step: Step) -> None:
@@ -475,6 +485,10 @@ class _Job:
         sign is fixed by the deck's node order (its first component above 1e-3 of its largest is
         positive), so that serial and parallel runs print the same modes.
         """
+        from dolfinx_ntf.solvers.modes import contact_modes
+
+        from .modal_dat import frequency_output
+
         modes = contact_modes(
             self.problem, self.model.mass_form(), step.frequency.num_eigenvalues, springs=False
         )
@@ -509,6 +523,10 @@ class _Job:
         damping, exactly integrated over ccx 2.20's increments. As ccx 2.20 measured on contact5
         and on a longer run of it (§25.4), contact pairs exert no force in the step.
         """
+        from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
+
+        from .modal_increments import modal_increments
+
         if self.stored_modes is None:  # the deck reader requires the earlier step
             raise ValueError(f"{step.location}: no stored modes for the *MODAL DYNAMIC step")
         if self.model.pairs:
@@ -694,6 +712,7 @@ def run_job(
     solver_options: dict | None = None,
     area_weights: str = "ccx",
     initial_acceleration: str = "ccx",
+    factorization: str = "auto",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -736,6 +755,11 @@ def run_job(
             ``(M + beta (1 + alpha) h^2 K) a_0 = f_ext - f(u_0)``, which reproduces ccx's results)
             or ``"exact"`` (``M a_0 = f_ext - f(u_0)``, the Python API's default)
             (``DynamicStep.initial_acceleration_increment``, docs/method.md §12.7).
+        factorization: The direct linear solver's factorizations: ``"fresh"``, one per Newton
+            iteration (the exact path); ``"reuse"``, GMRES preconditioned by an earlier
+            factorization while it converges in a few iterations (the printed values agree to
+            the Krylov tolerance, 1e-11 of the residual); ``"auto"`` (default), reuse from
+            ``REUSE_MIN_DOFS`` dofs on (docs/method.md §31).
 
     Returns:
         The :class:`JobResult`.
@@ -750,6 +774,8 @@ def run_job(
         raise ValueError(f"ccx_format {ccx_format!r}: one of {', '.join(CCX_FORMATS)}")
     if tangent not in TANGENTS:
         raise ValueError(f"tangent {tangent!r}: one of {', '.join(TANGENTS)}")
+    if factorization not in FACTORIZATIONS:
+        raise ValueError(f"factorization {factorization!r}: one of {', '.join(FACTORIZATIONS)}")
     if initial_acceleration not in INITIAL_ACCELERATIONS:
         raise ValueError(
             f"initial_acceleration {initial_acceleration!r}: one of "
@@ -796,7 +822,11 @@ def run_job(
         pair_after_predictor=pair_after_predictor,
         guard_predictor=guard_predictor,
         ccx_format=ccx_format,
-        solver_options={"line_search": line_search, **(solver_options or {})},
+        solver_options={
+            "line_search": line_search,
+            "factorization": factorization,
+            **(solver_options or {}),
+        },
         initial_acceleration=initial_acceleration,
     )
     try:

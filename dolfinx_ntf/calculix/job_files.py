@@ -418,10 +418,14 @@ def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWr
     materials = list(deck.materials)
     index = dict(zip(materials, range(1, len(materials) + 1)))
     element_material = np.zeros(block.ids.size, dtype=np.int64)
-    position = {int(e): k for k, e in enumerate(block.ids)}
-    for section in deck.sections:
-        for element in deck.elsets[section.elset]:
-            element_material[position[int(element)]] = index[section.material]
+    order = np.argsort(block.ids, kind="stable")
+    for section in deck.sections:  # a later section's material wins, as ccx's
+        members = np.asarray(deck.elsets[section.elset], dtype=np.int64)
+        rows = order[np.minimum(np.searchsorted(block.ids, members, sorter=order), order.size - 1)]
+        missing = block.ids[rows] != members
+        if np.any(missing):
+            raise KeyError(int(members[np.argmax(missing)]))
+        element_material[rows] = index[section.material]
     ids = _frd_node_ids(deck)
     return FrdWriter(
         path,

@@ -1,8 +1,9 @@
 """Solvers and steps: linear-solver choice, Newton, static, dynamic and multi-step runs.
 
 One module per idea: :mod:`~dolfinx_ntf.solvers.linear_solver` (which linear solver, PETSc
-options), :mod:`~dolfinx_ntf.solvers.convergence` (CalculiX's force-scaled test, the divergence
-rule), :mod:`~dolfinx_ntf.solvers.line_search`, :mod:`~dolfinx_ntf.solvers.errors`,
+options), :mod:`~dolfinx_ntf.solvers.factor_reuse` (Newton corrections with an earlier
+factorization), :mod:`~dolfinx_ntf.solvers.convergence` (CalculiX's force-scaled test, the
+divergence rule), :mod:`~dolfinx_ntf.solvers.line_search`, :mod:`~dolfinx_ntf.solvers.errors`,
 :mod:`~dolfinx_ntf.solvers.newton_loop` (:class:`NewtonSolver`, dolfinx's Newton loop without
 ``dolfinx.nls``), :mod:`~dolfinx_ntf.solvers.newton` (:class:`ContactNewtonSolver`, which wires
 them on that loop), :mod:`~dolfinx_ntf.solvers.snes` (:class:`ContactSNESSolver`, PETSc's SNES as

@@ -22,6 +22,7 @@ import dolfinx.fem
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import details_logger
 from dolfinx_ntf.solvers import nullspace
+from dolfinx_ntf.solvers.factor_reuse import FactorReuse
 
 __all__ = [
     "CHOLESKY_MAX_DOFS",
@@ -219,6 +220,8 @@ class LinearSolver:
         prefix: Prefix of the Krylov solver's options.
         space: The displacement space (rigid-body modes of a GAMG preconditioner).
         symmetric: The options chose Cholesky or CG: the first Jacobian's symmetry is checked.
+        reuse_factorization: A direct solver solves with an earlier factorization while GMRES
+            converges fast enough (:class:`~dolfinx_ntf.solvers.factor_reuse.FactorReuse`).
     """
 
     def __init__(
@@ -228,11 +231,21 @@ class LinearSolver:
         prefix: str,
         space: dolfinx.fem.FunctionSpace,
         symmetric: bool,
+        reuse_factorization: bool = False,
     ) -> None:
         self.ksp = ksp
         self.check_symmetry = symmetric
         #: Rigid-body modes of every body, the near-nullspace of a GAMG preconditioner.
         self.near_nullspace = configure(ksp, options, prefix, space)
+        #: The reuse of factorizations, or None (every Jacobian factored afresh).
+        self.factor_reuse = FactorReuse(ksp) if reuse_factorization else None
+
+    def solve(self, b: PETSc.Vec, dx: PETSc.Vec) -> None:
+        """Solve ``A dx = b``, with an earlier factorization where it is reused. Collective."""
+        if self.factor_reuse is None:
+            self.ksp.solve(b, dx)
+        else:
+            self.factor_reuse.solve(b, dx)
 
     def attach(self, A: PETSc.Mat) -> None:
         """Give a (new) Jacobian the near-nullspace of a GAMG preconditioner."""
@@ -256,6 +269,8 @@ class LinearSolver:
             self.check_symmetry = False
             if not A.isSymmetric(1e-10 * A.norm(PETSc.NormType.NORM_INFINITY)):
                 unsymmetric(ksp, "the Jacobian is not symmetric")
+        if pattern_grew and self.factor_reuse is not None:
+            self.factor_reuse.invalidate()
         if pattern_grew:
             ksp.getPC().reset()
             self.attach(A)

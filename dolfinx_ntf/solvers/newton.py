@@ -27,7 +27,7 @@ import dolfinx.fem
 from dolfinx_ntf import validation
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.logs import newton_logger, quiet_dolfinx
-from dolfinx_ntf.solvers import convergence, errors
+from dolfinx_ntf.solvers import convergence, errors, factor_reuse
 from dolfinx_ntf.solvers import linear_solver as linear
 from dolfinx_ntf.solvers.convergence import (
     TIGHT_FIELD_CONTROLS,
@@ -97,6 +97,12 @@ class ContactNewtonSolver(NewtonSolver):
             force-scaled test that the deck runner reproduces
             (:class:`~dolfinx_ntf.solvers.convergence.ForceScaledTest`);
             the defaults keep the test scale-free and within the increment.
+        factorization: With a direct linear solver: ``"fresh"`` factors every Jacobian,
+            ``"reuse"`` solves the corrections after the first by GMRES preconditioned by an
+            earlier factorization and factors afresh only when GMRES would need more than a
+            few iterations (:mod:`~dolfinx_ntf.solvers.factor_reuse`; the iterates differ at
+            the Krylov tolerance, 1e-11 of the residual), ``"auto"`` reuses from
+            ``REUSE_MIN_DOFS`` dofs on.
     """
 
     def __init__(
@@ -121,7 +127,15 @@ class ContactNewtonSolver(NewtonSolver):
         residual_floor: float = 0.0,
         average_over_step: bool = False,
         change_over_iterations: bool = False,
+        factorization: str = "auto",
     ) -> None:
+        dofs = (
+            problem.u.function_space.dofmap.index_map.size_global
+            * problem.u.function_space.dofmap.index_map_bs
+            if isinstance(problem, ContactProblem)
+            else 0
+        )
+        reuse = factor_reuse.reuses_factorization(factorization, dofs, "ContactNewtonSolver")
         symmetric = linear.expects_symmetric(problem, petsc_options)
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
         options = check_arguments(
@@ -184,7 +198,12 @@ class ContactNewtonSolver(NewtonSolver):
         #: the increment).
         self.history: list[tuple[int, int, float, float, float, float]] = []
         self.linear = linear.LinearSolver(
-            self.krylov_solver, options, options_prefix, problem.u.function_space, symmetric
+            self.krylov_solver,
+            options,
+            options_prefix,
+            problem.u.function_space,
+            symmetric,
+            reuse_factorization=reuse,
         )
         self.linear.attach(self._A)
 
@@ -249,6 +268,10 @@ class ContactNewtonSolver(NewtonSolver):
             pattern_grew=self.problem.assembler.pattern_merges != merges,
             reduced=self.problem.reduced_matrix,
         )
+
+    def solve_correction(self, b: PETSc.Vec, dx: PETSc.Vec) -> None:
+        """Solve ``J dx = b``, with an earlier factorization where it is reused."""
+        self.linear.solve(b, dx)
 
     def _update(self, solver: NewtonSolver, dx: PETSc.Vec, x: PETSc.Vec) -> None:
         """Dolfinx's update ``x -= relaxation dx``, counted; a failed linear solve stops here.
@@ -432,6 +455,8 @@ class ContactNewtonSolver(NewtonSolver):
                 f"first {self.residual_norms[0]:.3e}){errors.no_support_hint(self.problem)}"
             )
         self.test.end_solve()
+        if self.linear.factor_reuse is not None:
+            logger.debug("linear solves so far: %s", self.linear.factor_reuse.summary())
         return iterations, True
 
 

@@ -7,7 +7,8 @@ dolfinx deprecated ``dolfinx.nls.petsc.NewtonSolver`` in 0.10 and removed it aft
 class runs unchanged and gives the same iterates on every dolfinx version:
 
 1. ``form(x)``, ``F(x, b)``, convergence check of ``b``;
-2. while not converged and fewer than ``max_it`` updates: ``J(x, A)``, solve ``A dx = b``,
+2. while not converged and fewer than ``max_it`` updates: ``J(x, A)``, solve ``A dx = b``
+   (:meth:`NewtonSolver.solve_correction`),
    ``update(dx, x)`` (default ``x -= relaxation_parameter * dx``), ``form(x)``, ``F(x, b)``,
    convergence check.
 """
@@ -214,7 +215,7 @@ class NewtonSolver:
             self._fn_J(x, self._A)
             if self._fn_P is not None:
                 self._fn_P(x, self._P)
-            self.krylov_solver.solve(self._b, self._dx)
+            self.solve_correction(self._b, self._dx)
             self.krylov_iterations += self.krylov_solver.getIterationNumber()
             self._update_solution(self, self._dx, x)
             self.iteration += 1
@@ -226,6 +227,10 @@ class NewtonSolver:
             elif self.iteration > 1:
                 self.residual, converged = self._converged(self, self._dx)
         return converged
+
+    def solve_correction(self, b: PETSc.Vec, dx: PETSc.Vec) -> None:
+        """Solve ``J dx = b`` with the Krylov solver (subclasses may reuse factorizations)."""
+        self.krylov_solver.solve(b, dx)
 
     def _evaluate(self, x: PETSc.Vec) -> None:
         if self._fn_form is not None:
