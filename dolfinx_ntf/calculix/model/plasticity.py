@@ -81,6 +81,7 @@ def plastic_laws(
     element_cell: np.ndarray,
     quadrature_degree: int,
     finite: bool = False,
+    elastic_values: np.ndarray | None = None,
 ) -> tuple[list[J2Plasticity | FiniteStrainJ2Plasticity], compat.MeshTags]:
     """One J2 law per plastic section, and the cell tags of the materials.
 
@@ -94,6 +95,9 @@ def plastic_laws(
         element_cell: Local cell of each element of ``block`` (-1 elsewhere).
         quadrature_degree: ccx's volume rule of the element type.
         finite: Simo's finite-strain laws (the deck's steps are NLGEOM), else small-strain ones.
+        elastic_values: Tag of each local cell outside the plastic sections (default 0), e.g.
+            the wedges' integration rules (``wedge_rules.py``); values below ``1 + laws`` are
+            not allowed there.
 
     Returns:
         The laws (plastic sections in deck order) and the cell tags.
@@ -109,6 +113,8 @@ def plastic_laws(
         cells = element_cell[order[np.searchsorted(block.ids, members, sorter=order)]]
         section_of[cells[cells >= 0]] = k
     values = np.zeros(section_of.size, dtype=np.int32)
+    if elastic_values is not None:
+        values[:] = elastic_values
     plastic = [k for k, s in enumerate(deck.sections) if deck.materials[s.material].plastic]
     for tag, k in enumerate(plastic, 1):
         values[section_of == k] = tag
