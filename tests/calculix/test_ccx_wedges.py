@@ -199,11 +199,13 @@ def _run_ours(directory: Path, job: str) -> None:
 @pytest.mark.serial
 @pytest.mark.ccx
 @pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
-def test_wedge_block_against_ccx(tmp_path: Path) -> None:
+@pytest.mark.parametrize("nlgeom", [False, True], ids=["small", "nlgeom"])
+def test_wedge_block_against_ccx(tmp_path: Path, nlgeom: bool) -> None:
     ours_dir, hex_dir, wedge_dir = (tmp_path / d for d in ("ntf", "hex", "wedge"))
     for d, element in ((ours_dir, "C3D6"), (hex_dir, "C3D8"), (wedge_dir, "C3D6")):
         d.mkdir()
-        (d / "w.inp").write_text(_block(element=element, surfaces=False)[0])
+        text = _block(element=element, surfaces=False)[0]
+        (d / "w.inp").write_text(text.replace("*STEP\n", "*STEP, NLGEOM\n") if nlgeom else text)
     run_ccx(hex_dir, "w", timeout=120)
     run_ccx(wedge_dir, "w", timeout=120)
     _run_ours(ours_dir, "w")
