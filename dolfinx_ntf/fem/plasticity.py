@@ -35,6 +35,9 @@ __all__ = ["J2Plasticity", "mandel_strain", "material_cells"]
 
 _SQRT2 = float(np.sqrt(2.0))
 
+#: A yield stress no trial stress reaches: the return map's elastic branch everywhere.
+_NEVER_YIELDS = IsotropicHardening(yield_stress=[1e300], plastic_strain=[0.0])
+
 
 def mandel_strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
     """The small strain of ``u`` as a Mandel 6-vector ``[xx, yy, zz, √2 xy, √2 xz, √2 yz]``.
@@ -150,6 +153,19 @@ class QuadratureLaw:
     def evaluate(self) -> None:
         """Return-map the current ``u`` from the committed history (the subclass's)."""
         raise NotImplementedError
+
+    def evaluate_elastic(self) -> None:
+        """Evaluate the current ``u`` elastically from the committed history (no return map).
+
+        The elastic trial stress and the elastic tangent: CalculiX's first iteration of a step
+        whose prescribed displacements change (docs/method.md §31).
+        """
+        hardening = self.hardening
+        self.hardening = _NEVER_YIELDS
+        try:
+            self.evaluate()
+        finally:
+            self.hardening = hardening
 
     def increment_rejected(self) -> None:
         """Drop the trial history: the stress goes back to the committed state at ``u``."""

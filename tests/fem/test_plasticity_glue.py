@@ -439,3 +439,37 @@ def test_agrees_with_ccx(tmp_path) -> None:
             increment += 1
         previous = eps
     assert material.equivalent_plastic_strain.min() > TABLE.plastic_strain[-1]  # past the table
+
+
+@pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
+def test_elastic_evaluation_is_the_trial_state(finite: bool) -> None:
+    """``evaluate_elastic`` (ccx's elastic first iteration, docs/method.md §31): past yield, the
+    elastic trial stress and the elastic tangent from the committed history, which it keeps;
+    the next ``evaluate`` return-maps again."""
+    from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
+
+    mesh = _mesh()
+    u = dolfinx.fem.Function(compat.vector_space(mesh))
+    law = (FiniteStrainJ2Plasticity if finite else ntf.J2Plasticity)(u, E, NU, TABLE)
+    u.interpolate(lambda x: _smooth_field(x, 2e-3))
+    law.increment_converged()  # a committed plastic state
+    committed = law.equivalent_plastic_strain.copy()
+    assert committed.max() > 0.0
+    u.interpolate(lambda x: _smooth_field(x, 6e-3))
+    elastic = ntf.J2Plasticity(u, E, NU, ntf.IsotropicHardening.linear(1e300, 0.0))
+    law.evaluate_elastic()
+    assert not law.yielding.any()
+    np.testing.assert_array_equal(law.equivalent_plastic_strain, committed)
+    tangent = law.tangent.x.array.copy()
+    law.evaluate()
+    assert law.yielding.any() and not np.allclose(law.tangent.x.array, tangent)
+    if not finite:  # the small-strain trial: C (eps - eps_p), the elastic tangent
+        law.evaluate_elastic()
+        strain = law.strain()
+        expected = (strain - law.plastic_strain) @ elastic.tangent.x.array.reshape(-1, 6, 6)[0]
+        np.testing.assert_allclose(
+            law.stress.x.array.reshape(-1, 6), expected, rtol=1e-10, atol=1e-6 * E * 1e-3
+        )
+        np.testing.assert_allclose(
+            law.tangent.x.array.reshape(-1, 36), elastic.tangent.x.array.reshape(-1, 36)
+        )
