@@ -308,3 +308,33 @@ def test_wedge_punch_against_ccx(tmp_path: Path) -> None:
         scale = rf_scale if block.name == "RF_TOTAL" else np.abs(block.values).max()
         difference = np.abs(mine.values - block.values).max() / scale
         assert difference <= 1e-6, (block.name, difference)
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
+@pytest.mark.parametrize("nlgeom", [False, True], ids=["small", "nlgeom"])
+def test_plastic_wedges_against_ccx(tmp_path: Path, nlgeom: bool) -> None:
+    """Plastic wedges beside plastic C3D8, sheared far past yield in four increments: the wedges'
+    laws at ccx's two C3D6 points (docs/method.md §30.5) give ccx's U and RF at every increment
+    (measured: to the printed digits; 3.4e-6 with NLGEOM) and ccx's iterations."""
+    text = _block(surfaces=False, mixed=True)[0]
+    text = text.replace("210000., 0.3\n", "210000., 0.3\n*PLASTIC\n300., 0.\n400., 0.1\n")
+    text = text.replace("*STATIC\n", "*STATIC\n0.25, 1.\n")
+    if nlgeom:
+        text = text.replace("*STEP\n", "*STEP, NLGEOM\n")
+    ours_dir, ccx_dir = tmp_path / "ntf", tmp_path / "ccx"
+    for d in (ours_dir, ccx_dir):
+        d.mkdir()
+        (d / "w.inp").write_text(text)
+    run_ccx(ccx_dir, "w", timeout=120)
+    _run_ours(ours_dir, "w")
+    theirs, ours = read_dat(ccx_dir / "w.dat"), read_dat(ours_dir / "w.dat")
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
+    assert len(theirs) == 8  # U and RF at 4 increments
+    for a, c in zip(ours, theirs):
+        np.testing.assert_array_equal(a.labels, c.labels)
+        difference = np.abs(a.values - c.values).max() / np.abs(c.values).max()
+        assert difference <= 1e-5, (a.name, a.time, difference)
+    iterations = [(r.increment, r.iterations) for r in read_sta(ours_dir / "w.sta")]
+    assert iterations == [(r.increment, r.iterations) for r in read_sta(ccx_dir / "w.sta")]

@@ -473,3 +473,55 @@ def test_elastic_evaluation_is_the_trial_state(finite: bool) -> None:
         np.testing.assert_allclose(
             law.tangent.x.array.reshape(-1, 36), elastic.tangent.x.array.reshape(-1, 36)
         )
+
+
+def _gauss_rule() -> tuple[np.ndarray, np.ndarray]:
+    """The 2x2x2 Gauss rule on ``[0, 1]^3`` (dolfinx's default of degree 2 on hexahedra)."""
+    g = 0.5 + np.array([-1.0, 1.0]) / (2.0 * np.sqrt(3.0))
+    points = np.array([[x, y, z] for x in g for y in g for z in g])
+    return points, np.full(8, 1.0 / 8.0)
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
+def test_custom_rule_reproduces_the_default_one(finite: bool) -> None:
+    """A law with ``quadrature_rule`` (values in a DG1 carrier, docs/method.md §30.5) given the
+    2x2x2 Gauss points explicitly assembles the default law's residual and Jacobian."""
+    from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
+
+    mesh = _mesh()
+    V = compat.vector_space(mesh)
+    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    law = FiniteStrainJ2Plasticity if finite else ntf.J2Plasticity
+    default = law(u, E, NU, TABLE)
+    custom = law(u, E, NU, TABLE, quadrature_rule=_gauss_rule())
+    u.interpolate(lambda x: _smooth_field(x, 2e-3))
+    for material in (default, custom):
+        material.increment_converged()
+    u.interpolate(lambda x: _smooth_field(x, 3e-3) + 1e-4 * np.sin(3 * x))
+    for material in (default, custom):
+        material.evaluate()
+    assert default.yielding.any()
+    np.testing.assert_array_equal(np.sort(default.yielding), np.sort(custom.yielding))
+    expected, got = _vector(default.residual(v)), _vector(custom.residual(v))
+    assert np.abs(got - expected).max() <= 1e-10 * np.abs(expected).max()
+    matrices = []
+    for material in (default, custom):
+        A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(material.jacobian(du, v)))
+        A.assemble()
+        matrices.append(A)
+    matrices[1].axpy(-1.0, matrices[0])
+    assert matrices[1].norm() <= 1e-10 * matrices[0].norm()
+    for A in matrices:
+        A.destroy()
+
+
+def test_custom_rule_refused_with_a_clear_error() -> None:
+    mesh = _mesh()
+    u = dolfinx.fem.Function(compat.vector_space(mesh))
+    with pytest.raises(ValueError, match=r"quadrature_rule must be \(points \(q, 3\)"):
+        ntf.J2Plasticity(u, E, NU, TABLE, quadrature_rule=(np.zeros((2, 2)), np.ones(2)))
+    tets = dolfinx.mesh.create_unit_cube(MPI.COMM_WORLD, 1, 1, 1)
+    w = dolfinx.fem.Function(compat.vector_space(tets))
+    with pytest.raises(ValueError, match="linear quadrilaterals or hexahedra"):
+        ntf.J2Plasticity(w, E, NU, TABLE, quadrature_rule=(np.full((1, 3), 0.25), np.ones(1)))

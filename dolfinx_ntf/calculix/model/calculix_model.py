@@ -590,9 +590,13 @@ def build_model(
             etype.quadrature_degree,
             finite=True in kinds,
             elastic_values=None if rules is None else rules.values,
+            wedge_classes=None if rules is None else rules.classes_of_cells,
+            rule_classes=() if rules is None else rules.classes,
         )
     if laws and rules is not None:  # the elastic wedges' rule beside the laws' cells
-        dx_elastic, dx = rules.measures(mesh, tags, etype.quadrature_degree, len(laws))
+        dx_elastic, dx = rules.measures(
+            mesh, tags, etype.quadrature_degree, [law.dx for law in laws]
+        )
         mass_dx = dx
         internal_force = ufl.inner(P, ufl.grad(v)) * dx_elastic
     elif laws:
