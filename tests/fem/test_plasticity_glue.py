@@ -525,3 +525,37 @@ def test_custom_rule_refused_with_a_clear_error() -> None:
     w = dolfinx.fem.Function(compat.vector_space(tets))
     with pytest.raises(ValueError, match="linear quadrilaterals or hexahedra"):
         ntf.J2Plasticity(w, E, NU, TABLE, quadrature_rule=(np.full((1, 3), 0.25), np.ones(1)))
+
+
+@pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
+def test_custom_rule_jacobian_against_finite_differences(finite: bool) -> None:
+    """With ccx's two-point C3D6 rule (``kernels/collapsed_wedge.py``) as the custom rule, the
+    assembled Jacobian times a direction is the central difference of the assembled residual."""
+    from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
+    from dolfinx_ntf.kernels.collapsed_wedge import wedge_rule
+
+    mesh = _mesh()
+    V = compat.vector_space(mesh)
+    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    law = FiniteStrainJ2Plasticity if finite else ntf.J2Plasticity
+    material = law(u, E, NU, TABLE, quadrature_rule=wedge_rule(1))
+    u.interpolate(lambda x: _smooth_field(x, 2e-3))
+    material.increment_converged()
+    u.interpolate(lambda x: _smooth_field(x, 3e-3) + 1e-4 * np.sin(3 * x))
+    material.evaluate()
+    assert material.yielding.any()
+    A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(material.jacobian(du, v)))
+    A.assemble()
+    direction = dolfinx.fem.Function(V)
+    direction.x.array[:] = np.random.default_rng(5).normal(size=direction.x.array.size) * 1e-3
+    product = A.createVecLeft()
+    A.mult(compat.petsc_vector(direction), product)
+    start, h, values = u.x.array.copy(), 1e-6, []
+    for sign in (1.0, -1.0):
+        u.x.array[:] = start + sign * h * direction.x.array
+        material.evaluate()
+        values.append(_vector(material.residual(v)))
+    fd = (values[0] - values[1]) / (2 * h)
+    assert np.abs(fd - product.array).max() < 1e-6 * np.abs(product.array).max()
+    A.destroy()
+    product.destroy()
