@@ -225,7 +225,9 @@ def test_elastic_start_needs_an_elastic_evaluation() -> None:
 
     problem, solver, material, pressure = _plastic_punch(comm)
     problem.history.append(Plain())
-    with pytest.raises(TypeError, match=r"elastic_start needs history entries with evaluate_elastic\(\)"):
+    with pytest.raises(
+        TypeError, match=r"elastic_start needs history entries with evaluate_elastic\(\)"
+    ):
         problem.begin_increment(1.0, elastic_start=True)
     problem.history.pop()
     elastic_calls = []
