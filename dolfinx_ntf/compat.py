@@ -45,6 +45,7 @@ reason.
 from __future__ import annotations
 
 import typing
+import weakref
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -125,6 +126,12 @@ def scalar_space(
     return dolfinx.fem.functionspace(mesh, (family, degree))
 
 
+#: dolfinx 0.5.2's scalar spaces of :func:`component_space`, by (mesh identity, family, degree).
+#: An entry lives as long as its space, and the space holds its mesh: a key's mesh identity
+#: cannot be reused while the entry exists.
+_COMPONENT_SPACES: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
+
+
 def component_space(
     V: dolfinx.fem.FunctionSpace, component: int
 ) -> tuple[dolfinx.fem.FunctionSpace, np.ndarray]:
@@ -133,14 +140,20 @@ def component_space(
     What ``V.sub(component).collapse()`` gives. On dolfinx 0.5.2 ``collapse`` crashes with a
     segmentation fault on a process that holds no cells, so there the scalar space of the same
     element is built instead: its numbering is the blocked numbering of ``V`` (checked on every
-    process, collectively), so its dof ``k`` is ``V``'s dof ``bs * k + component``.
+    process, collectively), so its dof ``k`` is ``V``'s dof ``bs * k + component``. That space is
+    built once per mesh, family and degree (each build runs the form compiler's JIT, a few
+    milliseconds of start-up) and shared by the components and the callers.
     """
     if not _LEGACY:
         Q, dofs = V.sub(component).collapse()
         if _V011:  # a list of dof maps, one per cell type
             dofs = dofs[0]
         return Q, np.asarray(dofs, dtype=np.int64)
-    Q = scalar_space(V.mesh, space_family(V), space_degree(V))
+    key = (id(V.mesh), space_family(V), space_degree(V))
+    Q = _COMPONENT_SPACES.get(key)
+    if Q is None:
+        Q = scalar_space(V.mesh, key[1], key[2])
+        _COMPONENT_SPACES[key] = Q
     bs = V.dofmap.index_map_bs
     same = (
         np.array_equal(cell_dofs(Q), cell_dofs(V))

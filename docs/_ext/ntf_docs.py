@@ -213,6 +213,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
     ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
+    ("XDMF files of hexahedra and wedges", "dolfinx_ntf.outputs.xdmf_cells"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
     ("The Hertz geometry of the demos", "dolfinx_ntf.meshes.hertz"),

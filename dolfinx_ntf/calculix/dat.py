@@ -12,13 +12,15 @@ Formats, verified byte for byte against ``ccx`` 2.20 output:
     - titles end with the time in Fortran ``E14.7`` (``0.5000000E+00``); contact titles put it
       right after ``time`` (one blank), the other titles after ``time `` (two blanks);
     - a row is the label as ``I10`` followed by ``1X,1PE13.6`` per value; ``*EL PRINT`` rows are
-      ``I10,1X,I3`` (element, integration point) then six stresses;
+      ``I10,1X,I3`` (element, integration point) then the point's values (six stresses, three
+      heat fluxes or one equivalent plastic strain);
     - totals rows (``TOTALS=YES/ONLY`` of RF and CELS) are ``6X`` then the values;
     - the CNUM row is the count right-aligned in 17 columns.
 
-Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``HFL``, ``CDIS``, ``CSTR``,
-``CELS``, ``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no name for (the name is
-then the title text before the first parenthesis) so that any ccx ``.dat`` file can be compared.
+Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``E``, ``PEEQ``, ``HFL``,
+``CDIS``, ``CSTR``, ``CELS``, ``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no
+name for (the name is then the title text before the first parenthesis) so that any ccx ``.dat``
+file can be compared.
 """
 
 from __future__ import annotations
@@ -91,6 +93,17 @@ _BLOCKS: dict[str, tuple[str, int, int]] = {
         " stresses (elem, integ.pnt.,sxx,syy,szz,sxy,sxz,syz) for set {set} and time {time}",
         2,
         6,
+    ),
+    "E": (
+        " strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set {set} and time {time}",
+        2,
+        6,
+    ),
+    # ccx 2.20 writes no blank between "pe)" and "for" in this title (also for the key PE)
+    "PEEQ": (
+        " equivalent plastic strain (elem, integ.pnt.,pe)for set {set} and time {time}",
+        2,
+        1,
     ),
     # ccx 2.20 writes no blank between "set" and the set's name in this title
     "HFL": (" heat flux (elem, integ.pnt.,qx,qy,qz) for set{set} and time {time}", 2, 3),
@@ -280,21 +293,24 @@ def node_print_blocks(
 
 
 def el_print_blocks(key: str, set_name: str, time: float, elements, values) -> list[DatBlock]:
-    """Block of an ``*EL PRINT`` key at the integration points: ``S`` or ``HFL``.
+    """Block of an ``*EL PRINT`` key at the integration points: ``S``, ``E``, ``PEEQ`` or ``HFL``.
 
-    ``S`` is the Cauchy stress, ``HFL`` the heat flux.
+    ``S`` is the Cauchy stress, ``E`` the strain, ``PEEQ`` the equivalent plastic strain, ``HFL``
+    the heat flux.
 
     Args:
-        key: ``S`` or ``HFL``.
+        key: ``S``, ``E``, ``PEEQ`` or ``HFL``.
         set_name: element set name as printed.
         time: total time.
         elements: ``(E,)`` element numbers in set order.
-        values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz`` or ``(E, q, 3)`` heat
-            fluxes ``qx, qy, qz`` per integration point (ccx order of the points).
+        values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz`` or strains (tensor
+            components, same order), ``(E, q, 1)`` equivalent plastic strains or ``(E, q, 3)``
+            heat fluxes ``qx, qy, qz`` per integration point (ccx order of the points).
     """
-    if key not in ("S", "HFL"):
-        raise ValueError(f"*EL PRINT key must be S or HFL, got {key!r}")
-    width = 6 if key == "S" else 3
+    widths = {"S": 6, "E": 6, "PEEQ": 1, "HFL": 3}
+    if key not in widths:
+        raise ValueError(f"*EL PRINT key must be S, E, PEEQ or HFL, got {key!r}")
+    width = widths[key]
     elements = np.asarray(elements, dtype=np.int64).reshape(-1)
     values = np.asarray(values, dtype=np.float64)
     if values.ndim != 3 or values.shape[0] != elements.size or values.shape[2] != width:
@@ -357,7 +373,7 @@ def write_dat(
 # ----------------------------------------------------------------------------- reader
 
 _TIME_RE = re.compile(r"time\s*(\S+)\s*$")
-_SET_RE = re.compile(r" for set ?(\S+) and time")
+_SET_RE = re.compile(r"for set ?(\S+) and time")  # PEEQ: no blank before "for"
 #: ccx 2.23 (not 2.20) heads each step's and increment's blocks with ``S T E P       1`` and
 #: ``INCREMENT     1`` lines; blocks carry their time, so the reader skips them.
 _STEP_RE = re.compile(r"\s*(S T E P|INCREMENT)\s+\d+\s*$")

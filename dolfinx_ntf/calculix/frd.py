@@ -1,11 +1,11 @@
 """CalculiX ``.frd`` result files (ASCII, ccx 2.20's layout): writer and reader.
 
-See docs/method.md §13.2. ``FrdWriter`` writes what ccx writes for ``*NODE FILE`` (U -> ``DISP``,
-RF -> ``FORC``), ``*EL FILE`` (S -> ``STRESS``, integration-point stresses extrapolated to the
-nodes and averaged over the elements around each node) and ``*CONTACT FILE`` (CDIS/CSTR ->
-``CONTACT``): a header, the nodes, the elements, then per written increment one block per result,
-and `` 9999`` at the end. cgx and converters read it like ccx's file. ``read_frd`` reads both
-ccx's files and ours (the tests compare them value by value). Pure Python/numpy.
+See docs/method.md §13.2. ``FrdWriter`` writes what ccx writes for ``*NODE FILE`` (U -> ``DISP``, RF
+-> ``FORC``), ``*EL FILE`` (S -> ``STRESS``, E -> ``TOSTRAIN``, PEEQ -> ``PE``: integration-point
+values extrapolated to the nodes and averaged over the elements around each node) and ``*CONTACT
+FILE`` (CDIS/CSTR -> ``CONTACT``): a header, the nodes, the elements, then per written increment one
+block per result, and `` 9999`` at the end. cgx and converters read it like ccx's file. ``read_frd``
+reads both ccx's files and ours (the tests compare them value by value). Pure Python/numpy.
 
 Record layout (cgx manual, "Result Format"; widths checked against ccx 2.20's files):
     - ``    2C`` nodes and ``    3C`` elements blocks, rows ``-1`` (and ``-2`` for element nodes);
@@ -54,6 +54,18 @@ _COMPONENTS: dict[str, tuple[tuple[tuple[str, int, int, int], ...], bool]] = {
         ),
         False,
     ),
+    "TOSTRAIN": (
+        (
+            ("EXX", 4, 1, 1),
+            ("EYY", 4, 2, 2),
+            ("EZZ", 4, 3, 3),
+            ("EXY", 4, 1, 2),
+            ("EYZ", 4, 2, 3),
+            ("EZX", 4, 3, 1),
+        ),
+        False,
+    ),
+    "PE": ((("PE", 1, 0, 0),), False),
     "CONTACT": (
         (
             ("COPEN", 4, 1, 1),
@@ -73,7 +85,8 @@ class FrdBlock:
     """One result block of one increment.
 
     Attributes:
-        name: ``DISP``, ``FORC``, ``STRESS``, ``CONTACT`` (or any name ccx writes, when read).
+        name: ``DISP``, ``FORC``, ``STRESS``, ``TOSTRAIN``, ``PE``, ``CONTACT`` (or any name ccx
+            writes, when read).
         components: Component names in column order (read blocks; the writer knows them).
         step, increment: 1-based step and increment numbers (``1PSTEP`` record).
         time: Total time.

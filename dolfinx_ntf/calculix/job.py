@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time as _time
+import typing
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,23 +50,26 @@ from dolfinx_ntf.kernels.laws import LinearLaw
 from dolfinx_ntf.logs import log_progress
 from dolfinx_ntf.outputs.results import ContactWriter
 from dolfinx_ntf.parallel import collectives
-from dolfinx_ntf.solvers.dynamics import CCX_START_INCREMENT_FRACTION, DynamicStep
 from dolfinx_ntf.solvers.errors import ContactConvergenceError
-from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
-from dolfinx_ntf.solvers.modes import Modes, contact_modes
 from dolfinx_ntf.solvers.newton import ContactNewtonSolver
 from dolfinx_ntf.solvers.steps import IncrementResult, StaticStep
 
 from .controls import relaxation_iteration, solver_controls
-from .coupled import CoupledIncrementSolver, HeatIncrementSolver
 from .dat import CCX_FORMATS
 from .deck import Deck, PrintRequest, Step, read_deck
 from .gather import CcxNumbering
 from .job_files import JobFiles, check_requests
-from .modal_dat import frequency_output
-from .modal_increments import modal_increments
 from .model import CalculixModel, build_model, friction_of
 from .output_values import ContactRows, OutputValues
+from .xdmf import WedgeDeckWriter
+
+if typing.TYPE_CHECKING:
+    from dolfinx_ntf.solvers.modes import Modes
+
+    from .coupled import CoupledIncrementSolver, HeatIncrementSolver
+
+# The modules of dynamic, modal and coupled steps are imported where such a step runs: a static
+# deck does not pay for them at start-up (docs/performance.md, "Start-up").
 
 __all__ = ["ContactRows", "IncrementOutput", "JobError", "JobResult", "run_job"]
 
@@ -245,18 +249,24 @@ class _Job:
         self.numbering = CcxNumbering(model, printed)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
         self.solver: ContactNewtonSolver | CoupledIncrementSolver | HeatIncrementSolver
+        if model.thermal is not None:
+            from .coupled import CoupledIncrementSolver, HeatIncrementSolver
         if model.thermal is not None and deck.steps[0].coupled.heat:  # all *HEAT TRANSFER
             self.solver = HeatIncrementSolver(self.problem, model.thermal)
         elif model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
             self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
         else:
             self.solver = self._mechanical_solver(comm, petsc_options, tight, solver_options)
-        # no JOB.xdmf with wedges: dolfinx cannot write fields on collapsed hexahedra (its
-        # pull-back of their nodes fails at the collapsed edge, docs/method.md §30)
-        self.writer: ContactWriter | None = None
+        # wedges: dolfinx cannot write fields on collapsed hexahedra (its pull-back of their
+        # nodes fails at the collapsed edge), the deck's mesh is written with wedge cells (§30.6)
+        self.writer: ContactWriter | WedgeDeckWriter | None = None
+        xdmf = directory / f"{jobname}.xdmf"
         if deck.wedges.size == 0:
-            self.result.xdmf = directory / f"{jobname}.xdmf"
-            self.writer = ContactWriter(self.problem, str(self.result.xdmf), comm)
+            self.result.xdmf = xdmf
+            self.writer = ContactWriter(self.problem, str(xdmf), comm)
+        elif model.element_type.name == "C3D8":
+            self.result.xdmf = xdmf
+            self.writer = WedgeDeckWriter(xdmf, self.values, root=comm.rank == 0)
         self._static_interactions = [pair.interaction for pair in model.pairs]
         self.velocity: dolfinx.fem.Function | None = None  # of *DYNAMIC steps, kept between them
         self.acceleration: dolfinx.fem.Function | None = None
@@ -402,6 +412,8 @@ class _Job:
 
     def _run_dynamic_step(self, index: int, step: Step) -> None:
         """A ``*DYNAMIC`` step: :class:`~dolfinx_ntf.DynamicStep` (docs/method.md §12.4)."""
+        from dolfinx_ntf.solvers.dynamics import DynamicStep
+
         model = self.model
         if self.velocity is None:
             self.velocity = model.initial_velocity()
@@ -462,6 +474,8 @@ class _Job:
         if time_points is not None:
             ahead = time_points[time_points > 1e-9 * step.static.period]
             first = min(first, float(ahead[0])) if ahead.size else first
+        from dolfinx_ntf.solvers.dynamics import CCX_START_INCREMENT_FRACTION
+
         return CCX_START_INCREMENT_FRACTION * first
 
     def _run_frequency_step(self, index: int, step: Step) -> None:
@@ -471,6 +485,10 @@ class _Job:
         sign is fixed by the deck's node order (its first component above 1e-3 of its largest is
         positive), so that serial and parallel runs print the same modes.
         """
+        from dolfinx_ntf.solvers.modes import contact_modes
+
+        from .modal_dat import frequency_output
+
         modes = contact_modes(
             self.problem, self.model.mass_form(), step.frequency.num_eigenvalues, springs=False
         )
@@ -505,6 +523,10 @@ class _Job:
         damping, exactly integrated over ccx 2.20's increments. As ccx 2.20 measured on contact5
         and on a longer run of it (§25.4), contact pairs exert no force in the step.
         """
+        from dolfinx_ntf.solvers.modal_dynamics import ModalDynamics, RayleighDamping, modal_forces
+
+        from .modal_increments import modal_increments
+
         if self.stored_modes is None:  # the deck reader requires the earlier step
             raise ValueError(f"{step.location}: no stored modes for the *MODAL DYNAMIC step")
         if self.model.pairs:

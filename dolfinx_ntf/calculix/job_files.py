@@ -2,10 +2,10 @@
 
 :class:`JobFiles` opens them as ccx does at program start and writes, in ccx 2.20's formats:
 
-    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S) and ``*CONTACT PRINT`` (CDIS,
-      CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
-    - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S) and ``*CONTACT
-      FILE`` (CDIS, CSTR) blocks (docs/method.md §13.2).
+    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, E, PEEQ) and ``*CONTACT PRINT``
+      (CDIS, CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
+    - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S, E as
+      ``TOSTRAIN``, PEEQ as ``PE``) and ``*CONTACT FILE`` (CDIS, CSTR) blocks (§13.2).
     - ``JOB.cel``: the contact elements of every pairing when ``CONTACT ELEMENTS`` is requested.
     - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration (§13.3).
 
@@ -32,6 +32,7 @@ from .dat import (
     write_dat,
 )
 from .deck import Deck, FileRequest, PrintRequest, Step
+from .elements import ELEMENT_TYPES
 from .frd import FrdBlock, FrdWriter
 from .gather import Discard
 from .model import CalculixModel
@@ -245,7 +246,7 @@ class _Increment:
     def frd_blocks(
         self, step: Step, increment: int, total: float, contact: list[ContactRows]
     ) -> list[FrdBlock]:
-        """The ``.frd`` blocks of the file requests, in ccx's order: DISP, STRESS, FORC, CONTACT."""
+        """The ``.frd`` blocks in ccx's order: DISP, STRESS, TOSTRAIN, FORC, PE, CONTACT."""
         keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
         blocks = []
 
@@ -263,16 +264,21 @@ class _Increment:
         if ("EL", "S") in keys:
             nodes, values = self.values.nodal_stresses()
             values = zero_below(values, self.values.field_accuracy().stress)
-            if keys["EL", "S"].set is not None:  # its nodes that have a stress, in set order
-                members = self.deck.nsets[keys["EL", "S"].set]
-                pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
-                keep = nodes[pos] == members
-                nodes, values = members[keep], values[pos[keep]]
+            nodes, values = _in_set(self.deck, keys["EL", "S"], nodes, values)
             blocks.append(FrdBlock("STRESS", (), step.number, increment, total, nodes, values))
+        if ("EL", "E") in keys:
+            nodes, values = self.values.nodal_strains()
+            values = zero_below(values, self.values.field_accuracy().strain)
+            nodes, values = _in_set(self.deck, keys["EL", "E"], nodes, values)
+            blocks.append(FrdBlock("TOSTRAIN", (), step.number, increment, total, nodes, values))
         if ("NODE", "RF") in keys:
             node_block(
                 "FORC", keys["NODE", "RF"], self.values.printed_forces(self.largest_residual)[0]
             )
+        if ("EL", "PEEQ") in keys and self.values.model.plasticity:  # else none, as ccx's
+            nodes, values = self.values.nodal_equivalent_plastic_strains()
+            nodes, values = _in_set(self.deck, keys["EL", "PEEQ"], nodes, values)
+            blocks.append(FrdBlock("PE", (), step.number, increment, total, nodes, values))
         if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
             nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
             values = np.zeros((nodes.size, 6))
@@ -331,6 +337,16 @@ class _Increment:
                     "HFL", request.set, total, ids, self.values.heat_fluxes(ids)
                 )
                 continue
+            if key == "E":
+                strains = zero_below(self.values.strains(ids), self.values.field_accuracy().strain)
+                blocks += el_print_blocks("E", request.set, total, ids, strains)
+                continue
+            if key == "PEEQ":
+                if not self.values.model.plasticity:  # ccx 2.20 prints no block without one
+                    continue
+                values = self.values.equivalent_plastic_strains(ids)
+                blocks += el_print_blocks("PEEQ", request.set, total, ids, values)
+                continue
             if key != "S":
                 raise NotImplementedError(
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
@@ -338,6 +354,18 @@ class _Increment:
             stresses = zero_below(self.values.stresses(ids), self.values.field_accuracy().stress)
             blocks += el_print_blocks("S", request.set, total, ids, stresses)
         return blocks
+
+
+def _in_set(
+    deck: Deck, request: FileRequest, nodes: np.ndarray, values: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of the request's node set that have values, in set order (all without a set)."""
+    if request.set is None:
+        return nodes, values
+    members = deck.nsets[request.set]
+    pos = np.minimum(np.searchsorted(nodes, members), nodes.size - 1)
+    keep = nodes[pos] == members
+    return members[keep], values[pos[keep]]
 
 
 def _contact_blocks(
@@ -390,10 +418,14 @@ def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWr
     materials = list(deck.materials)
     index = dict(zip(materials, range(1, len(materials) + 1)))
     element_material = np.zeros(block.ids.size, dtype=np.int64)
-    position = {int(e): k for k, e in enumerate(block.ids)}
-    for section in deck.sections:
-        for element in deck.elsets[section.elset]:
-            element_material[position[int(element)]] = index[section.material]
+    order = np.argsort(block.ids, kind="stable")
+    for section in deck.sections:  # a later section's material wins, as ccx's
+        members = np.asarray(deck.elsets[section.elset], dtype=np.int64)
+        rows = order[np.minimum(np.searchsorted(block.ids, members, sorter=order), order.size - 1)]
+        missing = block.ids[rows] != members
+        if np.any(missing):
+            raise KeyError(int(members[np.argmax(missing)]))
+        element_material[rows] = index[section.material]
     ids = _frd_node_ids(deck)
     return FrdWriter(
         path,
@@ -448,9 +480,36 @@ def _check_wedge_outputs(deck: Deck) -> None:
                 )
 
 
+def _check_strain_outputs(deck: Deck) -> None:
+    """Refuse ``E`` where ccx's strain was not measured: 2D, C3D8I, shells, coupled steps."""
+    types = [ELEMENT_TYPES[name] for name in deck.elements if name in ELEMENT_TYPES]
+    why = ""
+    if any(t.tdim == 2 for t in types):
+        why = "2D elements"
+    elif "C3D8I" in deck.elements:
+        why = "C3D8I elements (their incompatible modes)"
+    elif deck.shells is not None:
+        why = "shell elements"
+    for step in deck.steps:
+        for request in [*step.prints, *step.file_requests]:
+            if request.kind != "EL" or "E" not in request.keys:
+                continue
+            reason = why or ("a coupled temperature-displacement step" if step.coupled else "")
+            if reason:
+                keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
+                raise NotImplementedError(
+                    f"{request.location}: {keyword} E (strains) of a deck with {reason} is not "
+                    "supported yet"
+                )
+
+
 def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
-    supported = {"NODE": {"U", "RF", "V"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"}}
+    supported = {
+        "NODE": {"U", "RF", "V"},
+        "EL": {"S", "E", "PEEQ"},
+        "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"},
+    }
     for step in deck.steps:
         if step.modal_dynamic is not None:
             _check_modal_requests(step)
@@ -490,7 +549,8 @@ def check_requests(deck: Deck) -> None:
             )
     _check_transformed_outputs(deck)
     _check_wedge_outputs(deck)
-    written = {"NODE": {"U", "RF"}, "EL": {"S"}, "CONTACT": {"CDIS", "CSTR"}}
+    _check_strain_outputs(deck)
+    written = {"NODE": {"U", "RF"}, "EL": {"S", "E", "PEEQ"}, "CONTACT": {"CDIS", "CSTR"}}
     for step in deck.steps:
         for request in step.file_requests:
             for key in request.keys:

@@ -1,11 +1,11 @@
 """The values a deck's output requests ask for, in ccx numbering and with their accuracy.
 
-Nodal forces (``RF``), stresses at ccx's integration points and extrapolated to the nodes
-(``S``), displacements with the reference nodes of ``*EQUATION`` at their value, and the contact
-rows of every pair (``CDIS``, ``CSTR``, ``CELS``, the ``.cel`` elements). Each is gathered over
-the processes in ccx order (``gather.py``), so that it is the serial run's on any number of
-processes; the accuracy of each value (``roundoff.py``, docs/method.md §14.5) decides which digits
-are printed.
+Nodal forces (``RF``), stresses, strains and equivalent plastic strains at ccx's integration points
+and extrapolated to the nodes (``S``, ``E``, ``PEEQ``), displacements with the reference nodes of
+``*EQUATION`` at their value, and the contact rows of every pair (``CDIS``, ``CSTR``, ``CELS``, the
+``.cel`` elements). Each is gathered over the processes in ccx order (``gather.py``), so that it is
+the serial run's on any number of processes; the accuracy of each value (``roundoff.py``,
+docs/method.md §14.5) decides which digits are printed.
 """
 
 from __future__ import annotations
@@ -101,6 +101,7 @@ class OutputValues:
         self.comm = comm
         self._stress: tuple[dolfinx.fem.Expression, int] | None = None
         self._heat_flux: tuple[dolfinx.fem.Expression, int] | None = None
+        self._strain: tuple[dolfinx.fem.Expression, int] | None = None
         self._field_scales: tuple[float, float, tuple[float, float]] | None = None
         #: The velocity of the job's dynamic steps (``*NODE PRINT V``), None before the first.
         self.velocity: dolfinx.fem.Function | None = None
@@ -254,6 +255,61 @@ class OutputValues:
             )
         return order
 
+    def strains(self, element_ids: np.ndarray) -> np.ndarray:
+        """Total strains ``(E, q, 6)`` (xx, yy, zz, xy, xz, yz; tensor shears) at ccx's points.
+
+        ccx 2.20's ``*EL PRINT E``: the small strain, under NLGEOM the Green-Lagrange strain
+        (measured, docs/method.md §21.6). 3D continuum elements; ``check_requests`` refuses the
+        others. Collective.
+        """
+        if self._strain is None:
+            model = self.model
+            kinematics = model.nlgeom
+            if kinematics is None:
+                kinematics = float(any(step.nlgeom for step in self.deck.steps))
+            H = ufl.grad(model.u)
+            strain = ufl.sym(H) + 0.5 * kinematics * H.T * H
+            points = model.element_type.integration_points
+            self._strain = (dolfinx.fem.Expression(strain, points), points.shape[0])
+        expression, q = self._strain
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, self.model.mesh, cells.astype(np.int32))
+            return values.reshape(cells.size, q, 3, 3)[:, :, index[0], index[1]]
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 6))
+
+    def nodal_strains(self) -> tuple[np.ndarray, np.ndarray]:
+        """Strains at the nodes like ccx's ``.frd`` block ``TOSTRAIN`` (frd order, as stresses).
+
+        Collective.
+        """
+        block = self.deck.elements[self.model.element_type.name]
+        nodes, values = self._at_nodes(self.strains(block.ids))
+        return nodes, values[:, [0, 1, 2, 3, 5, 4]]
+
+    def equivalent_plastic_strains(self, element_ids: np.ndarray) -> np.ndarray:
+        """Equivalent plastic strains ``(E, q, 1)`` (PEEQ) at ccx's integration points.
+
+        The plastic laws' committed values (the last converged increment's), 0 in elastic
+        sections, as ccx 2.20 prints them (docs/method.md §21.6). Collective.
+        """
+        q = self.model.element_type.integration_points.shape[0]
+        order = self._plastic_point_order()
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = np.zeros((cells.size, q, 1))
+            for law in self.model.plasticity:
+                mine = np.isin(cells, law.cells)
+                if mine.any():
+                    values[mine, :, 0] = law.cell_equivalent_plastic_strains(cells[mine])[:, order]
+            return values
+
+        values = self.numbering.element_values(element_ids, evaluate, (q, 1))
+        rows = self.model.element_type.print_rows
+        return values if rows is None else values[:, rows]
+
     def heat_fluxes(self, element_ids: np.ndarray) -> np.ndarray:
         """Heat fluxes ``-k grad T`` ``(E, q, 3)`` at ccx's integration points (coupled steps).
 
@@ -303,16 +359,30 @@ class OutputValues:
         around a node (docs/method.md §13.2). Collective.
         """
         block = self.deck.elements[self.model.element_type.name]
+        nodes, values = self._at_nodes(self.stresses(block.ids))
+        return nodes, values[:, [0, 1, 2, 3, 5, 4]]
+
+    def nodal_equivalent_plastic_strains(self) -> tuple[np.ndarray, np.ndarray]:
+        """PEEQ at the nodes like ccx's ``.frd`` block ``PE``: ``(nodes, (n, 1))``.
+
+        Extrapolated and averaged as the stresses, elastic elements counting 0 (measured on a
+        plastic C3D8 beside an elastic one, docs/method.md §21.6). Collective.
+        """
+        block = self.deck.elements[self.model.element_type.name]
+        return self._at_nodes(self.equivalent_plastic_strains(block.ids))
+
+    def _at_nodes(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Point values ``(E, q, k)`` of every element extrapolated and averaged at the nodes."""
+        block = self.deck.elements[self.model.element_type.name]
         extrapolate = self.model.element_type.extrapolation
-        at_nodes = np.einsum("nq,eqk->enk", extrapolate, self.stresses(block.ids))
+        at_nodes = np.einsum("nq,eqk->enk", extrapolate, values)
         index = self.deck.node_index(block.connectivity)
-        total = np.zeros((self.deck.node_ids.size, 6))
+        total = np.zeros((self.deck.node_ids.size, values.shape[2]))
         count = np.zeros(self.deck.node_ids.size)
         np.add.at(total, index, at_nodes)
         np.add.at(count, index, 1.0)
         used = count > 0
-        values = total[used] / count[used, None]
-        return self.deck.node_ids[used], values[:, [0, 1, 2, 3, 5, 4]]
+        return self.deck.node_ids[used], total[used] / count[used, None]
 
     # -- contact -----------------------------------------------------------------------------------
 

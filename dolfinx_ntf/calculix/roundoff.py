@@ -161,11 +161,13 @@ class FieldAccuracy:
         length: Of a clearance or a slip: ``FIELD_ROUND_OFF (L + U)``.
         stress: Of a stress: ``FIELD_ROUND_OFF M U / h``.
         force: Of a nodal force: ``stress d^2``.
+        strain: Of a strain: ``FIELD_ROUND_OFF U / h``.
     """
 
     length: float
     stress: float
     force: float
+    strain: float = 0.0
 
     @classmethod
     def of(
@@ -183,8 +185,8 @@ class FieldAccuracy:
         """
         smallest, largest = sizes
         length = FIELD_ROUND_OFF * (coordinates + displacement)
-        stress = FIELD_ROUND_OFF * modulus * displacement / smallest if smallest > 0.0 else 0.0
-        return cls(length, stress, stress * largest**2)
+        strain = FIELD_ROUND_OFF * displacement / smallest if smallest > 0.0 else 0.0
+        return cls(length, modulus * strain, modulus * strain * largest**2, strain)
 
 
 def law_accuracy(

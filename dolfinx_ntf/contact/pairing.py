@@ -128,12 +128,16 @@ class Pairing:
         self.static = True
         self._extend_numbering = extend_numbering
         self._reference = reference_coordinates(V)
+        #: ``reference_coordinates(V)`` for the surfaces' faces while the pairs are resolved
+        #: (one pass over the nodes instead of one per surface); None afterwards.
+        self._surface_reference: np.ndarray | None = self._reference
         #: Contact nodes of other processes (docs/method.md §14); None in serial.
         self.halo = NodeHalo(V) if V.mesh.comm.size > 1 else None
         self._face_centres = face_centres
         self._midsides = np.zeros(0, np.int64) if linear_midsides is None else linear_midsides
         self._serendipity = bool(V.mesh.comm.allreduce(face_centres.size, op=MPI.MAX))
         self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
+        self._surface_reference = None
         if self.halo is not None:
             self._reference = self.halo.reference
             extend_numbering(self.halo)
@@ -170,7 +174,10 @@ class Pairing:
                 f"{name}: axisymmetric = True is for 2D meshes of the meridian half-plane; this "
                 "mesh is 3D"
             )
-        slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        slave = collectives.collectively(
+            comm, resolve_slave, V, pair.slave, what=f"{name} slave",
+            reference=self._surface_reference,
+        )  # fmt: skip
         if self._serendipity:  # C3D20: quad8 slave faces, no face-centre slave nodes
             faces = self._as_quad8(slave.faces)
             keep = ~np.isin(slave.nodes, self._face_centres) & ~np.isin(slave.nodes, self._midsides)
@@ -199,8 +206,9 @@ class Pairing:
                 was_active=pair.active,
             )  # fmt: skip
         master_faces = collectives.collectively(
-            comm, resolve_master, V, pair.master, what=f"{name} master"
-        )
+            comm, resolve_master, V, pair.master, what=f"{name} master",
+            reference=self._surface_reference,
+        )  # fmt: skip
         if self._serendipity:
             master_faces = self._as_quad8(master_faces)
         patch = None
@@ -264,7 +272,10 @@ class Pairing:
         """
         V = self.u.function_space
         comm = V.mesh.comm
-        slave = collectives.collectively(comm, resolve_slave, V, pair.slave, what=f"{name} slave")
+        slave = collectives.collectively(
+            comm, resolve_slave, V, pair.slave, what=f"{name} slave",
+            reference=self._surface_reference,
+        )  # fmt: skip
         if pair.axisymmetric and pair.fallback_area != "ccx_ring":
             midside = slave.faceless is not None and bool(np.any(slave.faceless))
             if comm.allreduce(midside, op=MPI.LOR):
@@ -294,8 +305,9 @@ class Pairing:
                 friction=FrictionState(slave.nodes.size), was_active=pair.active,
             )  # fmt: skip
         master_faces = collectives.collectively(
-            comm, resolve_master, V, pair.master, what=f"{name} master"
-        )
+            comm, resolve_master, V, pair.master, what=f"{name} master",
+            reference=self._surface_reference,
+        )  # fmt: skip
         if self.halo is not None:  # every master edge; the owned slave nodes and their edges
             slave, master_faces = collectives.collectively(
                 comm, surface_distribution.distribute_pair, V, self.halo, pair.slave, slave,
@@ -337,8 +349,9 @@ class Pairing:
         V = self.u.function_space
         comm = V.mesh.comm
         nodes = collectives.collectively(
-            comm, resolve_slave, V, pair.adjust, what=f"{name} adjust"
-        ).nodes
+            comm, resolve_slave, V, pair.adjust, what=f"{name} adjust",
+            reference=self._surface_reference,
+        ).nodes  # fmt: skip
         if self.halo is not None:  # the union over processes, as extended nodes
             held = self.halo.local_global[nodes]
             nodes = self.halo.find(np.unique(np.concatenate(comm.allgather(held))))

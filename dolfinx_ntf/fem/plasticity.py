@@ -120,6 +120,8 @@ class QuadratureLaw:
 
     _cells: np.ndarray
     _trial: typing.Any
+    #: Committed equivalent plastic strain (CalculiX's PEEQ), one per local point, (n,).
+    equivalent_plastic_strain: np.ndarray
 
     def _set_up(
         self,
@@ -259,6 +261,17 @@ class QuadratureLaw:
     def cells(self) -> np.ndarray:
         """The law's local cells (owned and ghost), ascending."""
         return self._cells.copy()
+
+    def cell_equivalent_plastic_strains(self, cells: np.ndarray) -> np.ndarray:
+        """Committed equivalent plastic strains ``(n, q)`` (CalculiX's PEEQ) of ``cells``.
+
+        The values of the last converged increment at the rule's points, as ccx prints them.
+
+        Args:
+            cells: Local cells of the law (``ValueError`` for others).
+        """
+        owner = type(self).__name__
+        return _cell_rows(self._cells, self.equivalent_plastic_strain, cells, owner)
 
 
 class J2Plasticity(QuadratureLaw):

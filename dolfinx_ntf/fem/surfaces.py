@@ -204,7 +204,11 @@ def _cell_arrays(V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
 
 
 def boundary_faces(
-    V: dolfinx.fem.FunctionSpace, facets: np.ndarray, *, what: str = "surface"
+    V: dolfinx.fem.FunctionSpace,
+    facets: np.ndarray,
+    *,
+    what: str = "surface",
+    reference: np.ndarray | None = None,
 ) -> SurfaceFaces:
     """Faces of boundary facets as nodes of ``V`` in CalculiX order, oriented out of their cell.
 
@@ -212,6 +216,8 @@ def boundary_faces(
         V: Vector displacement space (P1 or P2, tetrahedra or hexahedra).
         facets: Local facet indices; each must belong to exactly one cell.
         what: Name of the surface, used in error messages.
+        reference: ``reference_coordinates(V)`` if the caller has them (computed otherwise: a
+            pass over every node of ``V``).
     """
     mesh = V.mesh
     tdim = mesh.topology.dim
@@ -222,7 +228,7 @@ def boundary_faces(
 
     cell_nodes, closure = _cell_arrays(V)
     closure_nodes = cell_nodes[cells[:, None], closure[local_facet]]
-    X = reference_coordinates(V)
+    X = reference_coordinates(V) if reference is None else reference
     if tdim == 2:
         return _boundary_edges(X, cell_nodes[cells], closure_nodes, facets)
     face_type = face_type_from_num_nodes(closure.shape[1])
@@ -338,27 +344,38 @@ def _tagged_facets(surface: FacetSurface, mesh: dolfinx.mesh.Mesh, what: str) ->
 
 
 def resolve_master(
-    V: dolfinx.fem.FunctionSpace, surface: FacetSurface, what: str = "master"
+    V: dolfinx.fem.FunctionSpace,
+    surface: FacetSurface,
+    what: str = "master",
+    *,
+    reference: np.ndarray | None = None,
 ) -> SurfaceFaces:
-    """Master faces of a facet surface."""
+    """Master faces of a facet surface (``reference``: as :func:`boundary_faces` takes it)."""
     if not isinstance(surface, FacetSurface):
         raise ValueError(
             f"{what}: the master surface must be a FacetSurface (face-based), "
             f"got {type(surface).__name__}"
         )
-    return boundary_faces(V, _tagged_facets(surface, V.mesh, what), what=what)
+    facets = _tagged_facets(surface, V.mesh, what)
+    return boundary_faces(V, facets, what=what, reference=reference)
 
 
 def resolve_slave(
-    V: dolfinx.fem.FunctionSpace, surface: FacetSurface | NodeSurface, what: str = "slave"
+    V: dolfinx.fem.FunctionSpace,
+    surface: FacetSurface | NodeSurface,
+    what: str = "slave",
+    *,
+    reference: np.ndarray | None = None,
 ) -> SlaveSurface:
     """Slave nodes and area faces (docs/method.md §2.1).
 
     Face-based: the listed faces; slave nodes are all their nodes. Node-based: the slave faces are
     all exterior faces of the mesh with at least one corner among the slave nodes.
+    ``reference``: as :func:`boundary_faces` takes it.
     """
     if isinstance(surface, FacetSurface):
-        faces = boundary_faces(V, _tagged_facets(surface, V.mesh, what), what=what)
+        facets = _tagged_facets(surface, V.mesh, what)
+        faces = boundary_faces(V, facets, what=what, reference=reference)
         return SlaveSurface(faces.nodes, faces)
     if not isinstance(surface, NodeSurface):
         raise TypeError(
@@ -386,10 +403,11 @@ def resolve_slave(
     nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
     mesh.topology.create_connectivity(tdim - 1, tdim)
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
-    all_faces = boundary_faces(V, exterior, what=what)
+    X = reference_coordinates(V) if reference is None else reference
+    all_faces = boundary_faces(V, exterior, what=what, reference=X)
     corners = all_faces.faces[:, : all_faces.face_type.num_corners]
     to_global = V.dofmap.index_map.local_to_global
-    _check_on_boundary(comm, label, nodes, corners, reference_coordinates(V), to_global)
+    _check_on_boundary(comm, label, nodes, corners, X, to_global)
     touching = np.isin(corners, nodes).any(axis=1)
     faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
     midside = surface.midside_nodes

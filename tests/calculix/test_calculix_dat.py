@@ -255,6 +255,27 @@ def test_round_trip_through_read_dat(tmp_path):
     assert len(read_dat(tmp_path / "job.dat")) == len(blocks) + 1
 
 
+def test_peeq_block_like_ccx(tmp_path):
+    """The PEEQ block as ccx 2.20 wrote it for the bar of test_ccx_plastic (no blank before
+    ``for``: the set name is read all the same)."""
+    text = (
+        "\n equivalent plastic strain (elem, integ.pnt.,pe)for set EALL and time  0.1000000E+01"
+        "\n\n         1   1  6.854688E-02\n         1   2  5.857536E-02\n         2   1  "
+        "0.000000E+00\n"
+    )
+    values = np.array([[[6.854688e-02], [5.857536e-02]], [[0.0], [0.0]]])
+    (block,) = el_print_blocks("PEEQ", "EALL", 1.0, [1, 2], values)
+    assert format_block(block).startswith(text)
+    path = tmp_path / "peeq.dat"
+    write_dat(path, [block])
+    (read,) = read_dat(path)
+    assert (read.name, read.set, read.time) == ("PEEQ", "EALL", 1.0)
+    np.testing.assert_array_equal(read.labels, [[1, 1], [1, 2], [2, 1], [2, 2]])
+    np.testing.assert_array_equal(read.values, values.reshape(-1, 1))
+    with pytest.raises(ValueError, match=r"\(2, q, 1\)"):
+        el_print_blocks("PEEQ", "EALL", 1.0, [1, 2], np.zeros((2, 8, 6)))
+
+
 def test_writer_input_errors():
     with pytest.raises(ValueError, match="U, V, RF or NT"):
         node_print_blocks("HFL", "N", 1.0, [1], [[0, 0, 0]])
@@ -288,15 +309,22 @@ def test_read_dat_errors(tmp_path):
 
 
 def test_read_dat_unknown_block(tmp_path):
+    """A block without a name here (ccx 2.20's ME) is named by its title; E is known."""
     path = tmp_path / "e.dat"
     path.write_text(
+        "\n mechanical strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time "
+        " 0.1000000E+01"
+        "\n\n         1   1  1.000000E+00  2.000000E+00  3.000000E+00  4.000000E+00  5.000000E+00"
+        "  6.000000E+00\n"
         "\n strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time  0.1000000E+01"
         "\n\n         1   1  1.000000E+00  2.000000E+00  3.000000E+00  4.000000E+00  5.000000E+00"
         "  6.000000E+00\n"
     )
-    (block,) = read_dat(path)
-    assert block.name == "strains" and block.set == "EALL" and block.time == 1.0
-    assert block.labels.tolist() == [[1, 1]] and block.values.tolist() == [[1, 2, 3, 4, 5, 6]]
+    unknown, strains = read_dat(path)
+    assert unknown.name == "mechanical strains" and unknown.set == "EALL" and unknown.time == 1.0
+    assert unknown.labels.tolist() == [[1, 1]] and unknown.values.tolist() == [[1, 2, 3, 4, 5, 6]]
+    assert strains.name == "E" and strains.set == "EALL"
+    assert strains.values.tolist() == [[1, 2, 3, 4, 5, 6]]
 
 
 # ----------------------------------------------------------------------------- .cel

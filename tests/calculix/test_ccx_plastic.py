@@ -5,7 +5,9 @@ increment), and a plastic block pressed and dragged by an elastic punch with fri
 (``friction_cases``' meshes, tight controls: U, CDIS and CSTR), each without NLGEOM (ccx's
 small-strain radial return) and with it (Simo's finite-strain law, docs/method.md §21.7). The
 refusals (steps mixing NLGEOM and small strain, kinematic hardening) and the reader's
-checks of the table are tested without ccx.
+checks of the table are tested without ccx. PEEQ and E (``*EL PRINT``, ``*EL FILE``) of a plastic
+C3D8 beside an elastic one and of the punch deck against ccx's ``.dat`` and ``.frd`` files
+(docs/method.md §21.6).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import compare_job
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
+from dolfinx_ntf.calculix.frd import read_frd
 from dolfinx_ntf.calculix.job import run_job
 from dolfinx_ntf.calculix.writer import (
     TIGHT_FIELD_CONTROLS,
@@ -326,3 +329,212 @@ def test_plastic_bar_on_all_processes(nlgeom: str, tmp_path: Path) -> None:
         for a, b in zip(ours, theirs):
             np.testing.assert_array_equal(a.labels, b.labels)
             assert np.abs(a.values - b.values).max() <= 1e-6 * np.abs(b.values).max(), a.name
+
+
+# -- PEEQ (docs/method.md §21.6) ------------------------------------------------------------------
+
+#: Element 1 of the bar plastic, element 2 elastic (ccx prints PEEQ 0 there); S, E and PEEQ
+#: printed, U, RF, S, E and PEEQ (by its other name PE, as ccx's test deck beampiso2) written to
+#: the .frd.
+MIXED_BAR = (
+    BAR.format(material=SHEET, nlgeom="{nlgeom}")
+    .replace(
+        "*SOLID SECTION, ELSET=EALL, MATERIAL=SHEET\n",
+        "*ELSET, ELSET=E1\n1\n*ELSET, ELSET=E2\n2\n*MATERIAL, NAME=ELASTIC\n*ELASTIC\n"
+        "5000.0, 0.3\n*SOLID SECTION, ELSET=E1, MATERIAL=SHEET\n"
+        "*SOLID SECTION, ELSET=E2, MATERIAL=ELASTIC\n",
+    )
+    .replace(
+        "*EL PRINT, ELSET=EALL\nS\n",
+        "*EL PRINT, ELSET=EALL\nS, E, PEEQ\n*NODE FILE\nU, RF\n*EL FILE\nS, E, PE\n",
+    )
+)
+
+#: Requests added to the punch deck's steps: E and PEEQ printed and written beside the others.
+PEEQ_REQUESTS = (
+    "*EL PRINT, ELSET=EALL\nS, E, PEEQ\n*NODE FILE\nU, RF\n*EL FILE\nS, E, PEEQ\n"
+    "*CONTACT FILE\nCDIS, CSTR\n*END STEP"
+)
+
+
+def _peeq_text(path: Path) -> list[list[str]]:
+    """The lines (title, then rows) of every PEEQ block of a ``.dat`` file."""
+    blocks: list[list[str]] = []
+    for line in path.read_text().splitlines():
+        if "equivalent plastic strain" in line:
+            blocks.append([line])
+        elif blocks and line.strip() and "time" in line:
+            blocks.append([])  # another block: closes the PEEQ block
+        elif blocks and line.strip() and blocks[-1]:
+            blocks[-1].append(line)
+    return [b for b in blocks if b]
+
+
+def _check_peeq(ccx_dir: Path, ntf_dir: Path, name: str) -> float:
+    """PEEQ of the ``.dat`` and ``.frd`` files against ccx's; the largest PEEQ printed.
+
+    Titles byte for byte, rows byte for byte where the printed values agree (and at least half
+    of them do), the others within 1e-6 of the strains' scale (the largest PEEQ plus the sheet's
+    yield strain 0.01: a stress known to 1e-6 gives the plastic strain to 1e-6 of the strain);
+    the ``.frd`` blocks in ccx's order (less ccx's ERROR estimate, not written) and ``PE``
+    within its 5 digits.
+    """
+    ours, theirs = _peeq_text(ntf_dir / f"{name}.dat"), _peeq_text(ccx_dir / f"{name}.dat")
+    assert len(ours) == len(theirs) > 2
+    same = total = 0
+    for a, b in zip(ours, theirs):
+        assert a[0] == b[0]  # the title: set and time
+        assert len(a) == len(b)
+        for row_a, row_b in zip(a[1:], b[1:]):
+            ra, rb = row_a.split(), row_b.split()
+            assert ra[:2] == rb[:2]  # element, point
+            total += 1
+            if float(ra[2]) == float(rb[2]):
+                same += 1
+                assert row_a == row_b
+    assert same >= total / 2, (same, total)
+    blocks = [b for b in read_dat(ntf_dir / f"{name}.dat") if b.name == "PEEQ"]
+    references = [b for b in read_dat(ccx_dir / f"{name}.dat") if b.name == "PEEQ"]
+    largest = max(np.abs(b.values).max() for b in references)
+    for a, b in zip(blocks, references):
+        assert a.set == b.set == "EALL"
+        np.testing.assert_array_equal(a.labels, b.labels)
+        assert np.abs(a.values - b.values).max() <= 1e-6 * (largest + 0.01)
+    frd, reference = read_frd(ntf_dir / f"{name}.frd"), read_frd(ccx_dir / f"{name}.frd")
+    assert [b.name for b in frd.blocks] == [b.name for b in reference.blocks if b.name != "ERROR"]
+    nodal = reference.blocks_named("PE")
+    assert len(nodal) == len(blocks)
+    top = max(np.abs(b.values).max() for b in nodal)
+    for a, b in zip(frd.blocks_named("PE"), nodal):
+        assert a.components == b.components == ("PE",)
+        np.testing.assert_array_equal(a.nodes, b.nodes)
+        assert np.abs(a.values - b.values).max() <= 2e-5 * top
+    return largest
+
+
+def _check_strains(ccx_dir: Path, ntf_dir: Path, name: str) -> None:
+    """E of the ``.dat`` (within 1e-6 of the largest strain, titles byte for byte) and the
+    ``.frd`` (``TOSTRAIN`` within its 5 digits) against ccx's (small strain, or Green-Lagrange
+    under NLGEOM; tensor shears)."""
+    ours = [b for b in read_dat(ntf_dir / f"{name}.dat") if b.name == "E"]
+    theirs = [b for b in read_dat(ccx_dir / f"{name}.dat") if b.name == "E"]
+    assert len(ours) == len(theirs) > 2
+    largest = max(np.abs(b.values).max() for b in theirs)
+    for a, b in zip(ours, theirs):
+        assert (a.set, a.time) == (b.set, b.time)
+        np.testing.assert_array_equal(a.labels, b.labels)
+        assert np.abs(a.values - b.values).max() <= 1e-6 * largest
+    titles = [
+        [line for line in (d / f"{name}.dat").read_text().splitlines() if " strains (" in line]
+        for d in (ntf_dir, ccx_dir)
+    ]
+    assert titles[0] == titles[1]
+    nodal = read_frd(ccx_dir / f"{name}.frd").blocks_named("TOSTRAIN")
+    top = max(np.abs(b.values).max() for b in nodal)
+    ours_nodal = read_frd(ntf_dir / f"{name}.frd").blocks_named("TOSTRAIN")
+    assert len(ours_nodal) == len(nodal) == len(ours)
+    for a, b in zip(ours_nodal, nodal):
+        assert a.components == b.components == ("EXX", "EYY", "EZZ", "EXY", "EYZ", "EZX")
+        np.testing.assert_array_equal(a.nodes, b.nodes)
+        assert np.abs(a.values - b.values).max() <= 2e-5 * top
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("nlgeom", ["", ", NLGEOM"], ids=["small", "nlgeom"])
+def test_peeq_of_bar_agrees_with_ccx(nlgeom: str, tmp_path: Path) -> None:
+    """``*EL PRINT PEEQ, E`` and ``*EL FILE PE, E`` of a plastic C3D8 beside an elastic one."""
+    text = MIXED_BAR.format(nlgeom=nlgeom)
+    ccx_dir, ntf_dir, result = _both(text, "bar", tmp_path, tight=True)
+    largest = _check_peeq(ccx_dir, ntf_dir, "bar")
+    _check_strains(ccx_dir, ntf_dir, "bar")
+    assert largest > 0.03  # element 1 yields
+    last = [b for b in read_dat(ntf_dir / "bar.dat") if b.name == "PEEQ"][-1]
+    assert np.all(last.values[last.labels[:, 0] == 2] == 0.0)  # the elastic element
+    law = result.model.plasticity[0]
+    printed = np.sort(last.values[last.labels[:, 0] == 1, 0])
+    committed = np.sort(law.equivalent_plastic_strain)
+    assert np.allclose(printed, committed, rtol=1e-6, atol=0.0)  # what the law committed
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("nlgeom", [False, True], ids=["small", "nlgeom"])
+def test_peeq_of_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path) -> None:
+    """PEEQ and E of the plastic block pressed and dragged by the punch (.dat, .frd)."""
+    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
+    for d in (ccx_dir, ntf_dir):
+        d.mkdir()
+        _punch_deck(d, nlgeom)
+        path = d / "plastic_punch.inp"
+        path.write_text(path.read_text().replace("*END STEP", PEEQ_REQUESTS))
+    run_ccx(ccx_dir, "plastic_punch", timeout=300)
+    result = _run("plastic_punch", ntf_dir, tight=True)
+    assert result.completed
+    assert _check_peeq(ccx_dir, ntf_dir, "plastic_punch") > 1e-3
+    _check_strains(ccx_dir, ntf_dir, "plastic_punch")
+
+
+def test_peeq_requests_are_read(tmp_path: Path) -> None:
+    """PE is PEEQ in ``*EL PRINT`` and ``*EL FILE``; other plastic keys are still refused."""
+    path = tmp_path / "deck.inp"
+    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, PE\n"))
+    step = read_deck(path).steps[0]
+    assert [r.keys for r in step.prints if r.kind == "EL"] == [("S", "PEEQ")]
+    assert [r.keys for r in step.file_requests if r.kind == "EL"] == [("S", "E", "PEEQ")]
+    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, ENER\n"))
+    with pytest.raises(DeckError, match="key ENER is not supported yet"):
+        read_deck(path)
+
+
+@pytest.mark.serial
+def test_strains_of_c3d8i_are_refused(tmp_path: Path) -> None:
+    """E of C3D8I (its condensed modes' strains were not measured against ccx): refused."""
+    text = MIXED_BAR.format(nlgeom="").replace("*PLASTIC\n50.0, 0.0\n100.0, 0.3\n", "")
+    text = text.replace("TYPE=C3D8,", "TYPE=C3D8I,")
+    line = text.splitlines().index("*EL PRINT, ELSET=EALL") + 1
+    message = _refusal(text, tmp_path)
+    assert f"deck.inp:{line}: *EL PRINT E (strains)" in message and "C3D8I" in message
+
+
+@pytest.mark.serial
+def test_no_peeq_block_without_plastic_sections(tmp_path: Path) -> None:
+    """ccx 2.20 prints and writes no PEEQ when no section is plastic (measured): nor do we."""
+    text = MIXED_BAR.format(nlgeom="").replace("*PLASTIC\n50.0, 0.0\n100.0, 0.3\n", "")
+    (tmp_path / "bar.inp").write_text(text)
+    result = _run("bar", tmp_path)
+    assert result.completed and not result.model.plasticity
+    names = {b.name for b in read_dat(tmp_path / "bar.dat")}
+    assert "S" in names and "PEEQ" not in names
+    frd = {b.name for b in read_frd(tmp_path / "bar.frd").blocks}
+    assert "STRESS" in frd and "PE" not in frd
+
+
+@pytest.mark.mpi
+@pytest.mark.ccx
+@needs_ccx
+def test_peeq_on_all_processes(tmp_path: Path) -> None:
+    """The mixed bar under NLGEOM on 1 or 2 processes (the plastic and the elastic element on
+    different ones): PEEQ and E in the .dat and .frd files as ccx's (rank 0 compares)."""
+    comm = MPI.COMM_WORLD
+    root = Path(comm.bcast(str(tmp_path), root=0))
+    ccx_dir, ntf_dir = root / "ccx", root / "ntf"
+    if comm.rank == 0:
+        for d in (ccx_dir, ntf_dir):
+            d.mkdir()
+            (d / "bar.inp").write_text(MIXED_BAR.format(nlgeom=", NLGEOM"))
+        run_ccx(ccx_dir, "bar", timeout=300)
+    comm.barrier()
+    logger = logging.getLogger("dolfinx_ntf")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        result = run_job("bar", ntf_dir, comm=comm, progress=False, tight=True)
+    finally:
+        logger.setLevel(level)
+    assert result.completed
+    if comm.rank == 0:
+        assert _check_peeq(ccx_dir, ntf_dir, "bar") > 0.03
+        _check_strains(ccx_dir, ntf_dir, "bar")

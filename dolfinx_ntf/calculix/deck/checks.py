@@ -36,13 +36,11 @@ class Checks(ReaderState):
         for block in elements.values():
             self._check_known(node_ids, block.connectivity, "node", "element connectivity",
                               block.locations)  # fmt: skip
-        for what, ids, loc in self.node_refs:
-            self._check_known(node_ids, ids, "node", what, (loc,))
+        self._check_refs(node_ids, self.node_refs, "node")
         self._apply_transforms(node_ids, node_coords)  # TransformCards: *BOUNDARY in global dofs
         springs = self._finish_springs(all_elements)
         known_elements = np.sort(np.concatenate([all_elements, *(s.ids for s in springs)]))
-        for what, ids, loc in self.element_refs:
-            self._check_known(known_elements, ids, "element", what, (loc,))
+        self._check_refs(known_elements, self.element_refs, "element")
         wedges = self._check_wedges(elements, node_ids, node_coords, rotation)
         self._check_faces(elements)
         materials = self._check_materials(elements, all_elements)
@@ -232,6 +230,22 @@ class Checks(ReaderState):
         loc = locations[bad[0]] if len(locations) > 1 else locations[0]
         number = int(ids[tuple(bad)])
         raise DeckError(f"{what} refers to {kind} {number}, which is not defined", loc)
+
+    @classmethod
+    def _check_refs(cls, known: np.ndarray, refs: list[tuple[str, np.ndarray, Location]],
+                    kind: str) -> None:  # fmt: skip
+        """:meth:`_check_known` of every card's references at once (a deck has thousands).
+
+        The error is the loop's: the first reference (in deck order) to an undefined number.
+        """
+        if not refs:
+            return
+        ids = np.concatenate([np.ravel(r[1]).astype(np.int64, copy=False) for r in refs])
+        pos = np.minimum(np.searchsorted(known, ids), max(known.size - 1, 0))
+        if known.size and np.array_equal(known[pos], ids):
+            return
+        for what, ref_ids, loc in refs:  # only on a bad deck: name the first bad reference
+            cls._check_known(known, ref_ids, kind, what, (loc,))
 
     def _check_faces(self, elements: dict[str, ElementBlock]) -> None:
         for surface in self.surfaces.values():

@@ -18,9 +18,16 @@ _FILE_KEYWORDS = {
 
 _PRINT_KEYS = {
     "NODE": ("U", "V", "RF", "NT"),
-    "EL": ("S", "HFL"),
+    "EL": ("S", "E", "PEEQ", "HFL"),
     "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM"),
 }
+
+
+def _element_keys(kind: str, keys: tuple[str, ...]) -> tuple[str, ...]:
+    """ccx 2.20's ``PE`` is ``PEEQ`` (the same block, measured; ccx's test deck beampiso2)."""
+    if kind != "EL":
+        return keys
+    return tuple("PEEQ" if k == "PE" else k for k in keys)
 
 
 class OutputCards(ReaderState):
@@ -49,6 +56,7 @@ class OutputCards(ReaderState):
         keys = tuple(k for fields, _, _ in card.lines for k in fields if k != "")
         if kind == "CONTACT":  # ccx reads the first four characters only (CDISP is CDIS)
             keys = tuple(k[:4] for k in keys)
+        keys = _element_keys(kind, keys)
         for key in keys:
             if key not in _PRINT_KEYS[kind]:
                 raise DeckError(
@@ -85,6 +93,7 @@ class OutputCards(ReaderState):
         keys = tuple(k for fields, _, _ in card.lines for k in fields if k != "")
         if kind == "CONTACT":  # as for *CONTACT PRINT: ccx reads four characters (CDISP is CDIS)
             keys = tuple(k[:4] for k in keys)
+        keys = _element_keys(kind, keys)
         set_name = None
         if "NSET" in card.params:  # ccx restricts *NODE/EL FILE to it (docs/method.md §13.2)
             set_name = card.params["NSET"] or ""
