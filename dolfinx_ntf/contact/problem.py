@@ -59,7 +59,7 @@ __all__ = [
 
 logger = logging.getLogger("dolfinx_ntf")
 
-#: A change of the prescribed displacements above which ccx's first iteration is elastic (§31).
+#: A change of the prescribed displacements above which ccx's first iteration is elastic (§33).
 _ELASTIC_START_CHANGE = 1e-5
 
 #: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION
@@ -120,7 +120,7 @@ class MaterialHistory(typing.Protocol):
         """Update the stress and tangent at the current displacement from the committed state."""
 
     def evaluate_elastic(self) -> None:
-        """Like :meth:`evaluate`, elastically: the trial state without return map (§31)."""
+        """Like :meth:`evaluate`, elastically: the trial state without return map (§33)."""
 
     def increment_converged(self) -> None:
         """Commit the state of the current (converged) displacement."""
@@ -318,7 +318,7 @@ class ContactProblem:
         #: Material states evaluated before every residual and committed with the friction state
         #: (:class:`MaterialHistory`, docs/method.md §21).
         self.history: list[MaterialHistory] = list(history)
-        self._elastic_start = False  # begin_increment(elastic_start=True) sets it (§31)
+        self._elastic_start = False  # begin_increment(elastic_start=True) sets it (§33)
         for term in self.history:
             missing = [
                 name
@@ -469,7 +469,7 @@ class ContactProblem:
         Args:
             time_fraction: Relative step time at the end of the increment (tau of the overlap ramp).
             static: Static step (the initial overlap is ramped) or not.
-            elastic_start: CalculiX's elastic first iteration (docs/method.md §31): the first
+            elastic_start: CalculiX's elastic first iteration (docs/method.md §33): the first
                 iterate evaluates :attr:`history` elastically if the prescribed displacements
                 change by more than 1e-5 there.
         """
@@ -614,7 +614,7 @@ class ContactProblem:
             self.elimination.back_substitute(x)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         for term in self.history:  # stresses at the iterate, from the committed state (§21)
-            if elastic:  # ccx's elastic first iteration (§31)
+            if elastic:  # ccx's elastic first iteration (§33)
                 term.evaluate_elastic()
             else:
                 term.evaluate()

@@ -239,7 +239,7 @@ class QuadratureLaw:
         """Evaluate the current ``u`` elastically from the committed history (no return map).
 
         The elastic trial stress and the elastic tangent: CalculiX's first iteration of a step
-        whose prescribed displacements change (docs/method.md §31).
+        whose prescribed displacements change (docs/method.md §33).
         """
         hardening = self.hardening
         self.hardening = _NEVER_YIELDS

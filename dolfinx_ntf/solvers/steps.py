@@ -415,7 +415,7 @@ class StaticStep(Step):
         elastic_start: CalculiX's elastic first iteration: in the first increment of the step
             (every attempt), the first iterate evaluates the material history (plasticity)
             elastically when the prescribed displacements change there by more than 1e-5
-            (docs/method.md §31); the deck runner's default.
+            (docs/method.md §33); the deck runner's default.
     """
 
     set_load: LoadControl = no_load

@@ -258,8 +258,8 @@ def test_metalforming_against_ccx(tmp_path: Path, simplified: bool) -> None:
 
     Elastic and frictionless, every block agrees to 2e-6 of its largest value. The deck itself
     (plastic sheet, friction, NLGEOM) converges in ccx's one increment with ccx's elastic first
-    iteration (it stalled and cut back twice before, docs/method.md §31) and, with ccx's local
-    directions on the axis (§31.3), agrees to 1e-3 in every column (measured: CDIS 9.0e-5 normal,
+    iteration (it stalled and cut back twice before, docs/method.md §33) and, with ccx's local
+    directions on the axis (§33.3), agrees to 1e-3 in every column (measured: CDIS 9.0e-5 normal,
     4.3e-4 and 3.2e-5 tangential; CSTR 8.9e-5).
     """
     ours_dir, ccx_dir = tmp_path / "ntf", tmp_path / "ccx"
@@ -279,7 +279,7 @@ def test_metalforming_against_ccx(tmp_path: Path, simplified: bool) -> None:
         assert difference <= (1e-5 if simplified else 1e-3), (block.name, difference)
     increments = [(r.step, r.increment, r.attempt) for r in read_sta(ours_dir / "mf.sta")]
     assert increments == [(r.step, r.increment, r.attempt) for r in read_sta(ccx_dir / "mf.sta")]
-    assert increments == [(1, 1, 1)]  # no cut-back (the stall, docs/method.md §31)
+    assert increments == [(1, 1, 1)]  # no cut-back (the stall, docs/method.md §33)
 
 
 @pytest.mark.serial

@@ -209,7 +209,7 @@ def test_parallel_run_is_the_serial_one(partition) -> None:
 
 def test_elastic_start_needs_an_elastic_evaluation() -> None:
     """``begin_increment(elastic_start=True)`` (ccx's elastic first iteration, docs/method.md
-    §31) names a history entry without ``evaluate_elastic``; without prescribed displacements
+    §33) names a history entry without ``evaluate_elastic``; without prescribed displacements
     (this punch is pressure-loaded) the first iterate return-maps as usual."""
     comm = MPI.COMM_WORLD
 

@@ -443,7 +443,7 @@ def test_agrees_with_ccx(tmp_path) -> None:
 
 @pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
 def test_elastic_evaluation_is_the_trial_state(finite: bool) -> None:
-    """``evaluate_elastic`` (ccx's elastic first iteration, docs/method.md §31): past yield, the
+    """``evaluate_elastic`` (ccx's elastic first iteration, docs/method.md §33): past yield, the
     elastic trial stress and the elastic tangent from the committed history, which it keeps;
     the next ``evaluate`` return-maps again."""
     from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
