@@ -71,6 +71,7 @@ __all__ = [
     "cpp_mesh",
     "create_mesh",
     "create_vector",
+    "discontinuous_space",
     "entities_to_geometry",
     "evaluate_expression",
     "geometry_dofs",
@@ -203,6 +204,23 @@ def quadrature_space(
         mesh.topology.cell_type.name, value_shape=tuple(shape), scheme="default", degree=degree
     )
     return dolfinx.fem.functionspace(mesh, element)
+
+
+def discontinuous_space(
+    mesh: dolfinx.mesh.Mesh, degree: int, shape: tuple[int, ...] = ()
+) -> dolfinx.fem.FunctionSpace:
+    """A discontinuous Lagrange space of ``degree`` with values of shape ``shape``."""
+    if _LEGACY:
+        cell = mesh.ufl_cell()
+        family = "DQ" if cell.cellname() in ("quadrilateral", "hexahedron") else "DG"
+        if shape == ():
+            element = ufl.FiniteElement(family, cell, degree)
+        elif len(shape) == 1:
+            element = ufl.VectorElement(family, cell, degree, dim=shape[0])
+        else:
+            element = ufl.TensorElement(family, cell, degree, shape=shape)
+        return dolfinx.fem.FunctionSpace(mesh, element)
+    return dolfinx.fem.functionspace(mesh, ("DG", degree, tuple(shape)))
 
 
 def quadrature_points(mesh: dolfinx.mesh.Mesh, degree: int) -> np.ndarray:

@@ -385,6 +385,7 @@ class _Job:
             predictor=self.predictor,
             pair_after_predictor=self.pair_after_predictor,
             guard_predictor=self.guard_predictor,
+            elastic_start=bool(model.plasticity),  # ccx's elastic first iteration (§33)
         )
         driver.run(self.solver, model.u)
 

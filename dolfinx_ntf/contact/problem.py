@@ -59,6 +59,9 @@ __all__ = [
 
 logger = logging.getLogger("dolfinx_ntf")
 
+#: A change of the prescribed displacements above which ccx's first iteration is elastic (§33).
+_ELASTIC_START_CHANGE = 1e-5
+
 #: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION
 #: (docs/method.md §3.1, ccx: iit <= 8).
 LAST_REPAIRING_ITERATION = 8
@@ -115,6 +118,9 @@ class MaterialHistory(typing.Protocol):
 
     def evaluate(self) -> None:
         """Update the stress and tangent at the current displacement from the committed state."""
+
+    def evaluate_elastic(self) -> None:
+        """Like :meth:`evaluate`, elastically: the trial state without return map (§33)."""
 
     def increment_converged(self) -> None:
         """Commit the state of the current (converged) displacement."""
@@ -312,6 +318,7 @@ class ContactProblem:
         #: Material states evaluated before every residual and committed with the friction state
         #: (:class:`MaterialHistory`, docs/method.md §21).
         self.history: list[MaterialHistory] = list(history)
+        self._elastic_start = False  # begin_increment(elastic_start=True) sets it (§33)
         for term in self.history:
             missing = [
                 name
@@ -454,13 +461,26 @@ class ContactProblem:
 
     # -- pairing -----------------------------------------------------------------------------------
 
-    def begin_increment(self, time_fraction: float, *, static: bool = True) -> None:
+    def begin_increment(
+        self, time_fraction: float, *, static: bool = True, elastic_start: bool = False
+    ) -> None:
         """Increment-start pairing at the last converged displacement (docs/method.md §3.1, §3.5).
 
         Args:
             time_fraction: Relative step time at the end of the increment (tau of the overlap ramp).
             static: Static step (the initial overlap is ramped) or not.
+            elastic_start: CalculiX's elastic first iteration (docs/method.md §33): the first
+                iterate evaluates :attr:`history` elastically if the prescribed displacements
+                change by more than 1e-5 there.
         """
+        if elastic_start:
+            for term in self.history:
+                if not callable(getattr(term, "evaluate_elastic", None)):
+                    raise TypeError(
+                        f"ContactProblem: elastic_start needs history entries with "
+                        f"evaluate_elastic(); {validation.describe(term)} has none"
+                    )
+        self._elastic_start = elastic_start
         self.pairing.begin_increment(time_fraction, static=static)
         first = not self._first_pairing_done
         self.iteration = 0
@@ -585,6 +605,8 @@ class ContactProblem:
 
     def form(self, x: PETSc.Vec) -> None:
         """Before F: update the ghost values of ``x`` and evaluate the current pairing's springs."""
+        elastic = self._elastic_start and self._prescribed_change(x) > _ELASTIC_START_CHANGE
+        self._elastic_start = False
         if self.elimination is not None:  # before the ghost update: ghosts get the new values
             # Prescribed values first: the reduced Jacobian cannot carry their lifting through
             # the constraints (C3D20's centres move with the prescribed nodes, §13.1, §13.5).
@@ -592,9 +614,26 @@ class ContactProblem:
             self.elimination.back_substitute(x)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         for term in self.history:  # stresses at the iterate, from the committed state (§21)
-            term.evaluate()
+            if elastic:  # ccx's elastic first iteration (§33)
+                term.evaluate_elastic()
+            else:
+                term.evaluate()
         self._blocks = self.evaluate(tangent=True)
         self._element_blocks = [term.evaluate(x, self.bcs) for term in self.element_terms]
+
+    def _prescribed_change(self, x: PETSc.Vec) -> float:
+        """Largest change of a prescribed value from ``x`` to the conditions' values (collective).
+
+        Before the first update of an increment: how far the conditions move the prescribed
+        dofs from the increment start (0 once eliminated values were set into ``x``, so it is
+        taken before :meth:`form` sets them).
+        """
+        target = x.copy()
+        dolfinx.fem.petsc.set_bc(target, self.bcs)
+        target.axpy(-1.0, x)
+        change = target.norm(PETSc.NormType.NORM_INFINITY)
+        target.destroy()
+        return float(change)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """Assemble the bulk residual plus the spring forces at ``x`` into ``b``."""

@@ -45,6 +45,8 @@ class FiniteStrainJ2Plasticity(QuadratureLaw):
         cell_tags: Cell tags and ``tag``: the law covers the cells tagged ``tag`` (default every
             cell), as :class:`~dolfinx_ntf.J2Plasticity`'s.
         tag: The value of this material's cells in ``cell_tags``.
+        quadrature_rule: Custom ``(points, weights)`` on the reference cell, as
+            :class:`~dolfinx_ntf.J2Plasticity`'s.
 
     Attributes:
         first_piola: P at the last evaluation, 9 components row-major (a quadrature Function).
@@ -62,23 +64,27 @@ class FiniteStrainJ2Plasticity(QuadratureLaw):
         quadrature_degree: int | None = None,
         cell_tags: compat.MeshTags | None = None,
         tag: int = 1,
+        quadrature_rule: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> None:
         owner = "FiniteStrainJ2Plasticity"
         if ufl.shape(u) != (3,):
             raise ValueError(f"{owner}: u must be a 3D displacement, got shape {ufl.shape(u)}")
         self._set_up(
-            owner, u, youngs_modulus, poisson_ratio, hardening, quadrature_degree, cell_tags, tag
+            owner,
+            u,
+            youngs_modulus,
+            poisson_ratio,
+            hardening,
+            quadrature_degree,
+            cell_tags,
+            tag,
+            quadrature_rule,
         )
-        degree = self.quadrature_degree
-        mesh = u.function_space.mesh
-        self.first_piola = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (9,)))
-        self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (9, 9)))
+        self.first_piola = dolfinx.fem.Function(self._space((9,)))
+        self.tangent = dolfinx.fem.Function(self._space((9, 9)))
         self.first_piola.name = "first_piola"
-        points = compat.quadrature_points(mesh, degree)
-        self._gradient = dolfinx.fem.Expression(ufl.Identity(3) + ufl.grad(u), points)
-        #: Quadrature points of the law's local cells (owned and ghost), in block dofs.
-        self._dofs = compat.cell_dofs(self.first_piola.function_space)[self._cells].reshape(-1)
-        n = self._dofs.size
+        self._gradient = dolfinx.fem.Expression(ufl.Identity(3) + ufl.grad(u), self._points)
+        n = self._num_points
         #: Committed inverse plastic right Cauchy-Green tensors ``Cp^-1``, (n, 3, 3).
         self.inverse_plastic_metric = np.tile(np.eye(3), (n, 1, 1))
         #: Committed equivalent plastic strain (CalculiX's PEEQ), (n,).
@@ -124,8 +130,8 @@ class FiniteStrainJ2Plasticity(QuadratureLaw):
             self.poisson_ratio,
             self.hardening,
         )
-        self.first_piola.x.array.reshape(-1, 9)[self._dofs] = result.first_piola.reshape(-1, 9)
-        self.tangent.x.array.reshape(-1, 81)[self._dofs] = result.tangent.reshape(-1, 81)
+        self._store(self.first_piola, result.first_piola.reshape(-1, 9))
+        self._store(self.tangent, result.tangent.reshape(-1, 81))
         self._trial = result
 
     def increment_converged(self) -> None:

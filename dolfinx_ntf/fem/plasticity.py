@@ -35,6 +35,9 @@ __all__ = ["J2Plasticity", "mandel_strain", "material_cells"]
 
 _SQRT2 = float(np.sqrt(2.0))
 
+#: A yield stress no trial stress reaches: the return map's elastic branch everywhere.
+_NEVER_YIELDS = IsotropicHardening(yield_stress=[1e300], plastic_strain=[0.0])
+
 
 def mandel_strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
     """The small strain of ``u`` as a Mandel 6-vector ``[xx, yy, zz, √2 xy, √2 xz, √2 yz]``.
@@ -60,6 +63,7 @@ def material_cells(
     cell_tags: compat.MeshTags | None,
     tag: int,
     owner: str,
+    metadata: dict | None = None,
 ) -> tuple[np.ndarray, ufl.Measure]:
     """The local cells (ghosts included) of a material and its measure with the default rule.
 
@@ -72,9 +76,12 @@ def material_cells(
         cell_tags: Cell tags of ``mesh``, or None.
         tag: The material's value in ``cell_tags``.
         owner: Name for error messages.
+        metadata: The measure's metadata instead of the default rule of ``degree`` (e.g. a
+            custom rule).
     """
     tdim = mesh.topology.dim
-    metadata = {"quadrature_degree": degree, "quadrature_scheme": "default"}
+    if metadata is None:
+        metadata = {"quadrature_degree": degree, "quadrature_scheme": "default"}
     if cell_tags is None:
         cell_map = mesh.topology.index_map(tdim)
         cells = np.arange(cell_map.size_local + cell_map.num_ghosts, dtype=np.int32)
@@ -126,8 +133,9 @@ class QuadratureLaw:
         quadrature_degree: int | None,
         cell_tags: compat.MeshTags | None,
         tag: int,
+        quadrature_rule: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> None:
-        """Check the arguments, store them and pick the law's cells and measure."""
+        """Check the arguments, store them and pick the law's cells, measure and points."""
         validation.check_type(u, dolfinx.fem.Function, f"{owner}: u")
         validation.check_type(hardening, IsotropicHardening, f"{owner}: hardening")
         elastic_matrix(youngs_modulus, poisson_ratio)  # checks E and nu
@@ -147,11 +155,98 @@ class QuadratureLaw:
         self.poisson_ratio = float(poisson_ratio)
         self.hardening = hardening
         self.quadrature_degree = degree
-        self._cells, self.dx = material_cells(u.function_space.mesh, degree, cell_tags, tag, owner)
+        mesh = u.function_space.mesh
+        metadata = None
+        if quadrature_rule is None:
+            self._points = compat.quadrature_points(mesh, degree)
+        else:
+            points, weights = (np.asarray(a, dtype=float) for a in quadrature_rule)
+            tdim = mesh.topology.dim
+            if points.ndim != 2 or points.shape[1] != tdim or weights.shape != points.shape[:1]:
+                raise ValueError(
+                    f"{owner}: quadrature_rule must be (points (q, {tdim}), weights (q,)), got "
+                    f"shapes {points.shape} and {weights.shape}"
+                )
+            if compat.geometry_dofs(mesh).shape[1] != 2**tdim or points.shape[0] > 2**tdim:
+                raise ValueError(
+                    f"{owner}: a custom quadrature_rule needs a mesh of linear quadrilaterals or "
+                    f"hexahedra and at most {2**tdim} points"
+                )
+            self._points = points
+            metadata = {
+                "quadrature_rule": "custom",
+                "quadrature_degree": degree,
+                "quadrature_points": tuple(map(tuple, points.tolist())),
+                "quadrature_weights": tuple(weights.tolist()),
+            }
+        self._custom = quadrature_rule is not None
+        self._cells, self.dx = material_cells(mesh, degree, cell_tags, tag, owner, metadata)
+        #: Points per cell and in all (the rows of the history arrays).
+        self._points_per_cell = self._points.shape[0]
+        self._num_points = self._cells.size * self._points_per_cell
+        self._carrier: np.ndarray | None = None
+
+    def _space(self, shape: tuple[int, ...]) -> dolfinx.fem.FunctionSpace:
+        """The space of per-point values of ``shape``.
+
+        The quadrature space of the default rule, or with a custom rule a DG1 space that
+        reproduces the values at its points.
+        """
+        mesh = self.u.function_space.mesh
+        if self._custom:
+            return compat.discontinuous_space(mesh, 1, shape)
+        return compat.quadrature_space(mesh, self.quadrature_degree, shape)
+
+    def _store(self, function: dolfinx.fem.Function, values: np.ndarray) -> None:
+        """Write per-point ``values`` (one row per point of the law's cells) into ``function``.
+
+        With a custom rule the DG1 coefficients of each cell are the least-norm ones whose
+        values at the rule's points are ``values`` (exact: fewer points than coefficients).
+        """
+        size = int(np.prod(function.ufl_shape)) if function.ufl_shape else 1
+        values = np.asarray(values).reshape(self._num_points, size)
+        dofs = compat.cell_dofs(function.function_space)[self._cells]
+        if not self._custom:
+            function.x.array.reshape(-1, size)[dofs.reshape(-1)] = values
+            return
+        if self._carrier is None:
+            self._carrier = np.linalg.pinv(self._tabulate_carrier())  # (8, q)
+        per_cell = values.reshape(self._cells.size, self._points_per_cell, size)
+        coefficients = np.einsum("bq,cqk->cbk", self._carrier, per_cell)
+        function.x.array.reshape(-1, size)[dofs.reshape(-1)] = coefficients.reshape(-1, size)
+
+    def _tabulate_carrier(self) -> np.ndarray:
+        """``(q, 8)`` values of the scalar DG1 basis (in dof order) at the rule's points."""
+        mesh = self.u.function_space.mesh
+        scalar = dolfinx.fem.Function(compat.discontinuous_space(mesh, 1))
+        expression = dolfinx.fem.Expression(scalar, self._points)
+        if self._cells.size == 0:
+            return np.zeros((self._points_per_cell, 2**mesh.topology.dim))
+        cell = self._cells[:1]
+        dofs = compat.cell_dofs(scalar.function_space)[cell[0]]
+        table = np.empty((self._points_per_cell, dofs.size))
+        for k, dof in enumerate(dofs):
+            scalar.x.array[:] = 0.0
+            scalar.x.array[dof] = 1.0
+            table[:, k] = np.asarray(compat.evaluate_expression(expression, mesh, cell)).ravel()
+        return table
 
     def evaluate(self) -> None:
         """Return-map the current ``u`` from the committed history (the subclass's)."""
         raise NotImplementedError
+
+    def evaluate_elastic(self) -> None:
+        """Evaluate the current ``u`` elastically from the committed history (no return map).
+
+        The elastic trial stress and the elastic tangent: CalculiX's first iteration of a step
+        whose prescribed displacements change (docs/method.md §33).
+        """
+        hardening = self.hardening
+        self.hardening = _NEVER_YIELDS
+        try:
+            self.evaluate()
+        finally:
+            self.hardening = hardening
 
     def increment_rejected(self) -> None:
         """Drop the trial history: the stress goes back to the committed state at ``u``."""
@@ -195,6 +290,12 @@ class J2Plasticity(QuadratureLaw):
             every cell. Forms of other materials on the other cells use the same tags (UFL
             needs one ``subdomain_data`` per form), as a deck's sections do.
         tag: The value of this material's cells in ``cell_tags``.
+        quadrature_rule: Custom ``(points (q, d), weights (q,))`` on the reference cell of a
+            mesh of linear quadrilaterals or hexahedra (e.g. CalculiX's two-point C3D6 rule on
+            collapsed hexahedra, docs/method.md §30.5), instead of the default rule of
+            ``quadrature_degree``; the stress and tangent are then DG1 Functions whose values
+            at those points are the points' (FFCx 0.5 has no quadrature element with custom
+            points).
 
     Attributes:
         stress: The stress at the last evaluation, Mandel 6-vectors (a quadrature Function).
@@ -212,23 +313,27 @@ class J2Plasticity(QuadratureLaw):
         quadrature_degree: int | None = None,
         cell_tags: compat.MeshTags | None = None,
         tag: int = 1,
+        quadrature_rule: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> None:
         owner = "J2Plasticity"
         if ufl.shape(u) not in ((2,), (3,)):
             raise ValueError(f"{owner}: u must be a 2D or 3D displacement, got {ufl.shape(u)}")
         self._set_up(
-            owner, u, youngs_modulus, poisson_ratio, hardening, quadrature_degree, cell_tags, tag
+            owner,
+            u,
+            youngs_modulus,
+            poisson_ratio,
+            hardening,
+            quadrature_degree,
+            cell_tags,
+            tag,
+            quadrature_rule,
         )
-        degree = self.quadrature_degree
-        mesh = u.function_space.mesh
-        self.stress = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6,)))
-        self.tangent = dolfinx.fem.Function(compat.quadrature_space(mesh, degree, (6, 6)))
+        self.stress = dolfinx.fem.Function(self._space((6,)))
+        self.tangent = dolfinx.fem.Function(self._space((6, 6)))
         self.stress.name = "stress"
-        points = compat.quadrature_points(mesh, degree)
-        self._strain = dolfinx.fem.Expression(mandel_strain(u), points)
-        #: Quadrature points of the material's local cells (owned and ghost), in block dofs.
-        self._dofs = compat.cell_dofs(self.stress.function_space)[self._cells].reshape(-1)
-        n = self._dofs.size
+        self._strain = dolfinx.fem.Expression(mandel_strain(u), self._points)
+        n = self._num_points
         #: Committed plastic strain, Mandel (n, 6), one row per local quadrature point.
         self.plastic_strain = np.zeros((n, 6))
         #: Committed equivalent plastic strain (CalculiX's PEEQ), (n,).
@@ -289,8 +394,8 @@ class J2Plasticity(QuadratureLaw):
             self.poisson_ratio,
             self.hardening,
         )
-        self.stress.x.array.reshape(-1, 6)[self._dofs] = result.stress
-        self.tangent.x.array.reshape(-1, 36)[self._dofs] = result.tangent.reshape(-1, 36)
+        self._store(self.stress, result.stress)
+        self._store(self.tangent, result.tangent.reshape(-1, 36))
         self._trial = result
 
     def increment_converged(self) -> None:

@@ -412,6 +412,10 @@ class StaticStep(Step):
             the increment-start pairing gave no spring (the growing contact zones on which the
             predictor makes the iterates run away); the deck runner's default (docs/method.md
             §7.2).
+        elastic_start: CalculiX's elastic first iteration: in the first increment of the step
+            (every attempt), the first iterate evaluates the material history (plasticity)
+            elastically when the prescribed displacements change there by more than 1e-5
+            (docs/method.md §33); the deck runner's default.
     """
 
     set_load: LoadControl = no_load
@@ -429,6 +433,7 @@ class StaticStep(Step):
     on_increment: typing.Callable[[IncrementResult], None] | None = None
     guard_predictor: bool = False
     time_points: typing.Sequence[float] | None = None
+    elastic_start: bool = False
 
     def _run(
         self, solver: IncrementSolver, u: dolfinx.fem.Function, start_time: float
@@ -439,7 +444,10 @@ class StaticStep(Step):
         velocity: np.ndarray | None = None
 
         def start(t_new: float, dt: float, u_start: np.ndarray) -> None:
-            problem.begin_increment(t_new / self.period)
+            if self.elastic_start and velocity is None:  # the step's first increment
+                problem.begin_increment(t_new / self.period, elastic_start=True)
+            else:
+                problem.begin_increment(t_new / self.period)
             if self.predictor and velocity is not None:
                 u.x.array[:] = u_start + dt * velocity
                 u.x.scatter_forward()

@@ -205,3 +205,37 @@ def test_parallel_run_is_the_serial_one(partition) -> None:
     scale = np.abs(serial_rows[:, 3:]).max()
     np.testing.assert_allclose(rows[:, 3:], serial_rows[:, 3:], rtol=0, atol=1e-8 * scale)
     assert alpha == pytest.approx(serial_alpha, rel=1e-8)
+
+
+def test_elastic_start_needs_an_elastic_evaluation() -> None:
+    """``begin_increment(elastic_start=True)`` (ccx's elastic first iteration, docs/method.md
+    §33) names a history entry without ``evaluate_elastic``; without prescribed displacements
+    (this punch is pressure-loaded) the first iterate return-maps as usual."""
+    comm = MPI.COMM_WORLD
+
+    class Plain:
+        def evaluate(self) -> None:
+            pass
+
+        def increment_converged(self) -> None:
+            pass
+
+        def increment_rejected(self) -> None:
+            pass
+
+    problem, solver, material, pressure = _plastic_punch(comm)
+    problem.history.append(Plain())
+    with pytest.raises(
+        TypeError, match=r"elastic_start needs history entries with evaluate_elastic\(\)"
+    ):
+        problem.begin_increment(1.0, elastic_start=True)
+    problem.history.pop()
+    elastic_calls = []
+    original = material.evaluate_elastic
+    material.evaluate_elastic = lambda: elastic_calls.append(1) or original()
+    ntf.StaticStep(
+        lambda t: setattr(pressure, "value", PEAK * t), initial_increment=1.0, elastic_start=True
+    ).run(solver, problem.u)
+    assert not elastic_calls  # no prescribed displacement changes: ccx's rule does not apply
+    solver.destroy()
+    problem.destroy()

@@ -439,3 +439,123 @@ def test_agrees_with_ccx(tmp_path) -> None:
             increment += 1
         previous = eps
     assert material.equivalent_plastic_strain.min() > TABLE.plastic_strain[-1]  # past the table
+
+
+@pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
+def test_elastic_evaluation_is_the_trial_state(finite: bool) -> None:
+    """``evaluate_elastic`` (ccx's elastic first iteration, docs/method.md §33): past yield, the
+    elastic trial stress and the elastic tangent from the committed history, which it keeps;
+    the next ``evaluate`` return-maps again."""
+    from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
+
+    mesh = _mesh()
+    u = dolfinx.fem.Function(compat.vector_space(mesh))
+    law = (FiniteStrainJ2Plasticity if finite else ntf.J2Plasticity)(u, E, NU, TABLE)
+    u.interpolate(lambda x: _smooth_field(x, 2e-3))
+    law.increment_converged()  # a committed plastic state
+    committed = law.equivalent_plastic_strain.copy()
+    assert committed.max() > 0.0
+    u.interpolate(lambda x: _smooth_field(x, 6e-3))
+    elastic = ntf.J2Plasticity(u, E, NU, ntf.IsotropicHardening.linear(1e300, 0.0))
+    law.evaluate_elastic()
+    assert not law.yielding.any()
+    np.testing.assert_array_equal(law.equivalent_plastic_strain, committed)
+    tangent = law.tangent.x.array.copy()
+    law.evaluate()
+    assert law.yielding.any() and not np.allclose(law.tangent.x.array, tangent)
+    if not finite:  # the small-strain trial: C (eps - eps_p), the elastic tangent
+        law.evaluate_elastic()
+        strain = law.strain()
+        expected = (strain - law.plastic_strain) @ elastic.tangent.x.array.reshape(-1, 6, 6)[0]
+        np.testing.assert_allclose(
+            law.stress.x.array.reshape(-1, 6), expected, rtol=1e-10, atol=1e-6 * E * 1e-3
+        )
+        np.testing.assert_allclose(
+            law.tangent.x.array.reshape(-1, 36), elastic.tangent.x.array.reshape(-1, 36)
+        )
+
+
+def _gauss_rule() -> tuple[np.ndarray, np.ndarray]:
+    """The 2x2x2 Gauss rule on ``[0, 1]^3`` (dolfinx's default of degree 2 on hexahedra)."""
+    g = 0.5 + np.array([-1.0, 1.0]) / (2.0 * np.sqrt(3.0))
+    points = np.array([[x, y, z] for x in g for y in g for z in g])
+    return points, np.full(8, 1.0 / 8.0)
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
+def test_custom_rule_reproduces_the_default_one(finite: bool) -> None:
+    """A law with ``quadrature_rule`` (values in a DG1 carrier, docs/method.md §30.5) given the
+    2x2x2 Gauss points explicitly assembles the default law's residual and Jacobian."""
+    from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
+
+    mesh = _mesh()
+    V = compat.vector_space(mesh)
+    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    law = FiniteStrainJ2Plasticity if finite else ntf.J2Plasticity
+    default = law(u, E, NU, TABLE)
+    custom = law(u, E, NU, TABLE, quadrature_rule=_gauss_rule())
+    u.interpolate(lambda x: _smooth_field(x, 2e-3))
+    for material in (default, custom):
+        material.increment_converged()
+    u.interpolate(lambda x: _smooth_field(x, 3e-3) + 1e-4 * np.sin(3 * x))
+    for material in (default, custom):
+        material.evaluate()
+    assert default.yielding.any()
+    np.testing.assert_array_equal(np.sort(default.yielding), np.sort(custom.yielding))
+    expected, got = _vector(default.residual(v)), _vector(custom.residual(v))
+    assert np.abs(got - expected).max() <= 1e-10 * np.abs(expected).max()
+    matrices = []
+    for material in (default, custom):
+        A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(material.jacobian(du, v)))
+        A.assemble()
+        matrices.append(A)
+    matrices[1].axpy(-1.0, matrices[0])
+    assert matrices[1].norm() <= 1e-10 * matrices[0].norm()
+    for A in matrices:
+        A.destroy()
+
+
+def test_custom_rule_refused_with_a_clear_error() -> None:
+    mesh = _mesh()
+    u = dolfinx.fem.Function(compat.vector_space(mesh))
+    with pytest.raises(ValueError, match=r"quadrature_rule must be \(points \(q, 3\)"):
+        ntf.J2Plasticity(u, E, NU, TABLE, quadrature_rule=(np.zeros((2, 2)), np.ones(2)))
+    tets = dolfinx.mesh.create_unit_cube(MPI.COMM_WORLD, 1, 1, 1)
+    w = dolfinx.fem.Function(compat.vector_space(tets))
+    with pytest.raises(ValueError, match="linear quadrilaterals or hexahedra"):
+        ntf.J2Plasticity(w, E, NU, TABLE, quadrature_rule=(np.full((1, 3), 0.25), np.ones(1)))
+
+
+@pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
+def test_custom_rule_jacobian_against_finite_differences(finite: bool) -> None:
+    """With ccx's two-point C3D6 rule (``kernels/collapsed_wedge.py``) as the custom rule, the
+    assembled Jacobian times a direction is the central difference of the assembled residual."""
+    from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
+    from dolfinx_ntf.kernels.collapsed_wedge import wedge_rule
+
+    mesh = _mesh()
+    V = compat.vector_space(mesh)
+    u, v, du = dolfinx.fem.Function(V), ufl.TestFunction(V), ufl.TrialFunction(V)
+    law = FiniteStrainJ2Plasticity if finite else ntf.J2Plasticity
+    material = law(u, E, NU, TABLE, quadrature_rule=wedge_rule(1))
+    u.interpolate(lambda x: _smooth_field(x, 2e-3))
+    material.increment_converged()
+    u.interpolate(lambda x: _smooth_field(x, 3e-3) + 1e-4 * np.sin(3 * x))
+    material.evaluate()
+    assert material.yielding.any()
+    A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(material.jacobian(du, v)))
+    A.assemble()
+    direction = dolfinx.fem.Function(V)
+    direction.x.array[:] = np.random.default_rng(5).normal(size=direction.x.array.size) * 1e-3
+    product = A.createVecLeft()
+    A.mult(compat.petsc_vector(direction), product)
+    start, h, values = u.x.array.copy(), 1e-6, []
+    for sign in (1.0, -1.0):
+        u.x.array[:] = start + sign * h * direction.x.array
+        material.evaluate()
+        values.append(_vector(material.residual(v)))
+    fd = (values[0] - values[1]) / (2 * h)
+    assert np.abs(fd - product.array).max() < 1e-6 * np.abs(product.array).max()
+    A.destroy()
+    product.destroy()

@@ -46,7 +46,8 @@ def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     """The local unit directions ``(n, 3, 3)`` (rows: local 1, 2, 3) at nodes ``coords (n, 3)``.
 
     A node on a cylinder's axis has no radial direction: local 3 is the axis there too, local 1
-    the global axis least along it made normal to it (docs/method.md §30.4).
+    the global axis that follows the one most along it (x -> y -> z -> x), made normal to it
+    (docs/method.md §30.4, §33.3).
 
     Raises:
         ValueError: degenerate points.
@@ -72,8 +73,9 @@ def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     on_axis = length == 0
     radial[~on_axis] /= length[~on_axis, None]
     # on the axis: local 3 stays the axis (ccx 2.20 moves metalforming's axis nodes along it,
-    # measured, docs/method.md §30.4); local 1 the global axis least along it, made normal to it
-    e = np.eye(3)[int(np.argmin(np.abs(axis)))]
+    # measured, docs/method.md §30.4); local 1 the global axis after the one most along it
+    # (cyclically: z for y, x for z; measured, §33.3), made normal to it
+    e = np.eye(3)[(int(np.argmax(np.abs(axis))) + 1) % 3]
     e = e - (e @ axis) * axis
     radial[on_axis] = e / np.linalg.norm(e)
     tangential = np.cross(axis, radial)

@@ -58,6 +58,7 @@ from .springs import check_springs, deck_springs
 from .surfaces import deck_surfaces
 from .thermal import ThermalModel, is_thermal, thermal_model
 from .ties import tie_constraints
+from .wedge_rules import wedge_rules
 
 __all__ = ["CalculixModel", "build_model"]
 
@@ -148,7 +149,7 @@ class CalculixModel:
     mu: dolfinx.fem.Function
     lmbda: dolfinx.fem.Function
     nlgeom: dolfinx.fem.Constant | None
-    dx: ufl.Measure
+    dx: ufl.Measure | CellMeasures
     first_piola: ufl.core.expr.Expr
     cauchy: ufl.core.expr.Expr
     residual: ufl.Form
@@ -528,6 +529,15 @@ def build_model(
         mass_dx = _mixed_measure(mesh, cells, linear_cells, None)
         if etype.name == "C3D20":  # C3D8's 2x2x2 beside C3D20's 3x3x3 Gauss points
             dx = _mixed_measure(mesh, cells, linear_cells, 5)
+    rules = None
+    if deck.wedges.size and mixed is None:  # every process read the deck
+        rules = wedge_rules(mesh, comm)  # ccx's C3D6 rule on the wedges (docs/method.md §30.5)
+        if rules.classes:
+            wedge_tags = rules.tags(mesh)
+            _, dx = rules.measures(mesh, wedge_tags, etype.quadrature_degree)
+            mass_dx = dx
+        else:
+            rules = None
     thermal = None
     if collectives.collectively(comm, is_thermal, deck):
         if etype.tdim == 2:
@@ -573,9 +583,23 @@ def build_model(
     laws: list[J2Plasticity | FiniteStrainJ2Plasticity] = []
     if etype.tdim == 3:  # *PLASTIC sections: their own law, the elastic form elsewhere (§21.6)
         laws, tags = plastic_laws(
-            deck, block, u, element_cell, etype.quadrature_degree, finite=True in kinds
+            deck,
+            block,
+            u,
+            element_cell,
+            etype.quadrature_degree,
+            finite=True in kinds,
+            elastic_values=None if rules is None else rules.values,
+            wedge_classes=None if rules is None else rules.classes_of_cells,
+            rule_classes=() if rules is None else rules.classes,
         )
-    if laws:
+    if laws and rules is not None:  # the elastic wedges' rule beside the laws' cells
+        dx_elastic, dx = rules.measures(
+            mesh, tags, etype.quadrature_degree, [law.dx for law in laws]
+        )
+        mass_dx = dx
+        internal_force = ufl.inner(P, ufl.grad(v)) * dx_elastic
+    elif laws:
         dx_elastic = ufl.Measure(
             "dx",
             domain=mesh,
@@ -583,6 +607,8 @@ def build_model(
             metadata={"quadrature_degree": etype.quadrature_degree},
         )(0)
         internal_force = ufl.inner(P, ufl.grad(v)) * dx_elastic
+    elif rules is not None:
+        internal_force = ufl.inner(P, ufl.grad(v)) * dx
     residual = internal_force
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     if pressures:

@@ -101,17 +101,27 @@ class CellMeasures:
     """
 
     def __init__(
-        self, mesh: dolfinx.mesh.Mesh, tags: compat.MeshTags, degrees: dict[int, int | None]
+        self,
+        mesh: dolfinx.mesh.Mesh,
+        tags: compat.MeshTags,
+        degrees: dict[int, int | dict | None],
     ) -> None:
-        """Measures ``dx(tag)`` of quadrature degree ``degrees[tag]`` (None: UFL's estimate)."""
+        """Measures ``dx(tag)`` of quadrature degree ``degrees[tag]`` (None: UFL's estimate).
+
+        A dict instead of a degree is the integral's metadata itself (e.g. a custom rule).
+        """
         self.measures = [
             ufl.Measure(
                 "dx",
                 domain=mesh,
                 subdomain_data=tags,
-                metadata={} if degree is None else {"quadrature_degree": degree},
+                metadata=rule
+                if isinstance(rule, dict)
+                else {}
+                if rule is None
+                else {"quadrature_degree": rule},
             )(tag)
-            for tag, degree in degrees.items()
+            for tag, rule in degrees.items()
         ]
 
     def __rmul__(self, integrand: ufl.core.expr.Expr) -> ufl.Form:

@@ -11,6 +11,8 @@ C3D8, coupled, dynamic and frequency steps.
 
 from __future__ import annotations
 
+import typing
+
 import numpy as np
 
 import dolfinx.fem
@@ -19,12 +21,16 @@ import dolfinx.mesh
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
 from dolfinx_ntf.fem.plasticity import J2Plasticity
+from dolfinx_ntf.kernels.collapsed_wedge import wedge_rule
 from dolfinx_ntf.kernels.plasticity import IsotropicHardening
 
 from ..deck import Deck, ElementBlock
 from ..elements import ElementType
 
 __all__ = ["check_plastic_deck", "has_plasticity", "plastic_laws"]
+
+#: Tags of the plastic wedges: ``PLASTIC_WEDGE_TAG + 16 law + class`` (above ``WEDGE_TAG``'s).
+PLASTIC_WEDGE_TAG = 2000
 
 #: Element types whose plastic sections are reproduced (measured against ccx 2.20).
 PLASTIC_ELEMENT_TYPES = ("C3D8",)
@@ -81,6 +87,9 @@ def plastic_laws(
     element_cell: np.ndarray,
     quadrature_degree: int,
     finite: bool = False,
+    elastic_values: np.ndarray | None = None,
+    wedge_classes: np.ndarray | None = None,
+    rule_classes: typing.Sequence[int] = (),
 ) -> tuple[list[J2Plasticity | FiniteStrainJ2Plasticity], compat.MeshTags]:
     """One J2 law per plastic section, and the cell tags of the materials.
 
@@ -94,6 +103,15 @@ def plastic_laws(
         element_cell: Local cell of each element of ``block`` (-1 elsewhere).
         quadrature_degree: ccx's volume rule of the element type.
         finite: Simo's finite-strain laws (the deck's steps are NLGEOM), else small-strain ones.
+        elastic_values: Tag of each local cell outside the plastic sections (default 0), e.g.
+            the wedges' integration rules (``wedge_rules.py``); values below ``1 + laws`` are
+            not allowed there.
+        wedge_classes: The collapse class of each local cell (-1: no wedge): the wedges of a
+            plastic
+            section get a law of their own per class, with ccx's two-point C3D6 rule
+            (``quadrature_rule``, tag ``PLASTIC_WEDGE_TAG + 16 law + class``; docs/method.md
+            §30.5), after the sections' laws.
+        rule_classes: The collapse classes present on any process (the same on all).
 
     Returns:
         The laws (plastic sections in deck order) and the cell tags.
@@ -109,17 +127,26 @@ def plastic_laws(
         cells = element_cell[order[np.searchsorted(block.ids, members, sorter=order)]]
         section_of[cells[cells >= 0]] = k
     values = np.zeros(section_of.size, dtype=np.int32)
+    if elastic_values is not None:
+        values[:] = elastic_values
     plastic = [k for k, s in enumerate(deck.sections) if deck.materials[s.material].plastic]
     for tag, k in enumerate(plastic, 1):
         values[section_of == k] = tag
+    wedge_laws = []  # (tag, section, class)
+    if wedge_classes is not None:
+        for tag, k in enumerate(plastic, 1):
+            for c in rule_classes:
+                wedge_tag = PLASTIC_WEDGE_TAG + 16 * tag + c
+                values[(section_of == k) & (wedge_classes == c)] = wedge_tag
+                wedge_laws.append((wedge_tag, k, c))
     tags = dolfinx.mesh.meshtags(mesh, tdim, np.arange(values.size, dtype=np.int32), values)
+    law = FiniteStrainJ2Plasticity if finite else J2Plasticity
     laws = []
-    for tag, k in enumerate(plastic, 1):
+    for tag, k, c in [(tag, k, None) for tag, k in enumerate(plastic, 1)] + wedge_laws:
         material = deck.materials[deck.sections[k].material]
         stress, strain = zip(*material.plastic)
         young, nu = material.elastic
         hardening = IsotropicHardening(yield_stress=stress, plastic_strain=strain)
-        law = FiniteStrainJ2Plasticity if finite else J2Plasticity
         laws.append(
             law(
                 u,
@@ -129,6 +156,7 @@ def plastic_laws(
                 quadrature_degree=quadrature_degree,
                 cell_tags=tags,
                 tag=tag,
+                quadrature_rule=None if c is None else wedge_rule(c),
             )
         )
     return laws, tags

@@ -1,0 +1,51 @@
+"""Wedges meshed as collapsed hexahedra, integrated with ccx's two-point C3D6 rule.
+
+docs/method.md §30.5. :func:`wedge_cells` finds the local cells of a hexahedral mesh that repeat
+a node along one face (the wedges) and their collapse class; :func:`wedge_metadata` is the
+integral metadata of a class (FFCx's custom rule, the points and weights of
+:func:`~dolfinx_ntf.kernels.collapsed_wedge.wedge_rule`), for ``dx(tag, metadata=...)`` over
+the cells of that class.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dolfinx.mesh
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.kernels.collapsed_wedge import collapse_classes, wedge_rule
+
+__all__ = ["wedge_cells", "wedge_metadata"]
+
+
+def wedge_cells(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
+    """The collapse class of every local cell (owned and ghost), -1 for a cell that is no wedge.
+
+    Read from the geometry: a wedge's cell lists a node twice along two parallel edges of one
+    face. Meshes of other cells than linear hexahedra have no wedges (all -1).
+
+    Args:
+        mesh: The mesh.
+    """
+    nodes = compat.geometry_dofs(mesh)
+    if mesh.topology.dim != 3 or nodes.shape[1] != 8:  # 8 nodes in 3D: linear hexahedra
+        return np.full(nodes.shape[0], -1, dtype=np.int64)
+    return collapse_classes(nodes)
+
+
+def wedge_metadata(rule_class: int) -> dict:
+    """Integral metadata of ccx's C3D6 rule on the cells of one collapse class.
+
+    Points and weights as tuples (UFL compares metadata; FFCx reads any sequence).
+
+    Args:
+        rule_class: The collapse class (:func:`wedge_cells`), ``0..11``.
+    """
+    points, weights = wedge_rule(rule_class)
+    return {
+        "quadrature_rule": "custom",
+        "quadrature_degree": 2,
+        "quadrature_points": tuple(map(tuple, points.tolist())),
+        "quadrature_weights": tuple(weights.tolist()),
+    }
