@@ -406,7 +406,7 @@ def test_agrees_with_ccx(tmp_path) -> None:
     run_ccx(tmp_path, "path", timeout=120)
     blocks = read_ccx_dat(tmp_path, "path")
     stresses = [b for b in blocks if b.name == "S"]
-    peeq = [b for b in blocks if b.name == "equivalent plastic strain"]
+    peeq = [b for b in blocks if b.name == "PEEQ"]
     assert len(stresses) == len(peeq) == 10 * len(_PATH)
 
     points, hexes = box_grid((0, 0, 0), (1, 1, 1), (1, 1, 1))
