@@ -3,7 +3,7 @@
 docs/method.md §30.5. :func:`wedge_cells` finds the local cells of a hexahedral mesh that repeat
 a node along one face (the wedges) and their collapse class; :func:`wedge_metadata` is the
 integral metadata of a class (FFCx's custom rule, the points and weights of
-:func:`~dolfinx_ntf.kernels.collapsed_wedge.wedge_rule`), for ``dx(tag, metadata=...)`` over
+:func:`~dolfinx_ntf.kernels.wedge_rule.wedge_rule`), for ``dx(tag, metadata=...)`` over
 the cells of that class.
 """
 
@@ -14,7 +14,7 @@ import numpy as np
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.kernels.collapsed_wedge import collapse_classes, wedge_rule
+from dolfinx_ntf.kernels.wedge_rule import collapse_classes, wedge_rule
 
 __all__ = ["wedge_cells", "wedge_metadata"]
 

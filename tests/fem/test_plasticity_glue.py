@@ -529,10 +529,10 @@ def test_custom_rule_refused_with_a_clear_error() -> None:
 
 @pytest.mark.parametrize("finite", [False, True], ids=["small", "finite"])
 def test_custom_rule_jacobian_against_finite_differences(finite: bool) -> None:
-    """With ccx's two-point C3D6 rule (``kernels/collapsed_wedge.py``) as the custom rule, the
+    """With ccx's two-point C3D6 rule (``kernels/wedge_rule.py``) as the custom rule, the
     assembled Jacobian times a direction is the central difference of the assembled residual."""
     from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
-    from dolfinx_ntf.kernels.collapsed_wedge import wedge_rule
+    from dolfinx_ntf.kernels.wedge_rule import wedge_rule
 
     mesh = _mesh()
     V = compat.vector_space(mesh)

@@ -1,11 +1,11 @@
-"""ccx's two-point C3D6 rule on collapsed hexahedra (kernels/collapsed_wedge.py, §30.5)."""
+"""ccx's two-point C3D6 rule on collapsed hexahedra (kernels/wedge_rule.py, §30.5)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from dolfinx_ntf.kernels.collapsed_wedge import NUM_CLASSES, collapse_classes, wedge_rule
+from dolfinx_ntf.kernels.wedge_rule import NUM_CLASSES, collapse_classes, wedge_rule
 
 VERTICES = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float)
 
