@@ -212,7 +212,7 @@ API_MODULES: list[tuple[str, str]] = [
     ("Per-cell 2D formulations (quasi-axisymmetric models)", "dolfinx_ntf.fem.plane_sections"),
     ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
     ("Wedges as collapsed hexahedra: the numpy kernel", "dolfinx_ntf.kernels.collapsed_wedges"),
-    ("ccx's two-point wedge rule on collapsed hexahedra: the numpy kernel", "dolfinx_ntf.kernels.wedge_rule"),
+    ("ccx's two-point wedge rule: the numpy kernel", "dolfinx_ntf.kernels.wedge_rule"),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
     ("Newton corrections with an earlier factorization", "dolfinx_ntf.solvers.factor_reuse"),
     ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
