@@ -21,8 +21,8 @@ import dolfinx.mesh
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
 from dolfinx_ntf.fem.plasticity import J2Plasticity
-from dolfinx_ntf.kernels.wedge_rule import wedge_rule
 from dolfinx_ntf.kernels.plasticity import IsotropicHardening
+from dolfinx_ntf.kernels.wedge_rule import wedge_rule
 
 from ..deck import Deck, ElementBlock
 from ..elements import ElementType
