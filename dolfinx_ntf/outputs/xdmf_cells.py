@@ -65,8 +65,8 @@ def _collapse_patterns() -> list[tuple[tuple[int, int], tuple[int, int], list[in
     return patterns
 
 
-#: The twelve collapses: ``((a, b), (c, d), wedge)``, the repeated edges and the wedge's six
-#: vertices of the hexahedron (a triangle, then the partners of its vertices across).
+#: The twelve collapses, each as ``((a, b), (c, d), wedge)``: the repeated edges and the wedge's
+#: six vertices of the hexahedron (a triangle, then the partners of its vertices across).
 COLLAPSE_PATTERNS = _collapse_patterns()
 
 
