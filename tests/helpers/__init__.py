@@ -1,5 +1,6 @@
 """Builders shared by the tests (``pythonpath`` of pyproject.toml puts ``tests`` on the path).
 
+- ``bars``: a clamped-free bar held to axial motion (the modal tests).
 - ``blocks``: two blocks stacked along z without gmsh, the punch and drag problems on them.
 - ``serial_answer``: partitions, and runs on several processes compared with the serial run.
 - ``decks``: decks with every output request, run serially and on all processes.
@@ -8,6 +9,7 @@
 The names most tests use are imported here: ``from helpers import punch_problem``.
 """
 
+from .bars import axial_bar
 from .blocks import (
     BLOCK_CONTACT,
     BLOCK_TOP,
@@ -51,6 +53,7 @@ __all__ = [
     "UPPER_BOTTOM",
     "UPPER_TOP",
     "YOUNGS_MODULUS",
+    "axial_bar",
     "box_grid",
     "displacement_fields",
     "drag_conditions",

@@ -4,6 +4,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers import axial_bar, rigid_block
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -11,26 +12,9 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
+from dolfinx_ntf.fem.elasticity import small_strain_stress
 
 LENGTH, E, RHO, AREA = 1.0, 1000.0, 2.0, 0.01
-
-
-def _axial_bar():
-    """A clamped-free bar (Q2, nu = 0, 16 cells) held to axial motion: a 1D wave guide."""
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD,
-        [[0, 0, 0], [LENGTH, 0.1, 0.1]],
-        [16, 1, 1],
-        dolfinx.mesh.CellType.hexahedron,
-    )
-    V = compat.vector_space(mesh, "Lagrange", 2)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx
-    every = dolfinx.mesh.locate_entities(mesh, 2, lambda x: np.full(x.shape[1], True))
-    clamped = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
-    bcs = [component_bc(V, 0, clamped), component_bc(V, 1, every), component_bc(V, 2, every)]
-    return ntf.ContactProblem(F, u, [], bcs)
 
 
 def _tip_force(V, total: float) -> dolfinx.fem.Function:
@@ -54,7 +38,7 @@ def test_step_load_on_a_bar_matches_the_modal_series(zeta1):
     ``u(L, t) = sum_n (2 P / (rho A L omega_n^2)) [1 - e^(-zeta_n omega_n t) (cos omega_dn t +
     zeta_n omega_n / omega_dn sin omega_dn t)]`` with the exact ``omega_n = (2n - 1) pi c / 2L``.
     """
-    problem = _axial_bar()
+    problem, _ = axial_bar(LENGTH, E)
     V = problem.u.function_space
     v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
     modes = ntf.contact_modes(problem, RHO * ufl.inner(w, v) * ufl.dx, 3)
@@ -105,7 +89,7 @@ def test_step_load_on_a_bar_matches_the_modal_series(zeta1):
 
 
 def test_bad_input_is_refused():
-    problem = _axial_bar()
+    problem, _ = axial_bar(LENGTH, E)
     V = problem.u.function_space
     v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
     modes = ntf.contact_modes(problem, RHO * ufl.inner(w, v) * ufl.dx, 2)
@@ -123,26 +107,9 @@ def test_bad_input_is_refused():
 
 def _block_on_springs(height: float, E: float, K: float, **options):
     """A block [0,1]^2 x [0,H] (2 cells high) on rollers, on LINEAR springs onto the plane z = 0."""
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD, [[0, 0, 0], [1, 1, height]], [1, 1, 2], dolfinx.mesh.CellType.hexahedron
-    )
-    V = compat.vector_space(mesh, "Lagrange", 1)
-
-    def facets(where):
-        return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
-
-    bottom, top = (
-        facets(lambda x: np.isclose(x[2], 0.0)),
-        facets(lambda x: np.isclose(x[2], height)),
-    )
-    entities = np.concatenate([bottom, top])
-    values = np.concatenate([np.full(bottom.size, 1), np.full(top.size, 2)]).astype(np.int32)
-    order = np.argsort(entities)
-    tags = dolfinx.mesh.meshtags(mesh, 2, entities[order], values[order])
-    bcs = [
-        component_bc(V, 0, facets(lambda x: np.isclose(x[0], 0.0))),
-        component_bc(V, 1, facets(lambda x: np.isclose(x[1], 0.0))),
-    ]
+    V, tags, bcs = rigid_block("hexahedron", height, (1, 1, 2))
+    mesh = V.mesh
+    bcs = bcs[:2]  # the rollers: the top is loaded, not held
     u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
     pressure = dolfinx.fem.Constant(mesh, 0.0)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 import scipy.optimize
-from helpers import drag_problem
+from helpers import axial_bar, drag_problem
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -22,45 +22,11 @@ def _facets(mesh, where):
     return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
 
 
-def _axial_bar(length: float, E: float, *, tie_end: bool = False):
-    """A clamped-free bar (Q2, nu = 0) held to axial motion; optionally its free end's u_x tied.
-
-    The ties (u_x of every end node equal to the corner's, the end cell's nodes: one process)
-    change no axial mode: they exercise the elimination of constraints.
-    """
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD,
-        [[0, 0, 0], [length, 0.1, 0.1]],
-        [16, 1, 1],
-        dolfinx.mesh.CellType.hexahedron,
-    )
-    V = compat.vector_space(mesh, "Lagrange", 2)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx
-    every = dolfinx.mesh.locate_entities(mesh, 2, lambda x: np.full(x.shape[1], True))
-    bcs = [
-        component_bc(V, 0, _facets(mesh, lambda x: np.isclose(x[0], 0.0))),
-        component_bc(V, 1, every),
-        component_bc(V, 2, every),
-    ]
-    constraints = []
-    if tie_end:
-        x = V.tabulate_dof_coordinates()
-        end = np.flatnonzero(np.isclose(x[:, 0], length))
-        corner = end[np.isclose(x[end, 1], 0.0) & np.isclose(x[end, 2], 0.0)][:1]
-        constraints = [  # none on a process without the end cell
-            ntf.LinearConstraint([node, corner[0]], [0, 0], [1.0, -1.0], name=f"tie {node}")
-            for node in end
-            if node != corner[0]
-        ]
-    return ntf.ContactProblem(F, u, [], bcs, constraints=constraints), end if tie_end else None
-
-
 @pytest.mark.mpi
 def test_axial_bar_frequencies_and_participation_match_the_closed_form():
     """A clamped-free bar held to axial motion (nu = 0): omega_n = (2n - 1) pi c / (2 L)."""
     length, E, rho, area = 1.0, 1000.0, 2.0, 0.01
-    problem, _ = _axial_bar(length, E)
+    problem, _ = axial_bar(length, E)
     bcs = problem.bcs
     V = problem.u.function_space
     v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
@@ -88,8 +54,8 @@ def test_axial_bar_frequencies_and_participation_match_the_closed_form():
 @pytest.mark.mpi
 def test_constraints_are_eliminated_from_both_matrices_and_expanded_in_the_modes():
     length, E, rho = 1.0, 1000.0, 2.0
-    plain, _ = _axial_bar(length, E)
-    tied, end = _axial_bar(length, E, tie_end=True)
+    plain, _ = axial_bar(length, E)
+    tied, end = axial_bar(length, E, tie_end=True)
     assert MPI.COMM_WORLD.allreduce(len(tied.constraints)) == 8  # 9 end nodes, one corner
 
     def mass(problem):
