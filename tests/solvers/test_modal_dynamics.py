@@ -4,7 +4,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from helpers import axial_bar, rigid_block
+from helpers import axial_bar, block_on_springs
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -12,7 +12,6 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import small_strain_stress
 
 LENGTH, E, RHO, AREA = 1.0, 1000.0, 2.0, 0.01
 
@@ -105,22 +104,6 @@ def test_bad_input_is_refused():
     modes.destroy()
 
 
-def _block_on_springs(height: float, E: float, K: float, **options):
-    """A block [0,1]^2 x [0,H] (2 cells high) on rollers, on LINEAR springs onto the plane z = 0."""
-    V, tags, bcs = rigid_block("hexahedron", height, (1, 1, 2))
-    mesh = V.mesh
-    bcs = bcs[:2]  # the rollers: the top is loaded, not held
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)
-    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx + pressure * v[2] * ds(2)
-    law = ntf.LinearLaw(slope=K, tension=1e-6 * K)
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(tags, 1), ntf.RigidPlane((0, 0, 0), (0, 0, 1)), ntf.SurfaceInteraction(law)
-    )
-    return ntf.ContactProblem(F, u, [pair], bcs, **options), pressure
-
-
 @pytest.mark.mpi
 def test_contact_forces_as_modal_loads_match_the_modes_with_springs():
     """A preloaded block on LINEAR springs, struck from above: two complete modal bases.
@@ -131,7 +114,7 @@ def test_contact_forces_as_modal_loads_match_the_modes_with_springs():
     within an increment, a second-order error (measured 7.3e-5, 1.9e-5, 5.0e-6 of the largest
     displacement with 50, 100, 200 increments per period of the bounce).
     """
-    problem, pressure = _block_on_springs(0.2, 1e5, 1e3)
+    problem, pressure, _ = block_on_springs(0.2, 1e5, 1e3)
     solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
     ntf.StaticStep(lambda t: setattr(pressure, "value", 5.0 * t)).run(solver, problem.u)
     V = problem.u.function_space
@@ -186,7 +169,7 @@ def test_modal_contact_tangent_matches_finite_differences():
     Each evaluation re-pairs, so the spring areas follow the displacement: the tangent is exact
     with ``linearize_area=True`` (without it the area terms are missing, docs/method.md §6.3).
     """
-    problem, pressure = _block_on_springs(0.2, 1e5, 1e3, linearize_area=True)
+    problem, pressure, _ = block_on_springs(0.2, 1e5, 1e3, linearize_area=True)
     solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
     ntf.StaticStep(lambda t: setattr(pressure, "value", 5.0 * t)).run(solver, problem.u)
     V = problem.u.function_space
