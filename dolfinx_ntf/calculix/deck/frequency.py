@@ -20,8 +20,7 @@ class FrequencyCards(ReaderState):
     def _k_FREQUENCY(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"STORAGE", "SOLVER"})
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
+        self._first_procedure(step, card)
         if step.nlgeom:
             raise DeckError(
                 "*FREQUENCY with NLGEOM (in this step or an earlier one) is not supported yet "
@@ -57,8 +56,7 @@ class FrequencyCards(ReaderState):
         """Increments (initial, period, minimum, maximum); DIRECT=NO with DELTMX or fixed."""
         step = self._in_step(card)
         self._check_params(card, allowed={"DIRECT", "DELTMX", "SOLVER", "STEADYSTATE"})
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
+        self._first_procedure(step, card)
         if "STEADYSTATE" in card.params:
             raise DeckError(
                 "*MODAL DYNAMIC, STEADY STATE is not supported yet (a fixed period only)",

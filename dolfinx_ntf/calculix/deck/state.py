@@ -256,6 +256,11 @@ class ReaderState:
             raise DeckError(f"{card.name} is a step keyword: it must follow *STEP", card.location)
         return self.step
 
+    def _first_procedure(self, step: StepBuilder, card: Card) -> None:
+        """Refuse a procedure card (``*STATIC``, ``*DYNAMIC``, ...) in a step that has one."""
+        if step.static is not None or step.frequency is not None:
+            raise DeckError("a step can have only one procedure card", card.location)
+
     def _ignore(self, card: Card, reason: str) -> None:
         """Skip a keyword, keeping the FREQUENCY it sets for every output (ccx rule)."""
         if "FREQUENCY" in card.params and card.keyword in SETS_FREQUENCY:

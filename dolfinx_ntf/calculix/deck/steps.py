@@ -37,8 +37,7 @@ class StepCards(ReaderState):
         step = self._in_step(card)
         self._check_params(card, allowed={"DIRECT", "SOLVER", "TIMERESET", "TOTALTIMEATSTART",
                                           "EXPLICIT"})  # fmt: skip
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
+        self._first_procedure(step, card)
         values: tuple[float | None, ...] = ()
         if card.lines:
             fields, _, loc = card.lines[0]
@@ -73,13 +72,8 @@ class StepCards(ReaderState):
             raise DeckError(
                 "*DYNAMIC, EXPLICIT is not supported yet (implicit only)", card.location
             )
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
-        alpha = -0.05
-        if "ALPHA" in card.params:
-            alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
-            if not -1.0 / 3.0 <= alpha <= 0.0:
-                raise DeckError(f"*DYNAMIC ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        self._first_procedure(step, card)
+        alpha = self._alpha(card, "*DYNAMIC ")
         self._need_data(card)
         fields, _, loc = card.lines[0]
         if len(card.lines) > 1 or len(fields) > 5:
@@ -101,6 +95,18 @@ class StepCards(ReaderState):
         )
         step.dynamic = Dynamic(alpha=alpha)
 
+    def _alpha(self, card: Card, prefix: str = "") -> float:
+        """The alpha method's ``ALPHA`` (ccx's default -0.05), in [-1/3, 0].
+
+        ``prefix`` starts the error message (``"*DYNAMIC "``).
+        """
+        if "ALPHA" not in card.params:
+            return -0.05
+        alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
+        if not -1.0 / 3.0 <= alpha <= 0.0:
+            raise DeckError(f"{prefix}ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        return alpha
+
     def _k_COUPLEDTEMPERATURE_DISPLACEMENT(self, card: Card) -> None:
         """Initial increment, period, minimum, maximum, DELTMX; ``STEADY STATE`` or transient."""
         self._check_params(card, allowed={"STEADYSTATE", "SOLVER", "DIRECT", "ALPHA"})
@@ -114,13 +120,8 @@ class StepCards(ReaderState):
     def _thermal_procedure(self, card: Card, name: str, *, heat: bool) -> None:
         """The data line and parameters shared by the two thermal procedures."""
         step = self._in_step(card)
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
-        alpha = -0.05
-        if "ALPHA" in card.params:
-            alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
-            if not -1.0 / 3.0 <= alpha <= 0.0:
-                raise DeckError(f"ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        self._first_procedure(step, card)
+        alpha = self._alpha(card)
         values: tuple[float | None, ...] = ()
         if card.lines:
             fields, _, loc = card.lines[0]
