@@ -1,5 +1,6 @@
 """Builders shared by the tests (``pythonpath`` of pyproject.toml puts ``tests`` on the path).
 
+- ``bar_decks``: the mesh of the two-bar thermal contact decks.
 - ``bars``: a clamped-free bar held to axial motion (the modal tests).
 - ``blocks``: two blocks stacked along z without gmsh, the punch and drag problems on them.
 - ``serial_answer``: partitions, and runs on several processes compared with the serial run.
