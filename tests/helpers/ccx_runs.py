@@ -19,7 +19,7 @@ import pytest
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import DatBlock
-from dolfinx_ntf.calculix.job import run_job
+from dolfinx_ntf.calculix.job import JobResult, run_job
 
 
 def run_ccx_and_ours(
@@ -52,15 +52,21 @@ def run_ccx_and_ours(
 
 
 @contextlib.contextmanager
-def quiet_logs() -> Iterator[None]:
-    """dolfinx_ntf's logger at WARNING for the block (no progress lines in the test log)."""
+def quiet_logs(level: int = logging.WARNING) -> Iterator[None]:
+    """dolfinx_ntf's logger at ``level`` for the block (no progress lines in the test log)."""
     logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
+    previous = logger.level
+    logger.setLevel(level)
     try:
         yield
     finally:
-        logger.setLevel(level)
+        logger.setLevel(previous)
+
+
+def run_quietly(name: str, directory: Path, **options) -> JobResult:
+    """``run_job`` on one process without progress, its log at ERROR (``options`` go to it)."""
+    with quiet_logs(logging.ERROR):
+        return run_job(name, directory, comm=MPI.COMM_SELF, progress=False, **options)
 
 
 def largest_differences(ccx: list[DatBlock], ntf: list[DatBlock]) -> dict[str, float]:
