@@ -6,6 +6,7 @@
 - ``serial_answer``: partitions, and runs on several processes compared with the serial run.
 - ``decks``: decks with every output request, run serially and on all processes.
 - ``spring_faces``: random master faces and slave nodes of the spring-kernel tests.
+- ``spring_differences``: central differences of spring forces by the nodal coordinates.
 
 The names most tests use are imported here: ``from helpers import punch_problem``.
 """
