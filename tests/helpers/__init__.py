@@ -5,6 +5,7 @@
 - ``blocks``: two blocks stacked along z without gmsh, the punch and drag problems on them.
 - ``serial_answer``: partitions, and runs on several processes compared with the serial run.
 - ``decks``: decks with every output request, run serially and on all processes.
+- ``demos``: the demos imported by path (``load_demo``).
 - ``spring_faces``: random master faces and slave nodes of the spring-kernel tests.
 - ``spring_differences``: central differences of spring forces by the nodal coordinates.
 
