@@ -38,15 +38,9 @@ class StepCards(ReaderState):
         self._check_params(card, allowed={"DIRECT", "SOLVER", "TIMERESET", "TOTALTIMEATSTART",
                                           "EXPLICIT"})  # fmt: skip
         self._first_procedure(step, card)
-        values: tuple[float | None, ...] = ()
-        if card.lines:
-            fields, _, loc = card.lines[0]
-            if len(card.lines) > 1 or len(fields) > 5:
-                raise DeckError(
-                    "*STATIC data line: initial increment, period, minimum, maximum", loc
-                )
-            values = self._floats_line(fields[:4], "*STATIC", loc)
-        values = values + (None,) * (4 - len(values))
+        values = self._procedure_line(
+            card, "*STATIC", "initial increment, period, minimum, maximum", 4, 5
+        )
         for name, value in zip(("initial increment", "period", "minimum", "maximum"), values):
             if value is not None and value <= 0.0 and name != "minimum":
                 raise DeckError(f"*STATIC {name} must be > 0, got {value}", card.location)
@@ -75,14 +69,9 @@ class StepCards(ReaderState):
         self._first_procedure(step, card)
         alpha = self._alpha(card, "*DYNAMIC ")
         self._need_data(card)
-        fields, _, loc = card.lines[0]
-        if len(card.lines) > 1 or len(fields) > 5:
-            raise DeckError(
-                "*DYNAMIC data line: initial increment, period, minimum, maximum[, CFD increment]",
-                loc,
-            )
-        values = self._floats_line(fields[:4], "*DYNAMIC", loc)
-        values = values + (None,) * (4 - len(values))
+        loc = card.lines[0][2]
+        usage = "initial increment, period, minimum, maximum[, CFD increment]"
+        values = self._procedure_line(card, "*DYNAMIC", usage, 4, 5)
         for name, value in zip(("initial increment", "period"), values[:2]):
             if value is None or value <= 0.0:
                 raise DeckError(f"*DYNAMIC {name} must be given and > 0, got {value}", loc)
@@ -122,16 +111,8 @@ class StepCards(ReaderState):
         step = self._in_step(card)
         self._first_procedure(step, card)
         alpha = self._alpha(card)
-        values: tuple[float | None, ...] = ()
-        if card.lines:
-            fields, _, loc = card.lines[0]
-            if len(card.lines) > 1 or len(fields) > 5:
-                raise DeckError(
-                    f"{name} data line: initial increment, period, minimum, maximum, DELTMX",
-                    loc,
-                )
-            values = self._floats_line(fields, name, loc)
-        values = values + (None,) * (5 - len(values))
+        usage = "initial increment, period, minimum, maximum, DELTMX"
+        values = self._procedure_line(card, name, usage, 5, 5)
         for what, value in zip(("initial increment", "period", "maximum", "DELTMX"),
                                (values[0], values[1], values[3], values[4])):  # fmt: skip
             if value is not None and value <= 0.0:
