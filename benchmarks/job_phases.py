@@ -37,12 +37,13 @@ import json
 import os
 import re
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+
+from driver_run import run_driver
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -171,23 +172,12 @@ def _driver(job: str) -> None:
 def _run(deck: Path, workdir: Path, petsc_options: str = "") -> tuple[dict, str]:
     """One run of ``deck`` in ``workdir`` (its own process): the driver's measurements and the
     process's standard output."""
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
+    extra_env = {}
     if petsc_options:
-        env["PETSC_OPTIONS"] = petsc_options
-        env["GFORTRAN_UNBUFFERED_ALL"] = "1"  # MUMPS's lines before the driver's os._exit
-    done = subprocess.run(
-        [sys.executable, __file__, "--driver", deck.stem],
-        cwd=workdir,
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    lines = [line for line in done.stderr.splitlines() if line.startswith("PHASES ")]
-    if done.returncode != 0 or not lines:
-        raise RuntimeError(f"{deck.name}: exit {done.returncode}\n{done.stderr[-2000:]}")
-    return json.loads(lines[-1][7:]), done.stdout
+        extra_env["PETSC_OPTIONS"] = petsc_options
+        extra_env["GFORTRAN_UNBUFFERED_ALL"] = "1"  # MUMPS's lines before the driver's os._exit
+    run = run_driver(__file__, deck, workdir, ROOT, "PHASES", extra_env)
+    return run.data, run.stdout
 
 
 def mumps_statistics(output: str) -> tuple[str, float]:

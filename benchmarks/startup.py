@@ -40,6 +40,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from driver_run import run_driver
+
 ROOT = Path(__file__).resolve().parents[1]
 PHASES = ("python", "import dolfinx", "imports", "deck", "model", "set-up", "job")
 
@@ -116,21 +118,8 @@ def _run(deck: Path, workdir: Path, checkout: Path) -> dict[str, tuple[float, fl
     """One timed run of ``deck`` in ``workdir``: the end of each phase, wall seconds after
     spawning and CPU seconds of the process."""
     shutil.copy(deck, workdir / deck.name)
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(checkout), env.get("PYTHONPATH")]))
-    start = time.time()
-    done = subprocess.run(
-        [sys.executable, __file__, "--driver", deck.stem],
-        cwd=workdir,
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    lines = [line for line in done.stderr.splitlines() if line.startswith("MARKS ")]
-    if done.returncode != 0 or not lines:
-        raise RuntimeError(f"{deck.name}: exit {done.returncode}\n{done.stderr[-2000:]}")
-    return {name: (t - start, cpu) for name, (t, cpu) in json.loads(lines[-1][6:]).items()}
+    run = run_driver(__file__, deck, workdir, checkout, "MARKS")
+    return {name: (t - run.start, cpu) for name, (t, cpu) in run.data.items()}
 
 
 def _table(results: dict[str, dict]) -> list[str]:

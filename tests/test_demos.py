@@ -3,27 +3,17 @@
 Serial here; tests/parallel/test_parallel.py runs the punch demo on 2 and 3 processes.
 """
 
-import importlib.util
 import itertools
 from pathlib import Path
 
 import pytest
+from helpers.demos import load_demo
 
 pytestmark = pytest.mark.serial
 
-DEMOS = Path(__file__).resolve().parents[1] / "demos"
-
-
-def _demo(name):
-    """Import ``demos/<name>.py`` by path under a name that cannot shadow anything."""
-    spec = importlib.util.spec_from_file_location(f"_demo_{name}", DEMOS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
 
 def test_punch_demo_balances_the_load(tmp_path):
-    summary = _demo("punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     assert summary["increments"] == 4
     assert summary["load"][-1] == pytest.approx(100.0 * 40 * 40)
@@ -44,7 +34,7 @@ def test_punch_demo_balances_the_load(tmp_path):
 
 
 def test_hertz_demo_is_close_to_hertz(tmp_path):
-    summary = _demo("hertz_sphere").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("hertz_sphere").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     assert summary["equilibrium_error"] < 1e-8
     assert summary["unpaired_penetrations"] == 0
@@ -68,7 +58,9 @@ def test_hertz_demo_is_close_to_hertz(tmp_path):
 
 
 def test_hertz_cylinder_2d_demo_is_close_to_hertz(tmp_path):
-    summary = _demo("hertz_cylinder_2d").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("hertz_cylinder_2d").main(
+        ["--coarse", "--quiet", "--output", str(tmp_path)]
+    )
     assert summary["passed"]
     # The springs carry F'/2 and the block's bottom reacts with it (measured 2e-13 both).
     assert summary["load_error"] < 1e-8 and summary["equilibrium_error"] < 1e-8
@@ -86,7 +78,7 @@ def test_hertz_cylinder_2d_demo_is_close_to_hertz(tmp_path):
 
 
 def test_sliding_block_2d_demo_slips_at_mu(tmp_path):
-    summary = _demo("sliding_block_2d").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("sliding_block_2d").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     # Press (2 increments), small drag (1), drag (4), mu raised and drag (4); 9 springs.
     assert summary["increments"] == 11 and summary["springs"] == 9
@@ -103,7 +95,7 @@ def test_sliding_block_2d_demo_slips_at_mu(tmp_path):
 
 
 def test_impact_demo_keeps_the_energy(tmp_path):
-    summary = _demo("impact").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("impact").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     # Total energy (kinetic + strain + spring + gravity) with ccx's alpha = -0.05 and 0.25 us
     # increments: measured 0.75 % lost by the end, never more (bound 1 %).
@@ -121,7 +113,7 @@ def test_impact_demo_keeps_the_energy(tmp_path):
 
 
 def test_sliding_block_demo_sticks_then_slips(tmp_path):
-    summary = _demo("sliding_block").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("sliding_block").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     assert summary["increments"] == 17 and summary["springs"] == 25
     # stick: the central node follows tau = lambda t during the press and the small drag
@@ -138,7 +130,7 @@ def test_sliding_block_demo_sticks_then_slips(tmp_path):
 
 
 def test_frictional_punch_demo_has_stick_and_slip_zones(tmp_path):
-    summary = _demo("frictional_punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("frictional_punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     # measured on the coarse mesh: the 5 central nodes stick, the 20 of the rim slip
     assert (summary["stick_nodes"], summary["slip_nodes"]) == (5, 20)
@@ -149,8 +141,8 @@ def test_frictional_punch_demo_has_stick_and_slip_zones(tmp_path):
     assert Path(summary["png"]).exists() and Path(summary["xdmf"]).exists()
 
 
-def test_compare_continuum_demo(tmp_path):
-    rows = _demo("compare_continuum").main(["--coarse", "--quiet"])
+def test_compare_continuumload_demo(tmp_path):
+    rows = load_demo("compare_continuum").main(["--coarse", "--quiet"])
     by = {row["method"]: row for row in rows}
     assert set(by) == {"ntf-rigid", "ntf-active", "ntf-meshed", "penalty", "nitsche"}
     # A clamped flat block and the analytical plane are the same master: same springs, same force.
@@ -180,7 +172,7 @@ def test_a_soft_joint_that_overshoots_converges_to_equilibrium(monkeypatch):
     the load: the force scale remembered the runaway iterates)."""
     import dolfinx_ntf as ntf
 
-    demo = _demo("preloaded_modes")
+    demo = load_demo("preloaded_modes")
     monkeypatch.setattr(demo, "LAW", ntf.ExponentialLaw(c0=0.5, p0=0.01))
     summary = demo.main(["--coarse", "--quiet"])
     for row in summary["rows"]:
@@ -189,7 +181,7 @@ def test_a_soft_joint_that_overshoots_converges_to_equilibrium(monkeypatch):
 
 
 def test_preloaded_modes_demo_bounces_on_the_joint_stiffness():
-    summary = _demo("preloaded_modes").main(["--coarse", "--quiet"])
+    summary = load_demo("preloaded_modes").main(["--coarse", "--quiet"])
     rows = summary["rows"]
     assert [r["load"] for r in rows] == pytest.approx([400.0, 800.0, 1200.0, 1600.0])
     for row in rows:
@@ -209,7 +201,7 @@ def test_preloaded_modes_demo_bounces_on_the_joint_stiffness():
 
 
 def test_hot_block_demo_balances_heat_and_force(tmp_path):
-    summary = _demo("hot_block").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("hot_block").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     # Three transient increments and the steady state; 5 x 5 slave nodes, all in contact.
     assert summary["increments"] == 4 and summary["springs"] == 25
@@ -242,7 +234,9 @@ def test_hot_block_demo_balances_heat_and_force(tmp_path):
 
 
 def test_plastic_indentation_demo_leaves_a_dent(tmp_path):
-    summary = _demo("plastic_indentation").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("plastic_indentation").main(
+        ["--coarse", "--quiet", "--output", str(tmp_path)]
+    )
     assert summary["passed"]
     # 4 loading increments, 4 + 2 withdrawing ones (after the seating increment).
     assert summary["increments"] == 10

@@ -123,32 +123,6 @@ def test_the_jacobian_belongs_to_the_problem():
     assert ntf.contact_force(problem)[2] == pytest.approx(LOAD * 0.36, rel=1e-10)
 
 
-@pytest.fixture
-def progress_lines(monkeypatch):
-    """Records of the progress loggers (no stream handler: pytest's capture may close it)."""
-    records = []
-
-    class Keep(logging.Handler):
-        def emit(self, record):
-            records.append(record.getMessage())
-
-    handler = Keep()
-    monkeypatch.setattr(logs, "_handler", handler)
-    saved = (
-        logs.logger.level,
-        logs.logger.propagate,
-        logs.newton_logger.level,
-        logs.details_logger.level,
-    )
-    logs.logger.addHandler(handler)
-    yield records
-    logs.logger.removeHandler(handler)
-    logs.logger.setLevel(saved[0])
-    logs.logger.propagate = saved[1]
-    logs.newton_logger.setLevel(saved[2])
-    logs.details_logger.setLevel(saved[3])
-
-
 def test_one_progress_line_per_increment_by_default(progress_lines):
     """A Python user sees one line per increment; CalculiX's per-attempt and per-pairing lines
     only with details=True (the deck runner's choice)."""

@@ -55,6 +55,15 @@ def _unblocked(nodes: np.ndarray, bs: int = 3) -> np.ndarray:
     return (bs * nodes[:, :, None] + np.arange(bs)).reshape(nodes.shape[0], bs * nodes.shape[1])
 
 
+def _add_rows(b: PETSc.Vec, rows: np.ndarray, values: np.ndarray) -> None:
+    """Add ``values`` to the global ``rows`` of ``b`` (same shape), skipping ``-1`` rows."""
+    rows = rows.ravel()
+    keep = rows >= 0
+    b.setValues(
+        rows[keep].astype(PETSc.IntType), values.ravel()[keep], addv=PETSc.InsertMode.ADD_VALUES
+    )
+
+
 class ContactAssembler:
     """Adds spring blocks to dolfinx's residual vectors and Jacobian matrices of one space."""
 
@@ -274,13 +283,7 @@ class ContactAssembler:
         Ends with a vector assembly so off-process rows reach their owners.
         """
         for blk in blocks:
-            rows = blk.dofs.ravel()
-            keep = rows >= 0
-            b.setValues(
-                rows[keep].astype(PETSc.IntType),
-                blk.vector.ravel()[keep],
-                addv=PETSc.InsertMode.ADD_VALUES,
-            )
+            _add_rows(b, blk.dofs, blk.vector)
         b.assemblyBegin()
         b.assemblyEnd()
 
@@ -306,13 +309,7 @@ class ContactAssembler:
         for blk in blocks:
             if blk.vector is None or blk.row_nodes.shape[0] == 0:
                 continue
-            rows = numbering[_unblocked(blk.row_nodes, self._bs)].ravel()
-            keep = rows >= 0
-            b.setValues(
-                rows[keep].astype(PETSc.IntType),
-                blk.vector.ravel()[keep],
-                addv=PETSc.InsertMode.ADD_VALUES,
-            )
+            _add_rows(b, numbering[_unblocked(blk.row_nodes, self._bs)], blk.vector)
         b.assemblyBegin()
         b.assemblyEnd()
 

@@ -21,7 +21,6 @@ ccx prints the contact rows at its expanded nodes: two per 2D slave node (number
 
 from __future__ import annotations
 
-import logging
 import shutil
 from pathlib import Path
 
@@ -31,6 +30,7 @@ import numpy as np
 import pytest
 from helpers.cax_sector import SECOND_LINE, CaxBlocks
 from helpers.ccx_2d_decks import Deck2D, block_difference, dat_pairs
+from helpers.ccx_runs import quiet_logs
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
@@ -55,13 +55,8 @@ def _run(deck: Deck2D, tmp_path: Path, *, ccx: bool = True, **options) -> tuple[
             run_ccx(ccx_dir, deck.name, timeout=120)
     ntf_dir = Path(COMM.bcast(str(ntf_dir)))
     COMM.barrier()
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
+    with quiet_logs():
         assert run_job(deck.name, ntf_dir, progress=False, comm=COMM, **options).completed
-    finally:
-        logger.setLevel(level)
     return ccx_dir, ntf_dir
 
 

@@ -20,10 +20,9 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import run_ccx_and_ours
 
-from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
-from dolfinx_ntf.calculix.job import run_job
 
 SUITE = Path("/usr/share/doc/calculix-ccx-test/examples/test")
 COMM = MPI.COMM_WORLD
@@ -40,16 +39,7 @@ def test_contdamp_deck_matches_ccx(tmp_path, deck):
     source = SUITE / f"{deck}.inp"
     if not source.exists():
         pytest.skip(f"{source} is not installed (Debian package calculix-ccx-test)")
-    root = Path(COMM.bcast(str(tmp_path), root=0))
-    ccx_dir, ntf_dir = root / "ccx", root / "ntf"
-    if COMM.rank == 0:
-        for directory in (ccx_dir, ntf_dir):
-            directory.mkdir()
-            shutil.copy(source, directory)
-        run_ccx(ccx_dir, deck, timeout=120)
-    COMM.barrier()
-    result = run_job(deck, ntf_dir, comm=COMM, progress=False)
-    assert result.completed
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, deck, lambda d: shutil.copy(source, d), COMM)
     if COMM.rank != 0:
         return
     ccx, ours = read_dat(ccx_dir / f"{deck}.dat"), read_dat(ntf_dir / f"{deck}.dat")

@@ -21,7 +21,6 @@ be relaxed says which quirk and why (``Case.quirk``).
 
 from __future__ import annotations
 
-import logging
 import shutil
 from pathlib import Path
 
@@ -30,6 +29,7 @@ from mpi4py import MPI
 import cases
 import numpy as np
 import pytest
+from helpers.ccx_runs import quiet_logs
 
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import (
@@ -61,13 +61,8 @@ def _run_both(case: cases.Case, tmp_path: Path):
     ntf_dir.mkdir()
     shutil.copy(ccx_dir / f"{case.name}.inp", ntf_dir)
     run_ccx(ccx_dir, case.name, timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)  # no progress lines in the test log
-    try:
+    with quiet_logs():
         result = run_job(case.name, ntf_dir, comm=MPI.COMM_SELF, tight=True)
-    finally:
-        logger.setLevel(level)
     assert result.completed
     comparison = compare_job(
         ccx_dir / f"{case.name}.dat", result, read_sta(ccx_dir / f"{case.name}.sta")
@@ -122,13 +117,8 @@ def test_c3d20_decks_take_ccx_iterations(name: str, tmp_path: Path):
     case.write(tmp_path)
     run_ccx(tmp_path, name, timeout=120)
     ccx = [i.iterations for i in read_sta(tmp_path / f"{name}.sta")]
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
+    with quiet_logs():
         result = run_job(name, tmp_path, comm=MPI.COMM_SELF)
-    finally:
-        logger.setLevel(level)
     assert result.completed
     assert [i.iterations for i in result.increments] == ccx
 

@@ -9,20 +9,17 @@ package calculix-ccx-test) run at ccx's default controls.
 from __future__ import annotations
 
 import gzip
-import logging
 import shutil
 from pathlib import Path
-
-from mpi4py import MPI
 
 import friction_cases
 import numpy as np
 import pytest
+from helpers.ccx_runs import run_quietly
 
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
 from dolfinx_ntf.calculix.compare import compare_job
 from dolfinx_ntf.calculix.dat import read_dat
-from dolfinx_ntf.calculix.job import run_job
 
 pytestmark = [
     pytest.mark.serial,
@@ -34,16 +31,6 @@ TOLERANCES = {"displacement": 1e-6, "pressure": 1e-5, "clearance": 1e-5, "energy
 CCX_TESTS = Path("/usr/share/doc/calculix-ccx-test/examples/test")
 
 
-def _quiet_run(name: str, directory: Path, **options):
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
-    try:
-        return run_job(name, directory, comm=MPI.COMM_SELF, progress=False, **options)
-    finally:
-        logger.setLevel(level)
-
-
 def _compare_with_ccx(case, tmp_path: Path, ccx: str = "ccx", **options):
     """Run ``case``'s deck by ``ccx`` and by the runner (tight controls); compare the two."""
     ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
@@ -52,7 +39,7 @@ def _compare_with_ccx(case, tmp_path: Path, ccx: str = "ccx", **options):
     case.write(ccx_dir)
     shutil.copy(ccx_dir / f"{case.name}.inp", ntf_dir)
     run_ccx(ccx_dir, case.name, timeout=300, ccx=ccx)
-    result = _quiet_run(case.name, ntf_dir, tight=True, **options)
+    result = run_quietly(case.name, ntf_dir, tight=True, **options)
     assert result.completed
     comparison = compare_job(
         ccx_dir / f"{case.name}.dat", result, read_sta(ccx_dir / f"{case.name}.sta")
@@ -111,7 +98,7 @@ def test_ccx_own_friction_decks(name, tmp_path: Path):
         d.mkdir()
         _ccx_deck(name, d)
     run_ccx(ccx_dir, name, timeout=300)
-    assert _quiet_run(name, ntf_dir).completed
+    assert run_quietly(name, ntf_dir).completed
     ccx, ntf = read_dat(ccx_dir / f"{name}.dat"), read_dat(ntf_dir / f"{name}.dat")
     assert [b.name for b in ccx] == [b.name for b in ntf]
     np.testing.assert_allclose([b.time for b in ccx], [b.time for b in ntf], rtol=1e-6)

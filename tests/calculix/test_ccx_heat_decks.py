@@ -16,6 +16,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.bar_decks import ids, stacked_bars
 from helpers.ccx_runs import largest_differences, run_ccx_and_ours
 
 from dolfinx_ntf.calculix.dat import DatBlock, read_dat
@@ -41,20 +42,7 @@ def bars_deck(
     extra: str = "",
 ) -> str:
     """Two unit-square bars of 2 C3D8 each; the upper one's bottom face (or nodes) is the slave."""
-    nodes, cells, layers, number = [], [], {}, 0
-    for bar, (z0, z1) in enumerate(((-LENGTH, 0.0), (gap, gap + LENGTH))):
-        for i, z in enumerate(np.linspace(z0, z1, 3)):
-            ids = []
-            for x, y in ((0, 0), (1, 0), (1, 1), (0, 1)):
-                number += 1
-                nodes.append(f"{number}, {x}., {y}., {float(z)!r}")
-                ids.append(number)
-            layers[bar, i] = ids
-        cells += [layers[bar, i] + layers[bar, i + 1] for i in range(2)]
-
-    def ids(values: list[int]) -> str:
-        return ", ".join(map(str, values))
-
+    nodes, cells, layers = stacked_bars(2, gap, LENGTH)
     slave = (
         "*SURFACE, NAME=SLAVE, TYPE=NODE\nSLAVES\n"
         if node_slaves

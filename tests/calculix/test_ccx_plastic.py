@@ -21,6 +21,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from cases import BOTTOM, PUNCH, TOP, blocks, facet_tag
+from helpers.ccx_runs import quiet_logs, run_quietly
 from helpers.decks import TWO_C3D8
 
 import dolfinx_ntf as ntf
@@ -93,16 +94,6 @@ S
 )
 
 
-def _run(name: str, directory: Path, **options):
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
-    try:
-        return run_job(name, directory, comm=MPI.COMM_SELF, progress=False, **options)
-    finally:
-        logger.setLevel(level)
-
-
 def _both(text: str, name: str, tmp_path: Path, **options):
     """Write ``text`` as deck ``name``, run it by ccx and by the runner; both directories."""
     ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
@@ -110,7 +101,7 @@ def _both(text: str, name: str, tmp_path: Path, **options):
         d.mkdir()
         (d / f"{name}.inp").write_text(text)
     run_ccx(ccx_dir, name, timeout=300)
-    result = _run(name, ntf_dir, **options)
+    result = run_quietly(name, ntf_dir, **options)
     assert result.completed
     return ccx_dir, ntf_dir, result
 
@@ -229,7 +220,7 @@ def test_plastic_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path)
         _punch_deck(d, nlgeom)
     assert ("NLGEOM=NO" in (ccx_dir / "plastic_punch.inp").read_text()) != nlgeom
     run_ccx(ccx_dir, "plastic_punch", timeout=300)
-    result = _run("plastic_punch", ntf_dir, tight=True)
+    result = run_quietly("plastic_punch", ntf_dir, tight=True)
     assert result.completed
     comparison = compare_job(
         ccx_dir / "plastic_punch.dat", result, read_sta(ccx_dir / "plastic_punch.sta")
@@ -251,7 +242,7 @@ def test_plastic_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path)
 def _refusal(text: str, tmp_path: Path) -> str:
     (tmp_path / "deck.inp").write_text(text)
     with pytest.raises(NotImplementedError) as info:
-        _run("deck", tmp_path)
+        run_quietly("deck", tmp_path)
     return str(info.value)
 
 
@@ -311,13 +302,8 @@ def test_plastic_bar_on_all_processes(nlgeom: str, tmp_path: Path) -> None:
             (d / "bar.inp").write_text(text)
         run_ccx(ccx_dir, "bar", timeout=300)
     comm.barrier()
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
-    try:
+    with quiet_logs(logging.ERROR):
         result = run_job("bar", ntf_dir, comm=comm, progress=False, tight=True)
-    finally:
-        logger.setLevel(level)
     assert result.completed
     yielded = comm.allreduce(
         float(result.model.plasticity[0].equivalent_plastic_strain.max(initial=0.0)), op=MPI.MAX

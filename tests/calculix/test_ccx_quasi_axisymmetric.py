@@ -15,7 +15,6 @@ blocks compared relative to ccx's largest value. What remains (measured):
 from __future__ import annotations
 
 import gzip
-import logging
 import shutil
 from pathlib import Path
 
@@ -24,8 +23,8 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers.ccx_2d_decks import Deck2D, _largest_node, block_difference, write_mixed_deck
+from helpers.ccx_runs import run_ccx_and_ours
 
-from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import DatBlock, read_dat
 from dolfinx_ntf.calculix.job import run_job
 
@@ -53,21 +52,7 @@ def _collapse(block: DatBlock, base: int) -> DatBlock:
 
 def _run(tmp_path: Path, name: str, write) -> dict[tuple[str, float, str | None], tuple]:
     """Write the deck (rank 0), run ccx (rank 0) and the runner (``COMM``): block pairs."""
-    root = Path(COMM.bcast(str(tmp_path)))
-    ccx_dir, ntf_dir = root / "ccx", root / "ntf"
-    if COMM.rank == 0:
-        for directory in (ccx_dir, ntf_dir):
-            directory.mkdir(parents=True, exist_ok=True)
-            write(directory)
-        run_ccx(ccx_dir, name, timeout=120)
-    COMM.barrier()
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        assert run_job(name, ntf_dir, progress=False, comm=COMM).completed
-    finally:
-        logger.setLevel(level)
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, name, write, COMM)
     theirs, ours = read_dat(ccx_dir / f"{name}.dat"), read_dat(ntf_dir / f"{name}.dat")
     assert [(b.name, b.time, b.set) for b in ours] == [(b.name, b.time, b.set) for b in theirs]
     pairs = {}

@@ -15,6 +15,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import quiet_logs
 from helpers.decks import TWO_C3D8
 
 from dolfinx_ntf.calculix.ccx import run_ccx
@@ -77,13 +78,8 @@ def test_later_section_holds_as_in_ccx(tmp_path: Path) -> None:
         d.mkdir()
         (d / "sec.inp").write_text(DECK)
     run_ccx(ccx_dir, "sec", timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
-    try:
+    with quiet_logs(logging.ERROR):
         result = run_job("sec", ntf_dir, comm=MPI.COMM_SELF, progress=False)
-    finally:
-        logger.setLevel(level)
     assert result.completed
     ours, theirs = read_dat(ntf_dir / "sec.dat"), read_dat(ccx_dir / "sec.dat")
     assert [b.name for b in ours] == [b.name for b in theirs] == ["U", "RF", "S"]

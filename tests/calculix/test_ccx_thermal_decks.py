@@ -19,6 +19,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.bar_decks import ids, stacked_bars
 from helpers.ccx_runs import largest_differences, run_ccx_and_ours
 
 from dolfinx_ntf.calculix.dat import DatBlock, read_dat
@@ -44,26 +45,11 @@ def bars_deck(
     extra: str = "",
 ) -> str:
     """Two unit-square bars of ``elements`` C3D8 each, lower z in [-1, 0], upper z in [0, 1]."""
-    nodes, cells = [], []
-    number = 0
-    layers = {}
-    for bar, (z0, z1) in enumerate(((-LENGTH, 0.0), (0.0, LENGTH))):
-        for i, z in enumerate(np.linspace(z0, z1, elements + 1)):
-            ids = []
-            for x, y in ((0, 0), (1, 0), (1, 1), (0, 1)):
-                number += 1
-                nodes.append(f"{number}, {x}., {y}., {float(z)!r}")
-                ids.append(number)
-            layers[bar, i] = ids
-        for i in range(elements):
-            cells.append(layers[bar, i] + layers[bar, i + 1])
+    nodes, cells, layers = stacked_bars(elements, 0.0, LENGTH)
     lower_top, upper_bottom = layers[0, elements], layers[1, 0]
     bottom, top = layers[0, 0], layers[1, elements]
-    x0 = [n for ids in layers.values() for n in (ids[0], ids[3])]
-    y0 = [n for ids in layers.values() for n in (ids[0], ids[1])]
-
-    def ids(values: list[int]) -> str:
-        return ", ".join(map(str, values))
+    x0 = [n for layer in layers.values() for n in (layer[0], layer[3])]
+    y0 = [n for layer in layers.values() for n in (layer[0], layer[1])]
 
     element_lines = "\n".join(f"{e + 1}, {ids(c)}" for e, c in enumerate(cells))
     return (

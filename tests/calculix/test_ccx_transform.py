@@ -19,6 +19,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import quiet_logs
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
@@ -97,13 +98,8 @@ def test_cylindrical_transform_agrees_with_ccx(tmp_path: Path) -> None:
         run_ccx(ccx_dir, "block", timeout=120)
         run_ccx(ccx_dir, "all", timeout=120)
     comm.barrier()
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
-    try:
+    with quiet_logs(logging.ERROR):
         result = run_job("block", ntf_dir, comm=comm, progress=False)
-    finally:
-        logger.setLevel(level)
     assert result.completed
     if comm.rank != 0:
         return

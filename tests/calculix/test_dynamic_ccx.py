@@ -10,19 +10,15 @@ pressure of the run.
 
 from __future__ import annotations
 
-import logging
 import shutil
-
-from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import run_ccx_and_ours
 from impact_deck import write_impact_deck
 
-from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.compare import ccx_increments
 from dolfinx_ntf.calculix.dat import read_dat
-from dolfinx_ntf.calculix.job import run_job
 
 pytestmark = [
     pytest.mark.serial,
@@ -32,20 +28,8 @@ pytestmark = [
 
 
 def test_impact_deck_matches_ccx(tmp_path):
-    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
-    ccx_dir.mkdir()
-    ntf_dir.mkdir()
-    write_impact_deck(ccx_dir, period=0.04)
-    shutil.copy(ccx_dir / "impact.inp", ntf_dir)
-    run_ccx(ccx_dir, "impact", timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        result = run_job("impact", ntf_dir, comm=MPI.COMM_SELF, tight=True)
-    finally:
-        logger.setLevel(level)
-    assert result.completed
+    deck = write_impact_deck(tmp_path, period=0.04).read_text()
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "impact", deck, tight=True)
     ccx, ntf = ccx_increments(ccx_dir / "impact.dat"), ccx_increments(ntf_dir / "impact.dat")
     assert len(ccx) == len(ntf) == 80
     largest_pressure = max(float(inc.pressure.max(initial=0.0)) for inc in ccx)
@@ -72,19 +56,8 @@ def test_step_load_and_initial_acceleration_match_ccx(tmp_path):
     ccx's initial acceleration is that of an alpha-method increment of a tenth of the initial
     increment, ``(M + beta (1 + alpha) h^2 K) a0 = f - f(u0)``.
     """
-    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
-    ccx_dir.mkdir()
-    ntf_dir.mkdir()
-    write_impact_deck(ccx_dir, "load", period=0.005, speed=0.0, load=-1.0)
-    shutil.copy(ccx_dir / "load.inp", ntf_dir)
-    run_ccx(ccx_dir, "load", timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        assert run_job("load", ntf_dir, comm=MPI.COMM_SELF, tight=True).completed
-    finally:
-        logger.setLevel(level)
+    deck = write_impact_deck(tmp_path, "load", period=0.005, speed=0.0, load=-1.0).read_text()
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "load", deck, tight=True)
     ccx, ntf = ccx_increments(ccx_dir / "load.dat"), ccx_increments(ntf_dir / "load.dat")
     assert len(ccx) == len(ntf) == 10
     for a, b in zip(ccx, ntf):
@@ -103,23 +76,11 @@ def test_two_dynamic_steps_match_ccx(tmp_path):
     alpha method); the deck runner follows the two-step run (measured 9.2e-8 with ccx's start of
     docs/method.md §12.7 at both steps; 1.6e-5 with the exact start).
     """
-    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
-    ccx_dir.mkdir()
-    ntf_dir.mkdir()
-    text = write_impact_deck(ccx_dir, "two", period=0.005, speed=0.0, load=-1.0).read_text()
+    text = write_impact_deck(tmp_path, "two", period=0.005, speed=0.0, load=-1.0).read_text()
     head, step = text.split("*STEP, INC=10000\n", 1)
     step = step.replace("0.0005, 0.005", "0.0005, 0.0025")
     deck = head + "*STEP, INC=10000\n" + step + "*STEP, INC=10000\n" + step
-    for directory in (ccx_dir, ntf_dir):
-        (directory / "two.inp").write_text(deck)
-    run_ccx(ccx_dir, "two", timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        assert run_job("two", ntf_dir, comm=MPI.COMM_SELF, tight=True).completed
-    finally:
-        logger.setLevel(level)
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "two", deck, tight=True)
     ccx, ntf = ccx_increments(ccx_dir / "two.dat"), ccx_increments(ntf_dir / "two.dat")
     assert len(ccx) == len(ntf) == 10
     for a, b in zip(ccx, ntf):
@@ -136,23 +97,11 @@ def test_prescribed_jump_matches_ccx(tmp_path):
     prescribed motion on the free dofs (measured: identical printed digits; before these rules
     were matched, 28 % and then 0.9 % of max |u|).
     """
-    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
-    ccx_dir.mkdir()
-    ntf_dir.mkdir()
-    text = write_impact_deck(ccx_dir, "jump", period=0.005, speed=0.0).read_text()
+    text = write_impact_deck(tmp_path, "jump", period=0.005, speed=0.0).read_text()
     deck = text.replace(
         "*NODE PRINT, NSET=NALL", "*BOUNDARY\nNTOP, 3, 3, -0.001\n*NODE PRINT, NSET=NALL"
     )
-    for directory in (ccx_dir, ntf_dir):
-        (directory / "jump.inp").write_text(deck)
-    run_ccx(ccx_dir, "jump", timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        assert run_job("jump", ntf_dir, comm=MPI.COMM_SELF, tight=True).completed
-    finally:
-        logger.setLevel(level)
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "jump", deck, tight=True)
     ccx, ntf = ccx_increments(ccx_dir / "jump.dat"), ccx_increments(ntf_dir / "jump.dat")
     assert len(ccx) == len(ntf) == 10
     for a, b in zip(ccx, ntf):
@@ -170,24 +119,11 @@ def test_contact_damping_matches_ccx(tmp_path, tangent_fraction):
     the largest (normal damping; with ``TANGENT FRACTION=1`` 1.0e-3: the tangential velocities
     differ by 1 %, not reproduced, docs/method.md §29.2).
     """
-    ccx_dir, ntf_dir = tmp_path / "ccx", tmp_path / "ntf"
-    ccx_dir.mkdir()
-    ntf_dir.mkdir()
     path = write_impact_deck(
-        ccx_dir, "damped", period=0.04, damping=10.0, tangent_fraction=tangent_fraction
+        tmp_path, "damped", period=0.04, damping=10.0, tangent_fraction=tangent_fraction
     )
-    path.write_text(
-        path.read_text().replace("*CONTACT PRINT", "*NODE PRINT, NSET=NALL\nV\n*CONTACT PRINT")
-    )
-    shutil.copy(ccx_dir / "damped.inp", ntf_dir)
-    run_ccx(ccx_dir, "damped", timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        assert run_job("damped", ntf_dir, comm=MPI.COMM_SELF, tight=True).completed
-    finally:
-        logger.setLevel(level)
+    deck = path.read_text().replace("*CONTACT PRINT", "*NODE PRINT, NSET=NALL\nV\n*CONTACT PRINT")
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "damped", deck, tight=True)
     ccx, ntf = ccx_increments(ccx_dir / "damped.dat"), ccx_increments(ntf_dir / "damped.dat")
     assert len(ccx) == len(ntf) == 80
     for a, b in zip(ccx, ntf):

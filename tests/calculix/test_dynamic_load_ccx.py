@@ -19,9 +19,10 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import run_ccx_and_ours
 from loaded_column_deck import loaded_column_deck
 
-from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
+from dolfinx_ntf.calculix.ccx import read_sta
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.job import run_job
 
@@ -47,22 +48,9 @@ CASES = {
 
 def _run(root: Path, text: str, initial_acceleration: str = "ccx") -> tuple[list, list]:
     """ccx's and the runner's U blocks of the deck ``text`` (ccx on rank 0)."""
-    ccx_dir, ntf_dir = root / "ccx", root / "ntf"
-    if COMM.rank == 0:
-        for directory in (ccx_dir, ntf_dir):
-            directory.mkdir()
-            (directory / "column.inp").write_text(text)
-        run_ccx(ccx_dir, "column", timeout=120)
-    COMM.barrier()
-    result = run_job(
-        "column",
-        ntf_dir,
-        comm=COMM,
-        tight=True,
-        progress=False,
-        initial_acceleration=initial_acceleration,
+    ccx_dir, ntf_dir = run_ccx_and_ours(
+        root, "column", text, COMM, tight=True, initial_acceleration=initial_acceleration
     )
-    assert result.completed
     if COMM.rank != 0:
         return [], []
     blocks = [[b for b in read_dat(d / "column.dat") if b.name == "U"] for d in (ccx_dir, ntf_dir)]

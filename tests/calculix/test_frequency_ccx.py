@@ -10,7 +10,6 @@ printed displacements up to the sign.
 
 from __future__ import annotations
 
-import logging
 import re
 import shutil
 from pathlib import Path
@@ -20,6 +19,7 @@ from mpi4py import MPI
 import cases
 import numpy as np
 import pytest
+from helpers.ccx_runs import quiet_logs
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
@@ -68,13 +68,8 @@ def test_frequency_step_after_contact_matches_ccx(tmp_path):
     _frequency_deck(ccx_dir)
     shutil.copy(ccx_dir / "modes.inp", ntf_dir)
     run_ccx(ccx_dir, "modes", timeout=120)
-    logger = logging.getLogger("dolfinx_ntf")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
+    with quiet_logs():
         result = run_job("modes", ntf_dir, comm=MPI.COMM_SELF)
-    finally:
-        logger.setLevel(level)
     assert result.completed and result.eigenvalues.size == 6
     ccx_dat, ntf_dat = ccx_dir / "modes.dat", ntf_dir / "modes.dat"
     a, b = _block(ccx_dat, TITLES[0]), _block(ntf_dat, TITLES[0])

@@ -21,6 +21,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.ccx_runs import run_ccx_and_ours
 from helpers.ccx_suite import node_to_surface_suite_deck, suite_text, two_beams_deck
 
 from dolfinx_ntf.calculix.ccx import run_ccx
@@ -47,19 +48,11 @@ def _deck(name: str) -> str:
 
 def _both(directory: Path, job: str, text: str) -> tuple[dict, dict]:
     """Run ``text`` with ccx (rank 0) and the runner (all ranks): blocks by (name, time)."""
-    if COMM.rank == 0:
-        (directory / "ccx").mkdir()
-        (directory / "ntf").mkdir()
-        (directory / "ccx" / f"{job}.inp").write_text(text)
-        (directory / "ntf" / f"{job}.inp").write_text(text)
-        run_ccx(directory / "ccx", job)
-    COMM.barrier()
-    result = run_job(job, directory / "ntf", comm=COMM, progress=False)
-    assert result.completed
+    ccx_dir, ntf_dir = run_ccx_and_ours(directory, job, text, COMM)
     if COMM.rank != 0:
         return {}, {}
-    ccx = {(b.name, b.time): b for b in read_dat(directory / "ccx" / f"{job}.dat")}
-    ours = {(b.name, b.time): b for b in read_dat(directory / "ntf" / f"{job}.dat")}
+    ccx = {(b.name, b.time): b for b in read_dat(ccx_dir / f"{job}.dat")}
+    ours = {(b.name, b.time): b for b in read_dat(ntf_dir / f"{job}.dat")}
     return ccx, ours
 
 

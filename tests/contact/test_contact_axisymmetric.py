@@ -9,13 +9,13 @@ the ring areas are the consistent shares of a uniform pressure), Hertz's sphere 
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 from pathlib import Path
 
 from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers.demos import load_demo
 from helpers.gmsh_blocks_2d import (
     LEFT,
     LOWER_BOTTOM,
@@ -39,7 +39,6 @@ from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 E, NU = 1000.0, 0.3
 RADIUS = 1.0
 AXIS = LEFT
-DEMOS = Path(__file__).resolve().parents[2] / "demos"
 
 
 def _build_cylinder_on_block(
@@ -156,11 +155,7 @@ def test_hertz_sphere_axisymmetric(tmp_path: Path) -> None:
     Measured (P1, h = 0.014 R at the contact, 2162 dofs): F = 3.43e5 N, a -0.40 %, p0 +0.85 %
     (fit), nodal maximum +0.26 %; the 3D quarter model of the same sizes: -0.60 %, +2.29 %.
     """
-    spec = importlib.util.spec_from_file_location(
-        "_demo_hertz_axi", DEMOS / "hertz_axisymmetric.py"
-    )
-    demo = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(demo)
+    demo = load_demo("hertz_axisymmetric")
     summary = demo.main(["--quiet", "--output", str(tmp_path)])
     assert summary["equilibrium_error"] < 1e-8
     assert summary["force"] == pytest.approx(3.43e5, rel=0.02)

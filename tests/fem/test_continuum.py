@@ -1,7 +1,6 @@
 """UFL penalty and Nitsche contact against rigid surfaces, and the recovered boundary pressure."""
 
 import inspect
-import logging
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ import dolfinx.fem
 import ufl
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf import compat, logs
+from dolfinx_ntf import compat
 from dolfinx_ntf.fem import continuum, measures, pressure_recovery
 from dolfinx_ntf.fem.elasticity import small_strain_stress
 from dolfinx_ntf.fem.pressure_recovery import BoundaryPressure
@@ -147,26 +146,6 @@ def _penalty_block(surface, penalty, divisions=(3, 4, 2), **options):
     bcs = [*bcs[:-1], dolfinx.fem.dirichletbc(top, dofs, V.sub(2))]
     newton = continuum.ContinuumNewton(bulk, contact, u, bcs, **options)
     return newton, obstacle, bulk, tags, top
-
-
-@pytest.fixture
-def progress_lines(monkeypatch):
-    """Messages of the progress loggers on every process (levels restored afterwards)."""
-    records = []
-
-    class Keep(logging.Handler):
-        def emit(self, record):
-            records.append(record.getMessage())
-
-    handler = Keep()
-    monkeypatch.setattr(logs, "_handler", handler)  # log_progress adds no stream handler
-    saved = (logs.logger.level, logs.logger.propagate, logs.newton_logger.level)
-    logs.logger.addHandler(handler)
-    yield records
-    logs.logger.removeHandler(handler)
-    logs.logger.setLevel(saved[0])
-    logs.logger.propagate = saved[1]
-    logs.newton_logger.setLevel(saved[2])
 
 
 def _bottom_uz_all(u, tags):

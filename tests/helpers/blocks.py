@@ -2,7 +2,8 @@
 
 The lower block is the master body, the upper one (the punch) the slave; facet tags name the
 bottom and top of each. ``punch_problem`` presses the punch down, ``drag_problem`` also drags its
-top sideways (friction), ``rigid_block`` is a block for contact on a rigid plane.
+top sideways (friction), ``rigid_block`` is a block for contact on a rigid plane,
+``block_on_springs`` that block on linear springs.
 """
 
 from mpi4py import MPI
@@ -264,6 +265,28 @@ def rigid_block(cell_type="tetrahedron", height=0.5, divisions=(3, 4, 2), degree
         component_bc(V, 2, top),
     ]
     return V, tags, bcs
+
+
+def block_on_springs(height: float, E: float, K: float, divisions=(1, 1, 2), **options):
+    """The ``rigid_block`` (hexahedra) on rollers only, on LINEAR springs (slope ``K``) onto the
+    plane z = 0, its top loaded by a pressure (a Constant, zero until set).
+
+    Returns the problem (``options`` go to ``ContactProblem``), the pressure and the law.
+    """
+    V, tags, bcs = rigid_block("hexahedron", height, divisions)
+    mesh = V.mesh
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)
+    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx
+    F += pressure * v[2] * ds(BLOCK_TOP)
+    law = ntf.LinearLaw(slope=K, tension=1e-6 * K)
+    pair = ntf.ContactPair(
+        ntf.FacetSurface(tags, BLOCK_CONTACT),
+        ntf.RigidPlane((0, 0, 0), (0, 0, 1)),
+        ntf.SurfaceInteraction(law),
+    )
+    return ntf.ContactProblem(F, u, [pair], bcs[:2], **options), pressure, law
 
 
 MU, STICK_SLOPE, PRESSURE = 0.2, 500.0, 10.0

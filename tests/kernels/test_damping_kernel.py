@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers.spring_differences import nodal_differences
 from helpers.spring_faces import CASE_IDS, CASES, SIZE
 from helpers.spring_faces import penetrating as _penetrating
 
@@ -29,18 +30,11 @@ def _damped(ft, coords, slave, areas, v0, reference, *, coefficient, fraction, t
 
 def _finite_difference(ft, coords, slave, areas, v0, h, **kwargs):
     nodes = np.concatenate([coords, slave[:, None, :]], axis=1)
-    num, k = nodes.shape[:2]
-    fd = np.zeros((num, 3 * k, 3 * k))
-    for node in range(k):
-        for c in range(3):
-            values = []
-            for sign in (1.0, -1.0):
-                x = nodes.copy()
-                x[:, node, c] += sign * h
-                ev = _damped(ft, x[:, :-1], x[:, -1], areas, v0, nodes, tangent=False, **kwargs)
-                values.append(ev.forces.reshape(num, -1))
-            fd[:, :, 3 * node + c] = (values[0] - values[1]) / (2 * h)
-    return fd
+
+    def forces(x: np.ndarray) -> np.ndarray:
+        return _damped(ft, x[:, :-1], x[:, -1], areas, v0, nodes, tangent=False, **kwargs).forces
+
+    return nodal_differences(forces, (nodes,), h)
 
 
 @pytest.mark.parametrize("fraction", [0.0, 0.4, 1.0])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers.spring_differences import nodal_differences, relative_error
 
 from dolfinx_ntf.kernels.faces import FACE_TYPES, face_points, face_tangents
 from dolfinx_ntf.kernels.friction import FrictionInput, output_tangents, tangential_forces
@@ -60,28 +61,13 @@ def _evaluate(ft, x, areas, law, data, **kwargs):
 
 
 def _finite_difference(ft, x, u, areas, law, data, h):
-    num, k = x.shape[:2]
-    fd = np.zeros((num, 3 * k, 3 * k))
-    for node in range(k):
-        for c in range(3):
-            values = []
-            for sign in (1.0, -1.0):
-                xp, up = x.copy(), u.copy()
-                xp[:, node, c] += sign * h
-                up[:, node, c] += sign * h
-                data.displacements = up
-                ev = _evaluate(ft, xp, areas, law, data, tangent=False)
-                values.append(ev.forces.reshape(num, -1))
-            fd[:, :, 3 * node + c] = (values[0] - values[1]) / (2 * h)
+    def forces(xp: np.ndarray, up: np.ndarray) -> np.ndarray:
+        data.displacements = up
+        return _evaluate(ft, xp, areas, law, data, tangent=False).forces
+
+    fd = nodal_differences(forces, (x, u), h)
     data.displacements = u
     return fd
-
-
-def _relative_error(k, k_ref):
-    num = len(k)
-    return np.abs(k - k_ref).reshape(num, -1).max(axis=1) / np.abs(k_ref).reshape(num, -1).max(
-        axis=1
-    )
 
 
 # stick: small lambda, large mu; slip: large lambda, small mu
@@ -99,10 +85,10 @@ def test_consistent_tangent_matches_finite_differences(name, warp, regime, law):
     sliding = ev.tangential.sliding
     assert np.all(sliding) if regime == "slip" else not np.any(sliding)
     fd = _finite_difference(ft, x, u, areas, law, data, h=1e-7 * SIZE)
-    error = _relative_error(ev.stiffness, fd)
+    error = relative_error(ev.stiffness, fd)
     assert error.max() <= 1e-6, error
     # Friction makes the element matrix unsymmetric.
-    assert _relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1)).max() > 1e-6
+    assert relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1)).max() > 1e-6
 
 
 @pytest.mark.parametrize("regime", list(REGIMES))
@@ -113,11 +99,11 @@ def test_ccx_tangent_freezes_the_projection_point(regime):
     u[:, :-1] = u[:, :1]  # every master node of a spring has the same displacement
     exact = _evaluate(ft, x, areas, LINEAR, _data(u, start, mu, slope)).stiffness
     ccx = _evaluate(ft, x, areas, LINEAR, _data(u, start, mu, slope, tangent_mode="ccx"))
-    assert _relative_error(ccx.stiffness, exact).max() <= 1e-12
+    assert relative_error(ccx.stiffness, exact).max() <= 1e-12
     ft, x, u, areas, start = _springs("quad4", 0.1, 6, seed=12)
     exact = _evaluate(ft, x, areas, LINEAR, _data(u, start, mu, slope)).stiffness
     ccx = _evaluate(ft, x, areas, LINEAR, _data(u, start, mu, slope, tangent_mode="ccx"))
-    assert _relative_error(ccx.stiffness, exact).max() > 1e-6
+    assert relative_error(ccx.stiffness, exact).max() > 1e-6
 
 
 def test_return_map_stick_and_slip_exact():

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers.spring_differences import nodal_differences, relative_error
 
 from dolfinx_ntf.kernels.edges import EDGE_TYPES, EdgeType
 from dolfinx_ntf.kernels.friction import FrictionInput
@@ -55,44 +56,25 @@ def _evaluate(edge_type, x, areas, law, data, **options):
 
 def _finite_difference(edge_type, x, u, areas, law, data, h):
     """Central differences of the forces by the nodal positions (u moves with x)."""
-    num, k = x.shape[:2]
-    fd = np.zeros((num, 2 * k, 2 * k))
-    for node in range(k):
-        for c in range(2):
-            values = []
-            for sign in (1.0, -1.0):
-                xp, up = x.copy(), u.copy()
-                xp[:, node, c] += sign * h
-                up[:, node, c] += sign * h
-                data.displacements = up
-                values.append(_evaluate(edge_type, xp, areas, law, data, tangent=False).forces)
-            fd[:, :, 2 * node + c] = (values[0] - values[1]).reshape(num, -1) / (2 * h)
+
+    def forces(xp: np.ndarray, up: np.ndarray) -> np.ndarray:
+        data.displacements = up
+        return _evaluate(edge_type, xp, areas, law, data, tangent=False).forces
+
+    fd = nodal_differences(forces, (x, u), h)
     data.displacements = u
     return fd
 
 
 def _fd_frictionless(edge_type, x, areas, law, h):
     """Central differences of the frictionless forces (same steps as ``_finite_difference``)."""
-    num, k = x.shape[:2]
-    fd = np.zeros((num, 2 * k, 2 * k))
-    for node in range(k):
-        for c in range(2):
-            values = []
-            for sign in (1.0, -1.0):
-                xp = x.copy()
-                xp[:, node, c] += sign * h
-                ev = evaluate_segment_springs(
-                    edge_type, xp[:, :-1], xp[:, -1], areas, law, tangent=False
-                )
-                values.append(ev.forces)
-            fd[:, :, 2 * node + c] = (values[0] - values[1]).reshape(num, -1) / (2 * h)
-    return fd
 
+    def forces(xp: np.ndarray) -> np.ndarray:
+        return evaluate_segment_springs(
+            edge_type, xp[:, :-1], xp[:, -1], areas, law, tangent=False
+        ).forces
 
-def _relative_error(k: np.ndarray, k_ref: np.ndarray) -> np.ndarray:
-    num = len(k)
-    scale = np.abs(k_ref).reshape(num, -1).max(axis=1)
-    return np.abs(k - k_ref).reshape(num, -1).max(axis=1) / scale
+    return nodal_differences(forces, (x,), h)
 
 
 @pytest.mark.parametrize("law_name", sorted(LAWS))
@@ -110,14 +92,14 @@ def test_frictional_tangent_matches_finite_differences(edge_name, regime, law_na
     sliding = ev.tangential.sliding
     assert np.all(sliding) if regime == "slip" else not np.any(sliding)
     fd = _finite_difference(edge_type, x, u, areas, law, data, h=1e-7)
-    assert _relative_error(ev.stiffness, fd).max() <= 1e-6
+    assert relative_error(ev.stiffness, fd).max() <= 1e-6
     # the friction part alone (the normal spring's tangent taken out of both) matches too
     plain = evaluate_segment_springs(edge_type, x[:, :-1], x[:, -1], areas, law).stiffness
     fd_plain = _fd_frictionless(edge_type, x, areas, law, h=1e-7)
-    assert _relative_error(ev.stiffness - plain, fd - fd_plain).max() <= 1e-6
+    assert relative_error(ev.stiffness - plain, fd - fd_plain).max() <= 1e-6
     # friction makes the element matrix unsymmetric (no symmetrization even when asked for)
     sym = _evaluate(edge_type, x, areas, law, data, symmetric=True).stiffness
-    assert _relative_error(sym, sym.transpose(0, 2, 1)).max() > 1e-9  # round-off: 1e-16
+    assert relative_error(sym, sym.transpose(0, 2, 1)).max() > 1e-9  # round-off: 1e-16
 
 
 @pytest.mark.parametrize("regime", sorted(REGIMES))
@@ -138,7 +120,7 @@ def test_ccx_tangent_freezes_the_projection_point(edge_name, regime):
         exact = _evaluate(edge_type, x, areas, law, FrictionInput(displacements, *start, mu, slope))
         ccx_data = FrictionInput(displacements, *start, mu, slope, tangent_mode="ccx")
         ccx = _evaluate(edge_type, x, areas, law, ccx_data)
-        error = _relative_error(ccx.stiffness, exact.stiffness).max()
+        error = relative_error(ccx.stiffness, exact.stiffness).max()
         assert error <= 1e-12 if equal else error > 1e-6
 
 
@@ -216,4 +198,4 @@ def test_frictional_tangent_at_clamped_projections(edge_name, regime):
     sliding = ev.tangential.sliding
     assert np.all(sliding) if regime == "slip" else not np.any(sliding)
     fd = _finite_difference(edge_type, x, u, areas, LAWS["linear"], data, h=1e-7)
-    assert _relative_error(ev.stiffness, fd).max() <= 1e-6
+    assert relative_error(ev.stiffness, fd).max() <= 1e-6

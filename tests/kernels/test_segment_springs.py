@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers.spring_differences import nodal_differences
 
 from dolfinx_ntf.kernels.edges import EDGE_TYPES, LINE2, LINE3, EdgeType, edge_spring_areas
 from dolfinx_ntf.kernels.laws import ExponentialLaw, LinearLaw, TabularLaw
@@ -42,19 +43,13 @@ def _fd_stiffness(edge_type, master, slave, areas, law, h=1e-6, **options):
     """Central differences of the forces by the 2(n+1) nodal coordinates."""
     n = edge_type.num_nodes
     x = np.concatenate([master, slave[:, None]], axis=1)  # (N, n+1, 2)
-    fd = np.zeros((x.shape[0], 2 * (n + 1), 2 * (n + 1)))
-    for col in range(2 * (n + 1)):
-        k, c = divmod(col, 2)
-        forces = []
-        for sign in (1.0, -1.0):
-            y = x.copy()
-            y[:, k, c] += sign * h
-            ev = evaluate_segment_springs(
-                edge_type, y[:, :n], y[:, n], areas, law, tangent=False, **options
-            )
-            forces.append(ev.forces.reshape(x.shape[0], -1))
-        fd[:, :, col] = (forces[0] - forces[1]) / (2 * h)
-    return fd
+
+    def forces(y: np.ndarray) -> np.ndarray:
+        return evaluate_segment_springs(
+            edge_type, y[:, :n], y[:, n], areas, law, tangent=False, **options
+        ).forces
+
+    return nodal_differences(forces, (x,), h)
 
 
 @pytest.mark.parametrize("law_name", sorted(LAWS))

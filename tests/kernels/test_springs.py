@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers.spring_differences import nodal_differences, relative_error
 from helpers.spring_faces import CASE_IDS, CASES, SIZE
 from helpers.spring_faces import penetrating as _penetrating
 from helpers.spring_faces import random_faces as _faces
@@ -20,25 +21,11 @@ EXPONENTIAL = ExponentialLaw(c0=0.2, p0=3.0)
 def _finite_difference(ft, coords, slave, areas, law, h, **kwargs) -> np.ndarray:
     """Central finite differences of the forces, (N, 3(n+1), 3(n+1))."""
     nodes = np.concatenate([coords, slave[:, None, :]], axis=1)
-    num, k = nodes.shape[:2]
-    fd = np.zeros((num, 3 * k, 3 * k))
-    for node in range(k):
-        for c in range(3):
-            values = []
-            for sign in (1.0, -1.0):
-                x = nodes.copy()
-                x[:, node, c] += sign * h
-                ev = evaluate_springs(ft, x[:, :-1], x[:, -1], areas, law, tangent=False, **kwargs)
-                values.append(ev.forces.reshape(num, -1))
-            fd[:, :, 3 * node + c] = (values[0] - values[1]) / (2 * h)
-    return fd
 
+    def forces(x: np.ndarray) -> np.ndarray:
+        return evaluate_springs(ft, x[:, :-1], x[:, -1], areas, law, tangent=False, **kwargs).forces
 
-def _relative_error(k: np.ndarray, k_ref: np.ndarray) -> np.ndarray:
-    """Per-spring max-norm error relative to the max-norm of the reference."""
-    num = len(k)
-    diff = np.abs(k - k_ref).reshape(num, -1).max(axis=1)
-    return diff / np.abs(k_ref).reshape(num, -1).max(axis=1)
+    return nodal_differences(forces, (nodes,), h)
 
 
 @pytest.mark.parametrize("law", [LINEAR, EXPONENTIAL], ids=["linear", "exponential"])
@@ -51,11 +38,11 @@ def test_tangent_matches_finite_differences(name: str, warp: float, law) -> None
     np.testing.assert_allclose(ev.overclosure, depth, rtol=1e-9)
     assert np.all(ev.normal_force > 0)
     fd = _finite_difference(ft, coords, slave, areas, law, h=1e-7 * SIZE)
-    error = _relative_error(ev.stiffness, fd)
+    error = relative_error(ev.stiffness, fd)
     assert error.max() <= 1e-6, error
     # With an interior projection the forces are the gradient of the spring energy A P(d(x))
     # (P' = p, since ∂g/∂x_p = n and ∂g/∂x_j = −φ_j n): the exact tangent is symmetric.
-    asym = _relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1))
+    asym = relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1))
     assert asym.max() <= 1e-12
 
 
@@ -134,7 +121,7 @@ def test_gap_shift() -> None:
     assert ev0.overclosure[0] == pytest.approx(0.0, abs=1e-15)
     # The shift is constant: the tangent still matches finite differences.
     fd = _finite_difference(ft, coords, slave, areas, EXPONENTIAL, h=1e-7 * SIZE, gap_shift=shift)
-    assert _relative_error(ev.stiffness, fd).max() <= 1e-6
+    assert relative_error(ev.stiffness, fd).max() <= 1e-6
 
 
 def _outside(ft: FaceType, where: str, num: int, seed: int):
@@ -179,7 +166,7 @@ def test_clamped_projection_tangent(name: str, where: str) -> None:
     np.testing.assert_allclose(ev.xi, xi, atol=1e-9)
     np.testing.assert_allclose(ev.overclosure, depth, rtol=1e-8)
     fd = _finite_difference(ft, coords, slave, areas, EXPONENTIAL, h=1e-7 * SIZE)
-    error = _relative_error(ev.stiffness, fd)
+    error = relative_error(ev.stiffness, fd)
     assert error.max() <= 1e-6, error
     # Still in equilibrium (forces), but r is not ∥ n: the moments do not balance and the forces
     # are no longer the gradient of A P(d), so the exact tangent is unsymmetric.
@@ -187,7 +174,7 @@ def test_clamped_projection_tangent(name: str, where: str) -> None:
     nodes = np.concatenate([coords, slave[:, None, :]], axis=1)
     moments = np.linalg.norm(np.cross(nodes, ev.forces).sum(axis=1), axis=1)
     assert np.all(moments > 1e-6 * np.abs(ev.forces).max())
-    asym = _relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1))
+    asym = relative_error(ev.stiffness, ev.stiffness.transpose(0, 2, 1))
     assert asym.min() > 1e-4
     # A start point does not change the result.
     ev0 = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL, xi0=ft.clamp(xi + 0.05))
@@ -207,7 +194,7 @@ def test_interior_projection_tangent_is_calculix_s(name: str, where: str) -> Non
     ccx = evaluate_springs(ft, coords, slave, areas, EXPONENTIAL, interior_projection=True)
     np.testing.assert_array_equal(ccx.forces, exact.forces)
     fd = _finite_difference(ft, coords, slave, areas, EXPONENTIAL, h=1e-7 * SIZE)
-    assert _relative_error(ccx.stiffness, fd).min() > 1e-3  # not the derivative there
+    assert relative_error(ccx.stiffness, fd).min() > 1e-3  # not the derivative there
     inside, other, inside_areas, _ = _penetrating(ft, 0.0, 6, seed=7)[:4]
     exact = evaluate_springs(ft, inside, other, inside_areas, EXPONENTIAL)
     ccx = evaluate_springs(ft, inside, other, inside_areas, EXPONENTIAL, interior_projection=True)

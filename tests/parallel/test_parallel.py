@@ -9,6 +9,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers import LOWER_TOP, PUNCH, UPPER, UPPER_BOTTOM, punch_bulk, punch_problem, two_blocks
+from helpers.demos import load_demo
 from helpers.serial_answer import (
     LOAD,
     PARTITIONS,
@@ -166,13 +167,7 @@ def test_writer_and_fields_in_parallel(tmp_path_factory):
 
 def test_punch_demo_in_parallel(tmp_path_factory):
     """The demo's checks pass with the serial figures (tests/test_demos.py) on any process count."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[2] / "demos" / "punch.py"
-    spec = importlib.util.spec_from_file_location("_demo_punch_mpi", path)
-    demo = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(demo)
+    demo = load_demo("punch")
     folder = COMM.bcast(str(tmp_path_factory.mktemp("demo")) if COMM.rank == 0 else None)
     summary = demo.main(["--coarse", "--quiet", "--output", folder])
     assert summary["passed"]
@@ -183,13 +178,7 @@ def test_punch_demo_in_parallel(tmp_path_factory):
 
 def test_hot_block_demo_in_parallel(tmp_path_factory):
     """The coupled demo's checks (force, heat balances, jumps, bounds) on any process count."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[2] / "demos" / "hot_block.py"
-    spec = importlib.util.spec_from_file_location("_demo_hot_block_mpi", path)
-    demo = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(demo)
+    demo = load_demo("hot_block")
     folder = COMM.bcast(str(tmp_path_factory.mktemp("demo")) if COMM.rank == 0 else None)
     summary = demo.main(["--coarse", "--quiet", "--output", folder])
     assert summary["passed"]
@@ -202,13 +191,7 @@ def test_hot_block_demo_in_parallel(tmp_path_factory):
 
 def test_plastic_indentation_demo_in_parallel(tmp_path_factory):
     """The indentation demo's checks (equilibrium, dent, elastic control) on any process count."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[2] / "demos" / "plastic_indentation.py"
-    spec = importlib.util.spec_from_file_location("_demo_plastic_indentation_mpi", path)
-    demo = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(demo)
+    demo = load_demo("plastic_indentation")
     folder = COMM.bcast(str(tmp_path_factory.mktemp("demo")) if COMM.rank == 0 else None)
     summary = demo.main(["--coarse", "--quiet", "--output", folder])
     assert summary["passed"]

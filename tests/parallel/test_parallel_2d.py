@@ -153,29 +153,14 @@ def cylinder_problem(mesh, ft):
 @pytest.mark.parametrize("partition", ["graph", "cut"])
 def test_rigid_line_gives_the_serial_answer(partition):
     """The upper block on the rigid line y = 0 (docs/method.md §15.1): one-node springs."""
-    run = _record_rigid(COMM, PARTITIONS[partition])
-    serial = _serial_rigid()
+    run = solve_patch_2d(COMM, PARTITIONS[partition], rigid=True)
+    serial = serial_patch_2d(rigid=True)
     assert run.increments == serial.increments
     np.testing.assert_allclose(run.nodes, serial.nodes, rtol=0, atol=1e-10 * PRESSURE)
     assert run.springs.shape == serial.springs.shape == (4, 6)
     np.testing.assert_allclose(run.springs, serial.springs, rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(run.force, serial.force, rtol=0, atol=1e-10 * PRESSURE)
     assert run.force[1] == pytest.approx(PRESSURE, rel=1e-8)
-
-
-def _record_rigid(comm, partition) -> Run2D:
-    problem, pressure, ft = patch_problem(comm, partition=partition, upper_divisions=3, rigid=True)
-    solver = ntf.ContactNewtonSolver(comm, problem)
-    step = ntf.StaticStep(lambda t: setattr(pressure, "value", PRESSURE * t), initial_increment=0.5)
-    run = _record(problem, step.run(solver, problem.u), ft.find(LOWER_BOTTOM))
-    solver.destroy()
-    problem.destroy()
-    return run
-
-
-@functools.lru_cache
-def _serial_rigid() -> Run2D:
-    return _record_rigid(MPI.COMM_SELF, None)
 
 
 def solve_cylinder(comm) -> Run2D:

@@ -37,6 +37,19 @@ def _cantilever(comm=MPI.COMM_WORLD):
     return u, F, bcs, mass, dofs
 
 
+def _moving_cantilever(comm):
+    """The cantilever as a problem and its initial velocity (u_z' = 1 off the clamped dofs).
+
+    Returns the problem, the velocity, the residual and mass forms and the clamped dofs.
+    """
+    u, F, bcs, mass, clamped = _cantilever(comm)
+    problem = ntf.ContactProblem(F, u, [], bcs)
+    velocity = dolfinx.fem.Function(u.function_space)
+    velocity.x.array.reshape(-1, 3)[:, 2] = 1.0
+    velocity.x.array.reshape(-1, 3)[clamped] = 0.0
+    return problem, velocity, F, mass, clamped
+
+
 def _matrix(form, bcs=()):
     A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(form), list(bcs))
     A.assemble()
@@ -47,12 +60,8 @@ def _matrix(form, bcs=()):
 @pytest.mark.parametrize("alpha", [-0.05, 0.0, -1.0 / 3.0])
 def test_hht_matches_numpy_reference(alpha):
     """Displacement, velocity, acceleration histories equal a numpy HHT on the same M and K."""
-    u, F, bcs, mass, clamped = _cantilever(MPI.COMM_SELF)
-    V = u.function_space
-    problem = ntf.ContactProblem(F, u, [], bcs)
-    velocity = dolfinx.fem.Function(V)
-    velocity.x.array.reshape(-1, 3)[:, 2] = 1.0
-    velocity.x.array.reshape(-1, 3)[clamped] = 0.0
+    problem, velocity, F, mass, clamped = _moving_cantilever(MPI.COMM_SELF)
+    u = problem.u
     v0 = velocity.x.array.copy()
     dt, steps = 0.01, 6
     history = []
@@ -150,13 +159,9 @@ def test_cutback_restores_the_state():
     """A failed first attempt leaves no trace: the end state of a run with the smaller increment."""
     runs = []
     for fail in (True, False):
-        u, F, bcs, mass, clamped = _cantilever(MPI.COMM_SELF)
-        V = u.function_space
-        problem = ntf.ContactProblem(F, u, [], bcs)
-        velocity = dolfinx.fem.Function(V)
-        velocity.x.array.reshape(-1, 3)[:, 2] = 1.0
-        velocity.x.array.reshape(-1, 3)[clamped] = 0.0
-        acceleration = dolfinx.fem.Function(V)
+        problem, velocity, _, mass, _ = _moving_cantilever(MPI.COMM_SELF)
+        u = problem.u
+        acceleration = dolfinx.fem.Function(u.function_space)
         with ntf.ContactNewtonSolver(MPI.COMM_SELF, problem) as solver:
             if fail:
                 original = solver.solve
@@ -301,12 +306,8 @@ def test_dynamic_step_is_the_same_in_parallel():
     """No contact: the bar's tip motion on any number of ranks equals the single-process one."""
     tips = []
     for comm in (MPI.COMM_SELF, MPI.COMM_WORLD):
-        u, F, bcs, mass, clamped = _cantilever(comm)
-        V = u.function_space
-        problem = ntf.ContactProblem(F, u, [], bcs)
-        velocity = dolfinx.fem.Function(V)
-        velocity.x.array.reshape(-1, 3)[:, 2] = 1.0
-        velocity.x.array.reshape(-1, 3)[clamped] = 0.0
+        problem, velocity, _, mass, _ = _moving_cantilever(comm)
+        u, V = problem.u, problem.u.function_space
         with ntf.ContactNewtonSolver(comm, problem) as solver:
             ntf.DynamicStep(mass, period=0.03, initial_increment=0.01, velocity=velocity).run(
                 solver, u

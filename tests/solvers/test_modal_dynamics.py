@@ -4,6 +4,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+from helpers import axial_bar, block_on_springs
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -11,26 +12,8 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 
 LENGTH, E, RHO, AREA = 1.0, 1000.0, 2.0, 0.01
-
-
-def _axial_bar():
-    """A clamped-free bar (Q2, nu = 0, 16 cells) held to axial motion: a 1D wave guide."""
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD,
-        [[0, 0, 0], [LENGTH, 0.1, 0.1]],
-        [16, 1, 1],
-        dolfinx.mesh.CellType.hexahedron,
-    )
-    V = compat.vector_space(mesh, "Lagrange", 2)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx
-    every = dolfinx.mesh.locate_entities(mesh, 2, lambda x: np.full(x.shape[1], True))
-    clamped = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 0.0))
-    bcs = [component_bc(V, 0, clamped), component_bc(V, 1, every), component_bc(V, 2, every)]
-    return ntf.ContactProblem(F, u, [], bcs)
 
 
 def _tip_force(V, total: float) -> dolfinx.fem.Function:
@@ -54,7 +37,7 @@ def test_step_load_on_a_bar_matches_the_modal_series(zeta1):
     ``u(L, t) = sum_n (2 P / (rho A L omega_n^2)) [1 - e^(-zeta_n omega_n t) (cos omega_dn t +
     zeta_n omega_n / omega_dn sin omega_dn t)]`` with the exact ``omega_n = (2n - 1) pi c / 2L``.
     """
-    problem = _axial_bar()
+    problem, _ = axial_bar(LENGTH, E)
     V = problem.u.function_space
     v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
     modes = ntf.contact_modes(problem, RHO * ufl.inner(w, v) * ufl.dx, 3)
@@ -105,7 +88,7 @@ def test_step_load_on_a_bar_matches_the_modal_series(zeta1):
 
 
 def test_bad_input_is_refused():
-    problem = _axial_bar()
+    problem, _ = axial_bar(LENGTH, E)
     V = problem.u.function_space
     v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
     modes = ntf.contact_modes(problem, RHO * ufl.inner(w, v) * ufl.dx, 2)
@@ -121,39 +104,6 @@ def test_bad_input_is_refused():
     modes.destroy()
 
 
-def _block_on_springs(height: float, E: float, K: float, **options):
-    """A block [0,1]^2 x [0,H] (2 cells high) on rollers, on LINEAR springs onto the plane z = 0."""
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD, [[0, 0, 0], [1, 1, height]], [1, 1, 2], dolfinx.mesh.CellType.hexahedron
-    )
-    V = compat.vector_space(mesh, "Lagrange", 1)
-
-    def facets(where):
-        return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
-
-    bottom, top = (
-        facets(lambda x: np.isclose(x[2], 0.0)),
-        facets(lambda x: np.isclose(x[2], height)),
-    )
-    entities = np.concatenate([bottom, top])
-    values = np.concatenate([np.full(bottom.size, 1), np.full(top.size, 2)]).astype(np.int32)
-    order = np.argsort(entities)
-    tags = dolfinx.mesh.meshtags(mesh, 2, entities[order], values[order])
-    bcs = [
-        component_bc(V, 0, facets(lambda x: np.isclose(x[0], 0.0))),
-        component_bc(V, 1, facets(lambda x: np.isclose(x[1], 0.0))),
-    ]
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)
-    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx + pressure * v[2] * ds(2)
-    law = ntf.LinearLaw(slope=K, tension=1e-6 * K)
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(tags, 1), ntf.RigidPlane((0, 0, 0), (0, 0, 1)), ntf.SurfaceInteraction(law)
-    )
-    return ntf.ContactProblem(F, u, [pair], bcs, **options), pressure
-
-
 @pytest.mark.mpi
 def test_contact_forces_as_modal_loads_match_the_modes_with_springs():
     """A preloaded block on LINEAR springs, struck from above: two complete modal bases.
@@ -164,7 +114,7 @@ def test_contact_forces_as_modal_loads_match_the_modes_with_springs():
     within an increment, a second-order error (measured 7.3e-5, 1.9e-5, 5.0e-6 of the largest
     displacement with 50, 100, 200 increments per period of the bounce).
     """
-    problem, pressure = _block_on_springs(0.2, 1e5, 1e3)
+    problem, pressure, _ = block_on_springs(0.2, 1e5, 1e3)
     solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
     ntf.StaticStep(lambda t: setattr(pressure, "value", 5.0 * t)).run(solver, problem.u)
     V = problem.u.function_space
@@ -219,7 +169,7 @@ def test_modal_contact_tangent_matches_finite_differences():
     Each evaluation re-pairs, so the spring areas follow the displacement: the tangent is exact
     with ``linearize_area=True`` (without it the area terms are missing, docs/method.md §6.3).
     """
-    problem, pressure = _block_on_springs(0.2, 1e5, 1e3, linearize_area=True)
+    problem, pressure, _ = block_on_springs(0.2, 1e5, 1e3, linearize_area=True)
     solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
     ntf.StaticStep(lambda t: setattr(pressure, "value", 5.0 * t)).run(solver, problem.u)
     V = problem.u.function_space

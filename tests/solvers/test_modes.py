@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 import scipy.optimize
-from helpers import drag_problem
+from helpers import axial_bar, block_on_springs, drag_problem
 
 import dolfinx.fem
 import dolfinx.mesh
@@ -14,53 +14,14 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.elasticity import component_bc, small_strain_stress
 from dolfinx_ntf.solvers.modes import _is_symmetric, contact_modes, mass_matrix, tangent_stiffness
-
-
-def _facets(mesh, where):
-    return dolfinx.mesh.locate_entities_boundary(mesh, 2, where)
-
-
-def _axial_bar(length: float, E: float, *, tie_end: bool = False):
-    """A clamped-free bar (Q2, nu = 0) held to axial motion; optionally its free end's u_x tied.
-
-    The ties (u_x of every end node equal to the corner's, the end cell's nodes: one process)
-    change no axial mode: they exercise the elimination of constraints.
-    """
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD,
-        [[0, 0, 0], [length, 0.1, 0.1]],
-        [16, 1, 1],
-        dolfinx.mesh.CellType.hexahedron,
-    )
-    V = compat.vector_space(mesh, "Lagrange", 2)
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx
-    every = dolfinx.mesh.locate_entities(mesh, 2, lambda x: np.full(x.shape[1], True))
-    bcs = [
-        component_bc(V, 0, _facets(mesh, lambda x: np.isclose(x[0], 0.0))),
-        component_bc(V, 1, every),
-        component_bc(V, 2, every),
-    ]
-    constraints = []
-    if tie_end:
-        x = V.tabulate_dof_coordinates()
-        end = np.flatnonzero(np.isclose(x[:, 0], length))
-        corner = end[np.isclose(x[end, 1], 0.0) & np.isclose(x[end, 2], 0.0)][:1]
-        constraints = [  # none on a process without the end cell
-            ntf.LinearConstraint([node, corner[0]], [0, 0], [1.0, -1.0], name=f"tie {node}")
-            for node in end
-            if node != corner[0]
-        ]
-    return ntf.ContactProblem(F, u, [], bcs, constraints=constraints), end if tie_end else None
 
 
 @pytest.mark.mpi
 def test_axial_bar_frequencies_and_participation_match_the_closed_form():
     """A clamped-free bar held to axial motion (nu = 0): omega_n = (2n - 1) pi c / (2 L)."""
     length, E, rho, area = 1.0, 1000.0, 2.0, 0.01
-    problem, _ = _axial_bar(length, E)
+    problem, _ = axial_bar(length, E)
     bcs = problem.bcs
     V = problem.u.function_space
     v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
@@ -88,8 +49,8 @@ def test_axial_bar_frequencies_and_participation_match_the_closed_form():
 @pytest.mark.mpi
 def test_constraints_are_eliminated_from_both_matrices_and_expanded_in_the_modes():
     length, E, rho = 1.0, 1000.0, 2.0
-    plain, _ = _axial_bar(length, E)
-    tied, end = _axial_bar(length, E, tie_end=True)
+    plain, _ = axial_bar(length, E)
+    tied, end = axial_bar(length, E, tie_end=True)
     assert MPI.COMM_WORLD.allreduce(len(tied.constraints)) == 8  # 9 end nodes, one corner
 
     def mass(problem):
@@ -110,33 +71,6 @@ def test_constraints_are_eliminated_from_both_matrices_and_expanded_in_the_modes
         obj.destroy()
 
 
-def _block_on_springs(K: float, height: float, E: float):
-    """A block [0,1]^2 x [0,H] on rollers (x = 0, y = 0) pressed onto the rigid plane z = 0."""
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD, [[0, 0, 0], [1, 1, height]], [2, 2, 4], dolfinx.mesh.CellType.hexahedron
-    )
-    V = compat.vector_space(mesh, "Lagrange", 1)
-    bottom = _facets(mesh, lambda x: np.isclose(x[2], 0.0))
-    top = _facets(mesh, lambda x: np.isclose(x[2], height))
-    entities = np.concatenate([bottom, top])
-    values = np.concatenate([np.full(bottom.size, 1), np.full(top.size, 2)]).astype(np.int32)
-    order = np.argsort(entities)
-    tags = dolfinx.mesh.meshtags(mesh, 2, entities[order], values[order])
-    bcs = [
-        component_bc(V, 0, _facets(mesh, lambda x: np.isclose(x[0], 0.0))),
-        component_bc(V, 1, _facets(mesh, lambda x: np.isclose(x[1], 0.0))),
-    ]
-    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
-    pressure = dolfinx.fem.Constant(mesh, 0.0)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)
-    F = ufl.inner(small_strain_stress(u, E, 0.0), ufl.grad(v)) * ufl.dx + pressure * v[2] * ds(2)
-    law = ntf.LinearLaw(slope=K, tension=1e-6 * K)
-    pair = ntf.ContactPair(
-        ntf.FacetSurface(tags, 1), ntf.RigidPlane((0, 0, 0), (0, 0, 1)), ntf.SurfaceInteraction(law)
-    )
-    return ntf.ContactProblem(F, u, [pair], bcs), pressure, law
-
-
 @pytest.mark.mpi
 def test_block_on_contact_springs_bounces_at_the_springs_frequency():
     """The closed springs (stiffness p'(d) A) carry a block: a rod on an end spring.
@@ -146,7 +80,7 @@ def test_block_on_contact_springs_bounces_at_the_springs_frequency():
     (no finite lowest frequency).
     """
     K, height, E, rho, load = 1e3, 0.2, 1e5, 3.0, 5.0
-    problem, pressure, law = _block_on_springs(K, height, E)
+    problem, pressure, law = block_on_springs(height, E, K, (2, 2, 4))
     solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)
     ntf.StaticStep(lambda t: setattr(pressure, "value", load * t)).run(solver, problem.u)
     (result,) = ntf.contact_results(problem)
@@ -176,7 +110,7 @@ def test_block_on_contact_springs_bounces_at_the_springs_frequency():
 
 @pytest.mark.mpi
 def test_the_tangent_includes_the_springs_and_asks_for_a_solved_problem():
-    problem, pressure, _ = _block_on_springs(1e3, 0.2, 1e5)
+    problem, pressure, _ = block_on_springs(0.2, 1e5, 1e3, (2, 2, 4))
     with pytest.raises(ValueError, match="never paired"):
         tangent_stiffness(problem)
     solver = ntf.ContactNewtonSolver(MPI.COMM_WORLD, problem)

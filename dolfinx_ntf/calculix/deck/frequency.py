@@ -20,8 +20,7 @@ class FrequencyCards(ReaderState):
     def _k_FREQUENCY(self, card: Card) -> None:
         step = self._in_step(card)
         self._check_params(card, allowed={"STORAGE", "SOLVER"})
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
+        self._first_procedure(step, card)
         if step.nlgeom:
             raise DeckError(
                 "*FREQUENCY with NLGEOM (in this step or an earlier one) is not supported yet "
@@ -29,16 +28,8 @@ class FrequencyCards(ReaderState):
                 card.location,
             )
         storage = (card.params.get("STORAGE") or "NO") == "YES"
-        values: tuple[float | None, ...] = ()
-        if card.lines:
-            fields, _, loc = card.lines[0]
-            if len(card.lines) > 1 or len(fields) > 4:
-                raise DeckError(
-                    "*FREQUENCY data line: number of eigenfrequencies, lower and upper frequency",
-                    loc,
-                )
-            values = self._floats_line(fields[:3], "*FREQUENCY", loc)
-        values = values + (None,) * (3 - len(values))
+        usage = "number of eigenfrequencies, lower and upper frequency"
+        values = self._procedure_line(card, "*FREQUENCY", usage, 3, 4)
         count = 10 if values[0] is None else values[0]
         if count != int(count) or count < 1:
             raise DeckError(
@@ -57,8 +48,7 @@ class FrequencyCards(ReaderState):
         """Increments (initial, period, minimum, maximum); DIRECT=NO with DELTMX or fixed."""
         step = self._in_step(card)
         self._check_params(card, allowed={"DIRECT", "DELTMX", "SOLVER", "STEADYSTATE"})
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
+        self._first_procedure(step, card)
         if "STEADYSTATE" in card.params:
             raise DeckError(
                 "*MODAL DYNAMIC, STEADY STATE is not supported yet (a fixed period only)",
@@ -89,13 +79,9 @@ class FrequencyCards(ReaderState):
         if variable and deltmx is None:
             raise DeckError("*MODAL DYNAMIC, DIRECT=NO needs DELTMX (ccx manual)", card.location)
         self._need_data(card)
-        fields, _, loc = card.lines[0]
-        if len(card.lines) > 1 or len(fields) > 4:
-            raise DeckError(
-                "*MODAL DYNAMIC data line: initial increment, period, minimum, maximum", loc
-            )
-        values = self._floats_line(fields, "*MODAL DYNAMIC", loc)
-        values = values + (None,) * (4 - len(values))
+        loc = card.lines[0][2]
+        usage = "initial increment, period, minimum, maximum"
+        values = self._procedure_line(card, "*MODAL DYNAMIC", usage, 4, 4)
         if values[1] is None or values[1] <= 0.0:
             raise DeckError(f"*MODAL DYNAMIC period must be given and > 0, got {values[1]}", loc)
         for name, value in (("initial increment", values[0]), ("maximum", values[3])):

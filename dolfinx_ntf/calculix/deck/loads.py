@@ -200,37 +200,44 @@ class LoadCards(ReaderState):
 
     def _initial_temperatures(self, card: Card) -> None:
         """``*INITIAL CONDITIONS, TYPE=TEMPERATURE``: lines of node or node set, temperature."""
-        self._need_data(card)
-        for fields, _, loc in card.lines:
-            if len(fields) != 2:
-                raise DeckError(
-                    "*INITIAL CONDITIONS, TYPE=TEMPERATURE data line: node or node set, "
-                    "temperature (temperature gradients are not supported)",
-                    loc,
-                )
-            nodes = self._nodes_of(fields[0], card, loc)
-            value = self._float(fields[1], "initial temperature", loc)
-            self.initial_temperatures.append(
-                InitialTemperature(frozen_array(nodes, np.int64), value, loc)
+        self.initial_temperatures.extend(
+            self._node_temperatures(
+                card,
+                "initial temperature",
+                "*INITIAL CONDITIONS, TYPE=TEMPERATURE data line: node or node set, "
+                "temperature (temperature gradients are not supported)",
             )
+        )
 
     def _k_TEMPERATURE(self, card: Card) -> None:
         """``*TEMPERATURE`` (a step's temperature field): lines of node or node set, temperature."""
         step = self._in_step(card)
         self._check_params(card, allowed=set())
+        step.temperature_fields.extend(
+            self._node_temperatures(
+                card,
+                "temperature",
+                "*TEMPERATURE data line: node or node set, temperature (gradients are not "
+                "supported)",
+            )
+        )
+
+    def _node_temperatures(
+        self, card: Card, what: str, line_error: str
+    ) -> list[InitialTemperature]:
+        """The node or node set, temperature lines of ``*INITIAL CONDITIONS`` and ``*TEMPERATURE``.
+
+        ``what`` names the value in a number error, ``line_error`` is a malformed line's error.
+        """
         self._need_data(card)
+        temperatures = []
         for fields, _, loc in card.lines:
             if len(fields) != 2:
-                raise DeckError(
-                    "*TEMPERATURE data line: node or node set, temperature (gradients are not "
-                    "supported)",
-                    loc,
-                )
+                raise DeckError(line_error, loc)
             nodes = self._nodes_of(fields[0], card, loc)
-            value = self._float(fields[1], "temperature", loc)
-            step.temperature_fields.append(
-                InitialTemperature(frozen_array(nodes, np.int64), value, loc)
-            )
+            value = self._float(fields[1], what, loc)
+            temperatures.append(InitialTemperature(frozen_array(nodes, np.int64), value, loc))
+        return temperatures
 
     def _k_CLOAD(self, card: Card) -> None:
         step = self._in_step(card)

@@ -205,6 +205,22 @@ class ReaderState:
     def _floats_line(self, fields: list[str], what: str, loc: Location) -> tuple[float | None, ...]:
         return tuple(self._optional_float(fields, i, what, loc) for i in range(len(fields)))
 
+    def _procedure_line(
+        self, card: Card, keyword: str, usage: str, count: int, most: int
+    ) -> tuple[float | None, ...]:
+        """The one data line of a procedure card (``*STATIC``, ``*FREQUENCY``, ...), if any.
+
+        Its first ``count`` numbers, None where absent or empty; more than ``most`` fields or a
+        second line is an error naming ``keyword`` and spelling the line's ``usage``.
+        """
+        values: tuple[float | None, ...] = ()
+        if card.lines:
+            fields, _, loc = card.lines[0]
+            if len(card.lines) > 1 or len(fields) > most:
+                raise DeckError(f"{keyword} data line: {usage}", loc)
+            values = self._floats_line(fields[:count], keyword, loc)
+        return values + (None,) * (count - len(values))
+
     def _nodes_of(self, token: str, card: Card, loc: Location) -> np.ndarray:
         if INT_RE.match(token):
             ids = np.array([int(token)], dtype=np.int64)
@@ -255,6 +271,11 @@ class ReaderState:
         if self.step is None:
             raise DeckError(f"{card.name} is a step keyword: it must follow *STEP", card.location)
         return self.step
+
+    def _first_procedure(self, step: StepBuilder, card: Card) -> None:
+        """Refuse a procedure card (``*STATIC``, ``*DYNAMIC``, ...) in a step that has one."""
+        if step.static is not None or step.frequency is not None:
+            raise DeckError("a step can have only one procedure card", card.location)
 
     def _ignore(self, card: Card, reason: str) -> None:
         """Skip a keyword, keeping the FREQUENCY it sets for every output (ccx rule)."""

@@ -37,17 +37,10 @@ class StepCards(ReaderState):
         step = self._in_step(card)
         self._check_params(card, allowed={"DIRECT", "SOLVER", "TIMERESET", "TOTALTIMEATSTART",
                                           "EXPLICIT"})  # fmt: skip
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
-        values: tuple[float | None, ...] = ()
-        if card.lines:
-            fields, _, loc = card.lines[0]
-            if len(card.lines) > 1 or len(fields) > 5:
-                raise DeckError(
-                    "*STATIC data line: initial increment, period, minimum, maximum", loc
-                )
-            values = self._floats_line(fields[:4], "*STATIC", loc)
-        values = values + (None,) * (4 - len(values))
+        self._first_procedure(step, card)
+        values = self._procedure_line(
+            card, "*STATIC", "initial increment, period, minimum, maximum", 4, 5
+        )
         for name, value in zip(("initial increment", "period", "minimum", "maximum"), values):
             if value is not None and value <= 0.0 and name != "minimum":
                 raise DeckError(f"*STATIC {name} must be > 0, got {value}", card.location)
@@ -73,22 +66,12 @@ class StepCards(ReaderState):
             raise DeckError(
                 "*DYNAMIC, EXPLICIT is not supported yet (implicit only)", card.location
             )
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
-        alpha = -0.05
-        if "ALPHA" in card.params:
-            alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
-            if not -1.0 / 3.0 <= alpha <= 0.0:
-                raise DeckError(f"*DYNAMIC ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        self._first_procedure(step, card)
+        alpha = self._alpha(card, "*DYNAMIC ")
         self._need_data(card)
-        fields, _, loc = card.lines[0]
-        if len(card.lines) > 1 or len(fields) > 5:
-            raise DeckError(
-                "*DYNAMIC data line: initial increment, period, minimum, maximum[, CFD increment]",
-                loc,
-            )
-        values = self._floats_line(fields[:4], "*DYNAMIC", loc)
-        values = values + (None,) * (4 - len(values))
+        loc = card.lines[0][2]
+        usage = "initial increment, period, minimum, maximum[, CFD increment]"
+        values = self._procedure_line(card, "*DYNAMIC", usage, 4, 5)
         for name, value in zip(("initial increment", "period"), values[:2]):
             if value is None or value <= 0.0:
                 raise DeckError(f"*DYNAMIC {name} must be given and > 0, got {value}", loc)
@@ -100,6 +83,18 @@ class StepCards(ReaderState):
             direct="DIRECT" in card.params,
         )
         step.dynamic = Dynamic(alpha=alpha)
+
+    def _alpha(self, card: Card, prefix: str = "") -> float:
+        """The alpha method's ``ALPHA`` (ccx's default -0.05), in [-1/3, 0].
+
+        ``prefix`` starts the error message (``"*DYNAMIC "``).
+        """
+        if "ALPHA" not in card.params:
+            return -0.05
+        alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
+        if not -1.0 / 3.0 <= alpha <= 0.0:
+            raise DeckError(f"{prefix}ALPHA must be in [-1/3, 0], got {alpha}", card.location)
+        return alpha
 
     def _k_COUPLEDTEMPERATURE_DISPLACEMENT(self, card: Card) -> None:
         """Initial increment, period, minimum, maximum, DELTMX; ``STEADY STATE`` or transient."""
@@ -114,23 +109,10 @@ class StepCards(ReaderState):
     def _thermal_procedure(self, card: Card, name: str, *, heat: bool) -> None:
         """The data line and parameters shared by the two thermal procedures."""
         step = self._in_step(card)
-        if step.static is not None or step.frequency is not None:
-            raise DeckError("a step can have only one procedure card", card.location)
-        alpha = -0.05
-        if "ALPHA" in card.params:
-            alpha = self._float(card.params["ALPHA"] or "", "ALPHA", card.location)
-            if not -1.0 / 3.0 <= alpha <= 0.0:
-                raise DeckError(f"ALPHA must be in [-1/3, 0], got {alpha}", card.location)
-        values: tuple[float | None, ...] = ()
-        if card.lines:
-            fields, _, loc = card.lines[0]
-            if len(card.lines) > 1 or len(fields) > 5:
-                raise DeckError(
-                    f"{name} data line: initial increment, period, minimum, maximum, DELTMX",
-                    loc,
-                )
-            values = self._floats_line(fields, name, loc)
-        values = values + (None,) * (5 - len(values))
+        self._first_procedure(step, card)
+        alpha = self._alpha(card)
+        usage = "initial increment, period, minimum, maximum, DELTMX"
+        values = self._procedure_line(card, name, usage, 5, 5)
         for what, value in zip(("initial increment", "period", "maximum", "DELTMX"),
                                (values[0], values[1], values[3], values[4])):  # fmt: skip
             if value is not None and value <= 0.0:
