@@ -260,7 +260,7 @@ def test_plastic_indentation_demo_leaves_a_dent(tmp_path):
 
 
 def test_prism_punch_demo_balances_the_load(tmp_path):
-    summary = _demo("prism_punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
+    summary = load_demo("prism_punch").main(["--coarse", "--quiet", "--output", str(tmp_path)])
     assert summary["passed"]
     # a gmsh mesh of prisms beside hexahedra, read as one mesh of hexahedra
     assert summary["cells"] == 300

@@ -457,7 +457,7 @@ def test_peeq_of_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path)
         path = d / "plastic_punch.inp"
         path.write_text(path.read_text().replace("*END STEP", PEEQ_REQUESTS))
     run_ccx(ccx_dir, "plastic_punch", timeout=300)
-    result = _run("plastic_punch", ntf_dir, tight=True)
+    result = run_quietly("plastic_punch", ntf_dir, tight=True)
     assert result.completed
     assert _check_peeq(ccx_dir, ntf_dir, "plastic_punch") > 1e-3
     _check_strains(ccx_dir, ntf_dir, "plastic_punch")
@@ -490,7 +490,7 @@ def test_no_peeq_block_without_plastic_sections(tmp_path: Path) -> None:
     """ccx 2.20 prints and writes no PEEQ when no section is plastic (measured): nor do we."""
     text = MIXED_BAR.format(nlgeom="").replace("*PLASTIC\n50.0, 0.0\n100.0, 0.3\n", "")
     (tmp_path / "bar.inp").write_text(text)
-    result = _run("bar", tmp_path)
+    result = run_quietly("bar", tmp_path)
     assert result.completed and not result.model.plasticity
     names = {b.name for b in read_dat(tmp_path / "bar.dat")}
     assert "S" in names and "PEEQ" not in names
