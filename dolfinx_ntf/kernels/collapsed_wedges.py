@@ -184,25 +184,29 @@ def _pick_shared(
     """One choice per stack under the shared rule, or a stack still in conflict.
 
     A min-conflicts local search (seeded, so the same mesh gives the same rotations): a greedy
-    start, then a stack in conflict moves to its least conflicting choice (a random one with
-    probability 0.2) until none is left or ``sweeps`` times the number of stacks moves are done.
+    start along a breadth-first front (each stack takes its least conflicting choice, ties to the
+    edges already used most: best fit, which leaves the fewest conflicts), then a stack in
+    conflict moves to its least conflicting choice (a random one with probability 0.2) until none
+    is left or ``sweeps`` times the number of stacks moves are done. Each move costs O(1): the
+    stacks in conflict are a list with an index (no sort per move), edges are integers.
     """
-    rng = np.random.default_rng(seed)
-    nodes = [set(row) for row in rows.tolist()]
-    options = [[[(k, _edge(rows[k], r)) for k, r in c.items()] for c in ch] for ch in stacks]
-    users: dict[frozenset, list[tuple[int, int]]] = {}  # edge -> [(stack, wedge)]
-    pick = [-1] * len(stacks)
-    for s, choices in enumerate(options):
+    for s, choices in enumerate(stacks):
         if not choices:
             return s
+    rng = np.random.default_rng(seed)
+    nodes = [set(row) for row in rows.tolist()]
+    options, num_edges = _edge_options(stacks, rows)
+    users: list[list[tuple[int, int]]] = [[] for _ in range(num_edges)]
+    pick = [-1] * len(stacks)
 
     def cost(s: int, c: int) -> int:
         """Conflicts of choice ``c`` of stack ``s`` with the other stacks' current choices."""
         total = 0
         for k, edge in options[s][c]:
-            others = [w for t, w in users.get(edge, ()) if t != s]
-            total += len(others) if len(others) >= 2 else 0
-            total += sum(len(nodes[k] & nodes[w]) >= 3 for w in others)  # a common face
+            others = [w for t, w in users[edge] if t != s]
+            if others:
+                total += len(others) if len(others) >= 2 else 0
+                total += sum(len(nodes[k] & nodes[w]) >= 3 for w in others)  # a common face
         return total
 
     def move(s: int, c: int) -> None:
@@ -211,15 +215,19 @@ def _pick_shared(
                 users[edge] = [(t, w) for t, w in users[edge] if t != s]
         pick[s] = c
         for k, edge in options[s][c]:
-            users.setdefault(edge, []).append((s, k))
+            users[edge].append((s, k))
 
-    for s in range(len(stacks)):  # greedy start
-        move(s, min(range(len(options[s])), key=lambda c: cost(s, c)))
-    bad = {s for s in range(len(stacks)) if cost(s, pick[s])}
+    def fill(s: int, c: int) -> tuple[int, int]:
+        """Greedy key: fewest conflicts, then the edges already used most (best fit)."""
+        return cost(s, c), -sum(len(users[edge]) for _, edge in options[s][c])
+
+    for s in _front_order(options, num_edges):  # greedy start, along a front
+        move(s, min(range(len(options[s])), key=lambda c: fill(s, c)))
+    bad = _IndexedSet(s for s in range(len(stacks)) if cost(s, pick[s]))
     for _ in range(sweeps * len(stacks)):
         if not bad:
             return pick
-        s = sorted(bad)[int(rng.integers(len(bad)))]
+        s = bad.item(int(rng.integers(len(bad))))
         if rng.random() < 0.2:
             c = int(rng.integers(len(options[s])))
         else:
@@ -234,7 +242,85 @@ def _pick_shared(
                 bad.add(t)
             else:
                 bad.discard(t)
-    return min(bad)
+    return min(bad.items)
+
+
+def _front_order(options: list, num_edges: int) -> list[int]:
+    """The stacks in breadth-first order over shared candidate edges (a front through the mesh)."""
+    near: list[list[int]] = [[] for _ in range(num_edges)]
+    for s, choices in enumerate(options):
+        for choice in choices:
+            for _, edge in choice:
+                near[edge].append(s)
+    seen = [False] * len(options)
+    order: list[int] = []
+    for root in range(len(options)):
+        if seen[root]:
+            continue
+        seen[root] = True
+        queue = [root]
+        head = 0
+        while head < len(queue):
+            s = queue[head]
+            head += 1
+            for choice in options[s]:
+                for _, edge in choice:
+                    for t in near[edge]:
+                        if not seen[t]:
+                            seen[t] = True
+                            queue.append(t)
+        order.extend(queue)
+    return order
+
+
+class _IndexedSet:
+    """A set of integers with O(1) insertion, removal and access by position (random picks)."""
+
+    def __init__(self, values) -> None:
+        self.items: list[int] = []
+        self._position: dict[int, int] = {}
+        for value in values:
+            self.add(value)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def item(self, position: int) -> int:
+        return self.items[position]
+
+    def add(self, value: int) -> None:
+        if value not in self._position:
+            self._position[value] = len(self.items)
+            self.items.append(value)
+
+    def discard(self, value: int) -> None:
+        position = self._position.pop(value, None)
+        if position is None:
+            return
+        last = self.items.pop()
+        if last != value:
+            self.items[position] = last
+            self._position[last] = position
+
+
+def _edge_options(stacks: list, rows: np.ndarray) -> tuple[list, int]:
+    """``options[s][c]``: (wedge, collapsed edge number) of choice ``c`` of stack ``s``; edges.
+
+    The edges of all choices at once (numpy): the sorted node pairs numbered by ``np.unique``.
+    """
+    wedge = np.fromiter((k for ch in stacks for c in ch for k in c), np.int64)
+    turn = np.fromiter((r for ch in stacks for c in ch for r in c.values()), np.int64)
+    ends = np.sort(rotated_wedges(rows[wedge], turn)[:, [2, 5]], axis=1)
+    _, number = np.unique(ends, axis=0, return_inverse=True)
+    pairs = list(zip(wedge.tolist(), number.ravel().tolist()))
+    options, start = [], 0
+    for ch in stacks:
+        mine = []
+        for c in ch:
+            mine.append(pairs[start : start + len(c)])
+            start += len(c)
+        options.append(mine)
+    return options, int(number.max(initial=-1)) + 1
 
 
 def _stack(start: int, first: int, rows: np.ndarray, triangles: dict) -> dict[int, int]:
