@@ -183,12 +183,14 @@ def _pick_shared(
 ) -> list[int] | int:
     """One choice per stack under the shared rule, or a stack still in conflict.
 
-    A min-conflicts local search (seeded, so the same mesh gives the same rotations): a greedy
-    start along a breadth-first front (each stack takes its least conflicting choice, ties to the
-    edges already used most: best fit, which leaves the fewest conflicts), then a stack in
+    A greedy start along a breadth-first front (:func:`_front_order`): each stack takes a choice
+    without conflict, moving the stacks in its way (up to three rounds, undone if they fail:
+    short augmenting paths to the spare edges next to the front), else its least conflicting
+    choice; ties go to the edges already used most (best fit). Then a min-conflicts local search
+    (seeded, so the same mesh gives the same rotations) on the few conflicts left: a stack in
     conflict moves to its least conflicting choice (a random one with probability 0.2) until none
-    is left or ``sweeps`` times the number of stacks moves are done. Each move costs O(1): the
-    stacks in conflict are a list with an index (no sort per move), edges are integers.
+    is left or ``sweeps`` times the number of stacks moves are done. Every step is local (O(1)):
+    the stacks in conflict are a list with an index (no sort per move), edges are integers.
     """
     for s, choices in enumerate(stacks):
         if not choices:
@@ -210,19 +212,47 @@ def _pick_shared(
         return total
 
     def move(s: int, c: int) -> None:
+        """Stack ``s`` takes choice ``c`` (-1: none)."""
         if pick[s] >= 0:
             for _, edge in options[s][pick[s]]:
                 users[edge] = [(t, w) for t, w in users[edge] if t != s]
         pick[s] = c
-        for k, edge in options[s][c]:
-            users[edge].append((s, k))
+        if c >= 0:
+            for k, edge in options[s][c]:
+                users[edge].append((s, k))
+
+    def settle(s: int, depth: int, log: list, path: set) -> bool:
+        """Give ``s`` a conflict-free choice, moving the stacks in its way (``depth`` deep)."""
+        for c in sorted(range(len(options[s])), key=lambda c: fill(s, c)):
+            log.append((s, pick[s]))
+            move(s, c)
+            if cost(s, c) == 0:
+                return True
+            if depth:
+                mark = len(log)
+                ways = {t for _, edge in options[s][c] for t, _ in users[edge]} - path - {s}
+                if all(settle(t, depth - 1, log, path | {s}) for t in sorted(ways)):
+                    if cost(s, c) == 0:
+                        return True
+                while len(log) > mark:
+                    move(*log.pop())
+        return False
+
+    def place(s: int) -> None:
+        """Greedy step: ``s`` without conflict if two rounds of moves allow, else least bad."""
+        log: list[tuple[int, int]] = []
+        if settle(s, 3, log, set()) and all(cost(t, pick[t]) == 0 for t, _ in log):
+            return
+        while log:
+            move(*log.pop())
+        move(s, min(range(len(options[s])), key=lambda c: fill(s, c)))
 
     def fill(s: int, c: int) -> tuple[int, int]:
         """Greedy key: fewest conflicts, then the edges already used most (best fit)."""
         return cost(s, c), -sum(len(users[edge]) for _, edge in options[s][c])
 
     for s in _front_order(options, num_edges):  # greedy start, along a front
-        move(s, min(range(len(options[s])), key=lambda c: fill(s, c)))
+        place(s)
     bad = _IndexedSet(s for s in range(len(stacks)) if cost(s, pick[s]))
     for _ in range(sweeps * len(stacks)):
         if not bad:
@@ -246,7 +276,13 @@ def _pick_shared(
 
 
 def _front_order(options: list, num_edges: int) -> list[int]:
-    """The stacks in breadth-first order over shared candidate edges (a front through the mesh)."""
+    """The stacks in breadth-first order over shared candidate edges, from a central stack.
+
+    A front grown from the middle of each connected part ends on its boundary, where the spare
+    edges are (a layer has about twice as many stacks as vertical lines, fewer at the boundary):
+    the greedy start leaves its conflicts there, next to the room that resolves them. The centre:
+    the stack nearest both ends of a long path (two sweeps from an end found by a third).
+    """
     near: list[list[int]] = [[] for _ in range(num_edges)]
     for s, choices in enumerate(options):
         for choice in choices:
@@ -257,20 +293,33 @@ def _front_order(options: list, num_edges: int) -> list[int]:
     for root in range(len(options)):
         if seen[root]:
             continue
-        seen[root] = True
-        queue = [root]
-        head = 0
-        while head < len(queue):
-            s = queue[head]
-            head += 1
-            for choice in options[s]:
-                for _, edge in choice:
-                    for t in near[edge]:
-                        if not seen[t]:
-                            seen[t] = True
-                            queue.append(t)
-        order.extend(queue)
+        part, _ = _sweep(root, options, near)
+        _, first = _sweep(part[-1], options, near)
+        far = max(first, key=first.__getitem__)
+        _, second = _sweep(far, options, near)
+        centre = min(part, key=lambda s: (max(first[s], second[s]), s))
+        part, _ = _sweep(centre, options, near)
+        for s in part:
+            seen[s] = True
+        order.extend(part)
     return order
+
+
+def _sweep(root: int, options: list, near: list) -> tuple[list[int], dict[int, int]]:
+    """Breadth-first order and distances of the stacks reached from ``root``."""
+    distance = {root: 0}
+    queue = [root]
+    head = 0
+    while head < len(queue):
+        s = queue[head]
+        head += 1
+        for choice in options[s]:
+            for _, edge in choice:
+                for t in near[edge]:
+                    if t not in distance:
+                        distance[t] = distance[s] + 1
+                        queue.append(t)
+    return queue, distance
 
 
 class _IndexedSet:
