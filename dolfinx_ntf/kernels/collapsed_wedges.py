@@ -91,10 +91,13 @@ def collapse_wedges(rows: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     return rotated_wedges(rows, rotation)[:, WEDGE_AS_HEXAHEDRON]
 
 
-def _rotated(row: np.ndarray, rotation: int) -> np.ndarray:
-    """The wedge ``row`` (6 nodes) with its corners renumbered cyclically by ``rotation``."""
-    turn = (np.arange(3) + rotation) % 3
-    return np.concatenate([row[turn], row[3 + turn]])
+def _rotated(row: list[int], rotation: int) -> list[int]:
+    """The wedge ``row`` (6 nodes) with its corners renumbered cyclically by ``rotation``.
+
+    Plain lists: called once per wedge and choice, where small numpy arrays cost more than the work.
+    """
+    turn = [(i + rotation) % 3 for i in range(3)]
+    return [row[i] for i in turn] + [row[3 + i] for i in turn]
 
 
 def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
@@ -110,8 +113,9 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
         WedgeRotationError: no rotation satisfies the rule (``index``: a wedge that is in the way).
     """
     rows = np.asarray(rows, dtype=np.int64)
+    lists = rows.tolist()
     triangles: dict[frozenset, list[int]] = {}
-    for k, row in enumerate(rows.tolist()):
+    for k, row in enumerate(lists):
         for tri in (row[:3], row[3:]):
             triangles.setdefault(frozenset(tri), []).append(k)
     rotation = np.full(rows.shape[0], -1, dtype=np.int64)
@@ -121,8 +125,8 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
             continue
         choices = []
         for first in range(3):
-            chosen = _stack(start, first, rows, triangles)
-            edges = [_edge(rows[k], r) for k, r in chosen.items()]
+            chosen = _stack(start, first, lists, triangles)
+            edges = [_edge(lists[k], r) for k, r in chosen.items()]
             if len(set(edges)) == len(edges):
                 choices.append(chosen)
         rotation[list(chosen)] = 0  # visited
@@ -130,7 +134,7 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
     if shared:
         picks = _pick_shared(stacks, rows)
     else:
-        picks = _pick([[{_edge(rows[k], r) for k, r in c.items()} for c in ch] for ch in stacks])
+        picks = _pick([[{_edge(lists[k], r) for k, r in c.items()} for c in ch] for ch in stacks])
     if isinstance(picks, int) or picks is None:
         stack = 0 if picks is None else picks
         index = int(next(iter(stacks[stack][0]))) if stacks and stacks[stack] else 0
@@ -144,9 +148,10 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
     return rotation
 
 
-def _edge(row: np.ndarray, rotation: int) -> frozenset:
+def _edge(row: list[int], rotation: int) -> frozenset:
     """The collapsed edge (nodes 3 and 6 after turning) of the wedge ``row``."""
-    return frozenset(_rotated(row, rotation)[[2, 5]].tolist())
+    corner = (2 + rotation) % 3
+    return frozenset((row[corner], row[3 + corner]))
 
 
 def _pick(edge_sets: list[list[set[frozenset]]], limit: int = 100000) -> list[int] | None:
@@ -372,7 +377,7 @@ def _edge_options(stacks: list, rows: np.ndarray) -> tuple[list, int]:
     return options, int(number.max(initial=-1)) + 1
 
 
-def _stack(start: int, first: int, rows: np.ndarray, triangles: dict) -> dict[int, int]:
+def _stack(start: int, first: int, rows: list[list[int]], triangles: dict) -> dict[int, int]:
     """Rotations of the wedges stacked on ``start``'s triangles when ``start`` takes ``first``.
 
     A neighbour repeats the corner the wedge repeats on their shared triangle.
@@ -383,10 +388,10 @@ def _stack(start: int, first: int, rows: np.ndarray, triangles: dict) -> dict[in
         k = todo.pop()
         row = _rotated(rows[k], chosen[k])
         for tri, repeated in ((row[:3], row[2]), (row[3:], row[5])):
-            for other in triangles[frozenset(tri.tolist())]:
+            for other in triangles[frozenset(tri)]:
                 if other in chosen:
                     continue
-                position = int(np.flatnonzero(rows[other] == repeated)[0]) % 3
+                position = rows[other].index(repeated) % 3
                 chosen[other] = (position - 2) % 3  # its corner 3 after turning
                 todo.append(other)
     return chosen
