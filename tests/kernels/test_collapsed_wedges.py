@@ -87,7 +87,7 @@ def test_a_split_layer_has_more_wedges_than_edges_for_the_strict_rule():
     assert 0 <= caught.value.index < rows.shape[0]
 
 
-@pytest.mark.parametrize(("n", "layers"), [(3, 1), (6, 3)])
+@pytest.mark.parametrize(("n", "layers"), [(3, 1), (6, 3), (20, 1), (12, 4)])
 def test_the_shared_rule_places_extruded_triangulations(n, layers):
     _, rows = _split_layers(n, layers)
     rotation = wedge_rotations(rows, shared=True)
