@@ -277,7 +277,7 @@ def _pick_shared(
                 bad.add(t)
             else:
                 bad.discard(t)
-    return min(bad.items)
+    return min(bad.items) if bad else pick  # no stacks at all: no moves, nothing in conflict
 
 
 def _front_order(options: list, num_edges: int) -> list[int]:

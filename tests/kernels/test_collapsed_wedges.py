@@ -104,3 +104,9 @@ def test_the_shared_rule_refuses_more_stacks_than_twice_the_lines():
     with pytest.raises(WedgeRotationError, match="at most two wedges") as caught:
         wedge_rotations(rows, shared=True)
     assert 0 <= caught.value.index < rows.shape[0]
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_no_wedges_need_no_rotation(shared):
+    rotation = wedge_rotations(np.zeros((0, 6), np.int64), shared=shared)
+    assert rotation.shape == (0,)
