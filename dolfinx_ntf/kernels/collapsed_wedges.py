@@ -91,10 +91,13 @@ def collapse_wedges(rows: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     return rotated_wedges(rows, rotation)[:, WEDGE_AS_HEXAHEDRON]
 
 
-def _rotated(row: np.ndarray, rotation: int) -> np.ndarray:
-    """The wedge ``row`` (6 nodes) with its corners renumbered cyclically by ``rotation``."""
-    turn = (np.arange(3) + rotation) % 3
-    return np.concatenate([row[turn], row[3 + turn]])
+def _rotated(row: list[int], rotation: int) -> list[int]:
+    """The wedge ``row`` (6 nodes) with its corners renumbered cyclically by ``rotation``.
+
+    Plain lists: called once per wedge and choice, where small numpy arrays cost more than the work.
+    """
+    turn = [(i + rotation) % 3 for i in range(3)]
+    return [row[i] for i in turn] + [row[3 + i] for i in turn]
 
 
 def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
@@ -110,8 +113,9 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
         WedgeRotationError: no rotation satisfies the rule (``index``: a wedge that is in the way).
     """
     rows = np.asarray(rows, dtype=np.int64)
+    lists = rows.tolist()
     triangles: dict[frozenset, list[int]] = {}
-    for k, row in enumerate(rows.tolist()):
+    for k, row in enumerate(lists):
         for tri in (row[:3], row[3:]):
             triangles.setdefault(frozenset(tri), []).append(k)
     rotation = np.full(rows.shape[0], -1, dtype=np.int64)
@@ -121,8 +125,8 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
             continue
         choices = []
         for first in range(3):
-            chosen = _stack(start, first, rows, triangles)
-            edges = [_edge(rows[k], r) for k, r in chosen.items()]
+            chosen = _stack(start, first, lists, triangles)
+            edges = [_edge(lists[k], r) for k, r in chosen.items()]
             if len(set(edges)) == len(edges):
                 choices.append(chosen)
         rotation[list(chosen)] = 0  # visited
@@ -130,7 +134,7 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
     if shared:
         picks = _pick_shared(stacks, rows)
     else:
-        picks = _pick([[{_edge(rows[k], r) for k, r in c.items()} for c in ch] for ch in stacks])
+        picks = _pick([[{_edge(lists[k], r) for k, r in c.items()} for c in ch] for ch in stacks])
     if isinstance(picks, int) or picks is None:
         stack = 0 if picks is None else picks
         index = int(next(iter(stacks[stack][0]))) if stacks and stacks[stack] else 0
@@ -144,9 +148,10 @@ def wedge_rotations(rows: np.ndarray, *, shared: bool = False) -> np.ndarray:
     return rotation
 
 
-def _edge(row: np.ndarray, rotation: int) -> frozenset:
+def _edge(row: list[int], rotation: int) -> frozenset:
     """The collapsed edge (nodes 3 and 6 after turning) of the wedge ``row``."""
-    return frozenset(_rotated(row, rotation)[[2, 5]].tolist())
+    corner = (2 + rotation) % 3
+    return frozenset((row[corner], row[3 + corner]))
 
 
 def _pick(edge_sets: list[list[set[frozenset]]], limit: int = 100000) -> list[int] | None:
@@ -183,43 +188,81 @@ def _pick_shared(
 ) -> list[int] | int:
     """One choice per stack under the shared rule, or a stack still in conflict.
 
-    A min-conflicts local search (seeded, so the same mesh gives the same rotations): a greedy
-    start, then a stack in conflict moves to its least conflicting choice (a random one with
-    probability 0.2) until none is left or ``sweeps`` times the number of stacks moves are done.
+    A greedy start along a breadth-first front (:func:`_front_order`): each stack takes a choice
+    without conflict, moving the stacks in its way (up to three rounds, undone if they fail:
+    short augmenting paths to the spare edges next to the front), else its least conflicting
+    choice; ties go to the edges already used most (best fit). Then a min-conflicts local search
+    (seeded, so the same mesh gives the same rotations) on the few conflicts left: a stack in
+    conflict moves to its least conflicting choice (a random one with probability 0.2) until none
+    is left or ``sweeps`` times the number of stacks moves are done. Every step is local (O(1)):
+    the stacks in conflict are a list with an index (no sort per move), edges are integers.
     """
-    rng = np.random.default_rng(seed)
-    nodes = [set(row) for row in rows.tolist()]
-    options = [[[(k, _edge(rows[k], r)) for k, r in c.items()] for c in ch] for ch in stacks]
-    users: dict[frozenset, list[tuple[int, int]]] = {}  # edge -> [(stack, wedge)]
-    pick = [-1] * len(stacks)
-    for s, choices in enumerate(options):
+    for s, choices in enumerate(stacks):
         if not choices:
             return s
+    rng = np.random.default_rng(seed)
+    nodes = [set(row) for row in rows.tolist()]
+    options, num_edges = _edge_options(stacks, rows)
+    users: list[list[tuple[int, int]]] = [[] for _ in range(num_edges)]
+    pick = [-1] * len(stacks)
 
     def cost(s: int, c: int) -> int:
         """Conflicts of choice ``c`` of stack ``s`` with the other stacks' current choices."""
         total = 0
         for k, edge in options[s][c]:
-            others = [w for t, w in users.get(edge, ()) if t != s]
-            total += len(others) if len(others) >= 2 else 0
-            total += sum(len(nodes[k] & nodes[w]) >= 3 for w in others)  # a common face
+            others = [w for t, w in users[edge] if t != s]
+            if others:
+                total += len(others) if len(others) >= 2 else 0
+                total += sum(len(nodes[k] & nodes[w]) >= 3 for w in others)  # a common face
         return total
 
     def move(s: int, c: int) -> None:
+        """Stack ``s`` takes choice ``c`` (-1: none)."""
         if pick[s] >= 0:
             for _, edge in options[s][pick[s]]:
                 users[edge] = [(t, w) for t, w in users[edge] if t != s]
         pick[s] = c
-        for k, edge in options[s][c]:
-            users.setdefault(edge, []).append((s, k))
+        if c >= 0:
+            for k, edge in options[s][c]:
+                users[edge].append((s, k))
 
-    for s in range(len(stacks)):  # greedy start
-        move(s, min(range(len(options[s])), key=lambda c: cost(s, c)))
-    bad = {s for s in range(len(stacks)) if cost(s, pick[s])}
+    def settle(s: int, depth: int, log: list, path: set) -> bool:
+        """Give ``s`` a conflict-free choice, moving the stacks in its way (``depth`` deep)."""
+        for c in sorted(range(len(options[s])), key=lambda c: fill(s, c)):
+            log.append((s, pick[s]))
+            move(s, c)
+            if cost(s, c) == 0:
+                return True
+            if depth:
+                mark = len(log)
+                ways = {t for _, edge in options[s][c] for t, _ in users[edge]} - path - {s}
+                if all(settle(t, depth - 1, log, path | {s}) for t in sorted(ways)):
+                    if cost(s, c) == 0:
+                        return True
+                while len(log) > mark:
+                    move(*log.pop())
+        return False
+
+    def place(s: int) -> None:
+        """Greedy step: ``s`` without conflict if two rounds of moves allow, else least bad."""
+        log: list[tuple[int, int]] = []
+        if settle(s, 3, log, set()) and all(cost(t, pick[t]) == 0 for t, _ in log):
+            return
+        while log:
+            move(*log.pop())
+        move(s, min(range(len(options[s])), key=lambda c: fill(s, c)))
+
+    def fill(s: int, c: int) -> tuple[int, int]:
+        """Greedy key: fewest conflicts, then the edges already used most (best fit)."""
+        return cost(s, c), -sum(len(users[edge]) for _, edge in options[s][c])
+
+    for s in _front_order(options, num_edges):  # greedy start, along a front
+        place(s)
+    bad = _IndexedSet(s for s in range(len(stacks)) if cost(s, pick[s]))
     for _ in range(sweeps * len(stacks)):
         if not bad:
             return pick
-        s = sorted(bad)[int(rng.integers(len(bad)))]
+        s = bad.item(int(rng.integers(len(bad))))
         if rng.random() < 0.2:
             c = int(rng.integers(len(options[s])))
         else:
@@ -234,10 +277,107 @@ def _pick_shared(
                 bad.add(t)
             else:
                 bad.discard(t)
-    return min(bad)
+    return min(bad.items) if bad else pick  # no stacks at all: no moves, nothing in conflict
 
 
-def _stack(start: int, first: int, rows: np.ndarray, triangles: dict) -> dict[int, int]:
+def _front_order(options: list, num_edges: int) -> list[int]:
+    """The stacks in breadth-first order over shared candidate edges, from a central stack.
+
+    A front grown from the middle of each connected part ends on its boundary, where the spare
+    edges are (a layer has about twice as many stacks as vertical lines, fewer at the boundary):
+    the greedy start leaves its conflicts there, next to the room that resolves them. The centre:
+    the stack nearest both ends of a long path (two sweeps from an end found by a third).
+    """
+    near: list[list[int]] = [[] for _ in range(num_edges)]
+    for s, choices in enumerate(options):
+        for choice in choices:
+            for _, edge in choice:
+                near[edge].append(s)
+    seen = [False] * len(options)
+    order: list[int] = []
+    for root in range(len(options)):
+        if seen[root]:
+            continue
+        part, _ = _sweep(root, options, near)
+        _, first = _sweep(part[-1], options, near)
+        far = max(first, key=first.__getitem__)
+        _, second = _sweep(far, options, near)
+        centre = min(part, key=lambda s: (max(first[s], second[s]), s))
+        part, _ = _sweep(centre, options, near)
+        for s in part:
+            seen[s] = True
+        order.extend(part)
+    return order
+
+
+def _sweep(root: int, options: list, near: list) -> tuple[list[int], dict[int, int]]:
+    """Breadth-first order and distances of the stacks reached from ``root``."""
+    distance = {root: 0}
+    queue = [root]
+    head = 0
+    while head < len(queue):
+        s = queue[head]
+        head += 1
+        for choice in options[s]:
+            for _, edge in choice:
+                for t in near[edge]:
+                    if t not in distance:
+                        distance[t] = distance[s] + 1
+                        queue.append(t)
+    return queue, distance
+
+
+class _IndexedSet:
+    """A set of integers with O(1) insertion, removal and access by position (random picks)."""
+
+    def __init__(self, values) -> None:
+        self.items: list[int] = []
+        self._position: dict[int, int] = {}
+        for value in values:
+            self.add(value)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def item(self, position: int) -> int:
+        return self.items[position]
+
+    def add(self, value: int) -> None:
+        if value not in self._position:
+            self._position[value] = len(self.items)
+            self.items.append(value)
+
+    def discard(self, value: int) -> None:
+        position = self._position.pop(value, None)
+        if position is None:
+            return
+        last = self.items.pop()
+        if last != value:
+            self.items[position] = last
+            self._position[last] = position
+
+
+def _edge_options(stacks: list, rows: np.ndarray) -> tuple[list, int]:
+    """``options[s][c]``: (wedge, collapsed edge number) of choice ``c`` of stack ``s``; edges.
+
+    The edges of all choices at once (numpy): the sorted node pairs numbered by ``np.unique``.
+    """
+    wedge = np.fromiter((k for ch in stacks for c in ch for k in c), np.int64)
+    turn = np.fromiter((r for ch in stacks for c in ch for r in c.values()), np.int64)
+    ends = np.sort(rotated_wedges(rows[wedge], turn)[:, [2, 5]], axis=1)
+    _, number = np.unique(ends, axis=0, return_inverse=True)
+    pairs = list(zip(wedge.tolist(), number.ravel().tolist()))
+    options, start = [], 0
+    for ch in stacks:
+        mine = []
+        for c in ch:
+            mine.append(pairs[start : start + len(c)])
+            start += len(c)
+        options.append(mine)
+    return options, int(number.max(initial=-1)) + 1
+
+
+def _stack(start: int, first: int, rows: list[list[int]], triangles: dict) -> dict[int, int]:
     """Rotations of the wedges stacked on ``start``'s triangles when ``start`` takes ``first``.
 
     A neighbour repeats the corner the wedge repeats on their shared triangle.
@@ -248,10 +388,10 @@ def _stack(start: int, first: int, rows: np.ndarray, triangles: dict) -> dict[in
         k = todo.pop()
         row = _rotated(rows[k], chosen[k])
         for tri, repeated in ((row[:3], row[2]), (row[3:], row[5])):
-            for other in triangles[frozenset(tri.tolist())]:
+            for other in triangles[frozenset(tri)]:
                 if other in chosen:
                     continue
-                position = int(np.flatnonzero(rows[other] == repeated)[0]) % 3
+                position = rows[other].index(repeated) % 3
                 chosen[other] = (position - 2) % 3  # its corner 3 after turning
                 todo.append(other)
     return chosen

@@ -87,7 +87,7 @@ def test_a_split_layer_has_more_wedges_than_edges_for_the_strict_rule():
     assert 0 <= caught.value.index < rows.shape[0]
 
 
-@pytest.mark.parametrize(("n", "layers"), [(3, 1), (6, 3)])
+@pytest.mark.parametrize(("n", "layers"), [(3, 1), (6, 3), (20, 1), (12, 4)])
 def test_the_shared_rule_places_extruded_triangulations(n, layers):
     _, rows = _split_layers(n, layers)
     rotation = wedge_rotations(rows, shared=True)
@@ -104,3 +104,9 @@ def test_the_shared_rule_refuses_more_stacks_than_twice_the_lines():
     with pytest.raises(WedgeRotationError, match="at most two wedges") as caught:
         wedge_rotations(rows, shared=True)
     assert 0 <= caught.value.index < rows.shape[0]
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_no_wedges_need_no_rotation(shared):
+    rotation = wedge_rotations(np.zeros((0, 6), np.int64), shared=shared)
+    assert rotation.shape == (0,)

@@ -33,6 +33,7 @@ import ufl
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf.fem.elasticity import component_bc
+from dolfinx_ntf.kernels.collapsed_wedges import collapse_wedges, wedge_rotations
 from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 COMM = MPI.COMM_WORLD
@@ -127,6 +128,51 @@ def test_prisms_whose_edges_cannot_be_collapsed_are_refused_naming_one():
     """20 stacks on 6 vertical lines: no rotation keeps a collapsed edge to two cells (§32.2)."""
     with pytest.raises(ValueError, match=r"prism 1\d\d: no numbering .* at most two wedges"):
         mesh_from_gmsh(_overlapping_prisms, COMM)
+
+
+def _extruded_prisms(size: float, layers: int) -> np.ndarray:
+    """``(e, 6)`` 0-based prisms of gmsh's extrusion of a Delaunay-meshed 2 x 1 rectangle."""
+    gmsh.initialize()
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("extruded")
+        square = gmsh.model.occ.addRectangle(0.0, 0.0, 0.0, 2.0, 1.0)
+        gmsh.model.occ.extrude([(2, square)], 0, 0, 0.5, numElements=[layers], recombine=True)
+        gmsh.model.occ.synchronize()
+        gmsh.model.mesh.setSize(gmsh.model.getEntities(0), size)
+        gmsh.model.mesh.generate(3)
+        types, _, nodes = gmsh.model.mesh.getElements(3)
+        return np.asarray(nodes[list(types).index(6)], dtype=np.int64).reshape(-1, 6) - 1
+    finally:
+        gmsh.finalize()
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("layers", [1, 3])
+def test_rotations_of_a_larger_extrusion_obey_the_shared_rule(layers):
+    """Thousands of prisms (one layer: twice as many stacks as vertical lines, the tight case):
+    stacked prisms repeat a corner on their shared triangle, a collapsed edge belongs to at most
+    two prisms, and two only if they share no face (§32.2)."""
+    rows = _extruded_prisms(0.04, layers)
+    assert rows.shape[0] > 2500 * layers
+    hexahedra = collapse_wedges(rows, wedge_rotations(rows, shared=True))
+    faces = np.sort(np.vstack([hexahedra[:, :4], hexahedra[:, 4:]]), axis=1)
+    triangles = np.sort(np.vstack([rows[:, :3], rows[:, 3:]]), axis=1)
+    _, face_counts = np.unique(faces, axis=0, return_counts=True)
+    _, triangle_counts = np.unique(triangles, axis=0, return_counts=True)
+    assert np.sum(triangle_counts == 2) == (layers - 1) * rows.shape[0] // layers  # inner planes
+    assert np.sum(face_counts == 2) == np.sum(triangle_counts == 2)
+    edges = np.sort(hexahedra[:, [2, 6]], axis=1)
+    _, users, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    users = users.ravel()
+    assert counts.max() <= 2
+    order = np.argsort(users, kind="stable")
+    pairs = order[counts[users[order]] == 2].reshape(-1, 2)
+    assert np.all(users[pairs[:, 0]] == users[pairs[:, 1]])
+    common = (rows[pairs[:, 0], :, None] == rows[pairs[:, 1], None, :]).any(axis=2).sum(axis=1)
+    assert np.all(common == 2)  # the collapsed edge only, no face
+    if layers == 1:
+        assert pairs.shape[0] > 0.4 * rows.shape[0]  # the tight case: most edges are shared
 
 
 def _patch_problem(punch_cell: str, base_cell: str):
