@@ -11,10 +11,10 @@ loads the modules its deck needs, not those of every feature (docs/performance.m
 
 __version__ = "0.1.0"
 
-import importlib
 
 from dolfinx_ntf import _moved
 from dolfinx_ntf import logs as _logs
+from dolfinx_ntf.lazy_names import lazy_dir, lazy_getattr
 
 _logs.route_compiler_lines()
 _moved.install()
@@ -197,17 +197,5 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> object:
-    """Import the module of a public name (or a subpackage) on first access (PEP 562)."""
-    if name in _SUBPACKAGES:
-        return importlib.import_module(f".{name}", __name__)
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__ = lazy_getattr(__name__, _LAZY, _SUBPACKAGES)
+__dir__ = lazy_dir(__name__, __all__)

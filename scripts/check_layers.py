@@ -3,7 +3,7 @@
 The package's folders are its layers, lowest first::
 
     kernels                               pure numpy: no dolfinx, ufl, basix, mpi4py, petsc4py
-    compat, logs, validation              version shims and generic helpers
+    compat, logs, lazy_names, validation  version shims and generic helpers
     fem, meshes                           dolfinx glue
     parallel                              MPI pieces
     contact                               pairs, pairing, the nonlinear problem
@@ -29,6 +29,7 @@ RANK = {
     "kernels": 0,
     "compat": 1,
     "logs": 1,
+    "lazy_names": 1,
     "validation": 1,
     "fem": 2,
     "meshes": 2,

@@ -12,7 +12,7 @@ dolfinx glue:
     - ``writer``: ``write_inp`` exports a problem built in Python as an equivalent ccx deck.
 """
 
-import importlib
+from dolfinx_ntf.lazy_names import lazy_dir, lazy_getattr
 
 #: Where each public name lives: the submodules are imported on first use (PEP 562), so that
 #: ``run_job`` does not pay for the deck writer, the ccx runner or the comparisons it never uses.
@@ -85,15 +85,5 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> object:
-    """Import the submodule of a public name on first access (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__ = lazy_getattr(__name__, _LAZY)
+__dir__ = lazy_dir(__name__, __all__)
