@@ -292,7 +292,9 @@ def node_print_blocks(
     return blocks
 
 
-def el_print_blocks(key: str, set_name: str, time: float, elements, values) -> list[DatBlock]:
+def el_print_blocks(
+    key: str, set_name: str, time: float, elements, values, points=None
+) -> list[DatBlock]:
     """Block of an ``*EL PRINT`` key at the integration points: ``S``, ``E``, ``PEEQ`` or ``HFL``.
 
     ``S`` is the Cauchy stress, ``E`` the strain, ``PEEQ`` the equivalent plastic strain, ``HFL``
@@ -306,6 +308,8 @@ def el_print_blocks(key: str, set_name: str, time: float, elements, values) -> l
         values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz`` or strains (tensor
             components, same order), ``(E, q, 1)`` equivalent plastic strains or ``(E, q, 3)``
             heat fluxes ``qx, qy, qz`` per integration point (ccx order of the points).
+        points: ``(E,)`` number of points printed of each element (its first rows of
+            ``values``; C3D6 wedges print 2), all ``q`` if None.
     """
     widths = {"S": 6, "E": 6, "PEEQ": 1, "HFL": 3}
     if key not in widths:
@@ -317,7 +321,11 @@ def el_print_blocks(key: str, set_name: str, time: float, elements, values) -> l
         raise ValueError(f"*EL PRINT {key}: values must have shape ({elements.size}, q, {width})")
     q = values.shape[1]
     labels = np.stack([np.repeat(elements, q), np.tile(np.arange(1, q + 1), elements.size)], 1)
-    return [DatBlock(key, time, set_name, labels, values.reshape(-1, width))]
+    values = values.reshape(-1, width)
+    if points is not None:
+        keep = (np.arange(q)[None, :] < np.asarray(points).reshape(-1, 1)).reshape(-1)
+        labels, values = labels[keep], values[keep]
+    return [DatBlock(key, time, set_name, labels, values)]
 
 
 def contact_print_blocks(

@@ -339,7 +339,8 @@ class _Increment:
                 continue
             if key == "E":
                 strains = zero_below(self.values.strains(ids), self.values.field_accuracy().strain)
-                blocks += el_print_blocks("E", request.set, total, ids, strains)
+                counts = self.values.point_counts(ids)
+                blocks += el_print_blocks("E", request.set, total, ids, strains, counts)
                 continue
             if key == "PEEQ":
                 if not self.values.model.plasticity:  # ccx 2.20 prints no block without one
@@ -352,7 +353,8 @@ class _Increment:
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
                 )
             stresses = zero_below(self.values.stresses(ids), self.values.field_accuracy().stress)
-            blocks += el_print_blocks("S", request.set, total, ids, stresses)
+            counts = self.values.point_counts(ids)
+            blocks += el_print_blocks("S", request.set, total, ids, stresses, counts)
         return blocks
 
 
@@ -459,9 +461,10 @@ def _check_transformed_outputs(deck: Deck) -> None:
 
 
 def _check_wedge_outputs(deck: Deck) -> None:
-    """Refuse element outputs of C3D6 wedges (docs/method.md §30).
+    """Refuse the C3D6 wedges' element outputs other than ``*EL PRINT`` S and E (method §30.6).
 
-    ccx's come from its two-point wedge rule, ours would be the collapsed hexahedron's 8 points.
+    ``*EL PRINT`` S and E of a wedge are printed at ccx's two C3D6 points; the ``.frd``'s nodal
+    values (``*EL FILE``) would need ccx's C3D6 extrapolation, not built.
     """
     if deck.wedges.size == 0:
         return
@@ -469,14 +472,16 @@ def _check_wedge_outputs(deck: Deck) -> None:
         for request in [*step.prints, *step.file_requests]:
             if request.kind != "EL":
                 continue
+            if isinstance(request, PrintRequest) and set(request.keys) <= {"S", "E"}:
+                continue
             members = deck.elsets.get(request.set or "", None) if request.set else None
             hit = deck.wedges if members is None else deck.wedges[np.isin(deck.wedges, members)]
             if hit.size:
                 keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
                 raise NotImplementedError(
-                    f"{request.location}: {keyword} of C3D6 element {int(hit[0])} is not "
-                    "supported (the wedges run as collapsed C3D8 with 8 integration points, "
-                    "ccx's C3D6 has 2)"
+                    f"{request.location}: {keyword} {'/'.join(request.keys)} of C3D6 element "
+                    f"{int(hit[0])} is not supported (only *EL PRINT S and E are printed at "
+                    "ccx's two C3D6 points)"
                 )
 
 

@@ -21,7 +21,9 @@ import ufl
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.fem.collapsed_wedges import wedge_cells
 from dolfinx_ntf.kernels.friction import output_tangents
+from dolfinx_ntf.kernels.wedge_rule import wedge_rule
 from dolfinx_ntf.outputs.results import contact_results
 
 from .deck import Deck
@@ -103,6 +105,9 @@ class OutputValues:
         self._heat_flux: tuple[dolfinx.fem.Expression, int] | None = None
         self._strain: tuple[dolfinx.fem.Expression, int] | None = None
         self._field_scales: tuple[float, float, tuple[float, float]] | None = None
+        self._wedge_classes: np.ndarray | None = None
+        self._strain_tensor: ufl.core.expr.Expr | None = None
+        self._wedge_expressions: dict[tuple[str, int], dolfinx.fem.Expression] = {}
         #: The velocity of the job's dynamic steps (``*NODE PRINT V``), None before the first.
         self.velocity: dolfinx.fem.Function | None = None
 
@@ -215,6 +220,8 @@ class OutputValues:
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
 
         order = self._plastic_point_order()
+        if self.deck.wedges.size:
+            self._wedge_classes_of_cells()  # collective: before the owners evaluate
 
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(
@@ -224,6 +231,7 @@ class OutputValues:
                 mine = np.isin(cells, law.cells)
                 if mine.any():
                     values[mine] = law.cell_stresses(cells[mine])[:, order]
+            self._at_wedge_points("S", self.model.cauchy, cells, values)
             return values[:, :, index[0], index[1]]
 
         values = self.numbering.element_values(element_ids, evaluate, (q, 6))
@@ -238,6 +246,57 @@ class OutputValues:
             turned = np.isin(np.asarray(element_ids), axisymmetric)
             values[turned] = sector_stresses(values[turned])
         return values
+
+    def point_counts(self, element_ids: np.ndarray) -> np.ndarray:
+        """``(E,)`` number of integration points ccx prints of each element: 2 on a C3D6 wedge.
+
+        The element arrays of :meth:`stresses` and :meth:`strains` hold a wedge's two points in
+        their first two rows (docs/method.md §30.6).
+        """
+        element_ids = np.asarray(element_ids)
+        q = self.model.element_type.integration_points.shape[0]
+        counts = np.full(element_ids.size, q, dtype=np.int64)
+        counts[np.isin(element_ids, self.deck.wedges)] = 2
+        return counts
+
+    def _wedge_classes_of_cells(self) -> np.ndarray:
+        """The collapse class of every local cell (-1: no wedge); refuses plastic wedges.
+
+        Collective on first use (all processes refuse together).
+        """
+        if self._wedge_classes is None:
+            classes = wedge_cells(self.model.mesh)
+            wedge = np.flatnonzero(classes >= 0)
+            plastic = any(np.isin(wedge, law.cells).any() for law in self.model.plasticity)
+            if self.comm.allreduce(bool(plastic), MPI.LOR):
+                raise NotImplementedError(
+                    "*EL PRINT of C3D6 wedges in a plastic section is not supported yet (only "
+                    "elastic wedges print at ccx's two C3D6 points)"
+                )
+            self._wedge_classes = classes
+        return self._wedge_classes
+
+    def _at_wedge_points(
+        self, key: str, tensor: ufl.core.expr.Expr, cells: np.ndarray, values: np.ndarray
+    ) -> None:
+        """Put ``tensor`` at ccx's two C3D6 points into rows 0, 1 of the wedge cells' ``values``.
+
+        ``values`` is ``(cells, q, 3, 3)``; rows past the second of a wedge become 0. The points
+        are those of the cell's collapse class (``kernels/wedge_rule.py``, ccx's order).
+        """
+        if self.deck.wedges.size == 0 or cells.size == 0:
+            return
+        classes = self._wedge_classes_of_cells()[cells]
+        for c in np.unique(classes[classes >= 0]).tolist():
+            if (key, c) not in self._wedge_expressions:
+                points = wedge_rule(c)[0]
+                self._wedge_expressions[key, c] = dolfinx.fem.Expression(tensor, points)
+            hit = np.flatnonzero(classes == c)
+            at = compat.evaluate_expression(
+                self._wedge_expressions[key, c], self.model.mesh, cells[hit].astype(np.int32)
+            ).reshape(hit.size, 2, 3, 3)
+            values[hit] = 0.0
+            values[hit, :2] = at
 
     def _plastic_point_order(self) -> np.ndarray | None:
         """The plastic laws' point of each of ccx's integration points (same rule, other order)."""
@@ -271,12 +330,19 @@ class OutputValues:
             strain = ufl.sym(H) + 0.5 * kinematics * H.T * H
             points = model.element_type.integration_points
             self._strain = (dolfinx.fem.Expression(strain, points), points.shape[0])
+            self._strain_tensor = strain
         expression, q = self._strain
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
 
+        strain = self._strain_tensor
+        if self.deck.wedges.size:
+            self._wedge_classes_of_cells()  # collective: before the owners evaluate
+
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(expression, self.model.mesh, cells.astype(np.int32))
-            return values.reshape(cells.size, q, 3, 3)[:, :, index[0], index[1]]
+            values = values.reshape(cells.size, q, 3, 3)
+            self._at_wedge_points("E", strain, cells, values)
+            return values[:, :, index[0], index[1]]
 
         return self.numbering.element_values(element_ids, evaluate, (q, 6))
 
