@@ -346,7 +346,8 @@ class _Increment:
                 if not self.values.model.plasticity:  # ccx 2.20 prints no block without one
                     continue
                 values = self.values.equivalent_plastic_strains(ids)
-                blocks += el_print_blocks("PEEQ", request.set, total, ids, values)
+                counts = self.values.point_counts(ids)
+                blocks += el_print_blocks("PEEQ", request.set, total, ids, values, counts)
                 continue
             if key != "S":
                 raise NotImplementedError(
@@ -461,10 +462,10 @@ def _check_transformed_outputs(deck: Deck) -> None:
 
 
 def _check_wedge_outputs(deck: Deck) -> None:
-    """Refuse the C3D6 wedges' element outputs other than ``*EL PRINT`` S and E (method §30.6).
+    """Refuse the C3D6 wedges' element outputs but ``*EL PRINT`` S, E, PEEQ (method §30.6).
 
-    ``*EL PRINT`` S and E of a wedge are printed at ccx's two C3D6 points; the ``.frd``'s nodal
-    values (``*EL FILE``) would need ccx's C3D6 extrapolation, not built.
+    ``*EL PRINT`` S, E and PEEQ of a wedge are printed at ccx's two C3D6 points; the ``.frd``'s
+    nodal values (``*EL FILE``) would need ccx's C3D6 extrapolation, not built.
     """
     if deck.wedges.size == 0:
         return
@@ -472,7 +473,7 @@ def _check_wedge_outputs(deck: Deck) -> None:
         for request in [*step.prints, *step.file_requests]:
             if request.kind != "EL":
                 continue
-            if isinstance(request, PrintRequest) and set(request.keys) <= {"S", "E"}:
+            if isinstance(request, PrintRequest) and set(request.keys) <= {"S", "E", "PEEQ"}:
                 continue
             members = deck.elsets.get(request.set or "", None) if request.set else None
             hit = deck.wedges if members is None else deck.wedges[np.isin(deck.wedges, members)]
@@ -480,7 +481,7 @@ def _check_wedge_outputs(deck: Deck) -> None:
                 keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
                 raise NotImplementedError(
                     f"{request.location}: {keyword} {'/'.join(request.keys)} of C3D6 element "
-                    f"{int(hit[0])} is not supported (only *EL PRINT S and E are printed at "
+                    f"{int(hit[0])} is not supported (only *EL PRINT S, E and PEEQ are printed at "
                     "ccx's two C3D6 points)"
                 )
 

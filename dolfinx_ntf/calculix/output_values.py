@@ -220,18 +220,18 @@ class OutputValues:
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
 
         order = self._plastic_point_order()
-        if self.deck.wedges.size:
-            self._wedge_classes_of_cells()  # collective: before the owners evaluate
 
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(
                 expression, self.model.mesh, cells.astype(np.int32)
             ).reshape(cells.size, q, 3, 3)
+            plastic = np.zeros(cells.size, dtype=bool)
             for law in self.model.plasticity:  # their stresses at ccx's points (§21.6)
                 mine = np.isin(cells, law.cells)
                 if mine.any():
-                    values[mine] = law.cell_stresses(cells[mine])[:, order]
-            self._at_wedge_points("S", self.model.cauchy, cells, values)
+                    _put_law_values(values, mine, law.cell_stresses(cells[mine]), order)
+                    plastic |= mine
+            self._at_wedge_points("S", self.model.cauchy, cells, values, skip=plastic)
             return values[:, :, index[0], index[1]]
 
         values = self.numbering.element_values(element_ids, evaluate, (q, 6))
@@ -260,33 +260,30 @@ class OutputValues:
         return counts
 
     def _wedge_classes_of_cells(self) -> np.ndarray:
-        """The collapse class of every local cell (-1: no wedge); refuses plastic wedges.
-
-        Collective on first use (all processes refuse together).
-        """
+        """The collapse class of every local cell (-1: no wedge)."""
         if self._wedge_classes is None:
-            classes = wedge_cells(self.model.mesh)
-            wedge = np.flatnonzero(classes >= 0)
-            plastic = any(np.isin(wedge, law.cells).any() for law in self.model.plasticity)
-            if self.comm.allreduce(bool(plastic), MPI.LOR):
-                raise NotImplementedError(
-                    "*EL PRINT of C3D6 wedges in a plastic section is not supported yet (only "
-                    "elastic wedges print at ccx's two C3D6 points)"
-                )
-            self._wedge_classes = classes
+            self._wedge_classes = wedge_cells(self.model.mesh)
         return self._wedge_classes
 
     def _at_wedge_points(
-        self, key: str, tensor: ufl.core.expr.Expr, cells: np.ndarray, values: np.ndarray
+        self,
+        key: str,
+        tensor: ufl.core.expr.Expr,
+        cells: np.ndarray,
+        values: np.ndarray,
+        skip: np.ndarray | None = None,
     ) -> None:
         """Put ``tensor`` at ccx's two C3D6 points into rows 0, 1 of the wedge cells' ``values``.
 
         ``values`` is ``(cells, q, 3, 3)``; rows past the second of a wedge become 0. The points
-        are those of the cell's collapse class (``kernels/wedge_rule.py``, ccx's order).
+        are those of the cell's collapse class (``kernels/wedge_rule.py``, ccx's order). Cells
+        where ``skip`` is set (plastic wedges: their laws' values) are left alone.
         """
         if self.deck.wedges.size == 0 or cells.size == 0:
             return
-        classes = self._wedge_classes_of_cells()[cells]
+        classes = self._wedge_classes_of_cells()[cells].copy()
+        if skip is not None:
+            classes[skip] = -1
         for c in np.unique(classes[classes >= 0]).tolist():
             if (key, c) not in self._wedge_expressions:
                 points = wedge_rule(c)[0]
@@ -335,8 +332,6 @@ class OutputValues:
         index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
 
         strain = self._strain_tensor
-        if self.deck.wedges.size:
-            self._wedge_classes_of_cells()  # collective: before the owners evaluate
 
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(expression, self.model.mesh, cells.astype(np.int32))
@@ -369,7 +364,8 @@ class OutputValues:
             for law in self.model.plasticity:
                 mine = np.isin(cells, law.cells)
                 if mine.any():
-                    values[mine, :, 0] = law.cell_equivalent_plastic_strains(cells[mine])[:, order]
+                    held = law.cell_equivalent_plastic_strains(cells[mine])
+                    _put_law_values(values[..., 0], mine, held, order)
             return values
 
         values = self.numbering.element_values(element_ids, evaluate, (q, 1))
@@ -522,6 +518,21 @@ class OutputValues:
             order = np.argsort(slaves, kind="stable")
             elements.append((faces[order], slaves[order]))
         return elements
+
+
+def _put_law_values(
+    values: np.ndarray, mine: np.ndarray, held: np.ndarray, order: np.ndarray | None
+) -> None:
+    """Put a plastic law's point values ``held (n, p, ...)`` into rows ``mine`` of ``values``.
+
+    A law of C3D8's points gives them in ccx's ``order``; a wedge's law (``p = 2``, ccx's C3D6
+    rule in ccx's order, docs/method.md §30.5) fills the first two rows, the others 0.
+    """
+    if held.shape[1] == 2 and values.shape[1] != 2:
+        values[mine] = 0.0
+        values[mine, :2] = held
+    else:
+        values[mine] = held[:, order]
 
 
 def sector_stresses(values: np.ndarray) -> np.ndarray:

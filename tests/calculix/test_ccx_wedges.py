@@ -134,7 +134,7 @@ def test_wedges_refused_with_a_clear_error(tmp_path: Path) -> None:
         read_deck(path)
 
 
-@pytest.mark.parametrize("request_card", ["*EL PRINT, ELSET=EALL\nS, PEEQ", "*EL FILE\nS"])
+@pytest.mark.parametrize("request_card", ["*EL FILE\nS", "*EL FILE\nE"])
 def test_element_outputs_of_wedges_refused(tmp_path: Path, request_card: str) -> None:
     text = _block(surfaces=False)[0].replace("*END STEP", f"{request_card}\n*END STEP")
     (tmp_path / "w.inp").write_text(text)
@@ -279,6 +279,39 @@ def test_mixed_wedge_stresses_against_ccx(tmp_path: Path) -> None:
     any element output: a solve bug of its own, not this output's).
     """
     _check_wedge_stresses(tmp_path, False, True, MPI.COMM_SELF)
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
+@pytest.mark.parametrize(
+    ("nlgeom", "tolerance"), [(False, 1e-6), (True, 1e-5)], ids=["small", "nlgeom"]
+)
+def test_plastic_wedge_stresses_against_ccx(tmp_path: Path, nlgeom: bool, tolerance: float) -> None:
+    """S, E and PEEQ of plastic wedges (their laws' two points) beside plastic C3D8, 4 increments.
+
+    Measured against ccx 2.20: its printed digits (difference 0); with NLGEOM 7.0e-6 of the largest
+    value (as U and RF of this deck, ``test_plastic_wedges_against_ccx``). Serial: the mixed block.
+    """
+    text, wedges = _block(surfaces=False, mixed=True)
+    text = text.replace("210000., 0.3\n", "210000., 0.3\n*PLASTIC\n300., 0.\n400., 0.1\n")
+    text = text.replace("*STATIC\n", "*STATIC\n0.25, 1.\n")
+    text = text.replace("*END STEP", "*EL PRINT, ELSET=EALL\nS, E, PEEQ\n*END STEP")
+    if nlgeom:
+        text = text.replace("*STEP\n", "*STEP, NLGEOM\n")
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "w", text)
+    ours, theirs = read_dat(ntf_dir / "w.dat"), read_dat(ccx_dir / "w.dat")
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in theirs]
+    printed = [(a, b) for a, b in zip(ours, theirs) if a.name in ("S", "E", "PEEQ")]
+    assert len(printed) == 12  # 3 keys at 4 increments
+    for a, b in printed:
+        np.testing.assert_array_equal(a.labels, b.labels)
+        points = np.bincount(b.labels[:, 0])[1:]
+        assert points.tolist() == [2] * len(wedges) + [8] * (points.size - len(wedges))
+        scale = np.abs(b.values).max()
+        assert np.abs(a.values - b.values).max() <= tolerance * scale, (a.name, a.time)
+    peeq = printed[-1][1]
+    assert np.abs(peeq.values[: 2 * len(wedges)]).min() > 0.0  # the wedges yielded
 
 
 SUITE = Path("/usr/share/doc/calculix-ccx-test/examples/test")

@@ -3,8 +3,8 @@
 The wedge punch deck (a C3D8 block pressed by a punch of 12 wedges) writes its mesh with 12 XDMF
 ``Wedge`` and 25 ``Hexahedron`` cells; the displacement and the contact pressure in the file are
 the ``.dat`` file's U and CSTR at the printed digits (both gathered in ccx order, so on any
-number of processes). Of the wedges' element outputs only ``*EL PRINT`` S and E are printed (at
-ccx's two C3D6 points, ``test_ccx_wedges.py``); the others stay refused.
+number of processes). Of the wedges' element outputs only ``*EL PRINT`` S, E and PEEQ are
+printed (at ccx's two C3D6 points, ``test_ccx_wedges.py``); ``*EL FILE`` stays refused.
 """
 
 from __future__ import annotations
@@ -80,11 +80,11 @@ def test_wedge_deck_writes_xdmf(tmp_path: Path) -> None:
 
 @pytest.mark.serial
 def test_wedge_element_outputs_stay_refused(tmp_path: Path) -> None:
-    """PEEQ of a wedge is refused before the run (only S and E are printed at its two points)."""
+    """``*EL FILE`` of wedges is refused before the run (``*EL PRINT`` S, E, PEEQ are built)."""
     text = (DATA / "wedge_punch.inp").read_text()
-    text = text.replace("*CONTACT PRINT", "*EL PRINT, ELSET=PUNCH\nS, PEEQ\n*CONTACT PRINT")
+    text = text.replace("*CONTACT PRINT", "*EL FILE\nS, PEEQ\n*CONTACT PRINT")
     with pytest.raises(
         NotImplementedError,
-        match=r"S/PEEQ of C3D6 element \d+ is not supported \(only \*EL PRINT S and E",
+        match=r"\*EL FILE S/PEEQ of C3D6 element \d+ is not supported",
     ):
         _run(tmp_path, text, MPI.COMM_SELF)
