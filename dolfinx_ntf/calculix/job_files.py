@@ -339,14 +339,14 @@ class _Increment:
                 continue
             if key == "E":
                 strains = zero_below(self.values.strains(ids), self.values.field_accuracy().strain)
-                counts = self.values.point_counts(ids)
+                counts = self.values.point_counts(ids, strains.shape[1])
                 blocks += el_print_blocks("E", request.set, total, ids, strains, counts)
                 continue
             if key == "PEEQ":
                 if not self.values.model.plasticity:  # ccx 2.20 prints no block without one
                     continue
                 values = self.values.equivalent_plastic_strains(ids)
-                counts = self.values.point_counts(ids)
+                counts = self.values.point_counts(ids, values.shape[1])
                 blocks += el_print_blocks("PEEQ", request.set, total, ids, values, counts)
                 continue
             if key != "S":
@@ -354,7 +354,7 @@ class _Increment:
                     f"{request.location}: *EL PRINT key {key} is not supported yet"
                 )
             stresses = zero_below(self.values.stresses(ids), self.values.field_accuracy().stress)
-            counts = self.values.point_counts(ids)
+            counts = self.values.point_counts(ids, stresses.shape[1])
             blocks += el_print_blocks("S", request.set, total, ids, stresses, counts)
         return blocks
 

@@ -247,15 +247,15 @@ class OutputValues:
             values[turned] = sector_stresses(values[turned])
         return values
 
-    def point_counts(self, element_ids: np.ndarray) -> np.ndarray:
+    def point_counts(self, element_ids: np.ndarray, rows: int) -> np.ndarray:
         """``(E,)`` number of integration points ccx prints of each element: 2 on a C3D6 wedge.
 
         The element arrays of :meth:`stresses` and :meth:`strains` hold a wedge's two points in
-        their first two rows (docs/method.md §30.6).
+        their first two rows (docs/method.md §30.6); every other element prints all ``rows``
+        (ccx's points: 8 for a 2D element, which ccx expands into a C3D8).
         """
         element_ids = np.asarray(element_ids)
-        q = self.model.element_type.integration_points.shape[0]
-        counts = np.full(element_ids.size, q, dtype=np.int64)
+        counts = np.full(element_ids.size, rows, dtype=np.int64)
         counts[np.isin(element_ids, self.deck.wedges)] = 2
         return counts
 
