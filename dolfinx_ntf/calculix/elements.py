@@ -130,6 +130,17 @@ class ElementType:
         return 3 if self.face_type.startswith("tri") else 4
 
     @property
+    def face_sizes(self) -> np.ndarray:
+        """``(num_faces,)`` nodes of each face (C3D15's triangles pad ``faces`` with -1)."""
+        return np.sum(self.faces >= 0, axis=1)
+
+    @property
+    def face_corner_counts(self) -> np.ndarray:
+        """``(num_faces,)`` corner nodes of each face (C3D15: 3 on S1, S2, 4 on S3..S5)."""
+        sizes = self.face_sizes
+        return np.where(sizes < self.faces.shape[1], sizes // 2, self.face_corners)
+
+    @property
     def corner_vertices(self) -> np.ndarray:
         """ccx corner ``i`` is dolfinx vertex ``corner_vertices[i]``."""
         return np.argsort(self.to_dolfinx[: self.num_corners])
@@ -159,6 +170,12 @@ _HEX_EDGES = (
 )  # fmt: skip
 
 
+# ccx C3D15 midside nodes 7..15 (manual): on 1-2, 2-3, 3-1, 4-5, 5-6, 6-4, 1-4, 2-5, 3-6.
+_WEDGE_EDGES = ((0, 1), (1, 2), (2, 0), (3, 4), (4, 5), (5, 3), (0, 3), (1, 4), (2, 5))
+# ccx C3D15 corners in dolfinx's reference prism.
+_WEDGE_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]])
+
+
 def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
     """``(nodes, points)`` matrix taking integration-point values to the element's nodes.
 
@@ -185,6 +202,13 @@ def nodal_extrapolation(element_type: str, points: np.ndarray) -> np.ndarray:
         return np.vstack([corner, midside])
     if element_type == "C3D20":
         return _c3d20_extrapolation(points)
+    if element_type == "C3D15":
+        # the field linear in the triangle and quadratic along the axis through the 9 points
+        # (not checked against ccx's .frd: the deck runner refuses .frd stresses of C3D15)
+        nodes = np.vstack(
+            [_WEDGE_CORNERS, [(_WEDGE_CORNERS[a] + _WEDGE_CORNERS[b]) / 2 for a, b in _WEDGE_EDGES]]
+        )
+        return _wedge_basis(nodes) @ np.linalg.inv(_wedge_basis(points))
     if element_type[:3] in TWO_D_MODELS and element_type[3:] == "3":
         return np.ones((3, 1))
     if element_type[:3] in TWO_D_MODELS and element_type[3:] in ("8", "8R"):
@@ -229,6 +253,14 @@ C3D20_EXTRAPOLATION = {
 }  # fmt: skip
 
 
+def _wedge_basis(points: np.ndarray) -> np.ndarray:
+    """``(q, 9)`` the products of ``1, x, y`` and ``1, z, z^2`` at reference prism ``points``."""
+    x, y, z = points.T
+    plane = np.column_stack([np.ones_like(x), x, y])
+    axis = np.column_stack([np.ones_like(z), z, z**2])
+    return np.einsum("qi,qj->qij", plane, axis).reshape(-1, 9)
+
+
 def _quad8_shapes(points: np.ndarray) -> np.ndarray:
     """``(q, 8)`` quad8 serendipity shape functions at unit-square ``points`` (ccx node order)."""
     xi, eta = 2 * points[:, 0] - 1, 2 * points[:, 1] - 1
@@ -262,6 +294,7 @@ def _c3d20_extrapolation(points: np.ndarray) -> np.ndarray:
 _G = 1.0 / np.sqrt(3.0)
 _A10, _B10 = 0.1381966011250105, 0.5854101966249685
 _G3 = (-np.sqrt(0.6), 0.0, np.sqrt(0.6))
+_TRI_POINTS = ((1 / 6, 1 / 6), (2 / 3, 1 / 6), (1 / 6, 2 / 3))
 
 # C3D8 2x2x2 Gauss points in ccx order (xi fastest); C3D4 one point; C3D10 four points.
 _POINTS = {
@@ -275,6 +308,9 @@ _POINTS = {
     "C3D10": [[_A10, _A10, _A10], [_B10, _A10, _A10], [_A10, _B10, _A10], [_A10, _A10, _B10]],
     # C3D20: 3x3x3 Gauss, xi fastest (checked against ccx's *EL PRINT); C3D20R as C3D8.
     "C3D20": [[(x + 1) / 2, (y + 1) / 2, (z + 1) / 2] for z in _G3 for y in _G3 for x in _G3],
+    # C3D15: ccx's 9 points, the 3 triangle points fastest in each of the 3 Gauss layers (the
+    # order ccx prints the C3D15 of a CPE6, docs/method.md §23; checked on C3D15, §34).
+    "C3D15": [[a, b, (z + 1) / 2] for z in _G3 for a, b in _TRI_POINTS],
 }
 _POINTS["C3D20R"] = _POINTS["C3D8I"] = _POINTS["C3D8"]
 # 2D elements: the in-plane points of ccx's expanded element (2x2 Gauss, xi fastest; one point).
@@ -303,7 +339,7 @@ def _element_type(
     print_rows: list[int] | None = None,
 ) -> ElementType:
     points = frozen_array(_POINTS[name], np.float64)
-    midside = {10: _TET_EDGES, 20: _HEX_EDGES, 6: _TRI_EDGES, 8: _QUAD_EDGES}
+    midside = {10: _TET_EDGES, 20: _HEX_EDGES, 6: _TRI_EDGES, 8: _QUAD_EDGES, 15: _WEDGE_EDGES}
     midside_edges = midside[num_nodes] if num_nodes > num_corners else ()
     return ElementType(
         name,
@@ -406,6 +442,33 @@ ELEMENT_TYPES: dict[str, ElementType] = {
         )
         for name, quadrature in (("C3D20", 5), ("C3D20R", 2))
     },
+    # C3D15 (dolfinx 0.11 only, docs/method.md §34): triangle 1-2-3 below 4-5-6, midside nodes
+    # 7..15 on _WEDGE_EDGES. Faces (manual): S1 1-2-3 (reversed here to point outward), S2 4-5-6,
+    # S3 1-2-5-4, S4 2-3-6-5, S5 3-1-4-6, then their midside nodes; the triangles are padded
+    # with -1 to the quadrilaterals' 8 nodes (``ElementType.face_sizes``). The dolfinx cell is
+    # an 18-node prism: vertices, edges v0-v1, v0-v2, v0-v3, v1-v2, v1-v4, v2-v5, v3-v4, v3-v5,
+    # v4-v5, then the centres of the quadrilateral faces, which the model adds and constrains
+    # to the serendipity space (fem/serendipity_wedge.py). ccx's 9 points (3 x 3).
+    "C3D15": _element_type(
+        "C3D15",
+        15,
+        6,
+        "quad8",
+        [
+            [1, 3, 2, 9, 8, 7, 0, 0],
+            [4, 5, 6, 10, 11, 12, 0, 0],
+            [1, 2, 5, 4, 7, 14, 10, 13],
+            [2, 3, 6, 5, 8, 15, 11, 14],
+            [3, 1, 4, 6, 9, 13, 12, 15],
+        ],
+        cell="prism",
+        degree=2,
+        to_dolfinx=[0, 1, 2, 3, 4, 5, 6, 8, 12, 7, 13, 14, 9, 11, 10],
+        mirrored_vertices=[3, 4, 5, 0, 1, 2],
+        quadrature_degree=5,
+        frd_type=5,
+        face_quadrature_degree=5,
+    ),
     # ccx's 2D elements (manual "Face numbering for quadrilateral elements": S1 1-2, S2 2-3,
     # S3 3-4, S4 4-1; triangles S1 1-2, S2 2-3, S3 3-1), run natively in 2D (docs/method.md §23).
     # ccx expands a 4-node element into one C3D8 and prints its 8 points (two equal layers of the
@@ -502,7 +565,7 @@ REFUSED_ELEMENTS = {
 }
 
 
-_NOT_PLAIN = ("C3D20", "C3D20R", "C3D8I")
+_NOT_PLAIN = ("C3D20", "C3D20R", "C3D8I", "C3D15")
 
 
 def element_for_cell(cell: str, degree: int) -> ElementType | None:

@@ -25,6 +25,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.serendipity import element_forces_on_nodes
 from dolfinx_ntf.fem.serendipity_quad import quad_forces_on_nodes
+from dolfinx_ntf.fem.serendipity_wedge import wedge_forces_on_nodes
 from dolfinx_ntf.kernels.discrete_springs import AxialSpring
 
 from .deck import Deck
@@ -189,6 +190,9 @@ class CcxNumbering:
         if self.model.element_type.num_nodes == 20:  # C3D20: centre forces on the 20 nodes
             values = element_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 20, 3)
             dofs = dofs[:, :20]
+        elif self.model.element_type.name == "C3D15":  # face-centre forces on the 15 nodes
+            values = wedge_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 15, 3)
+            dofs = dofs[:, :15]
         elif gdim == 2 and self.model.element_type.num_nodes == 8:  # CPE8: the centre's too
             values = quad_forces_on_nodes(forces.ravel(), self._W).reshape(-1, 8, 2)
             dofs = dofs[:, :8]

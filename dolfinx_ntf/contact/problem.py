@@ -33,7 +33,7 @@ from dolfinx_ntf.contact.evaluation import area_block, evaluate_pair
 from dolfinx_ntf.contact.pair import ContactPair, PairState
 from dolfinx_ntf.contact.pairing import Pairing
 from dolfinx_ntf.contact.velocity import NodeVelocity
-from dolfinx_ntf.fem import serendipity, serendipity_quad
+from dolfinx_ntf.fem import serendipity, serendipity_quad, serendipity_wedge
 from dolfinx_ntf.fem.bulk_jacobian import BulkJacobian
 from dolfinx_ntf.fem.constraints import (
     ConstraintElimination,
@@ -386,7 +386,10 @@ class ContactProblem:
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(vector, self._element_forces)
         values = vector.array_r  # owned entries: broken dofs belong to one cell each
-        if self._face_centres.size:  # C3D20: the forces of its 20 nodes (docs/method.md §13.5)
+        prisms = self._element_space.mesh.topology.cell_type == dolfinx.mesh.CellType.prism
+        if self._face_centres.size and prisms:  # C3D15: its 15 nodes' (docs/method.md §34)
+            values = serendipity_wedge.wedge_forces_on_nodes(values, self._element_space)
+        elif self._face_centres.size:  # C3D20: the forces of its 20 nodes (§13.5)
             values = serendipity.element_forces_on_nodes(values, self._element_space)
         elif self._quad_centres:  # 8-node quadrilaterals: the forces of their 8 nodes
             values = serendipity_quad.quad_forces_on_nodes(values, self._element_space)

@@ -32,6 +32,7 @@ from dolfinx_ntf.fem.plane_sections import PlaneSections
 from dolfinx_ntf.fem.plasticity import J2Plasticity
 from dolfinx_ntf.fem.serendipity import serendipity_constraints, trilinear_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
+from dolfinx_ntf.fem.serendipity_wedge import wedge_serendipity_constraints
 from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
@@ -39,6 +40,7 @@ from dolfinx_ntf.parallel.global_constraints import global_constraint_block, glo
 from ..deck import Deck, not_supported
 from ..elements import ElementType
 from .bulk import density, lame, plane_stress_factor, stresses
+from .c3d15 import c3d15_metadata, check_c3d15_deck
 from .carriers import carried_nodes, carrier_dofs
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
@@ -474,6 +476,8 @@ def build_model(
         check_mixed_deck(deck)
     block = element_block(deck)
     etype = block.type
+    if etype.name == "C3D15":
+        check_c3d15_deck(deck, block)
     models = element_models(deck, block)
     if len(deck.elements) > 1:  # ccx's quasi-axisymmetric mix, one block (docs/method.md §26)
         deck = dataclasses.replace(deck, elements={etype.name: block})
@@ -523,6 +527,8 @@ def build_model(
     dx = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": etype.quadrature_degree})
     linear_cells = np.zeros(0, np.int64)
     mass_dx = dx if etype.name == "C3D8" else ufl.dx(domain=mesh)  # ccx's C3D8 mass (§27.4)
+    if etype.name == "C3D15":  # ccx's 9 points (docs/method.md §34)
+        dx = mass_dx = ufl.Measure("dx", domain=mesh, metadata=c3d15_metadata())
     if mixed is not None:
         linear_cells = element_cell[mixed.linear & (element_cell >= 0)]
         cells = element_cell[element_cell >= 0]
@@ -650,6 +656,8 @@ def build_model(
         constraints.append(trilinear_constraints(V, linear_cells))
     if etype.tdim == 2 and etype.num_nodes == 8:
         constraints += quad_serendipity_constraints(V)  # CPE8's space (§23)
+    if etype.name == "C3D15":
+        constraints += wedge_serendipity_constraints(V)  # C3D15's space (§34)
     for tie in tie_blocks:  # every process read them: rank 0 gives them
         rows = slice(None) if comm.rank == 0 else slice(0)
         given = LinearConstraintBlock(

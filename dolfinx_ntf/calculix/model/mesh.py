@@ -23,6 +23,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.fem.collapsed_wedges import check_vertices_joined
 from dolfinx_ntf.fem.serendipity import add_centres
 from dolfinx_ntf.fem.serendipity_quad import add_quad_centres
+from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
 
 from ..deck import Deck, ElementBlock, Location
 from ..elements import ELEMENT_TYPES
@@ -128,6 +129,12 @@ def element_block(deck: Deck) -> ElementBlock:
         raise ValueError(f"{deck.path}: the deck has no elements")
     if len(blocks) > 1:
         names = ", ".join(f"{b.type.name} (first at {b.locations[0]})" for b in blocks)
+        if any(b.type.name == "C3D15" for b in blocks):
+            raise ValueError(
+                f"{deck.path}: the mesh mixes element types {names}: C3D15 wedges run in meshes "
+                "of C3D15 only (a dolfinx mesh holds one cell type, and an 18-node prism mesh "
+                "cannot take other cells; docs/method.md §34)"
+            )
         if not _quasi_axisymmetric(blocks):
             raise ValueError(
                 f"{deck.path}: the mesh mixes element types {names}; use one element type per "
@@ -184,7 +191,8 @@ def create_mesh(
     domain = compat.coordinate_element(block.type.cell, block.type.degree, gdim)
     serendipity = block.type.num_nodes == 20  # C3D20(R): 27-node cells (docs/method.md §13.5)
     quad8 = gdim == 2 and block.type.num_nodes == 8  # CPE8 ...: 9-node cells (§23)
-    width = 27 if serendipity else (9 if quad8 else block.type.num_nodes)
+    wedge15 = block.type.name == "C3D15"  # 18-node prisms (docs/method.md §34)
+    width = 27 if serendipity else (9 if quad8 else (18 if wedge15 else block.type.num_nodes))
     if comm.rank == 0:
         cells = deck.node_index(block.connectivity)[:, block.type.to_dolfinx]
         x = np.asarray(deck.node_coords, dtype=np.float64)[:, :gdim].copy()
@@ -192,6 +200,8 @@ def create_mesh(
             cells, x = add_centres(cells, x)
         if quad8:
             cells, x = add_quad_centres(cells, x)
+        if wedge15:
+            cells, x = add_wedge_centres(cells, x)
         if carried is not None and carried.size:
             points, extra = carrier_cells(deck, block, carried, x.shape[0])
             cells, x = np.vstack([cells, extra]), np.vstack([x, points])
@@ -241,8 +251,20 @@ def numbering(
 
 
 def facet_finder(mesh: dolfinx.mesh.Mesh) -> FacetFinder:
-    """A function mapping ``(F, k)`` facet corner vertices to local facet indices (-1 if none)."""
+    """A function mapping ``(F, k)`` facet corner vertices to local facet indices (-1 if none).
+
+    A prism mesh has two facet types, numbered apart by dolfinx 0.11, whose ``ds`` it does not
+    assemble: its finder refuses every query (C3D15 decks refuse faces first, §34).
+    """
     tdim = mesh.topology.dim
+    if mesh.topology.cell_type == dolfinx.mesh.CellType.prism:
+
+        def refuse(corners: np.ndarray) -> np.ndarray:
+            raise NotImplementedError(
+                "faces of prism meshes are not supported (docs/method.md §34)"
+            )
+
+        return refuse
     mesh.topology.create_connectivity(tdim - 1, 0)
     mesh.topology.create_connectivity(tdim - 1, tdim)
     f_to_v = mesh.topology.connectivity(tdim - 1, 0)
