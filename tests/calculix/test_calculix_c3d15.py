@@ -1,0 +1,108 @@
+"""C3D15 wedges (docs/method.md §34): run on dolfinx 0.11, refused naming the line before it.
+
+The decks are ``tests/data/calculix/c3d15/make_block.py``'s C3D15 block (curved edges, uneven
+load; small strain and NLGEOM) and ccx's own ``c3d15.inp`` with its pressures as the consistent
+nodal forces of its flat 6-node faces; the ``.dat.ref`` files are ccx 2.20's output.
+"""
+
+from __future__ import annotations
+
+import gzip
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.job import run_job
+
+pytestmark = pytest.mark.serial
+
+DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
+ON_011 = compat.DOLFINX_VERSION >= (0, 11)
+
+
+def _run(tmp_path: Path, job: str) -> tuple[list, list]:
+    shutil.copy(DATA / f"{job}.inp", tmp_path / f"{job}.inp")
+    run_job(job, tmp_path)
+    return read_dat(DATA / f"{job}.dat.ref"), read_dat(tmp_path / f"{job}.dat")
+
+
+def _check(ccx: list, ours: list, free_rf: float) -> dict[str, float]:
+    """Largest differences per block kind relative to ccx's largest value of that block.
+
+    ccx's RF at free nodes is its last residual (ours prints 0 there): below ``free_rf`` of the
+    block's largest value.
+    """
+    assert [(b.name, b.time) for b in ccx] == pytest.approx([(b.name, b.time) for b in ours])
+    worst: dict[str, float] = {}
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(a.labels, b.labels)
+        diff = np.abs(a.values - b.values)
+        if a.name == "RF":  # ccx prints its last residual at free nodes; ours 0 there
+            diff = diff[np.abs(b.values).max(axis=1) > 0]
+            residual = np.abs(a.values[np.abs(b.values).max(axis=1) == 0]).max()
+            assert residual < free_rf * np.abs(a.values).max()
+        scale = np.abs(a.values).max()
+        worst[a.name] = max(worst.get(a.name, 0.0), float(diff.max() / scale))
+    return worst
+
+
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+@pytest.mark.parametrize("job", ["wedge_block", "c3d15_cload"])
+def test_c3d15_small_strain_matches_ccx(tmp_path, job):
+    ccx, ours = _run(tmp_path, job)
+    worst = _check(ccx, ours, free_rf=1e-12)
+    for name, value in worst.items():  # U, RF, S to ccx's printed digits
+        assert value < 1e-6, (name, value)
+
+
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+def test_c3d15_nlgeom_matches_ccx(tmp_path):
+    ccx, ours = _run(tmp_path, "wedge_block_nlgeom")
+    assert {b.time for b in ours} == {0.25, 0.5, 0.875, 1.0}  # ccx's increments
+    worst = _check(ccx, ours, free_rf=1e-4)  # ccx stops at 0.5 % of its mean force
+    assert worst["U"] < 1e-6 and worst["S"] < 1e-6 and worst["RF"] < 1e-6, worst
+
+
+@pytest.mark.skipif(ON_011, reason="dolfinx 0.11 runs C3D15")
+def test_c3d15_refused_before_dolfinx_011(tmp_path):
+    shutil.copy(DATA / "wedge_block.inp", tmp_path / "wedge_block.inp")
+    with pytest.raises(NotImplementedError) as info:
+        run_job("wedge_block", tmp_path)
+    message = str(info.value)
+    assert "wedge_block.inp:" in message and "C3D15 (element 1)" in message
+    assert "dolfinx 0.11" in message
+    why = "refuses forms on prisms" if compat.DOLFINX_VERSION < (0, 7) else "abort the process"
+    assert why in message
+
+
+@pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
+def test_c3d15_refuses_pressures_and_mixed_meshes(tmp_path):
+    deck = (DATA / "wedge_block.inp").read_text()
+    with_pressure = deck.replace("*CLOAD\n", "*DLOAD\n1, P1, 5.\n*CLOAD\n")
+    (tmp_path / "p.inp").write_text(with_pressure)
+    with pytest.raises(NotImplementedError, match=r"p\.inp:\d+: \*DLOAD pressures on C3D15"):
+        run_job("p", tmp_path)
+    extra = "*ELEMENT, TYPE=C3D8, ELSET=EALL\n99, 1, 2, 3, 4, 5, 6, 7, 8\n*MATERIAL"
+    (tmp_path / "m.inp").write_text(deck.replace("*MATERIAL", extra, 1))
+    with pytest.raises(ValueError, match="C3D15 wedges run in meshes of C3D15 only"):
+        run_job("m", tmp_path)
+
+
+def test_ccx_deck_variant_is_ccx_c3d15(tmp_path):
+    """``c3d15_cload.inp`` is ccx's c3d15.inp but for the loads (and TYPE=ISO, no identity
+    *ORIENTATION, no temperature column): its ccx output equals ccx's own reference."""
+    ref = Path("/usr/share/doc/calculix-ccx-test/examples/test/c3d15.dat.ref.gz")
+    if not ref.exists():
+        pytest.skip("calculix-ccx-test is not installed")
+    with gzip.open(ref, "rt") as f:
+        text = f.read()
+    ours = read_dat(DATA / "c3d15_cload.dat.ref")
+    path = tmp_path / "c3d15.dat"
+    path.write_text(text)
+    theirs = read_dat(path)
+    for a, b in zip(theirs, ours, strict=True):
+        np.testing.assert_allclose(b.values, a.values, atol=1e-11 * np.abs(a.values).max() + 1e-18)

@@ -1,0 +1,92 @@
+"""Write ``wedge_block.inp`` / ``wedge_block_nlgeom.inp``: a C3D15 block for docs/method.md §34.
+
+A 2 x 2 x 2 grid of hexahedra on [0, 2] x [0, 1] x [0, 1], each split into two wedges along a
+diagonal, with all midside nodes moved off the straight edges (curved edges: the geometric map
+is C3D15's, not an affine one) and the top nodes loaded unevenly; the bottom is clamped. Run:
+``python make_block.py`` (deterministic: no random numbers).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+NX, NY, NZ = 2, 2, 2
+LX, LY, LZ = 2.0, 1.0, 1.0
+
+
+def _grid() -> tuple[dict, list]:
+    coords: dict[tuple, int] = {}
+    points: list[np.ndarray] = []
+
+    def node(p: np.ndarray) -> int:
+        key = tuple(np.round(p, 9))
+        if key not in coords:
+            coords[key] = len(points) + 1
+            points.append(p)
+        return coords[key]
+
+    wedges = []
+    h = np.array([LX / NX, LY / NY, LZ / NZ])
+    for k in range(NZ):
+        for j in range(NY):
+            for i in range(NX):
+                o = np.array([i, j, k]) * h
+                c = [o + np.array([a, b, 0.0]) * h for a, b in ((0, 0), (1, 0), (1, 1), (0, 1))]
+                up = np.array([0.0, 0.0, h[2]])
+                for tri in ((0, 1, 2), (0, 2, 3)) if (i + j) % 2 == 0 else ((0, 1, 3), (1, 2, 3)):
+                    bottom = [c[t] for t in tri]
+                    top = [p + up for p in bottom]
+                    corners = bottom + top
+                    edges = [(0, 1), (1, 2), (2, 0), (3, 4), (4, 5), (5, 3), (0, 3), (1, 4), (2, 5)]
+                    nodes = [node(p) for p in corners]
+                    for a, b in edges:
+                        mid = (corners[a] + corners[b]) / 2
+                        # curved edges: a smooth displacement of the midside nodes
+                        mid = mid + 0.03 * np.array(
+                            [
+                                np.sin(2 * mid[1] + mid[2]),
+                                np.cos(mid[0] + 3 * mid[2]),
+                                np.sin(mid[0] * mid[1]),
+                            ]
+                        )
+                        nodes.append(node(mid))
+                    wedges.append(nodes)
+    return points, wedges
+
+
+def write(path: Path, nlgeom: bool) -> None:
+    points, wedges = _grid()
+    x = np.array(points)
+    lines = ["*HEADING", "C3D15 block, curved edges, uneven top load (dolfinx_ntf method §34)"]
+    lines.append("*NODE, NSET=NALL")
+    lines += [f"{n + 1}, {p[0]:.12g}, {p[1]:.12g}, {p[2]:.12g}" for n, p in enumerate(x)]
+    lines.append("*ELEMENT, TYPE=C3D15, ELSET=EALL")
+    for e, w in enumerate(wedges):
+        lines.append(f"{e + 1}, " + ", ".join(map(str, w[:10])) + ",")
+        lines.append(", ".join(map(str, w[10:])))
+    bottom = np.flatnonzero(np.isclose(x[:, 2], 0.0)) + 1
+    top = np.flatnonzero(np.isclose(x[:, 2], LZ)) + 1
+    lines.append("*NSET, NSET=BOTTOM")
+    lines += [", ".join(map(str, bottom[i : i + 8])) for i in range(0, bottom.size, 8)]
+    lines += ["*MATERIAL, NAME=STEEL", "*ELASTIC", "210000., 0.3"]
+    lines += ["*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL"]
+    lines.append("*STEP" + (", NLGEOM" if nlgeom else ""))
+    lines += ["*STATIC", "0.25, 1.0" if nlgeom else ""]
+    lines += ["*BOUNDARY", "BOTTOM, 1, 3"]
+    lines.append("*CLOAD")
+    scale = 500.0 if nlgeom else 100.0
+    for n in top:
+        p = x[n - 1]
+        lines.append(f"{n}, 1, {scale * (0.5 + p[1]):.12g}")
+        lines.append(f"{n}, 2, {scale * 0.3 * p[0]:.12g}")
+        lines.append(f"{n}, 3, {-scale * (1.0 + p[0] * p[1]):.12g}")
+    lines += ["*NODE PRINT, NSET=NALL", "U, RF", "*EL PRINT, ELSET=EALL", "S", "*END STEP"]
+    path.write_text("\n".join(line for line in lines if line != "") + "\n")
+
+
+if __name__ == "__main__":
+    here = Path(__file__).parent
+    write(here / "wedge_block.inp", nlgeom=False)
+    write(here / "wedge_block_nlgeom.inp", nlgeom=True)
