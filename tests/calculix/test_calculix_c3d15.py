@@ -11,6 +11,8 @@ import gzip
 import shutil
 from pathlib import Path
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
 
@@ -18,16 +20,19 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.job import run_job
 
-pytestmark = pytest.mark.serial
-
 DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
 ON_011 = compat.DOLFINX_VERSION >= (0, 11)
 
 
-def _run(tmp_path: Path, job: str) -> tuple[list, list]:
-    shutil.copy(DATA / f"{job}.inp", tmp_path / f"{job}.inp")
-    run_job(job, tmp_path)
-    return read_dat(DATA / f"{job}.dat.ref"), read_dat(tmp_path / f"{job}.dat")
+def _run(tmp_path: Path, job: str, comm: MPI.Comm = MPI.COMM_SELF) -> tuple[list, list]:
+    """ccx's stored blocks and ours (rank 0's directory for all processes; both on every one)."""
+    root = Path(comm.bcast(str(tmp_path), root=0))
+    if comm.rank == 0:
+        shutil.copy(DATA / f"{job}.inp", root / f"{job}.inp")
+    comm.barrier()
+    run_job(job, root, comm=comm, progress=False)
+    comm.barrier()
+    return read_dat(DATA / f"{job}.dat.ref"), read_dat(root / f"{job}.dat")
 
 
 def _check(ccx: list, ours: list, free_rf: float) -> dict[str, float]:
@@ -50,18 +55,22 @@ def _check(ccx: list, ours: list, free_rf: float) -> dict[str, float]:
     return worst
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
 @pytest.mark.parametrize("job", ["wedge_block", "c3d15_cload"])
 def test_c3d15_small_strain_matches_ccx(tmp_path, job):
-    ccx, ours = _run(tmp_path, job)
+    """U, RF and S at ccx's 9 points equal ccx 2.20's printed digits (serial, 2 processes)."""
+    ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     worst = _check(ccx, ours, free_rf=1e-12)
     for name, value in worst.items():  # U, RF, S to ccx's printed digits
         assert value < 1e-6, (name, value)
 
 
+@pytest.mark.mpi
 @pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
 def test_c3d15_nlgeom_matches_ccx(tmp_path):
-    ccx, ours = _run(tmp_path, "wedge_block_nlgeom")
+    """NLGEOM: ccx's 4 increments, U and S to its printed digits (serial, 2 processes)."""
+    ccx, ours = _run(tmp_path, "wedge_block_nlgeom", MPI.COMM_WORLD)
     assert {b.time for b in ours} == {0.25, 0.5, 0.875, 1.0}  # ccx's increments
     worst = _check(ccx, ours, free_rf=1e-4)  # ccx stops at 0.5 % of its mean force
     assert worst["U"] < 1e-6 and worst["S"] < 1e-6 and worst["RF"] < 1e-6, worst
@@ -71,7 +80,7 @@ def test_c3d15_nlgeom_matches_ccx(tmp_path):
 def test_c3d15_refused_before_dolfinx_011(tmp_path):
     shutil.copy(DATA / "wedge_block.inp", tmp_path / "wedge_block.inp")
     with pytest.raises(NotImplementedError) as info:
-        run_job("wedge_block", tmp_path)
+        run_job("wedge_block", tmp_path, progress=False)
     message = str(info.value)
     assert "wedge_block.inp:" in message and "C3D15 (element 1)" in message
     assert "dolfinx 0.11" in message
@@ -85,11 +94,11 @@ def test_c3d15_refuses_pressures_and_mixed_meshes(tmp_path):
     with_pressure = deck.replace("*CLOAD\n", "*DLOAD\n1, P1, 5.\n*CLOAD\n")
     (tmp_path / "p.inp").write_text(with_pressure)
     with pytest.raises(NotImplementedError, match=r"p\.inp:\d+: \*DLOAD pressures on C3D15"):
-        run_job("p", tmp_path)
+        run_job("p", tmp_path, progress=False)
     extra = "*ELEMENT, TYPE=C3D8, ELSET=EALL\n99, 1, 2, 3, 4, 5, 6, 7, 8\n*MATERIAL"
     (tmp_path / "m.inp").write_text(deck.replace("*MATERIAL", extra, 1))
     with pytest.raises(ValueError, match="C3D15 wedges run in meshes of C3D15 only"):
-        run_job("m", tmp_path)
+        run_job("m", tmp_path, progress=False)
 
 
 def test_ccx_deck_variant_is_ccx_c3d15(tmp_path):
