@@ -268,8 +268,9 @@ def _run_one(job: str, args: argparse.Namespace, comm: object) -> int:
     if root:
         print(
             f" Wrote {result.dat}" + (f", {result.cel}" if result.cel else "") + f", {result.frd} "
-            f"(.sta, .cvg) and {result.xdmf} "
-            f"({len(result.increments)} increments, {result.wall_time:.1f} s)"
+            f"(.sta, .cvg)"
+            + (f" and {result.xdmf}" if result.xdmf else " (no .xdmf)")
+            + f" ({len(result.increments)} increments, {result.wall_time:.1f} s)"
         )
     return EXIT_OK
 

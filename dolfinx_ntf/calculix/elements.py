@@ -78,7 +78,8 @@ class ElementType:
         face_quadrature_degree: face quadrature degree of ``*DLOAD`` pressures (2x2 Gauss on
             quads, 3 points on triangles; C3D20 3x3).
         frd_order: the ccx nodes of an element in ``.frd`` order (ccx order but for C3D20:
-            nodes 1..12, 17..20, 13..16, as ccx 2.20 writes them).
+            nodes 1..12, 17..20, 13..16, and C3D15: 1..9, 13..15, 10..12, as ccx 2.20 writes
+            them).
         print_rows: 2D elements: the integration point of each ``*EL PRINT`` row ccx 2.20 prints
             (the points of the one layer of 3D elements it expands the element into, both
             layers the same in-plane points; docs/method.md §23); None for 3D elements.
@@ -322,6 +323,14 @@ for _family in TWO_D_MODELS:
     _POINTS[_family + "8R"] = _POINTS[_family + "4"]
 
 
+# ccx 2.20's .frd node order where it is not ccx's own (checked against ccx's .frd files):
+# C3D20 nodes 1..12, 17..20, 13..16; C3D15 nodes 1..9, 13..15, 10..12.
+_FRD_ORDERS = {
+    20: [*range(12), 16, 17, 18, 19, 12, 13, 14, 15],
+    15: [*range(9), 12, 13, 14, 9, 10, 11],
+}
+
+
 def _element_type(
     name: str,
     num_nodes: int,
@@ -357,9 +366,7 @@ def _element_type(
         frd_type,
         frozen_array(nodal_extrapolation(name, points), np.float64),
         face_quadrature_degree,
-        frozen_array([*range(12), 16, 17, 18, 19, 12, 13, 14, 15], np.int64)
-        if num_nodes == 20
-        else None,
+        frozen_array(_FRD_ORDERS[num_nodes], np.int64) if num_nodes in _FRD_ORDERS else None,
         None if print_rows is None else frozen_array(print_rows, np.int64),
     )
 

@@ -115,3 +115,14 @@ def test_ccx_deck_variant_is_ccx_c3d15(tmp_path):
     theirs = read_dat(path)
     for a, b in zip(theirs, ours, strict=True):
         np.testing.assert_allclose(b.values, a.values, atol=1e-11 * np.abs(a.values).max() + 1e-18)
+
+
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+def test_c3d15_frd_elements_in_ccx_order(tmp_path):
+    """``.frd`` element records: type 5 with ccx 2.20's node order 1..9, 13..15, 10..12 (as
+    ccx's .frd of ``wedge_block.inp``, whose element 1 is nodes 1..15)."""
+    _run(tmp_path, "wedge_block")
+    lines = (tmp_path / "wedge_block.frd").read_text().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.split()[:3] == ["-1", "1", "5"])
+    nodes = [int(t) for line in lines[start + 1 : start + 3] for t in line.split()[1:]]
+    assert nodes == [*range(1, 10), 13, 14, 15, 10, 11, 12]
