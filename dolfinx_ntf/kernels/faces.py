@@ -37,6 +37,7 @@ __all__ = [
     "face_points",
     "face_tangents",
     "face_type_from_num_nodes",
+    "pressure_forces",
 ]
 
 # Monomial basis ξ^a η^b shared by all face types; row k of a coefficient matrix multiplies it.
@@ -388,3 +389,26 @@ def face_tangents(
     dphi = face_type.shape_derivatives(xi)
     q = np.swapaxes(dphi, -1, -2) @ coords
     return q[..., 0, :], q[..., 1, :]
+
+
+def pressure_forces(
+    face_type: FaceType,
+    face_coords: np.ndarray,
+    pressure: np.ndarray,
+    rule: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
+    """Consistent nodal forces ``(F, n, 3)`` of a uniform pressure on each of ``F`` faces.
+
+    ``f_j = -p Σ_q w_q φ_j(ξ_q) (q_ξ × q_η)(ξ_q)``: a pressure pushes against the outward
+    normal of faces in CalculiX node order. ``rule``: points ``(q, 2)`` and weights ``(q,)`` in
+    the face's parameters; default the face type's area rule (tri6: 3 points, quad8: 3 x 3
+    Gauss). Exact for flat faces with straight edges.
+    """
+    coords = face_coords_array(face_type, face_coords)
+    if rule is None:
+        rule = (face_type.quadrature_points, face_type.quadrature_weights)
+    xi, weights = (np.asarray(a, dtype=float) for a in rule)
+    phi = face_type.shape_functions(xi)  # (q, n)
+    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
+    normal = np.cross(q_xi, q_eta) * weights[None, :, None]
+    return -np.asarray(pressure, dtype=float)[:, None, None] * np.einsum("qn,fqd->fnd", phi, normal)

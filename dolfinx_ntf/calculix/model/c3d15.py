@@ -12,14 +12,25 @@ from __future__ import annotations
 import numpy as np
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.kernels.faces import QUAD8, TRI6, pressure_forces
 
 from ..deck import Deck, ElementBlock
 from ..elements import ELEMENT_TYPES
 
-__all__ = ["C3D15_MIN_DOLFINX", "c3d15_metadata", "c3d15_rule", "check_c3d15_deck"]
+__all__ = [
+    "C3D15_MIN_DOLFINX",
+    "c3d15_metadata",
+    "c3d15_pressure_forces",
+    "c3d15_rule",
+    "check_c3d15_deck",
+]
 
 #: The first dolfinx release that assembles degree-2 spaces on prisms (docs/method.md §32.5).
 C3D15_MIN_DOLFINX = (0, 11)
+
+_G2 = 1.0 / np.sqrt(3.0)
+#: ccx's rule for pressures on C3D15's quadrilaterals: 2 x 2 Gauss points (measured, §34.3).
+_QUAD_RULE = (np.array([[x, y] for y in (-_G2, _G2) for x in (-_G2, _G2)]), np.ones(4))
 
 #: Output keys whose ``.frd`` values need ccx's C3D15 extrapolation (not reproduced).
 _FRD_STRESS_KEYS = {"S", "E", "ME", "PEEQ"}
@@ -51,7 +62,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     """Refuse a C3D15 deck this dolfinx or the runner cannot reproduce (naming the deck line).
 
     Raises:
-        NotImplementedError: dolfinx older than 0.11, pressures and element-face surfaces,
+        NotImplementedError: dolfinx older than 0.11, pressures under NLGEOM, element-face
+            surfaces,
             contact or tie surfaces, thermal,
             dynamic or modal steps, ``.frd`` stresses or strains.
     """
@@ -68,11 +80,11 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
             f"degree-2 space); dolfinx {version} cannot: {why} (docs/method.md §32.5, §34)"
         )
     for step in deck.steps:
-        if step.dloads:
+        if step.dloads and step.nlgeom:
             raise NotImplementedError(
-                f"{step.dloads[0].location}: *DLOAD pressures on C3D15 faces are not supported "
-                "yet: dolfinx 0.11 numbers a prism mesh's triangles and quadrilaterals apart and "
-                f"does not assemble ds over them (give *CLOAD nodal forces; {where})"
+                f"{step.dloads[0].location}: *DLOAD pressures on C3D15 faces in an NLGEOM step "
+                "are not supported yet: they are nodal forces on the reference faces here (no ds "
+                f"on prism meshes in dolfinx 0.11), ccx's follow the deformed faces ({where})"
             )
     if any(s.type == "ELEMENT" for s in deck.surfaces.values()):
         name, surface = next((n, s) for n, s in deck.surfaces.items() if s.type == "ELEMENT")
@@ -100,3 +112,29 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                     "elements is not supported yet (ccx's extrapolation of C3D15 stresses to the "
                     f"nodes is not reproduced; *EL PRINT prints them at ccx's 9 points; {where})"
                 )
+
+
+def c3d15_pressure_forces(
+    deck: Deck, block: ElementBlock, keys: np.ndarray, group: np.ndarray, num_groups: int
+) -> np.ndarray:
+    """Nodal forces of a unit pressure on each group of C3D15 faces: ``(groups, 3 nodes)``.
+
+    ``keys`` are ``6 row + face - 1`` (element row of ``block``, ccx face 1..5), ``group`` the
+    pressure group of each key. The 6-node triangles (S1, S2) and the 8-node quadrilaterals
+    (S3..S5) of the reference geometry, each with its face type's rule
+    (:func:`~dolfinx_ntf.kernels.faces.pressure_forces`); over the deck's nodes, the same on
+    every process. The forces stay on the reference faces (small strain; docs/method.md §34).
+    """
+    etype = block.type
+    rows, faces = keys // 6, keys % 6
+    out = np.zeros((num_groups, 3 * deck.node_ids.size))
+    for face_type, which in ((TRI6, faces < 2), (QUAD8, faces >= 2)):
+        if not np.any(which):
+            continue
+        local = etype.faces[faces[which], : face_type.num_nodes]
+        nodes = deck.node_index(block.connectivity[rows[which, None], local])
+        rule = _QUAD_RULE if face_type is QUAD8 else None
+        forces = pressure_forces(face_type, deck.node_coords[nodes], np.ones(nodes.shape[0]), rule)
+        columns = (3 * nodes[:, :, None] + np.arange(3)).reshape(nodes.shape[0], -1)
+        np.add.at(out, (np.repeat(group[which], columns.shape[1]), columns.ravel()), forces.ravel())
+    return out

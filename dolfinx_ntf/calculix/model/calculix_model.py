@@ -132,6 +132,10 @@ class CalculixModel:
             ``-rho inner(g, v) dx``), or None for decks without gravity (docs/method.md §27).
         mass_dx: The measure of the mass form: C3D8's 2x2x2 Gauss points on C3D8 cells (ccx's
             C3D8 mass, measured: docs/method.md §27.4), UFL's estimate on the others.
+        pressure_loads: C3D15 decks with ``*DLOAD`` pressures: ``(dofs, unit)``, the unrolled
+            dofs this process holds and each pressure group's nodal forces there for a unit
+            pressure, added to ``nodal_loads`` (no ``ds`` on prism meshes, docs/method.md §34);
+            else None.
     """
 
     deck: Deck
@@ -196,6 +200,7 @@ class CalculixModel:
     spring_only_nodes: np.ndarray | None = None
     gravity: dolfinx.fem.Function | None = None
     mass_dx: ufl.Measure | CellMeasures | None = None
+    pressure_loads: tuple[np.ndarray, np.ndarray] | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -280,10 +285,12 @@ class CalculixModel:
                         dofs[held],
                         by_key[ref.key] * ref.mesh_weights[held],
                     )
-        for constant, value in zip(
-            self.pressures, self._evaluate(loads.pressure, fraction, step_time, total)
-        ):
+        pressure = self._evaluate(loads.pressure, fraction, step_time, total)
+        for constant, value in zip(self.pressures, pressure):
             constant.value = value
+        if self.pressure_loads is not None:  # C3D15: nodal forces of unit pressures (§34)
+            dofs, unit = self.pressure_loads
+            self.nodal_loads.x.array[dofs] += np.asarray(pressure) @ unit
         if self.gravity is not None:
             self.gravity.x.array[:] = 0.0
             if loads.gravity is not None and loads.gravity_keys.size:
@@ -617,7 +624,11 @@ def build_model(
         internal_force = ufl.inner(P, ufl.grad(v)) * dx
     residual = internal_force
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
-    if pressures:
+    pressure_loads = None
+    if isinstance(pressure_tags, np.ndarray):  # C3D15: forces per group, no ds (§34)
+        pressure_loads = _held_columns(pressure_tags, node_dof)
+        pressure_tags = None
+    elif pressures:
         ds = ufl.Measure(
             "ds",
             domain=mesh,
@@ -726,6 +737,7 @@ def build_model(
         sections=sections,
         spring_only_nodes=_node_slaves(deck) if etype.tdim == 2 else None,
         gravity=gravity,
+        pressure_loads=pressure_loads,
         mass_dx=mass_dx,
     )
 
@@ -786,3 +798,10 @@ def _gravity(
                 )
     acceleration = dolfinx.fem.Function(compat.vector_space(mesh, "DG", 0), name="gravity")
     return acceleration, rho * acceleration
+
+
+def _held_columns(unit: np.ndarray, node_dof: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The unrolled dofs this process holds and their columns of deck-wide ``(groups, 3N)``."""
+    keys = np.flatnonzero(np.repeat(node_dof >= 0, 3) & np.any(unit != 0.0, axis=0))
+    dofs = 3 * node_dof[keys // 3] + keys % 3
+    return dofs, np.ascontiguousarray(unit[:, keys])

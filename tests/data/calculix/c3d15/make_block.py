@@ -1,8 +1,10 @@
-"""Write ``wedge_block.inp`` / ``wedge_block_nlgeom.inp``: a C3D15 block for docs/method.md §34.
+"""Write the C3D15 blocks ``wedge_block*.inp`` of docs/method.md §34.
 
 A 2 x 2 x 2 grid of hexahedra on [0, 2] x [0, 1] x [0, 1], each split into two wedges along a
 diagonal, with all midside nodes moved off the straight edges (curved edges: the geometric map
-is C3D15's, not an affine one) and the top nodes loaded unevenly; the bottom is clamped. Run:
+is C3D15's, not an affine one) and the top nodes loaded unevenly; the bottom is clamped.
+``wedge_block_pressure.inp`` adds pressures on the curved top triangles and the curved
+quadrilaterals at x = 2, one value per element. Run:
 ``python make_block.py`` (deterministic: no random numbers).
 """
 
@@ -56,7 +58,25 @@ def _grid() -> tuple[dict, list]:
     return points, wedges
 
 
-def write(path: Path, nlgeom: bool) -> None:
+#: ccx's C3D15 faces by their corners (manual): S1 1-2-3, S2 4-5-6, S3 1-2-5-4, S4 2-3-6-5,
+#: S5 3-1-4-6 (0-based).
+FACES = ((0, 1, 2), (3, 4, 5), (0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5))
+
+
+def _pressure_lines(x: np.ndarray, wedges: list) -> list[str]:
+    """``*DLOAD`` on the top triangles (z = LZ) and the quadrilaterals at x = LX (curved faces)."""
+    lines = ["*DLOAD"]
+    for e, w in enumerate(wedges):
+        for f, corners in enumerate(FACES):
+            p = x[[w[c] - 1 for c in corners]]
+            top = np.allclose(p[:, 2], LZ)
+            side = np.allclose(p[:, 0], LX)
+            if top or side:
+                lines.append(f"{e + 1}, P{f + 1}, {(10.0 if top else 40.0) + e:.12g}")
+    return lines
+
+
+def write(path: Path, nlgeom: bool, pressure: bool = False) -> None:
     points, wedges = _grid()
     x = np.array(points)
     lines = ["*HEADING", "C3D15 block, curved edges, uneven top load (dolfinx_ntf method §34)"]
@@ -82,6 +102,8 @@ def write(path: Path, nlgeom: bool) -> None:
         lines.append(f"{n}, 1, {scale * (0.5 + p[1]):.12g}")
         lines.append(f"{n}, 2, {scale * 0.3 * p[0]:.12g}")
         lines.append(f"{n}, 3, {-scale * (1.0 + p[0] * p[1]):.12g}")
+    if pressure:
+        lines += _pressure_lines(x, wedges)
     lines += ["*NODE PRINT, NSET=NALL", "U, RF", "*EL PRINT, ELSET=EALL", "S", "*END STEP"]
     path.write_text("\n".join(line for line in lines if line != "") + "\n")
 
@@ -90,3 +112,4 @@ if __name__ == "__main__":
     here = Path(__file__).parent
     write(here / "wedge_block.inp", nlgeom=False)
     write(here / "wedge_block_nlgeom.inp", nlgeom=True)
+    write(here / "wedge_block_pressure.inp", nlgeom=False, pressure=True)

@@ -1,10 +1,11 @@
-"""Write ``c3d15_cload.inp``: ccx's test deck c3d15.inp with what the deck runner refuses taken out.
+"""Write ``c3d15_dload.inp`` and ``c3d15_cload.inp``: ccx's test deck c3d15.inp for the runner.
 
-docs/method.md §34. From ``/usr/share/doc/calculix-ccx-test/examples/test/c3d15.inp.gz``:
-its ``*DLOAD`` pressures P1/P2 on flat 6-node triangles become their consistent nodal forces
-(``A p / 3`` on each midside node, 0 on the corners; ccx gives the same output to 1e-14 for
-both forms); its identity ``*ORIENTATION`` and the temperature column of ``*ELASTIC`` and
-``*EXPANSION`` (no temperatures are given) are removed, ``TYPE=ISOTROPIC`` becomes ``ISO``.
+docs/method.md §34. From ``/usr/share/doc/calculix-ccx-test/examples/test/c3d15.inp.gz``, what
+the deck runner refuses is taken out: its identity ``*ORIENTATION`` and the temperature column
+of ``*ELASTIC`` and ``*EXPANSION`` (no temperatures are given) are removed, ``TYPE=ISOTROPIC``
+becomes ``ISO`` (``c3d15_dload.inp``). ``c3d15_cload.inp`` also writes its ``*DLOAD`` pressures
+P1/P2 on flat 6-node triangles as their consistent nodal forces (``A p / 3`` on each midside
+node, 0 on the corners; ccx gives the same output to 1e-14 for both forms).
 """
 
 from __future__ import annotations
@@ -76,7 +77,9 @@ def main() -> None:
             for m in sorted(loads):
                 out += [f"{m}, {d + 1}, {loads[m][d]:.17g}" for d in range(3) if loads[m][d]]
         out.append(line)
-    (Path(__file__).parent / "c3d15_cload.inp").write_text("\n".join(out) + "\n")
+    here = Path(__file__).parent
+    (here / "c3d15_dload.inp").write_text("\n".join(text) + "\n")
+    (here / "c3d15_cload.inp").write_text("\n".join(out) + "\n")
 
 
 if __name__ == "__main__":
