@@ -4,7 +4,8 @@ A C3D15 deck becomes an 18-node prism mesh with a degree-2 space whose quadrilat
 centres are constrained to the serendipity wedge (``fem/serendipity_wedge.py``), integrated at
 ccx's 9 points. dolfinx holds one cell type per mesh and runs degree-2 spaces on prisms from 0.11
 on only (0.5.2's FFCx refuses prisms, 0.9 aborts the process while assembling P2 on prisms,
-§32.5): older releases refuse the deck, naming the element's line.
+§32.5): older releases refuse the deck, naming the element's line. A prism mesh has no ``ds``
+in dolfinx 0.11, so ``*DLOAD`` pressures become nodal forces with ccx's face rules (§34.4).
 """
 
 from __future__ import annotations
