@@ -137,3 +137,20 @@ def test_c3d15_frd_elements_in_ccx_order(tmp_path):
     start = next(i for i, line in enumerate(lines) if line.split()[:3] == ["-1", "1", "5"])
     nodes = [int(t) for line in lines[start + 1 : start + 3] for t in line.split()[1:]]
     assert nodes == [*range(1, 10), 13, 14, 15, 10, 11, 12]
+
+
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+def test_c3d15_mirrored_element_is_refused(tmp_path):
+    """An element numbered against ccx's order (top and bottom triangles swapped) is refused
+    naming it and its line, instead of a wrong answer."""
+    lines = (DATA / "wedge_block.inp").read_text().splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("*ELEMENT")) + 3  # element 2
+    first = [t.strip() for t in lines[k].split(",") if t.strip()]
+    second = [t.strip() for t in lines[k + 1].split(",") if t.strip()]
+    nodes = first[1:] + second
+    swapped = nodes[3:6] + nodes[0:3] + nodes[9:12] + nodes[6:9] + nodes[12:15]
+    lines[k] = ", ".join([first[0], *swapped[:9]]) + ","
+    lines[k + 1] = ", ".join(swapped[9:])
+    (tmp_path / "w.inp").write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=r"w\.inp:\d+: C3D15 element 2 has a Jacobian <= 0"):
+        run_job("w", tmp_path, progress=False)

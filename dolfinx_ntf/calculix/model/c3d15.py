@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+import basix
+
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
 from dolfinx_ntf.kernels.faces import QUAD8, TRI6, pressure_forces
 
 from ..deck import Deck, ElementBlock
@@ -63,6 +66,7 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     """Refuse a C3D15 deck this dolfinx or the runner cannot reproduce (naming the deck line).
 
     Raises:
+        ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures under NLGEOM, element-face
             surfaces,
             contact or tie surfaces, thermal,
@@ -93,6 +97,7 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
             f"{surface.location}: *SURFACE {name}: element faces of C3D15 elements are not "
             f"supported yet (prism meshes have two facet types; {where})"
         )
+    _check_jacobians(deck, block)
     if deck.contact_pairs or deck.ties:
         card = deck.contact_pairs[0] if deck.contact_pairs else deck.ties[0]
         raise NotImplementedError(
@@ -139,3 +144,31 @@ def c3d15_pressure_forces(
         columns = (3 * nodes[:, :, None] + np.arange(3)).reshape(nodes.shape[0], -1)
         np.add.at(out, (np.repeat(group[which], columns.shape[1]), columns.ravel()), forces.ravel())
     return out
+
+
+def _check_jacobians(deck: Deck, block: ElementBlock) -> None:
+    """Refuse elements whose map has a Jacobian ``<= 0`` at one of ccx's 9 points.
+
+    The 18-node geometry the mesh gets (face centres by the quad8 map), differentiated with
+    basix's degree-2 prism at the points: a wedge numbered against ccx's order (triangle 1-2-3
+    counter-clockwise seen from 4-5-6) or folded would otherwise give a silent wrong answer.
+    """
+    etype = block.type
+    cells = deck.node_index(block.connectivity)[:, etype.to_dolfinx]
+    cells, x = add_wedge_centres(cells, np.asarray(deck.node_coords, dtype=np.float64))
+    element = basix.create_element(
+        basix.ElementFamily.P, basix.CellType.prism, 2, basix.LagrangeVariant.equispaced
+    )
+    dphi = element.tabulate(1, etype.integration_points)[1:4, :, :, 0]  # (3, q, 18)
+    jacobian = np.einsum("aqn,cnd->cqda", dphi, x[cells])
+    det = np.linalg.det(jacobian)
+    bad = np.flatnonzero(np.any(det <= 0.0, axis=1))
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(
+            f"{block.locations[k]}: C3D15 element {int(block.ids[k])} has a Jacobian <= 0 "
+            f"({det[k].min():.3g}) at an integration point: its nodes are not in ccx's order "
+            "(triangle 1-2-3 counter-clockwise seen from the triangle 4-5-6, midside nodes 7..15 "
+            f"on 1-2, 2-3, 3-1, 4-5, 5-6, 6-4, 1-4, 2-5, 3-6) or it is folded "
+            f"({bad.size} such element(s))"
+        )
