@@ -38,6 +38,7 @@ __all__ = [
     "face_tangents",
     "face_type_from_num_nodes",
     "pressure_forces",
+    "pressure_stiffness",
 ]
 
 # Monomial basis ξ^a η^b shared by all face types; row k of a coefficient matrix multiplies it.
@@ -412,3 +413,40 @@ def pressure_forces(
     q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
     normal = np.cross(q_xi, q_eta) * weights[None, :, None]
     return -np.asarray(pressure, dtype=float)[:, None, None] * np.einsum("qn,fqd->fnd", phi, normal)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """``(..., 3, 3)`` matrices ``[v]_x`` with ``[v]_x w = v x w``."""
+    out = np.zeros((*v.shape[:-1], 3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def pressure_stiffness(
+    face_type: FaceType,
+    face_coords: np.ndarray,
+    pressure: np.ndarray,
+    rule: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
+    """``(F, 3n, 3n)`` derivative of :func:`pressure_forces` by the face's node coordinates.
+
+    A follower pressure (on the current faces): ``d(q_ξ x q_η)/dx_k = b_k [q_ξ]_x - a_k
+    [q_η]_x`` with ``a_k, b_k`` the shape derivatives of node ``k``; not symmetric.
+    """
+    coords = face_coords_array(face_type, face_coords)
+    if rule is None:
+        rule = (face_type.quadrature_points, face_type.quadrature_weights)
+    xi, weights = (np.asarray(a, dtype=float) for a in rule)
+    phi = face_type.shape_functions(xi)  # (q, n)
+    dphi = face_type.shape_derivatives(xi)  # (q, n, 2)
+    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
+    # (F, q, n, 3, 3): d n_q / d x_k
+    dn = (
+        dphi[None, :, :, 1, None, None] * _skew(q_xi)[:, :, None]
+        - dphi[None, :, :, 0, None, None] * _skew(q_eta)[:, :, None]
+    )
+    k = np.einsum("q,qj,fqkab->fjakb", weights, phi, dn)  # (F, n, 3, n, 3)
+    n = face_type.num_nodes
+    return -np.asarray(pressure, dtype=float)[:, None, None] * k.reshape(-1, 3 * n, 3 * n)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dolfinx_ntf.kernels.faces import QUAD8, TRI6, pressure_forces
+from dolfinx_ntf.kernels.faces import QUAD8, TRI6, pressure_forces, pressure_stiffness
 
 _ROTATION = np.linalg.qr(np.array([[1.0, 0.3, -0.2], [0.1, 1.0, 0.4], [-0.3, 0.2, 1.0]]))[0]
 
@@ -48,3 +48,30 @@ def test_rule_and_curved_face():
     reverse = x[[0, 3, 2, 1, 7, 6, 5, 4]]
     back = pressure_forces(QUAD8, reverse[None], np.array([2.0]))[0]
     np.testing.assert_allclose(back[[0, 3, 2, 1, 7, 6, 5, 4]], -f3, atol=1e-13)
+
+
+@pytest.mark.parametrize("face_type", [TRI6, QUAD8])
+def test_follower_stiffness_against_central_differences(face_type):
+    """``pressure_stiffness`` is the derivative of ``pressure_forces`` by the node coordinates
+    (a distorted, curved face; ccx's 2 x 2 rule on the quadrilateral)."""
+    rng = np.random.default_rng(7)
+    n = face_type.num_nodes
+    x = np.column_stack([face_type.node_parameters, np.zeros(n)]) + 0.1 * rng.normal(size=(n, 3))
+    g = 1 / np.sqrt(3)
+    rule = (
+        None
+        if face_type is TRI6
+        else (np.array([[a, b] for b in (-g, g) for a in (-g, g)]), np.ones(4))
+    )
+    p = np.array([2.5])
+    stiffness = pressure_stiffness(face_type, x[None], p, rule)[0]
+    h = 1e-6
+    fd = np.zeros_like(stiffness)
+    for m in range(3 * n):
+        d = np.zeros(3 * n)
+        d[m] = h
+        plus = pressure_forces(face_type, (x.ravel() + d).reshape(n, 3)[None], p, rule)
+        minus = pressure_forces(face_type, (x.ravel() - d).reshape(n, 3)[None], p, rule)
+        fd[:, m] = (plus - minus).ravel() / (2 * h)
+    assert np.abs(stiffness - fd).max() < 1e-8 * np.abs(stiffness).max()
+    assert np.abs(stiffness - stiffness.T).max() > 1e-3 * np.abs(stiffness).max()  # not symmetric

@@ -10,6 +10,9 @@ in dolfinx 0.11, so ``*DLOAD`` pressures become nodal forces with ccx's face rul
 
 from __future__ import annotations
 
+import typing
+from dataclasses import dataclass
+
 import numpy as np
 
 import basix
@@ -23,8 +26,8 @@ from ..elements import ELEMENT_TYPES
 
 __all__ = [
     "C3D15_MIN_DOLFINX",
+    "C3D15Pressures",
     "c3d15_metadata",
-    "c3d15_pressure_forces",
     "c3d15_rule",
     "check_c3d15_deck",
 ]
@@ -67,7 +70,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
 
     Raises:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
-        NotImplementedError: dolfinx older than 0.11, pressures under NLGEOM, element-face
+        NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
+            and small-strain steps, element-face
             surfaces,
             contact or tie surfaces, thermal,
             dynamic or modal steps, ``.frd`` stresses or strains.
@@ -85,11 +89,11 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
             f"degree-2 space); dolfinx {version} cannot: {why} (docs/method.md §32.5, §34)"
         )
     for step in deck.steps:
-        if step.dloads and step.nlgeom:
+        if step.dloads and any(other.nlgeom != step.nlgeom for other in deck.steps):
             raise NotImplementedError(
-                f"{step.dloads[0].location}: *DLOAD pressures on C3D15 faces in an NLGEOM step "
-                "are not supported yet: they are nodal forces on the reference faces here (no ds "
-                f"on prism meshes in dolfinx 0.11), ccx's follow the deformed faces ({where})"
+                f"{step.dloads[0].location}: *DLOAD pressures on C3D15 faces in a deck that mixes "
+                "NLGEOM and small-strain steps are not supported yet (they are nodal forces on "
+                f"the reference faces in the one, on the current faces in the other; {where})"
             )
     if any(s.type == "ELEMENT" for s in deck.surfaces.values()):
         name, surface = next((n, s) for n, s in deck.surfaces.items() if s.type == "ELEMENT")
@@ -120,30 +124,47 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 )
 
 
-def c3d15_pressure_forces(
-    deck: Deck, block: ElementBlock, keys: np.ndarray, group: np.ndarray, num_groups: int
-) -> np.ndarray:
-    """Nodal forces of a unit pressure on each group of C3D15 faces: ``(groups, 3 nodes)``.
+@dataclass(frozen=True)
+class C3D15Pressures:
+    """The pressure-loaded faces of a C3D15 deck (``*DLOAD`` without ``ds``, §34.4).
 
-    ``keys`` are ``6 row + face - 1`` (element row of ``block``, ccx face 1..5), ``group`` the
-    pressure group of each key. The 6-node triangles (S1, S2) and the 8-node quadrilaterals
-    (S3..S5) of the reference geometry, each with its face type's rule
-    (:func:`~dolfinx_ntf.kernels.faces.pressure_forces`); over the deck's nodes, the same on
-    every process. The forces stay on the reference faces (small strain; docs/method.md §34).
+    Attributes:
+        keys: ``6 row + face - 1`` of each face (element row of the block, ccx face 1..5).
+        group: ``(F,)`` the pressure group of each face (one history per group).
+        num_groups: Number of groups.
     """
-    etype = block.type
-    rows, faces = keys // 6, keys % 6
-    out = np.zeros((num_groups, 3 * deck.node_ids.size))
-    for face_type, which in ((TRI6, faces < 2), (QUAD8, faces >= 2)):
-        if not np.any(which):
-            continue
-        local = etype.faces[faces[which], : face_type.num_nodes]
-        nodes = deck.node_index(block.connectivity[rows[which, None], local])
-        rule = _QUAD_RULE if face_type is QUAD8 else None
-        forces = pressure_forces(face_type, deck.node_coords[nodes], np.ones(nodes.shape[0]), rule)
-        columns = (3 * nodes[:, :, None] + np.arange(3)).reshape(nodes.shape[0], -1)
-        np.add.at(out, (np.repeat(group[which], columns.shape[1]), columns.ravel()), forces.ravel())
-    return out
+
+    keys: np.ndarray
+    group: np.ndarray
+    num_groups: int
+
+    def faces(
+        self, deck: Deck, block: ElementBlock
+    ) -> list[tuple[typing.Any, np.ndarray, np.ndarray, typing.Any]]:
+        """``(face type, deck node rows (F, n), group (F,), ccx's face rule)`` per face type."""
+        rows, faces = self.keys // 6, self.keys % 6
+        out = []
+        for face_type, which in ((TRI6, faces < 2), (QUAD8, faces >= 2)):
+            if np.any(which):
+                local = block.type.faces[faces[which], : face_type.num_nodes]
+                nodes = deck.node_index(block.connectivity[rows[which, None], local])
+                rule = _QUAD_RULE if face_type is QUAD8 else None
+                out.append((face_type, nodes, self.group[which], rule))
+        return out
+
+    def unit_forces(self, deck: Deck, block: ElementBlock) -> np.ndarray:
+        """Nodal forces of a unit pressure on each group, on the reference faces.
+
+        ``(groups, 3 nodes)`` over the deck's nodes, the same on every process.
+        """
+        out = np.zeros((self.num_groups, 3 * deck.node_ids.size))
+        for face_type, nodes, group, rule in self.faces(deck, block):
+            ones = np.ones(nodes.shape[0])
+            forces = pressure_forces(face_type, deck.node_coords[nodes], ones, rule)
+            columns = (3 * nodes[:, :, None] + np.arange(3)).reshape(nodes.shape[0], -1)
+            rows = np.repeat(group, columns.shape[1])
+            np.add.at(out, (rows, columns.ravel()), forces.ravel())
+        return out
 
 
 def _check_jacobians(deck: Deck, block: ElementBlock) -> None:

@@ -27,6 +27,7 @@ from dolfinx_ntf.contact.problem import ContactPair, ContactProblem
 from dolfinx_ntf.fem.constraints import LinearConstraint, LinearConstraintBlock, num_equations
 from dolfinx_ntf.fem.discrete_springs import DiscreteSprings
 from dolfinx_ntf.fem.finite_plasticity import FiniteStrainJ2Plasticity
+from dolfinx_ntf.fem.follower_pressure import FollowerPressure, PressureFaces
 from dolfinx_ntf.fem.incompatible_modes import IncompatibleModes
 from dolfinx_ntf.fem.plane_sections import PlaneSections
 from dolfinx_ntf.fem.plasticity import J2Plasticity
@@ -37,10 +38,10 @@ from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
-from ..deck import Deck, not_supported
+from ..deck import Deck, ElementBlock, not_supported
 from ..elements import ElementType
 from .bulk import density, lame, plane_stress_factor, stresses
-from .c3d15 import c3d15_metadata, check_c3d15_deck
+from .c3d15 import C3D15Pressures, c3d15_metadata, check_c3d15_deck
 from .carriers import carried_nodes, carrier_dofs
 from .contact import contact_pairs
 from .equations import FreeReference, equation_constraints
@@ -136,6 +137,8 @@ class CalculixModel:
             dofs this process holds and each pressure group's nodal forces there for a unit
             pressure, added to ``nodal_loads`` (no ``ds`` on prism meshes, docs/method.md §34);
             else None.
+        follower_pressure: C3D15 decks with ``*DLOAD`` pressures and NLGEOM: the pressures on
+            the current faces, an element term of the problem (§34.4); else None.
     """
 
     deck: Deck
@@ -201,6 +204,7 @@ class CalculixModel:
     gravity: dolfinx.fem.Function | None = None
     mass_dx: ufl.Measure | CellMeasures | None = None
     pressure_loads: tuple[np.ndarray, np.ndarray] | None = None
+    follower_pressure: FollowerPressure | None = None
 
     # -- numbering ---------------------------------------------------------------------------------
 
@@ -430,6 +434,8 @@ class CalculixModel:
         problem.element_terms.extend(self.springs)
         if self.incompatible_modes is not None:
             problem.element_terms.append(self.incompatible_modes)
+        if self.follower_pressure is not None:
+            problem.element_terms.append(self.follower_pressure)
         return problem
 
 
@@ -625,8 +631,12 @@ def build_model(
     residual = internal_force
     pressures = [dolfinx.fem.Constant(mesh, 0.0) for _ in range(num_groups)]
     pressure_loads = None
-    if isinstance(pressure_tags, np.ndarray):  # C3D15: forces per group, no ds (§34)
-        pressure_loads = _held_columns(pressure_tags, node_dof)
+    follower = None
+    if isinstance(pressure_tags, C3D15Pressures):  # C3D15: no ds on prisms (§34.4)
+        if True in kinds:  # NLGEOM (every step, check_c3d15_deck): on the current faces
+            follower = _follower_pressure(deck, pressure_tags, block, V, node_dof, pressures)
+        else:  # forces per group on the reference faces
+            pressure_loads = _held_columns(pressure_tags.unit_forces(deck, block), node_dof)
         pressure_tags = None
     elif pressures:
         ds = ufl.Measure(
@@ -738,6 +748,7 @@ def build_model(
         spring_only_nodes=_node_slaves(deck) if etype.tdim == 2 else None,
         gravity=gravity,
         pressure_loads=pressure_loads,
+        follower_pressure=follower,
         mass_dx=mass_dx,
     )
 
@@ -805,3 +816,24 @@ def _held_columns(unit: np.ndarray, node_dof: np.ndarray) -> tuple[np.ndarray, n
     keys = np.flatnonzero(np.repeat(node_dof >= 0, 3) & np.any(unit != 0.0, axis=0))
     dofs = 3 * node_dof[keys // 3] + keys % 3
     return dofs, np.ascontiguousarray(unit[:, keys])
+
+
+def _follower_pressure(
+    deck: Deck,
+    loaded: C3D15Pressures,
+    block: ElementBlock,
+    V: dolfinx.fem.FunctionSpace,
+    node_dof: np.ndarray,
+    pressures: list[dolfinx.fem.Constant],
+) -> FollowerPressure:
+    """The C3D15 pressures of an NLGEOM deck on the current faces (collective)."""
+    index_map = V.dofmap.index_map
+    held = node_dof >= 0
+    global_node = np.full(node_dof.size, -1, dtype=np.int64)
+    global_node[held] = index_map.local_to_global(node_dof[held].astype(np.int32))
+    V.mesh.comm.Allreduce(MPI.IN_PLACE, global_node, op=MPI.MAX)
+    faces = [
+        PressureFaces(face_type, global_node[nodes], deck.node_coords[nodes], group, rule)
+        for face_type, nodes, group, rule in loaded.faces(deck, block)
+    ]
+    return FollowerPressure(V, faces, pressures)

@@ -30,7 +30,7 @@ import dolfinx.mesh
 from dolfinx_ntf import compat
 
 from ..deck import Deck, Step
-from .c3d15 import c3d15_pressure_forces
+from .c3d15 import C3D15Pressures
 from .mesh import MeshMaps, element_faces_to_facets, exterior
 
 __all__ = [
@@ -178,14 +178,13 @@ def step_times(deck: Deck) -> list[float]:
 
 def schedules(
     deck: Deck, maps: MeshMaps, mesh: dolfinx.mesh.Mesh
-) -> tuple[list[StepLoads], list[str], compat.MeshTags | np.ndarray | None, int]:
+) -> tuple[list[StepLoads], list[str], compat.MeshTags | C3D15Pressures | None, int]:
     """Per-step schedules of forces, pressures (grouped) and prescribed displacements.
 
     Dofs are this process's; nodes in no element (``maps.meshed`` false) are references.
     Returns the schedule of every step, the amplitude names by index, the facet tags of the
-    pressure groups (value ``group + 1``; C3D15: each group's nodal forces for a unit
-    pressure instead, ``(groups, 3 nodes)`` over the deck's nodes, docs/method.md §34) and the
-    number of groups.
+    pressure groups (value ``group + 1``; C3D15: the faces and their groups instead,
+    docs/method.md §34.4) and the number of groups.
     """
     block, node_dof = maps.block, maps.node_dof
     names = list(deck.amplitudes)
@@ -258,9 +257,9 @@ def schedules(
     )
     unique, group = np.unique(history, axis=0, return_inverse=True)
     group = group.ravel()
-    pressure_tags: compat.MeshTags | np.ndarray | None = None
+    pressure_tags: compat.MeshTags | C3D15Pressures | None = None
     if keys.size and block.type.name == "C3D15":  # nodal forces: no ds on prisms (§34)
-        pressure_tags = c3d15_pressure_forces(deck, block, keys, group, unique.shape[0])
+        pressure_tags = C3D15Pressures(keys, group, int(unique.shape[0]))
     elif keys.size:
         facets, _ = element_faces_to_facets(
             deck, maps, block.ids[keys // 6], keys % 6 + 1, "*DLOAD", deck.path

@@ -3,8 +3,9 @@
 A 2 x 2 x 2 grid of hexahedra on [0, 2] x [0, 1] x [0, 1], each split into two wedges along a
 diagonal, with all midside nodes moved off the straight edges (curved edges: the geometric map
 is C3D15's, not an affine one) and the top nodes loaded unevenly; the bottom is clamped.
-``wedge_block_pressure.inp`` adds pressures on the curved top triangles and the curved
-quadrilaterals at x = 2, one value per element. Run:
+``wedge_block_pressure*.inp`` add pressures on the curved top triangles and the curved
+quadrilaterals at x = 2, one value per element (NLGEOM: 5 times the values, and tight
+``*CONTROLS`` so that both codes converge to round-off). Run:
 ``python make_block.py`` (deterministic: no random numbers).
 """
 
@@ -63,7 +64,7 @@ def _grid() -> tuple[dict, list]:
 FACES = ((0, 1, 2), (3, 4, 5), (0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5))
 
 
-def _pressure_lines(x: np.ndarray, wedges: list) -> list[str]:
+def _pressure_lines(x: np.ndarray, wedges: list, scale: float) -> list[str]:
     """``*DLOAD`` on the top triangles (z = LZ) and the quadrilaterals at x = LX (curved faces)."""
     lines = ["*DLOAD"]
     for e, w in enumerate(wedges):
@@ -72,7 +73,8 @@ def _pressure_lines(x: np.ndarray, wedges: list) -> list[str]:
             top = np.allclose(p[:, 2], LZ)
             side = np.allclose(p[:, 0], LX)
             if top or side:
-                lines.append(f"{e + 1}, P{f + 1}, {(10.0 if top else 40.0) + e:.12g}")
+                value = ((10.0 if top else 40.0) + e) * scale
+                lines.append(f"{e + 1}, P{f + 1}, {value:.12g}")
     return lines
 
 
@@ -94,6 +96,8 @@ def write(path: Path, nlgeom: bool, pressure: bool = False) -> None:
     lines += ["*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL"]
     lines.append("*STEP" + (", NLGEOM" if nlgeom else ""))
     lines += ["*STATIC", "0.25, 1.0" if nlgeom else ""]
+    if nlgeom and pressure:  # both codes to round-off (the default stops at 0.5 %)
+        lines += ["*CONTROLS, PARAMETERS=FIELD", "1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12"]
     lines += ["*BOUNDARY", "BOTTOM, 1, 3"]
     lines.append("*CLOAD")
     scale = 500.0 if nlgeom else 100.0
@@ -103,7 +107,7 @@ def write(path: Path, nlgeom: bool, pressure: bool = False) -> None:
         lines.append(f"{n}, 2, {scale * 0.3 * p[0]:.12g}")
         lines.append(f"{n}, 3, {-scale * (1.0 + p[0] * p[1]):.12g}")
     if pressure:
-        lines += _pressure_lines(x, wedges)
+        lines += _pressure_lines(x, wedges, 5.0 if nlgeom else 1.0)
     lines += ["*NODE PRINT, NSET=NALL", "U, RF", "*EL PRINT, ELSET=EALL", "S", "*END STEP"]
     path.write_text("\n".join(line for line in lines if line != "") + "\n")
 
@@ -113,3 +117,4 @@ if __name__ == "__main__":
     write(here / "wedge_block.inp", nlgeom=False)
     write(here / "wedge_block_nlgeom.inp", nlgeom=True)
     write(here / "wedge_block_pressure.inp", nlgeom=False, pressure=True)
+    write(here / "wedge_block_pressure_nlgeom.inp", nlgeom=True, pressure=True)
