@@ -19,6 +19,8 @@ import pytest
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.elements import ELEMENT_TYPES
+from dolfinx_ntf.calculix.frd import read_frd
 from dolfinx_ntf.calculix.job import run_job
 
 DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
@@ -165,3 +167,35 @@ def test_c3d15_mirrored_element_is_refused(tmp_path):
     (tmp_path / "w.inp").write_text("\n".join(lines) + "\n")
     with pytest.raises(ValueError, match=r"w\.inp:\d+: C3D15 element 2 has a Jacobian <= 0"):
         run_job("w", tmp_path, progress=False)
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+def test_c3d15_frd_stresses_match_ccx(tmp_path):
+    """``*EL FILE S, E`` of the NLGEOM block: ccx's nodal values (its extrapolation of the 9
+    points, averaged at shared nodes) to the .frd's 6 printed digits, serial and on 2 processes.
+    """
+    comm = MPI.COMM_WORLD
+    _run(tmp_path, "wedge_block_frd", comm)
+    if comm.rank != 0:
+        return
+    theirs = read_frd(DATA / "wedge_block_frd.frd.ref")
+    ours = read_frd(Path(comm.bcast(str(tmp_path), root=0)) / "wedge_block_frd.frd")
+    names = ("STRESS", "TOSTRAIN")
+    a = [b for b in theirs.blocks if b.name in names]
+    b = [b for b in ours.blocks if b.name in names]
+    assert [(x.name, x.time) for x in a] == pytest.approx([(y.name, y.time) for y in b])
+    assert len(a) == 8  # S and E of 4 increments
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x.nodes, y.nodes)
+        assert np.abs(x.values - y.values).max() < 1e-5 * np.abs(x.values).max(), x.name
+
+
+def test_c3d15_extrapolation_is_ccx_table():
+    """ccx 2.20's C3D15 extrapolation (fitted to its .frd of one element under random nodal
+    displacements, docs/method.md §34): linear in the triangle, least squares along the axis."""
+    table = ELEMENT_TYPES["C3D15"].extrapolation
+    np.testing.assert_allclose(table[0, [0, 3, 6]], [1.63138, 0.55556, -0.52027], atol=1e-5)
+    np.testing.assert_allclose(table[0, [1, 4, 7]], [-0.32628, -0.11111, 0.10405], atol=1e-5)
+    np.testing.assert_allclose(table[12], np.tile([5 / 9, -1 / 9, -1 / 9], 3), atol=1e-12)
+    np.testing.assert_allclose(table[6], (table[0] + table[1]) / 2, atol=1e-12)  # midsides

@@ -39,9 +39,6 @@ _G2 = 1.0 / np.sqrt(3.0)
 #: ccx's rule for pressures on C3D15's quadrilaterals: 2 x 2 Gauss points (measured, §34.3).
 _QUAD_RULE = (np.array([[x, y] for y in (-_G2, _G2) for x in (-_G2, _G2)]), np.ones(4))
 
-#: Output keys whose ``.frd`` values need ccx's C3D15 extrapolation (not reproduced).
-_FRD_STRESS_KEYS = {"S", "E", "ME", "PEEQ"}
-
 
 def c3d15_rule() -> tuple[np.ndarray, np.ndarray]:
     """ccx's 9 points of C3D15 on dolfinx's reference prism and their weights (sum 1/2).
@@ -71,10 +68,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     Raises:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
-            and small-strain steps, element-face
-            surfaces,
-            contact or tie surfaces, thermal,
-            dynamic or modal steps, ``.frd`` stresses or strains.
+            and small-strain steps, element-face surfaces, contact or tie surfaces, thermal,
+            dynamic or modal steps.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -114,14 +109,6 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 f"{step.location}: dynamic, modal and thermal steps with C3D15 elements are not "
                 f"supported yet (their mass and heat forms were not checked against ccx; {where})"
             )
-        for request in step.file_requests:
-            keys = _FRD_STRESS_KEYS.intersection(request.keys)
-            if request.kind == "EL" and keys:
-                raise NotImplementedError(
-                    f"{request.location}: {request.keyword} {', '.join(sorted(keys))} of C3D15 "
-                    "elements is not supported yet (ccx's extrapolation of C3D15 stresses to the "
-                    f"nodes is not reproduced; *EL PRINT prints them at ccx's 9 points; {where})"
-                )
 
 
 @dataclass(frozen=True)

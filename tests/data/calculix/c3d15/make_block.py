@@ -5,7 +5,8 @@ diagonal, with all midside nodes moved off the straight edges (curved edges: the
 is C3D15's, not an affine one) and the top nodes loaded unevenly; the bottom is clamped.
 ``wedge_block_pressure*.inp`` add pressures on the curved top triangles and the curved
 quadrilaterals at x = 2, one value per element (NLGEOM: 5 times the values, and tight
-``*CONTROLS`` so that both codes converge to round-off). Run:
+``*CONTROLS`` so that both codes converge to round-off); ``wedge_block_frd.inp`` is the NLGEOM
+block with ``*EL FILE S, E``. Run:
 ``python make_block.py`` (deterministic: no random numbers).
 """
 
@@ -78,7 +79,7 @@ def _pressure_lines(x: np.ndarray, wedges: list, scale: float) -> list[str]:
     return lines
 
 
-def write(path: Path, nlgeom: bool, pressure: bool = False) -> None:
+def write(path: Path, nlgeom: bool, pressure: bool = False, frd: bool = False) -> None:
     points, wedges = _grid()
     x = np.array(points)
     lines = ["*HEADING", "C3D15 block, curved edges, uneven top load (dolfinx_ntf method §34)"]
@@ -108,6 +109,8 @@ def write(path: Path, nlgeom: bool, pressure: bool = False) -> None:
         lines.append(f"{n}, 3, {-scale * (1.0 + p[0] * p[1]):.12g}")
     if pressure:
         lines += _pressure_lines(x, wedges, 5.0 if nlgeom else 1.0)
+    if frd:
+        lines += ["*EL FILE", "S, E"]
     lines += ["*NODE PRINT, NSET=NALL", "U, RF", "*EL PRINT, ELSET=EALL", "S", "*END STEP"]
     path.write_text("\n".join(line for line in lines if line != "") + "\n")
 
@@ -118,3 +121,4 @@ if __name__ == "__main__":
     write(here / "wedge_block_nlgeom.inp", nlgeom=True)
     write(here / "wedge_block_pressure.inp", nlgeom=False, pressure=True)
     write(here / "wedge_block_pressure_nlgeom.inp", nlgeom=True, pressure=True)
+    write(here / "wedge_block_frd.inp", nlgeom=True, frd=True)
