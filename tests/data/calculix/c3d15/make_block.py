@@ -115,6 +115,19 @@ def write(path: Path, nlgeom: bool, pressure: bool = False, frd: bool = False) -
     path.write_text("\n".join(line for line in lines if line != "") + "\n")
 
 
+def write_dynamics(here: Path) -> None:
+    """``wedge_block_dynamic.inp`` (*DYNAMIC) and ``wedge_block_frequency.inp`` (*FREQUENCY, 6
+    modes): the small-strain block with a density (steel, N-mm-s)."""
+    deck = (here / "wedge_block.inp").read_text()
+    deck = deck.replace("210000., 0.3\n", "210000., 0.3\n*DENSITY\n7.8e-9\n")
+    (here / "wedge_block_dynamic.inp").write_text(
+        deck.replace("*STATIC\n", "*DYNAMIC\n1e-7, 5e-7\n")
+    )
+    model = deck.split("*STEP")[0]
+    steps = "*BOUNDARY\nBOTTOM, 1, 3\n*STEP\n*FREQUENCY\n6\n*END STEP\n"
+    (here / "wedge_block_frequency.inp").write_text(model + steps)
+
+
 if __name__ == "__main__":
     here = Path(__file__).parent
     write(here / "wedge_block.inp", nlgeom=False)
@@ -122,3 +135,4 @@ if __name__ == "__main__":
     write(here / "wedge_block_pressure.inp", nlgeom=False, pressure=True)
     write(here / "wedge_block_pressure_nlgeom.inp", nlgeom=True, pressure=True)
     write(here / "wedge_block_frd.inp", nlgeom=True, frd=True)
+    write_dynamics(here)
