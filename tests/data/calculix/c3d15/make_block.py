@@ -116,8 +116,9 @@ def write(path: Path, nlgeom: bool, pressure: bool = False, frd: bool = False) -
 
 
 def write_dynamics(here: Path) -> None:
-    """``wedge_block_dynamic.inp`` (*DYNAMIC) and ``wedge_block_frequency.inp`` (*FREQUENCY, 6
-    modes): the small-strain block with a density (steel, N-mm-s)."""
+    """``wedge_block_dynamic.inp`` (*DYNAMIC), ``wedge_block_frequency.inp`` (*FREQUENCY, 6
+    modes) and ``wedge_block_modal.inp`` (*MODAL DYNAMIC on them, Rayleigh damping): the
+    small-strain block with a density (steel, N-mm-s)."""
     deck = (here / "wedge_block.inp").read_text()
     deck = deck.replace("210000., 0.3\n", "210000., 0.3\n*DENSITY\n7.8e-9\n")
     (here / "wedge_block_dynamic.inp").write_text(
@@ -126,6 +127,14 @@ def write_dynamics(here: Path) -> None:
     model = deck.split("*STEP")[0]
     steps = "*BOUNDARY\nBOTTOM, 1, 3\n*STEP\n*FREQUENCY\n6\n*END STEP\n"
     (here / "wedge_block_frequency.inp").write_text(model + steps)
+    loads = deck.split("*CLOAD\n")[1].split("*NODE PRINT")[0]
+    steps = (
+        "*BOUNDARY\nBOTTOM, 1, 3\n*STEP\n*FREQUENCY, STORAGE=YES\n6\n*END STEP\n*STEP\n"
+        "*MODAL DYNAMIC\n1e-7, 5e-7\n*MODAL DAMPING, RAYLEIGH\n, , 0., 1e-7\n*CLOAD\n"
+        + loads
+        + "*NODE PRINT, NSET=NALL\nU\n*END STEP\n"
+    )
+    (here / "wedge_block_modal.inp").write_text(model + steps)
 
 
 if __name__ == "__main__":
