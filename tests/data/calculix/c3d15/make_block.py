@@ -111,7 +111,13 @@ def write(path: Path, nlgeom: bool, pressure: bool = False, frd: bool = False) -
         lines += _pressure_lines(x, wedges, 5.0 if nlgeom else 1.0)
     if frd:
         lines += ["*EL FILE", "S, E"]
-    lines += ["*NODE PRINT, NSET=NALL", "U, RF", "*EL PRINT, ELSET=EALL", "S", "*END STEP"]
+    lines += [
+        "*NODE PRINT, NSET=NALL",
+        "U, RF",
+        "*EL PRINT, ELSET=EALL",
+        "S, E" if nlgeom else "S",
+        "*END STEP",
+    ]
     path.write_text("\n".join(line for line in lines if line != "") + "\n")
 
 
