@@ -342,7 +342,10 @@ def test_metalforming_against_ccx(tmp_path: Path, simplified: bool) -> None:
     iteration (it stalled and cut back twice before, docs/method.md §33) and, with ccx's local
     directions on the axis (§33.3) and ccx's distance below which a node is on it (the punch's
     apex 21 lies 9.2e-16 off the axis, §33.6), agrees to 1e-5 in every column (measured: CDIS
-    8.7e-7, CSTR 8.6e-7; 4.3e-4 and 8.9e-5 before §33.6).
+    8.7e-7, CSTR 8.6e-7; 4.3e-4 and 8.9e-5 before §33.6). With the springs of the elastic first
+    iteration at the increment start, as ccx's (§33.4, §33.5), it takes ccx's 5 iterations with
+    ccx's number of springs in each (147, 146, 146, 147, 147: node 1020 open at iterations 2
+    and 3) and agrees to 1e-6 (measured: 2.4e-7 in CDIS and CSTR).
     """
     ours_dir, ccx_dir = tmp_path / "ntf", tmp_path / "ccx"
     for d in (ours_dir, ccx_dir):
@@ -358,10 +361,19 @@ def test_metalforming_against_ccx(tmp_path: Path, simplified: bool) -> None:
         np.testing.assert_array_equal(mine.labels, block.labels)  # 147 springs, node 1020 too
         scale = np.abs(block.values).max()
         difference = np.abs(mine.values - block.values).max() / scale
-        assert difference <= 1e-5, (block.name, difference)
+        assert difference <= (1e-5 if simplified else 1e-6), (block.name, difference)
     increments = [(r.step, r.increment, r.attempt) for r in read_sta(ours_dir / "mf.sta")]
     assert increments == [(r.step, r.increment, r.attempt) for r in read_sta(ccx_dir / "mf.sta")]
     assert increments == [(1, 1, 1)]  # no cut-back (the stall, docs/method.md §33)
+    if not simplified:  # iterations and springs per iteration, from the .cvg files (§33.5)
+        rows = [_cvg_springs(d / "mf.cvg") for d in (ours_dir, ccx_dir)]
+        assert rows[0] == rows[1] == [147, 146, 146, 147, 147]
+
+
+def _cvg_springs(path: Path) -> list[int]:
+    """The contact-element column of a ``.cvg`` file, iteration by iteration."""
+    rows = [line.split() for line in path.read_text().splitlines()]
+    return [int(r[4]) for r in rows if len(r) == 9 and r[0].isdigit()]
 
 
 @pytest.mark.serial
