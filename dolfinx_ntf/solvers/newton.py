@@ -67,8 +67,8 @@ class ContactNewtonSolver(NewtonSolver):
         relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
         max_it: Maximum Newton iterations per increment.
         min_iterations: Newton updates needed before convergence can be declared (ccx: 2).
-        divergence_iteration: CalculiX's I_0: from this Newton update on, the last two
-            residuals both larger than the one before them give the increment up at once
+        divergence_iteration: CalculiX's I_0: from this Newton update on, a residual larger than
+            the two before it gives the increment up at once
             (:class:`~dolfinx_ntf.solvers.convergence.DivergenceRule`; a re-pairing that changes
             the number of springs defers it by 4 updates, as in ccx).
         line_search: Backtrack along each Newton correction until the residual of the current
