@@ -154,6 +154,9 @@ class FrdWriter:
         materials: Material names in index order (the ``1UMAT`` lines).
         ccx: The ccx version whose records are written: ``"2.23"`` declares the CONTACT block's
             components scalars (``1    1    0    0``), 2.20 tensor components as STRESS's.
+        wedges: ``(ids, nodes (W, 6))`` of the C3D6 elements among ``element_ids`` (which list
+            them as collapsed C3D8), written as ccx does: frd type 2 with their six nodes, all
+            elements by ascending number (docs/method.md §35).
     """
 
     def __init__(
@@ -167,6 +170,7 @@ class FrdWriter:
         element_materials: np.ndarray,
         materials: typing.Sequence[str],
         ccx: str = "2.20",
+        wedges: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> None:
         if ccx not in ("2.20", "2.23"):
             raise ValueError(f"ccx format {ccx!r}: one of 2.20, 2.23")
@@ -204,7 +208,12 @@ class FrdWriter:
             "\n -2" + "%10d" * min(10, width - start) for start in range(0, width, 10)
         )
         columns = [np.asarray(element_materials).astype(np.int64).tolist()]
-        lines += map(record.__mod__, zip(element_ids.tolist(), *columns, *connectivity.T.tolist()))
+        records = list(
+            map(record.__mod__, zip(element_ids.tolist(), *columns, *connectivity.T.tolist()))
+        )
+        if wedges is not None and len(wedges[0]):
+            records = _with_wedges(records, element_ids, columns[0], wedges)
+        lines += records
         lines.append(" -3")
         self.path.write_text("\n".join(lines) + "\n")
 
@@ -243,6 +252,26 @@ class FrdWriter:
         """Write the end record."""
         with self.path.open("a") as stream:
             stream.write(" 9999\n")
+
+
+def _with_wedges(
+    records: list[str],
+    element_ids: np.ndarray,
+    materials: list[int],
+    wedges: tuple[np.ndarray, np.ndarray],
+) -> list[str]:
+    """The element records with the C3D6 wedges' as ccx's (type 2, six nodes), by number."""
+    ids, nodes = np.asarray(wedges[0]), np.asarray(wedges[1])
+    wedge = np.isin(element_ids, ids)
+    position = np.searchsorted(ids, element_ids[wedge], sorter=np.argsort(ids))
+    rows = nodes[np.argsort(ids)[position]]
+    record = f" -1%10d{2:5d}{0:5d}%5d\n -2" + "%10d" * 6
+    chosen = np.asarray(materials)[wedge].tolist()
+    written = map(record.__mod__, zip(element_ids[wedge].tolist(), chosen, *rows.T.tolist()))
+    for k, text in zip(np.flatnonzero(wedge).tolist(), written):
+        records[k] = text
+    order = np.argsort(element_ids, kind="stable")
+    return [records[k] for k in order.tolist()]
 
 
 # ----------------------------------------------------------------------------- reader

@@ -440,6 +440,7 @@ def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWr
         element_material,
         materials + list(deck.interactions),
         ccx=ccx,
+        wedges=(deck.wedges, deck.wedge_nodes),
     )
 
 
@@ -462,10 +463,10 @@ def _check_transformed_outputs(deck: Deck) -> None:
 
 
 def _check_wedge_outputs(deck: Deck) -> None:
-    """Refuse the C3D6 wedges' element outputs but ``*EL PRINT`` S, E, PEEQ (method §30.6).
+    """Refuse the C3D6 wedges' element outputs but S, E and PEEQ (method §30.6, §35).
 
-    ``*EL PRINT`` S, E and PEEQ of a wedge are printed at ccx's two C3D6 points; the ``.frd``'s
-    nodal values (``*EL FILE``) would need ccx's C3D6 extrapolation, not built.
+    ``*EL PRINT`` S, E and PEEQ of a wedge are printed at ccx's two C3D6 points, and ``*EL FILE``
+    writes them extrapolated to the nodes by ccx's C3D6 weights.
     """
     if deck.wedges.size == 0:
         return
@@ -473,7 +474,7 @@ def _check_wedge_outputs(deck: Deck) -> None:
         for request in [*step.prints, *step.file_requests]:
             if request.kind != "EL":
                 continue
-            if isinstance(request, PrintRequest) and set(request.keys) <= {"S", "E", "PEEQ"}:
+            if set(request.keys) <= {"S", "E", "PEEQ"}:
                 continue
             members = deck.elsets.get(request.set or "", None) if request.set else None
             hit = deck.wedges if members is None else deck.wedges[np.isin(deck.wedges, members)]
@@ -481,8 +482,8 @@ def _check_wedge_outputs(deck: Deck) -> None:
                 keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
                 raise NotImplementedError(
                     f"{request.location}: {keyword} {'/'.join(request.keys)} of C3D6 element "
-                    f"{int(hit[0])} is not supported (only *EL PRINT S, E and PEEQ are printed at "
-                    "ccx's two C3D6 points)"
+                    f"{int(hit[0])} is not supported (only S, E and PEEQ, from ccx's two C3D6 "
+                    "points)"
                 )
 
 

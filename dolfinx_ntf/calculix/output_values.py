@@ -27,7 +27,7 @@ from dolfinx_ntf.kernels.wedge_rule import wedge_rule
 from dolfinx_ntf.outputs.results import contact_results
 
 from .deck import Deck
-from .elements import AXISYMMETRIC_SECTOR
+from .elements import AXISYMMETRIC_SECTOR, C3D6_EXTRAPOLATION
 from .gather import CcxNumbering
 from .model import CalculixModel
 from .roundoff import (
@@ -434,11 +434,22 @@ class OutputValues:
         return self._at_nodes(self.equivalent_plastic_strains(block.ids))
 
     def _at_nodes(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Point values ``(E, q, k)`` of every element extrapolated and averaged at the nodes."""
+        """Point values ``(E, q, k)`` of every element extrapolated and averaged at the nodes.
+
+        A C3D6 wedge's two points (its first two rows) go to its six nodes by ccx's C3D6
+        extrapolation and count once at each (docs/method.md §35).
+        """
         block = self.deck.elements[self.model.element_type.name]
         extrapolate = self.model.element_type.extrapolation
-        at_nodes = np.einsum("nq,eqk->enk", extrapolate, values)
-        index = self.deck.node_index(block.connectivity)
+        wedge = np.isin(block.ids, self.deck.wedges)
+        at_nodes = np.einsum("nq,eqk->enk", extrapolate, values[~wedge])
+        index = self.deck.node_index(block.connectivity[~wedge])
+        at_nodes, index = at_nodes.reshape(-1, values.shape[2]), index.ravel()
+        if wedge.any():
+            nodes = self.deck.wedge_nodes[np.searchsorted(self.deck.wedges, block.ids[wedge])]
+            at_wedge = np.einsum("nq,eqk->enk", C3D6_EXTRAPOLATION, values[wedge, :2])
+            at_nodes = np.vstack([at_nodes, at_wedge.reshape(-1, values.shape[2])])
+            index = np.concatenate([index, self.deck.node_index(nodes).ravel()])
         total = np.zeros((self.deck.node_ids.size, values.shape[2]))
         count = np.zeros(self.deck.node_ids.size)
         np.add.at(total, index, at_nodes)
