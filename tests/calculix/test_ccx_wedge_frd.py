@@ -4,7 +4,8 @@ ccx extrapolates a wedge's two integration points to its six nodes with fixed we
 nodes 1, 3, 5 take ``1.1455 p1 - 0.1455 p2``, its even nodes the mirror: measured, not the two
 triangles) and averages over the elements around each node, wedges and C3D8 alike. The decks are
 a single wedge with every node's displacement prescribed (a stress varying along it), the 16-wedge
-block of ``test_ccx_wedges.py``, its mixed wedge + C3D8 block and the plastic mixed block.
+block of ``test_ccx_wedges.py``, its mixed wedge + C3D8 block, the plastic mixed block and the
+wedge punch (contact).
 """
 
 from __future__ import annotations
@@ -64,9 +65,14 @@ FILE_CARDS = "*EL PRINT, ELSET=EALL\nS, E\n*EL FILE\nS, E\n*NODE FILE\nU\n*END S
 
 
 def _deck(case: str) -> str:
-    """The deck of ``case``: one (wedge), block (16 wedges), mixed (8 wedges, 4 C3D8), plastic."""
+    """The deck of ``case``: one (wedge), block (16 wedges), mixed (8 wedges, 4 C3D8), plastic,
+    punch (``wedge_punch.inp``: 12 wedges pressing a C3D8 block)."""
     if case == "one":
         return ONE_WEDGE
+    if case == "punch":
+        text = (Path(__file__).parents[1] / "data" / "calculix" / "wedge_punch.inp").read_text()
+        cards = "*EL FILE\nS, E\n*NODE FILE\nU\n*CONTACT PRINT"
+        return text.replace("*CONTACT PRINT", cards, 1)
     text = _block(surfaces=False, mixed=case in ("mixed", "plastic"))[0]
     if case != "plastic":
         return text.replace("*END STEP", FILE_CARDS)
@@ -99,7 +105,7 @@ def _compare_with_ccx(ours: FrdFile, theirs: FrdFile) -> dict[str, float]:
 @pytest.mark.serial
 @pytest.mark.ccx
 @needs_ccx
-@pytest.mark.parametrize("case", ["one", "block", "mixed", "plastic"])
+@pytest.mark.parametrize("case", ["one", "block", "mixed", "plastic", "punch"])
 def test_wedge_frd_against_ccx(tmp_path: Path, case: str) -> None:
     """STRESS, TOSTRAIN and PE of wedges (beside C3D8) are ccx's blocks to their printed digits.
 
@@ -110,7 +116,11 @@ def test_wedge_frd_against_ccx(tmp_path: Path, case: str) -> None:
     ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "w", _deck(case))
     theirs, ours = read_frd(ccx_dir / "w.frd"), read_frd(ntf_dir / "w.frd")
     worst = _compare_with_ccx(ours, theirs)
-    names = {"one": {"STRESS", "TOSTRAIN"}, "plastic": {"STRESS", "TOSTRAIN", "PE"}}
+    names = {
+        "one": {"STRESS", "TOSTRAIN"},
+        "plastic": {"STRESS", "TOSTRAIN", "PE"},
+        "punch": {"DISP", "STRESS", "TOSTRAIN", "FORC", "CONTACT"},
+    }
     assert set(worst) == names.get(case, {"DISP", "STRESS", "TOSTRAIN"})
     for name, difference in worst.items():
         assert difference <= 1e-5, (name, difference)
