@@ -23,7 +23,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.collapsed_wedges import wedge_cells
 from dolfinx_ntf.kernels.friction import output_tangents
-from dolfinx_ntf.kernels.wedge_rule import wedge_rule
+from dolfinx_ntf.kernels.wedge_rule import NUM_CLASSES, wedge_rule
 from dolfinx_ntf.outputs.results import contact_results
 
 from .deck import Deck
@@ -231,9 +231,10 @@ class OutputValues:
                 if mine.any():
                     _put_law_values(values, mine, law.cell_stresses(cells[mine]), order)
                     plastic |= mine
-            self._at_wedge_points("S", self.model.cauchy, cells, values, skip=plastic)
+            self._at_wedge_points("S", cells, values, skip=plastic)
             return values[:, :, index[0], index[1]]
 
+        self._compile_wedge_expressions("S", self.model.cauchy)
         values = self.numbering.element_values(element_ids, evaluate, (q, 6))
         rows = self.model.element_type.print_rows
         if rows is None:
@@ -265,15 +266,31 @@ class OutputValues:
             self._wedge_classes = wedge_cells(self.model.mesh)
         return self._wedge_classes
 
+    def _compile_wedge_expressions(self, key: str, tensor: ufl.core.expr.Expr) -> None:
+        """``tensor`` at the two points of each collapse class present on any process.
+
+        Collective: dolfinx compiles an Expression on every process of the mesh, so all
+        processes compile the same classes in the same order, whether or not they evaluate
+        them (the wedge punch hung on 2 processes when only one held a class).
+        """
+        if self.deck.wedges.size == 0:
+            return
+        classes = self._wedge_classes_of_cells()
+        mask = sum(1 << c for c in np.unique(classes[classes >= 0]).tolist())
+        mask = self.comm.allreduce(mask, op=MPI.BOR)
+        for c in (c for c in range(NUM_CLASSES) if mask >> c & 1):
+            if (key, c) not in self._wedge_expressions:
+                points = wedge_rule(c)[0]
+                self._wedge_expressions[key, c] = dolfinx.fem.Expression(tensor, points)
+
     def _at_wedge_points(
         self,
         key: str,
-        tensor: ufl.core.expr.Expr,
         cells: np.ndarray,
         values: np.ndarray,
         skip: np.ndarray | None = None,
     ) -> None:
-        """Put ``tensor`` at ccx's two C3D6 points into rows 0, 1 of the wedge cells' ``values``.
+        """Put the ``key`` tensor at ccx's two C3D6 points into rows 0, 1 of wedge cells' values.
 
         ``values`` is ``(cells, q, 3, 3)``; rows past the second of a wedge become 0. The points
         are those of the cell's collapse class (``kernels/wedge_rule.py``, ccx's order). Cells
@@ -285,10 +302,7 @@ class OutputValues:
         if skip is not None:
             classes[skip] = -1
         for c in np.unique(classes[classes >= 0]).tolist():
-            if (key, c) not in self._wedge_expressions:
-                points = wedge_rule(c)[0]
-                self._wedge_expressions[key, c] = dolfinx.fem.Expression(tensor, points)
-            hit = np.flatnonzero(classes == c)
+            hit = np.flatnonzero(classes == c)  # compiled by _compile_wedge_expressions
             at = compat.evaluate_expression(
                 self._wedge_expressions[key, c], self.model.mesh, cells[hit].astype(np.int32)
             ).reshape(hit.size, 2, 3, 3)
@@ -336,9 +350,10 @@ class OutputValues:
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(expression, self.model.mesh, cells.astype(np.int32))
             values = values.reshape(cells.size, q, 3, 3)
-            self._at_wedge_points("E", strain, cells, values)
+            self._at_wedge_points("E", cells, values)
             return values[:, :, index[0], index[1]]
 
+        self._compile_wedge_expressions("E", strain)
         return self.numbering.element_values(element_ids, evaluate, (q, 6))
 
     def nodal_strains(self) -> tuple[np.ndarray, np.ndarray]:
