@@ -348,20 +348,48 @@ class OutputValues:
             return self.model.nlgeom
         return float(any(step.nlgeom for step in self.deck.steps))
 
+    def _mechanical_strain(self) -> ufl.core.expr.Expr:
+        """The strain of ``grad u`` less the thermal strain ``x I`` (that of the stresses).
+
+        Small strain ``sym(H - x I)``, under NLGEOM the Green-Lagrange strain of ``H - x I``
+        (``bulk.stresses``, docs/method.md §20.8); the total strain without temperatures.
+        """
+        kinematics = self._kinematics()
+        H = ufl.grad(self.model.u)
+        if self.model.thermal is not None:
+            H = H - self.model.thermal.thermal_strain()
+        return ufl.sym(H) + 0.5 * kinematics * H.T * H
+
     def mechanical_strains(self, element_ids: np.ndarray) -> np.ndarray:
         """Mechanical strains ``(E, q, 6)`` (ccx's ``ME``) at ccx's integration points.
 
-        The total strain less the thermal strain; ``check_requests`` refuses ME in coupled
-        steps, so it is :meth:`strains` (measured equal in ccx 2.20, small strain and NLGEOM,
-        docs/method.md §36). Collective.
+        The total strain less the thermal strain, as the stresses see it: without temperatures
+        :meth:`strains` (measured equal in ccx 2.20, small strain and NLGEOM; in coupled steps
+        the strain of ``grad u - x I``, docs/method.md §36). Collective.
         """
-        return self.strains(element_ids)
+        if self.model.thermal is None:
+            return self.strains(element_ids)
+        model = self.model
+        points = model.element_type.integration_points
+        q = points.shape[0]
+        tensor = self._mechanical_strain()
+        expression = dolfinx.fem.Expression(tensor, points)
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, model.mesh, cells.astype(np.int32))
+            values = values.reshape(cells.size, q, 3, 3)
+            self._at_wedge_points("ME", tensor, cells, values)
+            return values[:, :, index[0], index[1]]
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 6))
 
     def energy_densities(self, element_ids: np.ndarray) -> np.ndarray:
         """Strain energy densities ``(E, q, 1)`` (ccx's ``ENER``) at ccx's integration points.
 
         Elastic sections ``S : E / 2`` (the Cauchy stress and small strain, under NLGEOM the
-        second Piola-Kirchhoff stress and Green-Lagrange strain: per unit reference volume);
+        second Piola-Kirchhoff stress and Green-Lagrange strain: per unit reference volume; the
+        mechanical strain in coupled steps);
         plastic sections their laws' energy accumulated over the increments by ccx's
         trapezoidal rule (``kernels/strain_energy.py``). Measured, docs/method.md §36.
         Collective.
@@ -372,7 +400,7 @@ class OutputValues:
         if self._energy is None:
             kinematics = self._kinematics()
             H = ufl.grad(model.u)
-            strain = ufl.sym(H) + 0.5 * kinematics * H.T * H
+            strain = self._mechanical_strain()
             if isinstance(kinematics, float) and kinematics == 0.0:
                 second_piola = model.first_piola
             else:

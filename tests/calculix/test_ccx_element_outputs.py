@@ -382,30 +382,80 @@ def test_c3d8i_is_refused(key: str, tmp_path: Path) -> None:
     assert "C3D8I" in str(info.value)
 
 
-@pytest.mark.serial
-def test_coupled_step_is_refused(tmp_path: Path) -> None:
-    """ME in a coupled temperature-displacement step (the thermal strain, not measured)."""
-    text = _bar(False, plastic=False).split("*STEP")[0]
-    text = text.replace("*ELASTIC\n5000.0, 0.3\n", "*ELASTIC\n5000.0, 0.3\n*EXPANSION\n1e-5\n"
-                        "*CONDUCTIVITY\n50.\n*SPECIFIC HEAT\n400.\n*DENSITY\n7.8e-9\n")  # fmt: skip
-    text += """*INITIAL CONDITIONS, TYPE=TEMPERATURE
+#: A C3D8 cube heated by 3 (expansion 1e-2: a thermal strain x = 0.03), held at x = 0 and 1.
+HEATED = """*NODE, NSET=NALL
+1, 0, 0, 0
+2, 1, 0, 0
+3, 1, 1, 0
+4, 0, 1, 0
+5, 0, 0, 1
+6, 1, 0, 1
+7, 1, 1, 1
+8, 0, 1, 1
+*ELEMENT, TYPE=C3D8, ELSET=EALL
+1, 1, 2, 3, 4, 5, 6, 7, 8
+*NSET, NSET=X0
+1, 4, 5, 8
+*NSET, NSET=Y0
+1, 2, 5, 6
+*NSET, NSET=Z0
+1, 2, 3, 4
+*NSET, NSET=X1
+2, 3, 6, 7
+*MATERIAL, NAME=M
+*ELASTIC
+1000.0, 0.3
+*EXPANSION
+1e-2
+*CONDUCTIVITY
+50.
+*SPECIFIC HEAT
+400.
+*DENSITY
+7.8e-9
+*SOLID SECTION, ELSET=EALL, MATERIAL=M
+*INITIAL CONDITIONS, TYPE=TEMPERATURE
 NALL, 0.
-*STEP
+*BOUNDARY
+X0, 1, 1
+Y0, 2, 2
+Z0, 3, 3
+X1, 1, 1
+*STEP{nlgeom}
 *COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE
 1., 1.
 *BOUNDARY
-NALL, 11, 11, 100.
-*EL FILE
-ME
+NALL, 11, 11, 3.
+*EL PRINT, ELSET=EALL
+S, E, ENER, SDV, ME
 *END STEP
 """
-    (tmp_path / "deck.inp").write_text(text)
-    line = text.splitlines().index("*EL FILE") + 1
-    with pytest.raises(NotImplementedError) as info:
-        run_quietly("deck", tmp_path)
-    message = str(info.value)
-    assert f"deck.inp:{line}: *EL FILE ME (mechanical strains)" in message
-    assert "coupled temperature-displacement step" in message
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize(
+    ("nlgeom", "tolerance"), [(False, 1e-9), (True, 1e-4)], ids=["small", "nlgeom"]
+)
+def test_heated_cube(nlgeom: bool, tolerance: float, tmp_path: Path) -> None:
+    """A coupled step: ME is the strain of ``grad u - x I`` (NLGEOM: its Green-Lagrange strain),
+    E the total strain, ENER ``S : ME / 2``, as ccx's (small strain: its printed digits; NLGEOM:
+    as S and E of this steady coupled step, 7e-5 and 2.6e-5 at ccx's own controls)."""
+    text = HEATED.format(nlgeom=", NLGEOM" if nlgeom else "")
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "cube", text)
+    _compare_dat(ccx_dir / "cube.dat", ntf_dir / "cube.dat", dict.fromkeys(KEYS, tolerance))
+    x = 0.03
+    for directory in (ccx_dir, ntf_dir):  # ME from E: the stretches less x, to printed digits
+        dat = directory / "cube.dat"
+        total, mechanical = _blocks(dat, "E")[0].values, _blocks(dat, "ME")[0].values
+        if nlgeom:
+            stretch = np.sqrt(1 + 2 * total[:, :3])
+            expected = ((stretch - x) ** 2 - 1) / 2
+        else:
+            expected = total[:, :3] - x
+        np.testing.assert_allclose(mechanical[:, :3], expected, rtol=0, atol=2e-7)
+        assert abs(mechanical[0, 0] - (-x + (x**2 / 2 if nlgeom else 0.0))) < 1e-7  # held in x
 
 
 # -- on several processes -------------------------------------------------------------------------
