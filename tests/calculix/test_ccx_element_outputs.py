@@ -15,6 +15,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+import cases
 import numpy as np
 import pytest
 from helpers.ccx_runs import quiet_logs, run_ccx_and_ours, run_quietly
@@ -350,6 +351,33 @@ def test_elastic_wedges_under_nlgeom(tmp_path: Path) -> None:
     energy = _blocks(ntf_dir / "w.dat", "ENER")[-1]
     assert energy.values[: 2 * count].min() > 0.0
     assert np.abs(energy.values[0] - energy.values[1]).max() > 0.0  # two points, not one
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize(
+    ("name", "tolerance"),
+    [("tet10_exponential", 2e-7), ("tet_nlgeom_pressure", 6e-6)],
+    ids=["C3D10", "C3D4-nlgeom"],
+)
+def test_tetrahedra(name: str, tolerance: float, tmp_path: Path) -> None:
+    """Cross-validation decks of tetrahedral punches with ENER, SDV and ME printed: as ccx's
+    within the differences of S and E of the same decks (3.5e-8 and 3.3e-6, measured)."""
+    (case,) = [c for c in cases.CASES if c.name == name]
+
+    def write(directory: Path) -> None:
+        case.write(directory)
+        path = directory / f"{name}.inp"
+        request = "*EL PRINT, ELSET=EALL\nS, E, ENER, SDV, ME\n*END STEP"
+        text = path.read_text().replace("*END STEP", request)
+        assert "ENER" in text
+        path.write_text(text)
+
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, name, write)
+    dat = f"{name}.dat"
+    worst = _compare_dat(ccx_dir / dat, ntf_dir / dat, dict.fromkeys(KEYS, tolerance))
+    assert worst["SDV"] == 0.0
 
 
 # -- refusals and the reader (no ccx) -------------------------------------------------------------
