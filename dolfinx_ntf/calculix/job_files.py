@@ -2,10 +2,12 @@
 
 :class:`JobFiles` opens them as ccx does at program start and writes, in ccx 2.20's formats:
 
-    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, E, PEEQ) and ``*CONTACT PRINT``
-      (CDIS, CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
+    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, E, PEEQ, ENER, SDV, ME) and
+      ``*CONTACT PRINT`` (CDIS, CSTR, CELS, CNUM) blocks of each printed increment
+      (docs/method.md §8.5, §36).
     - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S, E as
-      ``TOSTRAIN``, PEEQ as ``PE``) and ``*CONTACT FILE`` (CDIS, CSTR) blocks (§13.2).
+      ``TOSTRAIN``, ME as ``MESTRAIN``, PEEQ as ``PE``, ENER, SDV) and ``*CONTACT FILE`` (CDIS,
+      CSTR) blocks (§13.2).
     - ``JOB.cel``: the contact elements of every pairing when ``CONTACT ELEMENTS`` is requested.
     - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration (§13.3).
 
