@@ -107,6 +107,7 @@ class OutputValues:
         self._field_scales: tuple[float, float, tuple[float, float]] | None = None
         self._wedge_classes: np.ndarray | None = None
         self._strain_tensor: ufl.core.expr.Expr | None = None
+        self._energy: tuple[dolfinx.fem.Expression, ufl.core.expr.Expr] | None = None
         self._wedge_expressions: dict[tuple[str, int], dolfinx.fem.Expression] = {}
         #: The velocity of the job's dynamic steps (``*NODE PRINT V``), None before the first.
         self.velocity: dolfinx.fem.Function | None = None
@@ -356,6 +357,118 @@ class OutputValues:
         self._compile_wedge_expressions("E", strain)
         return self.numbering.element_values(element_ids, evaluate, (q, 6))
 
+    def _kinematics(self) -> float | dolfinx.fem.Constant:
+        """0 (small strain) or 1 (NLGEOM), or the model's switch when its steps mix them."""
+        if self.model.nlgeom is not None:
+            return self.model.nlgeom
+        return float(any(step.nlgeom for step in self.deck.steps))
+
+    def _mechanical_strain(self) -> ufl.core.expr.Expr:
+        """The strain of ``grad u`` less the thermal strain ``x I`` (that of the stresses).
+
+        Small strain ``sym(H - x I)``, under NLGEOM the Green-Lagrange strain of ``H - x I``
+        (``bulk.stresses``, docs/method.md §20.8); the total strain without temperatures.
+        """
+        kinematics = self._kinematics()
+        H = ufl.grad(self.model.u)
+        if self.model.thermal is not None:
+            H = H - self.model.thermal.thermal_strain()
+        return ufl.sym(H) + 0.5 * kinematics * H.T * H
+
+    def mechanical_strains(self, element_ids: np.ndarray) -> np.ndarray:
+        """Mechanical strains ``(E, q, 6)`` (ccx's ``ME``) at ccx's integration points.
+
+        The total strain less the thermal strain, as the stresses see it: without temperatures
+        :meth:`strains` (measured equal in ccx 2.20, small strain and NLGEOM; in coupled steps
+        the strain of ``grad u - x I``, docs/method.md §36). Collective.
+        """
+        if self.model.thermal is None:
+            return self.strains(element_ids)
+        model = self.model
+        points = model.element_type.integration_points
+        q = points.shape[0]
+        tensor = self._mechanical_strain()
+        expression = dolfinx.fem.Expression(tensor, points)
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, model.mesh, cells.astype(np.int32))
+            values = values.reshape(cells.size, q, 3, 3)
+            self._at_wedge_points("ME", tensor, cells, values)
+            return values[:, :, index[0], index[1]]
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 6))
+
+    def energy_densities(self, element_ids: np.ndarray) -> np.ndarray:
+        """Strain energy densities ``(E, q, 1)`` (ccx's ``ENER``) at ccx's integration points.
+
+        Elastic sections ``S : E / 2`` (the Cauchy stress and small strain, under NLGEOM the
+        second Piola-Kirchhoff stress and Green-Lagrange strain: per unit reference volume; the
+        mechanical strain in coupled steps);
+        plastic sections their laws' energy accumulated over the increments by ccx's
+        trapezoidal rule (``kernels/strain_energy.py``). Measured, docs/method.md §36.
+        Collective.
+        """
+        model = self.model
+        points = model.element_type.integration_points
+        q = points.shape[0]
+        if self._energy is None:
+            kinematics = self._kinematics()
+            H = ufl.grad(model.u)
+            strain = self._mechanical_strain()
+            if isinstance(kinematics, float) and kinematics == 0.0:
+                second_piola = model.first_piola
+            else:
+                second_piola = ufl.inv(ufl.Identity(3) + kinematics * H) * model.first_piola
+            # a tensor (energy times I) so that the wedges' points take the strains' path
+            tensor = 0.5 * ufl.inner(second_piola, strain) * ufl.Identity(3)
+            self._energy = (dolfinx.fem.Expression(tensor, points), tensor)
+        expression, tensor = self._energy
+        order = self._plastic_point_order()
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, model.mesh, cells.astype(np.int32))
+            values = values.reshape(cells.size, q, 3, 3)
+            plastic = np.zeros(cells.size, dtype=bool)
+            for law in model.plasticity:
+                plastic |= np.isin(cells, law.cells)
+            self._at_wedge_points("ENER", tensor, cells, values, skip=plastic)
+            energy = values[:, :, :1, 0].copy()
+            for law in model.plasticity:
+                mine = np.isin(cells, law.cells)
+                if mine.any():
+                    held = law.cell_strain_energy_densities(cells[mine])
+                    _put_law_values(energy[..., 0], mine, held, order)
+            return energy
+
+        return self.numbering.element_values(element_ids, evaluate, (q, 1))
+
+    def state_variables(self, element_ids: np.ndarray) -> np.ndarray:
+        """Internal state variables ``(E, q, k)`` (ccx's ``SDV``) at ccx's integration points.
+
+        With plastic sections ``k = 13``, ccx 2.20's layout of its isotropic ``*PLASTIC`` law:
+        the equivalent plastic strain, the plastic strain tensor (xx, yy, zz, xy, xz, yz; under
+        NLGEOM ``(I - Cp^-1)/2``) and six zeros (the back stress of kinematic hardening);
+        elements of elastic sections 0. Without them ``k = 0``. Measured, docs/method.md §36.
+        Collective.
+        """
+        q = self.model.element_type.integration_points.shape[0]
+        if not self.model.plasticity:  # ccx prints the rows' labels only
+            return np.zeros((np.asarray(element_ids).size, q, 0))
+        width = 13
+        order = self._plastic_point_order()
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = np.zeros((cells.size, q, width))
+            for law in self.model.plasticity:
+                mine = np.isin(cells, law.cells)
+                if mine.any():
+                    held = law.cell_state_variables(cells[mine])  # (n, p, 7)
+                    _put_law_values(values[..., :7], mine, held, order)
+            return values
+
+        return self.numbering.element_values(element_ids, evaluate, (q, width))
+
     def nodal_strains(self) -> tuple[np.ndarray, np.ndarray]:
         """Strains at the nodes like ccx's ``.frd`` block ``TOSTRAIN`` (frd order, as stresses).
 
@@ -447,6 +560,25 @@ class OutputValues:
         """
         block = self.deck.elements[self.model.element_type.name]
         return self._at_nodes(self.equivalent_plastic_strains(block.ids))
+
+    def nodal_element_values(self, key: str) -> tuple[np.ndarray, np.ndarray]:
+        """``ME``, ``ENER`` or ``SDV`` at the nodes like ccx's ``.frd`` blocks.
+
+        ``MESTRAIN``, ``ENER`` and ``SDV``: extrapolated and averaged as the stresses (frd order
+        of tensors). Collective.
+
+        Args:
+            key: ``ME``, ``ENER`` or ``SDV``.
+        """
+        ids = self.deck.elements[self.model.element_type.name].ids
+        if key == "ME":
+            nodes, values = self._at_nodes(self.mechanical_strains(ids))
+            return nodes, values[:, [0, 1, 2, 3, 5, 4]]
+        if key == "ENER":
+            return self._at_nodes(self.energy_densities(ids))
+        if key == "SDV":
+            return self._at_nodes(self.state_variables(ids))
+        raise ValueError(f"no nodal values of element output {key!r}")
 
     def _at_nodes(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Point values ``(E, q, k)`` of every element extrapolated and averaged at the nodes.
