@@ -394,9 +394,10 @@ class OutputValues:
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(expression, model.mesh, cells.astype(np.int32))
             values = values.reshape(cells.size, q, 3, 3)
-            self._at_wedge_points("ME", tensor, cells, values)
+            self._at_wedge_points("ME", cells, values)
             return values[:, :, index[0], index[1]]
 
+        self._compile_wedge_expressions("ME", tensor)
         return self.numbering.element_values(element_ids, evaluate, (q, 6))
 
     def energy_densities(self, element_ids: np.ndarray) -> np.ndarray:
@@ -432,7 +433,7 @@ class OutputValues:
             plastic = np.zeros(cells.size, dtype=bool)
             for law in model.plasticity:
                 plastic |= np.isin(cells, law.cells)
-            self._at_wedge_points("ENER", tensor, cells, values, skip=plastic)
+            self._at_wedge_points("ENER", cells, values, skip=plastic)
             energy = values[:, :, :1, 0].copy()
             for law in model.plasticity:
                 mine = np.isin(cells, law.cells)
@@ -441,6 +442,7 @@ class OutputValues:
                     _put_law_values(energy[..., 0], mine, held, order)
             return energy
 
+        self._compile_wedge_expressions("ENER", tensor)
         return self.numbering.element_values(element_ids, evaluate, (q, 1))
 
     def state_variables(self, element_ids: np.ndarray) -> np.ndarray:
@@ -589,15 +591,16 @@ class OutputValues:
         block = self.deck.elements[self.model.element_type.name]
         extrapolate = self.model.element_type.extrapolation
         wedge = np.isin(block.ids, self.deck.wedges)
+        components = values.shape[2]  # 0 for SDV without plastic sections
         at_nodes = np.einsum("nq,eqk->enk", extrapolate, values[~wedge])
         index = self.deck.node_index(block.connectivity[~wedge])
-        at_nodes, index = at_nodes.reshape(-1, values.shape[2]), index.ravel()
+        at_nodes, index = at_nodes.reshape(index.size, components), index.ravel()
         if wedge.any():
             nodes = self.deck.wedge_nodes[np.searchsorted(self.deck.wedges, block.ids[wedge])]
             at_wedge = np.einsum("nq,eqk->enk", C3D6_EXTRAPOLATION, values[wedge, :2])
-            at_nodes = np.vstack([at_nodes, at_wedge.reshape(-1, values.shape[2])])
+            at_nodes = np.vstack([at_nodes, at_wedge.reshape(nodes.size, components)])
             index = np.concatenate([index, self.deck.node_index(nodes).ravel()])
-        total = np.zeros((self.deck.node_ids.size, values.shape[2]))
+        total = np.zeros((self.deck.node_ids.size, components))
         count = np.zeros(self.deck.node_ids.size)
         np.add.at(total, index, at_nodes)
         np.add.at(count, index, 1.0)
