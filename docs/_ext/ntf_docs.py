@@ -213,6 +213,10 @@ API_MODULES: list[tuple[str, str]] = [
     ("Incompatible-mode hexahedra: the numpy kernel", "dolfinx_ntf.kernels.incompatible_modes"),
     ("Wedges as collapsed hexahedra: the numpy kernel", "dolfinx_ntf.kernels.collapsed_wedges"),
     ("ccx's two-point wedge rule: the numpy kernel", "dolfinx_ntf.kernels.wedge_rule"),
+    (
+        "Strain energy density over increments: the numpy kernel",
+        "dolfinx_ntf.kernels.strain_energy",
+    ),
     ("Natural frequencies with contact", "dolfinx_ntf.solvers.modes"),
     ("Newton corrections with an earlier factorization", "dolfinx_ntf.solvers.factor_reuse"),
     ("Nodal velocities of dynamic steps (contact damping)", "dolfinx_ntf.contact.velocity"),
@@ -232,6 +236,7 @@ ARGS_CHECKED_MODULES = (
     "dolfinx_ntf.fem.plane_sections",
     "dolfinx_ntf.fem.pressure_recovery",
     "dolfinx_ntf.kernels.incompatible_modes",
+    "dolfinx_ntf.kernels.strain_energy",
     "dolfinx_ntf.solvers.continuum",
     "dolfinx_ntf.solvers.factor_reuse",
 )

@@ -17,10 +17,10 @@ Formats, verified byte for byte against ``ccx`` 2.20 output:
     - totals rows (``TOTALS=YES/ONLY`` of RF and CELS) are ``6X`` then the values;
     - the CNUM row is the count right-aligned in 17 columns.
 
-Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``E``, ``PEEQ``, ``HFL``,
-``CDIS``, ``CSTR``, ``CELS``, ``CELS_TOTAL``, ``CNUM``. ``read_dat`` also reads blocks it has no
-name for (the name is then the title text before the first parenthesis) so that any ccx ``.dat``
-file can be compared.
+Block names used here: ``U``, ``RF``, ``NT``, ``RF_TOTAL``, ``S``, ``E``, ``PEEQ``, ``ENER``,
+``SDV``, ``ME``, ``HFL``, ``CDIS``, ``CSTR``, ``CELS``, ``CELS_TOTAL``, ``CNUM``. ``read_dat``
+also reads blocks it has no name for (the name is then the title text before the first
+parenthesis) so that any ccx ``.dat`` file can be compared.
 """
 
 from __future__ import annotations
@@ -82,8 +82,8 @@ class DatBlock:
         ]
 
 
-# name -> (title template, number of label columns, number of value columns)
-_BLOCKS: dict[str, tuple[str, int, int]] = {
+# name -> (title template, number of label columns, number of value columns: None for any)
+_BLOCKS: dict[str, tuple[str, int, int | None]] = {
     "U": (" displacements (vx,vy,vz) for set {set} and time {time}", 1, 3),
     "V": (" velocities (vx,vy,vz) for set {set} and time {time}", 1, 3),
     "RF": (" forces (fx,fy,fz) for set {set} and time {time}", 1, 3),
@@ -104,6 +104,23 @@ _BLOCKS: dict[str, tuple[str, int, int]] = {
         " equivalent plastic strain (elem, integ.pnt.,pe)for set {set} and time {time}",
         2,
         1,
+    ),
+    "ENER": (
+        " internal energy density (elem, integ.pnt.,energy) for set {set} and time {time}",
+        2,
+        1,
+    ),
+    # as many values as the deck's materials have state variables (13 with *PLASTIC, else 0)
+    "SDV": (
+        " internal state variables (elem, integ.pnt.,values) for set {set} and time {time}",
+        2,
+        None,
+    ),
+    "ME": (
+        " mechanical strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set {set} and time "
+        "{time}",
+        2,
+        6,
     ),
     # ccx 2.20 writes no blank between "set" and the set's name in this title
     "HFL": (" heat flux (elem, integ.pnt.,qx,qy,qz) for set{set} and time {time}", 2, 3),
@@ -202,7 +219,7 @@ def format_block(block: DatBlock, ccx: str = "2.20") -> str:
     _, num_labels, num_values = _BLOCKS[block.name]
     values = np.asarray(block.values, dtype=np.float64)
     labels = np.asarray(block.labels, dtype=np.int64)
-    if values.ndim != 2 or values.shape[1] != num_values:
+    if values.ndim != 2 or values.shape[1] != (num_values or values.shape[1]):
         raise ValueError(
             f"block {block.name}: values must have shape (n, {num_values}), got {values.shape}"
         )
@@ -295,33 +312,35 @@ def node_print_blocks(
 def el_print_blocks(
     key: str, set_name: str, time: float, elements, values, points=None
 ) -> list[DatBlock]:
-    """Block of an ``*EL PRINT`` key at the integration points: ``S``, ``E``, ``PEEQ`` or ``HFL``.
+    """Block of an ``*EL PRINT`` key at the integration points (``S``, ``E``, ``PEEQ``, ...).
 
     ``S`` is the Cauchy stress, ``E`` the strain, ``PEEQ`` the equivalent plastic strain, ``HFL``
-    the heat flux.
+    the heat flux, ``ENER`` the strain energy density, ``SDV`` the internal state variables (any
+    number per point), ``ME`` the mechanical strain.
 
     Args:
-        key: ``S``, ``E``, ``PEEQ`` or ``HFL``.
+        key: ``S``, ``E``, ``PEEQ``, ``HFL``, ``ENER``, ``SDV`` or ``ME``.
         set_name: element set name as printed.
         time: total time.
         elements: ``(E,)`` element numbers in set order.
         values: ``(E, q, 6)`` stresses ``sxx, syy, szz, sxy, sxz, syz`` or strains (tensor
-            components, same order), ``(E, q, 1)`` equivalent plastic strains or ``(E, q, 3)``
-            heat fluxes ``qx, qy, qz`` per integration point (ccx order of the points).
+            components, same order), ``(E, q, 1)`` equivalent plastic strains or energy
+            densities, ``(E, q, 3)`` heat fluxes ``qx, qy, qz`` or ``(E, q, k)`` state variables
+            per integration point (ccx order of the points).
         points: ``(E,)`` number of points printed of each element (its first rows of
             ``values``; C3D6 wedges print 2), all ``q`` if None.
     """
-    widths = {"S": 6, "E": 6, "PEEQ": 1, "HFL": 3}
+    widths = {"S": 6, "E": 6, "PEEQ": 1, "HFL": 3, "ENER": 1, "SDV": None, "ME": 6}
     if key not in widths:
-        raise ValueError(f"*EL PRINT key must be S, E, PEEQ or HFL, got {key!r}")
-    width = widths[key]
-    elements = np.asarray(elements, dtype=np.int64).reshape(-1)
+        raise ValueError(f"*EL PRINT key must be one of {', '.join(widths)}, got {key!r}")
     values = np.asarray(values, dtype=np.float64)
+    width = widths[key] if widths[key] is not None else values.shape[-1]
+    elements = np.asarray(elements, dtype=np.int64).reshape(-1)
     if values.ndim != 3 or values.shape[0] != elements.size or values.shape[2] != width:
         raise ValueError(f"*EL PRINT {key}: values must have shape ({elements.size}, q, {width})")
     q = values.shape[1]
     labels = np.stack([np.repeat(elements, q), np.tile(np.arange(1, q + 1), elements.size)], 1)
-    values = values.reshape(-1, width)
+    values = values.reshape(elements.size * q, width)
     if points is not None:
         keep = (np.arange(q)[None, :] < np.asarray(points).reshape(-1, 1)).reshape(-1)
         labels, values = labels[keep], values[keep]
@@ -438,7 +457,7 @@ def read_dat(path: str | Path) -> list[DatBlock]:
         width = {len(r) for r in rows}
         if len(width) > 1:
             raise ValueError(f"{path}:{current['line']}: rows of block {name} differ in length")
-        ncols = width.pop() if width else num_labels + (_BLOCKS[name][2] if name in _BLOCKS else 0)
+        ncols = width.pop() if width else num_labels + ((_BLOCKS.get(name) or (0, 0, 0))[2] or 0)
         labels = np.array([[int(t) for t in r[:num_labels]] for r in rows], dtype=np.int64)
         values = np.array(
             [

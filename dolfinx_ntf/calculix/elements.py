@@ -25,6 +25,7 @@ import numpy.typing as npt
 
 __all__ = [
     "AXISYMMETRIC_SECTOR",
+    "C3D6_EXTRAPOLATION",
     "C3D8_EXTRAPOLATION",
     "C3D20_EXTRAPOLATION",
     "ELEMENT_TYPES",
@@ -153,6 +154,14 @@ class ElementType:
 #: uniform stress of 10 as 9.9996); they reproduce ccx's nodal stresses to print precision
 #: (docs/method.md §13.2).
 C3D8_EXTRAPOLATION = (2.549, -0.683, 0.183, -0.04904)
+
+#: ccx 2.20's ``(6, 2)`` extrapolation of a C3D6 wedge's two integration points (ccx's order) to
+#: its nodes (ccx's order), measured from ccx's ``.frd`` files (docs/method.md §35): the odd nodes
+#: 1, 3, 5 take ``1.1455 p1 - 0.1455 p2``, the even nodes 2, 4, 6 the mirror. The weights are the
+#: linear field through points at ``-+sqrt(3/5)`` rounded (not the 2-point rule's ``-+1/sqrt 3``),
+#: and the rows alternate where the two triangles would be expected: ccx's layout, reproduced as is.
+C3D6_EXTRAPOLATION = np.array([[1.1455, -0.1455], [-0.1455, 1.1455]] * 3)
+C3D6_EXTRAPOLATION.flags.writeable = False
 
 # ccx node order of the 8 hexahedron corners in dolfinx reference coordinates.
 _HEX_CORNERS = np.array(

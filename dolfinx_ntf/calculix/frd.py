@@ -1,11 +1,12 @@
 """CalculiX ``.frd`` result files (ASCII, ccx 2.20's layout): writer and reader.
 
 See docs/method.md §13.2. ``FrdWriter`` writes what ccx writes for ``*NODE FILE`` (U -> ``DISP``, RF
--> ``FORC``), ``*EL FILE`` (S -> ``STRESS``, E -> ``TOSTRAIN``, PEEQ -> ``PE``: integration-point
-values extrapolated to the nodes and averaged over the elements around each node) and ``*CONTACT
-FILE`` (CDIS/CSTR -> ``CONTACT``): a header, the nodes, the elements, then per written increment one
-block per result, and `` 9999`` at the end. cgx and converters read it like ccx's file. ``read_frd``
-reads both ccx's files and ours (the tests compare them value by value). Pure Python/numpy.
+-> ``FORC``), ``*EL FILE`` (S -> ``STRESS``, E -> ``TOSTRAIN``, ME -> ``MESTRAIN``, PEEQ -> ``PE``,
+ENER -> ``ENER``, SDV -> ``SDV``: integration-point values extrapolated to the nodes and averaged
+over the elements around each node) and ``*CONTACT FILE`` (CDIS/CSTR -> ``CONTACT``): a header,
+the nodes, the elements, then per written increment one block per result, and `` 9999`` at the
+end. cgx and converters read it like ccx's file. ``read_frd`` reads both ccx's files and ours (the
+tests compare them value by value). Pure Python/numpy.
 
 Record layout (cgx manual, "Result Format"; widths checked against ccx 2.20's files):
     - ``    2C`` nodes and ``    3C`` elements blocks, rows ``-1`` (and ``-2`` for element nodes);
@@ -65,7 +66,20 @@ _COMPONENTS: dict[str, tuple[tuple[tuple[str, int, int, int], ...], bool]] = {
         ),
         False,
     ),
+    "MESTRAIN": (
+        (
+            ("MEXX", 4, 1, 1),
+            ("MEYY", 4, 2, 2),
+            ("MEZZ", 4, 3, 3),
+            ("MEXY", 4, 1, 2),
+            ("MEYZ", 4, 2, 3),
+            ("MEZX", 4, 3, 1),
+        ),
+        False,
+    ),
     "PE": ((("PE", 1, 0, 0),), False),
+    "ENER": ((("ENER", 1, 0, 0),), False),
+    "SDV": ((), False),  # SDV1, SDV2, ...: as many as the block's values have columns
     "CONTACT": (
         (
             ("COPEN", 4, 1, 1),
@@ -85,7 +99,8 @@ class FrdBlock:
     """One result block of one increment.
 
     Attributes:
-        name: ``DISP``, ``FORC``, ``STRESS``, ``TOSTRAIN``, ``PE``, ``CONTACT`` (or any name ccx
+        name: ``DISP``, ``FORC``, ``STRESS``, ``TOSTRAIN``, ``MESTRAIN``, ``PE``, ``ENER``,
+            ``SDV``, ``CONTACT`` (or any name ccx
             writes, when read).
         components: Component names in column order (read blocks; the writer knows them).
         step, increment: 1-based step and increment numbers (``1PSTEP`` record).
@@ -128,9 +143,14 @@ def format_frd_time(value: float) -> str:
 
 
 def _rows(ids: np.ndarray, values: np.ndarray) -> list[str]:
-    """`` -1`` rows: the number (I10), then its values (E12.5); one format for all rows."""
+    """`` -1`` rows: the number (I10), then its values (E12.5); one format for all rows.
+
+    Past six values a row goes on in `` -2`` lines of six (ccx's ``SDV`` blocks).
+    """
     values = np.asarray(values, dtype=float)
-    row = " -1%10d" + "%12.5E" * values.shape[1]
+    width = values.shape[1]
+    row = " -1%10d" + "%12.5E" * min(width, 6)
+    row += "".join("\n -2" + " " * 10 + "%12.5E" * min(6, width - k) for k in range(6, width, 6))
     return list(map(row.__mod__, zip(np.asarray(ids).tolist(), *values.T.tolist())))
 
 
@@ -154,6 +174,9 @@ class FrdWriter:
         materials: Material names in index order (the ``1UMAT`` lines).
         ccx: The ccx version whose records are written: ``"2.23"`` declares the CONTACT block's
             components scalars (``1    1    0    0``), 2.20 tensor components as STRESS's.
+        wedges: ``(ids, nodes (W, 6))`` of the C3D6 elements among ``element_ids`` (which list
+            them as collapsed C3D8), written as ccx does: frd type 2 with their six nodes, all
+            elements by ascending number (docs/method.md §35).
     """
 
     def __init__(
@@ -167,6 +190,7 @@ class FrdWriter:
         element_materials: np.ndarray,
         materials: typing.Sequence[str],
         ccx: str = "2.20",
+        wedges: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> None:
         if ccx not in ("2.20", "2.23"):
             raise ValueError(f"ccx format {ccx!r}: one of 2.20, 2.23")
@@ -204,7 +228,12 @@ class FrdWriter:
             "\n -2" + "%10d" * min(10, width - start) for start in range(0, width, 10)
         )
         columns = [np.asarray(element_materials).astype(np.int64).tolist()]
-        lines += map(record.__mod__, zip(element_ids.tolist(), *columns, *connectivity.T.tolist()))
+        records = list(
+            map(record.__mod__, zip(element_ids.tolist(), *columns, *connectivity.T.tolist()))
+        )
+        if wedges is not None and len(wedges[0]):
+            records = _with_wedges(records, element_ids, columns[0], wedges)
+        lines += records
         lines.append(" -3")
         self.path.write_text("\n".join(lines) + "\n")
 
@@ -219,6 +248,9 @@ class FrdWriter:
         self._blocks += 1
         components, with_all = _COMPONENTS[block.name]
         nodes = np.asarray(block.nodes)
+        if block.name == "SDV":
+            count = np.asarray(block.values).size // max(nodes.size, 1)
+            components = tuple((f"SDV{k + 1}", 1, 0, 0) for k in range(count))
         lines = [
             f"    1PSTEP{'':14}{self._blocks:12d}{block.increment:12d}{block.step:12d}{'':10}",
             f"  100CL{100 + self._outputs:5d}{format_frd_time(block.time)}{nodes.size:12d}"
@@ -234,7 +266,8 @@ class FrdWriter:
         if with_all:
             lines.append(f" -5  {'ALL':<8}{1:5d}{2:5d}{0:5d}{0:5d}{1:5d}ALL")
         values = np.asarray(block.values, dtype=float).reshape(nodes.size, len(components))
-        lines += _rows(nodes, values)
+        if components:  # ccx writes no rows of a block without components (SDV of no *PLASTIC)
+            lines += _rows(nodes, values)
         lines.append(" -3")
         with self.path.open("a") as stream:
             stream.write("\n".join(lines) + "\n")
@@ -243,6 +276,26 @@ class FrdWriter:
         """Write the end record."""
         with self.path.open("a") as stream:
             stream.write(" 9999\n")
+
+
+def _with_wedges(
+    records: list[str],
+    element_ids: np.ndarray,
+    materials: list[int],
+    wedges: tuple[np.ndarray, np.ndarray],
+) -> list[str]:
+    """The element records with the C3D6 wedges' as ccx's (type 2, six nodes), by number."""
+    ids, nodes = np.asarray(wedges[0]), np.asarray(wedges[1])
+    wedge = np.isin(element_ids, ids)
+    position = np.searchsorted(ids, element_ids[wedge], sorter=np.argsort(ids))
+    rows = nodes[np.argsort(ids)[position]]
+    record = f" -1%10d{2:5d}{0:5d}%5d\n -2" + "%10d" * 6
+    chosen = np.asarray(materials)[wedge].tolist()
+    written = map(record.__mod__, zip(element_ids[wedge].tolist(), chosen, *rows.T.tolist()))
+    for k, text in zip(np.flatnonzero(wedge).tolist(), written):
+        records[k] = text
+    order = np.argsort(element_ids, kind="stable")
+    return [records[k] for k in order.tolist()]
 
 
 # ----------------------------------------------------------------------------- reader
@@ -256,7 +309,10 @@ def _floats(text: str, count: int, where: str) -> list[float]:
 
 
 def read_frd(path: str | Path) -> FrdFile:
-    """Read an ASCII ``.frd`` file (ccx's or ours; short format, results with up to 6 values)."""
+    """Read an ASCII ``.frd`` file (ccx's or ours; short format).
+
+    Rows past six values go on in `` -2`` lines (ccx's ``SDV``).
+    """
     path = Path(path)
     lines = path.read_text(encoding="latin-1").splitlines()
     node_ids: list[int] = []
@@ -305,10 +361,16 @@ def read_frd(path: str | Path) -> FrdFile:
                 i += 1
             ids, values = [], []
             while not lines[i].startswith(" -3"):
+                if lines[i].startswith(" -2") and values:  # a row's values past the sixth
+                    left = len(components) - len(values[-1])
+                    values[-1] += _floats(lines[i][13:], min(left, 6), f"{path}:{i + 1}")
+                    i += 1
+                    continue
                 if not lines[i].startswith(" -1"):
                     raise ValueError(f"{path}:{i + 1}: result row (-1) expected")
                 ids.append(int(lines[i][3:13]))
-                values.append(_floats(lines[i][13:], len(components), f"{path}:{i + 1}"))
+                first = min(len(components), 6)
+                values.append(_floats(lines[i][13:], first, f"{path}:{i + 1}"))
                 i += 1
             blocks.append(
                 FrdBlock(

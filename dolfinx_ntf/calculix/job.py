@@ -221,10 +221,12 @@ class _Job:
         ccx_format: str = "2.20",
         solver_options: dict | None = None,
         initial_acceleration: str = "ccx",
+        elastic_contact: str = "start",
     ) -> None:
         self.deck, self.model, self.comm, self.tight = deck, model, comm, tight
         self.initial_acceleration = initial_acceleration
         self.predictor = predictor
+        self.elastic_contact = elastic_contact
         self.guard_predictor = guard_predictor
         self.pair_after_predictor = pair_after_predictor
         # rank 0 writes the files (docs/method.md §14.5)
@@ -388,6 +390,7 @@ class _Job:
             pair_after_predictor=self.pair_after_predictor,
             guard_predictor=self.guard_predictor,
             elastic_start=bool(model.plasticity),  # ccx's elastic first iteration (§33)
+            elastic_contact=self.elastic_contact if model.plasticity else "iterate",  # §33.4
         )
         driver.run(self.solver, model.u)
 
@@ -716,6 +719,7 @@ def run_job(
     area_weights: str = "ccx",
     initial_acceleration: str = "ccx",
     factorization: str = "auto",
+    elastic_contact: str = "start",
 ) -> JobResult:
     """Run the CalculiX deck ``directory/jobname.inp``; write ``jobname.dat``, ``.cel``, ``.xdmf``.
 
@@ -763,6 +767,10 @@ def run_job(
             factorization while it converges in a few iterations (the printed values agree to
             the Krylov tolerance, 1e-11 of the residual); ``"auto"`` (default), reuse from
             ``REUSE_MIN_DOFS`` dofs on (docs/method.md §31).
+        elastic_contact: The springs in the elastic first iteration of a step (decks with
+            ``*PLASTIC``, where that iteration applies; docs/method.md §33.4): ``"start"``
+            (default) at the increment start, as ccx 2.20; ``"stick"`` at the first iterate with
+            the friction forces stuck; ``"iterate"`` at the first iterate.
 
     Returns:
         The :class:`JobResult`.
@@ -831,6 +839,7 @@ def run_job(
             **(solver_options or {}),
         },
         initial_acceleration=initial_acceleration,
+        elastic_contact=elastic_contact,
     )
     try:
         return job.run()

@@ -2,10 +2,12 @@
 
 :class:`JobFiles` opens them as ccx does at program start and writes, in ccx 2.20's formats:
 
-    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, E, PEEQ) and ``*CONTACT PRINT``
-      (CDIS, CSTR, CELS, CNUM) blocks of each printed increment (docs/method.md §8.5).
+    - ``JOB.dat``: the ``*NODE PRINT`` (U, RF), ``*EL PRINT`` (S, E, PEEQ, ENER, SDV, ME) and
+      ``*CONTACT PRINT`` (CDIS, CSTR, CELS, CNUM) blocks of each printed increment
+      (docs/method.md §8.5, §36).
     - ``JOB.frd``: the mesh, then the ``*NODE FILE`` (U, RF), ``*EL FILE`` (S, E as
-      ``TOSTRAIN``, PEEQ as ``PE``) and ``*CONTACT FILE`` (CDIS, CSTR) blocks (§13.2).
+      ``TOSTRAIN``, ME as ``MESTRAIN``, PEEQ as ``PE``, ENER, SDV) and ``*CONTACT FILE`` (CDIS,
+      CSTR) blocks (§13.2).
     - ``JOB.cel``: the contact elements of every pairing when ``CONTACT ELEMENTS`` is requested.
     - ``JOB.sta`` and ``JOB.cvg``: one row per attempt and per Newton iteration (§13.3).
 
@@ -38,7 +40,14 @@ from .gather import Discard
 from .model import CalculixModel
 from .output_values import ContactRows, OutputValues
 from .progress import CvgFile, StaFile
-from .roundoff import clean_contact, clean_dat_blocks, clean_frd_block, clean_totals, zero_below
+from .roundoff import (
+    FieldAccuracy,
+    clean_contact,
+    clean_dat_blocks,
+    clean_frd_block,
+    clean_totals,
+    zero_below,
+)
 
 __all__ = ["JobFiles", "check_requests"]
 
@@ -246,7 +255,10 @@ class _Increment:
     def frd_blocks(
         self, step: Step, increment: int, total: float, contact: list[ContactRows]
     ) -> list[FrdBlock]:
-        """The ``.frd`` blocks in ccx's order: DISP, STRESS, TOSTRAIN, FORC, PE, CONTACT."""
+        """The ``.frd`` blocks in ccx's order.
+
+        DISP, STRESS, TOSTRAIN, MESTRAIN, FORC, PE, ENER, SDV, CONTACT.
+        """
         keys = {(r.kind, k): r for r in step.file_requests for k in r.keys}
         blocks = []
 
@@ -271,6 +283,11 @@ class _Increment:
             values = zero_below(values, self.values.field_accuracy().strain)
             nodes, values = _in_set(self.deck, keys["EL", "E"], nodes, values)
             blocks.append(FrdBlock("TOSTRAIN", (), step.number, increment, total, nodes, values))
+        if ("EL", "ME") in keys:
+            nodes, values = self.values.nodal_element_values("ME")
+            values = zero_below(values, self.values.field_accuracy().strain)
+            nodes, values = _in_set(self.deck, keys["EL", "ME"], nodes, values)
+            blocks.append(FrdBlock("MESTRAIN", (), step.number, increment, total, nodes, values))
         if ("NODE", "RF") in keys:
             node_block(
                 "FORC", keys["NODE", "RF"], self.values.printed_forces(self.largest_residual)[0]
@@ -279,6 +296,12 @@ class _Increment:
             nodes, values = self.values.nodal_equivalent_plastic_strains()
             nodes, values = _in_set(self.deck, keys["EL", "PEEQ"], nodes, values)
             blocks.append(FrdBlock("PE", (), step.number, increment, total, nodes, values))
+        for key in ("ENER", "SDV"):  # SDV without plastic sections: no components, as ccx's
+            if ("EL", key) in keys:
+                nodes, values = self.values.nodal_element_values(key)
+                values = _within_accuracy(key, values, self.values.field_accuracy())
+                nodes, values = _in_set(self.deck, keys["EL", key], nodes, values)
+                blocks.append(FrdBlock(key, (), step.number, increment, total, nodes, values))
         if ("CONTACT", "CDIS") in keys or ("CONTACT", "CSTR") in keys:
             nodes = np.concatenate([r.nodes for r in contact]) if contact else np.zeros(0, int)
             values = np.zeros((nodes.size, 6))
@@ -342,6 +365,16 @@ class _Increment:
                 counts = self.values.point_counts(ids, strains.shape[1])
                 blocks += el_print_blocks("E", request.set, total, ids, strains, counts)
                 continue
+            if key in ("ME", "ENER", "SDV"):
+                if key == "ME":
+                    values = self.values.mechanical_strains(ids)
+                    values = zero_below(values, self.values.field_accuracy().strain)
+                else:
+                    values = getattr(self.values, _ELEMENT_VALUES[key])(ids)
+                    values = _within_accuracy(key, values, self.values.field_accuracy())
+                counts = self.values.point_counts(ids, values.shape[1])
+                blocks += el_print_blocks(key, request.set, total, ids, values, counts)
+                continue
             if key == "PEEQ":
                 if not self.values.model.plasticity:  # ccx 2.20 prints no block without one
                     continue
@@ -357,6 +390,24 @@ class _Increment:
             counts = self.values.point_counts(ids, stresses.shape[1])
             blocks += el_print_blocks("S", request.set, total, ids, stresses, counts)
         return blocks
+
+
+#: The OutputValues method of the element keys printed from the laws' or the elastic values.
+_ELEMENT_VALUES = {"ENER": "energy_densities", "SDV": "state_variables"}
+
+
+def _within_accuracy(key: str, values: np.ndarray, accuracy: FieldAccuracy) -> np.ndarray:
+    """ENER or SDV values (last axis: the components) with those within round-off as 0.
+
+    ENER at the energy's accuracy; SDV's plastic strains (components 2-7) at the strain's, its
+    equivalent plastic strain as PEEQ (the law's value) and its zeros unchanged.
+    """
+    if key == "ENER":
+        return zero_below(values, accuracy.energy)
+    values = np.array(values, dtype=np.float64)
+    if values.shape[-1]:
+        values[..., 1:7] = zero_below(values[..., 1:7], accuracy.strain)
+    return values
 
 
 def _in_set(
@@ -440,6 +491,7 @@ def _frd_writer(path: Path, deck: Deck, model: CalculixModel, ccx: str) -> FrdWr
         element_material,
         materials + list(deck.interactions),
         ccx=ccx,
+        wedges=(deck.wedges, deck.wedge_nodes),
     )
 
 
@@ -461,11 +513,17 @@ def _check_transformed_outputs(deck: Deck) -> None:
                 )
 
 
-def _check_wedge_outputs(deck: Deck) -> None:
-    """Refuse the C3D6 wedges' element outputs but ``*EL PRINT`` S, E, PEEQ (method §30.6).
+#: ``*EL PRINT`` keys printed at ccx's two C3D6 points of a wedge.
+_WEDGE_PRINT_KEYS = {"S", "E", "PEEQ", "ENER", "SDV", "ME"}
+#: ``*EL FILE`` keys extrapolated to a wedge's nodes by ccx's C3D6 weights.
+_WEDGE_FILE_KEYS = {"S", "E", "PEEQ"}
 
-    ``*EL PRINT`` S, E and PEEQ of a wedge are printed at ccx's two C3D6 points; the ``.frd``'s
-    nodal values (``*EL FILE``) would need ccx's C3D6 extrapolation, not built.
+
+def _check_wedge_outputs(deck: Deck) -> None:
+    """Refuse the wedges' element outputs that are not built (method §30.6, §35, §36).
+
+    ``*EL PRINT`` S, E, PEEQ, ENER, SDV and ME of a wedge are printed at ccx's two C3D6 points;
+    ``*EL FILE`` writes S, E and PEEQ extrapolated to the nodes by ccx's C3D6 weights.
     """
     if deck.wedges.size == 0:
         return
@@ -473,7 +531,8 @@ def _check_wedge_outputs(deck: Deck) -> None:
         for request in [*step.prints, *step.file_requests]:
             if request.kind != "EL":
                 continue
-            if isinstance(request, PrintRequest) and set(request.keys) <= {"S", "E", "PEEQ"}:
+            allowed = _WEDGE_PRINT_KEYS if isinstance(request, PrintRequest) else _WEDGE_FILE_KEYS
+            if set(request.keys) <= allowed:
                 continue
             members = deck.elsets.get(request.set or "", None) if request.set else None
             hit = deck.wedges if members is None else deck.wedges[np.isin(deck.wedges, members)]
@@ -481,39 +540,53 @@ def _check_wedge_outputs(deck: Deck) -> None:
                 keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
                 raise NotImplementedError(
                     f"{request.location}: {keyword} {'/'.join(request.keys)} of C3D6 element "
-                    f"{int(hit[0])} is not supported (only *EL PRINT S, E and PEEQ are printed at "
-                    "ccx's two C3D6 points)"
+                    f"{int(hit[0])} is not supported (only *EL PRINT S, E, PEEQ, ENER, SDV and ME "
+                    "and *EL FILE S, E and PEEQ of ccx's two C3D6 points)"
                 )
 
 
+#: Element outputs built for 3D continuum elements only, and what each is in a refusal.
+_CONTINUUM_KEYS = {
+    "E": "E (strains)",
+    "ME": "ME (mechanical strains)",
+    "ENER": "ENER (strain energy densities)",
+    "SDV": "SDV (internal state variables)",
+}
+
+
 def _check_strain_outputs(deck: Deck) -> None:
-    """Refuse ``E`` where ccx's strain was not measured: 2D, C3D8I, shells, coupled steps."""
-    types = [ELEMENT_TYPES[name] for name in deck.elements if name in ELEMENT_TYPES]
+    """Refuse E, ME, ENER and SDV where ccx's values were not measured.
+
+    2D elements, C3D8I, shells (docs/method.md §21.6, §36); the message names the element type
+    and the deck line. Coupled steps print them (measured, §36).
+    """
+    names = [name for name in deck.elements if name in ELEMENT_TYPES]
     why = ""
-    if any(t.tdim == 2 for t in types):
-        why = "2D elements"
+    flat = [name for name in names if ELEMENT_TYPES[name].tdim == 2]
+    if flat:
+        why = f"2D elements ({', '.join(flat)})"
     elif "C3D8I" in deck.elements:
         why = "C3D8I elements (their incompatible modes)"
     elif deck.shells is not None:
         why = "shell elements"
     for step in deck.steps:
         for request in [*step.prints, *step.file_requests]:
-            if request.kind != "EL" or "E" not in request.keys:
+            if request.kind != "EL":
                 continue
-            reason = why or ("a coupled temperature-displacement step" if step.coupled else "")
-            if reason:
-                keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
-                raise NotImplementedError(
-                    f"{request.location}: {keyword} E (strains) of a deck with {reason} is not "
-                    "supported yet"
-                )
+            for key in (k for k in request.keys if k in _CONTINUUM_KEYS):
+                if why:
+                    keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
+                    raise NotImplementedError(
+                        f"{request.location}: {keyword} {_CONTINUUM_KEYS[key]} of a deck with "
+                        f"{why} is not supported yet"
+                    )
 
 
 def check_requests(deck: Deck) -> None:
     """Output keys this runner cannot produce: a clear error before anything runs."""
     supported = {
         "NODE": {"U", "RF", "V"},
-        "EL": {"S", "E", "PEEQ"},
+        "EL": {"S", "E", "PEEQ", "ENER", "SDV", "ME"},
         "CONTACT": {"CDIS", "CSTR", "CELS", "CNUM"},
     }
     for step in deck.steps:
@@ -556,7 +629,11 @@ def check_requests(deck: Deck) -> None:
     _check_transformed_outputs(deck)
     _check_wedge_outputs(deck)
     _check_strain_outputs(deck)
-    written = {"NODE": {"U", "RF"}, "EL": {"S", "E", "PEEQ"}, "CONTACT": {"CDIS", "CSTR"}}
+    written = {
+        "NODE": {"U", "RF"},
+        "EL": {"S", "E", "PEEQ", "ENER", "SDV", "ME"},
+        "CONTACT": {"CDIS", "CSTR"},
+    }
     for step in deck.steps:
         for request in step.file_requests:
             for key in request.keys:

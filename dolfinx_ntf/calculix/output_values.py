@@ -23,11 +23,11 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.collapsed_wedges import wedge_cells
 from dolfinx_ntf.kernels.friction import output_tangents
-from dolfinx_ntf.kernels.wedge_rule import wedge_rule
+from dolfinx_ntf.kernels.wedge_rule import NUM_CLASSES, wedge_rule
 from dolfinx_ntf.outputs.results import contact_results
 
 from .deck import Deck
-from .elements import AXISYMMETRIC_SECTOR
+from .elements import AXISYMMETRIC_SECTOR, C3D6_EXTRAPOLATION
 from .gather import CcxNumbering
 from .model import CalculixModel
 from .roundoff import (
@@ -107,6 +107,7 @@ class OutputValues:
         self._field_scales: tuple[float, float, tuple[float, float]] | None = None
         self._wedge_classes: np.ndarray | None = None
         self._strain_tensor: ufl.core.expr.Expr | None = None
+        self._energy: tuple[dolfinx.fem.Expression, ufl.core.expr.Expr] | None = None
         self._wedge_expressions: dict[tuple[str, int], dolfinx.fem.Expression] = {}
         #: The velocity of the job's dynamic steps (``*NODE PRINT V``), None before the first.
         self.velocity: dolfinx.fem.Function | None = None
@@ -231,9 +232,10 @@ class OutputValues:
                 if mine.any():
                     _put_law_values(values, mine, law.cell_stresses(cells[mine]), order)
                     plastic |= mine
-            self._at_wedge_points("S", self.model.cauchy, cells, values, skip=plastic)
+            self._at_wedge_points("S", cells, values, skip=plastic)
             return values[:, :, index[0], index[1]]
 
+        self._compile_wedge_expressions("S", self.model.cauchy)
         values = self.numbering.element_values(element_ids, evaluate, (q, 6))
         rows = self.model.element_type.print_rows
         if rows is None:
@@ -265,15 +267,31 @@ class OutputValues:
             self._wedge_classes = wedge_cells(self.model.mesh)
         return self._wedge_classes
 
+    def _compile_wedge_expressions(self, key: str, tensor: ufl.core.expr.Expr) -> None:
+        """``tensor`` at the two points of each collapse class present on any process.
+
+        Collective: dolfinx compiles an Expression on every process of the mesh, so all
+        processes compile the same classes in the same order, whether or not they evaluate
+        them (the wedge punch hung on 2 processes when only one held a class).
+        """
+        if self.deck.wedges.size == 0:
+            return
+        classes = self._wedge_classes_of_cells()
+        mask = sum(1 << c for c in np.unique(classes[classes >= 0]).tolist())
+        mask = self.comm.allreduce(mask, op=MPI.BOR)
+        for c in (c for c in range(NUM_CLASSES) if mask >> c & 1):
+            if (key, c) not in self._wedge_expressions:
+                points = wedge_rule(c)[0]
+                self._wedge_expressions[key, c] = dolfinx.fem.Expression(tensor, points)
+
     def _at_wedge_points(
         self,
         key: str,
-        tensor: ufl.core.expr.Expr,
         cells: np.ndarray,
         values: np.ndarray,
         skip: np.ndarray | None = None,
     ) -> None:
-        """Put ``tensor`` at ccx's two C3D6 points into rows 0, 1 of the wedge cells' ``values``.
+        """Put the ``key`` tensor at ccx's two C3D6 points into rows 0, 1 of wedge cells' values.
 
         ``values`` is ``(cells, q, 3, 3)``; rows past the second of a wedge become 0. The points
         are those of the cell's collapse class (``kernels/wedge_rule.py``, ccx's order). Cells
@@ -285,10 +303,7 @@ class OutputValues:
         if skip is not None:
             classes[skip] = -1
         for c in np.unique(classes[classes >= 0]).tolist():
-            if (key, c) not in self._wedge_expressions:
-                points = wedge_rule(c)[0]
-                self._wedge_expressions[key, c] = dolfinx.fem.Expression(tensor, points)
-            hit = np.flatnonzero(classes == c)
+            hit = np.flatnonzero(classes == c)  # compiled by _compile_wedge_expressions
             at = compat.evaluate_expression(
                 self._wedge_expressions[key, c], self.model.mesh, cells[hit].astype(np.int32)
             ).reshape(hit.size, 2, 3, 3)
@@ -336,10 +351,125 @@ class OutputValues:
         def evaluate(cells: np.ndarray) -> np.ndarray:
             values = compat.evaluate_expression(expression, self.model.mesh, cells.astype(np.int32))
             values = values.reshape(cells.size, q, 3, 3)
-            self._at_wedge_points("E", strain, cells, values)
+            self._at_wedge_points("E", cells, values)
             return values[:, :, index[0], index[1]]
 
+        self._compile_wedge_expressions("E", strain)
         return self.numbering.element_values(element_ids, evaluate, (q, 6))
+
+    def _kinematics(self) -> float | dolfinx.fem.Constant:
+        """0 (small strain) or 1 (NLGEOM), or the model's switch when its steps mix them."""
+        if self.model.nlgeom is not None:
+            return self.model.nlgeom
+        return float(any(step.nlgeom for step in self.deck.steps))
+
+    def _mechanical_strain(self) -> ufl.core.expr.Expr:
+        """The strain of ``grad u`` less the thermal strain ``x I`` (that of the stresses).
+
+        Small strain ``sym(H - x I)``, under NLGEOM the Green-Lagrange strain of ``H - x I``
+        (``bulk.stresses``, docs/method.md §20.8); the total strain without temperatures.
+        """
+        kinematics = self._kinematics()
+        H = ufl.grad(self.model.u)
+        if self.model.thermal is not None:
+            H = H - self.model.thermal.thermal_strain()
+        return ufl.sym(H) + 0.5 * kinematics * H.T * H
+
+    def mechanical_strains(self, element_ids: np.ndarray) -> np.ndarray:
+        """Mechanical strains ``(E, q, 6)`` (ccx's ``ME``) at ccx's integration points.
+
+        The total strain less the thermal strain, as the stresses see it: without temperatures
+        :meth:`strains` (measured equal in ccx 2.20, small strain and NLGEOM; in coupled steps
+        the strain of ``grad u - x I``, docs/method.md §36). Collective.
+        """
+        if self.model.thermal is None:
+            return self.strains(element_ids)
+        model = self.model
+        points = model.element_type.integration_points
+        q = points.shape[0]
+        tensor = self._mechanical_strain()
+        expression = dolfinx.fem.Expression(tensor, points)
+        index = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, model.mesh, cells.astype(np.int32))
+            values = values.reshape(cells.size, q, 3, 3)
+            self._at_wedge_points("ME", cells, values)
+            return values[:, :, index[0], index[1]]
+
+        self._compile_wedge_expressions("ME", tensor)
+        return self.numbering.element_values(element_ids, evaluate, (q, 6))
+
+    def energy_densities(self, element_ids: np.ndarray) -> np.ndarray:
+        """Strain energy densities ``(E, q, 1)`` (ccx's ``ENER``) at ccx's integration points.
+
+        Elastic sections ``S : E / 2`` (the Cauchy stress and small strain, under NLGEOM the
+        second Piola-Kirchhoff stress and Green-Lagrange strain: per unit reference volume; the
+        mechanical strain in coupled steps);
+        plastic sections their laws' energy accumulated over the increments by ccx's
+        trapezoidal rule (``kernels/strain_energy.py``). Measured, docs/method.md §36.
+        Collective.
+        """
+        model = self.model
+        points = model.element_type.integration_points
+        q = points.shape[0]
+        if self._energy is None:
+            kinematics = self._kinematics()
+            H = ufl.grad(model.u)
+            strain = self._mechanical_strain()
+            if isinstance(kinematics, float) and kinematics == 0.0:
+                second_piola = model.first_piola
+            else:
+                second_piola = ufl.inv(ufl.Identity(3) + kinematics * H) * model.first_piola
+            # a tensor (energy times I) so that the wedges' points take the strains' path
+            tensor = 0.5 * ufl.inner(second_piola, strain) * ufl.Identity(3)
+            self._energy = (dolfinx.fem.Expression(tensor, points), tensor)
+        expression, tensor = self._energy
+        order = self._plastic_point_order()
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = compat.evaluate_expression(expression, model.mesh, cells.astype(np.int32))
+            values = values.reshape(cells.size, q, 3, 3)
+            plastic = np.zeros(cells.size, dtype=bool)
+            for law in model.plasticity:
+                plastic |= np.isin(cells, law.cells)
+            self._at_wedge_points("ENER", cells, values, skip=plastic)
+            energy = values[:, :, :1, 0].copy()
+            for law in model.plasticity:
+                mine = np.isin(cells, law.cells)
+                if mine.any():
+                    held = law.cell_strain_energy_densities(cells[mine])
+                    _put_law_values(energy[..., 0], mine, held, order)
+            return energy
+
+        self._compile_wedge_expressions("ENER", tensor)
+        return self.numbering.element_values(element_ids, evaluate, (q, 1))
+
+    def state_variables(self, element_ids: np.ndarray) -> np.ndarray:
+        """Internal state variables ``(E, q, k)`` (ccx's ``SDV``) at ccx's integration points.
+
+        With plastic sections ``k = 13``, ccx 2.20's layout of its isotropic ``*PLASTIC`` law:
+        the equivalent plastic strain, the plastic strain tensor (xx, yy, zz, xy, xz, yz; under
+        NLGEOM ``(I - Cp^-1)/2``) and six zeros (the back stress of kinematic hardening);
+        elements of elastic sections 0. Without them ``k = 0``. Measured, docs/method.md §36.
+        Collective.
+        """
+        q = self.model.element_type.integration_points.shape[0]
+        if not self.model.plasticity:  # ccx prints the rows' labels only
+            return np.zeros((np.asarray(element_ids).size, q, 0))
+        width = 13
+        order = self._plastic_point_order()
+
+        def evaluate(cells: np.ndarray) -> np.ndarray:
+            values = np.zeros((cells.size, q, width))
+            for law in self.model.plasticity:
+                mine = np.isin(cells, law.cells)
+                if mine.any():
+                    held = law.cell_state_variables(cells[mine])  # (n, p, 7)
+                    _put_law_values(values[..., :7], mine, held, order)
+            return values
+
+        return self.numbering.element_values(element_ids, evaluate, (q, width))
 
     def nodal_strains(self) -> tuple[np.ndarray, np.ndarray]:
         """Strains at the nodes like ccx's ``.frd`` block ``TOSTRAIN`` (frd order, as stresses).
@@ -433,13 +563,44 @@ class OutputValues:
         block = self.deck.elements[self.model.element_type.name]
         return self._at_nodes(self.equivalent_plastic_strains(block.ids))
 
+    def nodal_element_values(self, key: str) -> tuple[np.ndarray, np.ndarray]:
+        """``ME``, ``ENER`` or ``SDV`` at the nodes like ccx's ``.frd`` blocks.
+
+        ``MESTRAIN``, ``ENER`` and ``SDV``: extrapolated and averaged as the stresses (frd order
+        of tensors). Collective.
+
+        Args:
+            key: ``ME``, ``ENER`` or ``SDV``.
+        """
+        ids = self.deck.elements[self.model.element_type.name].ids
+        if key == "ME":
+            nodes, values = self._at_nodes(self.mechanical_strains(ids))
+            return nodes, values[:, [0, 1, 2, 3, 5, 4]]
+        if key == "ENER":
+            return self._at_nodes(self.energy_densities(ids))
+        if key == "SDV":
+            return self._at_nodes(self.state_variables(ids))
+        raise ValueError(f"no nodal values of element output {key!r}")
+
     def _at_nodes(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Point values ``(E, q, k)`` of every element extrapolated and averaged at the nodes."""
+        """Point values ``(E, q, k)`` of every element extrapolated and averaged at the nodes.
+
+        A C3D6 wedge's two points (its first two rows) go to its six nodes by ccx's C3D6
+        extrapolation and count once at each (docs/method.md §35).
+        """
         block = self.deck.elements[self.model.element_type.name]
         extrapolate = self.model.element_type.extrapolation
-        at_nodes = np.einsum("nq,eqk->enk", extrapolate, values)
-        index = self.deck.node_index(block.connectivity)
-        total = np.zeros((self.deck.node_ids.size, values.shape[2]))
+        wedge = np.isin(block.ids, self.deck.wedges)
+        components = values.shape[2]  # 0 for SDV without plastic sections
+        at_nodes = np.einsum("nq,eqk->enk", extrapolate, values[~wedge])
+        index = self.deck.node_index(block.connectivity[~wedge])
+        at_nodes, index = at_nodes.reshape(index.size, components), index.ravel()
+        if wedge.any():
+            nodes = self.deck.wedge_nodes[np.searchsorted(self.deck.wedges, block.ids[wedge])]
+            at_wedge = np.einsum("nq,eqk->enk", C3D6_EXTRAPOLATION, values[wedge, :2])
+            at_nodes = np.vstack([at_nodes, at_wedge.reshape(nodes.size, components)])
+            index = np.concatenate([index, self.deck.node_index(nodes).ravel()])
+        total = np.zeros((self.deck.node_ids.size, components))
         count = np.zeros(self.deck.node_ids.size)
         np.add.at(total, index, at_nodes)
         np.add.at(count, index, 1.0)

@@ -169,6 +169,11 @@ class FieldAccuracy:
     force: float
     strain: float = 0.0
 
+    @property
+    def energy(self) -> float:
+        """Of a strain energy density: ``FIELD_ROUND_OFF M (U / h)^2``."""
+        return self.stress * self.strain / FIELD_ROUND_OFF
+
     @classmethod
     def of(
         cls,

@@ -37,6 +37,7 @@ def evaluate_pair(
     projection_tangent: str = "exact",
     velocities: np.ndarray | None = None,
     velocity_rate: float = 0.0,
+    force_stick: bool = False,
 ) -> list[SpringBlocks]:
     """Evaluate the springs of one pair at ``coords``; returns the blocks to assemble.
 
@@ -57,10 +58,12 @@ def evaluate_pair(
         velocities: (N, 3) node velocities (a dynamic step's): the pair's contact damping acts
             (docs/method.md §29); None: no damping (static steps).
         velocity_rate: ``dv/du`` of ``velocities`` (the damping's tangent).
+        force_stick: The friction force and state stick whatever the trial force (the tangent:
+            :class:`~dolfinx_ntf.kernels.friction.FrictionInput`; docs/method.md §33.4).
     """
     nodes = state.element_nodes
     friction = _friction_input(
-        state, coords, nodes, reference, friction_in_tension, friction_tangent
+        state, coords, nodes, reference, friction_in_tension, friction_tangent, force_stick
     )
     if linearize_area:  # areas follow the deformation between pairings too
         areas = slave_areas(state.slave, coords)
@@ -118,6 +121,7 @@ def _friction_input(
     reference: np.ndarray,
     in_tension: bool,
     tangent_mode: str,
+    force_stick: bool = False,
 ) -> FrictionInput | None:
     """Friction state and parameters of the pair's springs, None without friction."""
     friction = state.pair.interaction.friction
@@ -131,6 +135,7 @@ def _friction_input(
         stick_slope=friction.stick_slope,
         in_tension=in_tension,
         tangent_mode=tangent_mode,
+        force_stick=force_stick,
     )
 
 

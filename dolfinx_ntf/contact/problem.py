@@ -62,6 +62,9 @@ logger = logging.getLogger("dolfinx_ntf")
 #: A change of the prescribed displacements above which ccx's first iteration is elastic (§33).
 _ELASTIC_START_CHANGE = 1e-5
 
+#: Where the springs of CalculiX's elastic first iterate are evaluated (docs/method.md §33.4).
+ELASTIC_CONTACT = ("iterate", "start", "stick")
+
 #: Re-pairing happens at the start of iterations 2..LAST_REPAIRING_ITERATION
 #: (docs/method.md §3.1, ccx: iit <= 8).
 LAST_REPAIRING_ITERATION = 8
@@ -319,6 +322,7 @@ class ContactProblem:
         #: (:class:`MaterialHistory`, docs/method.md §21).
         self.history: list[MaterialHistory] = list(history)
         self._elastic_start = False  # begin_increment(elastic_start=True) sets it (§33)
+        self._elastic_contact = "iterate"  # begin_increment(elastic_contact=...) sets it (§33.4)
         for term in self.history:
             missing = [
                 name
@@ -465,7 +469,12 @@ class ContactProblem:
     # -- pairing -----------------------------------------------------------------------------------
 
     def begin_increment(
-        self, time_fraction: float, *, static: bool = True, elastic_start: bool = False
+        self,
+        time_fraction: float,
+        *,
+        static: bool = True,
+        elastic_start: bool = False,
+        elastic_contact: str = "iterate",
     ) -> None:
         """Increment-start pairing at the last converged displacement (docs/method.md §3.1, §3.5).
 
@@ -475,7 +484,18 @@ class ContactProblem:
             elastic_start: CalculiX's elastic first iteration (docs/method.md §33): the first
                 iterate evaluates :attr:`history` elastically if the prescribed displacements
                 change by more than 1e-5 there.
+            elastic_contact: The springs in that same first iterate (docs/method.md §33.4):
+                ``"iterate"`` at the iterate, as in the others; ``"start"`` at the increment
+                start (CalculiX 2.20's static steps: the prescribed values are not yet in the
+                springs' force and tangent); ``"stick"`` at the iterate with every friction
+                spring's force stuck (the forced stick of CalculiX's elastic evaluation).
+                Independent of ``elastic_start``.
         """
+        if elastic_contact not in ELASTIC_CONTACT:
+            raise ValueError(
+                f"ContactProblem: elastic_contact must be one of {ELASTIC_CONTACT}, "
+                f"got {elastic_contact!r}"
+            )
         if elastic_start:
             for term in self.history:
                 if not callable(getattr(term, "evaluate_elastic", None)):
@@ -484,6 +504,7 @@ class ContactProblem:
                         f"evaluate_elastic(); {validation.describe(term)} has none"
                     )
         self._elastic_start = elastic_start
+        self._elastic_contact = elastic_contact
         self.pairing.begin_increment(time_fraction, static=static)
         first = not self._first_pairing_done
         self.iteration = 0
@@ -545,10 +566,11 @@ class ContactProblem:
 
     # -- springs -----------------------------------------------------------------------------------
 
-    def evaluate(self, *, tangent: bool = True) -> list[SpringBlocks]:
+    def evaluate(self, *, tangent: bool = True, force_stick: bool = False) -> list[SpringBlocks]:
         """Evaluate every spring at the current displacement; returns the blocks to assemble.
 
-        With ``tangent`` False only the forces are computed (no stiffness blocks).
+        With ``tangent`` False only the forces are computed (no stiffness blocks); with
+        ``force_stick`` every friction spring sticks (the elastic first iterate, §33.4).
         """
         coords = self.current_coordinates()
         blocks = []
@@ -570,6 +592,7 @@ class ContactProblem:
                 projection_tangent=self.projection_tangent,
                 velocities=velocities,
                 velocity_rate=rate,
+                force_stick=force_stick,
             )  # the start slope: contact_start_slope, docs/method.md §7.1
         return blocks
 
@@ -608,8 +631,15 @@ class ContactProblem:
 
     def form(self, x: PETSc.Vec) -> None:
         """Before F: update the ghost values of ``x`` and evaluate the current pairing's springs."""
-        elastic = self._elastic_start and self._prescribed_change(x) > _ELASTIC_START_CHANGE
-        self._elastic_start = False
+        first = self._elastic_start or self._elastic_contact != "iterate"
+        elastic = first and self._prescribed_change(x) > _ELASTIC_START_CHANGE
+        contact = self._elastic_contact if elastic else "iterate"
+        elastic = elastic and self._elastic_start
+        self._elastic_start, self._elastic_contact = False, "iterate"
+        blocks = None
+        if contact == "start":  # the springs before the prescribed values enter x (§33.4)
+            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            blocks = self.evaluate(tangent=True)
         if self.elimination is not None:  # before the ghost update: ghosts get the new values
             # Prescribed values first: the reduced Jacobian cannot carry their lifting through
             # the constraints (C3D20's centres move with the prescribed nodes, §13.1, §13.5).
@@ -621,7 +651,9 @@ class ContactProblem:
                 term.evaluate_elastic()
             else:
                 term.evaluate()
-        self._blocks = self.evaluate(tangent=True)
+        if blocks is None:
+            blocks = self.evaluate(tangent=True, force_stick=contact == "stick")
+        self._blocks = blocks
         self._element_blocks = [term.evaluate(x, self.bcs) for term in self.element_terms]
 
     def _prescribed_change(self, x: PETSc.Vec) -> float:

@@ -21,6 +21,7 @@ import ufl
 from dolfinx_ntf import compat
 from dolfinx_ntf.kernels.finite_plasticity import finite_return_map
 from dolfinx_ntf.kernels.plasticity import IsotropicHardening
+from dolfinx_ntf.kernels.strain_energy import green_lagrange_pair
 
 from .plasticity import QuadratureLaw, _cell_rows
 
@@ -90,7 +91,9 @@ class FiniteStrainJ2Plasticity(QuadratureLaw):
         #: Committed equivalent plastic strain (CalculiX's PEEQ), (n,).
         self.equivalent_plastic_strain = np.zeros(n)
         self._trial = None
+        self._trial_gradient = np.tile(np.eye(3), (n, 1, 1))
         self.evaluate()
+        self._start_energy()
 
     # -- the forms -----------------------------------------------------------------------------
 
@@ -122,8 +125,9 @@ class FiniteStrainJ2Plasticity(QuadratureLaw):
 
     def evaluate(self) -> None:
         """Return-map the current ``u`` from the committed history into P and ``dP/dF``."""
+        self._trial_gradient = self.deformation_gradient()
         result = finite_return_map(
-            self.deformation_gradient(),
+            self._trial_gradient,
             self.inverse_plastic_metric,
             self.equivalent_plastic_strain,
             self.youngs_modulus,
@@ -139,6 +143,22 @@ class FiniteStrainJ2Plasticity(QuadratureLaw):
         self.evaluate()
         self.inverse_plastic_metric = self._trial.inverse_plastic_metric.copy()
         self.equivalent_plastic_strain = self._trial.equivalent_plastic_strain.copy()
+        self._commit_energy()
+
+    def _work_pair(self) -> tuple[np.ndarray, np.ndarray]:
+        """The second Piola-Kirchhoff stress and Green-Lagrange strain of the last evaluation."""
+        return green_lagrange_pair(self._trial_gradient, self._trial.first_piola)
+
+    def state_variables(self) -> np.ndarray:
+        """Committed ``[alpha, (I - Cp^-1) xx, yy, zz, xy, xz, yz / 2]`` of every point, ``(n, 7)``.
+
+        The equivalent plastic strain and ``(I - Cp^-1) / 2`` (tensor components): CalculiX's
+        first seven internal state variables (``SDV``) of its finite-strain isotropic law
+        (measured, docs/method.md §36).
+        """
+        strain = 0.5 * (np.eye(3) - self.inverse_plastic_metric)
+        rows, cols = (0, 1, 2, 0, 0, 1), (0, 1, 2, 1, 2, 2)
+        return np.column_stack([self.equivalent_plastic_strain, strain[:, rows, cols]])
 
     def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
         """Cauchy stresses ``(n, q, 3, 3)`` of the last evaluation at the points of ``cells``.

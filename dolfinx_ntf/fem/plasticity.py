@@ -30,6 +30,7 @@ from dolfinx_ntf.kernels.plasticity import (
     return_map,
     tensor_from_mandel,
 )
+from dolfinx_ntf.kernels.strain_energy import trapezoidal_energy
 
 __all__ = ["J2Plasticity", "mandel_strain", "material_cells"]
 
@@ -122,6 +123,11 @@ class QuadratureLaw:
     _trial: typing.Any
     #: Committed equivalent plastic strain (CalculiX's PEEQ), one per local point, (n,).
     equivalent_plastic_strain: np.ndarray
+    #: Committed strain energy density (CalculiX's ENER), one per local point, (n,): the stress
+    #: power integrated over the converged increments by the trapezoidal rule (docs/method.md
+    #: §36), from 0 at the law's creation.
+    strain_energy_density: np.ndarray
+    _committed_pair: tuple[np.ndarray, np.ndarray]
 
     def _set_up(
         self,
@@ -235,6 +241,24 @@ class QuadratureLaw:
         """Return-map the current ``u`` from the committed history (the subclass's)."""
         raise NotImplementedError
 
+    def _work_pair(self) -> tuple[np.ndarray, np.ndarray]:
+        """Work-conjugate stress and strain ``(n, 3, 3)`` of the last evaluation (subclass's)."""
+        raise NotImplementedError
+
+    def _start_energy(self) -> None:
+        """Energy 0 at the state of the first evaluation (the law's creation)."""
+        self.strain_energy_density = np.zeros(self._num_points)
+        self._committed_pair = self._work_pair()
+
+    def _commit_energy(self) -> None:
+        """Add the converged increment's work (trapezoidal rule) to the energy density."""
+        pair = self._work_pair()
+        self.strain_energy_density = trapezoidal_energy(
+            self.strain_energy_density, self._committed_pair[0], pair[0], self._committed_pair[1],
+            pair[1],
+        )  # fmt: skip
+        self._committed_pair = pair
+
     def evaluate_elastic(self) -> None:
         """Evaluate the current ``u`` elastically from the committed history (no return map).
 
@@ -272,6 +296,28 @@ class QuadratureLaw:
         """
         owner = type(self).__name__
         return _cell_rows(self._cells, self.equivalent_plastic_strain, cells, owner)
+
+    def cell_strain_energy_densities(self, cells: np.ndarray) -> np.ndarray:
+        """Committed strain energy densities ``(n, q)`` (CalculiX's ENER) of ``cells``.
+
+        Args:
+            cells: Local cells of the law (``ValueError`` for others).
+        """
+        owner = type(self).__name__
+        return _cell_rows(self._cells, self.strain_energy_density, cells, owner)
+
+    def state_variables(self) -> np.ndarray:
+        """Committed internal variables of every local point, ``(n, 7)`` (the subclass's)."""
+        raise NotImplementedError
+
+    def cell_state_variables(self, cells: np.ndarray) -> np.ndarray:
+        """Committed internal variables ``(n, q, 7)`` of ``cells`` (:meth:`state_variables`).
+
+        Args:
+            cells: Local cells of the law (``ValueError`` for others).
+        """
+        owner = type(self).__name__
+        return _cell_rows(self._cells, self.state_variables(), cells, owner)
 
 
 class J2Plasticity(QuadratureLaw):
@@ -339,7 +385,9 @@ class J2Plasticity(QuadratureLaw):
         #: Committed equivalent plastic strain (CalculiX's PEEQ), (n,).
         self.equivalent_plastic_strain = np.zeros(n)
         self._trial = None
+        self._trial_strain = np.zeros((n, 6))
         self.evaluate()
+        self._start_energy()
 
     # -- the forms -----------------------------------------------------------------------------
 
@@ -386,8 +434,9 @@ class J2Plasticity(QuadratureLaw):
 
         Called at every Newton iterate; the trial history is kept until committed.
         """
+        self._trial_strain = self.strain()
         result = return_map(
-            self.strain(),
+            self._trial_strain,
             self.plastic_strain,
             self.equivalent_plastic_strain,
             self.youngs_modulus,
@@ -403,6 +452,22 @@ class J2Plasticity(QuadratureLaw):
         self.evaluate()  # at the converged u, whatever was evaluated last
         self.plastic_strain = self._trial.plastic_strain.copy()
         self.equivalent_plastic_strain = self._trial.equivalent_plastic_strain.copy()
+        self._commit_energy()
+
+    def _work_pair(self) -> tuple[np.ndarray, np.ndarray]:
+        """The stress and the small strain of the last evaluation, ``(n, 3, 3)`` each."""
+        return tensor_from_mandel(self._trial.stress), tensor_from_mandel(self._trial_strain)
+
+    def state_variables(self) -> np.ndarray:
+        """Committed ``[alpha, eps_p xx, yy, zz, xy, xz, yz]`` of every local point, ``(n, 7)``.
+
+        The equivalent plastic strain and the plastic strain tensor (tensor shears): CalculiX's
+        first seven internal state variables (``SDV``) of its isotropic ``*PLASTIC`` law
+        (measured, docs/method.md §36).
+        """
+        tensor = tensor_from_mandel(self.plastic_strain)
+        rows, cols = (0, 1, 2, 0, 0, 1), (0, 1, 2, 1, 2, 2)
+        return np.column_stack([self.equivalent_plastic_strain, tensor[:, rows, cols]])
 
     def cell_stresses(self, cells: np.ndarray) -> np.ndarray:
         """Stresses ``(n, q, 3, 3)`` of the last evaluation at the rule's points of ``cells``.

@@ -68,7 +68,10 @@ class FrictionInput:
         in_tension: Friction limit ``mu |F_N|`` (CalculiX: friction also under linear-law
             tension) instead of ``mu max(F_N, 0)``.
         tangent_mode: ``"consistent"`` or ``"ccx"`` (see the module docstring).
-        force_stick: Stick whatever the trial force (CalculiX's elastic first iteration).
+        force_stick: CalculiX's elastic first iteration (docs/method.md §33.4): the force and
+            the state stick whatever the trial force (``F_T = F_tr``, ``t_p = t_p,n``); the
+            tangent is the slip one where the increment-start trial ``K_t (t_n - t_p,n)``
+            slips, else the stick one.
     """
 
     displacements: np.ndarray
@@ -94,7 +97,7 @@ class TangentialForce:
             relative displacement, slip).
         elastic: ``(N, d)`` ``t_e = t - t_p,n``.
         limit: ``(N,)`` ``F_s``.
-        sliding: ``(N,)`` True where the spring slips.
+        sliding: ``(N,)`` True where the spring slips (its force; never with ``force_stick``).
         energy: ``(N,)`` elastic energy of the tangential spring, ``|F_T|^2 / (2 K_t)``.
     """
 
@@ -168,9 +171,11 @@ def tangential_forces(
     )
     settled = trial_norm <= ROUND_OFF * k_t * magnitude  # includes |F_tr| = 0
     sliding = ~settled & (trial_norm >= (1.0 - SLIP_TIE) * limit)
-    if data.force_stick:
-        sliding[:] = False
     elastic_norm = np.linalg.norm(elastic, axis=1)
+    tangent_sliding = sliding  # where the tangent is the slip one
+    if data.force_stick:  # ccx's elastic first iteration (docs/method.md §33.4)
+        tangent_sliding = _slipping_at_start(data, k_t, limit, magnitude) & (elastic_norm > 0.0)
+        sliding = np.zeros_like(sliding)
     direction = np.zeros_like(elastic)
     direction[sliding] = elastic[sliding] / elastic_norm[sliding, None]
     force = trial.copy()
@@ -198,18 +203,18 @@ def tangential_forces(
         dt -= normal[:, None, :, None] * np.einsum("ni,nkic->nkc", s, dnormal)[:, :, None, :]
         dt -= s_n[:, None, None, None] * dnormal
         dforce = k_t[:, None, None, None] * dt
-        if np.any(sliding):
-            scale = np.zeros(num)
-            scale[sliding] = limit[sliding] / elastic_norm[sliding]
-            e = direction[sliding]
+        slips = tangent_sliding
+        if np.any(slips):
+            scale = limit[slips] / elastic_norm[slips]
+            e = elastic[slips] / elastic_norm[slips, None]
             radial = eye - e[:, :, None] * e[:, None, :]
             dlimit = (
-                mu[sliding, None, None] * dnormal_force[sliding]
+                mu[slips, None, None] * dnormal_force[slips]
                 if data.tangent_mode == "ccx"
-                else (mu * sign)[sliding, None, None] * dnormal_force[sliding]
+                else (mu * sign)[slips, None, None] * dnormal_force[slips]
             )
-            dforce[sliding] = (
-                scale[sliding, None, None, None] * np.einsum("nij,nkjc->nkic", radial, dt[sliding])
+            dforce[slips] = (
+                scale[:, None, None, None] * np.einsum("nij,nkjc->nkic", radial, dt[slips])
                 + e[:, None, :, None] * dlimit[:, :, None, :]
             )
     return TangentialForce(
@@ -223,6 +228,20 @@ def tangential_forces(
         sliding=sliding,
         energy=energy,
     )
+
+
+def _slipping_at_start(
+    data: FrictionInput, k_t: np.ndarray, limit: np.ndarray, magnitude: np.ndarray
+) -> np.ndarray:
+    """``(N,)`` True where the trial force at the increment start (``s = 0``) slips.
+
+    CalculiX's forced stick acts on the force and the state only (``springforc_n2f``); its
+    tangent of that iteration is evaluated at the increment start, where the trial force is
+    ``K_t (t_n - t_p,n)``: a node that slipped at the end of the last increment slips there
+    (docs/method.md §33.4).
+    """
+    start = np.linalg.norm(k_t[:, None] * (data.t_start - data.slip_start), axis=1)
+    return (start > ROUND_OFF * k_t * magnitude) & (start >= (1.0 - SLIP_TIE) * limit)
 
 
 def output_tangents(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -6,49 +6,118 @@ point at the triangle's centroid times two Gauss points through the thickness, w
 on ccx's reference wedge) is a fixed rule on the reference hexahedron ``[0, 1]^3``: the same
 physical points, each weight divided by the Jacobian of the collapse map at its point. Which rule
 depends on which face of the reference hexahedron collapses, and along which axis: one of twelve
-*classes* (:func:`collapse_classes`), each with its rule (:func:`wedge_rule`). Pure numpy.
+*classes* (:func:`collapses`, :func:`collapse_classes`), each with its rule (:func:`wedge_rule`);
+the XDMF writer takes the wedges' vertices from the same classes. Pure numpy.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["NUM_CLASSES", "collapse_classes", "wedge_rule"]
+__all__ = [
+    "DOLFINX_HEXAHEDRON",
+    "NUM_CLASSES",
+    "VTK_HEXAHEDRON",
+    "Collapse",
+    "collapse_classes",
+    "collapses",
+    "wedge_rule",
+]
 
 #: The twelve ways a face of the reference hexahedron collapses into an edge.
 NUM_CLASSES = 12
 
 #: dolfinx's reference hexahedron: vertex ``i`` at ``(i & 1, i >> 1 & 1, i >> 2 & 1)``.
-_VERTICES = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=np.int64)
+DOLFINX_HEXAHEDRON = np.array(
+    [[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=np.int64
+)
+DOLFINX_HEXAHEDRON.flags.writeable = False
+
+#: VTK's (XDMF's, ccx's C3D8) reference hexahedron: ``0-1-2-3`` below ``4-5-6-7``.
+VTK_HEXAHEDRON = np.array(
+    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+    dtype=np.int64,
+)
+VTK_HEXAHEDRON.flags.writeable = False
 
 
-def collapse_classes(cell_nodes: np.ndarray) -> np.ndarray:
-    """The collapse class of each cell, from its 8 nodes in dolfinx's reference order.
+@dataclass(frozen=True)
+class Collapse:
+    """One way two parallel edges of one face of a hexahedron collapse (a wedge cell).
+
+    Attributes:
+        rule_class: ``4 c + 2 k + s``: ``c`` the axis of the collapsed edges, the collapsed face
+            normal to the ``k``-th other axis (in increasing order), at coordinate ``s``.
+        edges: The two collapsed edges, each ``(vertex, vertex + axis c)``.
+        wedge: The wedge's six vertices: a triangle (on a face holding one collapsed edge; the
+            face holding both is gone), then the partners of its vertices across.
+    """
+
+    rule_class: int
+    edges: tuple[tuple[int, int], tuple[int, int]]
+    wedge: tuple[int, ...]
+
+
+def collapses(vertices: np.ndarray = DOLFINX_HEXAHEDRON) -> tuple[Collapse, ...]:
+    """The twelve collapses of a hexahedron whose vertex ``i`` sits at ``vertices[i]``.
+
+    One function for every vertex numbering (dolfinx's, VTK's), so that the classes of the
+    integration rule and the wedges of the XDMF file are one thing.
+
+    Args:
+        vertices: ``(8, 3)`` the reference coordinates (0 or 1) of the numbering's vertices.
+    """
+    vertices = np.asarray(vertices, dtype=np.int64)
+
+    def vertex(at: np.ndarray) -> int:
+        return int(np.flatnonzero((vertices == at).all(axis=1))[0])
+
+    found = []
+    for axis in range(3):  # the collapsed edges run along this axis
+        unit = np.eye(3, dtype=np.int64)[axis]
+        edges = [(v, vertex(vertices[v] + unit)) for v in range(8) if vertices[v, axis] == 0]
+        for i, first in enumerate(edges):
+            for second in edges[i + 1 :]:
+                differ = np.flatnonzero(vertices[first[0]] != vertices[second[0]])
+                if differ.size != 1:  # diagonal edges: not on one face
+                    continue
+                across = int(differ[0])  # the triangles are the faces normal to this axis
+                face = 3 - axis - across  # the collapsed face is normal to this one
+                side = vertices[first[0], across]
+                triangle = [v for v in range(8) if vertices[v, across] == side and v != first[1]]
+                flip = np.eye(3, dtype=np.int64)[across]
+                partner = [vertex(np.abs(vertices[v] - flip)) for v in triangle]
+                others = [a for a in range(3) if a != axis]
+                rule_class = 4 * axis + 2 * others.index(face) + int(vertices[first[0], face])
+                found.append(Collapse(rule_class, (first, second), tuple(triangle + partner)))
+    return tuple(found)
+
+
+def collapse_classes(
+    cell_nodes: np.ndarray, vertices: np.ndarray = DOLFINX_HEXAHEDRON
+) -> np.ndarray:
+    """The collapse class of each cell (:class:`Collapse`), from its 8 nodes.
 
     A wedge cell repeats two nodes, along two parallel edges of one face (the face collapsed
-    into an edge); the class is ``4 c + 2 k + s``: ``c`` the axis of the collapsed edges, the
-    face normal to the ``k``-th other axis (in increasing order), at coordinate ``s``. A cell
-    whose repeated nodes are not two such edges gets -1.
+    into an edge), and no other; a cell that repeats nodes otherwise, or none, gets -1.
 
     Args:
         cell_nodes: ``(n, 8)`` node (or geometry dof) numbers of the cells.
+        vertices: The cells' vertex numbering (:func:`collapses`): dolfinx's by default.
 
     Returns:
         ``(n,)`` classes in ``0..11``, or -1.
     """
     cell_nodes = np.asarray(cell_nodes)
-    n = cell_nodes.shape[0]
-    classes = np.full(n, -1, dtype=np.int64)
-    for c in range(3):
-        low = np.flatnonzero(_VERTICES[:, c] == 0)  # edges along axis c: (v, v + 2^c)
-        high = low + (1 << c)
-        same = cell_nodes[:, low] == cell_nodes[:, high]  # (n, 4) collapsed edges along c
-        others = [a for a in range(3) if a != c]
-        for k, f in enumerate(others):
-            for s in range(2):
-                on_face = _VERTICES[low, f] == s  # the two edges of that face
-                hit = same[:, on_face].all(axis=1) & (same.sum(axis=1) == 2)
-                classes[hit] = 4 * c + 2 * k + s
+    ordered = np.sort(cell_nodes, axis=1)
+    repeated = (ordered[:, 1:] == ordered[:, :-1]).sum(axis=1)
+    classes = np.full(cell_nodes.shape[0], -1, dtype=np.int64)
+    for collapse in collapses(vertices):
+        (a, b), (c, d) = collapse.edges
+        hit = (cell_nodes[:, a] == cell_nodes[:, b]) & (cell_nodes[:, c] == cell_nodes[:, d])
+        classes[hit & (repeated == 2)] = collapse.rule_class
     return classes
 
 

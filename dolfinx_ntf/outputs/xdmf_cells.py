@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dolfinx_ntf.kernels.wedge_rule import VTK_HEXAHEDRON, collapse_classes, collapses
+
 __all__ = [
     "COLLAPSE_PATTERNS",
     "XDMF_HEXAHEDRON",
@@ -31,43 +33,15 @@ __all__ = [
 XDMF_HEXAHEDRON = 9
 XDMF_WEDGE = 8
 
-#: VTK's reference hexahedron: vertex ``i`` at these coordinates.
-_HEX = np.array(
-    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+#: The twelve collapses in VTK's vertex order, each as ``((a, b), (c, d), wedge)``: the repeated
+#: edges and the wedge's six vertices of the hexahedron (a triangle, then the partners of its
+#: vertices across); ``kernels.wedge_rule.collapses``, the integration rule's classes.
+COLLAPSE_PATTERNS = [(c.edges[0], c.edges[1], list(c.wedge)) for c in collapses(VTK_HEXAHEDRON)]
+
+#: The wedge vertices of each collapse class, VTK's order: ``(12, 6)``.
+_WEDGE_VERTICES = np.array(
+    [c.wedge for c in sorted(collapses(VTK_HEXAHEDRON), key=lambda c: c.rule_class)]
 )
-
-
-def _collapse_patterns() -> list[tuple[tuple[int, int], tuple[int, int], list[int]]]:
-    """Each way two parallel edges of one face collapse: the edges and the wedge's 6 vertices.
-
-    The wedge's triangles lie on the two faces holding one collapsed edge each (the face holding
-    both is gone); a triangle's vertex and its partner across share the other coordinates.
-    """
-    patterns = []
-    for axis in range(3):  # the collapsed edges run along this axis
-        low = [v for v in range(8) if _HEX[v, axis] == 0]
-        edges = [(v, int(np.flatnonzero((_HEX == _HEX[v] + np.eye(3, dtype=int)[axis]).all(1))[0]))
-                 for v in low]  # fmt: skip
-        for i, first in enumerate(edges):
-            for second in edges[i + 1 :]:
-                differ = np.flatnonzero(_HEX[first[0]] != _HEX[second[0]])
-                if differ.size != 1:  # diagonal edges: not on one face
-                    continue
-                across = int(differ[0])  # the triangles are the faces normal to this axis
-                side = _HEX[first[0], across]
-                triangle = [v for v in range(8) if _HEX[v, across] == side and v != first[1]]
-                flip = np.eye(3, dtype=int)[across]
-                partner = [
-                    int(np.flatnonzero((_HEX == np.abs(_HEX[v] - flip)).all(1))[0])
-                    for v in triangle
-                ]
-                patterns.append((first, second, triangle + partner))
-    return patterns
-
-
-#: The twelve collapses, each as ``((a, b), (c, d), wedge)``: the repeated edges and the wedge's
-#: six vertices of the hexahedron (a triangle, then the partners of its vertices across).
-COLLAPSE_PATTERNS = _collapse_patterns()
 
 
 def collapsed_wedges(cells: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -93,19 +67,15 @@ def collapsed_wedges(cells: np.ndarray, points: np.ndarray) -> tuple[np.ndarray,
     if points.ndim != 2 or points.shape[1] != 3:
         raise ValueError(f"collapsed_wedges: points must have shape (N, 3), got {points.shape}")
     repeated = (np.sort(cells, axis=1)[:, 1:] == np.sort(cells, axis=1)[:, :-1]).sum(axis=1)
-    wedge = np.zeros(cells.shape[0], dtype=bool)
-    nodes = np.zeros((cells.shape[0], 6), dtype=np.int64)
-    for (a, b), (c, d), vertices in COLLAPSE_PATTERNS:
-        hit = (cells[:, a] == cells[:, b]) & (cells[:, c] == cells[:, d]) & (repeated == 2)
-        wedge |= hit
-        nodes[hit] = cells[hit][:, vertices]
+    classes = collapse_classes(cells, VTK_HEXAHEDRON)
+    wedge = classes >= 0
     bad = np.flatnonzero((repeated > 0) & ~wedge)
     if bad.size:
         raise ValueError(
             f"collapsed_wedges: cell {int(bad[0])} repeats nodes {cells[bad[0]].tolist()} but is "
             "not a hexahedron collapsed along two parallel edges of one face"
         )
-    nodes = nodes[wedge]
+    nodes = np.take_along_axis(cells[wedge], _WEDGE_VERTICES[classes[wedge]], axis=1)
     p = points[nodes]  # (m, 6, 3)
     normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     toward = p[:, 3:].mean(axis=1) - p[:, :3].mean(axis=1)

@@ -416,6 +416,11 @@ class StaticStep(Step):
             (every attempt), the first iterate evaluates the material history (plasticity)
             elastically when the prescribed displacements change there by more than 1e-5
             (docs/method.md §33); the deck runner's default.
+        elastic_contact: The springs in that first iterate when the prescribed displacements
+            change there by more than 1e-5 (docs/method.md §33.4): ``"iterate"`` (default) at
+            the iterate; ``"start"`` at the increment start, as CalculiX 2.20's static steps (the
+            deck runner's default with ``elastic_start``); ``"stick"`` at the iterate, every
+            friction spring's force stuck.
     """
 
     set_load: LoadControl = no_load
@@ -434,6 +439,7 @@ class StaticStep(Step):
     guard_predictor: bool = False
     time_points: typing.Sequence[float] | None = None
     elastic_start: bool = False
+    elastic_contact: str = "iterate"
 
     def _run(
         self, solver: IncrementSolver, u: dolfinx.fem.Function, start_time: float
@@ -444,8 +450,13 @@ class StaticStep(Step):
         velocity: np.ndarray | None = None
 
         def start(t_new: float, dt: float, u_start: np.ndarray) -> None:
-            if self.elastic_start and velocity is None:  # the step's first increment
-                problem.begin_increment(t_new / self.period, elastic_start=True)
+            first = self.elastic_start or self.elastic_contact != "iterate"
+            if velocity is None and first:  # the step's first increment
+                problem.begin_increment(
+                    t_new / self.period,
+                    elastic_start=self.elastic_start,
+                    elastic_contact=self.elastic_contact,
+                )
             else:
                 problem.begin_increment(t_new / self.period)
             if self.predictor and velocity is not None:

@@ -309,22 +309,51 @@ def test_read_dat_errors(tmp_path):
 
 
 def test_read_dat_unknown_block(tmp_path):
-    """A block without a name here (ccx 2.20's ME) is named by its title; E is known."""
+    """A block without a name here is named by its title; E and ME (ccx 2.20's) are known."""
     path = tmp_path / "e.dat"
-    path.write_text(
-        "\n mechanical strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time "
-        " 0.1000000E+01"
-        "\n\n         1   1  1.000000E+00  2.000000E+00  3.000000E+00  4.000000E+00  5.000000E+00"
-        "  6.000000E+00\n"
-        "\n strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time  0.1000000E+01"
+    row = (
         "\n\n         1   1  1.000000E+00  2.000000E+00  3.000000E+00  4.000000E+00  5.000000E+00"
         "  6.000000E+00\n"
     )
-    unknown, strains = read_dat(path)
-    assert unknown.name == "mechanical strains" and unknown.set == "EALL" and unknown.time == 1.0
+    path.write_text(
+        "\n some other values (elem, integ.pnt.,a,b,c,d,e,f) for set EALL and time  0.1000000E+01"
+        + row
+        + "\n strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time  "
+        "0.1000000E+01"
+        + row
+        + "\n mechanical strains (elem, integ.pnt.,exx,eyy,ezz,exy,exz,eyz) for set EALL and time "
+        " 0.1000000E+01" + row
+    )
+    unknown, strains, mechanical = read_dat(path)
+    assert unknown.name == "some other values" and unknown.set == "EALL" and unknown.time == 1.0
     assert unknown.labels.tolist() == [[1, 1]] and unknown.values.tolist() == [[1, 2, 3, 4, 5, 6]]
     assert strains.name == "E" and strains.set == "EALL"
     assert strains.values.tolist() == [[1, 2, 3, 4, 5, 6]]
+    assert mechanical.name == "ME" and mechanical.values.tolist() == [[1, 2, 3, 4, 5, 6]]
+    assert path.read_text().endswith(format_block(mechanical))
+
+
+def test_energy_and_state_variable_blocks():
+    """ENER and SDV rows as ccx 2.20 writes them: SDV of any width, no values without *PLASTIC
+    (the rows' labels only), 13 with it on one line."""
+    energy = el_print_blocks("ENER", "EALL", 0.125, [1], np.full((1, 2, 1), 0.09765625))[0]
+    assert format_block(energy) == (
+        "\n internal energy density (elem, integ.pnt.,energy) for set EALL and time  "
+        "0.1250000E+00\n\n         1   1  9.765625E-02\n         1   2  9.765625E-02\n"
+    )
+    empty = el_print_blocks("SDV", "EALL", 1.0, [1, 2], np.zeros((2, 1, 0)))[0]
+    assert format_block(empty) == (
+        "\n internal state variables (elem, integ.pnt.,values) for set EALL and time  "
+        "0.1000000E+01\n\n         1   1\n         2   1\n"
+    )
+    values = np.zeros((1, 1, 13))
+    values[0, 0, :3] = (4.184164e-03, 4.18391e-03, -2.091955e-03)
+    full = format_block(el_print_blocks("SDV", "EALL", 0.25, [1], values)[0]).splitlines()[-1]
+    assert (
+        full == "         1   1  4.184164E-03  4.183910E-03 -2.091955E-03" + "  0.000000E+00" * 10
+    )
+    with pytest.raises(ValueError, match="must be one of"):
+        el_print_blocks("ZZS", "EALL", 1.0, [1], np.zeros((1, 1, 1)))
 
 
 # ----------------------------------------------------------------------------- .cel

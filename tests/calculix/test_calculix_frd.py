@@ -310,3 +310,38 @@ def test_frd_rows_are_formatted_value_by_value():
     ids = rng.integers(1, 10**9, 3000)
     expected = [f" -1{i:10d}" + "".join(f"{v:12.5E}" for v in row) for i, row in zip(ids, values)]
     assert _rows(ids, values) == expected
+
+
+def test_state_variable_blocks_like_ccx(tmp_path):
+    """SDV: 13 components SDV1..SDV13, each row in a -1 line of six values and -2 lines of the
+    rest; without values (no *PLASTIC) the header only, no rows; ENER and MESTRAIN (ccx 2.20's
+    records, measured on a plastic bar); all read back."""
+    path = tmp_path / "s.frd"
+    ids = np.arange(1, 9)
+    x = np.random.default_rng(0).uniform(-1, 1, (8, 3))
+    writer = FrdWriter(path, ids, x, np.array([1]), "C3D8", ids[None, :], np.array([1]), ["EL"])
+    values = np.random.default_rng(2).uniform(-1e-2, 1e-2, (8, 13))
+    writer.write(FrdBlock("MESTRAIN", (), 1, 1, 0.125, ids, values[:, :6]))
+    writer.write(FrdBlock("ENER", (), 1, 1, 0.125, ids, values[:, :1]))
+    writer.write(FrdBlock("SDV", (), 1, 1, 0.125, ids, values))
+    writer.write(FrdBlock("SDV", (), 1, 2, 0.25, ids, np.zeros((8, 0))))
+    writer.close()
+    lines = path.read_text().splitlines()
+    for record in (" -4  MESTRAIN    6    1", " -5  MEZX        1    4    3    1",
+                   " -4  ENER        1    1", " -5  ENER        1    1    0    0",
+                   " -4  SDV        13    1", " -5  SDV13       1    1    0    0",
+                   " -4  SDV         0    1"):  # fmt: skip
+        assert record in lines
+    first = lines.index(" -5  SDV13       1    1    0    0") + 1
+    assert lines[first].startswith(" -1         1") and len(lines[first]) == 13 + 6 * 12
+    assert lines[first + 1].startswith(" -2" + " " * 10) and len(lines[first + 1]) == 13 + 6 * 12
+    assert lines[first + 2].startswith(" -2" + " " * 10) and len(lines[first + 2]) == 13 + 12
+    empty = lines.index(" -4  SDV         0    1")
+    assert lines[empty + 1] == " -3"
+    frd = read_frd(path)
+    full, none = frd.blocks_named("SDV")
+    assert full.components == tuple(f"SDV{k}" for k in range(1, 14))
+    np.testing.assert_allclose(full.values, values, rtol=1e-5, atol=1e-12)
+    assert none.values.shape == (0, 0) and none.components == ()
+    (mechanical,) = frd.blocks_named("MESTRAIN")
+    np.testing.assert_allclose(mechanical.values, values[:, :6], rtol=1e-5, atol=1e-12)

@@ -464,14 +464,14 @@ def test_peeq_of_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path)
 
 
 def test_peeq_requests_are_read(tmp_path: Path) -> None:
-    """PE is PEEQ in ``*EL PRINT`` and ``*EL FILE``; other plastic keys are still refused."""
+    """PE is PEEQ in ``*EL PRINT`` and ``*EL FILE``; keys not built (ZZS) are still refused."""
     path = tmp_path / "deck.inp"
     path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, PE\n"))
     step = read_deck(path).steps[0]
     assert [r.keys for r in step.prints if r.kind == "EL"] == [("S", "PEEQ")]
     assert [r.keys for r in step.file_requests if r.kind == "EL"] == [("S", "E", "PEEQ")]
-    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, ENER\n"))
-    with pytest.raises(DeckError, match="key ENER is not supported yet"):
+    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, ZZS\n"))
+    with pytest.raises(DeckError, match="key ZZS is not supported yet"):
         read_deck(path)
 
 

@@ -24,7 +24,7 @@ from helpers.ccx_runs import quiet_logs
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
-from dolfinx_ntf.calculix.deck.transforms import Transform, local_directions
+from dolfinx_ntf.calculix.deck.transforms import ON_AXIS, Transform, axis_normal, local_directions
 from dolfinx_ntf.calculix.job import run_job
 
 needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
@@ -219,3 +219,96 @@ def test_node_print_of_transformed_nodes_is_refused(tmp_path: Path) -> None:
     (tmp_path / "deck.inp").write_text(_block("NALL"))
     with pytest.raises(NotImplementedError, match="local directions"):
         run_job("deck", tmp_path, comm=MPI.COMM_SELF, progress=False)
+
+
+def _one_node_deck(node: tuple[float, float, float], axis: tuple[float, float, float]) -> str:
+    """One C3D8 whose node 1 has a cylindrical system about ``axis`` through the origin.
+
+    Three steps move node 1 by 1e-3 along its local 1, 2 and 3 in turn (the others held), so
+    the printed global displacements are 1e-3 times the local directions.
+    """
+    corners = [
+        (0, 0, 0),
+        (1, 0, 0),
+        (1, 1, 0),
+        (0, 1, 0),
+        (0, 0, 1),
+        (1, 0, 1),
+        (1, 1, 1),
+        (0, 1, 1),
+    ]
+    coords = np.asarray(node) + np.asarray(corners, dtype=float)
+    coords[0] = node
+    text = "*NODE, NSET=NALL\n" + "".join(
+        f"{k}, {x!r}, {y!r}, {z!r}\n" for k, (x, y, z) in enumerate(coords.tolist(), start=1)
+    )
+    text += "*ELEMENT, TYPE=C3D8, ELSET=EALL\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"
+    text += "*NSET, NSET=ONE\n1\n*NSET, NSET=REST\n2, 3, 4, 5, 6, 7, 8\n"
+    text += "*TRANSFORM, NSET=ONE, TYPE=C\n0., 0., 0., " + ", ".join(map(repr, axis)) + "\n"
+    text += "*MATERIAL, NAME=M\n*ELASTIC\n1000., 0.3\n*SOLID SECTION, ELSET=EALL, MATERIAL=M\n"
+    text += "*BOUNDARY\nREST, 1, 3\n"
+    for i in (1, 2, 3):
+        text += "*STEP\n*STATIC\n*BOUNDARY, OP=NEW\nREST, 1, 3\n"
+        text += "".join(f"ONE, {j}, {j}, {0.001 if j == i else 0.0}\n" for j in (1, 2, 3))
+        text += "*NODE PRINT, NSET=ONE, GLOBAL=YES\nU\n*END STEP\n"
+    return text
+
+
+#: Node 1 and the axis: along x and -x, tilted (three kinds: ccx's rule takes the first global
+#: direction the axis has a component in), a node 9.2e-16 off a y axis (metalforming's punch
+#: apex; ccx: on the axis) and one 1e-9 off it (ccx: off the axis, radial along x).
+AXES = {
+    "x": ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
+    "minus_x": ((0.0, 0.0, 0.0), (-1.0, 0.0, 0.0)),
+    "tilted_123": ((0.0, 0.0, 0.0), (1.0, 2.0, 3.0)),
+    "tilted_m1m23": ((0.0, 0.0, 0.0), (-1.0, -2.0, 3.0)),
+    "tilted_032": ((0.0, 0.0, 0.0), (0.0, 3.0, 2.0)),
+    "y_near_9e-16": ((-9.18485e-16, 0.25, 0.0), (0.0, 1.0, 0.0)),
+    "y_off_1e-9": ((1e-9, 0.0, 0.0), (0.0, 1.0, 0.0)),
+}
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("case", list(AXES))
+def test_local_directions_on_the_axis_are_ccx_ones(tmp_path: Path, case: str) -> None:
+    """ccx 2.20's local directions at a node on (or next to) a cylindrical axis, read from its
+    global U after a unit move along each local direction, equal :func:`local_directions`
+    (docs/method.md §33.6) to ccx's printed digits."""
+    node, axis = AXES[case]
+    run_ccx_dir = tmp_path / "ccx"
+    run_ccx_dir.mkdir()
+    (run_ccx_dir / "t.inp").write_text(_one_node_deck(node, axis))
+    run_ccx(run_ccx_dir, "t", timeout=120)
+    blocks = read_dat(run_ccx_dir / "t.dat")
+    assert [b.name for b in blocks] == ["U"] * 3
+    theirs = np.array([b.values[0] / 0.001 for b in blocks])
+    np.testing.assert_allclose(theirs @ theirs.T, np.eye(3), atol=1e-6)  # ccx's are orthonormal
+    ours = local_directions(Transform("ONE", "C", (0.0, 0.0, 0.0), axis, None), np.array([node]))
+    np.testing.assert_allclose(ours[0], theirs, rtol=0, atol=1e-6)
+
+
+def test_axis_normal_is_ccx_rule() -> None:
+    """Local 1 on an axis lies in the plane of the first global direction the axis has a
+    component in and the next one, normal to the axis (without ccx: its measured values)."""
+    for axis in (
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 2.0, 3.0],
+        [0.0, 3.0, 2.0],
+    ):
+        axis = np.asarray(axis) / np.linalg.norm(axis)
+        normal = axis_normal(axis)
+        assert abs(normal @ axis) < 1e-15 and abs(np.linalg.norm(normal) - 1.0) < 1e-15
+    np.testing.assert_allclose(
+        axis_normal(np.array([1.0, 2.0, 3.0]) / 14**0.5), [-2 / 5**0.5, 1 / 5**0.5, 0.0]
+    )
+    np.testing.assert_allclose(axis_normal(np.array([0.0, 1.0, 0.0])), [0.0, 0.0, 1.0])
+    np.testing.assert_allclose(axis_normal(np.array([1e-11, 1.0, 0.0])), [0.0, 0.0, 1.0])
+    near = local_directions(
+        Transform("N", "C", (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), None),
+        np.array([[0.5 * ON_AXIS, 0.3, 0.0], [2.0 * ON_AXIS, 0.3, 0.0]]),
+    )
+    np.testing.assert_allclose(near[:, 0], [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])

@@ -80,11 +80,11 @@ def test_wedge_deck_writes_xdmf(tmp_path: Path) -> None:
 
 @pytest.mark.serial
 def test_wedge_element_outputs_stay_refused(tmp_path: Path) -> None:
-    """``*EL FILE`` of wedges is refused before the run (``*EL PRINT`` S, E, PEEQ are built)."""
+    """Wedge element outputs but S, E and PEEQ are refused before the run (method §35)."""
     text = (DATA / "wedge_punch.inp").read_text()
-    text = text.replace("*CONTACT PRINT", "*EL FILE\nS, PEEQ\n*CONTACT PRINT")
+    text = text.replace("*CONTACT PRINT", "*EL FILE\nS, ENER\n*CONTACT PRINT")
     with pytest.raises(
         NotImplementedError,
-        match=r"\*EL FILE S/PEEQ of C3D6 element \d+ is not supported",
+        match=r"\*EL FILE S/ENER of C3D6 element \d+ is not supported",
     ):
         _run(tmp_path, text, MPI.COMM_SELF)

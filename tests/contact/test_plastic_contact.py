@@ -239,3 +239,36 @@ def test_elastic_start_needs_an_elastic_evaluation() -> None:
     assert not elastic_calls  # no prescribed displacement changes: ccx's rule does not apply
     solver.destroy()
     problem.destroy()
+
+
+@pytest.mark.parametrize("contact", ["start", "stick"])
+def test_elastic_contact_is_asked_for_in_the_first_increment_only(contact: str) -> None:
+    """``StaticStep(elastic_contact=...)`` (docs/method.md §33.4) asks the problem in the step's
+    first increment only; it acts only where prescribed displacements change, so this
+    pressure-loaded punch is evaluated as usual (the springs at the iterate, no forced stick);
+    an unknown value is a ``ValueError``."""
+    problem, solver, _, pressure = _plastic_punch(MPI.COMM_WORLD)
+    asked, forced = [], []
+    begin, evaluate = problem.begin_increment, problem.evaluate
+
+    def spy_begin(fraction: float, **options) -> None:
+        asked.append(options.get("elastic_contact", "iterate"))
+        begin(fraction, **options)
+
+    def spy_evaluate(**options):
+        forced.append(options.get("force_stick", False))
+        return evaluate(**options)
+
+    problem.begin_increment, problem.evaluate = spy_begin, spy_evaluate
+    results = ntf.StaticStep(
+        lambda t: setattr(pressure, "value", PEAK * t),
+        initial_increment=0.5,
+        max_increment=0.5,
+        elastic_contact=contact,
+    ).run(solver, problem.u)
+    assert len(results) == 2 and asked == [contact, "iterate"]
+    assert forced and not any(forced)
+    with pytest.raises(ValueError, match="elastic_contact must be one of"):
+        begin(1.0, elastic_contact="ccx")
+    solver.destroy()
+    problem.destroy()

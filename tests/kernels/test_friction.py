@@ -137,6 +137,40 @@ def test_return_map_stick_and_slip_exact():
         np.testing.assert_allclose(ev.forces.sum(axis=1), 0, atol=1e-11 * np.abs(ev.forces).max())
 
 
+def test_forced_stick_sticks_the_force_and_keeps_the_start_tangent():
+    """ccx's elastic first iteration (docs/method.md §33.4): with ``force_stick`` the force is the
+    stick one (``F_T = lambda A t_e``, slip unchanged) even where the trial force slips. The
+    tangent is that force's derivative (finite differences) where the increment-start trial
+    sticks; where it slips already, the friction part of the tangent is the slip one."""
+    ft, x, u, areas, start = _springs("quad4", 0.1, 6, seed=14)
+    mu, slope = REGIMES["slip"]
+    free = _evaluate(ft, x, areas, LINEAR, _data(u, start, mu, slope))
+    assert np.all(free.tangential.sliding)
+    # the increment-start state sticks (t_n = t_p,n): the stick force and its derivative
+    sticking = (start[0], start[2].copy(), start[2])
+    data = _data(u, sticking, mu, slope, force_stick=True)
+    ev = _evaluate(ft, x, areas, LINEAR, data)
+    tf = ev.tangential
+    assert not np.any(tf.sliding)
+    np.testing.assert_array_equal(tf.slip, start[2])
+    np.testing.assert_allclose(
+        tf.force, slope * areas[:, None] * (tf.t - start[2]), rtol=1e-10, atol=0
+    )
+    assert np.all(np.linalg.norm(tf.force, axis=1) > 2.0 * mu * np.abs(ev.normal_force))
+    fd = _finite_difference(ft, x, u, areas, LINEAR, data, h=1e-7 * SIZE)
+    assert relative_error(ev.stiffness, fd).max() <= 1e-6
+    # the increment-start state slips (|K_t (t_n - t_p,n)| > F_s): the force still sticks, the
+    # tangent is the slip one
+    forced = _evaluate(ft, x, areas, LINEAR, _data(u, start, mu, slope, force_stick=True))
+    np.testing.assert_allclose(
+        forced.tangential.force, slope * areas[:, None] * (forced.tangential.t - start[2]),
+        rtol=1e-10, atol=0,
+    )  # fmt: skip
+    slip_tangent = free.tangential.dforce
+    np.testing.assert_allclose(forced.tangential.dforce, slip_tangent, rtol=1e-12, atol=0)
+    assert np.abs(ev.tangential.dforce - slip_tangent).max() > 1e-3 * np.abs(slip_tangent).max()
+
+
 def test_friction_in_tension():
     """ccx applies mu |F_N| under linear-law tension; by choice no friction in tension."""
     weights = np.array([[-1.0, 1.0]])

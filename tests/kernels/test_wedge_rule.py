@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dolfinx_ntf.kernels.wedge_rule import NUM_CLASSES, collapse_classes, wedge_rule
+from dolfinx_ntf.kernels.wedge_rule import (
+    DOLFINX_HEXAHEDRON,
+    NUM_CLASSES,
+    VTK_HEXAHEDRON,
+    collapse_classes,
+    collapses,
+    wedge_rule,
+)
 
 VERTICES = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float)
 
@@ -84,3 +91,35 @@ def test_rule_is_ccx_wedge_rule(rule_class: int) -> None:
 def test_bad_class() -> None:
     with pytest.raises(ValueError, match=r"collapse class must be in 0\.\.11"):
         wedge_rule(12)
+
+
+@pytest.mark.parametrize("rule_class", range(NUM_CLASSES))
+def test_one_source_for_both_vertex_numberings(rule_class: int) -> None:
+    """A collapse has one class in dolfinx's and VTK's numbering (the rule's and the XDMF
+    writer's), and its wedge is the same six corners: the triangles at the two ends of the
+    thickness axis, partners across it."""
+    dolfinx_cell = _collapsed_cell(rule_class)
+    # VTK vertex j sits at VTK_HEXAHEDRON[j]: dolfinx's vertex x + 2 y + 4 z
+    vtk_cell = dolfinx_cell[VTK_HEXAHEDRON @ np.array([1, 2, 4])]
+    assert collapse_classes(vtk_cell[None], VTK_HEXAHEDRON).tolist() == [rule_class]
+    assert collapse_classes(dolfinx_cell[None]).tolist() == [rule_class]
+    for vertices, cell in ((DOLFINX_HEXAHEDRON, dolfinx_cell), (VTK_HEXAHEDRON, vtk_cell)):
+        (collapse,) = [c for c in collapses(vertices) if c.rule_class == rule_class]
+        wedge = np.array(collapse.wedge)
+        c, rest = divmod(rule_class, 4)
+        t = 3 - c - [a for a in range(3) if a != c][rest // 2]
+        assert set(vertices[wedge[:3], t].tolist()) == {vertices[wedge[0], t]}  # one triangle
+        assert (vertices[wedge[3:], t] == 1 - vertices[wedge[:3], t]).all()  # partners across
+        assert np.unique(cell[wedge]).size == 6  # the six distinct nodes of the cell
+    assert len({c.rule_class for c in collapses(VTK_HEXAHEDRON)}) == NUM_CLASSES
+
+
+def test_other_repeats_have_no_class() -> None:
+    """A collapsed cell that repeats a further node is no wedge (-1), in both numberings."""
+    cell = _collapsed_cell(0)
+    assert collapse_classes(cell[None]).tolist() == [0]
+    free = [v for v in range(8) if (cell == v).sum() == 1 and cell[v] == v]  # not collapsed
+    assert len(free) == 4
+    cell[free[-1]] = cell[free[0]]  # a third repeat
+    assert collapse_classes(cell[None]).tolist() == [-1]
+    assert collapse_classes(cell[None], VTK_HEXAHEDRON).tolist() == [-1]

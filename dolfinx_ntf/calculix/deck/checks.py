@@ -92,6 +92,7 @@ class Checks(ReaderState):
             transformed_nodes=self._transformed_nodes(),
             time_points=dict(self.time_points),
             wedges=wedges,
+            wedge_nodes=self._wedge_nodes(),
         )
 
     def _collapse_wedges(self) -> np.ndarray:
@@ -110,6 +111,11 @@ class Checks(ReaderState):
         self.element_rows["C3D8"].extend(turned[:, C3D6_AS_C3D8].tolist())
         self.element_locs["C3D8"].extend(self.wedge_locs)
         return rotation
+
+    def _wedge_nodes(self) -> np.ndarray:
+        """The wedges' nodes as read, rows by ascending element number (``Deck.wedge_nodes``)."""
+        rows = np.asarray(self.wedge_rows, np.int64).reshape(-1, 6)
+        return frozen_array(rows[np.argsort(np.asarray(self.wedge_ids, np.int64))], np.int64)
 
     def _check_wedges(self, elements: dict[str, ElementBlock], node_ids: np.ndarray,
                       node_coords: np.ndarray, rotation: np.ndarray) -> np.ndarray:  # fmt: skip

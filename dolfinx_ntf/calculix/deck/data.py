@@ -603,6 +603,8 @@ class Deck:
         time_points: ``*TIME POINTS`` cards by upper-case name.
         wedges: sorted numbers of the C3D6 elements, which ``elements`` holds as C3D8 with one
             collapsed edge (``deck/wedges.py``, docs/method.md §30).
+        wedge_nodes: ``(W, 6)`` the wedges' nodes as the deck gives them (ccx's order, before
+            the turning of §30.1), rows in the order of ``wedges``: the ``.frd`` writes them.
     """
 
     path: str
@@ -633,6 +635,7 @@ class Deck:
     transformed_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     time_points: dict[str, TimePoints] = field(default_factory=dict)
     wedges: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    wedge_nodes: np.ndarray = field(default_factory=lambda: np.zeros((0, 6), np.int64))
 
     @property
     def num_elements(self) -> int:

@@ -18,7 +18,7 @@ _FILE_KEYWORDS = {
 
 _PRINT_KEYS = {
     "NODE": ("U", "V", "RF", "NT"),
-    "EL": ("S", "E", "PEEQ", "HFL"),
+    "EL": ("S", "E", "PEEQ", "HFL", "ENER", "SDV", "ME"),
     "CONTACT": ("CDIS", "CSTR", "CELS", "CNUM"),
 }
 

@@ -25,7 +25,7 @@ from .errors import DeckError, Location
 from .lexer import Card
 from .state import ReaderState
 
-__all__ = ["Transform", "TransformCards", "local_directions"]
+__all__ = ["ON_AXIS", "Transform", "TransformCards", "axis_normal", "local_directions"]
 
 #: A local direction whose largest global component exceeds 1 - ALIGNED is that global axis.
 ALIGNED = 1e-12
@@ -42,12 +42,39 @@ class Transform:
     location: Location
 
 
+#: Distance from a ``TYPE=C`` axis below which a node is on it (absolute, model units): ccx 2.20
+#: takes a node 9.2e-16 (metalforming's punch apex) or 1e-12 away as on the axis and one 1e-9 away
+#: as off it (measured, docs/method.md §33.6).
+ON_AXIS = 1e-10
+
+#: A unit axis component at most this large counts as zero in :func:`axis_normal` (as in ccx).
+_AXIS_COMPONENT = 1e-10
+
+
+def axis_normal(axis: np.ndarray) -> np.ndarray:
+    """ccx 2.20's local 1 at a node on a cylindrical axis ``axis`` (unit 3-vector).
+
+    With ``i`` the first global direction (x, y, z) in which the axis has a component, local 1
+    is the unit vector normal to the axis in the plane of global directions ``i`` and ``i + 1``
+    (cyclically), with a positive component along ``i + 1``: y for an axis along x, z along y,
+    x along z; ``(-2, 1, 0)/sqrt(5)`` for an axis along ``(1, 2, 3)`` (measured against ccx
+    2.20 for these and other axes, docs/method.md §33.6).
+    """
+    axis = np.asarray(axis, dtype=float)
+    i = int(np.flatnonzero(np.abs(axis) > _AXIS_COMPONENT)[0])
+    j = (i + 1) % 3
+    normal = np.zeros(3)
+    normal[j] = 1.0
+    normal[i] = -axis[j] / axis[i]
+    return normal / np.linalg.norm(normal)
+
+
 def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     """The local unit directions ``(n, 3, 3)`` (rows: local 1, 2, 3) at nodes ``coords (n, 3)``.
 
-    A node on a cylinder's axis has no radial direction: local 3 is the axis there too, local 1
-    the global axis that follows the one most along it (x -> y -> z -> x), made normal to it
-    (docs/method.md §30.4, §33.3).
+    A node on a cylinder's axis (closer to it than :data:`ON_AXIS`, as in ccx 2.20) has no
+    radial direction: local 3 is the axis there too and local 1 is :func:`axis_normal`
+    (docs/method.md §30.4, §33.3, §33.6).
 
     Raises:
         ValueError: degenerate points.
@@ -70,14 +97,11 @@ def local_directions(transform: Transform, coords: np.ndarray) -> np.ndarray:
     offset = coords - a
     radial = offset - np.outer(offset @ axis, axis)
     length = np.linalg.norm(radial, axis=1)
-    on_axis = length == 0
+    on_axis = length < ON_AXIS
     radial[~on_axis] /= length[~on_axis, None]
     # on the axis: local 3 stays the axis (ccx 2.20 moves metalforming's axis nodes along it,
-    # measured, docs/method.md §30.4); local 1 the global axis after the one most along it
-    # (cyclically: z for y, x for z; measured, §33.3), made normal to it
-    e = np.eye(3)[(int(np.argmax(np.abs(axis))) + 1) % 3]
-    e = e - (e @ axis) * axis
-    radial[on_axis] = e / np.linalg.norm(e)
+    # measured, docs/method.md §30.4), local 1 ccx's normal to it (measured, §33.6)
+    radial[on_axis] = axis_normal(axis)
     tangential = np.cross(axis, radial)
     out = np.stack([radial, tangential, np.broadcast_to(axis, radial.shape)], axis=1)
     return out
