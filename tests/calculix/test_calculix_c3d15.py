@@ -182,21 +182,25 @@ def test_c3d15_mirrored_element_is_refused(tmp_path):
 @pytest.mark.mpi
 @pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
 def test_c3d15_frd_stresses_match_ccx(tmp_path):
-    """``*EL FILE S, E`` of the NLGEOM block: ccx's nodal values (its extrapolation of the 9
-    points, averaged at shared nodes) to the .frd's 6 printed digits, serial and on 2 processes.
+    """``*EL FILE S, E, ME, ENER`` of the NLGEOM block: ccx's nodal values (its extrapolation of
+    the 9 points, averaged at shared nodes) to the .frd's 6 printed digits, and its ``*EL PRINT``
+    of the four at the 9 points to the .dat's digits; serial and on 2 processes.
     """
+    ccx_dat, ours_dat = _run(tmp_path, "wedge_block_frd", MPI.COMM_WORLD)
+    worst = _check(ccx_dat, ours_dat, free_rf=1e-4)
+    assert set(worst) == {"U", "RF", "S", "E", "ME", "ENER"}
+    assert all(value < 1e-6 for value in worst.values()), worst
     comm = MPI.COMM_WORLD
-    _run(tmp_path, "wedge_block_frd", comm)
     root = Path(comm.bcast(str(tmp_path), root=0))
     if comm.rank != 0:
         return
     theirs = read_frd(DATA / "wedge_block_frd.frd.ref")
     ours = read_frd(root / "wedge_block_frd.frd")
-    names = ("STRESS", "TOSTRAIN")
+    names = ("STRESS", "TOSTRAIN", "MESTRAIN", "ENER")
     a = [b for b in theirs.blocks if b.name in names]
     b = [b for b in ours.blocks if b.name in names]
     assert [(x.name, x.time) for x in a] == pytest.approx([(y.name, y.time) for y in b])
-    assert len(a) == 8  # S and E of 4 increments
+    assert len(a) == 16  # S, E, ME and ENER of 4 increments
     for x, y in zip(a, b):
         np.testing.assert_array_equal(x.nodes, y.nodes)
         assert np.abs(x.values - y.values).max() < 1e-5 * np.abs(x.values).max(), x.name

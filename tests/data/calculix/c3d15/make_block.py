@@ -6,7 +6,7 @@ is C3D15's, not an affine one) and the top nodes loaded unevenly; the bottom is 
 ``wedge_block_pressure*.inp`` add pressures on the curved top triangles and the curved
 quadrilaterals at x = 2, one value per element (NLGEOM: 5 times the values, and tight
 ``*CONTROLS`` so that both codes converge to round-off); ``wedge_block_frd.inp`` is the NLGEOM
-block with ``*EL FILE S, E``. Run:
+block with ``*EL PRINT`` and ``*EL FILE`` S, E, ME and ENER. Run:
 ``python make_block.py`` (deterministic: no random numbers).
 """
 
@@ -109,13 +109,14 @@ def write(path: Path, nlgeom: bool, pressure: bool = False, frd: bool = False) -
         lines.append(f"{n}, 3, {-scale * (1.0 + p[0] * p[1]):.12g}")
     if pressure:
         lines += _pressure_lines(x, wedges, 5.0 if nlgeom else 1.0)
+    prints = "S, E, ME, ENER" if frd else ("S, E" if nlgeom else "S")
     if frd:
-        lines += ["*EL FILE", "S, E"]
+        lines += ["*EL FILE", "S, E, ME, ENER"]
     lines += [
         "*NODE PRINT, NSET=NALL",
         "U, RF",
         "*EL PRINT, ELSET=EALL",
-        "S, E" if nlgeom else "S",
+        prints,
         "*END STEP",
     ]
     path.write_text("\n".join(line for line in lines if line != "") + "\n")
