@@ -35,6 +35,10 @@ quadrature space (e.g. stresses)       ``ufl.VectorElement(             ``basix.
                                        quad_scheme="default")``         scheme="default")``
 reference quadrature points            ``basix.make_quadrature(type,    ``make_quadrature(cell, deg)``  as 0.9
                                        cell, deg)``
+a cut through facets it cannot match   vertices duplicated (joined      joined (a global exchange of    as 0.9
+                                       only through ghosts of matched   unmatched facets' vertices)
+                                       facets): ``create_mesh``'s
+                                       ``unmatched`` adds the ghosts
 =====================================  ===============================  ==============================  ==============================
 
 A user's own UFL code differs the same way (element and space creation, ``LinearProblem``'s
@@ -61,6 +65,7 @@ import ufl
 
 __all__ = [
     "DOLFINX_VERSION",
+    "JOINS_UNMATCHED_FACETS",
     "DirichletBC",
     "Form",
     "MeshTags",
@@ -97,6 +102,11 @@ _LEGACY = DOLFINX_VERSION < (0, 7)
 _V010 = DOLFINX_VERSION >= (0, 10)
 #: dolfinx 0.11 changed ``create_mesh``'s and ``create_vector``'s arguments.
 _V011 = DOLFINX_VERSION >= (0, 11)
+
+#: Whether ``create_mesh`` joins the vertices of facets it does not match across processes by
+#: itself (0.9 and later: through a global exchange); 0.5.2 joins a cut's vertices only through
+#: the ghost cells of matched facets (``create_mesh``'s ``unmatched``, docs/method.md §37).
+JOINS_UNMATCHED_FACETS: bool = not _LEGACY
 
 if _LEGACY:
     DirichletBC = dolfinx.fem.DirichletBCMetaClass
@@ -381,7 +391,7 @@ def create_mesh(
     the other's process (docs/method.md §37); 0.9 and later join the vertices of unmatched
     facets themselves and ignore it."""
     pairs = None
-    if _LEGACY and unmatched is not None:
+    if not JOINS_UNMATCHED_FACETS and unmatched is not None:
         local = np.asarray(unmatched, dtype=np.int64).reshape(-1, 2)
         pairs = np.concatenate(comm.allgather(local))
         pairs = np.vstack([pairs, pairs[:, ::-1]]) if pairs.size else None

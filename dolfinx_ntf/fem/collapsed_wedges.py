@@ -64,7 +64,8 @@ def create_collapsed_mesh(
     dolfinx 0.5.2 joins the vertices of a partition's cut through the ghost cells of the facets
     it matches, and it does not match a wedge's triangle with the hexahedron's quadrilateral (or
     another wedge's triangle repeating another corner) lying on it: the cells of those faces are
-    made ghosts of each other's processes (docs/method.md §37). Then
+    made ghosts of each other's processes (docs/method.md §37; 0.9 and later join them by
+    themselves, and the faces are not looked for). Then
     :func:`check_vertices_joined` checks the result. Collective.
 
     Args:
@@ -75,7 +76,7 @@ def create_collapsed_mesh(
         root: The process holding the cells.
     """
     pairs = np.zeros((0, 2), dtype=np.int64)
-    if comm.size > 1 and comm.rank == root:
+    if comm.size > 1 and comm.rank == root and not compat.JOINS_UNMATCHED_FACETS:
         pairs = unmatched_neighbours(cells)
     mesh = compat.create_mesh(comm, cells, points, element, unmatched=pairs)
     check_vertices_joined(mesh, cells, root)
