@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "HEXAHEDRON_FACETS",
     "WEDGE_AS_HEXAHEDRON",
     "WedgeRotationError",
     "collapse_wedges",
