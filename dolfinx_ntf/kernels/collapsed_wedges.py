@@ -111,7 +111,8 @@ def unmatched_neighbours(cells: np.ndarray) -> np.ndarray:
     the same corner, never the quadrilateral ``a, b, c, d`` of a hexahedron lying on it nor a
     triangle repeating another corner. Returned: the pairs of cells with unmatched facets that
     have three distinct vertices in common, and no matched facet between them (docs/method.md
-    §37). None for a conforming mesh of hexahedra.
+    §37). None for a conforming mesh of hexahedra. At most two cells on a face (a manifold
+    mesh, as dolfinx's facet matching assumes too).
 
     Args:
         cells: ``(n, 8)`` hexahedra in dolfinx's tensor vertex order (collapsed ones repeat a
