@@ -484,7 +484,9 @@ def test_unjoined_vertices_are_still_refused() -> None:
 @pytest.mark.mpi
 def test_chosen_partitions_through_every_unmatched_face_are_joined() -> None:
     """The C3D8 on process 0, the wedges dealt round-robin to the others (every unmatched face
-    cut): one vertex per node, and the volume of the block."""
+    cut): one vertex per node, and the volume of the block. (This cut also crosses matched side
+    faces, which join the vertices without the added ghosts too, measured; dolfinx's own
+    partition is the one that needs them: ``test_unjoined_vertices_are_still_refused``.)"""
     comm = MPI.COMM_WORLD
     cells, points = _mixed_cells()
     pairs = unmatched_neighbours(cells)
@@ -504,14 +506,46 @@ def test_chosen_partitions_through_every_unmatched_face_are_joined() -> None:
     assert abs(volume - 1.0) < 1e-12
 
 
+def _cut_mesh(deck, block, comm, carried=None):
+    """The deck runner's mesh with every unmatched face cut: each wedge on another process than
+    the C3D8 its triangle lies on (the deck runner's own mesh on one process)."""
+    from dolfinx_ntf.calculix.model.mesh import create_mesh
+
+    if comm.size == 1:
+        return create_mesh(deck, block, comm, carried)
+    cells = deck.node_index(block.connectivity)[:, block.type.to_dolfinx].astype(np.int64)
+    x = np.asarray(deck.node_coords, dtype=np.float64)
+    pairs = unmatched_neighbours(cells)  # (C3D8, wedge): each wedge on one C3D8
+    owners = np.arange(len(cells)) % comm.size
+    hexahedron, wedge = pairs[:, 0], pairs[:, 1]
+    owners[wedge] = (owners[hexahedron] + 1 + np.arange(len(wedge)) % (comm.size - 1)) % comm.size
+    assert len(pairs) == 8 and np.all(owners[hexahedron] != owners[wedge])
+    # every process holds wedges (one without hangs in the wedge outputs' JIT: not this test's)
+    assert np.unique(owners[wedge]).size == comm.size
+    if comm.rank != 0:
+        cells, x, owners, pairs = cells[:0], x[:0], owners[:0], pairs[:0]
+    element = compat.coordinate_element("hexahedron")
+    mesh = compat.create_mesh(comm, cells, x, element, owners.astype(np.int32), unmatched=pairs)
+    check_vertices_joined(mesh, cells)
+    return mesh
+
+
 @pytest.mark.mpi
+@pytest.mark.parametrize("partition", ["dolfinx", "cut"])
 @pytest.mark.parametrize("request_card", ["", "*EL PRINT, ELSET=EALL\nS, E\n"], ids=["U", "S"])
-def test_mixed_wedge_block_gives_the_serial_files(request_card: str) -> None:
+def test_mixed_wedge_block_gives_the_serial_files(
+    request_card: str, partition: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The mixed block on all processes writes the serial run's files byte for byte.
 
-    Its partition cuts C3D8 faces lying on wedge triangles (2 and 3 processes: the cut through
-    the middle layer; docs/method.md §37).
+    ``dolfinx``: its partition cuts C3D8 faces lying on wedge triangles (2 and 3 processes: the
+    cut through the middle layer, unjoined without the ghosts of docs/method.md §37); ``cut``: a
+    chosen partition cuts all 8 of them (and matched faces too, which join its vertices anyway).
     """
+    from dolfinx_ntf.calculix.model import calculix_model as model_module
+
+    if partition == "cut":
+        monkeypatch.setattr(model_module, "create_mesh", _cut_mesh)
     from helpers.decks import first_differing_file, run_serial_and_parallel
 
     comm = MPI.COMM_WORLD
