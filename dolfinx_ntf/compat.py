@@ -35,6 +35,10 @@ quadrature space (e.g. stresses)       ``ufl.VectorElement(             ``basix.
                                        quad_scheme="default")``         scheme="default")``
 reference quadrature points            ``basix.make_quadrature(type,    ``make_quadrature(cell, deg)``  as 0.9
                                        cell, deg)``
+a cut through facets it cannot match   vertices duplicated (joined      joined (a global exchange of    as 0.9
+                                       only through ghosts of matched   unmatched facets' vertices)
+                                       facets): ``create_mesh``'s
+                                       ``unmatched`` adds the ghosts
 =====================================  ===============================  ==============================  ==============================
 
 A user's own UFL code differs the same way (element and space creation, ``LinearProblem``'s
@@ -61,6 +65,7 @@ import ufl
 
 __all__ = [
     "DOLFINX_VERSION",
+    "JOINS_UNMATCHED_FACETS",
     "DirichletBC",
     "Form",
     "MeshTags",
@@ -97,6 +102,11 @@ _LEGACY = DOLFINX_VERSION < (0, 7)
 _V010 = DOLFINX_VERSION >= (0, 10)
 #: dolfinx 0.11 changed ``create_mesh``'s and ``create_vector``'s arguments.
 _V011 = DOLFINX_VERSION >= (0, 11)
+
+#: Whether ``create_mesh`` joins the vertices of facets it does not match across processes by
+#: itself (0.9 and later: through a global exchange); 0.5.2 joins a cut's vertices only through
+#: the ghost cells of matched facets (``create_mesh``'s ``unmatched``, docs/method.md §37).
+JOINS_UNMATCHED_FACETS: bool = not _LEGACY
 
 if _LEGACY:
     DirichletBC = dolfinx.fem.DirichletBCMetaClass
@@ -368,28 +378,42 @@ def create_mesh(
     points: np.ndarray,
     element: typing.Any,
     owners: np.ndarray | None = None,
+    unmatched: np.ndarray | None = None,
 ) -> dolfinx.mesh.Mesh:
     """``dolfinx.mesh.create_mesh``; ``owners`` gives the process of each cell passed here (by
-    default dolfinx's graph partitioner decides), e.g. to test chosen partitions."""
-    if owners is None:
+    default dolfinx's graph partitioner decides), e.g. to test chosen partitions.
+
+    ``unmatched``: ``(k, 2)`` pairs of cells (global input numbers: the processes' cells in rank
+    order; any process may pass any of them, and each passes an array or each None: collective)
+    that share a face dolfinx's facet matching misses
+    (``kernels.collapsed_wedges.unmatched_neighbours``). dolfinx 0.5.2 joins a cut's vertices
+    only through the ghost cells of matched facets, so there each such pair is made a ghost of
+    the other's process (docs/method.md §37); 0.9 and later join the vertices of unmatched
+    facets themselves and ignore it."""
+    pairs = None
+    if not JOINS_UNMATCHED_FACETS and unmatched is not None:
+        local = np.asarray(unmatched, dtype=np.int64).reshape(-1, 2)
+        pairs = np.concatenate(comm.allgather(local))
+        pairs = np.vstack([pairs, pairs[:, ::-1]]) if pairs.size else None
+    if owners is None and pairs is None:
         return _create_mesh(comm, cells, points, element)
-    owners = np.ascontiguousarray(owners, dtype=np.int32)
-    everyone = np.concatenate(comm.allgather(owners))
+    graph_partitioner = dolfinx.cpp.graph.partitioner() if owners is None else None
+    everyone = None
+    if owners is not None:
+        owners = np.ascontiguousarray(owners, dtype=np.int32)
+        everyone = np.concatenate(comm.allgather(owners))
 
     def partition(_comm: typing.Any, _parts: int, graph: typing.Any, ghosting: bool) -> typing.Any:
-        """Owner of each local cell, then (when asked) the owners of its facet neighbours."""
-        if not ghosting:
+        """Owner of each local cell, then (when asked) the owners of its neighbours."""
+        if owners is None:
+            dest = graph_partitioner(_comm, _parts, graph, ghosting)
+        elif not ghosting:
             return dolfinx.cpp.graph.AdjacencyList_int32(owners)
-        offsets, links = np.asarray(graph.offsets), np.asarray(graph.array)
-        node = np.repeat(np.arange(owners.size), np.diff(offsets))
-        pairs = np.unique(np.column_stack([node, everyone[links]]), axis=0).reshape(-1, 2)
-        pairs = pairs[pairs[:, 1] != owners[pairs[:, 0]]]
-        rows = np.vstack([np.column_stack([np.arange(owners.size), owners]), pairs])
-        rows = rows[np.argsort(rows[:, 0], kind="stable")]
-        counts = np.bincount(rows[:, 0], minlength=owners.size)
-        return dolfinx.cpp.graph.AdjacencyList_int32(
-            rows[:, 1].astype(np.int32), np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-        )
+        else:
+            dest = _owner_destinations(owners, everyone, graph)
+        if pairs is None or not ghosting:
+            return dest
+        return _ghosts_across(comm, dest, pairs)
 
     if _LEGACY:
         partitioner = dolfinx.cpp.mesh.create_cell_partitioner(partition)
@@ -402,6 +426,43 @@ def create_mesh(
             partition, dolfinx.mesh.GhostMode.none
         )
     return _create_mesh(comm, cells, points, element, partitioner=partitioner)
+
+
+def _destinations(rows: np.ndarray, num_cells: int) -> typing.Any:
+    """An ``AdjacencyList_int32`` of the ``(cell, rank)`` rows, sorted by cell (stable)."""
+    rows = rows[np.argsort(rows[:, 0], kind="stable")]
+    counts = np.bincount(rows[:, 0], minlength=num_cells)
+    return dolfinx.cpp.graph.AdjacencyList_int32(
+        rows[:, 1].astype(np.int32), np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    )
+
+
+def _owner_destinations(owners: np.ndarray, everyone: np.ndarray, graph: typing.Any) -> typing.Any:
+    """Each local cell's owner, then the owners of its facet neighbours in the dual ``graph``."""
+    offsets, links = np.asarray(graph.offsets), np.asarray(graph.array)
+    node = np.repeat(np.arange(owners.size), np.diff(offsets))
+    pairs = np.unique(np.column_stack([node, everyone[links]]), axis=0).reshape(-1, 2)
+    pairs = pairs[pairs[:, 1] != owners[pairs[:, 0]]]
+    rows = np.vstack([np.column_stack([np.arange(owners.size), owners]), pairs])
+    return _destinations(rows, owners.size)
+
+
+def _ghosts_across(comm: typing.Any, dest: typing.Any, pairs: np.ndarray) -> typing.Any:
+    """``dest`` (owner, then ghost processes of each local cell) with, for each ``(i, j)`` of
+    ``pairs`` (global cell numbers, both orders given) whose cells' owners differ, the owner of
+    ``j`` added to ``i``'s ghost processes. Collective."""
+    offsets, links = np.asarray(dest.offsets), np.asarray(dest.array)
+    num_cells = offsets.size - 1
+    owner = links[offsets[:-1]]
+    everyone = np.concatenate(comm.allgather(owner))
+    first = comm.exscan(num_cells) or 0
+    mine = (pairs[:, 0] >= first) & (pairs[:, 0] < first + num_cells)
+    cell, other = pairs[mine, 0] - first, everyone[pairs[mine, 1]]
+    old = np.column_stack([np.repeat(np.arange(num_cells), np.diff(offsets)), links])
+    new = np.unique(np.column_stack([cell, other])[other != owner[cell]], axis=0).reshape(-1, 2)
+    known = old[:, 0].astype(np.int64) * comm.size + old[:, 1]
+    new = new[~np.isin(new[:, 0] * comm.size + new[:, 1], known)]
+    return _destinations(np.vstack([old, new]).astype(np.int64), num_cells)
 
 
 def _create_mesh(

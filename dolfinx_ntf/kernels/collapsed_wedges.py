@@ -19,11 +19,13 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "HEXAHEDRON_FACETS",
     "WEDGE_AS_HEXAHEDRON",
     "WedgeRotationError",
     "collapse_wedges",
     "collapsed_jacobians",
     "rotated_wedges",
+    "unmatched_neighbours",
     "wedge_rotations",
 ]
 
@@ -89,6 +91,57 @@ def rotated_wedges(rows: np.ndarray, rotation: np.ndarray) -> np.ndarray:
 def collapse_wedges(rows: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     """``(e, 8)`` collapsed hexahedra (ccx's C3D8 order) of the wedges turned by ``rotation``."""
     return rotated_wedges(rows, rotation)[:, WEDGE_AS_HEXAHEDRON]
+
+
+#: The six facets of a hexahedron in dolfinx's tensor vertex order.
+HEXAHEDRON_FACETS = np.array(
+    [[0, 1, 2, 3], [0, 1, 4, 5], [0, 2, 4, 6], [1, 3, 5, 7], [2, 3, 6, 7], [4, 5, 6, 7]], np.int64
+)
+
+
+# the four vertex triples of a sorted facet row (of a collapsed triangle, one is distinct)
+_TRIPLES = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]], dtype=np.int64)
+
+
+def unmatched_neighbours(cells: np.ndarray) -> np.ndarray:
+    """``(k, 2)`` pairs ``i < j`` of hexahedra that share a face dolfinx does not match.
+
+    dolfinx pairs two cells through a facet whose sorted vertex lists are equal. A collapsed
+    wedge's triangle is the list ``a, b, c, c``: it matches only a triangle of a wedge repeating
+    the same corner, never the quadrilateral ``a, b, c, d`` of a hexahedron lying on it nor a
+    triangle repeating another corner. Returned: the pairs of cells with unmatched facets that
+    have three distinct vertices in common, and no matched facet between them (docs/method.md
+    §37). None for a conforming mesh of hexahedra. At most two cells on a face (a manifold
+    mesh, as dolfinx's facet matching assumes too).
+
+    Args:
+        cells: ``(n, 8)`` hexahedra in dolfinx's tensor vertex order (collapsed ones repeat a
+            vertex), vertex numbers.
+    """
+    cells = np.asarray(cells, dtype=np.int64)
+    n = cells.shape[0]
+    # every facet's sorted vertex list (dolfinx's key) and its cell, sorted by key
+    facets = np.sort(cells[:, HEXAHEDRON_FACETS].reshape(-1, 4), axis=1)
+    owner = np.repeat(np.arange(n, dtype=np.int64), HEXAHEDRON_FACETS.shape[0])
+    order = np.lexsort(facets.T[::-1])
+    facets, owner = facets[order], owner[order]
+    same = np.all(facets[1:] == facets[:-1], axis=1)
+    matched_keys = np.minimum(owner[1:], owner[:-1])[same] * n
+    matched_keys += np.maximum(owner[1:], owner[:-1])[same]
+    alone = ~(np.r_[same, False] | np.r_[False, same])
+    # the unmatched facets' triples of distinct vertices (a quadrilateral has four, a collapsed
+    # triangle one, a collapsed face none), then cells meeting on a triple
+    triples = facets[alone][:, _TRIPLES].reshape(-1, 3)
+    holder = np.repeat(owner[alone], _TRIPLES.shape[0])
+    real = (triples[:, 0] < triples[:, 1]) & (triples[:, 1] < triples[:, 2])
+    triples, holder = triples[real], holder[real]
+    order = np.lexsort(np.column_stack([triples, holder]).T[::-1])
+    triples, holder = triples[order], holder[order]
+    meet = np.flatnonzero(np.all(triples[1:] == triples[:-1], axis=1) & (holder[1:] != holder[:-1]))
+    keys = np.unique(np.minimum(holder[meet], holder[meet + 1]) * n
+                     + np.maximum(holder[meet], holder[meet + 1]))  # fmt: skip
+    keys = keys[~np.isin(keys, matched_keys)]
+    return np.column_stack([keys // n, keys % n]) if n else np.zeros((0, 2), dtype=np.int64)
 
 
 def _rotated(row: list[int], rotation: int) -> list[int]:

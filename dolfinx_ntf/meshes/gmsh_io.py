@@ -39,7 +39,7 @@ from dolfinx.mesh import Mesh
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.compat import MeshTags
-from dolfinx_ntf.fem.collapsed_wedges import check_vertices_joined
+from dolfinx_ntf.fem.collapsed_wedges import create_collapsed_mesh
 from dolfinx_ntf.kernels.collapsed_wedges import (
     WedgeRotationError,
     collapse_wedges,
@@ -464,8 +464,7 @@ def _collapsed_prism_mesh(comm: MPI.Comm, rank: int, gdim: int) -> tuple[Mesh, M
     _raise_everywhere(comm, rank, error)
     groups, tagged = comm.bcast((groups, tagged), root=rank)
     domain = compat.coordinate_element("hexahedron", 1, gdim)
-    mesh = compat.create_mesh(comm, cells, points[:, :gdim], domain)
-    check_vertices_joined(mesh, cells, rank)
+    mesh = create_collapsed_mesh(comm, cells, points[:, :gdim], domain, rank)
     tdim = mesh.topology.dim
     cell_map = mesh.topology.index_map(tdim)
     num_cells = cell_map.size_local + cell_map.num_ghosts

@@ -12,10 +12,12 @@ import numpy as np
 import pytest
 
 from dolfinx_ntf.kernels.collapsed_wedges import (
+    HEXAHEDRON_FACETS,
     WedgeRotationError,
     collapse_wedges,
     collapsed_jacobians,
     rotated_wedges,
+    unmatched_neighbours,
     wedge_rotations,
 )
 
@@ -110,3 +112,61 @@ def test_the_shared_rule_refuses_more_stacks_than_twice_the_lines():
 def test_no_wedges_need_no_rotation(shared):
     rotation = wedge_rotations(np.zeros((0, 6), np.int64), shared=shared)
     assert rotation.shape == (0,)
+
+
+# dolfinx's tensor order of a hexahedron's corners as (i, j, k) offsets
+_TENSOR = np.array([[i, j, k] for k in (0, 1) for j in (0, 1) for i in (0, 1)])
+
+
+def _grid_cells(n: int, layers: int, split: np.ndarray) -> np.ndarray:
+    """Hexahedra of an n x n x layers grid (dolfinx order); where ``split`` (per cell), two
+    collapsed wedges (dolfinx order, collapsed on the ``b``-``B`` or ``d``-``D`` edge) instead."""
+
+    def vid(i, j, k):
+        return i + (n + 1) * (j + (n + 1) * k)
+
+    cells = []
+    for index, (k, j, i) in enumerate(np.ndindex(layers, n, n)):
+        h = [vid(i + a, j + b, k + c) for a, b, c in _TENSOR]
+        if not split[index]:
+            cells.append(h)
+            continue
+        v0, v1, v2, v3, v4, v5, v6, v7 = h  # the square v0 v1 v3 v2 cut along v0-v3
+        cells += [[v0, v1, v3, v3, v4, v5, v7, v7], [v0, v2, v3, v3, v4, v6, v7, v7]]
+    return np.array(cells, dtype=np.int64)
+
+
+def _brute_force(cells: np.ndarray) -> set[tuple[int, int]]:
+    """Pairs sharing three distinct vertices without two equal sorted facet lists (loops)."""
+    keys = [{tuple(sorted(c[f].tolist())) for f in HEXAHEDRON_FACETS} for c in cells]
+    return {
+        (i, j)
+        for i, j in combinations(range(len(cells)), 2)
+        if len(set(cells[i].tolist()) & set(cells[j].tolist())) >= 3 and not keys[i] & keys[j]
+    }
+
+
+def test_a_conforming_mesh_has_no_unmatched_neighbours():
+    """Hexahedra only, and wedges split alike in every layer (stacked triangles match)."""
+    assert unmatched_neighbours(_grid_cells(3, 2, np.zeros(18, bool))).shape == (0, 2)
+    assert unmatched_neighbours(_grid_cells(3, 2, np.ones(18, bool))).shape == (0, 2)
+
+
+def test_wedge_triangles_on_a_quadrilateral_are_unmatched_neighbours():
+    """A hexahedron below a split one: its top quadrilateral lies on the two wedge triangles."""
+    cells = _grid_cells(1, 2, np.array([False, True]))
+    assert unmatched_neighbours(cells).tolist() == [[0, 1], [0, 2]]
+    # a triangle repeating another corner (10, 11, 11, 12 below 10, 11, 12, 12): unmatched too
+    upper, lower = [10, 11, 12, 12, 20, 21, 22, 22], [0, 1, 1, 2, 10, 11, 11, 12]
+    assert unmatched_neighbours(np.array([upper, lower])).tolist() == [[0, 1]]
+    assert unmatched_neighbours(np.array([upper, [0, 1, 2, 2, 10, 11, 12, 12]])).size == 0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_unmatched_neighbours_equal_the_brute_force(seed):
+    """Random mixes of hexahedra and split cells over 3 x 3 x 3: the loops' pairs."""
+    split = np.random.default_rng(seed).random(27) < 0.5
+    cells = _grid_cells(3, 3, split)
+    pairs = unmatched_neighbours(cells)
+    assert {tuple(p) for p in pairs.tolist()} == _brute_force(cells)
+    assert len(pairs) > 0

@@ -20,7 +20,7 @@ import dolfinx.fem
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.collapsed_wedges import check_vertices_joined
+from dolfinx_ntf.fem.collapsed_wedges import create_collapsed_mesh
 from dolfinx_ntf.fem.serendipity import add_centres
 from dolfinx_ntf.fem.serendipity_quad import add_quad_centres
 from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
@@ -208,10 +208,9 @@ def create_mesh(
     else:
         cells = np.zeros((0, width), dtype=np.int64)
         x = np.zeros((0, gdim))
-    mesh = compat.create_mesh(comm, cells.astype(np.int64), x, domain)
     if width == 8 and gdim == 3:  # C3D6 wedges are collapsed C3D8 cells
-        check_vertices_joined(mesh, cells)
-    return mesh
+        return create_collapsed_mesh(comm, cells.astype(np.int64), x, domain)
+    return compat.create_mesh(comm, cells.astype(np.int64), x, domain)
 
 
 def numbering(
