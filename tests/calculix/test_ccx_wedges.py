@@ -9,6 +9,7 @@ ccx's metalforming deck (28 wedges, surfaces named twice) against ccx 2.20.
 
 from __future__ import annotations
 
+import functools
 import gzip
 import logging
 import shutil
@@ -455,9 +456,10 @@ def test_chosen_partitions_through_every_unmatched_face_are_joined() -> None:
     assert abs(volume - 1.0) < 1e-12
 
 
-def _cut_mesh(deck, block, comm, carried=None):
+def _cut_mesh(deck, block, comm, carried=None, apart=False):
     """The deck runner's mesh with every unmatched face cut: each wedge on another process than
-    the C3D8 its triangle lies on (the deck runner's own mesh on one process)."""
+    the C3D8 its triangle lies on (the deck runner's own mesh on one process). ``apart``: every
+    C3D8 on process 0 and every wedge on the last, so that a process holds no wedge."""
     from dolfinx_ntf.calculix.model.mesh import create_mesh
 
     if comm.size == 1:
@@ -468,9 +470,11 @@ def _cut_mesh(deck, block, comm, carried=None):
     owners = np.arange(len(cells)) % comm.size
     hexahedron, wedge = pairs[:, 0], pairs[:, 1]
     owners[wedge] = (owners[hexahedron] + 1 + np.arange(len(wedge)) % (comm.size - 1)) % comm.size
+    if apart:
+        owners = np.where(np.isin(np.arange(len(cells)), wedge), comm.size - 1, 0)
     assert len(pairs) == 8 and np.all(owners[hexahedron] != owners[wedge])
-    # every process holds wedges (one without hangs in the wedge outputs' JIT: not this test's)
-    assert np.unique(owners[wedge]).size == comm.size
+    # apart: process 0 holds no wedge (the wedge outputs' collective compile, method §35)
+    assert np.unique(owners[wedge]).size == (1 if apart else comm.size)
     if comm.rank != 0:
         cells, x, owners, pairs = cells[:0], x[:0], owners[:0], pairs[:0]
     element = compat.coordinate_element("hexahedron")
@@ -480,7 +484,7 @@ def _cut_mesh(deck, block, comm, carried=None):
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("partition", ["dolfinx", "cut"])
+@pytest.mark.parametrize("partition", ["dolfinx", "cut", "apart"])
 @pytest.mark.parametrize("request_card", ["", "*EL PRINT, ELSET=EALL\nS, E\n"], ids=["U", "S"])
 def test_mixed_wedge_block_gives_the_serial_files(
     request_card: str, partition: str, monkeypatch: pytest.MonkeyPatch
@@ -489,12 +493,15 @@ def test_mixed_wedge_block_gives_the_serial_files(
 
     ``dolfinx``: its partition cuts C3D8 faces lying on wedge triangles (2 and 3 processes: the
     cut through the middle layer, unjoined without the ghosts of docs/method.md §37); ``cut``: a
-    chosen partition cuts all 8 of them (and matched faces too, which join its vertices anyway).
+    chosen partition cuts all 8 of them (and matched faces too, which join its vertices anyway);
+    ``apart``: the C3D8 on process 0, the wedges on the last (process 0 holds no wedge, and still
+    takes part in the wedge outputs' collective compilation, docs/method.md §35).
     """
     from dolfinx_ntf.calculix.model import calculix_model as model_module
 
-    if partition == "cut":
-        monkeypatch.setattr(model_module, "create_mesh", _cut_mesh)
+    if partition != "dolfinx":
+        cut = functools.partial(_cut_mesh, apart=partition == "apart")
+        monkeypatch.setattr(model_module, "create_mesh", cut)
     from helpers.decks import first_differing_file, run_serial_and_parallel
 
     comm = MPI.COMM_WORLD
