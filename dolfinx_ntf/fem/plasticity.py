@@ -123,9 +123,9 @@ class QuadratureLaw:
     _trial: typing.Any
     #: Committed equivalent plastic strain (CalculiX's PEEQ), one per local point, (n,).
     equivalent_plastic_strain: np.ndarray
-    #: Committed strain energy density (CalculiX's ENER), one per local point, (n,): the stress
-    #: power integrated over the converged increments by the trapezoidal rule (docs/method.md
-    #: §36), from 0 at the law's creation.
+    #: Committed strain energy density (CalculiX's ENER) of every local point, shape (n,), the
+    #: stress power integrated over the converged increments by the trapezoidal rule
+    #: (docs/method.md §36), from 0 at the law's creation.
     strain_energy_density: np.ndarray
     _committed_pair: tuple[np.ndarray, np.ndarray]
 

@@ -29,13 +29,13 @@ __all__ = [
 #: The twelve ways a face of the reference hexahedron collapses into an edge.
 NUM_CLASSES = 12
 
-#: dolfinx's reference hexahedron: vertex ``i`` at ``(i & 1, i >> 1 & 1, i >> 2 & 1)``.
+#: Vertices of dolfinx's reference hexahedron, vertex ``i`` at ``(i & 1, i >> 1 & 1, i >> 2 & 1)``.
 DOLFINX_HEXAHEDRON = np.array(
     [[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=np.int64
 )
 DOLFINX_HEXAHEDRON.flags.writeable = False
 
-#: VTK's (XDMF's, ccx's C3D8) reference hexahedron: ``0-1-2-3`` below ``4-5-6-7``.
+#: Vertices of VTK's reference hexahedron (XDMF's and ccx's C3D8), ``0-1-2-3`` below ``4-5-6-7``.
 VTK_HEXAHEDRON = np.array(
     [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
     dtype=np.int64,
