@@ -13,6 +13,7 @@ from mpi4py import MPI
 import cases
 import numpy as np
 import pytest
+from helpers.decks import WARPED_CUBES
 from hex20 import to_hex20
 
 from dolfinx_ntf import compat
@@ -29,38 +30,10 @@ pytestmark = pytest.mark.serial
 COMM = MPI.COMM_SELF
 E, NU, P = 1000.0, 0.3, 10.0
 
-# Two C3D8 elements stacked along z (unit cube), the shared layer warped (corners moved in z).
-_CUBE = """*NODE, NSET=NALL
-1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 0.45
-6, 1, 0, 0.55
-7, 1, 1, 0.5
-8, 0, 1, 0.58
-9, 0, 0, 1
-10, 1, 0, 1
-11, 1, 1, 1
-12, 0, 1, 1
-*ELEMENT, TYPE=C3D8, ELSET=EALL
-1, 1, 2, 3, 4, 5, 6, 7, 8
-2, 5, 6, 7, 8, 9, 10, 11, 12
-*NSET, NSET=BOTTOM
-1, 2, 3, 4
-*NSET, NSET=XSYM
-1, 4, 5, 8, 9, 12
-*NSET, NSET=YSYM
-1, 2, 5, 6, 9, 10
-*BOUNDARY
-BOTTOM, 3, 3
-XSYM, 1, 1
-YSYM, 2, 2
-*MATERIAL, NAME=M
-*ELASTIC
-{E}, {NU}
-*SOLID SECTION, ELSET=EALL, MATERIAL=M
-*STEP
+# WARPED_CUBES loaded on top and printed.
+_CUBE = (
+    WARPED_CUBES
+    + """*STEP
 *STATIC
 1., 1.
 *DLOAD
@@ -75,6 +48,7 @@ U
 S
 *END STEP
 """
+)
 
 
 def _cube(tmp_path: Path, element: str = "C3D20") -> Path:

@@ -19,7 +19,7 @@ import cases
 import numpy as np
 import pytest
 from helpers.ccx_runs import quiet_logs, run_ccx_and_ours, run_quietly
-from helpers.decks import TWO_C3D8
+from helpers.decks import TWO_C3D8, WARPED_CUBES
 from hex20 import to_hex20
 
 from dolfinx_ntf.calculix.dat import read_dat
@@ -197,38 +197,10 @@ def test_bar_without_plastic_sections(tmp_path: Path) -> None:
     assert all(b.values.shape == (0, 0) for b in read_frd(ntf_dir / "bar.frd").blocks_named("SDV"))
 
 
-#: Two C3D8 stacked along z, the shared layer warped, pressed on top: made C3D20 by ``to_hex20``.
-CUBE = """*NODE, NSET=NALL
-1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 0.45
-6, 1, 0, 0.55
-7, 1, 1, 0.5
-8, 0, 1, 0.58
-9, 0, 0, 1
-10, 1, 0, 1
-11, 1, 1, 1
-12, 0, 1, 1
-*ELEMENT, TYPE=C3D8, ELSET=EALL
-1, 1, 2, 3, 4, 5, 6, 7, 8
-2, 5, 6, 7, 8, 9, 10, 11, 12
-*NSET, NSET=BOTTOM
-1, 2, 3, 4
-*NSET, NSET=XSYM
-1, 4, 5, 8, 9, 12
-*NSET, NSET=YSYM
-1, 2, 5, 6, 9, 10
-*BOUNDARY
-BOTTOM, 3, 3
-XSYM, 1, 1
-YSYM, 2, 2
-*MATERIAL, NAME=M
-*ELASTIC
-1000.0, 0.3
-*SOLID SECTION, ELSET=EALL, MATERIAL=M
-*STEP, NLGEOM
+#: WARPED_CUBES pressed on top under NLGEOM: made C3D20 by ``to_hex20``.
+CUBE = (
+    WARPED_CUBES.format(E=1000.0, NU=0.3)
+    + """*STEP, NLGEOM
 *STATIC
 1., 1.
 *DLOAD
@@ -241,6 +213,7 @@ U
 ENER, SDV, ME
 *END STEP
 """
+)
 
 
 @pytest.mark.serial

@@ -24,6 +24,40 @@ REQUESTS = (
     "*NODE FILE, CONTACT ELEMENTS\nU, RF\n*EL FILE\nS\n*CONTACT FILE\nCDIS, CSTR\n*END STEP"
 )
 
+#: Two C3D8 stacked along z (a unit cube), their shared layer warped (corners moved in z), with
+#: symmetry planes x = 0, y = 0, the bottom held in z; material ``M`` with ``{E}, {NU}`` to fill.
+WARPED_CUBES = """*NODE, NSET=NALL
+1, 0, 0, 0
+2, 1, 0, 0
+3, 1, 1, 0
+4, 0, 1, 0
+5, 0, 0, 0.45
+6, 1, 0, 0.55
+7, 1, 1, 0.5
+8, 0, 1, 0.58
+9, 0, 0, 1
+10, 1, 0, 1
+11, 1, 1, 1
+12, 0, 1, 1
+*ELEMENT, TYPE=C3D8, ELSET=EALL
+1, 1, 2, 3, 4, 5, 6, 7, 8
+2, 5, 6, 7, 8, 9, 10, 11, 12
+*NSET, NSET=BOTTOM
+1, 2, 3, 4
+*NSET, NSET=XSYM
+1, 4, 5, 8, 9, 12
+*NSET, NSET=YSYM
+1, 2, 5, 6, 9, 10
+*BOUNDARY
+BOTTOM, 3, 3
+XSYM, 1, 1
+YSYM, 2, 2
+*MATERIAL, NAME=M
+*ELASTIC
+{E}, {NU}
+*SOLID SECTION, ELSET=EALL, MATERIAL=M
+"""
+
 #: Two unit C3D8 cubes side by side along x (nodes 1-12, elements 1, 2 in ELSET EALL), to follow
 #: ``*NODE, NSET=NALL``.
 TWO_C3D8 = """1, 0, 0, 0
