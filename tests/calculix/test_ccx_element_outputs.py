@@ -19,7 +19,7 @@ import cases
 import numpy as np
 import pytest
 from helpers.ccx_runs import quiet_logs, run_ccx_and_ours, run_quietly
-from helpers.decks import TWO_C3D8, WARPED_CUBES
+from helpers.decks import TWO_C3D8, UNIT_C3D8, WARPED_CUBES
 from hex20 import to_hex20
 
 from dolfinx_ntf.calculix.dat import read_dat
@@ -384,18 +384,9 @@ def test_c3d8i_is_refused(key: str, tmp_path: Path) -> None:
 
 
 #: A C3D8 cube heated by 3 (expansion 1e-2: a thermal strain x = 0.03), held at x = 0 and 1.
-HEATED = """*NODE, NSET=NALL
-1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 1
-6, 1, 0, 1
-7, 1, 1, 1
-8, 0, 1, 1
-*ELEMENT, TYPE=C3D8, ELSET=EALL
-1, 1, 2, 3, 4, 5, 6, 7, 8
-*NSET, NSET=X0
+HEATED = (
+    UNIT_C3D8
+    + """*NSET, NSET=X0
 1, 4, 5, 8
 *NSET, NSET=Y0
 1, 2, 5, 6
@@ -431,6 +422,7 @@ NALL, 11, 11, 3.
 S, E, ENER, SDV, ME
 *END STEP
 """
+)
 
 
 @pytest.mark.serial

@@ -58,17 +58,25 @@ YSYM, 2, 2
 *SOLID SECTION, ELSET=EALL, MATERIAL=M
 """
 
+#: The corners of the unit cube in ccx's C3D8 order (bottom face, then top face).
+UNIT_CUBE_CORNERS = ((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1),
+                     (0, 1, 1))  # fmt: skip
+#: The unit cube's nodes 1-8 as ``*NODE`` data lines.
+UNIT_CUBE_NODES = "".join(
+    f"{k}, {x}, {y}, {z}\n" for k, (x, y, z) in enumerate(UNIT_CUBE_CORNERS, 1)
+)
+#: One C3D8 unit cube (nodes 1-8, element 1 in ELSET EALL) under ``*NODE, NSET=NALL``.
+UNIT_C3D8 = (
+    "*NODE, NSET=NALL\n"
+    + UNIT_CUBE_NODES
+    + "*ELEMENT, TYPE=C3D8, ELSET=EALL\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"
+)
+
 #: Two unit C3D8 cubes side by side along x (nodes 1-12, elements 1, 2 in ELSET EALL), to follow
 #: ``*NODE, NSET=NALL``.
-TWO_C3D8 = """1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 1
-6, 1, 0, 1
-7, 1, 1, 1
-8, 0, 1, 1
-9, 2, 0, 0
+TWO_C3D8 = (
+    UNIT_CUBE_NODES
+    + """9, 2, 0, 0
 10, 2, 1, 0
 11, 2, 0, 1
 12, 2, 1, 1
@@ -76,6 +84,7 @@ TWO_C3D8 = """1, 0, 0, 0
 1, 1, 2, 3, 4, 5, 6, 7, 8
 2, 2, 9, 10, 3, 6, 11, 12, 7
 """
+)
 
 _CLOCK = re.compile(r"^\s*1U(TIME|DATE)")  # .frd header lines with the wall-clock time
 
