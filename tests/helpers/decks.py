@@ -86,6 +86,60 @@ TWO_C3D8 = (
 """
 )
 
+#: metalforming's sheet: elastic, then isotropic hardening from yield at 1 % strain.
+SHEET_ELASTIC = "*ELASTIC\n5000.0, 0.3\n"
+SHEET_PLASTIC = "*PLASTIC\n50.0, 0.0\n100.0, 0.3\n"
+
+
+def mixed_sections(plastic: bool = True) -> str:
+    """Material cards of :func:`pulled_bar`: element 1 the sheet (``SHEET``), element 2 elastic."""
+    return (
+        "*ELSET, ELSET=E1\n1\n*ELSET, ELSET=E2\n2\n*MATERIAL, NAME=SHEET\n"
+        + SHEET_ELASTIC
+        + (SHEET_PLASTIC if plastic else "")
+        + "*MATERIAL, NAME=ELASTIC\n"
+        + SHEET_ELASTIC
+        + "*SOLID SECTION, ELSET=E1, MATERIAL=SHEET\n*SOLID SECTION, ELSET=E2, MATERIAL=ELASTIC\n"
+    )
+
+
+def pulled_bar(
+    sections: str,
+    requests: str,
+    nlgeom: str = "",
+    heading: str = "",
+    second_requests: str | None = None,
+) -> str:
+    """``TWO_C3D8`` on symmetry rollers, pulled to 5 % in ccx's automatic increments, then to 4 %.
+
+    Args:
+        sections: The ``*MATERIAL`` and ``*SOLID SECTION`` cards.
+        requests: The output requests of both steps.
+        nlgeom: ``", NLGEOM"`` or ``""``, after ``*STEP``.
+        heading: A ``*HEADING`` line if not empty.
+        second_requests: The second step's requests if not ``requests``.
+    """
+    steps = "".join(
+        f"*STEP{nlgeom}\n*STATIC\n{start}, 1.0\n*CONTROLS, PARAMETERS=FIELD\n"
+        "1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12\n"
+        f"*BOUNDARY\nEND, 1, 1, {end}\n{asked}*END STEP\n"
+        for start, end, asked in (
+            (0.125, 0.1, requests),
+            (0.25, 0.08, requests if second_requests is None else second_requests),
+        )
+    )
+    return (
+        (f"*HEADING\n{heading}\n" if heading else "")
+        + "*NODE, NSET=NALL\n"
+        + TWO_C3D8
+        + "*NSET, NSET=X0\n1, 4, 5, 8\n*NSET, NSET=Y0\n1, 2, 5, 6, 9, 11\n"
+        "*NSET, NSET=Z0\n1, 2, 3, 4, 9, 10\n*NSET, NSET=END\n9, 10, 11, 12\n"
+        + sections
+        + "*BOUNDARY\nX0, 1, 1\nY0, 2, 2\nZ0, 3, 3\n"
+        + steps
+    )
+
+
 _CLOCK = re.compile(r"^\s*1U(TIME|DATE)")  # .frd header lines with the wall-clock time
 
 
