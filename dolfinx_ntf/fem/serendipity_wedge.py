@@ -58,6 +58,13 @@ def add_wedge_centres(cells: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.
     then edges). Each centre is placed by the quad8 map of its face's 8 nodes, so the geometry is
     exactly C3D15's isoparametric map; a face shared by two cells gets one node (keyed by its
     sorted corners). Their rows come after those of ``x``.
+
+    Args:
+        cells: ``(C, 15)`` (or wider: the first 15 columns are used) rows into ``x``.
+        x: ``(N, gdim)`` node coordinates.
+
+    Returns:
+        ``(cells, x)``: ``(C, 18)`` rows and the coordinates with the centres appended.
     """
     faces = cells[:, _FACE_ROWS[:, 1:]]  # (C, 3, 8)
     face_x = np.einsum("k,cfkd->cfd", _FACE_WEIGHTS, x[faces])
@@ -109,6 +116,10 @@ def wedge_forces_on_nodes(values: np.ndarray, space: dolfinx.fem.FunctionSpace) 
     Each face centre's force moves to the 8 nodes it depends on (virtual work), so that ccx's
     average element force (docs/method.md §7.1) is taken over the 15 nodes of each element. On
     several processes: the owned cells.
+
+    Args:
+        values: The broken (per-cell) vector's values.
+        space: Its space (18 dofs of 3 components per cell).
     """
     num_owned = space.mesh.topology.index_map(space.mesh.topology.dim).size_local
     dofs = compat.cell_dofs(space)[:num_owned]

@@ -9,6 +9,14 @@ C3D6 (``kernels/collapsed_wedges.py``, docs/method.md §30 and §32): one mesh o
 dolfinx release. Their triangles are facets (quadrilaterals with a repeated corner) that facet
 tags, contact surfaces and ``ds`` take like any other.
 
+Second-order prisms (gmsh's 15-node type 18 and 18-node type 13, alone) become a mesh of 18-node
+prisms on dolfinx 0.11 (docs/method.md §40): a 15-node prism's quadrilateral centres are placed
+by the quad8 map (CalculiX C3D15's geometry), an 18-node prism keeps gmsh's. dolfinx 0.11 has no
+facets on prism meshes (two facet types), so the tagged faces come back as a
+:class:`~dolfinx_ntf.fem.wedge_faces.PrismFaces` (rows of input nodes, outward) instead of facet
+tags; ``fem.serendipity_wedge.wedge15_space`` and ``fem.wedge_faces.prism_face_forces`` solve on
+them. Older releases refuse such models (NotImplementedError).
+
 Shared rules:
     * Every public function is collective over ``comm``. gmsh is touched on rank ``rank`` only,
       so the other ranks need neither gmsh initialized nor a model.
@@ -152,7 +160,7 @@ def gmsh_session(*, terminal: bool = False) -> Iterator[None]:
 
 def model_to_mesh(
     comm: MPI.Comm = MPI.COMM_WORLD, *, rank: int = 0, gdim: int = 3
-) -> tuple[Mesh, MeshTags, MeshTags]:
+) -> tuple[Mesh, MeshTags, MeshTags | PrismFaces]:
     """Distributed dolfinx mesh and tags from the current gmsh model on ``rank``.
 
     Cells are the elements of the physical groups of the highest dimension, tagged with the group
@@ -164,15 +172,19 @@ def model_to_mesh(
         gdim: Geometric dimension of the mesh.
 
     Returns:
-        ``(mesh, cell_tags, facet_tags)``.
+        ``(mesh, cell_tags, facet_tags)``; for 15- or 18-node prisms ``(mesh, cell_tags,
+        faces)`` with ``faces`` a :class:`~dolfinx_ntf.fem.wedge_faces.PrismFaces`.
 
     Prisms, alone or beside hexahedra, become hexahedra with a collapsed edge (the module's
-    docstring); their facets may then be triangles and quadrilaterals.
+    docstring); their facets may then be triangles and quadrilaterals. Second-order prisms
+    become 18-node prisms (dolfinx 0.11 and later).
 
     Raises:
         ValueError: The model has no physical groups or no mesh, an entity sits in two physical
             groups of the same dimension, the cells (facets) are not all of one element type
-            (other than prisms beside hexahedra), or prisms cannot be collapsed (naming them).
+            (other than prisms beside hexahedra), prisms cannot be collapsed, or a second-order
+            prism has a Jacobian ``<= 0`` at one of ccx's 9 points (naming them).
+        NotImplementedError: Second-order prisms on dolfinx older than 0.11.
     """
     _check_rank(comm, rank)
     if gdim not in (1, 2, 3):
@@ -194,7 +206,7 @@ def model_to_mesh(
 
 def read_msh(
     path: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *, rank: int = 0, gdim: int = 3
-) -> tuple[Mesh, MeshTags, MeshTags]:
+) -> tuple[Mesh, MeshTags, MeshTags | PrismFaces]:
     """Distributed dolfinx mesh and tags from a gmsh .msh file read on ``rank``. Collective.
 
     Args:
@@ -204,7 +216,8 @@ def read_msh(
         gdim: Geometric dimension of the mesh.
 
     Returns:
-        ``(mesh, cell_tags, facet_tags)`` with the physical group numbers as tag values.
+        ``(mesh, cell_tags, facet_tags)`` with the physical group numbers as tag values
+        (second-order prisms: the faces as a ``PrismFaces``, see `model_to_mesh`).
 
     Raises:
         FileNotFoundError: ``path`` is not a file.
@@ -244,7 +257,7 @@ def mesh_from_gmsh(
     rank: int = 0,
     gdim: int = 3,
     **kwargs: Any,
-) -> tuple[Mesh, MeshTags, MeshTags]:
+) -> tuple[Mesh, MeshTags, MeshTags | PrismFaces]:
     """Run a gmsh model builder on ``rank`` and distribute its mesh. Collective.
 
     Typical use with the builders of ``dolfinx_ntf.meshes``:
@@ -259,7 +272,8 @@ def mesh_from_gmsh(
         **kwargs: Passed to ``build``.
 
     Returns:
-        ``(mesh, cell_tags, facet_tags)``.
+        ``(mesh, cell_tags, facet_tags)`` (second-order prisms: the faces as a ``PrismFaces``,
+        see `model_to_mesh`).
 
     Raises:
         Exception: Whatever ``build`` raised, on every rank (as the same type where possible).
