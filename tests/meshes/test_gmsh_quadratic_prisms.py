@@ -172,14 +172,21 @@ def test_patch_uniform_compression(incomplete):
     assert COMM.allreduce(error, op=MPI.MAX) < 1e-12 * p / YOUNGS_MODULUS  # 2.7e-14 measured
 
 
-def _one_prism(x: np.ndarray, order: np.ndarray) -> None:
-    """One second-order prism (element 7) of nodes ``x`` (basix order) in the node ``order``."""
+def _one_prism(x: np.ndarray, order: np.ndarray, triangle: list[int] | None = None) -> None:
+    """One second-order prism (element 7) of nodes ``x`` (basix order) in the node ``order``.
+
+    ``triangle``: six nodes (basix slots) of a tagged 6-node triangle (element 8), group 11.
+    """
     gmsh.model.add("one_quadratic_prism")
     volume = gmsh.model.addDiscreteEntity(3)
     n = order.size
     gmsh.model.mesh.addNodes(3, volume, list(range(1, n + 1)), x[:n].ravel().tolist())
     gmsh.model.mesh.addElementsByType(volume, 13 if n == 18 else 18, [7], (order + 1).tolist())
     gmsh.model.addPhysicalGroup(3, [volume], 1)
+    if triangle is not None:
+        surface = gmsh.model.addDiscreteEntity(2)
+        gmsh.model.mesh.addElementsByType(surface, 9, [8], [t + 1 for t in triangle])
+        gmsh.model.addPhysicalGroup(2, [surface], 11)
 
 
 def _unit_prism() -> np.ndarray:
@@ -282,3 +289,16 @@ def test_bending_against_ccx(incomplete, tmp_path):
     assert np.array_equal(np.sort(block.labels), used)
     printed = np.vectorize(lambda value: float(format_e13(value)))(ours)  # ccx's 1PE13.6
     np.testing.assert_array_equal(printed, block.values)
+
+
+@pytest.mark.mpi
+@needs_011
+def test_a_tagged_face_of_no_prism_is_refused_naming_it():
+    x = _unit_prism()
+    with pytest.raises(ValueError, match=r"element 8 of physical group 11 is no face of a prism"):
+        mesh_from_gmsh(_one_prism, COMM, x=x, order=np.arange(15), triangle=[0, 1, 3, 6, 10, 8])
+    # the bottom triangle, numbered inward as gmsh may: read outward (S1 of ccx's C3D15)
+    _, _, faces = mesh_from_gmsh(
+        _one_prism, COMM, x=x, order=np.arange(15), triangle=[0, 1, 2, 6, 9, 7]
+    )
+    np.testing.assert_array_equal(faces.triangles, [WEDGE_FACES[0]])
