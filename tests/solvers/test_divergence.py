@@ -19,7 +19,8 @@ SHEET_R = [4.345, 2.692, 9.862, 3.148]
 SHEET_MEAN = [1.113, 0.4560, 1.471, 0.1866]
 #: The 2-norms of the same residuals, which the Python API's rule reads (docs/method.md §33.7).
 SHEET_NORMS = [9.9, 7.9, 28.6, 11.5]
-#: Largest residual forces after updates 2..4 of a solve that stagnates at round-off
+#: Largest residual forces after updates 2..4 of a solve that stagnates on a plateau while
+#: slave nodes flip faces across master edges at each re-pairing, until the pairing freezes
 #: (tests/contact/test_pairing.py ``test_default_search_changes_no_faces_on_a_tie_deck
 #: [tetrahedron]``, measured with ccx's rule under the Python API's tight controls).
 STAGNATING = [8.387e-08, 9.471e-07, 9.472e-07]
@@ -71,7 +72,7 @@ def test_ccx_rule_leaves_a_solve_below_its_tolerance_alone():
     ccx = DivergenceRule(4, "ccx")
     assert not ccx.diverges(4, STAGNATING, CCX_FIELD_CONTROLS["R_n"] * 1.0)
     # under the Python API's tight controls (R_n = 1e-10; q~ = 7.7e-3 here) the tolerance is
-    # below round-off and ccx's rule ends it (docs/method.md §42.3); the growth rule does not
+    # far below the plateau and ccx's rule ends it (docs/method.md §42.3); the growth rule not
     assert ccx.diverges(4, STAGNATING, 7.722e-13)
     growth = DivergenceRule(4)
     assert not growth.diverges(4, STAGNATING, 0.0)
