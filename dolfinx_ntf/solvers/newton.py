@@ -30,6 +30,7 @@ from dolfinx_ntf.logs import newton_logger, quiet_dolfinx
 from dolfinx_ntf.solvers import convergence, errors, factor_reuse
 from dolfinx_ntf.solvers import linear_solver as linear
 from dolfinx_ntf.solvers.convergence import (
+    DIVERGENCE_RULES,
     TIGHT_FIELD_CONTROLS,
     DivergenceRule,
     ExtraPairings,
@@ -140,6 +141,11 @@ class ContactNewtonSolver(NewtonSolver):
             if isinstance(problem, ContactProblem)
             else 0
         )
+        if divergence_rule not in DIVERGENCE_RULES:
+            raise ValueError(
+                f"ContactNewtonSolver: divergence_rule must be one of {DIVERGENCE_RULES}, "
+                f"got {divergence_rule!r}"
+            )
         reuse = factor_reuse.reuses_factorization(factorization, dofs, "ContactNewtonSolver")
         symmetric = linear.expects_symmetric(problem, petsc_options)
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
