@@ -132,7 +132,8 @@ def _tet_punch(rule: str, controls: dict[str, float]):
 def test_ccx_rule_in_the_python_api_needs_ccx_controls():
     """Why the Python API keeps the growth rule (docs/method.md §42.3): under its tight controls
     ccx's rule ends the plateau of the flipping faces at update 4 (the diverging iterate recorded
-    in ``history``); at ccx's controls it converges (measured: 2 updates per increment)."""
+    in ``history``); at ccx's controls it converges (measured: 2 updates per increment); the
+    growth rule converges after the pairing freezes."""
     from dolfinx_ntf.solvers.convergence import TIGHT_FIELD_CONTROLS
 
     solver, error = _tet_punch("ccx", dict(TIGHT_FIELD_CONTROLS))
@@ -141,5 +142,6 @@ def test_ccx_rule_in_the_python_api_needs_ccx_controls():
     assert [row[0] for row in solver.history] == [1, 2, 3, 4]
     _, results = _tet_punch("ccx", dict(CCX_FIELD_CONTROLS))
     assert [r.iterations for r in results] == [2, 2]
-    _, results = _tet_punch("growth", dict(TIGHT_FIELD_CONTROLS))
-    assert [r.iterations for r in results] == [9, 9]
+    _, results = _tet_punch("growth", dict(TIGHT_FIELD_CONTROLS))  # through the plateau until
+    assert [r.time for r in results] == [0.5, 1.0]  # the pairing freezes after update 8
+    assert min(r.iterations for r in results) >= 9  # (measured 9, 9; on dolfinx 0.11 9, 10)
