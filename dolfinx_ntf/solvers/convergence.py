@@ -55,8 +55,9 @@ TIGHT_FIELD_CONTROLS: dict[str, float] = {
     "C_epsilon": 1e-8,
 }
 
-#: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
-#: strict comparison, with a margin for iterations that stagnate at round-off level.
+#: The ``"growth"`` divergence rule's margin: a residual counts as larger than an earlier one when
+#: it exceeds it by this factor, so that iterations that stagnate on a plateau go on (the
+#: ``"ccx"`` rule compares strictly, as CalculiX does, and spares residuals below its tolerance).
 DIVERGENCE_GROWTH = 1.01
 
 #: With a bounded scale (:class:`ForceScaledTest`), an iterate's average force counts in the mean
