@@ -294,7 +294,7 @@ class _Job:
             residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
             average_over_step=not tight,
             change_over_iterations=not tight,
-            **(solver_options or {}),
+            **{"divergence_rule": "ccx", **(solver_options or {})},  # ccx's check (§42)
         )
 
     def _on_pairing(self, problem: ContactProblem) -> None:
