@@ -16,7 +16,8 @@ from .data import (
     SurfaceInteraction,
 )
 from .errors import DeckError, Location
-from .state import ReaderState
+from .materials import elastic_at_temperature
+from .state import MaterialBuilder, ReaderState
 from .wedges import C3D6_AS_C3D8, check_wedge_orientation, wedge_faces, wedge_rotations
 
 
@@ -300,10 +301,50 @@ class Checks(ReaderState):
             raise DeckError(f"element {element} has no *SOLID SECTION (no material)", loc)
         return {
             name: Material(
-                m.name, m.elastic, dict(m.extra), m.location, m.plastic, m.plastic_location
+                m.name,
+                self._elastic_constants(m),
+                dict(m.extra),
+                m.location,
+                m.plastic,
+                m.plastic_location,
             )
             for name, m in self.materials.items()
         }
+
+    def _elastic_constants(self, material: MaterialBuilder) -> tuple[float, float] | None:
+        """``(E, nu)`` of a material: its ``*ELASTIC`` table at the deck's one temperature.
+
+        ccx 2.20 (measured, docs/method.md §41.2): without any temperature in the deck the first
+        line holds; with one initial temperature everywhere the table is interpolated linearly
+        there, and held constant beyond its first and last temperatures. Temperatures that vary
+        in space or in time are refused at the table's second line.
+        """
+        rows = material.elastic_rows
+        if len(rows) <= 1:
+            return material.elastic
+        second = material.elastic_row_locations[1]
+        changing = self.temperature_boundaries or any(
+            s.coupled is not None or s.temperatures or s.temperature_fields for s in self.steps
+        )
+        if changing:
+            raise DeckError(
+                f"temperature-dependent *ELASTIC of material {material.name} (several data "
+                "lines) in a deck whose temperatures change (coupled or heat transfer steps, "
+                "*TEMPERATURE, temperature *BOUNDARY) is not supported yet",
+                second,
+            )
+        if not self.initial_temperatures:
+            return rows[0][:2]
+        values = {t.value for t in self.initial_temperatures}
+        given = np.unique(np.concatenate([t.nodes for t in self.initial_temperatures]))
+        if len(values) > 1 or not np.all(np.isin(np.asarray(self.node_ids), given)):
+            raise DeckError(
+                f"temperature-dependent *ELASTIC of material {material.name} (several data "
+                "lines) needs one initial temperature at every node (*INITIAL CONDITIONS, "
+                "TYPE=TEMPERATURE); varying temperatures are not supported yet",
+                second,
+            )
+        return elastic_at_temperature(rows, values.pop())
 
     def _check_contact(self) -> dict[str, SurfaceInteraction]:
         self.contact_pairs = [
