@@ -89,8 +89,13 @@ def _run(directory: Path, deck: str) -> tuple[Path, Path]:
 
 
 def _frd_blocks(path: Path) -> dict[str, np.ndarray]:
-    """The ``.frd`` blocks by name, less ccx's ``ERROR`` block (not written, method §13.2)."""
-    return {b.name: b.values for b in read_frd(path).blocks if b.name != "ERROR"}
+    """The ``.frd`` blocks by name (increments stacked), less ccx's ``ERROR`` block (not
+    written, method §13.2)."""
+    blocks: dict[str, list[np.ndarray]] = {}
+    for b in read_frd(path).blocks:  # every increment's, one after the other
+        if b.name != "ERROR":
+            blocks.setdefault(b.name, []).append(b.values)
+    return {name: np.concatenate(values) for name, values in blocks.items()}
 
 
 def _check_against(ccx_dir: Path, ntf_dir: Path, job: str) -> dict[str, float]:
@@ -125,6 +130,47 @@ def test_orientation_of_isotropic_section_changes_nothing(
     for name in theirs:
         scale = np.abs(theirs[name]).max()
         assert np.abs(ours[name] - theirs[name]).max() <= 1e-5 * scale, name
+
+
+PLASTIC = "*ELASTIC\n210000., 0.3\n*PLASTIC\n150., 0.\n1000., 0.1\n"
+ALL_KEYS = "S, E, PEEQ, SDV, ENER, ME\n"
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("nlgeom", [False, True])
+@pytest.mark.parametrize("case", ["turned", "cylindrical"])
+def test_orientation_of_plastic_section_changes_nothing(
+    tmp_path: Path, case: str, nlgeom: bool
+) -> None:
+    """A plastic section (isotropic hardening) past yield in 4 increments: ccx 2.20's ``.dat``
+    (S, E, PEEQ, SDV, ENER, ME in global axes) and ``.frd`` with the orientation equal its files
+    without it, and ours equal ccx's."""
+
+    def deck(orientation: str | None) -> str:
+        text = block(
+            orientation,
+            elastic=PLASTIC,
+            el_print="*EL PRINT, ELSET=EALL, GLOBAL=YES\n" + ALL_KEYS,
+            el_file="*EL FILE\nS, E, PE, SDV, ENER, ME\n",
+            nlgeom=nlgeom,
+        )
+        return text.replace("*STATIC\n", "*STATIC\n0.25, 1.\n")
+
+    ccx_dir, ntf_dir = _run(tmp_path / "with", deck(ORIENTATIONS[case]))
+    bare_dir, _ = _run(tmp_path / "without", deck(None))
+    assert (ccx_dir / "b.dat").read_text() == (bare_dir / "b.dat").read_text()
+    theirs, bare = _frd_blocks(ccx_dir / "b.frd"), _frd_blocks(bare_dir / "b.frd")
+    assert set(theirs) == {"DISP", "STRESS", "TOSTRAIN", "MESTRAIN", "PE", "ENER", "SDV"}
+    for name in theirs:
+        np.testing.assert_array_equal(theirs[name], bare[name])
+    ccx_peeq = [b for b in read_dat(ccx_dir / "b.dat") if b.name == "PEEQ"]
+    assert np.abs(ccx_peeq[-1].values).max() > 1e-3  # yielded
+    worst = _check_against(ccx_dir, ntf_dir, "b")
+    assert set(worst) == {"U", "RF", "S", "E", "PEEQ", "SDV", "ENER", "ME"}
+    for name, difference in worst.items():
+        assert difference <= 1e-5, (name, difference)
 
 
 @pytest.mark.mpi
