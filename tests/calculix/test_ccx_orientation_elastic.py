@@ -22,7 +22,7 @@ from helpers.ccx_runs import largest_differences, run_ccx_and_ours
 
 from dolfinx_ntf.calculix.dat import read_dat
 from dolfinx_ntf.calculix.deck import DeckError, read_deck
-from dolfinx_ntf.calculix.deck.materials import elastic_at_temperature
+from dolfinx_ntf.calculix.deck.materials import table_at_temperature
 from dolfinx_ntf.calculix.frd import read_frd
 
 needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
@@ -224,13 +224,60 @@ def test_elastic_variants_against_ccx(tmp_path: Path, case: str) -> None:
     assert read_deck(ntf_dir / "b.inp").materials["M1"].elastic == pytest.approx((young, nu))
 
 
-def test_elastic_at_temperature() -> None:
-    """Linear between lines, the end lines' values beyond the table."""
+def test_table_at_temperature() -> None:
+    """Each value linear between lines, the end lines' values beyond the table."""
     rows = ((100.0, 0.2, 0.0), (200.0, 0.3, 10.0), (300.0, 0.1, 20.0))
-    assert elastic_at_temperature(rows, 5.0) == pytest.approx((150.0, 0.25))
-    assert elastic_at_temperature(rows, 15.0) == pytest.approx((250.0, 0.2))
-    assert elastic_at_temperature(rows, -5.0) == (100.0, 0.2)
-    assert elastic_at_temperature(rows, 25.0) == (300.0, 0.1)
+    assert table_at_temperature(rows, 5.0) == pytest.approx((150.0, 0.25))
+    assert table_at_temperature(rows, 15.0) == pytest.approx((250.0, 0.2))
+    assert table_at_temperature(rows, -5.0) == (100.0, 0.2)
+    assert table_at_temperature(rows, 25.0) == (300.0, 0.1)
+    assert table_at_temperature(((1.0, 0.0), (3.0, 1.0)), 0.25) == (1.5,)
+
+
+def _frequency_block(density: str, model: str = "") -> str:
+    """The two C3D8 with ``density`` in a ``*FREQUENCY`` step of 3 modes."""
+    text = block(elastic="*ELASTIC\n210000., 0.3\n" + density, model=model)
+    return text[: text.index("*STEP")] + "*STEP\n*FREQUENCY\n3\n*BOUNDARY\nBOT, 1, 3\n*END STEP\n"
+
+
+def _eigenvalues(path: Path) -> np.ndarray:
+    """The eigenvalues of a ``.dat``'s ``E I G E N V A L U E   O U T P U T`` table."""
+    lines = path.read_text().split("E I G E N V A L U E   O U T P U T")[1].splitlines()
+    values = []
+    for line in lines:
+        fields = line.split()
+        if len(fields) == 5 and fields[0].isdigit():
+            values.append(float(fields[1]))
+        elif values:
+            break
+    return np.array(values)
+
+
+DENSITY_TABLE = "*DENSITY\n7.8e-9, -100.\n3.9e-9, 100.\n"
+DENSITY_CASES = {
+    # case: (model cards, the density ccx's eigenvalues are those of)
+    "no-temperature": ("", 7.8e-9),  # the first line, not the table at 0
+    "between": ("*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.\n", 5.85e-9),
+    "above": ("*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 500.\n", 3.9e-9),
+}
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("case", list(DENSITY_CASES))
+def test_density_table_against_ccx(tmp_path: Path, case: str) -> None:
+    """A ``*DENSITY`` table follows the ``*ELASTIC`` rule: ccx's eigenvalue output equals that of
+    the plain density it stands for (every byte), and ours is ccx's to 1e-9."""
+    model, density = DENSITY_CASES[case]
+    ccx_dir, ntf_dir = _run(tmp_path / "table", _frequency_block(DENSITY_TABLE, model))
+    plain_dir, _ = _run(tmp_path / "plain", _frequency_block(f"*DENSITY\n{density!r}\n", model))
+    assert (ccx_dir / "b.dat").read_text() == (plain_dir / "b.dat").read_text()
+    theirs, ours = _eigenvalues(ccx_dir / "b.dat"), _eigenvalues(ntf_dir / "b.dat")
+    assert theirs.size == 3
+    np.testing.assert_allclose(ours, theirs, rtol=1e-6)  # 7 printed digits
+    deck = read_deck(ntf_dir / "b.inp")
+    assert deck.materials["M1"].extra["*DENSITY"] == ((pytest.approx(density),),)
 
 
 REFUSED = {
@@ -283,6 +330,20 @@ REFUSED = {
         block(elastic=TABLE).replace("*CLOAD", "*TEMPERATURE\nNALL, 50.\n*CLOAD"),
         "in a deck whose temperatures change",
     ),
+    "density-varying": (
+        _frequency_block(
+            "*DENSITY\n1., 0.\n2., 300.\n",
+            "*INITIAL CONDITIONS, TYPE=TEMPERATURE\n1, 20.\nNALL, 30.\n",
+        ),
+        "*DENSITY of material M1 (several data lines) needs one initial temperature",
+    ),
+    "conductivity-coupled": (
+        block(elastic=ELASTIC + "*CONDUCTIVITY\n50., 0.\n60., 300.\n").replace(
+            "*STATIC\n", "*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE\n1., 1.\n"
+        ),
+        "temperature-dependent *CONDUCTIVITY of material M1 (several data lines) in a deck "
+        "whose temperatures change",
+    ),
 }
 
 
@@ -299,6 +360,8 @@ def test_refused(tmp_path: Path, case: str) -> None:
     card = text.splitlines()[line - 1]
     data_lines = {
         "varying": "210000., 0.3, 300.",  # the table's second line
+        "density-varying": "2., 300.",
+        "conductivity-coupled": "60., 300.",
         "partial": "210000., 0.3, 300.",
         "changing": "210000., 0.3, 300.",
         "degenerate": "1., 0., 0., 2., 0., 0.",

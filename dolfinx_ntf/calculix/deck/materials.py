@@ -15,20 +15,21 @@ from .state import MaterialBuilder
 _ANISOTROPIC = ("ORTHO", "ENGINEERING", "ANISO")
 
 
-def elastic_at_temperature(
-    rows: tuple[tuple[float, float, float | None], ...], temperature: float
-) -> tuple[float, float]:
-    """``(E, nu)`` of an ``*ELASTIC`` table at ``temperature``, as ccx 2.20 (measured).
+def table_at_temperature(
+    rows: tuple[tuple[float | None, ...], ...], temperature: float
+) -> tuple[float, ...]:
+    """The values of a material table at ``temperature``, as ccx 2.20 (measured, method §41.2).
 
     Args:
-        rows: ``(E, nu, temperature)`` lines, temperatures increasing.
-        temperature: Where to evaluate: linear between lines, the first (last) line's values
-            below (above) the table.
+        rows: Lines of values with the temperature last, temperatures increasing (``*ELASTIC``:
+            ``(E, nu, T)``, ``*DENSITY``: ``(rho, T)``).
+        temperature: Where to evaluate: each value linear between lines, the first (last)
+            line's values below (above) the table.
     """
-    table = np.array([r[2] for r in rows], dtype=float)
-    young = float(np.interp(temperature, table, [r[0] for r in rows]))
-    nu = float(np.interp(temperature, table, [r[1] for r in rows]))
-    return young, nu
+    table = np.array([r[-1] for r in rows], dtype=float)
+    return tuple(
+        float(np.interp(temperature, table, [r[k] for r in rows])) for k in range(len(rows[0]) - 1)
+    )
 
 
 class MaterialCards(OrientationCards):
@@ -153,6 +154,7 @@ class MaterialCards(OrientationCards):
         material.extra[card.name] = tuple(
             self._floats_line(f, card.name, loc) for f, _, loc in card.lines
         )
+        material.extra_locations[card.name] = tuple(loc for _, _, loc in card.lines)
 
     def _k_SOLIDSECTION(self, card: Card) -> None:
         self._check_params(

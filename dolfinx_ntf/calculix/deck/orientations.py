@@ -109,11 +109,12 @@ class OrientationCards(ReaderState):
 
         ``elset`` is the ``*EL PRINT`` set, None for ``*EL FILE`` (every element).
         """
-        key = "GLOBAL"
+        if all(section.orientation is None for section in self.sections):
+            return  # GLOBAL changes nothing (decks without orientations read as before)
         is_print = elset is not None
-        global_axes = card.params.get(key) or ("NO" if is_print else "YES")
+        global_axes = card.params.get("GLOBAL") or ("NO" if is_print else "YES")
         if global_axes not in ("YES", "NO"):
-            raise DeckError(f"{key}={global_axes}: YES or NO expected", card.location)
+            raise DeckError(f"GLOBAL={global_axes}: YES or NO expected", card.location)
         if global_axes == "YES":
             return
         members = np.unique(self.elsets[elset]) if is_print else None

@@ -84,6 +84,8 @@ class MaterialBuilder:
     plastic: tuple[tuple[float, float], ...] | None = None
     plastic_location: Location | None = None
     extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
+    #: The data lines of each card of ``extra``.
+    extra_locations: dict[str, tuple[Location, ...]] = field(default_factory=dict)
 
 
 @dataclass
