@@ -5,8 +5,9 @@ rectangular (turned, and turned again about a local axis) or cylindrical ``*ORIE
 section and the element outputs in global axes, ccx's ``.dat`` and ``.frd`` are those of the deck
 without it, and ours too; ``*ELASTIC, TYPE=ISOTROPIC``; ``*ELASTIC`` tables with a temperature
 column: the first line without temperatures, interpolated at one initial temperature, held beyond
-the table. The refusals (outputs in the orientation's axes, anisotropic and unknown types,
-temperatures that vary) are tested without ccx.
+the table; ``*DENSITY`` tables the same (the eigenvalues of a ``*FREQUENCY`` step). The
+refusals (outputs in the orientation's axes, anisotropic and unknown types, temperatures that
+vary) are tested without ccx.
 """
 
 from __future__ import annotations
