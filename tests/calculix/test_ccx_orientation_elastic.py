@@ -174,6 +174,32 @@ def test_orientation_of_plastic_section_changes_nothing(
         assert difference <= 1e-5, (name, difference)
 
 
+#: c3d15.inp's material and orientation cards on the C3D8 block (method §34.3, §41).
+C3D15_CARDS = (
+    "*ELASTIC, TYPE=ISOTROPIC\n 29000000.,      0.32,       70.\n"
+    "*EXPANSION, TYPE=ISO\n    6.6E-6,       70.\n*DENSITY\n0.00073315\n"
+)
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("case", ["identity", "turned"])
+def test_c3d15_cards_on_c3d8(tmp_path: Path, case: str) -> None:
+    """``c3d15.inp``'s cards (an orientation, ``TYPE=ISOTROPIC``, temperature columns) on the two
+    C3D8: ccx's ``.dat`` is that of plain ``E, nu`` without the orientation, ours is ccx's, and
+    the section keeps its orientation's name."""
+    ccx_dir, ntf_dir = _run(tmp_path / "cards", block(ORIENTATIONS[case], elastic=C3D15_CARDS))
+    plain = block(elastic="*ELASTIC\n29000000., 0.32\n")
+    plain_dir, _ = _run(tmp_path / "plain", plain)
+    assert (ccx_dir / "b.dat").read_text() == (plain_dir / "b.dat").read_text()
+    for name, difference in _check_against(ccx_dir, ntf_dir, "b").items():
+        assert difference <= 1e-9, (name, difference)
+    deck = read_deck(ntf_dir / "b.inp")
+    assert [section.orientation for section in deck.sections] == ["OR1"]
+    assert deck.materials["M1"].elastic == (29000000.0, 0.32)
+
+
 @pytest.mark.mpi
 @pytest.mark.ccx
 @needs_ccx
