@@ -174,6 +174,40 @@ def test_orientation_of_plastic_section_changes_nothing(
         assert difference <= 1e-5, (name, difference)
 
 
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+def test_scalar_outputs_in_local_axes(tmp_path: Path) -> None:
+    """PEEQ, ENER and SDV requested in the orientation's axes (``*EL PRINT`` without GLOBAL,
+    ``*EL FILE, GLOBAL=NO``): ccx 2.20 writes them as without the orientation, SDV's plastic
+    strain in global axes too (measured), and the runner takes them: ours equal ccx's."""
+
+    def deck(orientation: str | None) -> str:
+        text = block(
+            orientation,
+            elastic=PLASTIC,
+            el_print="*EL PRINT, ELSET=EALL\nPEEQ, ENER, SDV\n",
+            el_file="*EL FILE, GLOBAL=NO\nPE, ENER, SDV\n",
+        )
+        return text.replace("*STATIC\n", "*STATIC\n0.25, 1.\n")
+
+    ccx_dir, ntf_dir = _run(tmp_path / "with", deck(ORIENTATIONS["rectangular"]))
+    bare_dir, _ = _run(tmp_path / "without", deck(None))
+    assert (ccx_dir / "b.dat").read_text() == (bare_dir / "b.dat").read_text()
+    theirs, bare = _frd_blocks(ccx_dir / "b.frd"), _frd_blocks(bare_dir / "b.frd")
+    for name in theirs:
+        np.testing.assert_array_equal(theirs[name], bare[name])
+    worst = _check_against(ccx_dir, ntf_dir, "b")
+    assert set(worst) == {"U", "RF", "PEEQ", "ENER", "SDV"}
+    for name, difference in worst.items():
+        assert difference <= 1e-5, (name, difference)
+    ours = _frd_blocks(ntf_dir / "b.frd")
+    assert set(ours) == set(theirs) == {"DISP", "PE", "ENER", "SDV"}
+    for name in theirs:
+        scale = np.abs(theirs[name]).max()
+        assert np.abs(ours[name] - theirs[name]).max() <= 1e-5 * scale, name
+
+
 #: c3d15.inp's material and orientation cards on the C3D8 block (method §34.3, §41).
 C3D15_CARDS = (
     "*ELASTIC, TYPE=ISOTROPIC\n 29000000.,      0.32,       70.\n"
@@ -309,12 +343,12 @@ def test_density_table_against_ccx(tmp_path: Path, case: str) -> None:
 
 REFUSED = {
     "print-local": (
-        block(ORIENTATIONS["rectangular"], el_print="*EL PRINT, ELSET=EALL\nS\n"),
-        "GLOBAL=NO (the default of *EL PRINT)",
+        block(ORIENTATIONS["rectangular"], el_print="*EL PRINT, ELSET=EALL\nS, PEEQ\n"),
+        "*EL PRINT S with GLOBAL=NO (the default of *EL PRINT)",
     ),
     "file-local": (
-        block(ORIENTATIONS["rectangular"], el_file="*EL FILE, GLOBAL=NO\nS\n"),
-        "*EL FILE with GLOBAL=NO over elements",
+        block(ORIENTATIONS["rectangular"], el_file="*EL FILE, GLOBAL=NO\nENER, E, ME\n"),
+        "*EL FILE E, ME with GLOBAL=NO over elements",
     ),
     "undefined": (
         block(ORIENTATIONS["rectangular"]).replace("ORIENTATION=OR1", "ORIENTATION=OR2"),

@@ -3,9 +3,10 @@
 See docs/method.md §41.3. An orientation turns the material axes; the reader's materials are
 isotropic (``*ELASTIC`` of TYPE=ISO, ``*PLASTIC`` with isotropic hardening), so it cannot change
 the solution, and ccx 2.20 writes the same ``.dat`` and ``.frd`` with and without it when the
-element outputs are requested in global axes (measured). ccx prints element outputs in the
-orientation's axes, followed by its name, for ``*EL PRINT`` without ``GLOBAL=YES`` (its default is
-NO) and for ``*EL FILE, GLOBAL=NO``: such requests over oriented elements are refused.
+element outputs are requested in global axes (measured). ccx writes S, E and ME in the
+orientation's axes (in ``.dat`` lines followed by its name) for ``*EL PRINT`` without
+``GLOBAL=YES`` (its default is NO) and for ``*EL FILE, GLOBAL=NO``: such requests over oriented
+elements are refused; PEEQ, ENER and SDV are written the same in either case.
 """
 
 from __future__ import annotations
@@ -17,6 +18,11 @@ import numpy as np
 from .errors import DeckError, Location
 from .lexer import Card
 from .state import ReaderState
+
+#: Element output keys ccx 2.20 writes in an orientation's axes without GLOBAL=YES (measured:
+#: S, E and ME turned, and ``*EL PRINT`` lines followed by the orientation's name; PEEQ, ENER and
+#: SDV, its plastic strain included, as in global axes).
+_TURNED_KEYS = ("S", "E", "ME")
 
 #: Smallest ``|a|`` and ``|a x b|`` relative to the points' size for a rectangular system.
 _DEGENERATE = 1e-12
@@ -104,13 +110,18 @@ class OrientationCards(ReaderState):
             raise DeckError(f"orientation {name} is not defined (before this line)", card.location)
         return name
 
-    def _check_local_axes(self, card: Card, elset: str | None) -> None:
+    def _check_local_axes(self, card: Card, elset: str | None, keys: tuple[str, ...]) -> None:
         """Refuse element outputs ccx would write in an orientation's axes (module doc).
 
-        ``elset`` is the ``*EL PRINT`` set, None for ``*EL FILE`` (every element).
+        ``elset`` is the ``*EL PRINT`` set, None for ``*EL FILE`` (every element); ``keys`` the
+        requested keys: only the tensors S, E and ME turn (PEEQ, ENER and SDV are written as
+        in global axes, measured).
         """
         if all(section.orientation is None for section in self.sections):
             return  # GLOBAL changes nothing (decks without orientations read as before)
+        turned = [key for key in keys if key in _TURNED_KEYS]
+        if not turned:
+            return
         is_print = elset is not None
         global_axes = card.params.get("GLOBAL") or ("NO" if is_print else "YES")
         if global_axes not in ("YES", "NO"):
@@ -125,9 +136,9 @@ class OrientationCards(ReaderState):
                 continue
             default = " (the default of *EL PRINT)" if "GLOBAL" not in card.params else ""
             raise DeckError(
-                f"{card.name} with GLOBAL=NO{default} over elements of the section at "
-                f"{section.location} (ORIENTATION={section.orientation}): ccx 2.20 writes "
-                "their outputs in the orientation's axes, which is not supported; write "
+                f"{card.name} {', '.join(turned)} with GLOBAL=NO{default} over elements of the "
+                f"section at {section.location} (ORIENTATION={section.orientation}): ccx 2.20 "
+                "writes them in the orientation's axes, which is not supported; write "
                 "GLOBAL=YES",
                 card.location,
             )

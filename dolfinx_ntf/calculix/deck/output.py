@@ -72,7 +72,7 @@ class OutputCards(OrientationCards):
         if not any(p.kind == kind for p in step.new_prints):
             self.prints = [p for p in self.prints if p.kind != kind]
         if kind == "EL":
-            self._check_local_axes(card, set_name)
+            self._check_local_axes(card, set_name, keys)
         request = PrintRequest(kind, keys, set_name, totals, frequency, card.location, time_points)
         step.new_prints.append(request)
         self.prints.append(request)
@@ -104,7 +104,7 @@ class OutputCards(OrientationCards):
                                 card.location)  # fmt: skip
         frequency = self._frequency(card)
         if kind == "EL":
-            self._check_local_axes(card, None)
+            self._check_local_axes(card, None, keys)
         if not any(r.kind == kind for r in step.new_files):
             self.files = [r for r in self.files if r.kind != kind]
         request = FileRequest(card.name, kind, keys, set_name, "CONTACTELEMENTS" in card.params,
