@@ -79,7 +79,7 @@ def test_wedges_refused_with_a_clear_error(tmp_path: Path) -> None:
         read_deck(path)
 
 
-@pytest.mark.parametrize("request_card", ["*EL FILE\nS, ENER", "*EL FILE\nHFL"])
+@pytest.mark.parametrize("request_card", ["*EL FILE\nS, HFL", "*EL FILE\nHFL"])
 def test_element_outputs_of_wedges_refused(tmp_path: Path, request_card: str) -> None:
     text = _block(surfaces=False)[0].replace("*END STEP", f"{request_card}\n*END STEP")
     (tmp_path / "w.inp").write_text(text)

@@ -88,12 +88,15 @@ class SolidSection:
 
     ``thickness`` is the first value of its data line, if any: the out-of-plane thickness of
     plane strain and plane stress elements (ccx's default 1; ignored for 3D and CAX elements).
+    ``orientation`` names its ``*ORIENTATION``, if any.
     """
 
     elset: str
     material: str
     location: Location
     thickness: float | None = None
+    #: The ``ORIENTATION`` name (material axes; isotropic materials only, docs/method.md §41.3).
+    orientation: str | None = None
 
 
 @dataclass(frozen=True, eq=False)

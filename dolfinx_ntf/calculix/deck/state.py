@@ -77,9 +77,15 @@ class MaterialBuilder:
     location: Location
     elastic: tuple[float, float] | None = None
     elastic_location: Location | None = None
+    #: ``*ELASTIC`` rows ``(E, nu, temperature or None)`` and their lines; ``elastic`` is the
+    #: first row until the deck's temperatures are known (``checks._check_materials``).
+    elastic_rows: tuple[tuple[float, float, float | None], ...] = ()
+    elastic_row_locations: tuple[Location, ...] = ()
     plastic: tuple[tuple[float, float], ...] | None = None
     plastic_location: Location | None = None
     extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
+    #: The data lines of each card of ``extra``.
+    extra_locations: dict[str, tuple[Location, ...]] = field(default_factory=dict)
 
 
 @dataclass
@@ -128,6 +134,8 @@ class ReaderState:
         self.surfaces: dict[str, Surface] = {}
         self.materials: dict[str, MaterialBuilder] = {}
         self.sections: list[SolidSection] = []
+        #: ``*ORIENTATION`` cards by name (``orientations.Orientation``).
+        self.orientations: dict = {}
         self.interactions: dict[str, InteractionBuilder] = {}
         self.contact_pairs: list[ContactPair] = []
         self.amplitudes: dict[str, Amplitude] = {}
