@@ -12,7 +12,7 @@ node rows
 (:func:`~dolfinx_ntf.fem.wedge_faces.prism_face_forces`). The displacement lives in C3D15's
 space (:func:`~dolfinx_ntf.fem.serendipity_wedge.wedge15_space`: vector P2 with the
 quadrilateral centres constrained), integrated at ccx's 9 points; the constraints are eliminated
-(:class:`~dolfinx_ntf.fem.constraints.ConstraintElimination`) and the system solved by LU.
+(``dolfinx_ntf.fem.constraints.ConstraintElimination``) and the system solved by LU.
 
 The demo checks the equilibrium (the clamp's reaction, with each constrained centre's force
 handed to the nodes it depends on, equals the load), reads the same ring as 18-node prisms
@@ -194,7 +194,7 @@ def castigliano() -> float:
 
 def main(argv: list[str] | None = None) -> dict:
     """Run the demo; returns a summary (``skipped`` with the reason on dolfinx before 0.11)."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--coarse", action="store_true", help="small mesh (tests)")
     parser.add_argument("--quiet", action="store_true", help="no printout")
     parser.add_argument("--output", type=Path, default=Path("curved_prisms_output"))

@@ -6,7 +6,7 @@ of the three quadrilateral faces are fixed by the 8 other nodes of the face,
 
     u(face centre) = -1/4 sum(4 face corners) + 1/2 sum(4 face midside nodes),
 
-the value the quad8 shape functions take there (as C3D20's faces, :mod:`serendipity`). Local
+the value the quad8 shape functions take there (as C3D20's faces, ``fem/serendipity.py``). Local
 nodes of basix's degree-2 prism: 0..5 the vertices (triangle 0-1-2 below 3-4-5), 6..14 the
 edges (0-1, 0-2, 0-3, 1-2, 1-4, 2-5, 3-4, 3-5, 4-5), 15..17 the centres of the quadrilateral
 faces (0-1-3-4, 0-2-3-5, 1-2-4-5). Prism cells with P2 spaces run on dolfinx 0.11 only
