@@ -130,6 +130,7 @@ class HeatIncrementSolver:
             thermal.conductances,
             thermal.bcs,
             conductance_pressure="ccx",
+            constraints=thermal.constraints,  # C3D15's face centres (docs/method.md §39)
         )
         self.problem = problem
         #: Relative and absolute tolerances of the heat residual's 2-norm.
@@ -205,7 +206,8 @@ class HeatIncrementSolver:
                 A = self.heat.ensure_matrix()
                 self.heat.J(x, A)
                 dx = A.createVecLeft()
-                self._ksp.setOperators(A)
+                reduced = self.heat.reduced_matrix  # with constraints (§13.1)
+                self._ksp.setOperators(A if reduced is None else reduced)
                 self._ksp.solve(self._b, dx)
                 x.array[:] -= dx.array_r
                 x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)

@@ -19,8 +19,8 @@ correction must be small against the increment's displacement change (``C_n``), 
 ``TIGHT_FIELD_CONTROLS`` (``R_n = R_p = 1e-10``, ``controls.py``), so that converged solutions are
 compared.
 
-Steps without contact pairs and without NLGEOM are linear: one increment over the whole step, as in
-ccx.
+Steps without contact pairs, NLGEOM and temperatures are linear: one increment over the whole
+step, as in ccx (whose thermal steps follow their increments also without contact, §39).
 
 Under ``mpirun -n N`` the model is distributed by dolfinx and every output is gathered in ccx
 numbering (``gather.py``) and written by rank 0: the files are those of the serial run
@@ -361,7 +361,8 @@ class _Job:
             return
         static = step.static
         period = static.period
-        linear = not step.nlgeom and not model.pairs and not model.plasticity
+        # thermal steps follow their increments also without contact (ccx 2.20, §39)
+        linear = not (step.nlgeom or model.pairs or model.plasticity or step.coupled)
         initial = period if linear else static.initial_increment
         maximum = min(static.maximum if static.maximum is not None else period, period)
         initial = min(initial, maximum)

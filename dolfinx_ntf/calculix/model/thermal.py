@@ -23,6 +23,8 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.constraints import LinearConstraintBlock
+from dolfinx_ntf.fem.serendipity_wedge import wedge_serendipity_constraints
 from dolfinx_ntf.fem.thermal import CellTemperature
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 
@@ -132,6 +134,7 @@ class ThermalModel:
         bc_dofs: Local dofs of ``Q`` with a prescribed temperature (the same in every step).
         bc_values: Per step, the prescribed temperatures at ``bc_dofs``.
         bc_value: Function holding the current prescribed values; ``bcs`` the conditions.
+        constraints: C3D15: the face centres of ``Q`` (docs/method.md §39), else empty.
     """
 
     Q: dolfinx.fem.FunctionSpace
@@ -149,6 +152,7 @@ class ThermalModel:
     bc_values: list[np.ndarray]
     bc_value: dolfinx.fem.Function
     bcs: list[compat.DirichletBC]
+    constraints: list[LinearConstraintBlock]
     _steady: bool = False
     _start: np.ndarray | None = None
     _target: np.ndarray | None = None
@@ -186,6 +190,7 @@ class ThermalModel:
         values = self._start + (self._target - self._start) * scale
         for f in (self.bc_value, self.T_old):
             f.x.array[self.bc_dofs] = values
+            _fill_centres(f, self.constraints)  # C3D15: T_old is C3D15's field of its nodes
             f.x.scatter_forward()
         self.T.x.array[:] = self.T_old.x.array
         self.T.x.scatter_forward()
@@ -195,6 +200,19 @@ class ThermalModel:
         """A converged increment: its temperature becomes the next one's ``T_old``."""
         self.T_old.x.array[:] = self.T.x.array
         self.T_old.x.scatter_forward()
+
+
+def _fill_centres(f: dolfinx.fem.Function, constraints: list[LinearConstraintBlock]) -> None:
+    """Set the dependent (first) dof of every constraint row from its other terms (local).
+
+    C3D15's face centres from their faces' 8 nodes (docs/method.md §39): a temperature given at
+    the deck's nodes (initial, prescribed) is then C3D15's field. Every row's dofs are local
+    (its face is in a local cell), so no communication is needed.
+    """
+    values = f.x.array
+    for block in constraints:
+        terms = block.coefficients[:, 1:] * values[block.nodes[:, 1:]]
+        values[block.nodes[:, 0]] = (block.values - terms.sum(axis=1)) / block.coefficients[:, 0]
 
 
 def _cell_values(
@@ -304,11 +322,12 @@ def thermal_model(
     T = dolfinx.fem.Function(Q, name="temperature")
     Q0 = compat.scalar_space(mesh, "DG", 0)
     heat = all(s.coupled.heat for s in deck.steps)  # no thermal strain: C3D8I conducts as C3D8
-    if block.type.name != "C3D8" and not (heat and block.type.name == "C3D8I"):
+    conducting = ("C3D8", "C3D8I", "C3D15") if heat else ("C3D8",)  # C3D15: §39
+    if block.type.name not in conducting:
         procedure = "*HEAT TRANSFER" if heat else "*COUPLED TEMPERATURE-DISPLACEMENT"
         raise NotImplementedError(
             f"{block.locations[0]}: {procedure} with {block.type.name} elements is not supported "
-            "yet (measured against ccx for C3D8 only, and C3D8I in heat transfer)"
+            "yet (measured against ccx for C3D8 only, and C3D8I and C3D15 in heat transfer)"
         )
     if heat:
         _check_heat_boundaries(deck)
@@ -326,6 +345,8 @@ def thermal_model(
     for condition in deck.initial_temperatures:
         dofs = node_dof[deck.node_index(condition.nodes)]
         T.x.array[dofs[dofs >= 0]] = condition.value
+    constraints = wedge_serendipity_constraints(Q) if block.type.name == "C3D15" else []
+    _fill_centres(T, constraints)
     T.x.scatter_forward()
     T_old = dolfinx.fem.Function(Q, name="temperature_old")
     T_init = dolfinx.fem.Function(Q, name="initial_temperature")
@@ -350,7 +371,8 @@ def thermal_model(
     bc_value = dolfinx.fem.Function(Q, name="prescribed_temperature")
     bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
     return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
-                        residual, conductances, bc_dofs, bc_values, bc_value, bcs)  # fmt: skip
+                        residual, conductances, bc_dofs, bc_values, bc_value, bcs,
+                        constraints)  # fmt: skip
 
 
 def _conductance(rows: tuple | None, interaction: str) -> GapConductance:

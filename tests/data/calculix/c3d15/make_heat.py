@@ -1,0 +1,66 @@
+"""Write the C3D15 heat decks ``wedge_heat*.inp`` of docs/method.md §39.
+
+``make_block.py``'s block (16 curved C3D15 wedges on [0, 2] x [0, 1] x [0, 1]) with its bottom
+held at temperatures that vary over the face (``100 + 20 x + 10 y``, dof 11):
+
+- ``wedge_heat_steady``: ``*HEAT TRANSFER, STEADY STATE``, the top held at 0;
+- ``wedge_heat_transient``: a transient ``*HEAT TRANSFER`` from 20 everywhere
+  (``*INITIAL CONDITIONS, TYPE=TEMPERATURE``), fixed increments (``DIRECT``);
+
+both with ``*NODE PRINT NT`` and ``*EL PRINT HFL``. Run: ``python make_heat.py``
+(deterministic).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from make_block import LZ, _grid
+
+
+def _model(x: np.ndarray, wedges: list) -> list[str]:
+    """Nodes, elements, the bottom and top sets and the material."""
+    lines = ["*HEADING", "C3D15 block, curved edges, heat conduction (dolfinx_ntf method §39)"]
+    lines.append("*NODE, NSET=NALL")
+    lines += [f"{n + 1}, {p[0]:.12g}, {p[1]:.12g}, {p[2]:.12g}" for n, p in enumerate(x)]
+    lines.append("*ELEMENT, TYPE=C3D15, ELSET=EALL")
+    for e, w in enumerate(wedges):
+        lines.append(f"{e + 1}, " + ", ".join(map(str, w[:10])) + ",")
+        lines.append(", ".join(map(str, w[10:])))
+    for name, z in (("BOTTOM", 0.0), ("TOP", LZ)):
+        ids = np.flatnonzero(np.isclose(x[:, 2], z)) + 1
+        lines.append(f"*NSET, NSET={name}")
+        lines += [", ".join(map(str, ids[i : i + 8])) for i in range(0, ids.size, 8)]
+    lines += ["*MATERIAL, NAME=M", "*ELASTIC", "1000., 0.3", "*CONDUCTIVITY", "2.5"]
+    lines += ["*DENSITY", "1.5", "*SPECIFIC HEAT", "0.8"]
+    lines += ["*SOLID SECTION, ELSET=EALL, MATERIAL=M"]
+    return lines
+
+
+def _bottom(x: np.ndarray) -> list[str]:
+    """``*BOUNDARY`` dof 11 on the bottom nodes: ``100 + 20 x + 10 y``."""
+    ids = np.flatnonzero(np.isclose(x[:, 2], 0.0))
+    return [f"{n + 1}, 11, 11, {100.0 + 20.0 * x[n, 0] + 10.0 * x[n, 1]:.12g}" for n in ids]
+
+
+def write(path: Path, transient: bool) -> None:
+    points, wedges = _grid()
+    x = np.array(points)
+    lines = _model(x, wedges)
+    if transient:
+        lines += ["*INITIAL CONDITIONS, TYPE=TEMPERATURE", "NALL, 20."]
+        lines += ["*STEP", "*HEAT TRANSFER, DIRECT", "0.05, 0.2"]
+    else:
+        lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "1., 1."]
+    lines += ["*BOUNDARY", *_bottom(x)]
+    if not transient:
+        lines += ["TOP, 11, 11, 0."]
+    lines += ["*NODE PRINT, NSET=NALL", "NT", "*EL PRINT, ELSET=EALL", "HFL", "*END STEP"]
+    path.write_text("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    here = Path(__file__).parent
+    write(here / "wedge_heat_steady.inp", transient=False)
+    write(here / "wedge_heat_transient.inp", transient=True)
