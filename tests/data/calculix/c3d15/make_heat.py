@@ -3,7 +3,8 @@
 ``make_block.py``'s block (16 curved C3D15 wedges on [0, 2] x [0, 1] x [0, 1]) with its bottom
 held at temperatures that vary over the face (``100 + 20 x + 10 y``, dof 11):
 
-- ``wedge_heat_steady``: ``*HEAT TRANSFER, STEADY STATE``, the top held at 0;
+- ``wedge_heat_steady``: ``*HEAT TRANSFER, STEADY STATE``, the top held at 0, in ccx's
+  increments (0.25, 0.5, 0.875, 1: the prescribed temperatures ramp from 0);
 - ``wedge_heat_transient``: a transient ``*HEAT TRANSFER`` from 20 everywhere
   (``*INITIAL CONDITIONS, TYPE=TEMPERATURE``), fixed increments (``DIRECT``);
 
@@ -52,7 +53,7 @@ def write(path: Path, transient: bool) -> None:
         lines += ["*INITIAL CONDITIONS, TYPE=TEMPERATURE", "NALL, 20."]
         lines += ["*STEP", "*HEAT TRANSFER, DIRECT", "0.05, 0.2"]
     else:
-        lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "1., 1."]
+        lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "0.25, 1."]
     lines += ["*BOUNDARY", *_bottom(x)]
     if not transient:
         lines += ["TOP, 11, 11, 0."]

@@ -1,0 +1,78 @@
+"""C3D15 wedges in ``*HEAT TRANSFER`` steps (docs/method.md §39) against ccx 2.20.
+
+The decks are ``tests/data/calculix/c3d15/make_heat.py``'s: the curved C3D15 block of §34 with
+temperatures prescribed on its bottom (varying over the face) and its top, steady in ccx's four
+increments and transient from 20 (consistent capacity); the ``.dat.ref`` files are ccx 2.20's.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.job import run_job
+
+DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
+ON_011 = compat.DOLFINX_VERSION >= (0, 11)
+NEEDS_011 = pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+
+
+def _run(tmp_path: Path, job: str, comm: MPI.Comm) -> tuple[list, list]:
+    """ccx's stored blocks and ours (rank 0's directory for all processes; both on every one)."""
+    root = Path(comm.bcast(str(tmp_path), root=0))
+    if comm.rank == 0:
+        shutil.copy(DATA / f"{job}.inp", root / f"{job}.inp")
+    comm.barrier()
+    run_job(job, root, comm=comm, progress=False)
+    comm.barrier()
+    return read_dat(DATA / f"{job}.dat.ref"), read_dat(root / f"{job}.dat")
+
+
+@pytest.mark.mpi
+@NEEDS_011
+@pytest.mark.parametrize(
+    "job, times",
+    [
+        ("wedge_heat_steady", [0.25, 0.5, 0.875, 1.0]),  # ccx's increments, ramped temperatures
+        ("wedge_heat_transient", [0.05, 0.1, 0.15, 0.2]),  # DIRECT
+    ],
+)
+def test_c3d15_heat_matches_ccx(tmp_path, job, times):
+    """NT at every node and HFL at ccx's 9 points equal ccx 2.20's printed digits in each of
+    its increments (serial and on 2 processes): ccx's 9 points for conduction and capacity,
+    the face centres constrained to C3D15's field."""
+    ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
+    assert [b.time for b in ours if b.name == "NT"] == pytest.approx(times)
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(a.labels, b.labels)
+        assert a.values.shape == b.values.shape == (a.values.shape[0], 1 if a.name == "NT" else 3)
+        scale = np.abs(a.values).max()
+        assert np.abs(a.values - b.values).max() <= 1e-6 * scale, (a.name, a.time)
+
+
+@pytest.mark.skipif(ON_011, reason="dolfinx 0.11 runs C3D15")
+def test_c3d15_heat_refused_before_dolfinx_011(tmp_path):
+    shutil.copy(DATA / "wedge_heat_steady.inp", tmp_path / "h.inp")
+    with pytest.raises(
+        NotImplementedError, match=r"h\.inp:\d+: C3D15 \(element 1\).*dolfinx 0\.11"
+    ):
+        run_job("h", tmp_path, progress=False)
+
+
+@NEEDS_011
+def test_c3d15_coupled_step_refused(tmp_path):
+    """A *COUPLED TEMPERATURE-DISPLACEMENT step with C3D15 is refused naming its line."""
+    deck = (DATA / "wedge_heat_steady.inp").read_text()
+    coupled = "*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE"
+    (tmp_path / "c.inp").write_text(deck.replace("*HEAT TRANSFER, STEADY STATE", coupled))
+    match = r"c\.inp:\d+: \*COUPLED TEMPERATURE-DISPLACEMENT steps with C3D15 elements"
+    with pytest.raises(NotImplementedError, match=match):
+        run_job("c", tmp_path, progress=False)
