@@ -67,7 +67,7 @@ from .xdmf import WedgeDeckWriter
 if typing.TYPE_CHECKING:
     from dolfinx_ntf.solvers.modes import Modes
 
-    from .coupled import CoupledIncrementSolver, HeatIncrementSolver
+    from .coupled import CoupledIncrementSolver, HeatIncrementSolver, SequentialIncrementSolver
 
 # The modules of dynamic, modal and coupled steps are imported where such a step runs: a static
 # deck does not pay for them at start-up (docs/performance.md, "Start-up").
@@ -251,11 +251,26 @@ class _Job:
         printed = internal if model.printed_force is None else model.printed_force
         self.numbering = CcxNumbering(model, printed)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
-        self.solver: ContactNewtonSolver | CoupledIncrementSolver | HeatIncrementSolver
+        self.solver: (
+            ContactNewtonSolver
+            | CoupledIncrementSolver
+            | HeatIncrementSolver
+            | SequentialIncrementSolver
+        )
         if model.thermal is not None:
-            from .coupled import CoupledIncrementSolver, HeatIncrementSolver
+            from .coupled import (
+                CoupledIncrementSolver,
+                HeatIncrementSolver,
+                SequentialIncrementSolver,
+            )
         if model.thermal is not None and deck.steps[0].coupled.heat:  # all *HEAT TRANSFER
             self.solver = HeatIncrementSolver(self.problem, model.thermal)
+        elif model.thermal is not None and model.thermal.constraints:  # C3D15, no contact (§39)
+            self.solver = SequentialIncrementSolver(
+                HeatIncrementSolver(self.problem, model.thermal),
+                self._mechanical_solver(comm, petsc_options, tight, solver_options),
+                model.thermal,
+            )
         elif model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
             self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
         else:

@@ -135,6 +135,8 @@ class ThermalModel:
         bc_values: Per step, the prescribed temperatures at ``bc_dofs``.
         bc_value: Function holding the current prescribed values; ``bcs`` the conditions.
         constraints: C3D15: the face centres of ``Q`` (docs/method.md §39), else empty.
+        strain_at_points: The thermal strain from ``T`` at the integration points (C3D15, §39)
+            instead of the element mean temperature (C3D8, §20.8).
     """
 
     Q: dolfinx.fem.FunctionSpace
@@ -153,6 +155,7 @@ class ThermalModel:
     bc_value: dolfinx.fem.Function
     bcs: list[compat.DirichletBC]
     constraints: list[LinearConstraintBlock]
+    strain_at_points: bool = False
     _steady: bool = False
     _start: np.ndarray | None = None
     _target: np.ndarray | None = None
@@ -162,8 +165,11 @@ class ThermalModel:
 
         The mechanical strain is formed from ``grad u - x I`` (``bulk.stresses``): with
         ``NLGEOM`` its Green-Lagrange strain ``x^2/2`` off the small one where ``u = 0``, as ccx
-        2.20's (measured, docs/method.md §20.8).
+        2.20's (measured, docs/method.md §20.8). With :attr:`strain_at_points` (C3D15) ``x =
+        alpha (T - T_init)`` at each integration point, as ccx 2.20's C3D15 (measured, §39).
         """
+        if self.strain_at_points:
+            return self.alpha * (self.T - self.T_init) * ufl.Identity(3)
         x = self.alpha * (self.cell_temperature.T_c - self.T_init_c)
         return x * ufl.Identity(3)
 
@@ -322,12 +328,12 @@ def thermal_model(
     T = dolfinx.fem.Function(Q, name="temperature")
     Q0 = compat.scalar_space(mesh, "DG", 0)
     heat = all(s.coupled.heat for s in deck.steps)  # no thermal strain: C3D8I conducts as C3D8
-    conducting = ("C3D8", "C3D8I", "C3D15") if heat else ("C3D8",)  # C3D15: §39
+    conducting = ("C3D8", "C3D8I", "C3D15") if heat else ("C3D8", "C3D15")  # C3D15: §39
     if block.type.name not in conducting:
         procedure = "*HEAT TRANSFER" if heat else "*COUPLED TEMPERATURE-DISPLACEMENT"
         raise NotImplementedError(
             f"{block.locations[0]}: {procedure} with {block.type.name} elements is not supported "
-            "yet (measured against ccx for C3D8 only, and C3D8I and C3D15 in heat transfer)"
+            "yet (measured against ccx for C3D8 and C3D15 only, and C3D8I in heat transfer)"
         )
     if heat:
         _check_heat_boundaries(deck)
@@ -372,7 +378,7 @@ def thermal_model(
     bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
     return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
                         residual, conductances, bc_dofs, bc_values, bc_value, bcs,
-                        constraints)  # fmt: skip
+                        constraints, strain_at_points=block.type.name == "C3D15")  # fmt: skip
 
 
 def _conductance(rows: tuple | None, interaction: str) -> GapConductance:

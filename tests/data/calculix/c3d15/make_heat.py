@@ -8,8 +8,13 @@ held at temperatures that vary over the face (``100 + 20 x + 10 y``, dof 11):
 - ``wedge_heat_transient``: a transient ``*HEAT TRANSFER`` from 20 everywhere
   (``*INITIAL CONDITIONS, TYPE=TEMPERATURE``), fixed increments (``DIRECT``);
 
-both with ``*NODE PRINT NT`` and ``*EL PRINT HFL``. Run: ``python make_heat.py``
-(deterministic).
+both with ``*NODE PRINT NT`` and ``*EL PRINT HFL``;
+
+- ``wedge_coupled``: ``*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE`` in two increments from
+  20 everywhere, the top held at 0, ``*EXPANSION`` (``ZERO`` not given: the strain is measured
+  from the initial temperature), the bottom clamped; ``NT, U, RF`` and ``HFL, S``.
+
+Run: ``python make_heat.py`` (deterministic).
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ import numpy as np
 from make_block import LZ, _grid
 
 
-def _model(x: np.ndarray, wedges: list) -> list[str]:
+def _model(x: np.ndarray, wedges: list, expansion: float = 0.0) -> list[str]:
     """Nodes, elements, the bottom and top sets and the material."""
     lines = ["*HEADING", "C3D15 block, curved edges, heat conduction (dolfinx_ntf method §39)"]
     lines.append("*NODE, NSET=NALL")
@@ -34,6 +39,8 @@ def _model(x: np.ndarray, wedges: list) -> list[str]:
         lines.append(f"*NSET, NSET={name}")
         lines += [", ".join(map(str, ids[i : i + 8])) for i in range(0, ids.size, 8)]
     lines += ["*MATERIAL, NAME=M", "*ELASTIC", "1000., 0.3", "*CONDUCTIVITY", "2.5"]
+    if expansion:
+        lines += ["*EXPANSION", f"{expansion:g}"]
     lines += ["*DENSITY", "1.5", "*SPECIFIC HEAT", "0.8"]
     lines += ["*SOLID SECTION, ELSET=EALL, MATERIAL=M"]
     return lines
@@ -61,7 +68,21 @@ def write(path: Path, transient: bool) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def write_coupled(path: Path, nlgeom: bool = False) -> None:
+    points, wedges = _grid()
+    x = np.array(points)
+    lines = _model(x, wedges, expansion=1e-3)
+    lines += ["*INITIAL CONDITIONS, TYPE=TEMPERATURE", "NALL, 20."]
+    lines += ["*STEP" + (", NLGEOM" if nlgeom else "")]
+    lines += ["*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE", "0.5, 1."]
+    lines += ["*BOUNDARY", "BOTTOM, 1, 3", *_bottom(x), "TOP, 11, 11, 0."]
+    lines += ["*NODE PRINT, NSET=NALL", "NT, U, RF", "*EL PRINT, ELSET=EALL", "HFL, S"]
+    lines += ["*END STEP"]
+    path.write_text("\n".join(lines) + "\n")
+
+
 if __name__ == "__main__":
     here = Path(__file__).parent
     write(here / "wedge_heat_steady.inp", transient=False)
     write(here / "wedge_heat_transient.inp", transient=True)
+    write_coupled(here / "wedge_coupled.inp")
