@@ -151,6 +151,9 @@ class ThermalContactProblem:
         self.elimination = _elimination(Q, list(constraints), self.bcs)
         #: The reduced Jacobian ``T'^T J T'`` of the last :meth:`J` with constraints, else None.
         self.reduced_matrix: PETSc.Mat | None = None
+        #: Heat flows into the nodes (a function of ``T``'s space, e.g. CalculiX's ``*CFLUX``),
+        #: subtracted from the residual; None for none.
+        self.nodal_loads: dolfinx.fem.Function | None = None
 
     @property
     def L(self) -> compat.Form:
@@ -260,13 +263,18 @@ class ThermalContactProblem:
         self._blocks = self.evaluate(tangent=True, coupling=coupling, mechanics=mechanics)
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """Assemble the bulk heat residual plus the springs' heat flows at ``x`` into ``b``."""
+        """Assemble the bulk heat residual plus the springs' heat flows at ``x`` into ``b``.
+
+        Minus :attr:`nodal_loads` where given.
+        """
         with b.localForm() as b_local:
             b_local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, self.L)
         dolfinx.fem.petsc.apply_lifting(b, [self.a], [self.bcs], [x], -1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.assembler.add_to_vector(b, self._blocks)
+        if self.nodal_loads is not None:
+            b.axpy(-1.0, compat.petsc_vector(self.nodal_loads))
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
         if self.elimination is not None:
             self.elimination.reduce_vector(

@@ -17,6 +17,7 @@ import pytest
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.deck import DeckError
 from dolfinx_ntf.calculix.job import run_job
 
 DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
@@ -42,12 +43,16 @@ def _run(tmp_path: Path, job: str, comm: MPI.Comm) -> tuple[list, list]:
     [
         ("wedge_heat_steady", [0.25, 0.5, 0.875, 1.0]),  # ccx's increments, ramped temperatures
         ("wedge_heat_transient", [0.05, 0.1, 0.15, 0.2]),  # DIRECT
+        ("wedge_cflux_steady", [0.25, 0.5, 0.875, 1.0]),  # *CFLUX ramped with the step
+        ("wedge_cflux_transient", [0.05, 0.1, 0.15, 0.2]),  # *CFLUX at once
+        ("wedge_cflux_steps", [0.25, 0.5, 0.875, 1.0, 1.5, 2.0]),  # OP=MOD in step 2
     ],
 )
 def test_c3d15_heat_matches_ccx(tmp_path, job, times):
     """NT at every node and HFL at ccx's 9 points equal ccx 2.20's printed digits in each of
     its increments (serial and on 2 processes): ccx's 9 points for conduction and capacity,
-    the face centres constrained to C3D15's field."""
+    the face centres constrained to C3D15's field; ``*CFLUX`` heat flows into nodes (two lines
+    on one node add up, a later step's line replaces the value of its node only)."""
     ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
     assert [b.time for b in ours if b.name == "NT"] == pytest.approx(times)
@@ -106,3 +111,27 @@ def test_c3d15_coupled_steps_refused(tmp_path, old, new, match):
     (tmp_path / "c.inp").write_text(deck.replace(old, new))
     with pytest.raises(NotImplementedError, match=r"c\.inp:\d+: " + match):
         run_job("c", tmp_path, progress=False)
+
+
+def test_cflux_on_another_dof_is_a_deck_error(tmp_path):
+    deck = (DATA / "wedge_cflux_steady.inp").read_text().replace("4, 11, 50.", "4, 12, 50.")
+    (tmp_path / "f.inp").write_text(deck)
+    with pytest.raises(DeckError, match=r"f\.inp:\d+.*degree of freedom must be 11, got 12"):
+        run_job("f", tmp_path, progress=False)
+
+
+@NEEDS_011
+def test_cflux_refusals_name_the_line(tmp_path):
+    """A *CFLUX with an amplitude, or in a static step, is refused naming its line."""
+    deck = (
+        (DATA / "wedge_cflux_steady.inp").read_text().replace("*CFLUX\n", "*CFLUX, AMPLITUDE=A\n")
+    )
+    deck = deck.replace("*STEP", "*AMPLITUDE, NAME=A\n0., 0., 1., 1.\n*STEP", 1)
+    (tmp_path / "a.inp").write_text(deck)
+    with pytest.raises(NotImplementedError, match=r"a\.inp:\d+: \*CFLUX with an AMPLITUDE"):
+        run_job("a", tmp_path, progress=False)
+    deck = (DATA / "wedge_block.inp").read_text()
+    (tmp_path / "s.inp").write_text(deck.replace("*NODE PRINT", "*CFLUX\n4, 11, 50.\n*NODE PRINT"))
+    match = r"s\.inp:\d+: \*CFLUX in step 1, which is not .* thermal steps only"
+    with pytest.raises(NotImplementedError, match=match):
+        run_job("s", tmp_path, progress=False)

@@ -467,6 +467,8 @@ class Step:
             temperature, in order; the model accepts them where they keep the initial
             temperatures, docs/method.md §26.2).
         gravity: the ``*DLOAD ... GRAV`` lines of this step, in deck order.
+        cfluxes: the ``*CFLUX`` lines of this step (heat flow into nodes, dof 11), in deck
+            order.
     """
 
     number: int
@@ -491,6 +493,7 @@ class Step:
     modal_damping: ModalDamping | None = None
     temperature_fields: tuple[InitialTemperature, ...] = ()
     gravity: tuple[Gravity, ...] = ()
+    cfluxes: tuple[CLoad, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

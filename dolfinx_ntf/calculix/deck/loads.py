@@ -1,7 +1,7 @@
 """Load, constraint and initial condition cards.
 
 ``*AMPLITUDE``, ``*TIME POINTS``, ``*BOUNDARY``, ``*EQUATION``, ``*INITIAL CONDITIONS``,
-``*CLOAD``, ``*DLOAD`` (face pressures and ``GRAV``).
+``*CLOAD``, ``*CFLUX``, ``*DLOAD`` (face pressures and ``GRAV``).
 """
 
 from __future__ import annotations
@@ -251,6 +251,22 @@ class LoadCards(ReaderState):
             value = self._float(fields[2], "load", loc)
             step.cloads.append(CLoad(frozen_array(nodes, np.int64), dof, value, amplitude, op,
                                      fields[0], loc))  # fmt: skip
+
+    def _k_CFLUX(self, card: Card) -> None:
+        """Concentrated heat flows into nodes (dof 11; docs/method.md §39)."""
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
+        op, amplitude = self._op(card), self._amplitude_param(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 3:
+                raise DeckError("*CFLUX data line: node or node set, 11, heat flow", loc)
+            nodes = self._nodes_of(fields[0], card, loc)
+            dof = self._int(fields[1], "*CFLUX degree of freedom", loc)
+            if dof != 11:
+                raise DeckError(f"*CFLUX degree of freedom must be 11, got {dof}", loc)
+            value = self._float(fields[2], "heat flow", loc)
+            step.cfluxes.append(CLoad(frozen_array(nodes, np.int64), dof, value, amplitude, op,
+                                      fields[0], loc))  # fmt: skip
 
     def _k_DLOAD(self, card: Card) -> None:
         step = self._in_step(card)

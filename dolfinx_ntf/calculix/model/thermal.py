@@ -53,6 +53,13 @@ def is_thermal(deck: Deck) -> bool:
         *deck.temperature_boundaries,
         *(b for step in deck.steps for b in step.temperatures),
     ]
+    for step in deck.steps:
+        if step.cfluxes and step.coupled is None:
+            raise NotImplementedError(
+                f"{step.cfluxes[0].location}: *CFLUX in step {step.number}, which is not "
+                "*COUPLED TEMPERATURE-DISPLACEMENT or *HEAT TRANSFER: heat flows are supported in "
+                "thermal steps only"
+            )
     heat = {step.coupled.heat for step in deck.steps if step.coupled is not None}
     if len(heat) > 1:
         raise NotImplementedError(
@@ -137,6 +144,8 @@ class ThermalModel:
         constraints: C3D15: the face centres of ``Q`` (docs/method.md §39), else empty.
         strain_at_points: The thermal strain from ``T`` at the integration points (C3D15, §39)
             instead of the element mean temperature (C3D8, §20.8).
+        flux: The current ``*CFLUX`` heat flows into the nodes (``Q``'s dofs); ``flux_dofs``
+            their local dofs and ``flux_values`` their values per step (§39).
     """
 
     Q: dolfinx.fem.FunctionSpace
@@ -155,10 +164,15 @@ class ThermalModel:
     bc_value: dolfinx.fem.Function
     bcs: list[compat.DirichletBC]
     constraints: list[LinearConstraintBlock]
+    flux: dolfinx.fem.Function
+    flux_dofs: np.ndarray
+    flux_values: list[np.ndarray]
     strain_at_points: bool = False
     _steady: bool = False
     _start: np.ndarray | None = None
     _target: np.ndarray | None = None
+    _flux_start: np.ndarray | None = None
+    _flux_target: np.ndarray | None = None
 
     def thermal_strain(self) -> ufl.core.expr.Expr:
         """``x I``, ``x = alpha (T_c - T_init,c)`` of the element mean temperatures.
@@ -181,6 +195,8 @@ class ThermalModel:
         """
         self._target = self.bc_values[step_index]
         self._start = self.T.x.array[self.bc_dofs].copy()
+        self._flux_target = self.flux_values[step_index]
+        self._flux_start = self.flux.x.array[self.flux_dofs].copy()
         self._steady = steady
         self.inverse_dt.value = 0.0
 
@@ -193,6 +209,8 @@ class ThermalModel:
         ``T_old``, measured on contact8). ``1/dt`` stays 0 in a steady step.
         """
         scale = fraction if self._steady else 1.0
+        flux = self._flux_start + (self._flux_target - self._flux_start) * scale
+        self.flux.x.array[self.flux_dofs] = flux  # ramped as the temperatures (measured, §39)
         values = self._start + (self._target - self._start) * scale
         for f in (self.bc_value, self.T_old):
             f.x.array[self.bc_dofs] = values
@@ -278,6 +296,32 @@ def _bc_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
                 "than the first step: changing the nodes of dof 11 between steps is not "
                 "supported yet"
             )
+    return np.array(nodes, dtype=np.int64), per_step
+
+
+def _flux_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
+    """The nodes with a ``*CFLUX`` in any step and their heat flows per step (``*CLOAD``'s rules).
+
+    A flow stays from step to step unless changed (``OP=MOD``) or removed (``OP=NEW``, the first
+    card of a step); the lines of one step on the same node add up (measured against ccx 2.20,
+    docs/method.md §39), and a step's first line on a node replaces the earlier steps' value.
+    """
+    current: dict[int, float] = {}
+    per_step = []
+    for step in deck.steps:
+        if step.cfluxes and step.cfluxes[0].op == "NEW":
+            current = {}
+        touched: set[int] = set()
+        for card in step.cfluxes:
+            if card.amplitude is not None:
+                raise NotImplementedError(
+                    f"{card.location}: *CFLUX with an AMPLITUDE is not supported yet"
+                )
+            for node in card.nodes.tolist():
+                current[node] = (current[node] if node in touched else 0.0) + card.value
+                touched.add(node)
+        per_step.append(dict(current))
+    nodes = sorted(set().union(*per_step)) if per_step else []
     return np.array(nodes, dtype=np.int64), per_step
 
 
@@ -376,9 +420,18 @@ def thermal_model(
     bc_values = [np.array([values[n] for n in nodes.tolist()])[held] for values in per_step]
     bc_value = dolfinx.fem.Function(Q, name="prescribed_temperature")
     bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
+    flux_nodes, flux_per_step = _flux_nodes(deck)
+    dofs = node_dof[deck.node_index(flux_nodes)] if flux_nodes.size else np.zeros(0, np.int64)
+    flux_held = dofs >= 0
+    flux_values = [
+        np.array([values.get(n, 0.0) for n in flux_nodes.tolist()])[flux_held]
+        for values in flux_per_step
+    ]
+    flux = dolfinx.fem.Function(Q, name="concentrated_heat_flow")
     return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
                         residual, conductances, bc_dofs, bc_values, bc_value, bcs,
-                        constraints, strain_at_points=block.type.name == "C3D15")  # fmt: skip
+                        constraints, flux, dofs[flux_held].astype(np.int32), flux_values,
+                        strain_at_points=block.type.name == "C3D15")  # fmt: skip
 
 
 def _conductance(rows: tuple | None, interaction: str) -> GapConductance:

@@ -14,6 +14,11 @@ both with ``*NODE PRINT NT`` and ``*EL PRINT HFL``;
   20 everywhere, the top held at 0, ``*EXPANSION`` (``ZERO`` not given: the strain is measured
   from the initial temperature), the bottom clamped; ``NT, U, RF`` and ``HFL, S``.
 
+- ``wedge_cflux_steady``, ``wedge_cflux_transient``: the two heat decks with ``*CFLUX`` heat
+  flows into a bottom node and every top node (the top not held), one top node listed twice;
+  ``wedge_cflux_steps``: the steady one followed by a second steady step that changes the flow of
+  one node (``OP=MOD``: the others stay).
+
 Run: ``python make_heat.py`` (deterministic).
 """
 
@@ -52,7 +57,11 @@ def _bottom(x: np.ndarray) -> list[str]:
     return [f"{n + 1}, 11, 11, {100.0 + 20.0 * x[n, 0] + 10.0 * x[n, 1]:.12g}" for n in ids]
 
 
-def write(path: Path, transient: bool) -> None:
+#: ``*CFLUX`` lines: a bottom node, every top node, one top node again (its flows add up).
+CFLUX = ["*CFLUX", "4, 11, 50.", "TOP, 11, 2.5", "60, 11, 7."]
+
+
+def write(path: Path, transient: bool, cflux: bool = False, steps: bool = False) -> None:
     points, wedges = _grid()
     x = np.array(points)
     lines = _model(x, wedges)
@@ -62,9 +71,13 @@ def write(path: Path, transient: bool) -> None:
     else:
         lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "0.25, 1."]
     lines += ["*BOUNDARY", *_bottom(x)]
-    if not transient:
+    if not transient and not cflux:
         lines += ["TOP, 11, 11, 0."]
+    lines += CFLUX if cflux else []
     lines += ["*NODE PRINT, NSET=NALL", "NT", "*EL PRINT, ELSET=EALL", "HFL", "*END STEP"]
+    if steps:
+        lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "0.5, 1.", "*CFLUX", "4, 11, -30."]
+        lines += ["*NODE PRINT, NSET=NALL", "NT", "*EL PRINT, ELSET=EALL", "HFL", "*END STEP"]
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -86,3 +99,6 @@ if __name__ == "__main__":
     write(here / "wedge_heat_steady.inp", transient=False)
     write(here / "wedge_heat_transient.inp", transient=True)
     write_coupled(here / "wedge_coupled.inp")
+    write(here / "wedge_cflux_steady.inp", transient=False, cflux=True)
+    write(here / "wedge_cflux_transient.inp", transient=True, cflux=True)
+    write(here / "wedge_cflux_steps.inp", transient=False, cflux=True, steps=True)
