@@ -469,6 +469,8 @@ class Step:
         gravity: the ``*DLOAD ... GRAV`` lines of this step, in deck order.
         cfluxes: the ``*CFLUX`` lines of this step (heat flow into nodes, dof 11), in deck
             order.
+        dfluxes: the ``*DFLUX`` lines of this step (uniform heat flux into faces S1..S6; the
+            ``face`` of each line), in deck order.
     """
 
     number: int
@@ -494,6 +496,7 @@ class Step:
     temperature_fields: tuple[InitialTemperature, ...] = ()
     gravity: tuple[Gravity, ...] = ()
     cfluxes: tuple[CLoad, ...] = ()
+    dfluxes: tuple[DLoad, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

@@ -1,7 +1,7 @@
 """Load, constraint and initial condition cards.
 
 ``*AMPLITUDE``, ``*TIME POINTS``, ``*BOUNDARY``, ``*EQUATION``, ``*INITIAL CONDITIONS``,
-``*CLOAD``, ``*CFLUX``, ``*DLOAD`` (face pressures and ``GRAV``).
+``*CLOAD``, ``*CFLUX``, ``*DLOAD`` (face pressures and ``GRAV``), ``*DFLUX`` (face fluxes).
 """
 
 from __future__ import annotations
@@ -267,6 +267,27 @@ class LoadCards(ReaderState):
             value = self._float(fields[2], "heat flow", loc)
             step.cfluxes.append(CLoad(frozen_array(nodes, np.int64), dof, value, amplitude, op,
                                       fields[0], loc))  # fmt: skip
+
+    def _k_DFLUX(self, card: Card) -> None:
+        """Uniform heat fluxes into element faces S1..S6 (docs/method.md §39)."""
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
+        op, amplitude = self._op(card), self._amplitude_param(card)
+        for fields, _, loc in card.lines:
+            label = fields[1] if len(fields) > 1 else ""
+            if not re.fullmatch(r"S[1-6]", label):
+                raise DeckError(
+                    f"*DFLUX, {label or '(no label)'} is not supported yet (load types: uniform "
+                    "face fluxes S1..S6)",
+                    loc,
+                )
+            if len(fields) != 3:
+                raise DeckError("*DFLUX data line: element or element set, S1..S6, flux", loc)
+            elements = self._elements_of(fields[0], card, loc)
+            self.element_refs.append((f"{card.name} face {label}", elements, loc))
+            value = self._float(fields[2], "heat flux", loc)
+            step.dfluxes.append(DLoad(frozen_array(elements, np.int64), int(label[1]), value,
+                                      amplitude, op, fields[0], loc))  # fmt: skip
 
     def _k_DLOAD(self, card: Card) -> None:
         step = self._in_step(card)

@@ -61,6 +61,7 @@ class StepBuilder:
     temperature_fields: list[InitialTemperature] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
     cfluxes: list[CLoad] = field(default_factory=list)
+    dfluxes: list[DLoad] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
     gravity: list[Gravity] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)

@@ -211,6 +211,7 @@ class StepCards(ReaderState):
                 temperature_fields=tuple(step.temperature_fields),
                 gravity=tuple(step.gravity),
                 cfluxes=tuple(step.cfluxes),
+                dfluxes=tuple(step.dfluxes),
             )
         )
         self.step = None

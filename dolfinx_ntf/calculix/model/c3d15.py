@@ -19,7 +19,7 @@ import basix
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
-from dolfinx_ntf.kernels.faces import QUAD8, TRI6, pressure_forces
+from dolfinx_ntf.kernels.faces import QUAD8, TRI6, flux_flows, pressure_forces
 
 from ..deck import Deck, ElementBlock
 from ..elements import ELEMENT_TYPES
@@ -27,6 +27,7 @@ from ..elements import ELEMENT_TYPES
 __all__ = [
     "C3D15_MIN_DOLFINX",
     "C3D15Pressures",
+    "c3d15_face_flows",
     "c3d15_metadata",
     "c3d15_rule",
     "check_c3d15_deck",
@@ -159,6 +160,33 @@ class C3D15Pressures:
             rows = np.repeat(group, columns.shape[1])
             np.add.at(out, (rows, columns.ravel()), forces.ravel())
         return out
+
+
+def c3d15_face_flows(
+    deck: Deck, block: ElementBlock, rows: np.ndarray, faces: np.ndarray, flux: np.ndarray
+) -> np.ndarray:
+    """``(nodes,)`` nodal heat flows of uniform fluxes into C3D15 faces (``*DFLUX``, §39).
+
+    Without ``ds`` on prism meshes (§34.4), as the pressures: the consistent flows of each face
+    from its deck nodes with ccx's face rules (6-node triangles 3 points, 8-node quadrilaterals
+    2 x 2), summed at the deck's nodes (the same on every process).
+
+    Args:
+        deck: The deck.
+        block: Its C3D15 block.
+        rows: ``(F,)`` element rows of the faces in the block.
+        faces: ``(F,)`` ccx face numbers 1..5.
+        flux: ``(F,)`` flux into each face.
+    """
+    out = np.zeros(deck.node_ids.size)
+    for face_type, which in ((TRI6, faces <= 2), (QUAD8, faces > 2)):
+        if np.any(which):
+            local = block.type.faces[faces[which] - 1, : face_type.num_nodes]
+            nodes = deck.node_index(block.connectivity[rows[which, None], local])
+            rule = _QUAD_RULE if face_type is QUAD8 else None
+            flows = flux_flows(face_type, deck.node_coords[nodes], flux[which], rule)
+            np.add.at(out, nodes.ravel(), flows.ravel())
+    return out
 
 
 def _check_jacobians(deck: Deck, block: ElementBlock) -> None:

@@ -29,6 +29,7 @@ from dolfinx_ntf.fem.thermal import CellTemperature
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 
 from ..deck import Boundary, Deck, ElementBlock
+from .c3d15 import c3d15_face_flows
 
 __all__ = ["ThermalModel", "is_thermal", "thermal_model"]
 
@@ -54,12 +55,13 @@ def is_thermal(deck: Deck) -> bool:
         *(b for step in deck.steps for b in step.temperatures),
     ]
     for step in deck.steps:
-        if step.cfluxes and step.coupled is None:
-            raise NotImplementedError(
-                f"{step.cfluxes[0].location}: *CFLUX in step {step.number}, which is not "
-                "*COUPLED TEMPERATURE-DISPLACEMENT or *HEAT TRANSFER: heat flows are supported in "
-                "thermal steps only"
-            )
+        for name, cards in (("*CFLUX", step.cfluxes), ("*DFLUX", step.dfluxes)):
+            if cards and step.coupled is None:
+                raise NotImplementedError(
+                    f"{cards[0].location}: {name} in step {step.number}, which is not "
+                    "*COUPLED TEMPERATURE-DISPLACEMENT or *HEAT TRANSFER: heat flows are "
+                    "supported in thermal steps only"
+                )
     heat = {step.coupled.heat for step in deck.steps if step.coupled is not None}
     if len(heat) > 1:
         raise NotImplementedError(
@@ -144,8 +146,9 @@ class ThermalModel:
         constraints: C3D15: the face centres of ``Q`` (docs/method.md §39), else empty.
         strain_at_points: The thermal strain from ``T`` at the integration points (C3D15, §39)
             instead of the element mean temperature (C3D8, §20.8).
-        flux: The current ``*CFLUX`` heat flows into the nodes (``Q``'s dofs); ``flux_dofs``
-            their local dofs and ``flux_values`` their values per step (§39).
+        flux: The current ``*CFLUX`` and ``*DFLUX`` heat flows into the nodes (``Q``'s dofs);
+            ``flux_dofs`` the local dofs of the deck's nodes and ``flux_values`` their flows per
+            step (§39).
     """
 
     Q: dolfinx.fem.FunctionSpace
@@ -299,30 +302,52 @@ def _bc_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
     return np.array(nodes, dtype=np.int64), per_step
 
 
-def _flux_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
-    """The nodes with a ``*CFLUX`` in any step and their heat flows per step (``*CLOAD``'s rules).
+def _nodal_flows(deck: Deck, block: ElementBlock) -> list[np.ndarray]:
+    """Per step, ``(nodes,)`` heat flows into the deck's nodes: ``*CFLUX`` and ``*DFLUX``.
 
-    A flow stays from step to step unless changed (``OP=MOD``) or removed (``OP=NEW``, the first
-    card of a step); the lines of one step on the same node add up (measured against ccx 2.20,
-    docs/method.md §39), and a step's first line on a node replaces the earlier steps' value.
+    ``*CLOAD``'s and ``*DLOAD``'s rules (docs/method.md §39): a value stays from step to step
+    unless changed (``OP=MOD``) or removed (``OP=NEW``, the first card of a step); lines of one
+    step on the same node (face) add up (measured against ccx 2.20 for ``*CFLUX``), and a step's
+    first line on a node (face) replaces the earlier steps' value. ``*DFLUX`` faces: C3D15 only
+    (nodal flows from the deck's faces, :func:`~.c3d15.c3d15_face_flows`).
     """
-    current: dict[int, float] = {}
+    nodes: dict[int, float] = {}
+    faces: dict[tuple[int, int], float] = {}
+    order = np.argsort(block.ids)
     per_step = []
     for step in deck.steps:
-        if step.cfluxes and step.cfluxes[0].op == "NEW":
-            current = {}
-        touched: set[int] = set()
-        for card in step.cfluxes:
-            if card.amplitude is not None:
-                raise NotImplementedError(
-                    f"{card.location}: *CFLUX with an AMPLITUDE is not supported yet"
-                )
-            for node in card.nodes.tolist():
-                current[node] = (current[node] if node in touched else 0.0) + card.value
-                touched.add(node)
-        per_step.append(dict(current))
-    nodes = sorted(set().union(*per_step)) if per_step else []
-    return np.array(nodes, dtype=np.int64), per_step
+        for current, cards in ((nodes, step.cfluxes), (faces, step.dfluxes)):
+            if cards and cards[0].op == "NEW":
+                current.clear()
+            touched: set = set()
+            for card in cards:
+                if card.amplitude is not None:
+                    name = "*CFLUX" if current is nodes else "*DFLUX"
+                    raise NotImplementedError(
+                        f"{card.location}: {name} with an AMPLITUDE is not supported yet"
+                    )
+                if current is nodes:
+                    keys = card.nodes.tolist()
+                else:
+                    if block.type.name != "C3D15":
+                        raise NotImplementedError(
+                            f"{card.location}: *DFLUX on {block.type.name} faces is not "
+                            "supported yet (C3D15 only, docs/method.md §39)"
+                        )
+                    rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
+                    keys = [(int(r), card.face) for r in rows]
+                for key in keys:
+                    current[key] = (current[key] if key in touched else 0.0) + card.value
+                    touched.add(key)
+        flows = np.zeros(deck.node_ids.size)
+        if nodes:
+            np.add.at(flows, deck.node_index(np.array(list(nodes))), list(nodes.values()))
+        if faces:
+            keys = np.array(list(faces), dtype=np.int64)
+            values = np.array(list(faces.values()))
+            flows += c3d15_face_flows(deck, block, keys[:, 0], keys[:, 1], values)
+        per_step.append(flows)
+    return per_step
 
 
 def _check_heat_boundaries(deck: Deck) -> None:
@@ -420,17 +445,12 @@ def thermal_model(
     bc_values = [np.array([values[n] for n in nodes.tolist()])[held] for values in per_step]
     bc_value = dolfinx.fem.Function(Q, name="prescribed_temperature")
     bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
-    flux_nodes, flux_per_step = _flux_nodes(deck)
-    dofs = node_dof[deck.node_index(flux_nodes)] if flux_nodes.size else np.zeros(0, np.int64)
-    flux_held = dofs >= 0
-    flux_values = [
-        np.array([values.get(n, 0.0) for n in flux_nodes.tolist()])[flux_held]
-        for values in flux_per_step
-    ]
-    flux = dolfinx.fem.Function(Q, name="concentrated_heat_flow")
+    flux_held = node_dof >= 0
+    flux_values = [flows[flux_held] for flows in _nodal_flows(deck, block)]
+    flux = dolfinx.fem.Function(Q, name="nodal_heat_flow")
     return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
                         residual, conductances, bc_dofs, bc_values, bc_value, bcs,
-                        constraints, flux, dofs[flux_held].astype(np.int32), flux_values,
+                        constraints, flux, node_dof[flux_held].astype(np.int32), flux_values,
                         strain_at_points=block.type.name == "C3D15")  # fmt: skip
 
 

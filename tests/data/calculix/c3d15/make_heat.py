@@ -17,7 +17,10 @@ both with ``*NODE PRINT NT`` and ``*EL PRINT HFL``;
 - ``wedge_cflux_steady``, ``wedge_cflux_transient``: the two heat decks with ``*CFLUX`` heat
   flows into a bottom node and every top node (the top not held), one top node listed twice;
   ``wedge_cflux_steps``: the steady one followed by a second steady step that changes the flow of
-  one node (``OP=MOD``: the others stay).
+  one node (``OP=MOD``: the others stay);
+- ``wedge_dflux_steady``, ``wedge_dflux_transient``: the two heat decks with ``*DFLUX`` fluxes
+  into the curved top triangles and the curved quadrilaterals at x = 2 (one value per element;
+  the top not held).
 
 Run: ``python make_heat.py`` (deterministic).
 """
@@ -27,7 +30,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from make_block import LZ, _grid
+from make_block import FACES, LX, LZ, _grid
 
 
 def _model(x: np.ndarray, wedges: list, expansion: float = 0.0) -> list[str]:
@@ -61,7 +64,21 @@ def _bottom(x: np.ndarray) -> list[str]:
 CFLUX = ["*CFLUX", "4, 11, 50.", "TOP, 11, 2.5", "60, 11, 7."]
 
 
-def write(path: Path, transient: bool, cflux: bool = False, steps: bool = False) -> None:
+def _dflux(x: np.ndarray, wedges: list) -> list[str]:
+    """``*DFLUX`` on the top triangles (z = LZ) and the quadrilaterals at x = LX."""
+    lines = ["*DFLUX"]
+    for e, w in enumerate(wedges):
+        for f, corners in enumerate(FACES):
+            p = x[[w[c] - 1 for c in corners]]
+            top, side = np.allclose(p[:, 2], LZ), np.allclose(p[:, 0], LX)
+            if top or side:
+                lines.append(f"{e + 1}, S{f + 1}, {(-20.0 if top else 30.0) + 2.0 * e:.12g}")
+    return lines
+
+
+def write(
+    path: Path, transient: bool, cflux: bool = False, steps: bool = False, dflux: bool = False
+) -> None:
     points, wedges = _grid()
     x = np.array(points)
     lines = _model(x, wedges)
@@ -71,9 +88,10 @@ def write(path: Path, transient: bool, cflux: bool = False, steps: bool = False)
     else:
         lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "0.25, 1."]
     lines += ["*BOUNDARY", *_bottom(x)]
-    if not transient and not cflux:
+    if not transient and not (cflux or dflux):
         lines += ["TOP, 11, 11, 0."]
     lines += CFLUX if cflux else []
+    lines += _dflux(x, wedges) if dflux else []
     lines += ["*NODE PRINT, NSET=NALL", "NT", "*EL PRINT, ELSET=EALL", "HFL", "*END STEP"]
     if steps:
         lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "0.5, 1.", "*CFLUX", "4, 11, -30."]
@@ -102,3 +120,5 @@ if __name__ == "__main__":
     write(here / "wedge_cflux_steady.inp", transient=False, cflux=True)
     write(here / "wedge_cflux_transient.inp", transient=True, cflux=True)
     write(here / "wedge_cflux_steps.inp", transient=False, cflux=True, steps=True)
+    write(here / "wedge_dflux_steady.inp", transient=False, dflux=True)
+    write(here / "wedge_dflux_transient.inp", transient=True, dflux=True)
