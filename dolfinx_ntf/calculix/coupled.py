@@ -65,7 +65,8 @@ class CoupledIncrementSolver:
             residual, self.heat, cell_temperature=thermal.cell_temperature
         )
         self.coupled.coupling_blocks = False  # ccx's iterates (docs/method.md §20.8)
-        self.heat.nodal_loads = thermal.flux  # *CFLUX (docs/method.md §39)
+        self.heat.nodal_loads = thermal.flux  # *CFLUX, *DFLUX (docs/method.md §39)
+        self.heat.element_terms += [term for term, _ in thermal.films]  # *FILM on C3D15
         self.problem = problem
         #: ccx's field controls (kept for the job; the Newton's test is its own, §20.5).
         self.controls: dict[str, float] = {}
@@ -142,7 +143,8 @@ class HeatIncrementSolver:
             conductance_pressure="ccx",
             constraints=thermal.constraints,  # C3D15's face centres (docs/method.md §39)
         )
-        self.heat.nodal_loads = thermal.flux  # *CFLUX (docs/method.md §39)
+        self.heat.nodal_loads = thermal.flux  # *CFLUX, *DFLUX (docs/method.md §39)
+        self.heat.element_terms += [term for term, _ in thermal.films]  # *FILM on C3D15
         self.problem = problem
         #: Relative and absolute tolerances of the heat residual's 2-norm.
         self.rtol, self.atol = 1e-10, 1e-12

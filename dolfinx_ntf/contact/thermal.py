@@ -31,6 +31,7 @@ from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.constraints import ConstraintElimination, LinearConstraintBlock
+from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.kernels.gap_conductance import (
     GapConductance,
     ThermalSpringEvaluation,
@@ -41,7 +42,19 @@ from dolfinx_ntf.kernels.rigid import RigidSurface
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import distributed_elimination
 
-__all__ = ["ThermalContactProblem"]
+__all__ = ["HeatElementTerm", "ThermalContactProblem"]
+
+
+class HeatElementTerm(typing.Protocol):
+    """Element blocks added to the heat residual and Jacobian, in the global numbering.
+
+    For example film conditions on faces the mesh has no ``ds`` for (C3D15's, docs/method.md
+    §39); see :attr:`ThermalContactProblem.element_terms`. Their couplings must be in the
+    matrix pattern (nodes of one cell).
+    """
+
+    def evaluate(self, x: PETSc.Vec) -> GlobalBlocks:
+        """This process's blocks at the temperature ``x`` (ghosts updated); -1 skips a dof."""
 
 
 class ThermalContactProblem:
@@ -154,6 +167,9 @@ class ThermalContactProblem:
         #: Heat flows into the nodes (a function of ``T``'s space, e.g. CalculiX's ``*CFLUX``),
         #: subtracted from the residual; None for none.
         self.nodal_loads: dolfinx.fem.Function | None = None
+        #: Element blocks added to the residual and the Jacobian (e.g. films, §39).
+        self.element_terms: list[HeatElementTerm] = []
+        self._element_blocks: list[GlobalBlocks] = []
 
     @property
     def L(self) -> compat.Form:
@@ -261,11 +277,12 @@ class ThermalContactProblem:
             self.elimination.back_substitute(x)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._blocks = self.evaluate(tangent=True, coupling=coupling, mechanics=mechanics)
+        self._element_blocks = [term.evaluate(x) for term in self.element_terms]
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """Assemble the bulk heat residual plus the springs' heat flows at ``x`` into ``b``.
 
-        Minus :attr:`nodal_loads` where given.
+        Minus :attr:`nodal_loads` where given, plus :attr:`element_terms`.
         """
         with b.localForm() as b_local:
             b_local.set(0.0)
@@ -275,6 +292,8 @@ class ThermalContactProblem:
         self.assembler.add_to_vector(b, self._blocks)
         if self.nodal_loads is not None:
             b.axpy(-1.0, compat.petsc_vector(self.nodal_loads))
+        if self._element_blocks:
+            self.assembler.add_global_to_vector(b, self._element_blocks)
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
         if self.elimination is not None:
             self.elimination.reduce_vector(
@@ -291,6 +310,9 @@ class ThermalContactProblem:
         A.assemble()
         self.assembler.add_to_matrix(A, self._blocks)
         A.assemble()
+        if self._element_blocks:
+            self.assembler.add_global_to_matrix(A, self._element_blocks)
+            A.assemble()
         if self.elimination is not None:
             key = (A.handle, self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
             self.reduced_matrix = self.elimination.reduce_matrix(A, key)

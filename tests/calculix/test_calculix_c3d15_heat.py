@@ -48,6 +48,8 @@ def _run(tmp_path: Path, job: str, comm: MPI.Comm) -> tuple[list, list]:
         ("wedge_cflux_steps", [0.25, 0.5, 0.875, 1.0, 1.5, 2.0]),  # OP=MOD in step 2
         ("wedge_dflux_steady", [0.25, 0.5, 0.875, 1.0]),  # *DFLUX on curved faces
         ("wedge_dflux_transient", [0.05, 0.1, 0.15, 0.2]),
+        ("wedge_film_steady", [0.25, 0.5, 0.875, 1.0]),  # *FILM: h ramped, sink at once
+        ("wedge_film_transient", [0.05, 0.1, 0.15, 0.2]),
     ],
 )
 def test_c3d15_heat_matches_ccx(tmp_path, job, times):
@@ -56,7 +58,8 @@ def test_c3d15_heat_matches_ccx(tmp_path, job, times):
     the face centres constrained to C3D15's field; ``*CFLUX`` heat flows into nodes (two lines
     on one node add up, a later step's line replaces the value of its node only); ``*DFLUX``
     on curved 6-node triangles and 8-node quadrilaterals (ccx's 3 and 2 x 2 points: 3 x 3 on
-    the quadrilaterals is 1.1e-4 off in NT)."""
+    the quadrilaterals is 1.1e-4 off in NT); ``*FILM`` on the same faces (a steady step ramps
+    the film coefficient, not the sink temperature: ramping the sink instead is 2.8e-1 off)."""
     ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
     assert [b.time for b in ours if b.name == "NT"] == pytest.approx(times)
@@ -175,11 +178,15 @@ NT
     [
         ("S2", NotImplementedError, r"d\.inp:\d+: \*DFLUX on C3D8 faces is not supported yet"),
         ("BF", DeckError, r"d\.inp:\d+.*\*DFLUX, BF is not supported yet"),
+        ("F2", NotImplementedError, r"d\.inp:\d+: \*FILM on C3D8 faces is not supported yet"),
     ],
 )
 def test_dflux_refusals_name_the_line(tmp_path, label, error, match):
-    """*DFLUX on faces of elements other than C3D15, and body fluxes, are refused naming the
-    line (any dolfinx)."""
-    (tmp_path / "d.inp").write_text(C3D8_HEAT.format(label=label))
+    """*DFLUX and *FILM on faces of elements other than C3D15, and body fluxes, are refused
+    naming the line (any dolfinx)."""
+    deck = C3D8_HEAT.format(label=label)
+    if label.startswith("F"):
+        deck = deck.replace("*DFLUX\nEALL, F2, 5.", "*FILM\nEALL, F2, 20., 5.")
+    (tmp_path / "d.inp").write_text(deck)
     with pytest.raises(error, match=match):
         run_job("d", tmp_path, progress=False)

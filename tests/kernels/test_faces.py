@@ -14,6 +14,7 @@ from dolfinx_ntf.kernels.faces import (
     face_points,
     face_tangents,
     face_type_from_num_nodes,
+    film_matrices,
     flux_flows,
 )
 
@@ -342,3 +343,19 @@ def test_flux_flows_of_flat_faces():
     area = np.sum(QUAD8.quadrature_weights * np.linalg.norm(np.cross(q_xi, q_eta), axis=-1))
     assert area > 16.0
     np.testing.assert_allclose(flows.sum(), q[0] * area, rtol=1e-13)
+
+
+@pytest.mark.parametrize("ft", [TRI6, QUAD8], ids=["tri6", "quad8"])
+def test_film_matrices_are_face_masses(ft):
+    """Symmetric, row sums the consistent flows of a unit flux (``M 1`` is :func:`flux_flows`);
+    positive semi-definite of rank ``min(n, points)`` on a curved face (tri6's 3 points give
+    rank 3, quad8's 3 x 3 points a positive definite matrix)."""
+    coords = np.column_stack([ft.node_parameters, np.zeros(ft.num_nodes)])
+    coords[ft.num_corners :, 2] = 0.2  # curved
+    M = film_matrices(ft, coords[None])[0]
+    np.testing.assert_allclose(M, M.T, atol=1e-15)
+    np.testing.assert_allclose(M.sum(axis=1), flux_flows(ft, coords[None], [1.0])[0], rtol=1e-13)
+    eigenvalues = np.linalg.eigvalsh(M)
+    assert eigenvalues.min() > -1e-14 * eigenvalues.max()
+    rank = min(ft.num_nodes, ft.quadrature_points.shape[0])
+    assert np.count_nonzero(eigenvalues > 1e-12 * eigenvalues.max()) == rank

@@ -214,6 +214,18 @@ class CLoad:
 
 
 @dataclass(frozen=True, eq=False)
+class Film:
+    """One ``*FILM`` data line: heat flow ``coefficient (T - sink)`` out of face ``face`` (1..6)."""
+
+    elements: np.ndarray
+    face: int
+    sink: float
+    coefficient: float
+    op: str
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
 class DLoad:
     """One ``*DLOAD`` data line: pressure ``value`` on face ``face`` (1-based) of ``elements``."""
 
@@ -471,6 +483,7 @@ class Step:
             order.
         dfluxes: the ``*DFLUX`` lines of this step (uniform heat flux into faces S1..S6; the
             ``face`` of each line), in deck order.
+        films: the ``*FILM`` lines of this step (faces F1..F6), in deck order.
     """
 
     number: int
@@ -497,6 +510,7 @@ class Step:
     gravity: tuple[Gravity, ...] = ()
     cfluxes: tuple[CLoad, ...] = ()
     dfluxes: tuple[DLoad, ...] = ()
+    films: tuple[Film, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

@@ -1,7 +1,8 @@
 """Load, constraint and initial condition cards.
 
 ``*AMPLITUDE``, ``*TIME POINTS``, ``*BOUNDARY``, ``*EQUATION``, ``*INITIAL CONDITIONS``,
-``*CLOAD``, ``*CFLUX``, ``*DLOAD`` (face pressures and ``GRAV``), ``*DFLUX`` (face fluxes).
+``*CLOAD``, ``*CFLUX``, ``*DLOAD`` (face pressures and ``GRAV``), ``*DFLUX`` (face fluxes),
+``*FILM``.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from .data import (
     CLoad,
     DLoad,
     Equation,
+    Film,
     Gravity,
     InitialTemperature,
     InitialVelocity,
@@ -288,6 +290,32 @@ class LoadCards(ReaderState):
             value = self._float(fields[2], "heat flux", loc)
             step.dfluxes.append(DLoad(frozen_array(elements, np.int64), int(label[1]), value,
                                       amplitude, op, fields[0], loc))  # fmt: skip
+
+    def _k_FILM(self, card: Card) -> None:
+        """Film conditions on element faces F1..F6 (docs/method.md §39)."""
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP"})
+        op = self._op(card)
+        for fields, _, loc in card.lines:
+            label = fields[1] if len(fields) > 1 else ""
+            if not re.fullmatch(r"F[1-6]", label):
+                raise DeckError(
+                    f"*FILM, {label or '(no label)'} is not supported yet (load types: uniform "
+                    "film conditions F1..F6)",
+                    loc,
+                )
+            if len(fields) != 4:
+                raise DeckError(
+                    "*FILM data line: element or element set, F1..F6, sink temperature, film "
+                    "coefficient",
+                    loc,
+                )
+            elements = self._elements_of(fields[0], card, loc)
+            self.element_refs.append((f"{card.name} face {label}", elements, loc))
+            sink = self._float(fields[2], "sink temperature", loc)
+            coefficient = self._float(fields[3], "film coefficient", loc)
+            step.films.append(Film(frozen_array(elements, np.int64), int(label[1]), sink,
+                                   coefficient, op, loc))  # fmt: skip
 
     def _k_DLOAD(self, card: Card) -> None:
         step = self._in_step(card)

@@ -20,6 +20,7 @@ from .data import (
     Dynamic,
     Equation,
     FileRequest,
+    Film,
     Frequency,
     Friction,
     FrictionChange,
@@ -62,6 +63,7 @@ class StepBuilder:
     cloads: list[CLoad] = field(default_factory=list)
     cfluxes: list[CLoad] = field(default_factory=list)
     dfluxes: list[DLoad] = field(default_factory=list)
+    films: list[Film] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
     gravity: list[Gravity] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)

@@ -212,6 +212,7 @@ class StepCards(ReaderState):
                 gravity=tuple(step.gravity),
                 cfluxes=tuple(step.cfluxes),
                 dfluxes=tuple(step.dfluxes),
+                films=tuple(step.films),
             )
         )
         self.step = None

@@ -13,21 +13,27 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
+from petsc4py import PETSc
+
 import numpy as np
 
 import basix
+import dolfinx.fem
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
-from dolfinx_ntf.kernels.faces import QUAD8, TRI6, flux_flows, pressure_forces
+from dolfinx_ntf.kernels.faces import QUAD8, TRI6, film_matrices, flux_flows, pressure_forces
 
 from ..deck import Deck, ElementBlock
 from ..elements import ELEMENT_TYPES
 
 __all__ = [
     "C3D15_MIN_DOLFINX",
+    "C3D15Films",
     "C3D15Pressures",
     "c3d15_face_flows",
+    "c3d15_films",
     "c3d15_metadata",
     "c3d15_rule",
     "check_c3d15_deck",
@@ -186,6 +192,74 @@ def c3d15_face_flows(
             rule = _QUAD_RULE if face_type is QUAD8 else None
             flows = flux_flows(face_type, deck.node_coords[nodes], flux[which], rule)
             np.add.at(out, nodes.ravel(), flows.ravel())
+    return out
+
+
+class C3D15Films:
+    """``*FILM`` conditions on C3D15 faces of one face type, as element blocks of ``T`` (§39).
+
+    No ``ds`` on prism meshes (§34.4): each face of an owned cell is a block of its nodes with
+    the matrix ``h M`` (``M`` from :func:`~dolfinx_ntf.kernels.faces.film_matrices` with ccx's
+    face rule) and the residual ``h M (T - T_sink)``: the heat flow out of the face. The
+    :class:`~dolfinx_ntf.contact.thermal.HeatElementTerm` role.
+
+    Args:
+        T: The temperature.
+        dofs: ``(F, n)`` local dofs of the faces' nodes.
+        matrices: ``(F, n, n)`` face mass matrices.
+        prescribed: Local dofs with a prescribed temperature (skipped in the blocks).
+    """
+
+    def __init__(
+        self,
+        T: dolfinx.fem.Function,
+        dofs: np.ndarray,
+        matrices: np.ndarray,
+        prescribed: np.ndarray,
+    ) -> None:
+        index_map = T.function_space.dofmap.index_map
+        glob = index_map.local_to_global(dofs.ravel().astype(np.int32)).astype(np.int64)
+        glob = glob.reshape(dofs.shape)
+        self._local = dofs
+        self._dofs = np.where(np.isin(dofs, prescribed), -1, glob)
+        self._matrices = matrices
+        #: ``(F,)`` film coefficient and sink temperature of each face (0: no film).
+        self.coefficient = np.zeros(dofs.shape[0])
+        self.sink = np.zeros(dofs.shape[0])
+
+    def evaluate(self, x: PETSc.Vec) -> GlobalBlocks:
+        """The faces' blocks at the temperature ``x`` (local values, ghosts updated)."""
+        with x.localForm() as local:
+            T = local.array_r[self._local]
+        K = self.coefficient[:, None, None] * self._matrices
+        vector = np.einsum("fij,fj->fi", K, T - self.sink[:, None])
+        return GlobalBlocks(self._dofs, K, vector)
+
+
+def c3d15_films(
+    deck: Deck,
+    block: ElementBlock,
+    T: dolfinx.fem.Function,
+    node_dof: np.ndarray,
+    element_cell: np.ndarray,
+    keys: np.ndarray,
+    prescribed: np.ndarray,
+) -> list[tuple[C3D15Films, np.ndarray]]:
+    """The film terms of the faces ``keys`` ``(F, 2)`` (element row, ccx face 1..5) per face type.
+
+    Each with the positions in ``keys`` of its faces: those of cells this process owns.
+    """
+    num_owned = T.function_space.mesh.topology.index_map(3).size_local
+    cell = element_cell[keys[:, 0]]
+    owned = (cell >= 0) & (cell < num_owned)
+    out = []
+    for face_type, which in ((TRI6, keys[:, 1] <= 2), (QUAD8, keys[:, 1] > 2)):
+        positions = np.flatnonzero(which & owned)
+        local = block.type.faces[keys[positions, 1] - 1, : face_type.num_nodes]
+        nodes = deck.node_index(block.connectivity[keys[positions, 0, None], local])
+        rule = _QUAD_RULE if face_type is QUAD8 else None
+        matrices = film_matrices(face_type, deck.node_coords[nodes], rule)
+        out.append((C3D15Films(T, node_dof[nodes], matrices, prescribed), positions))
     return out
 
 

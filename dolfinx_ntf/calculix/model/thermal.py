@@ -29,7 +29,7 @@ from dolfinx_ntf.fem.thermal import CellTemperature
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 
 from ..deck import Boundary, Deck, ElementBlock
-from .c3d15 import c3d15_face_flows
+from .c3d15 import C3D15Films, c3d15_face_flows, c3d15_films
 
 __all__ = ["ThermalModel", "is_thermal", "thermal_model"]
 
@@ -55,7 +55,8 @@ def is_thermal(deck: Deck) -> bool:
         *(b for step in deck.steps for b in step.temperatures),
     ]
     for step in deck.steps:
-        for name, cards in (("*CFLUX", step.cfluxes), ("*DFLUX", step.dfluxes)):
+        kinds = (("*CFLUX", step.cfluxes), ("*DFLUX", step.dfluxes), ("*FILM", step.films))
+        for name, cards in kinds:
             if cards and step.coupled is None:
                 raise NotImplementedError(
                     f"{cards[0].location}: {name} in step {step.number}, which is not "
@@ -149,6 +150,9 @@ class ThermalModel:
         flux: The current ``*CFLUX`` and ``*DFLUX`` heat flows into the nodes (``Q``'s dofs);
             ``flux_dofs`` the local dofs of the deck's nodes and ``flux_values`` their flows per
             step (§39).
+        films: C3D15's ``*FILM`` terms (one per face type, on the heat problem's element terms)
+            with the positions of their faces in ``film_values``' arrays; ``film_values`` per
+            step the film coefficient and sink temperature of every face (§39).
     """
 
     Q: dolfinx.fem.FunctionSpace
@@ -170,12 +174,16 @@ class ThermalModel:
     flux: dolfinx.fem.Function
     flux_dofs: np.ndarray
     flux_values: list[np.ndarray]
+    films: list[tuple[C3D15Films, np.ndarray]]
+    film_values: list[tuple[np.ndarray, np.ndarray]]
     strain_at_points: bool = False
     _steady: bool = False
     _start: np.ndarray | None = None
     _target: np.ndarray | None = None
     _flux_start: np.ndarray | None = None
     _flux_target: np.ndarray | None = None
+    _film_start: list[np.ndarray] | None = None
+    _step: int = 0
 
     def thermal_strain(self) -> ufl.core.expr.Expr:
         """``x I``, ``x = alpha (T_c - T_init,c)`` of the element mean temperatures.
@@ -196,10 +204,15 @@ class ThermalModel:
         ccx applies the temperatures of a transient step at once and ramps those of a steady one
         from their values at the step start (manual, ``*COUPLED TEMPERATURE-DISPLACEMENT``).
         """
+        self._step = step_index
         self._target = self.bc_values[step_index]
         self._start = self.T.x.array[self.bc_dofs].copy()
         self._flux_target = self.flux_values[step_index]
         self._flux_start = self.flux.x.array[self.flux_dofs].copy()
+        self._film_start = [term.coefficient.copy() for term, _ in self.films]
+        sink = self.film_values[step_index][1]
+        for term, positions in self.films:  # the sink temperatures at once (measured, §39)
+            term.sink[:] = sink[positions]
         self._steady = steady
         self.inverse_dt.value = 0.0
 
@@ -214,6 +227,9 @@ class ThermalModel:
         scale = fraction if self._steady else 1.0
         flux = self._flux_start + (self._flux_target - self._flux_start) * scale
         self.flux.x.array[self.flux_dofs] = flux  # ramped as the temperatures (measured, §39)
+        coefficient = self.film_values[self._step][0]
+        for (term, positions), start in zip(self.films, self._film_start):  # h ramped (§39)
+            term.coefficient[:] = start + (coefficient[positions] - start) * scale
         values = self._start + (self._target - self._start) * scale
         for f in (self.bc_value, self.T_old):
             f.x.array[self.bc_dofs] = values
@@ -350,6 +366,39 @@ def _nodal_flows(deck: Deck, block: ElementBlock) -> list[np.ndarray]:
     return per_step
 
 
+def _film_faces(
+    deck: Deck, block: ElementBlock
+) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+    """The faces with a ``*FILM`` ``(K, 2)`` (element row, face); per step their ``h, T_sink``.
+
+    Coefficients and sink temperatures are 0 where a face has no film in a step.
+
+    A face keeps its film from step to step unless given again (its last line replaces it) or
+    removed (``OP=NEW``, the first card of a step). C3D15 faces only (§39).
+    """
+    order = np.argsort(block.ids)
+    current: dict[tuple[int, int], tuple[float, float]] = {}
+    per_step = []
+    for step in deck.steps:
+        if step.films and step.films[0].op == "NEW":
+            current = {}
+        for card in step.films:
+            if block.type.name != "C3D15":
+                raise NotImplementedError(
+                    f"{card.location}: *FILM on {block.type.name} faces is not supported yet "
+                    "(C3D15 only, docs/method.md §39)"
+                )
+            rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
+            current.update({(int(r), card.face): (card.coefficient, card.sink) for r in rows})
+        per_step.append(dict(current))
+    keys = sorted(set().union(*per_step)) if per_step else []
+    values = [
+        tuple(np.array([film.get(k, (0.0, 0.0))[i] for k in keys]) for i in (0, 1))
+        for film in per_step
+    ]
+    return np.array(keys, dtype=np.int64).reshape(-1, 2), values
+
+
 def _check_heat_boundaries(deck: Deck) -> None:
     """Refuse prescribed displacements other than 0 in a deck of ``*HEAT TRANSFER`` steps.
 
@@ -448,9 +497,14 @@ def thermal_model(
     flux_held = node_dof >= 0
     flux_values = [flows[flux_held] for flows in _nodal_flows(deck, block)]
     flux = dolfinx.fem.Function(Q, name="nodal_heat_flow")
+    film_keys, film_values = _film_faces(deck, block)
+    films = []
+    if film_keys.size:
+        films = c3d15_films(deck, block, T, node_dof, element_cell, film_keys, bc_dofs)
     return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
                         residual, conductances, bc_dofs, bc_values, bc_value, bcs,
                         constraints, flux, node_dof[flux_held].astype(np.int32), flux_values,
+                        films, film_values,
                         strain_at_points=block.type.name == "C3D15")  # fmt: skip
 
 

@@ -20,7 +20,9 @@ both with ``*NODE PRINT NT`` and ``*EL PRINT HFL``;
   one node (``OP=MOD``: the others stay);
 - ``wedge_dflux_steady``, ``wedge_dflux_transient``: the two heat decks with ``*DFLUX`` fluxes
   into the curved top triangles and the curved quadrilaterals at x = 2 (one value per element;
-  the top not held).
+  the top not held);
+- ``wedge_film_steady``, ``wedge_film_transient``: the same faces with ``*FILM`` (sink 40 and
+  coefficient 0.5 on the top triangles, sink -10 and coefficient 1.5 on the quadrilaterals).
 
 Run: ``python make_heat.py`` (deterministic).
 """
@@ -76,8 +78,23 @@ def _dflux(x: np.ndarray, wedges: list) -> list[str]:
     return lines
 
 
+def _film(x: np.ndarray, wedges: list) -> list[str]:
+    """``*FILM`` on the faces of :func:`_dflux`."""
+    lines = ["*FILM"]
+    for line in _dflux(x, wedges)[1:]:
+        element, label, value = (t.strip() for t in line.split(","))
+        top = float(value) < 0.0
+        lines.append(f"{element}, F{label[1]}, {40.0 if top else -10.0}, {0.5 if top else 1.5}")
+    return lines
+
+
 def write(
-    path: Path, transient: bool, cflux: bool = False, steps: bool = False, dflux: bool = False
+    path: Path,
+    transient: bool,
+    cflux: bool = False,
+    steps: bool = False,
+    dflux: bool = False,
+    film: bool = False,
 ) -> None:
     points, wedges = _grid()
     x = np.array(points)
@@ -88,10 +105,11 @@ def write(
     else:
         lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "0.25, 1."]
     lines += ["*BOUNDARY", *_bottom(x)]
-    if not transient and not (cflux or dflux):
+    if not transient and not (cflux or dflux or film):
         lines += ["TOP, 11, 11, 0."]
     lines += CFLUX if cflux else []
     lines += _dflux(x, wedges) if dflux else []
+    lines += _film(x, wedges) if film else []
     lines += ["*NODE PRINT, NSET=NALL", "NT", "*EL PRINT, ELSET=EALL", "HFL", "*END STEP"]
     if steps:
         lines += ["*STEP", "*HEAT TRANSFER, STEADY STATE", "0.5, 1.", "*CFLUX", "4, 11, -30."]
@@ -122,3 +140,5 @@ if __name__ == "__main__":
     write(here / "wedge_cflux_steps.inp", transient=False, cflux=True, steps=True)
     write(here / "wedge_dflux_steady.inp", transient=False, dflux=True)
     write(here / "wedge_dflux_transient.inp", transient=True, dflux=True)
+    write(here / "wedge_film_steady.inp", transient=False, film=True)
+    write(here / "wedge_film_transient.inp", transient=True, film=True)
