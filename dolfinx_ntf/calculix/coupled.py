@@ -126,6 +126,8 @@ class HeatIncrementSolver:
     The displacement is never solved for: the springs are those the contact problem pairs at
     the undeformed state (as ccx 2.20's heat transfer step, docs/method.md §20.9), their heat
     flows are :class:`~dolfinx_ntf.ThermalContactProblem`'s with ccx's conductance pressure.
+    C3D15's face centres are eliminated (the reduced Jacobian is factorized), ``*CFLUX`` and
+    ``*DFLUX`` are the problem's nodal loads and ``*FILM`` its element terms (§39).
 
     Args:
         problem: The job's contact problem (its displacement stays as it is).

@@ -245,9 +245,18 @@ def c3d15_films(
     keys: np.ndarray,
     prescribed: np.ndarray,
 ) -> list[tuple[C3D15Films, np.ndarray]]:
-    """The film terms of the faces ``keys`` ``(F, 2)`` (element row, ccx face 1..5) per face type.
+    """The film terms of the faces ``keys`` per face type (docs/method.md §39).
 
     Each with the positions in ``keys`` of its faces: those of cells this process owns.
+
+    Args:
+        deck: The deck.
+        block: Its C3D15 block.
+        T: The temperature.
+        node_dof: Local dof of each deck node (-1 where this process has none).
+        element_cell: Local cell of each element row (-1 elsewhere).
+        keys: ``(F, 2)`` element row and ccx face (1..5) of each face with a film.
+        prescribed: Local dofs with a prescribed temperature.
     """
     num_owned = T.function_space.mesh.topology.index_map(3).size_local
     cell = element_cell[keys[:, 0]]
