@@ -129,7 +129,8 @@ def test_cflux_on_another_dof_is_a_deck_error(tmp_path):
 
 @NEEDS_011
 def test_cflux_refusals_name_the_line(tmp_path):
-    """A *CFLUX with an amplitude, or in a static step, is refused naming its line."""
+    """A *CFLUX with an amplitude, or in a static step, is refused naming its line; a *FILM on
+    a face the element does not have is an error naming its line."""
     deck = (
         (DATA / "wedge_cflux_steady.inp").read_text().replace("*CFLUX\n", "*CFLUX, AMPLITUDE=A\n")
     )
@@ -142,6 +143,12 @@ def test_cflux_refusals_name_the_line(tmp_path):
     match = r"s\.inp:\d+: \*CFLUX in step 1, which is not .* thermal steps only"
     with pytest.raises(NotImplementedError, match=match):
         run_job("s", tmp_path, progress=False)
+    deck = (DATA / "wedge_film_steady.inp").read_text().replace("4, F3,", "4, F6,")
+    (tmp_path / "f.inp").write_text(deck)
+    with pytest.raises(
+        ValueError, match=r"f\.inp:\d+: \*FILM F6: C3D15 elements have faces F1\.\.F5"
+    ):
+        run_job("f", tmp_path, progress=False)
 
 
 C3D8_HEAT = """*NODE, NSET=NALL

@@ -350,6 +350,7 @@ def _nodal_flows(deck: Deck, block: ElementBlock) -> list[np.ndarray]:
                             f"{card.location}: *DFLUX on {block.type.name} faces is not "
                             "supported yet (C3D15 only, docs/method.md §39)"
                         )
+                    _check_face(card.face, block, card.location, "*DFLUX", "S")
                     rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
                     keys = [(int(r), card.face) for r in rows]
                 for key in keys:
@@ -388,6 +389,7 @@ def _film_faces(
                     f"{card.location}: *FILM on {block.type.name} faces is not supported yet "
                     "(C3D15 only, docs/method.md §39)"
                 )
+            _check_face(card.face, block, card.location, "*FILM", "F")
             rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
             current.update({(int(r), card.face): (card.coefficient, card.sink) for r in rows})
         per_step.append(dict(current))
@@ -397,6 +399,16 @@ def _film_faces(
         for film in per_step
     ]
     return np.array(keys, dtype=np.int64).reshape(-1, 2), values
+
+
+def _check_face(face: int, block: ElementBlock, location: object, card: str, letter: str) -> None:
+    """Raise ``ValueError`` naming the line if ``face`` is not a face of the block's elements."""
+    count = len(block.type.faces)
+    if face > count:
+        raise ValueError(
+            f"{location}: {card} {letter}{face}: {block.type.name} elements have faces "
+            f"{letter}1..{letter}{count}"
+        )
 
 
 def _check_heat_boundaries(deck: Deck) -> None:
