@@ -76,7 +76,7 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
             and small-strain steps, element-face surfaces, contact or tie surfaces, transient
-            or NLGEOM coupled temperature-displacement steps.
+            coupled temperature-displacement steps.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -116,12 +116,6 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 f"{step.location}: transient *COUPLED TEMPERATURE-DISPLACEMENT steps with C3D15 "
                 "elements are not supported yet (STEADY STATE ones and *HEAT TRANSFER are, "
                 f"docs/method.md §39; {where})"
-            )
-        if step.coupled and not step.coupled.heat and step.nlgeom:
-            raise NotImplementedError(
-                f"{step.location}: *COUPLED TEMPERATURE-DISPLACEMENT steps with NLGEOM and C3D15 "
-                "elements are not supported yet (the small-strain ones are, docs/method.md §39; "
-                f"{where})"
             )
 
 

@@ -12,7 +12,9 @@ both with ``*NODE PRINT NT`` and ``*EL PRINT HFL``;
 
 - ``wedge_coupled``: ``*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE`` in two increments from
   20 everywhere, the top held at 0, ``*EXPANSION`` (``ZERO`` not given: the strain is measured
-  from the initial temperature), the bottom clamped; ``NT, U, RF`` and ``HFL, S``.
+  from the initial temperature), the bottom clamped; ``NT, U, RF`` and ``HFL, S``;
+- ``wedge_coupled_nlgeom``: the same with ``NLGEOM``, ``*EXPANSION 4e-4`` (thermal strains up to
+  5e-2) and tight ``*CONTROLS`` in both codes (converged solutions compared).
 
 - ``wedge_cflux_steady``, ``wedge_cflux_transient``: the two heat decks with ``*CFLUX`` heat
   flows into a bottom node and every top node (the top not held), one top node listed twice;
@@ -120,10 +122,12 @@ def write(
 def write_coupled(path: Path, nlgeom: bool = False) -> None:
     points, wedges = _grid()
     x = np.array(points)
-    lines = _model(x, wedges, expansion=1e-3)
+    lines = _model(x, wedges, expansion=4e-4 if nlgeom else 1e-3)
     lines += ["*INITIAL CONDITIONS, TYPE=TEMPERATURE", "NALL, 20."]
     lines += ["*STEP" + (", NLGEOM" if nlgeom else "")]
     lines += ["*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE", "0.5, 1."]
+    if nlgeom:  # both codes to round-off (the default stops at 0.5 %)
+        lines += ["*CONTROLS, PARAMETERS=FIELD", "1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12"]
     lines += ["*BOUNDARY", "BOTTOM, 1, 3", *_bottom(x), "TOP, 11, 11, 0."]
     lines += ["*NODE PRINT, NSET=NALL", "NT, U, RF", "*EL PRINT, ELSET=EALL", "HFL, S"]
     lines += ["*END STEP"]
@@ -135,6 +139,7 @@ if __name__ == "__main__":
     write(here / "wedge_heat_steady.inp", transient=False)
     write(here / "wedge_heat_transient.inp", transient=True)
     write_coupled(here / "wedge_coupled.inp")
+    write_coupled(here / "wedge_coupled_nlgeom.inp", nlgeom=True)
     write(here / "wedge_cflux_steady.inp", transient=False, cflux=True)
     write(here / "wedge_cflux_transient.inp", transient=True, cflux=True)
     write(here / "wedge_cflux_steps.inp", transient=False, cflux=True, steps=True)
