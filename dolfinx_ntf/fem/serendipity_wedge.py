@@ -76,21 +76,23 @@ def add_wedge_centres(cells: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def wedge_serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstraintBlock]:
-    """Constraints that turn a degree-2 vector Lagrange space on prisms into C3D15's space.
+    """Constraints that turn a degree-2 Lagrange space on prisms into C3D15's space.
 
     Args:
-        V: Vector Lagrange space of degree 2 on a prism mesh (this process's cells, ghosts
-            included; a face between two processes' cells is given on both).
+        V: Vector (displacement) or scalar (temperature, docs/method.md §39) Lagrange space of
+            degree 2 on a prism mesh (this process's cells, ghosts included; a face between two
+            processes' cells is given on both).
 
     Returns:
-        One block of 9-term rows (each quadrilateral face once, three components; the centre
+        One block of 9-term rows (each quadrilateral face once, each component; the centre
         first, the dependent dof). Dirichlet conditions must leave the centres free.
     """
     if V.mesh.topology.cell_type != dolfinx.mesh.CellType.prism:
         raise ValueError("wedge_serendipity_constraints: a prism mesh is needed")
-    if compat.space_degree(V) != 2 or V.dofmap.index_map_bs != 3:
+    bs = V.dofmap.index_map_bs
+    if compat.space_degree(V) != 2 or bs not in (1, 3):
         raise ValueError(
-            "wedge_serendipity_constraints: a degree-2 vector Lagrange space is needed"
+            "wedge_serendipity_constraints: a degree-2 vector or scalar Lagrange space is needed"
         )
     dofs = compat.cell_dofs(V).astype(np.int64)
     if dofs.shape[1] != 18:
@@ -102,10 +104,11 @@ def wedge_serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearCo
     nodes = nodes[np.sort(first)]
     return [
         LinearConstraintBlock(
-            np.repeat(nodes, 3, axis=0),
-            np.tile(np.arange(3), nodes.shape[0])[:, None],
+            np.repeat(nodes, bs, axis=0),
+            np.tile(np.arange(bs), nodes.shape[0])[:, None],
             np.concatenate([[1.0], -_FACE_WEIGHTS]),
             name="C3D15 face centres",
+            block_size=bs,
         )
     ]
 

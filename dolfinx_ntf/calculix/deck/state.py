@@ -20,6 +20,7 @@ from .data import (
     Dynamic,
     Equation,
     FileRequest,
+    Film,
     Frequency,
     Friction,
     FrictionChange,
@@ -60,6 +61,9 @@ class StepBuilder:
     temperatures: list[Boundary] = field(default_factory=list)
     temperature_fields: list[InitialTemperature] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
+    cfluxes: list[CLoad] = field(default_factory=list)
+    dfluxes: list[DLoad] = field(default_factory=list)
+    films: list[Film] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
     gravity: list[Gravity] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)
