@@ -69,7 +69,7 @@ class PrismXdmfFile:
         gathered = self._comm.gather(
             (original, self._input[nodes[:num_owned]], self._input, mesh.geometry.x), root=0
         )
-        self._spaces: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._spaces: dict[int, tuple[dolfinx.fem.FunctionSpace, np.ndarray, np.ndarray]] = {}
         self._file: MixedXdmfFile | None = None
         #: The file written.
         self.path = Path(path)
@@ -87,7 +87,7 @@ class PrismXdmfFile:
 
     def _owned_nodes(self, V: dolfinx.fem.FunctionSpace) -> tuple[np.ndarray, np.ndarray]:
         """Input indices of the geometry nodes whose dof this process owns, and those dofs."""
-        key = id(V)
+        key = id(V)  # the space is kept with its entry: the id is not reused meanwhile
         if key not in self._spaces:
             if V.mesh is not self.mesh or compat.space_degree(V) != 2:
                 raise ValueError(
@@ -101,8 +101,8 @@ class PrismXdmfFile:
             owned = np.flatnonzero(
                 (dof_of_node >= 0) & (dof_of_node < V.dofmap.index_map.size_local)
             )
-            self._spaces[key] = (self._input[owned], dof_of_node[owned])
-        return self._spaces[key]
+            self._spaces[key] = (V, self._input[owned], dof_of_node[owned])
+        return self._spaces[key][1:]
 
     def write(self, t: float, functions: typing.Sequence[dolfinx.fem.Function]) -> None:
         """Append one time step with the Functions' nodal values (by their names). Collective.

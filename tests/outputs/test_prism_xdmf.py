@@ -27,6 +27,7 @@ from helpers.xdmf import read_xdmf
 
 import basix
 import dolfinx.fem
+import dolfinx.mesh
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.serendipity_wedge import wedge15_space
@@ -165,3 +166,18 @@ def test_c3d15_solution_keeps_its_face_centres(tmp_path: Path):
         edges = [6 + e for e, (a, b) in enumerate(VTK_EDGES) if a in quad and b in quad]
         quad8 = -0.25 * values[:, list(quad)].sum(axis=1) + 0.5 * values[:, edges].sum(axis=1)
         assert np.abs(values[:, 15 + k] - quad8).max() <= 1e-12 * largest
+
+
+@pytest.mark.mpi
+@needs_011
+def test_prism_file_refuses_other_meshes_and_spaces(tmp_path: Path):
+    """A mesh of hexahedra, and a degree-1 Function on the prisms, are refused with the reason."""
+    directory = Path(COMM.bcast(str(tmp_path), root=0))
+    cube = dolfinx.mesh.create_unit_cube(COMM, 1, 1, 1, dolfinx.mesh.CellType.hexahedron)
+    with pytest.raises(ValueError, match="a mesh of prisms is needed"):
+        PrismXdmfFile(directory / "cube.xdmf", cube)
+    mesh, _, _ = mesh_from_gmsh(build_prism_block, COMM, incomplete=True)
+    linear = dolfinx.fem.Function(compat.vector_space(mesh, "Lagrange", 1), name="p1")
+    with PrismXdmfFile(directory / "p1.xdmf", mesh) as file:
+        with pytest.raises(ValueError, match="degree-2 Lagrange spaces on the file's mesh"):
+            file.write(0.0, [linear])
