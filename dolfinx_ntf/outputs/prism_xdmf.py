@@ -61,7 +61,6 @@ class PrismXdmfFile:
             )
         self.mesh = mesh
         self._comm = mesh.comm
-        self._root = self._comm.rank == 0
         num_owned = mesh.topology.index_map(3).size_local
         #: Input index of each local geometry node.
         self._input = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
@@ -89,7 +88,11 @@ class PrismXdmfFile:
         """Input indices of the geometry nodes whose dof this process owns, and those dofs."""
         key = id(V)  # the space is kept with its entry: the id is not reused meanwhile
         if key not in self._spaces:
-            if V.mesh is not self.mesh or compat.space_degree(V) != 2:
+            if (
+                V.mesh is not self.mesh
+                or compat.space_degree(V) != 2
+                or compat.space_family(V) != "Lagrange"  # DG: a node's value per cell
+            ):
                 raise ValueError(
                     "PrismXdmfFile.write: Functions of degree-2 Lagrange spaces on the file's "
                     "mesh are needed"

@@ -171,13 +171,15 @@ def test_c3d15_solution_keeps_its_face_centres(tmp_path: Path):
 @pytest.mark.mpi
 @needs_011
 def test_prism_file_refuses_other_meshes_and_spaces(tmp_path: Path):
-    """A mesh of hexahedra, and a degree-1 Function on the prisms, are refused with the reason."""
+    """A mesh of hexahedra, degree-1 and broken Functions on the prisms: refused with the reason."""
     directory = Path(COMM.bcast(str(tmp_path), root=0))
     cube = dolfinx.mesh.create_unit_cube(COMM, 1, 1, 1, dolfinx.mesh.CellType.hexahedron)
     with pytest.raises(ValueError, match="a mesh of prisms is needed"):
         PrismXdmfFile(directory / "cube.xdmf", cube)
     mesh, _, _ = mesh_from_gmsh(build_prism_block, COMM, incomplete=True)
     linear = dolfinx.fem.Function(compat.vector_space(mesh, "Lagrange", 1), name="p1")
+    broken = dolfinx.fem.Function(compat.discontinuous_space(mesh, 2), name="dg2")
     with PrismXdmfFile(directory / "p1.xdmf", mesh) as file:
-        with pytest.raises(ValueError, match="degree-2 Lagrange spaces on the file's mesh"):
-            file.write(0.0, [linear])
+        for f in (linear, broken):
+            with pytest.raises(ValueError, match="degree-2 Lagrange spaces on the file's mesh"):
+                file.write(0.0, [f])
