@@ -292,3 +292,11 @@ def test_curved_prisms_demo(tmp_path):
     # 18-node prisms: gmsh's centres on these ruled faces are the quad8 ones (2.3e-13)
     assert summary["difference_18"] < 1e-9
     assert Path(summary["png"]).stat().st_size > 10_000
+    # the XDMF file (Wedge_18): every prism, and the loaded end's mean displacement at its points
+    import numpy as np
+    from helpers.xdmf import read_xdmf
+
+    points, cells, (step,) = read_xdmf(Path(summary["xdmf"]))
+    assert len(cells) == summary["cells_15"]
+    end = step["displacement"][np.isclose(points[:, 1], 0.0)].mean(axis=0)
+    np.testing.assert_allclose(end, summary["end_15"], rtol=0, atol=1e-12 * np.abs(end).max())

@@ -279,12 +279,11 @@ class _Job:
         # nodes fails at the collapsed edge), the deck's mesh is written with wedge cells (§30.6)
         self.writer: ContactWriter | WedgeDeckWriter | None = None
         xdmf = directory / f"{jobname}.xdmf"
-        if model.element_type.name == "C3D15":  # dolfinx 0.11 writes no 18-node prisms (§34)
-            pass
-        elif deck.wedges.size == 0:
+        # C3D15: dolfinx 0.11 writes no 18-node prisms, the deck's Wedge_15 cells are (§43)
+        if deck.wedges.size == 0 and model.element_type.name != "C3D15":
             self.result.xdmf = xdmf
             self.writer = ContactWriter(self.problem, str(xdmf), comm)
-        elif model.element_type.name == "C3D8":
+        elif model.element_type.name in ("C3D8", "C3D15"):
             self.result.xdmf = xdmf
             self.writer = WedgeDeckWriter(xdmf, self.values, root=comm.rank == 0)
         self._static_interactions = [pair.interaction for pair in model.pairs]

@@ -4,12 +4,17 @@ docs/method.md §30.6. dolfinx cannot write fields of a mesh whose hexahedra col
 (its point values pull the cells' vertices back, which fails where the Jacobian vanishes, at the
 collapsed edge), so :class:`MixedXdmfFile` writes such a mesh itself: the hexahedra as XDMF
 ``Hexahedron`` cells, the collapsed ones as ``Wedge`` cells (:func:`collapsed_wedges`), in one
-``Mixed`` topology, and per time step the point fields, as dolfinx and meshio lay out a time
-series (the mesh once, each step's grid including its topology and geometry by an XPointer). The
+``Mixed`` topology; or cells of one given type, such as the quadratic wedges ``Wedge_15`` and
+``Wedge_18`` that dolfinx does not write (docs/method.md §43); and per time step the point
+fields, as dolfinx and meshio lay out a time series (the mesh once, each step's grid including its
+topology and geometry by an XPointer). The
 data are written inline (``Format="XML"``, shortest round-trip decimals), so the file needs no HDF5
 library and has no companion ``.h5``. Node ordering: VTK's (and XDMF's), hexahedra
 ``0-1-2-3`` below ``4-5-6-7``, wedges ``0-1-2`` below ``3-4-5`` with the first triangle's normal
-pointing away from the second. Pure Python and numpy; one process writes.
+pointing away from the second, quadratic wedges the same, then their edges ``0-1, 1-2, 2-0, 3-4,
+4-5, 5-3, 0-3, 1-4, 2-5`` and (18 nodes) the centres of the quadrilaterals ``0-1-4-3, 1-2-5-4,
+2-0-3-5`` (``VTK_QUADRATIC_WEDGE``, ``VTK_BIQUADRATIC_QUADRATIC_WEDGE``). Pure Python and numpy;
+one process writes.
 """
 
 from __future__ import annotations
@@ -23,8 +28,11 @@ from dolfinx_ntf.kernels.wedge_rule import VTK_HEXAHEDRON, collapse_classes, col
 
 __all__ = [
     "COLLAPSE_PATTERNS",
+    "NODES_PER_CELL",
     "XDMF_HEXAHEDRON",
     "XDMF_WEDGE",
+    "XDMF_WEDGE_15",
+    "XDMF_WEDGE_18",
     "MixedXdmfFile",
     "collapsed_wedges",
 ]
@@ -32,6 +40,11 @@ __all__ = [
 #: XDMF's cell type numbers in a ``Mixed`` topology.
 XDMF_HEXAHEDRON = 9
 XDMF_WEDGE = 8
+XDMF_WEDGE_15 = 40
+XDMF_WEDGE_18 = 41
+
+#: Nodes per cell of the XDMF types written.
+NODES_PER_CELL = {XDMF_HEXAHEDRON: 8, XDMF_WEDGE: 6, XDMF_WEDGE_15: 15, XDMF_WEDGE_18: 18}
 
 #: The twelve collapses in VTK's vertex order, each as ``((a, b), (c, d), wedge)``: the repeated
 #: edges and the wedge's six vertices of the hexahedron (a triangle, then the partners of its
@@ -102,7 +115,7 @@ def _data_item(values: np.ndarray, indent: str, number_type: str = "Float") -> s
 
 
 class MixedXdmfFile:
-    """An XDMF time series on hexahedra and collapsed wedges (``Mixed`` topology, inline data).
+    """An XDMF time series on hexahedra and collapsed wedges, or on cells of one type (inline data).
 
     Each :meth:`write` appends one time step and leaves a complete file behind (the closing tags
     are rewritten after it), so a file of an interrupted run opens.
@@ -111,28 +124,56 @@ class MixedXdmfFile:
         path: The ``.xdmf`` file to create (overwritten).
         points: ``(N, 3)`` node coordinates.
         cells: ``(n, 8)`` hexahedra in VTK order, wedges as collapsed hexahedra
-            (:func:`collapsed_wedges`).
+            (:func:`collapsed_wedges`); with ``cell_type``, ``(n, k)`` cells of that type in
+            XDMF's (VTK's) node order.
+        cell_type: One XDMF type for all cells (:data:`NODES_PER_CELL`'s keys, e.g.
+            :data:`XDMF_WEDGE_15`); the topology stays ``Mixed``, each cell with its type.
+
+    Raises:
+        ValueError: Cells of another width than ``cell_type``'s, or not indexing the points.
     """
 
     _TAIL = "    </Grid>\n  </Domain>\n</Xdmf>\n"
 
-    def __init__(self, path: str | Path, points: np.ndarray, cells: np.ndarray) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        points: np.ndarray,
+        cells: np.ndarray,
+        *,
+        cell_type: int | None = None,
+    ) -> None:
         points = np.asarray(points, dtype=np.float64)
-        wedge, wedge_nodes = collapsed_wedges(cells, points)
+        if cell_type is None:
+            wedge, wedge_nodes = collapsed_wedges(cells, points)
         cells = np.asarray(cells, dtype=np.int64)
+        if cell_type is not None and (
+            cell_type not in NODES_PER_CELL
+            or cells.ndim != 2
+            or cells.shape[1] != NODES_PER_CELL[cell_type]
+        ):
+            raise ValueError(
+                f"MixedXdmfFile: cells of XDMF type {cell_type} must have shape "
+                f"(n, {NODES_PER_CELL.get(cell_type, '?')}), got {cells.shape}"
+            )
         if cells.size and (cells.min() < 0 or cells.max() >= points.shape[0]):
             raise ValueError(f"MixedXdmfFile: cells must index the {points.shape[0]} points")
         #: The file.
         self.path = Path(path)
         self.num_points = points.shape[0]
-        #: ``(n,)`` True for the cells written as wedges.
-        self.wedges = wedge
-        rows: list[np.ndarray] = [np.zeros(0, np.int64)] * cells.shape[0]
-        for k in np.flatnonzero(~wedge).tolist():
-            rows[k] = np.concatenate([[XDMF_HEXAHEDRON], cells[k]])
-        for k, nodes in zip(np.flatnonzero(wedge).tolist(), wedge_nodes):
-            rows[k] = np.concatenate([[XDMF_WEDGE], nodes])
-        topology = np.concatenate(rows) if rows else np.zeros(0, np.int64)
+        if cell_type is not None:
+            #: ``(n,)`` True for the cells written as (linear) wedges.
+            self.wedges = np.full(cells.shape[0], cell_type == XDMF_WEDGE)
+            typed = np.column_stack([np.full(cells.shape[0], cell_type, np.int64), cells])
+            topology = typed.ravel()
+        else:
+            self.wedges = wedge
+            rows: list[np.ndarray] = [np.zeros(0, np.int64)] * cells.shape[0]
+            for k in np.flatnonzero(~wedge).tolist():
+                rows[k] = np.concatenate([[XDMF_HEXAHEDRON], cells[k]])
+            for k, nodes in zip(np.flatnonzero(wedge).tolist(), wedge_nodes):
+                rows[k] = np.concatenate([[XDMF_WEDGE], nodes])
+            topology = np.concatenate(rows) if rows else np.zeros(0, np.int64)
         ints = " ".join(map(str, topology.tolist()))
         head = (
             '<?xml version="1.0"?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n'

@@ -1,11 +1,11 @@
-"""Reading back the XDMF files of ``outputs.xdmf_cells`` (hexahedra and wedges, inline data)."""
+"""Reading back the XDMF files of ``outputs.xdmf_cells`` (hexahedra, wedges, quadratic wedges)."""
 
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
-from dolfinx_ntf.outputs.xdmf_cells import XDMF_HEXAHEDRON, XDMF_WEDGE
+from dolfinx_ntf.outputs.xdmf_cells import NODES_PER_CELL
 
 
 def read_xdmf(path: Path) -> tuple[np.ndarray, list[tuple[int, np.ndarray]], list[dict]]:
@@ -19,7 +19,7 @@ def read_xdmf(path: Path) -> tuple[np.ndarray, list[tuple[int, np.ndarray]], lis
     flat = np.array(topology.find("DataItem").text.split(), dtype=np.int64)
     cells, k = [], 0
     while k < flat.size:
-        size = {XDMF_HEXAHEDRON: 8, XDMF_WEDGE: 6}[int(flat[k])]
+        size = NODES_PER_CELL[int(flat[k])]
         cells.append((int(flat[k]), flat[k + 1 : k + 1 + size]))
         k += 1 + size
     assert len(cells) == int(topology.get("NumberOfElements"))
