@@ -7,8 +7,9 @@ then midside nodes (see ``faces.py``).
 
 Users name surfaces with :class:`FacetSurface` (facet-tag values, the face-based surfaces of
 CalculiX) or :class:`NodeSurface` (a vertex set, CalculiX's ``*SURFACE, TYPE=NODE``);
-:func:`resolve_master` and :func:`resolve_slave` turn them into numbering-level data for the
-pure-numpy layers.
+:class:`FaceNodesSurface` gives a face-based surface by its faces' nodes where dolfinx numbers no
+facets (prism meshes on dolfinx 0.11, docs/method.md §38). :func:`resolve_master` and
+:func:`resolve_slave` turn them into numbering-level data for the pure-numpy layers.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from dolfinx_ntf.kernels.edges import EdgeType, edge_type_from_num_nodes
 from dolfinx_ntf.kernels.faces import FaceType, face_type_from_num_nodes
 
 __all__ = [
+    "NO_FACET",
+    "FaceNodesSurface",
     "FacetSurface",
     "NodeSurface",
     "SlaveSurface",
@@ -134,18 +137,76 @@ class NodeSurface:
         return cls(dolfinx.mesh.locate_entities(mesh, 0, marker), name)
 
 
+#: The facet index of a face that is no dolfinx facet of this process: another process's face,
+#: or a face given by its nodes (:class:`FaceNodesSurface`). Facet-based code skips it.
+NO_FACET = -1
+
+
 @dataclass(frozen=True)
 class SurfaceFaces:
     """Faces of one face type as node (block dof) connectivity in CalculiX order."""
 
     face_type: FaceType | EdgeType
     faces: np.ndarray  # (F, n) local block dofs
-    facets: np.ndarray  # (F,) local facet index of each face
+    facets: np.ndarray  # (F,) local facet index of each face, NO_FACET for none
 
     @property
     def nodes(self) -> np.ndarray:
         """Sorted unique nodes of the faces."""
         return np.unique(self.faces)
+
+
+@dataclass(frozen=True)
+class FaceNodesSurface:
+    """A face-based surface given by the nodes of its faces instead of dolfinx facets.
+
+    For meshes whose facets dolfinx does not number: dolfinx 0.11 gives a prism mesh two facet
+    types, and ``ds``, ``exterior_facet_indices`` and ``connectivity(2, 0)`` raise "Multiple
+    entity types in mesh" there (C3D15 decks, docs/method.md §38). Its faces have no facet
+    index (:data:`NO_FACET`), so facet-based outputs (the recovered pressure) leave them out.
+
+    Args:
+        face_type: The type of every face (e.g. ``TRI6`` or ``QUAD8`` of ``kernels.faces``).
+        faces: ``(F, n)`` local block dofs of the displacement space, one row per face in
+            CalculiX order: corners counter-clockwise seen from outside the body, then the
+            midside nodes. On several processes each gives the faces of its cells (owned and
+            ghost); a process may give none.
+        name: Label used in messages.
+    """
+
+    face_type: FaceType
+    faces: np.ndarray = field(repr=False)
+    name: str = "faces"
+
+    def __post_init__(self) -> None:
+        """Check the face type and the node rows; store them as an int32 array."""
+        owner = f"FaceNodesSurface '{self.name}'"
+        validation.check_type(self.name, str, "FaceNodesSurface: name")
+        validation.check_type(self.face_type, FaceType, f"{owner}: face_type")
+        faces = np.asarray(self.faces)
+        n = self.face_type.num_nodes
+        if faces.size == 0:
+            faces = np.zeros((0, n), dtype=np.int32)
+        if faces.ndim != 2 or faces.shape[1] != n or not np.issubdtype(faces.dtype, np.integer):
+            raise ValueError(
+                f"{owner}: faces must be an integer array of shape (F, {n}) for "
+                f"{self.face_type.name} faces, got shape {faces.shape} and dtype {faces.dtype}"
+            )
+        if faces.size and int(faces.min()) < 0:
+            raise ValueError(f"{owner}: faces must hold block dofs >= 0, got {int(faces.min())}")
+        object.__setattr__(self, "faces", np.ascontiguousarray(faces, dtype=np.int32))
+
+    def surface_faces(self, V: dolfinx.fem.FunctionSpace, what: str) -> SurfaceFaces:
+        """The faces as :class:`SurfaceFaces` of ``V`` (a ``ValueError`` for a node outside V)."""
+        index_map = V.dofmap.index_map
+        num_nodes = index_map.size_local + index_map.num_ghosts
+        if self.faces.size and int(self.faces.max()) >= num_nodes:
+            raise ValueError(
+                f"{what}: FaceNodesSurface '{self.name}' has node {int(self.faces.max())}, "
+                f"outside 0..{num_nodes - 1} (the displacement space's nodes on this process)"
+            )
+        facets = np.full(self.faces.shape[0], NO_FACET, dtype=np.int32)
+        return SurfaceFaces(self.face_type, self.faces, facets)
 
 
 @dataclass(frozen=True)
@@ -345,16 +406,18 @@ def _tagged_facets(surface: FacetSurface, mesh: dolfinx.mesh.Mesh, what: str) ->
 
 def resolve_master(
     V: dolfinx.fem.FunctionSpace,
-    surface: FacetSurface,
+    surface: FacetSurface | FaceNodesSurface,
     what: str = "master",
     *,
     reference: np.ndarray | None = None,
 ) -> SurfaceFaces:
-    """Master faces of a facet surface (``reference``: as :func:`boundary_faces` takes it)."""
+    """Master faces of a face-based surface (``reference``: as :func:`boundary_faces` takes it)."""
+    if isinstance(surface, FaceNodesSurface):
+        return surface.surface_faces(V, what)
     if not isinstance(surface, FacetSurface):
         raise ValueError(
-            f"{what}: the master surface must be a FacetSurface (face-based), "
-            f"got {type(surface).__name__}"
+            f"{what}: the master surface must be a FacetSurface or a FaceNodesSurface "
+            f"(face-based), got {type(surface).__name__}"
         )
     facets = _tagged_facets(surface, V.mesh, what)
     return boundary_faces(V, facets, what=what, reference=reference)
@@ -362,7 +425,7 @@ def resolve_master(
 
 def resolve_slave(
     V: dolfinx.fem.FunctionSpace,
-    surface: FacetSurface | NodeSurface,
+    surface: FacetSurface | NodeSurface | FaceNodesSurface,
     what: str = "slave",
     *,
     reference: np.ndarray | None = None,
@@ -373,13 +436,17 @@ def resolve_slave(
     all exterior faces of the mesh with at least one corner among the slave nodes.
     ``reference``: as :func:`boundary_faces` takes it.
     """
+    if isinstance(surface, FaceNodesSurface):
+        faces = surface.surface_faces(V, what)
+        return SlaveSurface(faces.nodes, faces)
     if isinstance(surface, FacetSurface):
         facets = _tagged_facets(surface, V.mesh, what)
         faces = boundary_faces(V, facets, what=what, reference=reference)
         return SlaveSurface(faces.nodes, faces)
     if not isinstance(surface, NodeSurface):
         raise TypeError(
-            f"{what}: expected a FacetSurface or NodeSurface, got {type(surface).__name__}"
+            f"{what}: expected a FacetSurface, NodeSurface or FaceNodesSurface, got "
+            f"{type(surface).__name__}"
         )
     vertices = surface.vertices
     mesh = V.mesh

@@ -5,7 +5,9 @@ centres are constrained to the serendipity wedge (``fem/serendipity_wedge.py``),
 ccx's 9 points. dolfinx holds one cell type per mesh and runs degree-2 spaces on prisms from 0.11
 on only (0.5.2's FFCx refuses prisms, 0.9 aborts the process while assembling P2 on prisms,
 §32.5): older releases refuse the deck, naming the element's line. A prism mesh has no ``ds``
-in dolfinx 0.11, so ``*DLOAD`` pressures become nodal forces with ccx's face rules (§34.4).
+in dolfinx 0.11, so ``*DLOAD`` pressures become nodal forces with ccx's face rules (§34.4), and
+element-face ``*SURFACE``s become :class:`~dolfinx_ntf.FaceNodesSurface`s of the deck's faces
+for contact (§38).
 """
 
 from __future__ import annotations
@@ -19,16 +21,19 @@ import basix
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
+from dolfinx_ntf.fem.surfaces import FaceNodesSurface
 from dolfinx_ntf.kernels.faces import QUAD8, TRI6, pressure_forces
 
-from ..deck import Deck, ElementBlock
+from ..deck import Deck, ElementBlock, Surface, not_supported
 from ..elements import ELEMENT_TYPES
+from .mesh import MeshMaps
 
 __all__ = [
     "C3D15_MIN_DOLFINX",
     "C3D15Pressures",
     "c3d15_metadata",
     "c3d15_rule",
+    "c3d15_surface",
     "check_c3d15_deck",
 ]
 
@@ -68,8 +73,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     Raises:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
-            and small-strain steps, element-face surfaces, contact or tie surfaces, thermal
-            steps.
+            and small-strain steps, ties, node-based slave surfaces and ADJUST node sets of
+            contact pairs, thermal steps.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -90,19 +95,25 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 "NLGEOM and small-strain steps are not supported yet (they are nodal forces on "
                 f"the reference faces in the one, on the current faces in the other; {where})"
             )
-    if any(s.type == "ELEMENT" for s in deck.surfaces.values()):
-        name, surface = next((n, s) for n, s in deck.surfaces.items() if s.type == "ELEMENT")
-        raise NotImplementedError(
-            f"{surface.location}: *SURFACE {name}: element faces of C3D15 elements are not "
-            f"supported yet (prism meshes have two facet types; {where})"
-        )
     _check_jacobians(deck, block)
-    if deck.contact_pairs or deck.ties:
-        card = deck.contact_pairs[0] if deck.contact_pairs else deck.ties[0]
+    if deck.ties:
         raise NotImplementedError(
-            f"{card.location}: contact and tie surfaces on C3D15 elements are not supported yet "
-            f"({where}; docs/method.md §34)"
+            f"{deck.ties[0].location}: *TIE on C3D15 elements is not supported yet ({where}; "
+            "docs/method.md §38)"
         )
+    for pair in deck.contact_pairs:
+        slave = deck.surfaces[pair.slave]
+        if slave.type == "NODE":
+            raise NotImplementedError(
+                f"{pair.location}: *CONTACT PAIR with the node-based slave surface {pair.slave} "
+                f"({slave.location}) on C3D15 elements is not supported yet (its faces are all "
+                f"exterior faces, which a prism mesh does not number; {where}; docs/method.md §38)"
+            )
+        if pair.adjust is not None and not isinstance(pair.adjust, float):
+            raise NotImplementedError(
+                f"{pair.location}: ADJUST={pair.adjust} (a node set) on C3D15 elements is not "
+                f"supported yet (a distance is; {where}; docs/method.md §38)"
+            )
     for step in deck.steps:
         if step.coupled:
             raise NotImplementedError(
@@ -180,3 +191,53 @@ def _check_jacobians(deck: Deck, block: ElementBlock) -> None:
             f"on 1-2, 2-3, 3-1, 4-5, 5-6, 6-4, 1-4, 2-5, 3-6) or it is folded "
             f"({bad.size} such element(s))"
         )
+
+
+def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> FaceNodesSurface:
+    """An element-face ``*SURFACE`` of a C3D15 deck as the faces' nodes (docs/method.md §38).
+
+    ccx's faces S1, S2 are 6-node triangles, S3..S5 8-node quadrilaterals, in ccx's outward
+    order (``ELEMENT_TYPES["C3D15"].faces``); a surface holds faces of one of the two kinds. On
+    several processes each gives the faces of the elements it holds (owned and ghost cells).
+
+    Raises:
+        ValueError: a face that lies between two elements.
+        NotImplementedError: a surface of triangles and quadrilaterals together.
+    """
+    block = maps.block
+    etype = block.type
+    order = np.argsort(block.ids)
+    rows = order[np.searchsorted(block.ids, surface.elements, sorter=order)]
+    faces = surface.faces - 1
+    triangle = faces < 2
+    if np.any(triangle) and not np.all(triangle):
+        raise not_supported(
+            f"*SURFACE {name} with both 6-node triangles (S1, S2) and 8-node quadrilaterals "
+            f"(S3..S5) of C3D15 elements ({int(np.sum(triangle))} and {int(np.sum(~triangle))} "
+            "faces; one kind per contact surface)",
+            surface.location,
+        )
+    face_type = TRI6 if np.all(triangle) else QUAD8
+    inner = ~_exterior_faces(block)[rows, faces]
+    if np.any(inner):
+        k = int(np.argmax(inner))
+        raise ValueError(
+            f"{surface.location}: *SURFACE {name}: face S{surface.faces[k]} of element "
+            f"{surface.elements[k]} lies between two elements, not on the boundary"
+        )
+    held = maps.element_cell[rows] >= 0
+    local = etype.faces[faces[held], : face_type.num_nodes]
+    nodes = block.connectivity[rows[held, None], local]
+    dofs = maps.node_dof[deck.node_index(nodes)]
+    return FaceNodesSurface(face_type, dofs.astype(np.int32), name)
+
+
+def _exterior_faces(block: ElementBlock) -> np.ndarray:
+    """``(E, 5)``: face ``f`` of element row ``e`` belongs to that element only."""
+    etype = block.type
+    corners = etype.faces[:, :4].copy()
+    corners[etype.face_corner_counts == 3, 3] = -1
+    keys = np.where(corners >= 0, block.connectivity[:, np.maximum(corners, 0)], -1)
+    keys = np.sort(keys.reshape(-1, 4), axis=1)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    return (counts[inverse.ravel()] == 1).reshape(block.ids.size, etype.num_faces)

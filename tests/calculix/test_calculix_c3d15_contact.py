@@ -1,0 +1,139 @@
+"""Contact on C3D15 faces (docs/method.md §38): runs on dolfinx 0.11, refused before it.
+
+The decks are ``tests/data/calculix/c3d15/make_contact.py``'s punch of C3D15 wedges pressed onto
+a block of C3D15 wedges (LINEAR law, 2 increments), with 8-node quadrilaterals or 6-node
+triangles in contact; the ``.dat.ref`` files are ccx 2.20's output.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.deck import read_deck
+from dolfinx_ntf.calculix.job import run_job
+
+DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
+ON_011 = compat.DOLFINX_VERSION >= (0, 11)
+#: The decks and the wedges' axes of punch and block (y: quadrilaterals in contact, z: triangles).
+AXES = {"wedge_punch_quad": (1, 1), "wedge_punch_tri": (2, 2), "wedge_punch_quad_on_tri": (1, 2)}
+DECKS = list(AXES)
+
+
+def _generator():
+    """``make_contact.py`` as a module (it writes the decks)."""
+    spec = importlib.util.spec_from_file_location("make_contact", DATA / "make_contact.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+@pytest.mark.parametrize("job", DECKS)
+def test_c3d15_contact_matches_ccx(tmp_path, job):
+    """U, RF and the contact blocks (CDIS, CSTR, CELS, CNUM) of both increments equal ccx 2.20's
+    printed digits, on the same slave nodes (serial and 2 processes).
+
+    ``wedge_punch_quad``: quad8 slave faces (ccx's 1/100, 24/100 shares) on quad8 master faces;
+    ``wedge_punch_tri``: tri6 on tri6 (1/999, 332/999); ``wedge_punch_quad_on_tri``: quad8 on
+    tri6. Some punch nodes lift off: ccx's open springs (positive clearance) are in CDIS too.
+    """
+    comm = MPI.COMM_WORLD
+    root = Path(comm.bcast(str(tmp_path), root=0))
+    if comm.rank == 0:
+        shutil.copy(DATA / f"{job}.inp", root / f"{job}.inp")
+    comm.barrier()
+    assert run_job(job, root, comm=comm, progress=False).completed
+    comm.barrier()
+    ccx, ours = read_dat(DATA / f"{job}.dat.ref"), read_dat(root / f"{job}.dat")
+    names = ["U", "RF", "CDIS", "CSTR", "CELS", "CNUM"]
+    assert [(b.name, b.time) for b in ccx] == [(n, t) for t in (0.5, 1.0) for n in names]
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
+    worst: dict[str, float] = {}
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(b.labels, a.labels)  # the same slave nodes, in ccx order
+        scale = np.abs(a.values).max()
+        assert scale > 0.0
+        worst[a.name] = max(
+            worst.get(a.name, 0.0), float(np.abs(a.values - b.values).max() / scale)
+        )
+    assert all(value < 1e-6 for value in worst.values()), worst
+
+
+def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
+    """The stored decks are what ``make_contact.py`` writes, with the faces each names: S3..S5
+    (quadrilaterals) or S1, S2 (triangles) in contact."""
+    module = _generator()
+    for job, (slave_axis, master_axis) in AXES.items():
+        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis)
+        assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
+        deck = read_deck(DATA / f"{job}.inp")
+        for name, axis in (("SLAVE", slave_axis), ("MASTER", master_axis)):
+            faces = set(deck.surfaces[name].faces.tolist())
+            assert faces <= ({1, 2} if axis == 2 else {3, 4, 5}), (job, name, faces)
+
+
+def _edited(tmp_path: Path, job: str, old: str, new: str) -> str:
+    """``job``'s deck with ``old`` replaced by ``new``, written as ``e.inp``: the job name."""
+    text = (DATA / f"{job}.inp").read_text()
+    assert old in text
+    (tmp_path / "e.inp").write_text(text.replace(old, new, 1))
+    return "e"
+
+
+@pytest.mark.skipif(ON_011, reason="dolfinx 0.11 runs C3D15")
+def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
+    shutil.copy(DATA / "wedge_punch_quad.inp", tmp_path / "wedge_punch_quad.inp")
+    with pytest.raises(
+        NotImplementedError, match=r"wedge_punch_quad\.inp:\d+: C3D15 \(element 1\)"
+    ):
+        run_job("wedge_punch_quad", tmp_path, progress=False)
+
+
+@pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
+def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
+    """What is not built stays refused with the deck line: ties, node-based slave surfaces,
+    ADJUST node sets, a surface of triangles and quadrilaterals; a face inside the mesh is an
+    error naming it."""
+    tie = "*TIE, NAME=T\nSLAVE, MASTER\n*SURFACE INTERACTION"
+    job = _edited(tmp_path, "wedge_punch_quad", "*SURFACE INTERACTION", tie)
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*TIE on C3D15 elements"):
+        run_job(job, tmp_path, progress=False)
+    nodal = "*SURFACE, NAME=NS, TYPE=NODE\nTOP\n*CONTACT PAIR"
+    job = _edited(tmp_path, "wedge_punch_quad", "*CONTACT PAIR", nodal)
+    (tmp_path / "e.inp").write_text(
+        (tmp_path / "e.inp").read_text().replace("SLAVE, MASTER", "NS, MASTER")
+    )
+    with pytest.raises(
+        NotImplementedError, match=r"e\.inp:\d+: \*CONTACT PAIR with the node-based"
+    ):
+        run_job(job, tmp_path, progress=False)
+    adjust = "TYPE=NODE TO SURFACE, ADJUST=TOP"
+    job = _edited(tmp_path, "wedge_punch_quad", "TYPE=NODE TO SURFACE", adjust)
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ADJUST=TOP \(a node set\)"):
+        run_job(job, tmp_path, progress=False)
+    deck = read_deck(DATA / "wedge_punch_quad.inp")
+    side = next(e for e in deck.elements["C3D15"].ids if e > 32)  # a punch wedge: S1 at y = 0.13
+    job = _edited(
+        tmp_path,
+        "wedge_punch_quad",
+        "*SURFACE, NAME=SLAVE\n",
+        f"*SURFACE, NAME=SLAVE\n{side}, S1\n",
+    )
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*SURFACE SLAVE with both 6-node"):
+        run_job(job, tmp_path, progress=False)
+    # the block's wedges along z: element 1's top triangle (z = 0.5) is shared by the layer above
+    job = _edited(
+        tmp_path, "wedge_punch_tri", "*SURFACE, NAME=SLAVE\n", "*SURFACE, NAME=SLAVE\n1, S2\n"
+    )
+    with pytest.raises(ValueError, match=r"e\.inp:\d+: \*SURFACE SLAVE: face S2 of element 1 lies"):
+        run_job(job, tmp_path, progress=False)

@@ -1,0 +1,90 @@
+"""``FaceNodesSurface``: a face-based surface given by its faces' nodes (docs/method.md §38).
+
+The deck runner gives C3D15's surfaces this way (a prism mesh has no facet numbering in dolfinx
+0.11); here the same faces as a ``FacetSurface``'s, given by their nodes, must give the same
+springs and solution on any mesh, serial and on 2 processes.
+"""
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+from helpers import (
+    LOWER_TOP,
+    PUNCH,
+    UPPER_BOTTOM,
+    YOUNGS_MODULUS,
+    displacement_fields,
+    elastic_residual,
+    punch_conditions,
+    solve_increments,
+    two_blocks,
+)
+
+import dolfinx_ntf as ntf
+from dolfinx_ntf.fem.surfaces import NO_FACET, resolve_master
+from dolfinx_ntf.kernels.faces import QUAD4, TRI6
+
+
+def _as_nodes(V, surface: ntf.FacetSurface, name: str) -> ntf.FaceNodesSurface:
+    """The faces of ``surface`` (this process's, in ccx order) given by their nodes."""
+    faces = resolve_master(V, surface)
+    return ntf.FaceNodesSurface(faces.face_type, faces.faces, name)
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("cell, degree, face_type", [("hexahedron", 1, QUAD4),
+                                                     ("tetrahedron", 2, TRI6)])  # fmt: skip
+def test_face_nodes_surface_solves_as_the_facet_surface(cell, degree, face_type):
+    """The punch pressed in 2 increments: the same springs and displacement to round-off."""
+    mesh, _, ft = two_blocks(MPI.COMM_WORLD, cell=cell, upper=PUNCH)
+    solutions, springs = [], []
+    for by_nodes in (False, True):
+        V, u, v, pressure = displacement_fields(mesh, degree)
+        slave, master = ntf.FacetSurface(ft, UPPER_BOTTOM), ntf.FacetSurface(ft, LOWER_TOP)
+        if by_nodes:
+            slave, master = _as_nodes(V, slave, "slave"), _as_nodes(V, master, "master")
+            assert master.face_type is face_type
+        law = ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS)
+        pair = ntf.ContactPair(slave, master, ntf.SurfaceInteraction(law))
+        problem = ntf.ContactProblem(
+            elastic_residual(u, v, ft, pressure), u, [pair], punch_conditions(V, ft)
+        )
+        if by_nodes:  # no dolfinx facets behind the faces
+            assert np.all(problem.states[0].slave.faces.facets == NO_FACET)
+        solve_increments(problem, pressure)
+        solutions.append(u.x.array.copy())
+        springs.append(problem.total_springs)
+        ntf.ContactFields(problem)  # the recovered pressure skips faces without facets
+    scale = MPI.COMM_WORLD.allreduce(float(np.abs(solutions[0]).max()), op=MPI.MAX)
+    assert scale > 1e-3 and springs[0] > 0
+    assert springs[1] == springs[0]
+    np.testing.assert_allclose(solutions[1], solutions[0], rtol=0.0, atol=1e-11 * scale)
+
+
+@pytest.mark.serial
+def test_face_nodes_surface_checks_its_faces_and_pairs():
+    mesh, _, ft = two_blocks(MPI.COMM_SELF, upper=PUNCH)
+    V, u, v, pressure = displacement_fields(mesh)
+    with pytest.raises(ValueError, match=r"faces must be an integer array of shape \(F, 4\)"):
+        ntf.FaceNodesSurface(QUAD4, np.zeros((2, 3), dtype=np.int32), "bad")
+    with pytest.raises(ValueError, match="faces must hold block dofs >= 0, got -1"):
+        ntf.FaceNodesSurface(QUAD4, -np.ones((1, 4), dtype=np.int32), "bad")
+    with pytest.raises(TypeError, match="face_type must be a FaceType, got str"):
+        ntf.FaceNodesSurface("quad4", np.zeros((1, 4), dtype=np.int32), "bad")
+    slave = _as_nodes(V, ntf.FacetSurface(ft, UPPER_BOTTOM), "slave")
+    master = _as_nodes(V, ntf.FacetSurface(ft, LOWER_TOP), "master")
+    law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS))
+    F, bcs = elastic_residual(u, v, ft, pressure), punch_conditions(V, ft)
+    outside = ntf.FaceNodesSurface(QUAD4, master.faces + V.dofmap.index_map.size_local, "far")
+    with pytest.raises(ValueError, match=r"FaceNodesSurface 'far' has node \d+, outside 0\.\."):
+        ntf.ContactProblem(F, u, [ntf.ContactPair(slave, outside, law)], bcs)
+    # identical pairs are found by their faces' nodes (faces given by nodes have no facets)
+    twice = [ntf.ContactPair(slave, master, law), ntf.ContactPair(slave, master, law)]
+    with pytest.raises(ValueError, match="pairs 'pair 1' and 'pair 2' are the same"):
+        ntf.ContactProblem(F, u, twice, bcs)
+    half = ntf.FaceNodesSurface(QUAD4, master.faces[: master.faces.shape[0] // 2], "half")
+    with pytest.warns(UserWarning, match=r"share \d+ slave node\(s\) and master faces"):
+        ntf.ContactProblem(
+            F, u, [ntf.ContactPair(slave, master, law), ntf.ContactPair(slave, half, law)], bcs
+        )
