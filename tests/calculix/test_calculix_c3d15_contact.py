@@ -23,9 +23,15 @@ from dolfinx_ntf.calculix.job import run_job
 
 DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
 ON_011 = compat.DOLFINX_VERSION >= (0, 11)
-#: The decks and the wedges' axes of punch and block (y: quadrilaterals in contact, z: triangles).
-AXES = {"wedge_punch_quad": (1, 1), "wedge_punch_tri": (2, 2), "wedge_punch_quad_on_tri": (1, 2)}
-DECKS = list(AXES)
+#: The decks: the wedges' axes of punch and block (y: quadrilaterals in contact, z: triangles)
+#: and whether the punch's edges are curved.
+DECKS = {
+    "wedge_punch_quad": (1, 1, False),
+    "wedge_punch_tri": (2, 2, False),
+    "wedge_punch_quad_on_tri": (1, 2, False),
+    "wedge_punch_quad_curved": (1, 1, True),
+    "wedge_punch_tri_curved": (2, 2, True),
+}
 
 
 def _generator():
@@ -46,6 +52,8 @@ def test_c3d15_contact_matches_ccx(tmp_path, job):
     ``wedge_punch_quad``: quad8 slave faces (ccx's 1/100, 24/100 shares) on quad8 master faces;
     ``wedge_punch_tri``: tri6 on tri6 (1/999, 332/999); ``wedge_punch_quad_on_tri``: quad8 on
     tri6. Some punch nodes lift off: ccx's open springs (positive clearance) are in CDIS too.
+    ``*_curved``: the punch's edges curved, where the quadrilaterals' face areas need ccx's
+    2 x 2 points (3 x 3 give CDIS, CSTR, CELS 3e-6 off).
     """
     comm = MPI.COMM_WORLD
     root = Path(comm.bcast(str(tmp_path), root=0))
@@ -73,8 +81,8 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
     """The stored decks are what ``make_contact.py`` writes, with the faces each names: S3..S5
     (quadrilaterals) or S1, S2 (triangles) in contact."""
     module = _generator()
-    for job, (slave_axis, master_axis) in AXES.items():
-        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis)
+    for job, (slave_axis, master_axis, curved) in DECKS.items():
+        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis, curved)
         assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
         deck = read_deck(DATA / f"{job}.inp")
         for name, axis in (("SLAVE", slave_axis), ("MASTER", master_axis)):

@@ -9,7 +9,10 @@ no slave node lies above a master edge. Decks:
 
 - ``wedge_punch_quad``: quadrilateral slave faces on quadrilateral master faces;
 - ``wedge_punch_tri``: triangular slave faces on triangular master faces;
-- ``wedge_punch_quad_on_tri``: quadrilateral slave faces on triangular master faces.
+- ``wedge_punch_quad_on_tri``: quadrilateral slave faces on triangular master faces;
+- ``wedge_punch_quad_curved``, ``wedge_punch_tri_curved``: the first two with the punch's midside
+  nodes moved in x and y by a smooth field of amplitude 0.03 (curved edges; the contact faces
+  stay in the plane z = 1): the spring areas depend on ccx's face-area rule there.
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -81,14 +84,30 @@ def _faces_on(x: np.ndarray, wedges: list, first_element: int, coordinate: int, 
     return out
 
 
-def write(path: Path, slave_axis: int, master_axis: int) -> None:
-    """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``)."""
+def _curve(x: np.ndarray, wedges: list, first_node: int) -> np.ndarray:
+    """``x`` with the midside nodes of ``wedges`` moved in x and y (smooth, amplitude 0.03)."""
+    mids = np.unique(np.array(wedges)[:, 6:]) - first_node
+    x = x.copy()
+    p = x[mids]
+    x[mids, 0] += 0.03 * np.sin(3 * p[:, 1] + 2 * p[:, 0])
+    x[mids, 1] += 0.03 * np.cos(2 * p[:, 0] + p[:, 1])
+    return x
+
+
+def write(path: Path, slave_axis: int, master_axis: int, curved: bool = False) -> None:
+    """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
+
+    ``curved``: the punch's edges curved in x and y (:func:`_curve`).
+    """
     block_x, block_w = wedge_body((0, 0, 0), (2, 1, 1), (4, 2, 2), master_axis, 1)
     n0 = block_x.shape[0] + 1
     punch_x, punch_w = wedge_body((0.52, 0.13, 1), (0.95, 0.68, 0.5), (2, 2, 1), slave_axis, n0)
+    if curved:
+        punch_x = _curve(punch_x, punch_w, n0)
     x = np.vstack([block_x, punch_x])
     e0 = len(block_w) + 1
-    heading = f"C3D15 punch (wedge axis {'xyz'[slave_axis]}) on a C3D15 block (axis "
+    shape = "curved punch" if curved else "punch"
+    heading = f"C3D15 {shape} (wedge axis {'xyz'[slave_axis]}) on a C3D15 block (axis "
     lines = ["*HEADING", heading + f"{'xyz'[master_axis]}), dolfinx_ntf method §38"]
     lines.append("*NODE, NSET=NALL")
     lines += [f"{n + 1}, {p[0]:.12g}, {p[1]:.12g}, {p[2]:.12g}" for n, p in enumerate(x)]
@@ -141,3 +160,5 @@ if __name__ == "__main__":
     write(here / "wedge_punch_quad.inp", slave_axis=1, master_axis=1)
     write(here / "wedge_punch_tri.inp", slave_axis=2, master_axis=2)
     write(here / "wedge_punch_quad_on_tri.inp", slave_axis=1, master_axis=2)
+    write(here / "wedge_punch_quad_curved.inp", slave_axis=1, master_axis=1, curved=True)
+    write(here / "wedge_punch_tri_curved.inp", slave_axis=2, master_axis=2, curved=True)
