@@ -23,8 +23,8 @@ from dolfinx_ntf.calculix.job import run_job
 
 DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
 ON_011 = compat.DOLFINX_VERSION >= (0, 11)
-#: The decks: the wedges' axes of punch and block (y: quadrilaterals in contact, z: triangles)
-#: and whether the punch's edges are curved.
+#: The contact decks: the wedges' axes of punch and block (y: quadrilaterals in contact, z:
+#: triangles) and whether the punch's edges are curved.
 DECKS = {
     "wedge_punch_quad": (1, 1, False),
     "wedge_punch_tri": (2, 2, False),
@@ -32,6 +32,8 @@ DECKS = {
     "wedge_punch_quad_curved": (1, 1, True),
     "wedge_punch_tri_curved": (2, 2, True),
 }
+#: The tie decks: the punch tied to the block (quadrilaterals, triangles).
+TIES = {"wedge_tie_quad": (1, 1), "wedge_tie_tri": (2, 2)}
 
 
 def _generator():
@@ -40,6 +42,17 @@ def _generator():
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def _run(tmp_path: Path, job: str, comm: MPI.Comm) -> tuple[list, list]:
+    """ccx's stored blocks and ours (rank 0's directory for all processes; both on every one)."""
+    root = Path(comm.bcast(str(tmp_path), root=0))
+    if comm.rank == 0:
+        shutil.copy(DATA / f"{job}.inp", root / f"{job}.inp")
+    comm.barrier()
+    assert run_job(job, root, comm=comm, progress=False).completed
+    comm.barrier()
+    return read_dat(DATA / f"{job}.dat.ref"), read_dat(root / f"{job}.dat")
 
 
 @pytest.mark.mpi
@@ -55,14 +68,7 @@ def test_c3d15_contact_matches_ccx(tmp_path, job):
     ``*_curved``: the punch's edges curved, where the quadrilaterals' face areas need ccx's
     2 x 2 points (3 x 3 give CDIS, CSTR, CELS 3e-6 off).
     """
-    comm = MPI.COMM_WORLD
-    root = Path(comm.bcast(str(tmp_path), root=0))
-    if comm.rank == 0:
-        shutil.copy(DATA / f"{job}.inp", root / f"{job}.inp")
-    comm.barrier()
-    assert run_job(job, root, comm=comm, progress=False).completed
-    comm.barrier()
-    ccx, ours = read_dat(DATA / f"{job}.dat.ref"), read_dat(root / f"{job}.dat")
+    ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     names = ["U", "RF", "CDIS", "CSTR", "CELS", "CNUM"]
     assert [(b.name, b.time) for b in ccx] == [(n, t) for t in (0.5, 1.0) for n in names]
     assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
@@ -77,12 +83,28 @@ def test_c3d15_contact_matches_ccx(tmp_path, job):
     assert all(value < 1e-6 for value in worst.values()), worst
 
 
+@pytest.mark.mpi
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+@pytest.mark.parametrize("job", TIES)
+def test_c3d15_tie_matches_ccx(tmp_path, job):
+    """``*TIE`` of the punch's bottom (slave, midside nodes included) to the block's top: U and
+    RF equal ccx 2.20's printed digits (serial and 2 processes)."""
+    comm = MPI.COMM_WORLD
+    ccx, ours = _run(tmp_path, job, comm)
+    assert [(b.name, b.time) for b in ccx] == [("U", 1.0), ("RF", 1.0)]
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(b.labels, a.labels)
+        assert np.abs(a.values - b.values).max() < 1e-6 * np.abs(a.values).max(), a.name
+
+
 def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
     """The stored decks are what ``make_contact.py`` writes, with the faces each names: S3..S5
     (quadrilaterals) or S1, S2 (triangles) in contact."""
     module = _generator()
-    for job, (slave_axis, master_axis, curved) in DECKS.items():
-        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis, curved)
+    decks = {**DECKS, **{job: (*axes, False) for job, axes in TIES.items()}}
+    for job, (slave_axis, master_axis, curved) in decks.items():
+        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis, curved, job in TIES)
         assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
         deck = read_deck(DATA / f"{job}.inp")
         for name, axis in (("SLAVE", slave_axis), ("MASTER", master_axis)):
@@ -109,12 +131,16 @@ def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
 
 @pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
 def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
-    """What is not built stays refused with the deck line: ties, node-based slave surfaces,
-    ADJUST node sets, a surface of triangles and quadrilaterals; a face inside the mesh is an
-    error naming it."""
-    tie = "*TIE, NAME=T\nSLAVE, MASTER\n*SURFACE INTERACTION"
-    job = _edited(tmp_path, "wedge_punch_quad", "*SURFACE INTERACTION", tie)
-    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*TIE on C3D15 elements"):
+    """What is not built stays refused with the deck line: cyclic symmetry, node-based slave
+    surfaces, ADJUST node sets, a surface of triangles and quadrilaterals; a face inside the
+    mesh is an error naming it."""
+    cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
+    job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
+    (tmp_path / "e.inp").write_text(
+        (tmp_path / "e.inp").read_text()
+        + "*CYCLIC SYMMETRY MODEL, N=12, TIE=T\n0., 0., 0., 0., 0., 1.\n"
+    )
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*TIE T, CYCLIC SYMMETRY on C3D15"):
         run_job(job, tmp_path, progress=False)
     nodal = "*SURFACE, NAME=NS, TYPE=NODE\nTOP\n*CONTACT PAIR"
     job = _edited(tmp_path, "wedge_punch_quad", "*CONTACT PAIR", nodal)

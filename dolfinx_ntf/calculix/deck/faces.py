@@ -41,17 +41,23 @@ def face_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
         return np.zeros((0, 0), dtype=np.int64)
     type_index, row = deck.element_location(surf.elements)
     blocks = list(deck.elements.values())
-    sizes = {blocks[k].type.faces.shape[1] for k in np.unique(type_index)}
+    # C3D15's 6-node triangles pad the element's face table with -1 (ElementType.face_sizes)
+    sizes = {
+        int(size)
+        for k in np.unique(type_index)
+        for size in blocks[k].type.face_sizes[surf.faces[type_index == k] - 1]
+    }
     if len(sizes) > 1:
         raise ValueError(
             f"surface {surf.name} ({surf.location}) mixes faces with {sorted(sizes)} nodes; "
-            "split it by element type"
+            "split it by element type (or C3D15 triangles and quadrilaterals)"
         )
-    result = np.empty((surf.elements.size, sizes.pop()), dtype=np.int64)
+    width = sizes.pop()
+    result = np.empty((surf.elements.size, width), dtype=np.int64)
     for k in np.unique(type_index):
         block = blocks[k]
         mask = type_index == k
-        local = block.type.faces[surf.faces[mask] - 1]  # (m, n) element-local indices
+        local = block.type.faces[surf.faces[mask] - 1, :width]  # (m, n) element-local indices
         result[mask] = block.connectivity[row[mask][:, None], local]
     return result
 

@@ -12,7 +12,9 @@ no slave node lies above a master edge. Decks:
 - ``wedge_punch_quad_on_tri``: quadrilateral slave faces on triangular master faces;
 - ``wedge_punch_quad_curved``, ``wedge_punch_tri_curved``: the first two with the punch's midside
   nodes moved in x and y by a smooth field of amplitude 0.03 (curved edges; the contact faces
-  stay in the plane z = 1): the spring areas depend on ccx's face-area rule there.
+  stay in the plane z = 1): the spring areas depend on ccx's face-area rule there;
+- ``wedge_tie_quad``, ``wedge_tie_tri``: the punch tied to the block (``*TIE``, quadrilaterals
+  or triangles; the punch's top also moved sideways).
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -94,10 +96,13 @@ def _curve(x: np.ndarray, wedges: list, first_node: int) -> np.ndarray:
     return x
 
 
-def write(path: Path, slave_axis: int, master_axis: int, curved: bool = False) -> None:
+def write(
+    path: Path, slave_axis: int, master_axis: int, curved: bool = False, tie: bool = False
+) -> None:
     """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
 
-    ``curved``: the punch's edges curved in x and y (:func:`_curve`).
+    ``curved``: the punch's edges curved in x and y (:func:`_curve`); ``tie``: the punch tied
+    to the block instead of in contact, its top also moved by 0.01 in x.
     """
     block_x, block_w = wedge_body((0, 0, 0), (2, 1, 1), (4, 2, 2), master_axis, 1)
     n0 = block_x.shape[0] + 1
@@ -130,12 +135,17 @@ def write(path: Path, slave_axis: int, master_axis: int, curved: bool = False) -
     for name, faces in (("SLAVE", slave), ("MASTER", master)):
         lines.append(f"*SURFACE, NAME={name}")
         lines += [f"{e}, S{f}" for e, f in faces]
+    if tie:
+        lines += ["*TIE, NAME=T", "SLAVE, MASTER"]
+    else:
+        lines += [
+            "*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE",
+            "SLAVE, MASTER",
+            "*SURFACE INTERACTION, NAME=SI",
+            "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
+            "50000.0, 0.014285714285714285, 0.001",
+        ]
     lines += [
-        "*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE",
-        "SLAVE, MASTER",
-        "*SURFACE INTERACTION, NAME=SI",
-        "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
-        "50000.0, 0.014285714285714285, 0.001",
         "*BOUNDARY",
         "BASE, 1, 3, 0.0",
         "TOP, 1, 2, 0.0",
@@ -146,10 +156,10 @@ def write(path: Path, slave_axis: int, master_axis: int, curved: bool = False) -
         "1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12",
         "*BOUNDARY",
         "TOP, 3, 3, -0.02",
+        *(["TOP, 1, 1, 0.01"] if tie else []),
         "*NODE PRINT, NSET=NALL",
         "U, RF",
-        "*CONTACT PRINT",
-        "CDIS, CSTR, CELS, CNUM",
+        *([] if tie else ["*CONTACT PRINT", "CDIS, CSTR, CELS, CNUM"]),
         "*END STEP",
     ]
     path.write_text("\n".join(lines) + "\n")
@@ -162,3 +172,5 @@ if __name__ == "__main__":
     write(here / "wedge_punch_quad_on_tri.inp", slave_axis=1, master_axis=2)
     write(here / "wedge_punch_quad_curved.inp", slave_axis=1, master_axis=1, curved=True)
     write(here / "wedge_punch_tri_curved.inp", slave_axis=2, master_axis=2, curved=True)
+    write(here / "wedge_tie_quad.inp", slave_axis=1, master_axis=1, tie=True)
+    write(here / "wedge_tie_tri.inp", slave_axis=2, master_axis=2, tie=True)
