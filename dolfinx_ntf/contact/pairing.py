@@ -182,7 +182,9 @@ class Pairing:
             faces = self._as_quad8(slave.faces)
             keep = ~np.isin(slave.nodes, self._face_centres) & ~np.isin(slave.nodes, self._midsides)
             faceless = None if slave.faceless is None else slave.faceless[keep]
-            slave = SlaveSurface(slave.nodes[keep], faces, faceless)
+            slave = dataclasses.replace(
+                slave, nodes=slave.nodes[keep], faces=faces, faceless=faceless
+            )
         if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
             if pair.interaction.friction is not None or pair.adjust is not None:
                 raise NotImplementedError(
@@ -834,8 +836,11 @@ def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
         areas = slave.thickness * edge_spring_areas(
             faces.face_type, faces.faces, coords, slave.nodes
         )
-    else:
-        areas = spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    else:  # each face type's shares (a C3D15 surface of triangles and quadrilaterals, §38)
+        areas = sum(
+            spring_areas(group.face_type, group.faces, coords, slave.nodes)
+            for group in slave.face_groups
+        )
     if slave.faceless is not None:
         areas[slave.faceless] = 0.0
     return areas

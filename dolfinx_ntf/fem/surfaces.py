@@ -172,41 +172,74 @@ class FaceNodesSurface:
             midside nodes. On several processes each gives the faces of its cells (owned and
             ghost); a process may give none.
         name: Label used in messages.
+        more: Faces of further types, ``(face_type, faces)`` each, e.g. the triangles of a
+            surface of triangles and quadrilaterals (C3D15). A slave surface only: a master
+            holds one face type. Every process gives the same types.
     """
 
     face_type: FaceType
     faces: np.ndarray = field(repr=False)
     name: str = "faces"
+    more: tuple[tuple[FaceType, np.ndarray], ...] = field(default=(), repr=False)
 
     def __post_init__(self) -> None:
-        """Check the face type and the node rows; store them as an int32 array."""
-        owner = f"FaceNodesSurface '{self.name}'"
+        """Check the face types and the node rows; store them as int32 arrays."""
         validation.check_type(self.name, str, "FaceNodesSurface: name")
-        validation.check_type(self.face_type, FaceType, f"{owner}: face_type")
-        faces = np.asarray(self.faces)
-        n = self.face_type.num_nodes
+        object.__setattr__(self, "faces", self._checked(self.face_type, self.faces))
+        more = tuple(self.more)
+        for k, group in enumerate(more):
+            if not isinstance(group, tuple) or len(group) != 2:
+                raise TypeError(
+                    f"FaceNodesSurface '{self.name}': more[{k}] must be a (face_type, faces) "
+                    f"tuple, got {validation.describe(group)}"
+                )
+        groups = tuple((t, self._checked(t, f)) for t, f in more)
+        types = [self.face_type, *(t for t, _ in groups)]
+        if len({id(t) for t in types}) < len(types):
+            raise ValueError(
+                f"FaceNodesSurface '{self.name}': a face type is given twice "
+                f"({', '.join(t.name for t in types)}); give the faces of each type once"
+            )
+        object.__setattr__(self, "more", groups)
+
+    def _checked(self, face_type: object, faces: np.ndarray) -> np.ndarray:
+        """``faces`` as a contiguous int32 ``(F, n)`` array of ``face_type`` (or an error)."""
+        owner = f"FaceNodesSurface '{self.name}'"
+        validation.check_type(face_type, FaceType, f"{owner}: face_type")
+        faces = np.asarray(faces)
+        n = face_type.num_nodes
         if faces.size == 0:
             faces = np.zeros((0, n), dtype=np.int32)
         if faces.ndim != 2 or faces.shape[1] != n or not np.issubdtype(faces.dtype, np.integer):
             raise ValueError(
                 f"{owner}: faces must be an integer array of shape (F, {n}) for "
-                f"{self.face_type.name} faces, got shape {faces.shape} and dtype {faces.dtype}"
+                f"{face_type.name} faces, got shape {faces.shape} and dtype {faces.dtype}"
             )
         if faces.size and int(faces.min()) < 0:
             raise ValueError(f"{owner}: faces must hold block dofs >= 0, got {int(faces.min())}")
-        object.__setattr__(self, "faces", np.ascontiguousarray(faces, dtype=np.int32))
+        return np.ascontiguousarray(faces, dtype=np.int32)
 
     def surface_faces(self, V: dolfinx.fem.FunctionSpace, what: str) -> SurfaceFaces:
         """The faces as :class:`SurfaceFaces` of ``V`` (a ``ValueError`` for a node outside V)."""
+        return self._surface_faces(V, what, self.face_type, self.faces)
+
+    def face_groups(self, V: dolfinx.fem.FunctionSpace, what: str) -> tuple[SurfaceFaces, ...]:
+        """The faces of every type as :class:`SurfaceFaces` of ``V``, the first type first."""
+        more = (self._surface_faces(V, what, t, f) for t, f in self.more)
+        return (self.surface_faces(V, what), *more)
+
+    def _surface_faces(
+        self, V: dolfinx.fem.FunctionSpace, what: str, face_type: FaceType, faces: np.ndarray
+    ) -> SurfaceFaces:
         index_map = V.dofmap.index_map
         num_nodes = index_map.size_local + index_map.num_ghosts
-        if self.faces.size and int(self.faces.max()) >= num_nodes:
+        if faces.size and int(faces.max()) >= num_nodes:
             raise ValueError(
-                f"{what}: FaceNodesSurface '{self.name}' has node {int(self.faces.max())}, "
+                f"{what}: FaceNodesSurface '{self.name}' has node {int(faces.max())}, "
                 f"outside 0..{num_nodes - 1} (the displacement space's nodes on this process)"
             )
-        facets = np.full(self.faces.shape[0], NO_FACET, dtype=np.int32)
-        return SurfaceFaces(self.face_type, self.faces, facets)
+        facets = np.full(faces.shape[0], NO_FACET, dtype=np.int32)
+        return SurfaceFaces(face_type, faces, facets)
 
 
 @dataclass(frozen=True)
@@ -215,6 +248,8 @@ class SlaveSurface:
 
     ``faceless`` marks slave nodes that take no share of the faces' area and get CalculiX's
     fallback area instead (ccx: the midside nodes of a node-based surface, §13.5); None: none.
+    ``more_faces`` holds faces of further types (a C3D15 surface of 6-node triangles and 8-node
+    quadrilaterals, docs/method.md §38.4): their areas add to the nodes' as ``faces``' do.
     """
 
     nodes: np.ndarray  # (S,) sorted local block dofs
@@ -223,6 +258,12 @@ class SlaveSurface:
     thickness: float = 1.0  # 2D meshes: the spring areas are tributary lengths times this
     axisymmetric: bool = False  # 2D meshes: ring areas 2 pi ∫ r φ_p ds instead (§17.2)
     area_weights: str = "consistent"  # 2D meshes: "ccx" for ccx's expanded faces' shares (§23)
+    more_faces: tuple[SurfaceFaces, ...] = ()
+
+    @property
+    def face_groups(self) -> tuple[SurfaceFaces, ...]:
+        """``faces`` and ``more_faces``: the slave faces of each face type."""
+        return (self.faces, *self.more_faces)
 
 
 def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
@@ -413,6 +454,12 @@ def resolve_master(
 ) -> SurfaceFaces:
     """Master faces of a face-based surface (``reference``: as :func:`boundary_faces` takes it)."""
     if isinstance(surface, FaceNodesSurface):
+        if surface.more:
+            types = ", ".join(g.face_type.name for g in surface.face_groups(V, what))
+            raise NotImplementedError(
+                f"{what}: FaceNodesSurface '{surface.name}' holds faces of several types "
+                f"({types}): a master surface of one face type only is supported"
+            )
         return surface.surface_faces(V, what)
     if not isinstance(surface, FacetSurface):
         raise ValueError(
@@ -437,8 +484,9 @@ def resolve_slave(
     ``reference``: as :func:`boundary_faces` takes it.
     """
     if isinstance(surface, FaceNodesSurface):
-        faces = surface.surface_faces(V, what)
-        return SlaveSurface(faces.nodes, faces)
+        first, *more = surface.face_groups(V, what)
+        nodes = np.unique(np.concatenate([first.faces.ravel(), *(g.faces.ravel() for g in more)]))
+        return SlaveSurface(nodes.astype(first.faces.dtype), first, more_faces=tuple(more))
     if isinstance(surface, FacetSurface):
         facets = _tagged_facets(surface, V.mesh, what)
         faces = boundary_faces(V, facets, what=what, reference=reference)

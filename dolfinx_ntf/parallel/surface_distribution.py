@@ -167,6 +167,19 @@ def distribute_slave(
         if faces.face_type is not slave.faces.face_type:  # C3D20: quad9 facets as quad8 (§13.5)
             n = slave.faces.face_type.num_nodes
             faces = SurfaceFaces(slave.faces.face_type, faces.faces[:, :n], faces.facets)
+    slave_faces = _faces_at_owners(halo, faces, mine)
+    # faces of further types (C3D15's triangles beside quadrilaterals, §38): the same, per type
+    more = tuple(_faces_at_owners(halo, group, mine) for group in slave.more_faces)
+    nodes = np.flatnonzero(mine)
+    faceless = None  # midside nodes of a node-based surface (docs/method.md §13.5, §14.10)
+    marked = slave.nodes[slave.faceless] if slave.faceless is not None else slave.nodes[:0]
+    if comm.allreduce(int(marked.size), op=MPI.MAX):
+        faceless = _marked_at_owners(halo, marked)[nodes]
+    return SlaveSurface(nodes, slave_faces, faceless, more_faces=more)
+
+
+def _faces_at_owners(halo: NodeHalo, faces: SurfaceFaces, mine: np.ndarray) -> SurfaceFaces:
+    """Every process's ``faces`` holding one of the ``mine`` owned nodes, extended. Collective."""
     g, x = _send_faces_to_owners(halo, faces)
     # the faces received and this process's own (for their facets); duplicates dropped, sorted
     g = np.vstack([g, halo.local_global[faces.faces]])
@@ -176,12 +189,6 @@ def distribute_slave(
     facets[inverse[g.shape[0] - faces.faces.shape[0] :]] = faces.facets
     g, x = g[first], x[first]
     keep = np.isin(g, halo.local_global[: halo.num_owned][mine]).any(axis=1)
-    slave_faces = SurfaceFaces(
+    return SurfaceFaces(
         faces.face_type, halo.local(g[keep], x[keep]).astype(np.int32), facets[keep]
     )
-    nodes = np.flatnonzero(mine)
-    faceless = None  # midside nodes of a node-based surface (docs/method.md §13.5, §14.10)
-    marked = slave.nodes[slave.faceless] if slave.faceless is not None else slave.nodes[:0]
-    if comm.allreduce(int(marked.size), op=MPI.MAX):
-        faceless = _marked_at_owners(halo, marked)[nodes]
-    return SlaveSurface(nodes, slave_faces, faceless)

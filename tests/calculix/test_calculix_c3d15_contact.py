@@ -31,9 +31,10 @@ DECKS = {
     "wedge_punch_quad_on_tri": (1, 2, False),
     "wedge_punch_quad_curved": (1, 1, True),
     "wedge_punch_tri_curved": (2, 2, True),
+    "wedge_punch_mixed": ((1, 2), 1, False),  # a slave surface of quadrilaterals and triangles
 }
-#: The tie decks: the punch tied to the block (quadrilaterals, triangles).
-TIES = {"wedge_tie_quad": (1, 1), "wedge_tie_tri": (2, 2)}
+#: The tie decks: the punch tied to the block (quadrilaterals, triangles, both).
+TIES = {"wedge_tie_quad": (1, 1), "wedge_tie_tri": (2, 2), "wedge_tie_mixed": ((1, 2), 1)}
 
 
 def _generator():
@@ -66,7 +67,8 @@ def test_c3d15_contact_matches_ccx(tmp_path, job):
     ``wedge_punch_tri``: tri6 on tri6 (1/999, 332/999); ``wedge_punch_quad_on_tri``: quad8 on
     tri6. Some punch nodes lift off: ccx's open springs (positive clearance) are in CDIS too.
     ``*_curved``: the punch's edges curved, where the quadrilaterals' face areas need ccx's
-    2 x 2 points (3 x 3 give CDIS, CSTR, CELS 3e-6 off).
+    2 x 2 points (3 x 3 give CDIS, CSTR, CELS 3e-6 off). ``wedge_punch_mixed``: the slave
+    surface holds quadrilaterals and triangles (per-type spring areas).
     """
     ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     names = ["U", "RF", "CDIS", "CSTR", "CELS", "CNUM"]
@@ -107,9 +109,11 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
         module.write(tmp_path / f"{job}.inp", slave_axis, master_axis, curved, job in TIES)
         assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
         deck = read_deck(DATA / f"{job}.inp")
-        for name, axis in (("SLAVE", slave_axis), ("MASTER", master_axis)):
+        for name, axes in (("SLAVE", slave_axis), ("MASTER", master_axis)):
             faces = set(deck.surfaces[name].faces.tolist())
-            assert faces <= ({1, 2} if axis == 2 else {3, 4, 5}), (job, name, faces)
+            expected = [{1, 2} if axis == 2 else {3, 4, 5} for axis in np.atleast_1d(axes)]
+            assert faces <= set().union(*expected), (job, name, faces)
+            assert all(faces & kind for kind in expected), (job, name, faces)
 
 
 def _edited(tmp_path: Path, job: str, old: str, new: str) -> str:
@@ -132,8 +136,8 @@ def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
 @pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
 def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     """What is not built stays refused with the deck line: cyclic symmetry, node-based slave
-    surfaces, ADJUST node sets, a surface of triangles and quadrilaterals; a face inside the
-    mesh is an error naming it."""
+    surfaces, ADJUST node sets, a master surface of triangles and quadrilaterals; a face inside
+    the mesh is an error naming it."""
     cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
     job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
     (tmp_path / "e.inp").write_text(
@@ -155,15 +159,10 @@ def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     job = _edited(tmp_path, "wedge_punch_quad", "TYPE=NODE TO SURFACE", adjust)
     with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ADJUST=TOP \(a node set\)"):
         run_job(job, tmp_path, progress=False)
-    deck = read_deck(DATA / "wedge_punch_quad.inp")
-    side = next(e for e in deck.elements["C3D15"].ids if e > 32)  # a punch wedge: S1 at y = 0.13
     job = _edited(
-        tmp_path,
-        "wedge_punch_quad",
-        "*SURFACE, NAME=SLAVE\n",
-        f"*SURFACE, NAME=SLAVE\n{side}, S1\n",
+        tmp_path, "wedge_punch_quad", "*SURFACE, NAME=MASTER\n", "*SURFACE, NAME=MASTER\n1, S1\n"
     )
-    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*SURFACE SLAVE with both 6-node"):
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*SURFACE MASTER with both 6-node"):
         run_job(job, tmp_path, progress=False)
     # the block's wedges along z: element 1's top triangle (z = 0.5) is shared by the layer above
     job = _edited(

@@ -22,8 +22,10 @@ from helpers import (
 )
 
 import dolfinx_ntf as ntf
-from dolfinx_ntf.fem.surfaces import NO_FACET, resolve_master
-from dolfinx_ntf.kernels.faces import QUAD4, TRI6
+from dolfinx_ntf.contact.pairing import slave_areas
+from dolfinx_ntf.fem.surfaces import NO_FACET, resolve_master, resolve_slave
+from dolfinx_ntf.kernels.faces import QUAD4, TRI3, TRI6
+from dolfinx_ntf.kernels.spring_areas import spring_areas
 
 
 def _as_nodes(V, surface: ntf.FacetSurface, name: str) -> ntf.FaceNodesSurface:
@@ -88,3 +90,33 @@ def test_face_nodes_surface_checks_its_faces_and_pairs():
         ntf.ContactProblem(
             F, u, [ntf.ContactPair(slave, master, law), ntf.ContactPair(slave, half, law)], bcs
         )
+
+
+@pytest.mark.serial
+def test_face_nodes_surface_of_two_face_types():
+    """Triangles beside quadrilaterals (C3D15, docs/method.md §38): a slave surface whose nodes
+    collect both types' shares; a master of one type only; each type given once."""
+    mesh, _, ft = two_blocks(MPI.COMM_SELF, upper=PUNCH)
+    V = displacement_fields(mesh)[0]
+    faces = _as_nodes(V, ntf.FacetSurface(ft, UPPER_BOTTOM), "slave").faces
+    half = faces.shape[0] // 2
+    quads, rest = faces[:half], faces[half:]
+    triangles = np.vstack([rest[:, [0, 1, 2]], rest[:, [0, 2, 3]]])  # the other half, split
+    mixed = ntf.FaceNodesSurface(QUAD4, quads, "mixed", more=((TRI3, triangles),))
+    with pytest.raises(ValueError, match="a face type is given twice"):
+        ntf.FaceNodesSurface(QUAD4, quads, "twice", more=((QUAD4, rest),))
+    with pytest.raises(TypeError, match=r"more\[0\] must be a \(face_type, faces\) tuple"):
+        ntf.FaceNodesSurface(QUAD4, quads, "bad", more=(TRI3,))
+    with pytest.raises(NotImplementedError, match="a master surface of one face type only"):
+        resolve_master(V, mixed)
+    slave = resolve_slave(V, mixed)
+    assert [g.face_type for g in slave.face_groups] == [QUAD4, TRI3]
+    X = V.tabulate_dof_coordinates()
+    areas = slave_areas(slave, X)
+    expected = spring_areas(QUAD4, quads, X, slave.nodes) + spring_areas(
+        TRI3, triangles, X, slave.nodes
+    )
+    np.testing.assert_allclose(areas, expected, rtol=1e-14)
+    # the nodes' total is the surface's area (0.6 x 0.6), whichever types hold it
+    assert areas.sum() == pytest.approx(0.36, rel=1e-12)
+    np.testing.assert_array_equal(slave.nodes, np.unique(faces))

@@ -70,7 +70,17 @@ def surface_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
     surf = _surface(deck, surface)
     if surf.type == "NODE":
         return np.unique(surf.nodes)
-    return np.unique(face_nodes(deck, surf))
+    if surf.elements.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    type_index, row = deck.element_location(surf.elements)
+    blocks = list(deck.elements.values())
+    nodes = []
+    for k in np.unique(type_index):  # faces of any sizes (C3D15's triangles beside quadrilaterals)
+        mask = type_index == k
+        local = blocks[k].type.faces[surf.faces[mask] - 1]  # -1 pads C3D15's triangles
+        picked = blocks[k].connectivity[row[mask][:, None], np.maximum(local, 0)]
+        nodes.append(picked[local >= 0])
+    return np.unique(np.concatenate(nodes))
 
 
 def external_faces(deck: Deck) -> np.ndarray:

@@ -103,6 +103,16 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 f"supported yet (not checked against ccx; {where}; docs/method.md §38)"
             )
     for pair in deck.contact_pairs:
+        master = deck.surfaces[pair.master]
+        kinds = np.unique(np.minimum(master.faces, 3)) if master.type == "ELEMENT" else []
+        if len(kinds) > 1:
+            raise not_supported(
+                f"*SURFACE {pair.master} with both 6-node triangles (S1, S2) and 8-node "
+                f"quadrilaterals (S3..S5) of C3D15 elements as the master surface of a contact "
+                f"pair (line {pair.location}; a slave surface may mix them, a master holds one "
+                f"kind; {where}; docs/method.md §38)",
+                master.location,
+            )
         slave = deck.surfaces[pair.slave]
         if slave.type == "NODE":
             raise NotImplementedError(
@@ -198,29 +208,20 @@ def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> Fa
     """An element-face ``*SURFACE`` of a C3D15 deck as the faces' nodes (docs/method.md §38).
 
     ccx's faces S1, S2 are 6-node triangles, S3..S5 8-node quadrilaterals, in ccx's outward
-    order (``ELEMENT_TYPES["C3D15"].faces``); a surface holds faces of one of the two kinds. The
+    order (``ELEMENT_TYPES["C3D15"].faces``); a surface of both kinds gives the triangles as
+    ``more`` faces (slave surfaces only, :func:`check_c3d15_deck` refuses such masters). The
     quadrilaterals' spring areas take ccx's 2 x 2 points (``QUAD8_GAUSS2``, 3 x 3 differ by up
     to 3e-6 of the contact stress on faces with curved edges, measured). On
     several processes each gives the faces of the elements it holds (owned and ghost cells).
 
     Raises:
         ValueError: a face that lies between two elements.
-        NotImplementedError: a surface of triangles and quadrilaterals together.
     """
     block = maps.block
     etype = block.type
     order = np.argsort(block.ids)
     rows = order[np.searchsorted(block.ids, surface.elements, sorter=order)]
     faces = surface.faces - 1
-    triangle = faces < 2
-    if np.any(triangle) and not np.all(triangle):
-        raise not_supported(
-            f"*SURFACE {name} with both 6-node triangles (S1, S2) and 8-node quadrilaterals "
-            f"(S3..S5) of C3D15 elements ({int(np.sum(triangle))} and {int(np.sum(~triangle))} "
-            "faces; one kind per contact surface)",
-            surface.location,
-        )
-    face_type = TRI6 if np.all(triangle) else QUAD8_GAUSS2  # ccx's 2 x 2 area rule (§38)
     inner = ~_exterior_faces(block)[rows, faces]
     if np.any(inner):
         k = int(np.argmax(inner))
@@ -229,10 +230,15 @@ def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> Fa
             f"{surface.elements[k]} lies between two elements, not on the boundary"
         )
     held = maps.element_cell[rows] >= 0
-    local = etype.faces[faces[held], : face_type.num_nodes]
-    nodes = block.connectivity[rows[held, None], local]
-    dofs = maps.node_dof[deck.node_index(nodes)]
-    return FaceNodesSurface(face_type, dofs.astype(np.int32), name)
+    groups = []  # quadrilaterals with ccx's 2 x 2 area rule (§38.2), triangles
+    for face_type, which in ((QUAD8_GAUSS2, faces >= 2), (TRI6, faces < 2)):
+        if np.any(which):  # decided on the deck: the same types on every process
+            take = which & held
+            local = etype.faces[faces[take], : face_type.num_nodes]
+            nodes = block.connectivity[rows[take, None], local]
+            groups.append((face_type, maps.node_dof[deck.node_index(nodes)].astype(np.int32)))
+    (face_type, dofs), *more = groups
+    return FaceNodesSurface(face_type, dofs, name, more=tuple(more))
 
 
 def _exterior_faces(block: ElementBlock) -> np.ndarray:

@@ -14,7 +14,10 @@ no slave node lies above a master edge. Decks:
   nodes moved in x and y by a smooth field of amplitude 0.03 (curved edges; the contact faces
   stay in the plane z = 1): the spring areas depend on ccx's face-area rule there;
 - ``wedge_tie_quad``, ``wedge_tie_tri``: the punch tied to the block (``*TIE``, quadrilaterals
-  or triangles; the punch's top also moved sideways).
+  or triangles; the punch's top also moved sideways);
+- ``wedge_punch_mixed``, ``wedge_tie_mixed``: a punch whose first column of cells has its
+  wedges along y, the second along z: its bottom is a slave surface of quadrilaterals and
+  triangles (in contact with, or tied to, the block's quadrilaterals).
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -33,15 +36,15 @@ EDGES = ((0, 1), (1, 2), (2, 0), (3, 4), (4, 5), (5, 3), (0, 3), (1, 4), (2, 5))
 
 
 def wedge_body(
-    origin: tuple, size: tuple, divisions: tuple, axis: int, first_node: int
+    origin: tuple, size: tuple, divisions: tuple, axis: int | tuple, first_node: int
 ) -> tuple[np.ndarray, list[list[int]]]:
     """Points and C3D15 connectivities (1-based, from ``first_node``) of a box of wedges.
 
     Every hexahedron of the grid becomes two wedges whose triangles are normal to ``axis``
-    (0, 1, 2), the diagonal alternating from cell to cell.
+    (0, 1, 2; a tuple: ``axis[i % len(axis)]`` for the cells of the i-th column along x, y or z
+    only, which keeps the mesh conforming), the diagonal alternating from cell to cell.
     """
     h = np.array(size, float) / np.array(divisions)
-    u, v = [a for a in range(3) if a != axis]
     points: list[np.ndarray] = []
     index: dict[tuple, int] = {}
 
@@ -54,6 +57,8 @@ def wedge_body(
 
     wedges = []
     for cell in np.ndindex(*divisions):
+        axis_here = axis if isinstance(axis, int) else axis[cell[0] % len(axis)]
+        u, v = [a for a in range(3) if a != axis_here]
         o = np.array(origin, float) + np.array(cell) * h
         square = []
         for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
@@ -62,7 +67,7 @@ def wedge_body(
             p[v] += b * h[v]
             square.append(p)
         up = np.zeros(3)
-        up[axis] = h[axis]
+        up[axis_here] = h[axis_here]
         # the diagonal alternates across the triangles' plane only: conforming along the axis
         split = ((0, 1, 2), (0, 2, 3)) if (cell[u] + cell[v]) % 2 == 0 else ((0, 1, 3), (1, 2, 3))
         for tri in split:
@@ -97,7 +102,7 @@ def _curve(x: np.ndarray, wedges: list, first_node: int) -> np.ndarray:
 
 
 def write(
-    path: Path, slave_axis: int, master_axis: int, curved: bool = False, tie: bool = False
+    path: Path, slave_axis: int | tuple, master_axis: int, curved: bool = False, tie: bool = False
 ) -> None:
     """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
 
@@ -112,7 +117,8 @@ def write(
     x = np.vstack([block_x, punch_x])
     e0 = len(block_w) + 1
     shape = "curved punch" if curved else "punch"
-    heading = f"C3D15 {shape} (wedge axis {'xyz'[slave_axis]}) on a C3D15 block (axis "
+    axes = "".join("xyz"[a] for a in np.atleast_1d(slave_axis))
+    heading = f"C3D15 {shape} (wedge axis {axes}) on a C3D15 block (axis "
     lines = ["*HEADING", heading + f"{'xyz'[master_axis]}), dolfinx_ntf method §38"]
     lines.append("*NODE, NSET=NALL")
     lines += [f"{n + 1}, {p[0]:.12g}, {p[1]:.12g}, {p[2]:.12g}" for n, p in enumerate(x)]
@@ -174,3 +180,5 @@ if __name__ == "__main__":
     write(here / "wedge_punch_tri_curved.inp", slave_axis=2, master_axis=2, curved=True)
     write(here / "wedge_tie_quad.inp", slave_axis=1, master_axis=1, tie=True)
     write(here / "wedge_tie_tri.inp", slave_axis=2, master_axis=2, tie=True)
+    write(here / "wedge_punch_mixed.inp", slave_axis=(1, 2), master_axis=1)
+    write(here / "wedge_tie_mixed.inp", slave_axis=(1, 2), master_axis=1, tie=True)
