@@ -37,6 +37,7 @@ __all__ = [
     "SlaveSurface",
     "SurfaceFaces",
     "boundary_faces",
+    "faces_touching",
     "facet_cells",
     "reference_coordinates",
     "resolve_master",
@@ -106,17 +107,23 @@ class NodeSurface:
             the fallback area (``ContactPair.fallback_area``). ccx does this to the node sets
             of 2D elements, whose 2D nodes belong to none of its expanded 3D elements
             (docs/method.md §26.3).
+        exterior: The exterior faces of the mesh given by their nodes, for meshes whose facets
+            dolfinx does not number (C3D15's prisms, docs/method.md §38); this process's, each
+            process the same face types. None: dolfinx's exterior facets.
     """
 
     vertices: np.ndarray = field(repr=False)
     name: str = "nodes"
     midside_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32), repr=False)
     faceless: bool = False
+    exterior: FaceNodesSurface | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         """Check the indices and store them as an int32 array."""
         validation.check_type(self.name, str, "NodeSurface: name")
         validation.check_type(self.faceless, bool, "NodeSurface: faceless")
+        if self.exterior is not None:
+            validation.check_type(self.exterior, FaceNodesSurface, "NodeSurface: exterior")
         owner = f"NodeSurface '{self.name}'"
         object.__setattr__(self, "vertices", validation.vertex_indices(self.vertices, owner))
         midside = np.asarray(self.midside_nodes).ravel()
@@ -516,18 +523,21 @@ def resolve_slave(
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(0, tdim)
     nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
-    mesh.topology.create_connectivity(tdim - 1, tdim)
-    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     X = reference_coordinates(V) if reference is None else reference
-    all_faces = boundary_faces(V, exterior, what=what, reference=X)
-    corners = all_faces.faces[:, : all_faces.face_type.num_corners]
+    if surface.exterior is not None:  # no facet numbering (C3D15's prisms, §38)
+        groups = surface.exterior.face_groups(V, what)
+    else:
+        mesh.topology.create_connectivity(tdim - 1, tdim)
+        exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+        groups = (boundary_faces(V, exterior, what=what, reference=X),)
+    corners = np.concatenate([g.faces[:, : g.face_type.num_corners].ravel() for g in groups])
     to_global = V.dofmap.index_map.local_to_global
     _check_on_boundary(comm, label, nodes, corners, X, to_global)
-    touching = np.isin(corners, nodes).any(axis=1)
-    faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
+    faces, *more = (faces_touching(g, np.isin(np.arange(X.shape[0]), nodes)) for g in groups)
+    more = tuple(more)
     midside = surface.midside_nodes
     if comm.allreduce(int(midside.size), op=MPI.MAX):
-        on_faces = np.isin(midside, all_faces.faces)
+        on_faces = np.isin(midside, np.concatenate([g.faces.ravel() for g in groups]))
         if comm.size > 1:  # on global numbers: another process may hold the node's faces
             held = np.asarray(to_global(midside[on_faces].astype(np.int32)), dtype=np.int64)
             held = np.concatenate(comm.allgather(held))
@@ -541,10 +551,16 @@ def resolve_slave(
             )
         nodes = np.union1d(nodes, midside).astype(nodes.dtype)
         faceless = np.ones(nodes.size, bool) if surface.faceless else np.isin(nodes, midside)
-        return SlaveSurface(nodes, faces, faceless)
+        return SlaveSurface(nodes, faces, faceless, more_faces=more)
     if surface.faceless:
-        return SlaveSurface(nodes, faces, np.ones(nodes.size, dtype=bool))
-    return SlaveSurface(nodes, faces)
+        return SlaveSurface(nodes, faces, np.ones(nodes.size, dtype=bool), more_faces=more)
+    return SlaveSurface(nodes, faces, more_faces=more)
+
+
+def faces_touching(faces: SurfaceFaces, marked: np.ndarray) -> SurfaceFaces:
+    """The faces with a corner among the ``marked`` nodes (a flag per local node)."""
+    touching = marked[faces.faces[:, : faces.face_type.num_corners]].any(axis=1)
+    return SurfaceFaces(faces.face_type, faces.faces[touching], faces.facets[touching])
 
 
 def _check_on_boundary(

@@ -31,6 +31,7 @@ from .mesh import MeshMaps
 __all__ = [
     "C3D15_MIN_DOLFINX",
     "C3D15Pressures",
+    "c3d15_exterior",
     "c3d15_metadata",
     "c3d15_rule",
     "c3d15_surface",
@@ -73,8 +74,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     Raises:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
-            and small-strain steps, cyclic symmetry ties, node-based slave surfaces and ADJUST
-            node sets of contact pairs, thermal steps.
+            and small-strain steps, cyclic symmetry ties, a master surface of triangles and
+            quadrilaterals, ADJUST node sets of contact pairs, thermal steps.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -112,13 +113,6 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 f"pair (line {pair.location}; a slave surface may mix them, a master holds one "
                 f"kind; {where}; docs/method.md §38)",
                 master.location,
-            )
-        slave = deck.surfaces[pair.slave]
-        if slave.type == "NODE":
-            raise NotImplementedError(
-                f"{pair.location}: *CONTACT PAIR with the node-based slave surface {pair.slave} "
-                f"({slave.location}) on C3D15 elements is not supported yet (its faces are all "
-                f"exterior faces, which a prism mesh does not number; {where}; docs/method.md §38)"
             )
         if pair.adjust is not None and not isinstance(pair.adjust, float):
             raise NotImplementedError(
@@ -218,7 +212,6 @@ def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> Fa
         ValueError: a face that lies between two elements.
     """
     block = maps.block
-    etype = block.type
     order = np.argsort(block.ids)
     rows = order[np.searchsorted(block.ids, surface.elements, sorter=order)]
     faces = surface.faces - 1
@@ -229,12 +222,30 @@ def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> Fa
             f"{surface.location}: *SURFACE {name}: face S{surface.faces[k]} of element "
             f"{surface.elements[k]} lies between two elements, not on the boundary"
         )
+    return _face_nodes_surface(deck, maps, rows, faces, name)
+
+
+def c3d15_exterior(deck: Deck, maps: MeshMaps, name: str) -> FaceNodesSurface:
+    """Every exterior face of a C3D15 deck by its nodes: a node-based surface's faces (§38).
+
+    ccx's slave faces of a ``TYPE=NODE`` surface are the exterior faces with a corner in it
+    (docs/method.md §2.1); the model's ``NodeSurface`` picks them from these.
+    """
+    rows, faces = np.nonzero(_exterior_faces(maps.block))
+    return _face_nodes_surface(deck, maps, rows, faces, f"{name} (exterior faces)")
+
+
+def _face_nodes_surface(
+    deck: Deck, maps: MeshMaps, rows: np.ndarray, faces: np.ndarray, name: str
+) -> FaceNodesSurface:
+    """Faces (element rows, 0-based ccx faces) of the elements this process holds, per type."""
+    block = maps.block
     held = maps.element_cell[rows] >= 0
     groups = []  # quadrilaterals with ccx's 2 x 2 area rule (§38.2), triangles
     for face_type, which in ((QUAD8_GAUSS2, faces >= 2), (TRI6, faces < 2)):
         if np.any(which):  # decided on the deck: the same types on every process
             take = which & held
-            local = etype.faces[faces[take], : face_type.num_nodes]
+            local = block.type.faces[faces[take], : face_type.num_nodes]
             nodes = block.connectivity[rows[take, None], local]
             groups.append((face_type, maps.node_dof[deck.node_index(nodes)].astype(np.int32)))
     (face_type, dofs), *more = groups

@@ -18,7 +18,7 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.fem.surfaces import FaceNodesSurface, FacetSurface, NodeSurface
 
 from ..deck import Deck, not_supported
-from .c3d15 import c3d15_surface
+from .c3d15 import c3d15_exterior, c3d15_surface
 from .mesh import MeshMaps, element_faces_to_facets, exterior
 
 __all__ = ["deck_surfaces"]
@@ -60,16 +60,21 @@ def deck_surfaces(
             # elements, every spring gets the fallback area (docs/method.md §26.3)
             faceless = maps.block.type.tdim == 2
             known = corner[rows] | carried
-            if not np.all(known) and maps.block.type.num_nodes != 20 and not faceless:
+            if not np.all(known) and maps.block.type.num_nodes not in (15, 20) and not faceless:
                 node = int(surface.nodes[np.argmax(~known)])
                 raise not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
                     f"corner, on {maps.block.type.name} elements (midside nodes of "
-                    "node-based surfaces: C3D20 only)",
+                    "node-based surfaces: C3D20 and C3D15 only)",
                     surface.location,
                 )
             vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)  # this process's
-            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside, faceless=faceless)
+            # C3D15: the exterior faces by their nodes, a prism mesh has no facets (§38)
+            wedges = maps.block.type.name == "C3D15"
+            outer = c3d15_exterior(deck, maps, name) if wedges else None
+            surfaces[name] = NodeSurface(
+                vertices, name, midside_nodes=midside, faceless=faceless, exterior=outer
+            )
             continue
         if maps.block.type.name == "C3D15":  # no facets on prism meshes (docs/method.md §38)
             surfaces[name] = c3d15_surface(deck, maps, name, surface)

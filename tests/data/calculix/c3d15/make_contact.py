@@ -17,7 +17,10 @@ no slave node lies above a master edge. Decks:
   or triangles; the punch's top also moved sideways);
 - ``wedge_punch_mixed``, ``wedge_tie_mixed``: a punch whose first column of cells has its
   wedges along y, the second along z: its bottom is a slave surface of quadrilaterals and
-  triangles (in contact with, or tied to, the block's quadrilaterals).
+  triangles (in contact with, or tied to, the block's quadrilaterals);
+- ``wedge_node_quad``, ``wedge_node_mixed``: the slave surface is the node set of the punch's
+  bottom (``TYPE=NODE``, corner and midside nodes), whose faces are every exterior face with a
+  corner in it: the bottom's and the sides' (triangles and quadrilaterals).
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -102,12 +105,18 @@ def _curve(x: np.ndarray, wedges: list, first_node: int) -> np.ndarray:
 
 
 def write(
-    path: Path, slave_axis: int | tuple, master_axis: int, curved: bool = False, tie: bool = False
+    path: Path,
+    slave_axis: int | tuple,
+    master_axis: int,
+    curved: bool = False,
+    tie: bool = False,
+    nodes: bool = False,
 ) -> None:
     """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
 
     ``curved``: the punch's edges curved in x and y (:func:`_curve`); ``tie``: the punch tied
-    to the block instead of in contact, its top also moved by 0.01 in x.
+    to the block instead of in contact, its top also moved by 0.01 in x; ``nodes``: the slave
+    surface is the node set of the punch's bottom (``TYPE=NODE``).
     """
     block_x, block_w = wedge_body((0, 0, 0), (2, 1, 1), (4, 2, 2), master_axis, 1)
     n0 = block_x.shape[0] + 1
@@ -130,15 +139,20 @@ def write(
     lines += ["*ELSET, ELSET=EALL", "BLOCK, PUNCH"]
     base = np.flatnonzero(np.isclose(x[:, 2], 0.0)) + 1
     top = np.flatnonzero(np.isclose(x[:, 2], 1.5)) + 1
-    for name, nodes in (("BASE", base), ("TOP", top)):
+    bottom = n0 + np.flatnonzero(np.isclose(punch_x[:, 2], 1.0))
+    sets = [("BASE", base), ("TOP", top)] + ([("BOTTOM", bottom)] if nodes else [])
+    for name, members in sets:
         lines.append(f"*NSET, NSET={name}")
-        lines += [", ".join(map(str, nodes[i : i + 8])) for i in range(0, nodes.size, 8)]
+        lines += [", ".join(map(str, members[i : i + 8])) for i in range(0, members.size, 8)]
     for name, e, nu, elset in (("SOFT", 1000.0, 0.3, "BLOCK"), ("HARD", 2000.0, 0.25, "PUNCH")):
         lines += [f"*MATERIAL, NAME={name}", "*ELASTIC", f"{e}, {nu}"]
         lines.append(f"*SOLID SECTION, ELSET={elset}, MATERIAL={name}")
     slave = _faces_on(x, punch_w, e0, 2, 1.0)
     master = _faces_on(x, block_w, 1, 2, 1.0)
     for name, faces in (("SLAVE", slave), ("MASTER", master)):
+        if name == "SLAVE" and nodes:
+            lines += ["*SURFACE, NAME=SLAVE, TYPE=NODE", "BOTTOM"]
+            continue
         lines.append(f"*SURFACE, NAME={name}")
         lines += [f"{e}, S{f}" for e, f in faces]
     if tie:
@@ -182,3 +196,5 @@ if __name__ == "__main__":
     write(here / "wedge_tie_tri.inp", slave_axis=2, master_axis=2, tie=True)
     write(here / "wedge_punch_mixed.inp", slave_axis=(1, 2), master_axis=1)
     write(here / "wedge_tie_mixed.inp", slave_axis=(1, 2), master_axis=1, tie=True)
+    write(here / "wedge_node_quad.inp", slave_axis=1, master_axis=1, nodes=True)
+    write(here / "wedge_node_mixed.inp", slave_axis=(1, 2), master_axis=1, nodes=True)
