@@ -110,8 +110,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
             raise not_supported(
                 f"*SURFACE {pair.master} with both 6-node triangles (S1, S2) and 8-node "
                 f"quadrilaterals (S3..S5) of C3D15 elements as the master surface of a contact "
-                f"pair (line {pair.location}; a slave surface may mix them, a master holds one "
-                f"kind; {where}; docs/method.md §38)",
+                f"pair (the pair at {pair.location}; a slave surface may mix them, a master "
+                f"holds one kind; {where}; docs/method.md §38)",
                 master.location,
             )
         if pair.adjust is not None and not isinstance(pair.adjust, float):
