@@ -120,3 +120,35 @@ def test_face_nodes_surface_of_two_face_types():
     # the nodes' total is the surface's area (0.6 x 0.6), whichever types hold it
     assert areas.sum() == pytest.approx(0.36, rel=1e-12)
     np.testing.assert_array_equal(slave.nodes, np.unique(faces))
+
+
+@pytest.mark.mpi
+def test_slave_of_two_face_types_carries_the_punch():
+    """A slave surface given half as quadrilaterals, half as triangles (the faces with x < 0.5
+    split in two): its springs carry the pressure on the punch (equilibrium) and its areas add
+    up to the surface's, serial and on 2 processes (each type's faces sent to their owners)."""
+    comm = MPI.COMM_WORLD
+    mesh, _, ft = two_blocks(comm, upper=PUNCH)
+    V, u, v, pressure = displacement_fields(mesh)
+    faces = _as_nodes(V, ntf.FacetSurface(ft, UPPER_BOTTOM), "slave").faces
+    X = V.tabulate_dof_coordinates()
+    split = X[faces].mean(axis=1)[:, 0] < 0.5
+    rest = faces[split]
+    triangles = np.vstack([rest[:, [0, 1, 2]], rest[:, [0, 2, 3]]])
+    slave = ntf.FaceNodesSurface(QUAD4, faces[~split], "mixed", more=((TRI3, triangles),))
+    master = ntf.FacetSurface(ft, LOWER_TOP)
+    law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS))
+    problem = ntf.ContactProblem(
+        elastic_residual(u, v, ft, pressure), u, [ntf.ContactPair(slave, master, law)],
+        punch_conditions(V, ft),
+    )  # fmt: skip
+    assert comm.allreduce(int(np.any(split)), op=MPI.SUM) > 0
+    solve_increments(problem, pressure, load=10.0)
+    (result,) = ntf.contact_results(problem)
+    total = comm.allreduce(float(result.force[:, 2].sum()), op=MPI.SUM)
+    assert total == pytest.approx(10.0 * 0.36, rel=1e-8)  # the pressure on the punch's top
+    state = problem.states[0]
+    assert len(state.slave.more_faces) == 1 and state.slave.more_faces[0].face_type is TRI3
+    owned = state.slave.nodes < V.dofmap.index_map.size_local  # each node once
+    areas = slave_areas(state.slave, problem.reference_coordinates)
+    assert comm.allreduce(float(areas[owned].sum()), op=MPI.SUM) == pytest.approx(0.36, rel=1e-12)
