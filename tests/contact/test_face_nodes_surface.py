@@ -20,6 +20,7 @@ from helpers import (
     solve_increments,
     two_blocks,
 )
+from helpers.jacobian_check import directional_derivative
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf.contact.pairing import slave_areas
@@ -122,12 +123,9 @@ def test_face_nodes_surface_of_two_face_types():
     np.testing.assert_array_equal(slave.nodes, np.unique(faces))
 
 
-@pytest.mark.mpi
-def test_slave_of_two_face_types_carries_the_punch():
-    """A slave surface given half as quadrilaterals, half as triangles (the faces with x < 0.5
-    split in two): its springs carry the pressure on the punch (equilibrium) and its areas add
-    up to the surface's, serial and on 2 processes (each type's faces sent to their owners)."""
-    comm = MPI.COMM_WORLD
+def _mixed_punch(comm: MPI.Comm, **options) -> tuple:
+    """The punch whose slave faces with x < 0.5 are given as two triangles each: the problem,
+    the pressure and the space."""
     mesh, _, ft = two_blocks(comm, upper=PUNCH)
     V, u, v, pressure = displacement_fields(mesh)
     faces = _as_nodes(V, ntf.FacetSurface(ft, UPPER_BOTTOM), "slave").faces
@@ -140,9 +138,19 @@ def test_slave_of_two_face_types_carries_the_punch():
     law = ntf.SurfaceInteraction(ntf.LinearLaw.with_ccx_defaults(YOUNGS_MODULUS))
     problem = ntf.ContactProblem(
         elastic_residual(u, v, ft, pressure), u, [ntf.ContactPair(slave, master, law)],
-        punch_conditions(V, ft),
+        punch_conditions(V, ft), **options,
     )  # fmt: skip
     assert comm.allreduce(int(np.any(split)), op=MPI.SUM) > 0
+    return problem, pressure, V
+
+
+@pytest.mark.mpi
+def test_slave_of_two_face_types_carries_the_punch():
+    """A slave surface given half as quadrilaterals, half as triangles (the faces with x < 0.5
+    split in two): its springs carry the pressure on the punch (equilibrium) and its areas add
+    up to the surface's, serial and on 2 processes (each type's faces sent to their owners)."""
+    comm = MPI.COMM_WORLD
+    problem, pressure, V = _mixed_punch(comm)
     solve_increments(problem, pressure, load=10.0)
     (result,) = ntf.contact_results(problem)
     total = comm.allreduce(float(result.force[:, 2].sum()), op=MPI.SUM)
@@ -152,3 +160,14 @@ def test_slave_of_two_face_types_carries_the_punch():
     owned = state.slave.nodes < V.dofmap.index_map.size_local  # each node once
     areas = slave_areas(state.slave, problem.reference_coordinates)
     assert comm.allreduce(float(areas[owned].sum()), op=MPI.SUM) == pytest.approx(0.36, rel=1e-12)
+
+
+@pytest.mark.serial
+def test_area_tangent_of_two_face_types_is_the_derivative():
+    """``linearize_area``: the tangent of the areas of both types' faces (their gradients added)
+    equals central differences of the residual."""
+    problem, pressure, _ = _mixed_punch(MPI.COMM_SELF, linearize_area=True)
+    solve_increments(problem, pressure, increments=1)
+    check = directional_derivative(problem, amplitude=1e-3, h=1e-4, seed=1)
+    np.testing.assert_allclose(check.product, check.difference, atol=1e-6 * check.contact_scale)
+    assert problem.states[0].slave.more_faces  # the check above saw the triangles
