@@ -1,7 +1,9 @@
 """The increment solvers of the thermal steps in the deck runner.
 
 ``*HEAT TRANSFER`` steps (docs/method.md §20.9): :class:`HeatIncrementSolver`, Newton on the
-temperature alone with the springs of the undeformed state.
+temperature alone with the springs of the undeformed state. Coupled steps without contact whose
+temperature space has constraints (C3D15, §39): :class:`SequentialIncrementSolver`, the heat
+Newton then the mechanical one (exact: without springs the coupling is one way).
 
 docs/method.md §20.8. :class:`CoupledIncrementSolver` runs the monolithic Newton of
 :class:`~dolfinx_ntf.ThermoMechanicalContact` (both fields, the coupling blocks in the Jacobian)
@@ -12,6 +14,8 @@ pressure (``conductance_pressure="ccx"``, §20.1).
 """
 
 from __future__ import annotations
+
+import typing
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -29,7 +33,12 @@ from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenc
 
 from .model.thermal import ThermalModel
 
-__all__ = ["CoupledIncrementSolver", "HeatIncrementSolver"]
+__all__ = [
+    "CoupledIncrementSolver",
+    "HeatIncrementSolver",
+    "MechanicalSolver",
+    "SequentialIncrementSolver",
+]
 
 
 class CoupledIncrementSolver:
@@ -56,6 +65,8 @@ class CoupledIncrementSolver:
             residual, self.heat, cell_temperature=thermal.cell_temperature
         )
         self.coupled.coupling_blocks = False  # ccx's iterates (docs/method.md §20.8)
+        self.heat.nodal_loads = thermal.flux  # *CFLUX, *DFLUX (docs/method.md §39)
+        self.heat.element_terms += [term for term, _ in thermal.films]  # *FILM on C3D15
         self.problem = problem
         #: ccx's field controls (kept for the job; the Newton's test is its own, §20.5).
         self.controls: dict[str, float] = {}
@@ -115,6 +126,8 @@ class HeatIncrementSolver:
     The displacement is never solved for: the springs are those the contact problem pairs at
     the undeformed state (as ccx 2.20's heat transfer step, docs/method.md §20.9), their heat
     flows are :class:`~dolfinx_ntf.ThermalContactProblem`'s with ccx's conductance pressure.
+    C3D15's face centres are eliminated (the reduced Jacobian is factorized), ``*CFLUX`` and
+    ``*DFLUX`` are the problem's nodal loads and ``*FILM`` its element terms (§39).
 
     Args:
         problem: The job's contact problem (its displacement stays as it is).
@@ -130,7 +143,10 @@ class HeatIncrementSolver:
             thermal.conductances,
             thermal.bcs,
             conductance_pressure="ccx",
+            constraints=thermal.constraints,  # C3D15's face centres (docs/method.md §39)
         )
+        self.heat.nodal_loads = thermal.flux  # *CFLUX, *DFLUX (docs/method.md §39)
+        self.heat.element_terms += [term for term, _ in thermal.films]  # *FILM on C3D15
         self.problem = problem
         #: Relative and absolute tolerances of the heat residual's 2-norm.
         self.rtol, self.atol = 1e-10, 1e-12
@@ -205,7 +221,8 @@ class HeatIncrementSolver:
                 A = self.heat.ensure_matrix()
                 self.heat.J(x, A)
                 dx = A.createVecLeft()
-                self._ksp.setOperators(A)
+                reduced = self.heat.reduced_matrix  # with constraints (§13.1)
+                self._ksp.setOperators(A if reduced is None else reduced)
                 self._ksp.solve(self._b, dx)
                 x.array[:] -= dx.array_r
                 x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
@@ -225,3 +242,110 @@ class HeatIncrementSolver:
         self._b.destroy()
         self._ksp.destroy()
         self.heat.destroy()
+
+
+class MechanicalSolver(typing.Protocol):
+    """The role of the job's mechanical Newton (:class:`~dolfinx_ntf.ContactNewtonSolver`)."""
+
+    controls: dict[str, float]
+    relaxation_iteration: int
+    increment_start: np.ndarray | None
+    history: list
+    residual_norms: list[float]
+
+    @property
+    def largest_residual(self) -> float:
+        """Largest residual component of the last iterate."""
+
+    def begin_step(self) -> None:
+        """A step starts."""
+
+    def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
+        """Newton from the current state."""
+
+    def destroy(self) -> None:
+        """Free the PETSc objects."""
+
+
+class SequentialIncrementSolver:
+    """The temperature, then the displacement at it, per increment (the job's solver role).
+
+    A coupled step without contact springs is coupled one way: the heat residual does not
+    depend on the displacement, so solving the heat problem first and the mechanics at its
+    temperature gives the monolithic solution (docs/method.md §39). Used where the monolithic
+    Newton cannot run: constraints on the temperature (C3D15's face centres).
+
+    Args:
+        heat: The heat Newton (its springs: none).
+        mechanics: The mechanical Newton; its residual holds the thermal strain of ``T``.
+        thermal: The deck's temperature field (its cell temperatures updated between the two).
+    """
+
+    def __init__(
+        self, heat: HeatIncrementSolver, mechanics: MechanicalSolver, thermal: ThermalModel
+    ) -> None:
+        if heat.problem.states:
+            raise NotImplementedError(
+                "SequentialIncrementSolver: contact springs couple the heat problem to the "
+                "displacement; solve it monolithically (CoupledIncrementSolver)"
+            )
+        self.heat, self.mechanics, self.thermal = heat, mechanics, thermal
+        self.problem = heat.problem
+
+    @property
+    def controls(self) -> dict[str, float]:
+        """ccx's field controls of the mechanical Newton."""
+        return self.mechanics.controls
+
+    @controls.setter
+    def controls(self, value: dict[str, float]) -> None:
+        self.mechanics.controls = value
+
+    @property
+    def relaxation_iteration(self) -> int:
+        """ccx's I_P of the mechanical Newton."""
+        return self.mechanics.relaxation_iteration
+
+    @relaxation_iteration.setter
+    def relaxation_iteration(self, value: int) -> None:
+        self.mechanics.relaxation_iteration = value
+
+    @property
+    def increment_start(self) -> np.ndarray | None:
+        """Displacement at the start of the increment (set by the step), for both solvers."""
+        return self.mechanics.increment_start
+
+    @increment_start.setter
+    def increment_start(self, value: np.ndarray | None) -> None:
+        self.heat.increment_start = self.mechanics.increment_start = value
+
+    @property
+    def history(self) -> list:
+        """The mechanical Newton's ``.cvg`` rows of the last solve."""
+        return self.mechanics.history
+
+    @property
+    def residual_norms(self) -> list[float]:
+        """The mechanical Newton's residual norms of the last solve."""
+        return self.mechanics.residual_norms
+
+    @property
+    def largest_residual(self) -> float:
+        """The mechanical Newton's largest residual force of the last iterate."""
+        return self.mechanics.largest_residual
+
+    def begin_step(self) -> None:
+        """A step starts."""
+        self.heat.begin_step()
+        self.mechanics.begin_step()
+
+    def solve(self, u: dolfinx.fem.Function) -> tuple[int, bool]:
+        """The heat Newton, then the mechanical one at the new temperature. Collective."""
+        self.heat.solve(u)
+        self.thermal.cell_temperature.update()
+        return self.mechanics.solve(u)
+
+    def destroy(self) -> None:
+        """Destroy the PETSc objects. Collective."""
+        self.heat.destroy()
+        self.mechanics.destroy()

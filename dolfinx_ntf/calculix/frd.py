@@ -40,55 +40,32 @@ __all__ = [
 #: frd element type numbers of the ccx element types (cgx manual: he8 1, te4 3, te10 6, he20 4).
 FRD_ELEMENT_TYPES: dict[str, int] = {n: t.frd_type for n, t in ELEMENT_TYPES.items()}
 
+#: Row and column of the six components of a symmetric tensor, in ccx's order.
+_TENSOR_SLOTS = (("XX", 1, 1), ("YY", 2, 2), ("ZZ", 3, 3), ("XY", 1, 2), ("YZ", 2, 3), ("ZX", 3, 1))
+
+
+def _tensor_components(names: typing.Iterable[str]) -> tuple[tuple[str, int, int, int], ...]:
+    """Component lines of a symmetric-tensor block whose six components are called ``names``."""
+    return tuple((name, 4, row, col) for name, (_, row, col) in zip(names, _TENSOR_SLOTS))
+
+
+def _tensor_named(prefix: str) -> tuple[tuple[str, int, int, int], ...]:
+    """Component lines ``prefix`` + XX, YY, ZZ, XY, YZ, ZX (``STRESS``: SXX, ...)."""
+    return _tensor_components(prefix + slot for slot, _, _ in _TENSOR_SLOTS)
+
+
 #: Result blocks: frd name -> (component lines ``(name, type, row, column)``, ccx's ALL line).
 _COMPONENTS: dict[str, tuple[tuple[tuple[str, int, int, int], ...], bool]] = {
     "DISP": ((("D1", 2, 1, 0), ("D2", 2, 2, 0), ("D3", 2, 3, 0)), True),
     "FORC": ((("F1", 2, 1, 0), ("F2", 2, 2, 0), ("F3", 2, 3, 0)), True),
-    "STRESS": (
-        (
-            ("SXX", 4, 1, 1),
-            ("SYY", 4, 2, 2),
-            ("SZZ", 4, 3, 3),
-            ("SXY", 4, 1, 2),
-            ("SYZ", 4, 2, 3),
-            ("SZX", 4, 3, 1),
-        ),
-        False,
-    ),
-    "TOSTRAIN": (
-        (
-            ("EXX", 4, 1, 1),
-            ("EYY", 4, 2, 2),
-            ("EZZ", 4, 3, 3),
-            ("EXY", 4, 1, 2),
-            ("EYZ", 4, 2, 3),
-            ("EZX", 4, 3, 1),
-        ),
-        False,
-    ),
-    "MESTRAIN": (
-        (
-            ("MEXX", 4, 1, 1),
-            ("MEYY", 4, 2, 2),
-            ("MEZZ", 4, 3, 3),
-            ("MEXY", 4, 1, 2),
-            ("MEYZ", 4, 2, 3),
-            ("MEZX", 4, 3, 1),
-        ),
-        False,
-    ),
+    "STRESS": (_tensor_named("S"), False),
+    "TOSTRAIN": (_tensor_named("E"), False),
+    "MESTRAIN": (_tensor_named("ME"), False),
     "PE": ((("PE", 1, 0, 0),), False),
     "ENER": ((("ENER", 1, 0, 0),), False),
     "SDV": ((), False),  # SDV1, SDV2, ...: as many as the block's values have columns
     "CONTACT": (
-        (
-            ("COPEN", 4, 1, 1),
-            ("CSLIP1", 4, 2, 2),
-            ("CSLIP2", 4, 3, 3),
-            ("CPRESS", 4, 1, 2),
-            ("CSHEAR1", 4, 2, 3),
-            ("CSHEAR2", 4, 3, 1),
-        ),
+        _tensor_components(("COPEN", "CSLIP1", "CSLIP2", "CPRESS", "CSHEAR1", "CSHEAR2")),
         False,
     ),
 }

@@ -19,8 +19,8 @@ correction must be small against the increment's displacement change (``C_n``), 
 ``TIGHT_FIELD_CONTROLS`` (``R_n = R_p = 1e-10``, ``controls.py``), so that converged solutions are
 compared.
 
-Steps without contact pairs and without NLGEOM are linear: one increment over the whole step, as in
-ccx.
+Steps without contact pairs, NLGEOM and temperatures are linear: one increment over the whole
+step, as in ccx (whose thermal steps follow their increments also without contact, §39).
 
 Under ``mpirun -n N`` the model is distributed by dolfinx and every output is gathered in ccx
 numbering (``gather.py``) and written by rank 0: the files are those of the serial run
@@ -67,7 +67,7 @@ from .xdmf import WedgeDeckWriter
 if typing.TYPE_CHECKING:
     from dolfinx_ntf.solvers.modes import Modes
 
-    from .coupled import CoupledIncrementSolver, HeatIncrementSolver
+    from .coupled import CoupledIncrementSolver, HeatIncrementSolver, SequentialIncrementSolver
 
 # The modules of dynamic, modal and coupled steps are imported where such a step runs: a static
 # deck does not pay for them at start-up (docs/performance.md, "Start-up").
@@ -251,11 +251,26 @@ class _Job:
         printed = internal if model.printed_force is None else model.printed_force
         self.numbering = CcxNumbering(model, printed)
         self.values = OutputValues(deck, model, self.problem, self.numbering, comm)
-        self.solver: ContactNewtonSolver | CoupledIncrementSolver | HeatIncrementSolver
+        self.solver: (
+            ContactNewtonSolver
+            | CoupledIncrementSolver
+            | HeatIncrementSolver
+            | SequentialIncrementSolver
+        )
         if model.thermal is not None:
-            from .coupled import CoupledIncrementSolver, HeatIncrementSolver
+            from .coupled import (
+                CoupledIncrementSolver,
+                HeatIncrementSolver,
+                SequentialIncrementSolver,
+            )
         if model.thermal is not None and deck.steps[0].coupled.heat:  # all *HEAT TRANSFER
             self.solver = HeatIncrementSolver(self.problem, model.thermal)
+        elif model.thermal is not None and model.thermal.constraints:  # C3D15, no contact (§39)
+            self.solver = SequentialIncrementSolver(
+                HeatIncrementSolver(self.problem, model.thermal),
+                self._mechanical_solver(comm, petsc_options, tight, solver_options),
+                model.thermal,
+            )
         elif model.thermal is not None:  # every step is coupled (model.thermal.is_thermal)
             self.solver = CoupledIncrementSolver(self.problem, model.residual, model.thermal)
         else:
@@ -294,7 +309,7 @@ class _Job:
             residual_floor=0.0 if tight else CCX_RESIDUAL_FLOOR,
             average_over_step=not tight,
             change_over_iterations=not tight,
-            **(solver_options or {}),
+            **{"divergence_rule": "ccx", **(solver_options or {})},  # ccx's check (§42)
         )
 
     def _on_pairing(self, problem: ContactProblem) -> None:
@@ -361,7 +376,8 @@ class _Job:
             return
         static = step.static
         period = static.period
-        linear = not step.nlgeom and not model.pairs and not model.plasticity
+        # thermal steps follow their increments also without contact (ccx 2.20, §39)
+        linear = not (step.nlgeom or model.pairs or model.plasticity or step.coupled)
         initial = period if linear else static.initial_increment
         maximum = min(static.maximum if static.maximum is not None else period, period)
         initial = min(initial, maximum)

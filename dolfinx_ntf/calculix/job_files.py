@@ -515,15 +515,15 @@ def _check_transformed_outputs(deck: Deck) -> None:
 
 #: ``*EL PRINT`` keys printed at ccx's two C3D6 points of a wedge.
 _WEDGE_PRINT_KEYS = {"S", "E", "PEEQ", "ENER", "SDV", "ME"}
-#: ``*EL FILE`` keys extrapolated to a wedge's nodes by ccx's C3D6 weights.
-_WEDGE_FILE_KEYS = {"S", "E", "PEEQ"}
+#: ``*EL FILE`` keys extrapolated to a wedge's nodes by ccx's C3D6 weights (method §35, §41.4).
+_WEDGE_FILE_KEYS = {"S", "E", "PEEQ", "ENER", "SDV", "ME"}
 
 
 def _check_wedge_outputs(deck: Deck) -> None:
     """Refuse the wedges' element outputs that are not built (method §30.6, §35, §36).
 
     ``*EL PRINT`` S, E, PEEQ, ENER, SDV and ME of a wedge are printed at ccx's two C3D6 points;
-    ``*EL FILE`` writes S, E and PEEQ extrapolated to the nodes by ccx's C3D6 weights.
+    ``*EL FILE`` writes the same keys extrapolated to the nodes by ccx's C3D6 weights (§41.4).
     """
     if deck.wedges.size == 0:
         return
@@ -540,8 +540,8 @@ def _check_wedge_outputs(deck: Deck) -> None:
                 keyword = request.keyword if isinstance(request, FileRequest) else "*EL PRINT"
                 raise NotImplementedError(
                     f"{request.location}: {keyword} {'/'.join(request.keys)} of C3D6 element "
-                    f"{int(hit[0])} is not supported (only *EL PRINT S, E, PEEQ, ENER, SDV and ME "
-                    "and *EL FILE S, E and PEEQ of ccx's two C3D6 points)"
+                    f"{int(hit[0])} is not supported (only S, E, PEEQ, ENER, SDV and ME of ccx's "
+                    "two C3D6 points)"
                 )
 
 

@@ -30,6 +30,8 @@ import ufl
 from dolfinx_ntf import compat, validation
 from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.contact.problem import ContactProblem
+from dolfinx_ntf.fem.constraints import ConstraintElimination, LinearConstraintBlock
+from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.kernels.gap_conductance import (
     GapConductance,
     ThermalSpringEvaluation,
@@ -38,8 +40,21 @@ from dolfinx_ntf.kernels.gap_conductance import (
 from dolfinx_ntf.kernels.laws import LinearLaw
 from dolfinx_ntf.kernels.rigid import RigidSurface
 from dolfinx_ntf.parallel import collectives
+from dolfinx_ntf.parallel.global_constraints import distributed_elimination
 
-__all__ = ["ThermalContactProblem"]
+__all__ = ["HeatElementTerm", "ThermalContactProblem"]
+
+
+class HeatElementTerm(typing.Protocol):
+    """Element blocks added to the heat residual and Jacobian, in the global numbering.
+
+    For example film conditions on faces the mesh has no ``ds`` for (C3D15's, docs/method.md
+    §39); see :attr:`ThermalContactProblem.element_terms`. Their couplings must be in the
+    matrix pattern (nodes of one cell).
+    """
+
+    def evaluate(self, x: PETSc.Vec) -> GlobalBlocks:
+        """This process's blocks at the temperature ``x`` (ghosts updated); -1 skips a dof."""
 
 
 class ThermalContactProblem:
@@ -58,6 +73,9 @@ class ThermalContactProblem:
             (the spring's contact pressure ``F_N/A``, default) or ``"ccx"`` (CalculiX 2.20's
             thermal spring: the slope ``K`` of a LINEAR law, whatever the contact pressure;
             docs/method.md §20.1; other laws are refused, their ccx value is not measured).
+        constraints: Constraint blocks on ``T``'s dofs (``block_size=1``), eliminated as the
+            displacement's (docs/method.md §13.1): C3D15's face centres (§39). The Jacobian the
+            linear solver needs is then :attr:`reduced_matrix`.
         form_compiler_options, jit_options: Passed to dolfinx's form compiler and JIT.
     """
 
@@ -71,6 +89,7 @@ class ThermalContactProblem:
         J: ufl.form.Form | None = None,
         *,
         conductance_pressure: str = "contact",
+        constraints: typing.Sequence[LinearConstraintBlock] = (),
         form_compiler_options: dict | None = None,
         jit_options: dict | None = None,
     ) -> None:
@@ -141,6 +160,16 @@ class ThermalContactProblem:
         self.coupling_blocks: list[SpringBlocks] = []
         #: The thermal springs of every pair at the last evaluation (None where a pair has none).
         self.evaluations: list[ThermalSpringEvaluation | None] = []
+        #: The elimination of ``constraints`` (None without any, on every process).
+        self.elimination = _elimination(Q, list(constraints), self.bcs)
+        #: The reduced Jacobian ``T'^T J T'`` of the last :meth:`J` with constraints, else None.
+        self.reduced_matrix: PETSc.Mat | None = None
+        #: Heat flows into the nodes (a function of ``T``'s space, e.g. CalculiX's ``*CFLUX``),
+        #: subtracted from the residual; None for none.
+        self.nodal_loads: dolfinx.fem.Function | None = None
+        #: Element blocks added to the residual and the Jacobian (e.g. films, §39).
+        self.element_terms: list[HeatElementTerm] = []
+        self._element_blocks: list[GlobalBlocks] = []
 
     @property
     def L(self) -> compat.Form:
@@ -240,34 +269,92 @@ class ThermalContactProblem:
     def form(self, x: PETSc.Vec, *, coupling: bool = False, mechanics: bool = True) -> None:
         """Before F: update the ghost values of ``x`` and evaluate the thermal springs.
 
-        ``coupling`` and ``mechanics`` as for :meth:`evaluate`.
+        ``coupling`` and ``mechanics`` as for :meth:`evaluate`. With constraints the prescribed
+        values are set into ``x`` and its dependent dofs back-substituted first (§13.1).
         """
+        if self.elimination is not None:  # before the ghost update: ghosts get the new values
+            dolfinx.fem.petsc.set_bc(x, self.bcs)
+            self.elimination.back_substitute(x)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._blocks = self.evaluate(tangent=True, coupling=coupling, mechanics=mechanics)
+        self._element_blocks = [term.evaluate(x) for term in self.element_terms]
 
     def F(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """Assemble the bulk heat residual plus the springs' heat flows at ``x`` into ``b``."""
+        """Assemble the bulk heat residual plus the springs' heat flows at ``x`` into ``b``.
+
+        Minus :attr:`nodal_loads` where given, plus :attr:`element_terms`.
+        """
         with b.localForm() as b_local:
             b_local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(b, self.L)
         dolfinx.fem.petsc.apply_lifting(b, [self.a], [self.bcs], [x], -1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.assembler.add_to_vector(b, self._blocks)
+        if self.nodal_loads is not None:
+            b.axpy(-1.0, compat.petsc_vector(self.nodal_loads))
+        if self._element_blocks:
+            self.assembler.add_global_to_vector(b, self._element_blocks)
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
+        if self.elimination is not None:
+            self.elimination.reduce_vector(
+                b, lambda r: dolfinx.fem.petsc.set_bc(r, self.bcs, x, -1.0)
+            )
 
     def J(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
-        """The Jacobian at ``x`` (bulk, springs' exact temperature tangent) into ``A``."""
+        """The Jacobian at ``x`` (bulk, springs' exact temperature tangent) into ``A``.
+
+        With constraints also its reduction, :attr:`reduced_matrix`.
+        """
         A.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(A, self.a, self.bcs)
         A.assemble()
         self.assembler.add_to_matrix(A, self._blocks)
         A.assemble()
+        if self._element_blocks:
+            self.assembler.add_global_to_matrix(A, self._element_blocks)
+            A.assemble()
+        if self.elimination is not None:
+            key = (A.handle, self.assembler.pattern_merges, self.assembler.matrix_rebuilds)
+            self.reduced_matrix = self.elimination.reduce_matrix(A, key)
 
     def destroy(self) -> None:
         """Destroy the PETSc matrix the problem owns. Collective."""
         if self.matrix is not None:
             self.matrix.destroy()
             self.matrix = None
+        if self.elimination is not None:
+            self.elimination.destroy()
+            self.elimination, self.reduced_matrix = None, None
+
+
+def _elimination(
+    Q: dolfinx.fem.FunctionSpace,
+    constraints: list[LinearConstraintBlock],
+    bcs: typing.Sequence[compat.DirichletBC],
+) -> ConstraintElimination | None:
+    """The elimination of the constraints on ``T``'s space (None if no process has any).
+
+    Collective. Prescribed dofs are never dependent (docs/method.md §13.1).
+    """
+    comm = Q.mesh.comm
+    if not comm.allreduce(len(constraints), op=MPI.MAX):
+        return None
+
+    def check() -> None:
+        for c in constraints:
+            validation.check_type(c, LinearConstraintBlock, "ThermalContactProblem: constraints")
+            if c.block_size != 1:
+                raise ValueError(
+                    f"ThermalContactProblem: constraint block {c.name!r} has block size "
+                    f"{c.block_size}; T's space is scalar (block size 1)"
+                )
+
+    collectives.collectively(comm, check)
+    prescribed = [bc.dof_indices()[0] for bc in bcs]
+    prescribed = np.concatenate(prescribed) if prescribed else np.zeros(0, np.int64)
+    if comm.size > 1:  # every process's constraints, in the global numbering (§14.6)
+        return collectives.collectively(comm, distributed_elimination, Q, constraints, prescribed)
+    return ConstraintElimination(Q.dofmap.index_map.size_local, constraints, prescribed, comm)
 
 
 def _check_space(T: object, u: dolfinx.fem.Function) -> None:

@@ -115,7 +115,7 @@ class LinearConstraintBlock:
             symmetry on a fixed boundary, §19: the prescribed values are the caller's to keep
             consistent).
         block_size: Components per node of the space (3; 2 on a 2D mesh, e.g. the centres of
-            8-node quadrilaterals, §23).
+            8-node quadrilaterals, §23; 1 on a scalar space, C3D15's temperatures, §39).
     """
 
     nodes: np.ndarray
@@ -146,7 +146,7 @@ class LinearConstraintBlock:
         if nodes.size and nodes.min() < 0:
             raise ValueError(f"{label}: node {int(nodes.min())} is not a mesh node")
         if np.any((components < 0) | (components >= self.block_size)):
-            allowed = "0, 1 or 2" if self.block_size == 3 else "0 or 1"
+            allowed = {1: "0", 2: "0 or 1"}.get(self.block_size, "0, 1 or 2")
             raise ValueError(f"{label}: components must be {allowed}")
         if not (np.all(np.isfinite(coefficients)) and np.all(np.isfinite(values))):
             raise ValueError(f"{label}: coefficients and values must be finite")

@@ -39,6 +39,8 @@ __all__ = [
     "face_points",
     "face_tangents",
     "face_type_from_num_nodes",
+    "film_matrices",
+    "flux_flows",
     "pressure_forces",
     "pressure_stiffness",
 ]
@@ -422,6 +424,47 @@ def pressure_forces(
     q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
     normal = np.cross(q_xi, q_eta) * weights[None, :, None]
     return -np.asarray(pressure, dtype=float)[:, None, None] * np.einsum("qn,fqd->fnd", phi, normal)
+
+
+def flux_flows(
+    face_type: FaceType,
+    face_coords: np.ndarray,
+    flux: np.ndarray,
+    rule: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
+    """Consistent nodal heat flows ``(F, n)`` of a uniform flux into each of ``F`` faces.
+
+    ``h_j = q Σ_q w_q φ_j(ξ_q) |q_ξ × q_η|(ξ_q)`` (CalculiX's ``*DFLUX``: positive into the
+    body). ``rule`` as for :func:`pressure_forces`.
+    """
+    coords = face_coords_array(face_type, face_coords)
+    if rule is None:
+        rule = (face_type.quadrature_points, face_type.quadrature_weights)
+    xi, weights = (np.asarray(a, dtype=float) for a in rule)
+    phi = face_type.shape_functions(xi)  # (q, n)
+    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
+    area = np.linalg.norm(np.cross(q_xi, q_eta), axis=-1) * weights[None, :]  # (F, q)
+    return np.asarray(flux, dtype=float)[:, None] * (area @ phi)
+
+
+def film_matrices(
+    face_type: FaceType,
+    face_coords: np.ndarray,
+    rule: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
+    """``(F, n, n)`` face mass matrices ``Σ_q w_q φ_i φ_j |q_ξ × q_η|`` of ``F`` faces.
+
+    Times a film coefficient ``h``: the Jacobian of CalculiX's ``*FILM`` heat flow
+    ``h (T - T_sink)`` out of the face. ``rule`` as for :func:`pressure_forces`.
+    """
+    coords = face_coords_array(face_type, face_coords)
+    if rule is None:
+        rule = (face_type.quadrature_points, face_type.quadrature_weights)
+    xi, weights = (np.asarray(a, dtype=float) for a in rule)
+    phi = face_type.shape_functions(xi)  # (q, n)
+    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
+    area = np.linalg.norm(np.cross(q_xi, q_eta), axis=-1) * weights[None, :]  # (F, q)
+    return np.einsum("fq,qi,qj->fij", area, phi, phi)
 
 
 def _skew(v: np.ndarray) -> np.ndarray:

@@ -9,6 +9,14 @@ C3D6 (``kernels/collapsed_wedges.py``, docs/method.md §30 and §32): one mesh o
 dolfinx release. Their triangles are facets (quadrilaterals with a repeated corner) that facet
 tags, contact surfaces and ``ds`` take like any other.
 
+Second-order prisms (gmsh's 15-node type 18 and 18-node type 13, alone) become a mesh of 18-node
+prisms on dolfinx 0.11 (docs/method.md §40): a 15-node prism's quadrilateral centres are placed
+by the quad8 map (CalculiX C3D15's geometry), an 18-node prism keeps gmsh's. dolfinx 0.11 has no
+facets on prism meshes (two facet types), so the tagged faces come back as a
+:class:`~dolfinx_ntf.fem.wedge_faces.PrismFaces` (rows of input nodes, outward) instead of facet
+tags; ``fem.serendipity_wedge.wedge15_space`` and ``fem.wedge_faces.prism_face_forces`` solve on
+them. Older releases refuse such models (NotImplementedError).
+
 Shared rules:
     * Every public function is collective over ``comm``. gmsh is touched on rank ``rank`` only,
       so the other ranks need neither gmsh initialized nor a model.
@@ -24,6 +32,7 @@ Shared rules:
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -34,12 +43,15 @@ from mpi4py import MPI
 import gmsh
 import numpy as np
 
+import basix
 import dolfinx.mesh
 from dolfinx.mesh import Mesh
 
 from dolfinx_ntf import compat
 from dolfinx_ntf.compat import MeshTags
 from dolfinx_ntf.fem.collapsed_wedges import create_collapsed_mesh
+from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres, wedge15_rule
+from dolfinx_ntf.fem.wedge_faces import WEDGE_FACES, PrismFaces
 from dolfinx_ntf.kernels.collapsed_wedges import (
     WedgeRotationError,
     collapse_wedges,
@@ -55,8 +67,14 @@ _INCOMPLETE = {16: "8-node quadrilaterals", 17: "20-node hexahedra"}
 #: gmsh element types of the prism path: 3-node triangles, 4-node quadrilaterals, 8-node
 #: hexahedra, 6-node prisms.
 _TRIANGLE, _QUADRILATERAL, _HEXAHEDRON, _PRISM = 2, 3, 5, 6
-#: Prisms the collapsed-hexahedron reading cannot take (gmsh element type: what it is).
+#: Second-order prisms (gmsh element type: what it is), read as 18-node prisms on dolfinx 0.11.
 _OTHER_PRISMS = {13: "18-node prisms", 18: "15-node prisms"}
+#: Their faces: 6-node triangles, 9-node and 8-node quadrilaterals (gmsh element types).
+_QUADRATIC_FACES = {9: 6, 10: 9, 16: 8}
+#: The first dolfinx release that assembles degree-2 spaces on prisms (docs/method.md §32.5).
+QUADRATIC_PRISMS_MIN_DOLFINX = (0, 11)
+#: A second-order prism mirrored (triangle 1-3-2 below 4-6-5), the same element: basix's nodes.
+_MIRROR = np.array([0, 2, 1, 3, 5, 4, 7, 6, 8, 9, 11, 10, 13, 12, 14, 16, 15, 17])
 #: gmsh's hexahedron (and ccx's C3D8) corner order to dolfinx's.
 _HEX_TO_DOLFINX = np.array([0, 1, 3, 2, 4, 5, 7, 6])
 
@@ -91,6 +109,15 @@ def _track_initialization() -> dict[str, bool] | None:
 
 
 _gmsh_state = _track_initialization()
+
+
+@functools.cache
+def _prism18_derivatives() -> np.ndarray:
+    """``(3, 9, 18)`` derivatives of basix's degree-2 prism functions at ccx's 9 points."""
+    element = basix.create_element(
+        basix.ElementFamily.P, basix.CellType.prism, 2, basix.LagrangeVariant.equispaced
+    )
+    return element.tabulate(1, wedge15_rule()[0])[1:4, :, :, 0]
 
 
 def _gmsh_is_initialized() -> bool:
@@ -133,7 +160,7 @@ def gmsh_session(*, terminal: bool = False) -> Iterator[None]:
 
 def model_to_mesh(
     comm: MPI.Comm = MPI.COMM_WORLD, *, rank: int = 0, gdim: int = 3
-) -> tuple[Mesh, MeshTags, MeshTags]:
+) -> tuple[Mesh, MeshTags, MeshTags | PrismFaces]:
     """Distributed dolfinx mesh and tags from the current gmsh model on ``rank``.
 
     Cells are the elements of the physical groups of the highest dimension, tagged with the group
@@ -145,34 +172,41 @@ def model_to_mesh(
         gdim: Geometric dimension of the mesh.
 
     Returns:
-        ``(mesh, cell_tags, facet_tags)``.
+        ``(mesh, cell_tags, facet_tags)``; for 15- or 18-node prisms ``(mesh, cell_tags,
+        faces)`` with ``faces`` a :class:`~dolfinx_ntf.fem.wedge_faces.PrismFaces`.
 
     Prisms, alone or beside hexahedra, become hexahedra with a collapsed edge (the module's
-    docstring); their facets may then be triangles and quadrilaterals.
+    docstring); their facets may then be triangles and quadrilaterals. Second-order prisms
+    become 18-node prisms (dolfinx 0.11 and later).
 
     Raises:
         ValueError: The model has no physical groups or no mesh, an entity sits in two physical
             groups of the same dimension, the cells (facets) are not all of one element type
-            (other than prisms beside hexahedra), or prisms cannot be collapsed (naming them).
+            (other than prisms beside hexahedra), prisms cannot be collapsed, or a second-order
+            prism has a Jacobian ``<= 0`` at one of ccx's 9 points (naming them).
+        NotImplementedError: Second-order prisms on dolfinx older than 0.11.
     """
     _check_rank(comm, rank)
     if gdim not in (1, 2, 3):
         raise ValueError(f"gdim must be 1, 2 or 3, got {gdim!r}")
-    error, prisms = None, False
+    error, path = None, "dolfinx"
     if comm.rank == rank:
         try:
-            prisms = _prepare_model()
+            path = _prepare_model()
         except ValueError as exc:
             error = exc
     _raise_everywhere(comm, rank, error)
-    if comm.bcast(prisms, root=rank):
+    path = comm.bcast(path, root=rank)
+    if path == "prisms":
         return _collapsed_prism_mesh(comm, rank, gdim)
+    if path == "quadratic prisms":
+        return _quadratic_prism_mesh(comm, rank, gdim)
     return compat.model_to_mesh(gmsh.model, comm, rank, gdim)
 
 
 def read_msh(
     path: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, *, rank: int = 0, gdim: int = 3
-) -> tuple[Mesh, MeshTags, MeshTags]:
+) -> tuple[Mesh, MeshTags, MeshTags | PrismFaces]:
     """Distributed dolfinx mesh and tags from a gmsh .msh file read on ``rank``. Collective.
 
     Args:
@@ -182,7 +216,8 @@ def read_msh(
         gdim: Geometric dimension of the mesh.
 
     Returns:
-        ``(mesh, cell_tags, facet_tags)`` with the physical group numbers as tag values.
+        ``(mesh, cell_tags, facet_tags)`` with the physical group numbers as tag values
+        (second-order prisms: the faces as a ``PrismFaces``, see `model_to_mesh`).
 
     Raises:
         FileNotFoundError: ``path`` is not a file.
@@ -222,7 +257,7 @@ def mesh_from_gmsh(
     rank: int = 0,
     gdim: int = 3,
     **kwargs: Any,
-) -> tuple[Mesh, MeshTags, MeshTags]:
+) -> tuple[Mesh, MeshTags, MeshTags | PrismFaces]:
     """Run a gmsh model builder on ``rank`` and distribute its mesh. Collective.
 
     Typical use with the builders of ``dolfinx_ntf.meshes``:
@@ -237,7 +272,8 @@ def mesh_from_gmsh(
         **kwargs: Passed to ``build``.
 
     Returns:
-        ``(mesh, cell_tags, facet_tags)``.
+        ``(mesh, cell_tags, facet_tags)`` (second-order prisms: the faces as a ``PrismFaces``,
+        see `model_to_mesh`).
 
     Raises:
         Exception: Whatever ``build`` raised, on every rank (as the same type where possible).
@@ -299,12 +335,13 @@ def _raise_everywhere(comm: MPI.Comm, rank: int, error: Exception | None) -> Non
     raise rebuilt
 
 
-def _prepare_model() -> bool:
+def _prepare_model() -> str:
     """Check the current gmsh model can go through dolfinx's ``model_to_mesh``; renumber nodes.
 
     dolfinx reads the elements of every physical group, keeps the highest dimension as cells and
-    the next one as facets, assumes one element type for each and contiguous node tags. Prisms
-    (with or without hexahedra) take the collapsed-hexahedron path instead: returns True then.
+    the next one as facets, assumes one element type for each and contiguous node tags. Returns
+    ``"dolfinx"`` then; ``"prisms"`` for 6-node prisms (with or without hexahedra, the
+    collapsed-hexahedron path), ``"quadratic prisms"`` for 15- or 18-node prisms (§40).
 
     Raises:
         ValueError: Naming the model and the offending group or entity.
@@ -317,7 +354,7 @@ def _prepare_model() -> bool:
             "physical groups (add them with gmsh.model.addPhysicalGroup)"
         )
     tdim = max(dim for dim, _ in groups)
-    prisms = False
+    prisms = quadratic = False
     for dim in (tdim, tdim - 1):
         owner: dict[int, int] = {}
         types: set[int] = set()
@@ -338,12 +375,24 @@ def _prepare_model() -> bool:
                         f"mixes element types {list(entity_types)}"
                     )
                 types.update(int(t) for t in entity_types)
-        other = sorted(types & set(_OTHER_PRISMS)) if dim == tdim else []
-        if other:
-            raise ValueError(
-                f"gmsh model '{model}': its cells are {_OTHER_PRISMS[other[0]]}; only 6-node "
-                "prisms are read (as hexahedra with a collapsed edge, docs/method.md §32)"
-            )
+        if dim == tdim == 3 and types & set(_OTHER_PRISMS):
+            if len(types) > 1:
+                names = [gmsh.model.mesh.getElementProperties(t)[0] for t in sorted(types)]
+                raise ValueError(
+                    f"gmsh model '{model}': physical groups of dimension 3 mix element types "
+                    f"{names}; second-order prisms are read alone (15- or 18-node, one kind)"
+                )
+            quadratic = True
+            continue
+        if quadratic:
+            other = sorted(types - set(_QUADRATIC_FACES))
+            if other:
+                names = [gmsh.model.mesh.getElementProperties(t)[0] for t in other]
+                raise ValueError(
+                    f"gmsh model '{model}': the tagged faces of second-order prisms must be "
+                    f"6-node triangles and 8- or 9-node quadrilaterals, got {names}"
+                )
+            continue
         if dim == tdim == 3 and _PRISM in types and types <= {_PRISM, _HEXAHEDRON}:
             prisms = True
             continue
@@ -371,7 +420,7 @@ def _prepare_model() -> bool:
     node_tags, _, _ = gmsh.model.mesh.getNodes()
     if not np.array_equal(np.sort(node_tags), np.arange(1, node_tags.size + 1)):
         gmsh.model.mesh.renumberNodes()
-    return prisms
+    return "quadratic prisms" if quadratic else ("prisms" if prisms else "dolfinx")
 
 
 def _group_elements(dim: int) -> dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
@@ -491,6 +540,135 @@ def _collapsed_prism_mesh(comm: MPI.Comm, rank: int, gdim: int) -> tuple[Mesh, M
     keep = np.flatnonzero(found >= 0)
     facet_tags = dolfinx.mesh.meshtags(mesh, tdim - 1, facets[keep], found[keep].astype(np.int32))
     return mesh, cell_tags, facet_tags
+
+
+def _quadratic_prism_cells(
+    model: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, PrismFaces]:
+    """Points, 18-node prisms (dolfinx order), cell groups and tagged faces of a gmsh model.
+
+    gmsh's 15- and 18-node prisms number their nodes as basix's degree-2 prism (vertices, edges
+    0-1, 0-2, 0-3, 1-2, 1-4, 2-5, 3-4, 3-5, 4-5, then the quadrilateral centres: derived from the
+    node positions, ``tests/meshes/test_gmsh_quadratic_prisms.py``). A prism whose triangle
+    ``1-2-3`` turns clockwise seen from ``4-5-6`` is mirrored; 15-node prisms get their face
+    centres by the quad8 map (C3D15's geometry), 18-node ones keep gmsh's.
+
+    Raises:
+        ValueError: a prism with a Jacobian ``<= 0`` at one of ccx's 9 points, or a tagged face
+            that bounds no prism (naming gmsh element tags).
+    """
+    node_tags, coords, _ = gmsh.model.mesh.getNodes()
+    points = np.zeros((node_tags.size, 3))
+    points[np.asarray(node_tags, dtype=np.int64) - 1] = np.asarray(coords).reshape(-1, 3)
+    found = _group_elements(3)
+    kind = next(iter(found))
+    tags, cells, groups = _stacked(found[kind], 18 if kind == 13 else 15)
+    det = _prism_jacobians(cells, points)
+    mirrored = np.all(det < 0.0, axis=1)
+    cells[mirrored] = cells[mirrored][:, _MIRROR[: cells.shape[1]]]
+    if kind == 18:
+        cells, points = add_wedge_centres(cells, points)
+    bad = np.flatnonzero(np.any(_prism_jacobians(cells, points) <= 0.0, axis=1))
+    if bad.size:
+        raise ValueError(
+            f"gmsh model '{model}': prism {int(tags[bad[0]])} (and {bad.size - 1} more) has a "
+            "Jacobian <= 0 at an integration point (flat, folded or inverted)"
+        )
+    return points, cells, groups, _tagged_faces(model, cells)
+
+
+def _prism_jacobians(cells: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """``(C, 9)`` Jacobian determinants of 15- or 18-node prisms at ccx's 9 points.
+
+    15-node rows are measured with their face centres placed by the quad8 map.
+    """
+    if cells.shape[1] == 15:
+        cells, points = add_wedge_centres(cells, points)
+    x = points[cells]  # (C, 18, 3)
+    jacobian = np.einsum("aqn,cnd->cqda", _prism18_derivatives(), x)
+    return np.linalg.det(jacobian)
+
+
+def _tagged_faces(model: str, cells: np.ndarray) -> PrismFaces:
+    """The tagged faces of the physical groups of dimension 2, oriented by their prisms."""
+    local = [np.array(f) for f in WEDGE_FACES]
+    rows = [cells[:, f] for f in local]  # (C, 6) twice, (C, 9) three times
+    minus = np.full((cells.shape[0], 1), -1)
+    keys = np.vstack(
+        [np.hstack([minus, np.sort(r[:, :3], axis=1)]) for r in rows[:2]]
+        + [np.sort(r[:, :4], axis=1) for r in rows[2:]]
+    )
+    padded = np.vstack([np.pad(r, ((0, 0), (0, 9 - r.shape[1])), constant_values=-1) for r in rows])
+    out: dict[bool, tuple[list, list]] = {True: ([], []), False: ([], [])}
+    for kind, parts in _group_elements(2).items():
+        tags, faces, groups = _stacked(parts, _QUADRATIC_FACES[kind])
+        triangle = kind == 9
+        key = np.sort(faces[:, : 3 if triangle else 4], axis=1)
+        if triangle:
+            key = np.column_stack([np.full(key.shape[0], -1), key])
+        both = np.vstack([keys, key])
+        _, inverse = np.unique(both, axis=0, return_inverse=True)
+        inverse = inverse.ravel()
+        where = np.full(both.shape[0], -1, dtype=np.int64)
+        where[inverse[: keys.shape[0]]] = np.arange(keys.shape[0])
+        match = where[inverse[keys.shape[0] :]]
+        if np.any(match < 0):
+            k = int(np.flatnonzero(match < 0)[0])
+            raise ValueError(
+                f"gmsh model '{model}': element {int(tags[k])} of physical group "
+                f"{int(groups[k])} is no face of a prism"
+            )
+        out[triangle][0].append(padded[match, : 6 if triangle else 9])
+        out[triangle][1].append(groups)
+    tri, quad = out[True], out[False]
+    return PrismFaces(
+        triangles=np.vstack(tri[0]) if tri[0] else np.zeros((0, 6), np.int64),
+        triangle_tags=np.concatenate(tri[1]) if tri[1] else np.zeros(0, np.int32),
+        quadrilaterals=np.vstack(quad[0]) if quad[0] else np.zeros((0, 9), np.int64),
+        quadrilateral_tags=np.concatenate(quad[1]) if quad[1] else np.zeros(0, np.int32),
+    )
+
+
+def _quadratic_prism_mesh(
+    comm: MPI.Comm, rank: int, gdim: int
+) -> tuple[Mesh, MeshTags, PrismFaces]:
+    """Mesh of 18-node prisms, cell tags and tagged faces of a gmsh model on ``rank``.
+
+    Collective. The faces are broadcast (the same on every process).
+    """
+    if compat.DOLFINX_VERSION < QUADRATIC_PRISMS_MIN_DOLFINX:
+        version = ".".join(map(str, compat.DOLFINX_VERSION))
+        why = (
+            "its FFCx refuses forms on prisms"
+            if compat.DOLFINX_VERSION < (0, 7)
+            else "degree-2 spaces on prisms abort the process while assembling"
+        )
+        raise NotImplementedError(
+            "gmsh's 15- and 18-node prisms need dolfinx 0.11 or later (an 18-node prism mesh "
+            f"with a degree-2 space); dolfinx {version} cannot: {why} (docs/method.md §32.5, §40)"
+        )
+    if gdim != 3:
+        raise ValueError(f"a mesh of prisms needs gdim = 3, got {gdim!r}")
+    error, groups, faces = None, None, None
+    points, cells = np.zeros((0, 3)), np.zeros((0, 18), np.int64)
+    if comm.rank == rank:
+        try:
+            points, cells, groups, faces = _quadratic_prism_cells(
+                gmsh.model.getCurrent() or "<default>"
+            )
+        except ValueError as exc:
+            error = exc
+    _raise_everywhere(comm, rank, error)
+    groups, faces = comm.bcast((groups, faces), root=rank)
+    domain = compat.coordinate_element("prism", 2, 3)
+    mesh = compat.create_mesh(comm, cells.astype(np.int64), points, domain)
+    tdim = mesh.topology.dim
+    cell_map = mesh.topology.index_map(tdim)
+    num_cells = cell_map.size_local + cell_map.num_ghosts
+    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
+    local = np.arange(original.size, dtype=np.int32)
+    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
+    return mesh, cell_tags, faces
 
 
 def write_msh(path: str | Path) -> None:

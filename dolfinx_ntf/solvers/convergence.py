@@ -23,6 +23,7 @@ from dolfinx_ntf.solvers.errors import ContactConvergenceError, ContactDivergenc
 __all__ = [
     "CCX_FIELD_CONTROLS",
     "DIVERGENCE_GROWTH",
+    "DIVERGENCE_RULES",
     "ITERATIONS_PER_EXTRA_PAIRING",
     "MAX_EXTRA_PAIRINGS",
     "SCALE_GROWTH",
@@ -54,8 +55,9 @@ TIGHT_FIELD_CONTROLS: dict[str, float] = {
     "C_epsilon": 1e-8,
 }
 
-#: A residual counts as larger than an earlier one when it exceeds it by this factor: CalculiX's
-#: strict comparison, with a margin for iterations that stagnate at round-off level.
+#: The ``"growth"`` divergence rule's margin: a residual counts as larger than an earlier one when
+#: it exceeds it by this factor, so that iterations that stagnate on a plateau go on (the
+#: ``"ccx"`` rule compares strictly, as CalculiX does, and spares residuals below its tolerance).
 DIVERGENCE_GROWTH = 1.01
 
 #: With a bounded scale (:class:`ForceScaledTest`), an iterate's average force counts in the mean
@@ -190,6 +192,8 @@ class ForceScaledTest:
     largest_residual: float = 0.0
     #: ``(r, q~, c, du)`` of the last :meth:`converged` call, as the test used them.
     last: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    #: ``c1 q~`` of the last :meth:`converged` call: the largest residual force it accepts.
+    tolerance: float = 0.0
     _averages: list[float] = field(default_factory=list, repr=False)
     #: ``q`` of the iterates whose residual is at most the increment's first (bounded test).
     _settled_averages: list[float] = field(default_factory=list, repr=False)
@@ -206,6 +210,11 @@ class ForceScaledTest:
     def begin_iterations(self, average: float, largest: float) -> None:
         """The average and largest residual force of the solve's first iterate (no update yet)."""
         self._start = (average, largest)
+
+    @property
+    def residuals(self) -> list[float]:
+        """The largest residual force of each update of the solve (after ``residual_floor``)."""
+        return self._largest
 
     def end_solve(self) -> None:
         """Remember the forces of a converged increment."""
@@ -262,6 +271,7 @@ class ForceScaledTest:
             c1 = controls["R_n"] if updates <= self.relaxation_iteration else controls["R_p"]
             c2 = controls["C_n"]
         self.last = (largest, mean, correction, change)
+        self.tolerance = c1 * mean
         estimate = np.inf
         if updates >= 3 and min(self._largest[-3:-1]) > 0:
             estimate = largest * correction / min(self._largest[-3:-1])
@@ -276,16 +286,32 @@ class ForceScaledTest:
         )
 
 
+#: Names of the divergence rules (:class:`DivergenceRule`): ``"growth"`` is the Python API's
+#: default, ``"ccx"`` CalculiX 2.20's (the deck runner's).
+DIVERGENCE_RULES = ("growth", "ccx")
+
+
 class DivergenceRule:
-    """CalculiX's divergence check: a residual larger than the two before it ends the attempt.
+    """When a growing residual ends an attempt (docs/method.md §42).
+
+    ``"growth"``: a residual larger than ``DIVERGENCE_GROWTH`` times each of the two before it,
+    on the residual's 2-norm. ``"ccx"``: CalculiX 2.20's check on the largest residual force
+    ``r_k``: the last two both larger than the one before them (``r_{k-1} > r_{k-2}`` and
+    ``r_k > r_{k-2}``) and the last above the force-scaled test's tolerance (``r_k > c1 q~``,
+    :attr:`ForceScaledTest.tolerance`), so that an iterate that stagnates below the tolerance
+    is never given up. Both check from update ``first_iteration`` on.
 
     Args:
         first_iteration: CalculiX's I_0, the first Newton update checked.
+        rule: One of ``DIVERGENCE_RULES``.
     """
 
-    def __init__(self, first_iteration: int) -> None:
+    def __init__(self, first_iteration: int, rule: str = "growth") -> None:
+        if rule not in DIVERGENCE_RULES:
+            raise ValueError(f"divergence rule must be one of {DIVERGENCE_RULES}, got {rule!r}")
         self.first_iteration = first_iteration
         self.first_check = first_iteration
+        self.rule = rule
 
     def reset(self) -> None:
         """Start a solve: check from ``first_iteration`` on."""
@@ -295,25 +321,39 @@ class DivergenceRule:
         """Check no earlier than ``by`` updates after ``updates`` (the springs changed)."""
         self.first_check = max(self.first_check, updates + by)
 
+    def diverges(self, updates: int, residuals: typing.Sequence[float], tolerance: float) -> bool:
+        """Whether the attempt ends after update ``updates``.
+
+        Args:
+            updates: Newton updates so far.
+            residuals: The measures of the iterates so far, the current one last (2-norms for
+                ``"growth"``, largest residual forces for ``"ccx"``).
+            tolerance: The residual the force-scaled test accepts now (``"ccx"`` only).
+        """
+        if updates < self.first_check or len(residuals) < 3:
+            return False
+        before, last, now = residuals[-3], residuals[-2], residuals[-1]
+        if self.rule == "ccx":
+            return last > before and now > before and now > tolerance
+        return now > DIVERGENCE_GROWTH * max(last, before)
+
     def check(
         self,
         updates: int,
-        norms: typing.Sequence[float],
-        norm: float,
+        residuals: typing.Sequence[float],
         hint: typing.Callable[[], str],
+        tolerance: float = 0.0,
     ) -> None:
-        """Raise :class:`~dolfinx_ntf.ContactDivergenceError` if ``norm`` outgrows ``norms[-2:]``.
+        """Raise :class:`~dolfinx_ntf.ContactDivergenceError` if :meth:`diverges`.
 
         ``hint()`` words a likely cause for the message (called only when raising).
         """
-        if (
-            updates >= self.first_check
-            and len(norms) >= 2
-            and norm > DIVERGENCE_GROWTH * max(norms[-1], norms[-2])
-        ):
+        if self.diverges(updates, residuals, tolerance):
+            what = "largest residual force" if self.rule == "ccx" else "residual"
+            above = f" (tolerance {tolerance:.3e})" if self.rule == "ccx" else ""
+            values = ", ".join(f"{r:.3e}" for r in residuals[-3:])
             raise ContactDivergenceError(
-                f"residual grows: {norms[-2]:.3e}, {norms[-1]:.3e}, {norm:.3e} after "
-                f"{updates} Newton updates{hint()}"
+                f"{what} grows: {values}{above} after {updates} Newton updates{hint()}"
             )
 
 

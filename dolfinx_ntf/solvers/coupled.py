@@ -85,7 +85,7 @@ class ThermoMechanicalContact:
                 f"{owner}: the heat residual depends on the displacement; only the springs may "
                 "couple it to u for now"
             )
-        if self.contact.constraints:
+        if self.contact.constraints or thermal.elimination is not None:
             raise NotImplementedError(f"{owner}: linear constraints are not supported yet")
         options = compat.jit_keywords(form_compiler_options, jit_options)
         Q = T.function_space  # T_c's with cell_temperature

@@ -30,6 +30,7 @@ from dolfinx_ntf.logs import newton_logger, quiet_dolfinx
 from dolfinx_ntf.solvers import convergence, errors, factor_reuse
 from dolfinx_ntf.solvers import linear_solver as linear
 from dolfinx_ntf.solvers.convergence import (
+    DIVERGENCE_RULES,
     TIGHT_FIELD_CONTROLS,
     DivergenceRule,
     ExtraPairings,
@@ -67,10 +68,14 @@ class ContactNewtonSolver(NewtonSolver):
         relaxation_iteration: CalculiX's I_P: after this many updates ``R_p`` replaces ``R_n``.
         max_it: Maximum Newton iterations per increment.
         min_iterations: Newton updates needed before convergence can be declared (ccx: 2).
-        divergence_iteration: CalculiX's I_0: from this Newton update on, a residual larger than
-            the two before it gives the increment up at once
+        divergence_iteration: CalculiX's I_0: from this Newton update on, a growing residual
+            gives the increment up at once
             (:class:`~dolfinx_ntf.solvers.convergence.DivergenceRule`; a re-pairing that changes
             the number of springs defers it by 4 updates, as in ccx).
+        divergence_rule: ``"growth"``: a residual 2-norm larger than each of the two before it;
+            ``"ccx"``: CalculiX 2.20's check on the largest residual force (the last two larger
+            than the one before them and the last above the force-scaled test's tolerance; the
+            deck runner's). docs/method.md §42 measures both.
         line_search: Backtrack along each Newton correction until the residual of the current
             pairing decreases (:class:`~dolfinx_ntf.solvers.line_search.LineSearch`, beyond
             CalculiX).
@@ -118,6 +123,7 @@ class ContactNewtonSolver(NewtonSolver):
         max_it: int = 30,
         min_iterations: int = 2,
         divergence_iteration: int = 4,
+        divergence_rule: str = "growth",
         line_search: bool = True,
         max_line_search_halvings: int = 4,
         line_search_from: int = 2,
@@ -135,6 +141,11 @@ class ContactNewtonSolver(NewtonSolver):
             if isinstance(problem, ContactProblem)
             else 0
         )
+        if divergence_rule not in DIVERGENCE_RULES:
+            raise ValueError(
+                f"ContactNewtonSolver: divergence_rule must be one of {DIVERGENCE_RULES}, "
+                f"got {divergence_rule!r}"
+            )
         reuse = factor_reuse.reuses_factorization(factorization, dofs, "ContactNewtonSolver")
         symmetric = linear.expects_symmetric(problem, petsc_options)
         controls = dict(TIGHT_FIELD_CONTROLS if controls is None else controls)
@@ -180,7 +191,7 @@ class ContactNewtonSolver(NewtonSolver):
         self.roundoff_floor = roundoff_floor
         self._roundoff = RoundoffFloor(0.0, 0.0)
         problem.measure_bulk_norm = roundoff_floor
-        self.divergence = DivergenceRule(divergence_iteration)
+        self.divergence = DivergenceRule(divergence_iteration, divergence_rule)
         self.first_solve = True
         self.line_search = line_search
         self.line_search_from = line_search_from
@@ -356,11 +367,9 @@ class ContactNewtonSolver(NewtonSolver):
             raise errors.non_finite_residual(norm, self.updates, self.problem)
         if self.problem.count_changed:
             self.divergence.defer(self.updates, 4)
-        self.divergence.check(
-            self.updates, self.residual_norms, norm, lambda: errors.no_support_hint(self.problem)
-        )
         self.residual_norms.append(norm)
         converged = self.is_converged(x, b, norm)  # always called: criteria may keep a history
+        self._check_divergence()  # after the test: the diverging iterate is in the history
         converged = (
             converged and self.updates >= self.min_iterations and not self.problem.count_changed
         )
@@ -380,6 +389,14 @@ class ContactNewtonSolver(NewtonSolver):
                 )
                 + (", converged" if converged else "")
             )
+
+    def _check_divergence(self) -> None:
+        """Give the attempt up if the residual grows (:class:`DivergenceRule`)."""
+        hint = lambda: errors.no_support_hint(self.problem)  # noqa: E731
+        if self.divergence.rule == "ccx":  # the force-scaled test's measures
+            self.divergence.check(self.updates, self.test.residuals, hint, self.test.tolerance)
+        else:
+            self.divergence.check(self.updates, self.residual_norms, hint)
 
     def _decision(self, solver: NewtonSolver, b: PETSc.Vec) -> tuple[float, bool]:
         """The loop's convergence check: what :meth:`_residual` decided for ``b``."""

@@ -30,6 +30,8 @@ logger = logging.getLogger("dolfinx_ntf")
 def thermal_solver(problem: ThermalContactProblem) -> NewtonSolver:
     """A Newton solver for ``problem`` on its Jacobian matrix (the springs' couplings included).
 
+    With constraints it solves with the reduced Jacobian (``problem.reduced_matrix``).
+
     Args:
         problem: The heat problem.
     """
@@ -40,7 +42,9 @@ def thermal_solver(problem: ThermalContactProblem) -> NewtonSolver:
         # change of MatAXPY(..., DIFFERENT_NONZERO_PATTERN) (solvers/linear_solver.py).
         merges = problem.assembler.pattern_merges
         problem.J(x, A)
-        if problem.assembler.pattern_merges != merges:
+        if problem.reduced_matrix is not None:  # constraints: the reduced system (§13.1)
+            solver.krylov_solver.setOperators(problem.reduced_matrix, problem.reduced_matrix)
+        elif problem.assembler.pattern_merges != merges:
             solver.krylov_solver.getPC().reset()
             solver.krylov_solver.setOperators(A, A)
 

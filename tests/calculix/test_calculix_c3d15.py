@@ -67,6 +67,7 @@ def _check(ccx: list, ours: list, free_rf: float) -> dict[str, float]:
         "wedge_block_pressure",
         "wedge_block_dynamic",
         "wedge_block_modal",
+        "c3d15",
         "c3d15_dload",
         "c3d15_cload",
     ],
@@ -77,6 +78,8 @@ def test_c3d15_small_strain_matches_ccx(tmp_path, job):
     ``wedge_block_pressure``: pressures on curved 6-node triangles (ccx's 3 points) and curved
     8-node quadrilaterals (ccx's 2 x 2 points; 3 x 3 differ by 3.9e-5). ``wedge_block_dynamic``
     (*DYNAMIC) and ``wedge_block_modal`` (*MODAL DYNAMIC: U only, as ccx prints it).
+    ``c3d15``: ccx's own deck as Debian ships it (its identity ``*ORIENTATION``, ``*ELASTIC,
+    TYPE=ISOTROPIC`` with a temperature column; method §41).
     """
     ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     worst = _check(ccx, ours, free_rf=1e-12)
@@ -135,7 +138,8 @@ def test_c3d15_refuses_mixed_pressure_steps_and_mixed_meshes(tmp_path):
 def test_ccx_deck_variant_is_ccx_c3d15(tmp_path):
     """``c3d15_dload.inp`` is ccx's c3d15.inp with TYPE=ISO, no identity *ORIENTATION and no
     temperature column, ``c3d15_cload.inp`` also with its pressures as nodal forces: their ccx
-    output (the stored references) equals ccx's own reference."""
+    output (the stored references) equals ccx's own reference, and so does ccx's output of the
+    unedited deck (``c3d15.dat.ref``, every byte)."""
     ref = Path("/usr/share/doc/calculix-ccx-test/examples/test/c3d15.dat.ref.gz")
     if not ref.exists():
         pytest.skip("calculix-ccx-test is not installed")
@@ -144,6 +148,7 @@ def test_ccx_deck_variant_is_ccx_c3d15(tmp_path):
     path = tmp_path / "c3d15.dat"
     path.write_text(text)
     theirs = read_dat(path)
+    assert (DATA / "c3d15.dat.ref").read_text() == text
     for variant in ("c3d15_dload", "c3d15_cload"):
         ours = read_dat(DATA / f"{variant}.dat.ref")
         for a, b in zip(theirs, ours, strict=True):

@@ -165,9 +165,9 @@ def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
 
 @pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
 def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
-    """What is not built stays refused with the deck line: cyclic symmetry, ADJUST node sets,
-    a master surface of triangles and quadrilaterals; a face inside the mesh is an error naming
-    it."""
+    """What is not built stays refused with the deck line: cyclic symmetry, contact and ties in
+    decks with thermal steps, ADJUST node sets, a master surface of triangles and quadrilaterals;
+    a face inside the mesh is an error naming it."""
     cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
     job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
     (tmp_path / "e.inp").write_text(
@@ -175,6 +175,10 @@ def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
         + "*CYCLIC SYMMETRY MODEL, N=12, TIE=T\n0., 0., 0., 0., 0., 1.\n"
     )
     with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*TIE T, CYCLIC SYMMETRY on C3D15"):
+        run_job(job, tmp_path, progress=False)
+    heat = "*STEP\n*HEAT TRANSFER, STEADY STATE\n*END STEP\n"
+    job = _edited(tmp_path, "wedge_tie_quad", "*STEP, INC=100", heat + "*STEP, INC=100")
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: contact pairs and ties on C3D15"):
         run_job(job, tmp_path, progress=False)
     adjust = "TYPE=NODE TO SURFACE, ADJUST=TOP"
     job = _edited(tmp_path, "wedge_punch_quad", "TYPE=NODE TO SURFACE", adjust)

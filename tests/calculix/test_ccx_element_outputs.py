@@ -19,7 +19,7 @@ import cases
 import numpy as np
 import pytest
 from helpers.ccx_runs import quiet_logs, run_ccx_and_ours, run_quietly
-from helpers.decks import TWO_C3D8, WARPED_CUBES
+from helpers.decks import UNIT_C3D8, WARPED_CUBES, mixed_sections, pulled_bar
 from hex20 import to_hex20
 
 from dolfinx_ntf.calculix.dat import read_dat
@@ -32,66 +32,18 @@ needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx
 KEYS = ("ENER", "SDV", "ME")
 TITLES = ("internal energy density", "internal state variables", "mechanical strains")
 
+
 #: Element 1 plastic (metalforming's sheet table), element 2 elastic, on symmetry rollers: pulled
 #: to 5 % in ccx's automatic increments, then back to 4 % (ccx's controls near round-off).
-BAR = (
-    "*NODE, NSET=NALL\n"
-    + TWO_C3D8
-    + """*NSET, NSET=X0
-1, 4, 5, 8
-*NSET, NSET=Y0
-1, 2, 5, 6, 9, 11
-*NSET, NSET=Z0
-1, 2, 3, 4, 9, 10
-*NSET, NSET=END
-9, 10, 11, 12
-*ELSET, ELSET=E1
-1
-*ELSET, ELSET=E2
-2
-*MATERIAL, NAME=SHEET
-*ELASTIC
-5000.0, 0.3
-{plastic}*MATERIAL, NAME=ELASTIC
-*ELASTIC
-5000.0, 0.3
-*SOLID SECTION, ELSET=E1, MATERIAL=SHEET
-*SOLID SECTION, ELSET=E2, MATERIAL=ELASTIC
-*BOUNDARY
-X0, 1, 1
-Y0, 2, 2
-Z0, 3, 3
-*STEP{nlgeom}
-*STATIC
-0.125, 1.0
-*CONTROLS, PARAMETERS=FIELD
-1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12
-*BOUNDARY
-END, 1, 1, 0.1
-*EL PRINT, ELSET=EALL
-S, E, PEEQ, ENER, SDV, ME
-*NODE FILE
-U
-*EL FILE
-E, ENER, SDV, ME
-*END STEP
-*STEP{nlgeom}
-*STATIC
-0.25, 1.0
-*CONTROLS, PARAMETERS=FIELD
-1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12
-*BOUNDARY
-END, 1, 1, 0.08
-*EL PRINT, ELSET=EALL
-S, E, PEEQ, ENER, SDV, ME
-*END STEP
-"""
-)
-PLASTIC = "*PLASTIC\n50.0, 0.0\n100.0, 0.3\n"
-
-
 def _bar(nlgeom: bool, plastic: bool = True) -> str:
-    return BAR.format(nlgeom=", NLGEOM" if nlgeom else "", plastic=PLASTIC if plastic else "")
+    printed = "*EL PRINT, ELSET=EALL\nS, E, PEEQ, ENER, SDV, ME\n"
+    written = "*NODE FILE\nU\n*EL FILE\nE, ENER, SDV, ME\n"
+    return pulled_bar(
+        mixed_sections(plastic),
+        printed + written,
+        ", NLGEOM" if nlgeom else "",
+        second_requests=printed,
+    )
 
 
 def _title_lines(path: Path) -> list[str]:
@@ -384,18 +336,9 @@ def test_c3d8i_is_refused(key: str, tmp_path: Path) -> None:
 
 
 #: A C3D8 cube heated by 3 (expansion 1e-2: a thermal strain x = 0.03), held at x = 0 and 1.
-HEATED = """*NODE, NSET=NALL
-1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 1
-6, 1, 0, 1
-7, 1, 1, 1
-8, 0, 1, 1
-*ELEMENT, TYPE=C3D8, ELSET=EALL
-1, 1, 2, 3, 4, 5, 6, 7, 8
-*NSET, NSET=X0
+HEATED = (
+    UNIT_C3D8
+    + """*NSET, NSET=X0
 1, 4, 5, 8
 *NSET, NSET=Y0
 1, 2, 5, 6
@@ -431,6 +374,7 @@ NALL, 11, 11, 3.
 S, E, ENER, SDV, ME
 *END STEP
 """
+)
 
 
 @pytest.mark.serial

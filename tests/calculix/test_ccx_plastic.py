@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from cases import BOTTOM, PUNCH, TOP, blocks, facet_tag
 from helpers.ccx_runs import quiet_logs, run_quietly
-from helpers.decks import TWO_C3D8
+from helpers.decks import SHEET_ELASTIC, SHEET_PLASTIC, mixed_sections, pulled_bar
 
 import dolfinx_ntf as ntf
 from dolfinx_ntf.calculix.ccx import read_sta, run_ccx
@@ -42,56 +42,21 @@ from dolfinx_ntf.calculix.writer import (
 
 needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX ccx is not installed")
 
-#: The sheet's table of CalculiX's metalforming deck (yield strain 0.01, hardening 166.7).
 OUTPUT = OutputSpec(node_print=("U",), contact_print=("CDIS", "CSTR", "CELS", "CNUM"))
-SHEET = "*ELASTIC\n5000.0, 0.3\n*PLASTIC\n50.0, 0.0\n100.0, 0.3\n"
+#: The sheet's table of CalculiX's metalforming deck (yield strain 0.01, hardening 166.7).
+SHEET = SHEET_ELASTIC + SHEET_PLASTIC
 
-BAR = (
-    """*HEADING
-two C3D8 on symmetry rollers pulled to 5 % strain (yield at 1 %), then back to 4 %
-*NODE, NSET=NALL
-"""
-    + TWO_C3D8
-    + """*NSET, NSET=X0
-1, 4, 5, 8
-*NSET, NSET=Y0
-1, 2, 5, 6, 9, 11
-*NSET, NSET=Z0
-1, 2, 3, 4, 9, 10
-*NSET, NSET=END
-9, 10, 11, 12
-*MATERIAL, NAME=SHEET
-{material}*SOLID SECTION, ELSET=EALL, MATERIAL=SHEET
-*BOUNDARY
-X0, 1, 1
-Y0, 2, 2
-Z0, 3, 3
-*STEP{nlgeom}
-*STATIC
-0.125, 1.0
-*CONTROLS, PARAMETERS=FIELD
-1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12
-*BOUNDARY
-END, 1, 1, 0.1
-*NODE PRINT, NSET=NALL
-U, RF
-*EL PRINT, ELSET=EALL
-S
-*END STEP
-*STEP{nlgeom}
-*STATIC
-0.25, 1.0
-*CONTROLS, PARAMETERS=FIELD
-1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12
-*BOUNDARY
-END, 1, 1, 0.08
-*NODE PRINT, NSET=NALL
-U, RF
-*EL PRINT, ELSET=EALL
-S
-*END STEP
-"""
-)
+HEADING = "two C3D8 on symmetry rollers pulled to 5 % strain (yield at 1 %), then back to 4 %"
+
+
+def _bar(material: str, nlgeom: str = "") -> str:
+    """Two C3D8 of ``material`` on symmetry rollers pulled to 5 % strain, then back to 4 %."""
+    return pulled_bar(
+        f"*MATERIAL, NAME=SHEET\n{material}*SOLID SECTION, ELSET=EALL, MATERIAL=SHEET\n",
+        "*NODE PRINT, NSET=NALL\nU, RF\n*EL PRINT, ELSET=EALL\nS\n",
+        nlgeom,
+        heading=HEADING,
+    )
 
 
 def _both(text: str, name: str, tmp_path: Path, **options):
@@ -125,7 +90,7 @@ def _largest_difference(ccx_dat: Path, ntf_dat: Path, name: str) -> tuple[float,
 @needs_ccx
 def test_plastic_bar_agrees_with_ccx(tmp_path: Path) -> None:
     """Small strain: U, RF and S of every increment at 1e-6 (ccx prints 7 digits); it yields."""
-    text = BAR.format(material=SHEET, nlgeom="")
+    text = _bar(SHEET, "")
     ccx_dir, ntf_dir, result = _both(text, "bar", tmp_path, tight=True)
     for block in ("U", "RF", "S"):
         worst, count = _largest_difference(ccx_dir / "bar.dat", ntf_dir / "bar.dat", block)
@@ -150,7 +115,7 @@ def test_plastic_bar_agrees_with_ccx(tmp_path: Path) -> None:
 def test_plastic_bar_agrees_with_ccx_under_nlgeom(tmp_path: Path) -> None:
     """NLGEOM (Simo's finite-strain law): U, RF, S of every increment at 1e-6; the end force is
     not the small-strain one (the cross-section shrinks), the law is the finite-strain one."""
-    text = BAR.format(material=SHEET, nlgeom=", NLGEOM")
+    text = _bar(SHEET, ", NLGEOM")
     ccx_dir, ntf_dir, result = _both(text, "bar", tmp_path, tight=True)
     for block in ("U", "RF", "S"):
         worst, count = _largest_difference(ccx_dir / "bar.dat", ntf_dir / "bar.dat", block)
@@ -248,7 +213,7 @@ def _refusal(text: str, tmp_path: Path) -> str:
 
 @pytest.mark.serial
 def test_mixed_nlgeom_with_plastic_is_refused(tmp_path: Path) -> None:
-    text = BAR.format(material=SHEET, nlgeom="")
+    text = _bar(SHEET, "")
     first = text.index("*STEP")
     second = text.index("*STEP", first + 1)
     text = text[:second] + "*STEP, NLGEOM" + text[second + len("*STEP") :]
@@ -269,7 +234,7 @@ def test_mixed_nlgeom_with_plastic_is_refused(tmp_path: Path) -> None:
     ],
 )
 def test_bad_plastic_tables_are_refused(table: str, what: str, tmp_path: Path) -> None:
-    text = BAR.format(material="*ELASTIC\n5000.0, 0.3\n" + table, nlgeom="")
+    text = _bar("*ELASTIC\n5000.0, 0.3\n" + table, "")
     path = tmp_path / "deck.inp"
     path.write_text(text)
     with pytest.raises(DeckError, match=what) as info:
@@ -279,7 +244,7 @@ def test_bad_plastic_tables_are_refused(table: str, what: str, tmp_path: Path) -
 
 def test_reader_keeps_the_table(tmp_path: Path) -> None:
     path = tmp_path / "deck.inp"
-    path.write_text(BAR.format(material=SHEET, nlgeom=""))
+    path.write_text(_bar(SHEET, ""))
     material = read_deck(path).materials["SHEET"]
     assert material.plastic == ((50.0, 0.0), (100.0, 0.3))
     assert material.elastic == (5000.0, 0.3)
@@ -294,7 +259,7 @@ def test_plastic_bar_on_all_processes(nlgeom: str, tmp_path: Path) -> None:
     every increment, within 1e-6 of the block's largest value (rank 0 compares)."""
     comm = MPI.COMM_WORLD
     root = Path(comm.bcast(str(tmp_path), root=0))
-    text = BAR.format(material=SHEET, nlgeom=nlgeom)
+    text = _bar(SHEET, nlgeom)
     ccx_dir, ntf_dir = root / "ccx", root / "ntf"
     if comm.rank == 0:
         for d in (ccx_dir, ntf_dir):
@@ -322,19 +287,17 @@ def test_plastic_bar_on_all_processes(nlgeom: str, tmp_path: Path) -> None:
 #: Element 1 of the bar plastic, element 2 elastic (ccx prints PEEQ 0 there); S, E and PEEQ
 #: printed, U, RF, S, E and PEEQ (by its other name PE, as ccx's test deck beampiso2) written to
 #: the .frd.
-MIXED_BAR = (
-    BAR.format(material=SHEET, nlgeom="{nlgeom}")
-    .replace(
-        "*SOLID SECTION, ELSET=EALL, MATERIAL=SHEET\n",
-        "*ELSET, ELSET=E1\n1\n*ELSET, ELSET=E2\n2\n*MATERIAL, NAME=ELASTIC\n*ELASTIC\n"
-        "5000.0, 0.3\n*SOLID SECTION, ELSET=E1, MATERIAL=SHEET\n"
-        "*SOLID SECTION, ELSET=E2, MATERIAL=ELASTIC\n",
+
+
+def _mixed_bar(nlgeom: str) -> str:
+    return pulled_bar(
+        mixed_sections(),
+        "*NODE PRINT, NSET=NALL\nU, RF\n*EL PRINT, ELSET=EALL\nS, E, PEEQ\n*NODE FILE\nU, RF\n"
+        "*EL FILE\nS, E, PE\n",
+        nlgeom,
+        heading=HEADING,
     )
-    .replace(
-        "*EL PRINT, ELSET=EALL\nS\n",
-        "*EL PRINT, ELSET=EALL\nS, E, PEEQ\n*NODE FILE\nU, RF\n*EL FILE\nS, E, PE\n",
-    )
-)
+
 
 #: Requests added to the punch deck's steps: E and PEEQ printed and written beside the others.
 PEEQ_REQUESTS = (
@@ -431,7 +394,7 @@ def _check_strains(ccx_dir: Path, ntf_dir: Path, name: str) -> None:
 @pytest.mark.parametrize("nlgeom", ["", ", NLGEOM"], ids=["small", "nlgeom"])
 def test_peeq_of_bar_agrees_with_ccx(nlgeom: str, tmp_path: Path) -> None:
     """``*EL PRINT PEEQ, E`` and ``*EL FILE PE, E`` of a plastic C3D8 beside an elastic one."""
-    text = MIXED_BAR.format(nlgeom=nlgeom)
+    text = _mixed_bar(nlgeom)
     ccx_dir, ntf_dir, result = _both(text, "bar", tmp_path, tight=True)
     largest = _check_peeq(ccx_dir, ntf_dir, "bar")
     _check_strains(ccx_dir, ntf_dir, "bar")
@@ -466,11 +429,11 @@ def test_peeq_of_block_under_punch_agrees_with_ccx(nlgeom: bool, tmp_path: Path)
 def test_peeq_requests_are_read(tmp_path: Path) -> None:
     """PE is PEEQ in ``*EL PRINT`` and ``*EL FILE``; keys not built (ZZS) are still refused."""
     path = tmp_path / "deck.inp"
-    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, PE\n"))
+    path.write_text(_mixed_bar("").replace("S, E, PEEQ\n", "S, PE\n"))
     step = read_deck(path).steps[0]
     assert [r.keys for r in step.prints if r.kind == "EL"] == [("S", "PEEQ")]
     assert [r.keys for r in step.file_requests if r.kind == "EL"] == [("S", "E", "PEEQ")]
-    path.write_text(MIXED_BAR.format(nlgeom="").replace("S, E, PEEQ\n", "S, ZZS\n"))
+    path.write_text(_mixed_bar("").replace("S, E, PEEQ\n", "S, ZZS\n"))
     with pytest.raises(DeckError, match="key ZZS is not supported yet"):
         read_deck(path)
 
@@ -478,7 +441,7 @@ def test_peeq_requests_are_read(tmp_path: Path) -> None:
 @pytest.mark.serial
 def test_strains_of_c3d8i_are_refused(tmp_path: Path) -> None:
     """E of C3D8I (its condensed modes' strains were not measured against ccx): refused."""
-    text = MIXED_BAR.format(nlgeom="").replace("*PLASTIC\n50.0, 0.0\n100.0, 0.3\n", "")
+    text = _mixed_bar("").replace(SHEET_PLASTIC, "")
     text = text.replace("TYPE=C3D8,", "TYPE=C3D8I,")
     line = text.splitlines().index("*EL PRINT, ELSET=EALL") + 1
     message = _refusal(text, tmp_path)
@@ -488,7 +451,7 @@ def test_strains_of_c3d8i_are_refused(tmp_path: Path) -> None:
 @pytest.mark.serial
 def test_no_peeq_block_without_plastic_sections(tmp_path: Path) -> None:
     """ccx 2.20 prints and writes no PEEQ when no section is plastic (measured): nor do we."""
-    text = MIXED_BAR.format(nlgeom="").replace("*PLASTIC\n50.0, 0.0\n100.0, 0.3\n", "")
+    text = _mixed_bar("").replace(SHEET_PLASTIC, "")
     (tmp_path / "bar.inp").write_text(text)
     result = run_quietly("bar", tmp_path)
     assert result.completed and not result.model.plasticity
@@ -510,7 +473,7 @@ def test_peeq_on_all_processes(tmp_path: Path) -> None:
     if comm.rank == 0:
         for d in (ccx_dir, ntf_dir):
             d.mkdir()
-            (d / "bar.inp").write_text(MIXED_BAR.format(nlgeom=", NLGEOM"))
+            (d / "bar.inp").write_text(_mixed_bar(", NLGEOM"))
         run_ccx(ccx_dir, "bar", timeout=300)
     comm.barrier()
     logger = logging.getLogger("dolfinx_ntf")

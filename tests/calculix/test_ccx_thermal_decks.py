@@ -119,8 +119,11 @@ def test_reader_reads_the_thermal_cards(tmp_path):
         ("NALL, 350.", "NALL, 11, 350.", r"TYPE=TEMPERATURE data line: node or node set, temp"),
         ("STEADY STATE", "ALPHA=-0.5", r"ALPHA must be in \[-1/3, 0\]"),
         ("1., 1.\n*CONTROLS", "1., -1.\n*CONTROLS", r"period must be > 0"),
+        (f"*CONDUCTIVITY\n{K}\n", f"*CONDUCTIVITY\n{K}, 0.\n{K}, 100.\n",
+         r"temperature-dependent \*CONDUCTIVITY of material M \(several data lines\) in a deck "
+         r"whose temperatures change"),  # method §41.2: the table's second line
     ],
-)
+)  # fmt: skip
 def test_reader_errors_name_the_line(tmp_path, old, new, match):
     text = bars_deck()
     assert old in text
@@ -136,8 +139,6 @@ def test_reader_errors_name_the_line(tmp_path, old, new, match):
         ("*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE", "*STATIC", NotImplementedError,
          r"supported in \*COUPLED TEMPERATURE-DISPLACEMENT and \*HEAT TRANSFER steps only"),
         (f"*CONDUCTIVITY\n{K}\n", "", ValueError, r"material M needs \*CONDUCTIVITY"),
-        (f"*CONDUCTIVITY\n{K}\n", f"*CONDUCTIVITY\n{K}, 0.\n{K}, 100.\n", NotImplementedError,
-         r"only one constant value"),
         ("*BOUNDARY\nBOTTOM, 11", "*BOUNDARY, AMPLITUDE=A\nBOTTOM, 11", NotImplementedError,
          r"dof 11 with an AMPLITUDE"),
         (", STEADY STATE\n1., 1.\n", "\n0.1, 1., , , 5.\n", NotImplementedError,

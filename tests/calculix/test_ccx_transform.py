@@ -20,6 +20,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers.ccx_runs import quiet_logs
+from helpers.decks import UNIT_CUBE_CORNERS
 
 from dolfinx_ntf.calculix.ccx import run_ccx
 from dolfinx_ntf.calculix.dat import read_dat
@@ -227,17 +228,7 @@ def _one_node_deck(node: tuple[float, float, float], axis: tuple[float, float, f
     Three steps move node 1 by 1e-3 along its local 1, 2 and 3 in turn (the others held), so
     the printed global displacements are 1e-3 times the local directions.
     """
-    corners = [
-        (0, 0, 0),
-        (1, 0, 0),
-        (1, 1, 0),
-        (0, 1, 0),
-        (0, 0, 1),
-        (1, 0, 1),
-        (1, 1, 1),
-        (0, 1, 1),
-    ]
-    coords = np.asarray(node) + np.asarray(corners, dtype=float)
+    coords = np.asarray(node) + np.asarray(UNIT_CUBE_CORNERS, dtype=float)
     coords[0] = node
     text = "*NODE, NSET=NALL\n" + "".join(
         f"{k}, {x!r}, {y!r}, {z!r}\n" for k, (x, y, z) in enumerate(coords.tolist(), start=1)

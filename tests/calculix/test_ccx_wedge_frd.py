@@ -64,10 +64,25 @@ S, E
 FILE_CARDS = "*EL PRINT, ELSET=EALL\nS, E\n*EL FILE\nS, E\n*NODE FILE\nU\n*END STEP"
 
 
+ENERGY_KEYS = ", ENER, SDV, ME"
+
+
 def _deck(case: str) -> str:
     """The deck of ``case``: one (wedge), block (16 wedges), nset (its ``*EL FILE, NSET=TOP``),
     nlgeom, mixed (8 wedges, 4 C3D8), plastic, half-plastic (elastic wedges beside plastic
-    C3D8), punch (``wedge_punch.inp``: 12 wedges pressing a C3D8 block)."""
+    C3D8), punch (``wedge_punch.inp``: 12 wedges pressing a C3D8 block); with ``-energy`` the
+    ``*EL FILE`` also asks for ENER, SDV and ME (method §41.4), ``one-plastic-energy`` the one
+    wedge past yield, ``plastic-nlgeom-energy`` the plastic block under NLGEOM."""
+    if case.endswith("-energy"):
+        base = case.removesuffix("-energy")
+        text = _deck(base.replace("one-plastic", "one").replace("plastic-nlgeom", "plastic"))
+        if base == "one-plastic":
+            text = text.replace("1000., 0.3\n", "1000., 0.3\n*PLASTIC\n5., 0.\n10., 0.1\n")
+        if base == "plastic-nlgeom":
+            text = text.replace("*STEP\n", "*STEP, NLGEOM\n")
+        head, tail = text.split("*EL FILE\n")
+        keys, rest = tail.split("\n", 1)
+        return f"{head}*EL FILE\n{keys}{ENERGY_KEYS}\n{rest}"
     if case == "one":
         return ONE_WEDGE
     if case in ("nset", "nlgeom"):
@@ -122,6 +137,9 @@ def _compare_with_ccx(ours: FrdFile, theirs: FrdFile) -> dict[str, float]:
     for a, b in zip(ours.blocks, blocks):
         np.testing.assert_array_equal(a.nodes, b.nodes)
         assert a.components == b.components
+        assert a.values.shape == b.values.shape
+        if b.values.size == 0:  # SDV without plastic sections: no components, no values
+            continue
         difference = np.abs(a.values - b.values).max() / np.abs(b.values).max()
         worst[a.name] = max(worst.get(a.name, 0.0), float(difference))
     return worst
@@ -164,6 +182,44 @@ def test_wedge_frd_against_ccx(tmp_path: Path, case: str) -> None:
         assert theirs.blocks_named("STRESS")[0].nodes.size == 9  # the top's nodes only
 
 
+ENERGY_CASES = {
+    # case: (.frd blocks, the largest difference allowed relative to each block's largest value)
+    "one-energy": ({"STRESS", "TOSTRAIN", "MESTRAIN", "ENER", "SDV"}, 1e-9),
+    "one-plastic-energy": ({"STRESS", "TOSTRAIN", "MESTRAIN", "ENER", "SDV"}, 1e-9),
+    "nlgeom-energy": ({"DISP", "STRESS", "TOSTRAIN", "MESTRAIN", "ENER", "SDV"}, 1e-5),
+    "plastic-energy": ({"STRESS", "TOSTRAIN", "MESTRAIN", "PE", "ENER", "SDV"}, 1e-5),
+    "plastic-nlgeom-energy": ({"STRESS", "TOSTRAIN", "MESTRAIN", "PE", "ENER", "SDV"}, 1e-5),
+    "half-plastic-energy": ({"STRESS", "TOSTRAIN", "MESTRAIN", "PE", "ENER", "SDV"}, 1e-5),
+}
+
+
+@pytest.mark.serial
+@pytest.mark.ccx
+@needs_ccx
+@pytest.mark.parametrize("case", list(ENERGY_CASES))
+def test_wedge_energy_state_and_mechanical_strain_frd(tmp_path: Path, case: str) -> None:
+    """``*EL FILE`` ENER, SDV and ME of wedges: ccx 2.20 extrapolates them from the two points
+    as S and E (method §41.4); ours are its blocks (the one wedge to every printed digit, the
+    blocks within a unit of the last printed digit of their values, as S).
+
+    Without ``*PLASTIC`` ccx's ``SDV`` block has no components; with it the wedges yielded.
+    """
+    ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "w", _deck(case))
+    theirs, ours = read_frd(ccx_dir / "w.frd"), read_frd(ntf_dir / "w.frd")
+    worst = _compare_with_ccx(ours, theirs)
+    names, tolerance = ENERGY_CASES[case]
+    assert set(worst) | {"SDV"} == names, worst
+    for name, difference in worst.items():
+        assert difference <= tolerance, (name, difference)
+    state = theirs.blocks_named("SDV")[-1]
+    plastic = "plastic" in case
+    assert (state.values.shape[1] == 13) == plastic
+    if plastic:
+        assert np.abs(state.values[:, 0]).max() > 1e-3  # the equivalent plastic strain
+    energy = theirs.blocks_named("ENER")[-1].values
+    assert energy.min() > 0.0 and energy.max() > 1.01 * energy.min()
+
+
 @pytest.mark.serial
 def test_wedge_nodal_values_are_the_extrapolated_points(tmp_path: Path) -> None:
     """A lone wedge's ``.frd`` values are ``C3D6_EXTRAPOLATION`` of its printed point values.
@@ -191,11 +247,11 @@ def test_wedge_nodal_values_are_the_extrapolated_points(tmp_path: Path) -> None:
 @pytest.mark.mpi
 @pytest.mark.ccx
 @needs_ccx
-@pytest.mark.parametrize("case", ["block", "punch"])
+@pytest.mark.parametrize("case", ["block", "punch", "nlgeom-energy", "plastic-energy"])
 def test_wedge_frd_on_processes(tmp_path: Path, case: str) -> None:
-    """The 16-wedge block's and the wedge punch's ``.frd`` on any number of processes: ccx's
-    blocks, and on 2 processes the serial run's file after its header (every byte). (The mixed
-    block is refused on 2 processes, docs/method.md §30.7.)"""
+    """The 16-wedge block's, the wedge punch's and (with ENER, SDV and ME) the NLGEOM block's
+    and the plastic mixed block's ``.frd`` on any number of processes: ccx's blocks, and on 2
+    processes the serial run's file after its header (every byte)."""
     comm = MPI.COMM_WORLD
     ccx_dir, ntf_dir = run_ccx_and_ours(tmp_path, "w", _deck(case), comm=comm)
     if comm.rank == 0:

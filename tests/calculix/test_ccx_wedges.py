@@ -21,6 +21,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 from helpers.ccx_runs import run_ccx_and_ours
+from helpers.decks import UNIT_C3D8
 from helpers.wedge_decks import wedge_block as _block
 
 import dolfinx.fem
@@ -78,7 +79,7 @@ def test_wedges_refused_with_a_clear_error(tmp_path: Path) -> None:
         read_deck(path)
 
 
-@pytest.mark.parametrize("request_card", ["*EL FILE\nS, ENER", "*EL FILE\nHFL"])
+@pytest.mark.parametrize("request_card", ["*EL FILE\nS, HFL", "*EL FILE\nHFL"])
 def test_element_outputs_of_wedges_refused(tmp_path: Path, request_card: str) -> None:
     text = _block(surfaces=False)[0].replace("*END STEP", f"{request_card}\n*END STEP")
     (tmp_path / "w.inp").write_text(text)
@@ -86,18 +87,9 @@ def test_element_outputs_of_wedges_refused(tmp_path: Path, request_card: str) ->
         run_job("w", tmp_path, comm=MPI.COMM_SELF, progress=False)
 
 
-TWINS = """*NODE, NSET=NALL
-1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 1
-6, 1, 0, 1
-7, 1, 1, 1
-8, 0, 1, 1
-*ELEMENT, TYPE=C3D8, ELSET=EALL
-1, 1, 2, 3, 4, 5, 6, 7, 8
-*SURFACE, NAME=TOP, TYPE=NODE
+TWINS = (
+    UNIT_C3D8
+    + """*SURFACE, NAME=TOP, TYPE=NODE
 5, 6
 *SURFACE, NAME=TOP
 1, S2
@@ -119,6 +111,7 @@ BOTTOM, TOP
 *STATIC
 *END STEP
 """
+)
 
 
 def test_node_and_element_surface_of_one_name(tmp_path: Path) -> None:

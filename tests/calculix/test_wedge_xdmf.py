@@ -80,11 +80,12 @@ def test_wedge_deck_writes_xdmf(tmp_path: Path) -> None:
 
 @pytest.mark.serial
 def test_wedge_element_outputs_stay_refused(tmp_path: Path) -> None:
-    """Wedge element outputs but S, E and PEEQ are refused before the run (method §35)."""
+    """Wedge element outputs but S, E, PEEQ, ENER, SDV and ME are refused before the run
+    (method §35, §41.4)."""
     text = (DATA / "wedge_punch.inp").read_text()
-    text = text.replace("*CONTACT PRINT", "*EL FILE\nS, ENER\n*CONTACT PRINT")
+    text = text.replace("*CONTACT PRINT", "*EL FILE\nS, HFL\n*CONTACT PRINT")
     with pytest.raises(
         NotImplementedError,
-        match=r"\*EL FILE S/ENER of C3D6 element \d+ is not supported",
+        match=r"\*EL FILE S/HFL of C3D6 element \d+ is not supported",
     ):
         _run(tmp_path, text, MPI.COMM_SELF)

@@ -35,6 +35,7 @@ import ufl
 import dolfinx_ntf as ntf
 from dolfinx_ntf import compat
 from dolfinx_ntf.contact.thermal import ThermalContactProblem
+from dolfinx_ntf.fem.constraints import LinearConstraintBlock
 from dolfinx_ntf.fem.elasticity import component_bc
 from dolfinx_ntf.fem.thermal import thermoelastic_stress
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
@@ -617,5 +618,47 @@ def test_agrees_with_ccx(rows, conductance_pressure, tmp_path) -> None:
     slave, master = _interface_temperatures(T, mesh)
     np.testing.assert_allclose([slave, master], [ccx[11], ccx[5]], rtol=2e-7)  # 7 digits
     assert all(ccx[n] == ccx[11] for n in (12, 13, 14)) and ccx[5] > ccx[11]
+    thermal.destroy()
+    problem.destroy()
+
+
+@pytest.mark.mpi
+def test_constraints_on_the_temperature_are_eliminated() -> None:
+    """Constraint blocks on ``T`` (``block_size=1``) are eliminated (docs/method.md §39): one-term
+    rows holding every node of the lower bar at z = -0.5 at 380 act as a prescribed layer, so the
+    flow is the series of the half bar, the conductance and the upper bar (closed form, 1e-10);
+    a block of another block size is refused."""
+    load, held = 40.0, 380.0
+    mesh, ft, V, Q, T, bcs_T = _bars()
+    u, v = dolfinx.fem.Function(V), ufl.TestFunction(V)
+    pressure = dolfinx.fem.Constant(mesh, 0.0)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
+    sigma = ntf.small_strain_stress(u, YOUNGS_MODULUS, POISSON_RATIO)
+    F = ufl.inner(sigma, ufl.grad(v)) * ufl.dx + pressure * ufl.inner(
+        ufl.FacetNormal(mesh), v
+    ) * ds(UPPER_TOP)
+    problem = ntf.ContactProblem(F, u, [_pair(ft)], _rollers(V, ft, constrained=False))
+    layer = np.flatnonzero(np.isclose(Q.tabulate_dof_coordinates()[:, 2], -0.5))
+    rows = LinearConstraintBlock(
+        layer[:, None], 0, [1.0], np.full(layer.size, held), name="layer", block_size=1
+    )
+    wrong = LinearConstraintBlock(layer[:, None], 0, [1.0], name="vector")
+    with pytest.raises(ValueError, match="'vector' has block size 3"):
+        ThermalContactProblem(_heat_residual(T, Q), T, problem, TABLE, bcs_T, constraints=[wrong])
+    thermal = ThermalContactProblem(
+        _heat_residual(T, Q), T, problem, TABLE, bcs_T, constraints=[rows]
+    )
+    assert mesh.comm.allreduce(1 if thermal.elimination is not None else 0) == mesh.comm.size
+    assert thermal.elimination.num_constraints == 16  # the 4 x 4 nodes of the layer, once
+    solve_staggered(lambda: solve_increments(problem, pressure, load, 1), thermal)
+    h = 20.0 + 200.0 * load / 100.0
+    flux = (held - T_TOP) / (0.5 / CONDUCTIVITY + 1.0 / h + 1.0 / CONDUCTIVITY)
+    slave, master = T_TOP + flux / CONDUCTIVITY, held - 0.5 * flux / CONDUCTIVITY
+    np.testing.assert_allclose(_interface_temperatures(T, mesh), (slave, master), rtol=1e-10)
+    np.testing.assert_allclose(_total_flow(thermal), flux, rtol=1e-10)
+    np.testing.assert_allclose(T.x.array[layer], held, rtol=1e-14)
+    F_T = F + ufl.inner(T * ufl.Identity(3), ufl.grad(v)) * ufl.dx
+    with pytest.raises(NotImplementedError, match="linear constraints are not supported"):
+        ThermoMechanicalContact(F_T, thermal)
     thermal.destroy()
     problem.destroy()

@@ -286,6 +286,10 @@ def test_solver_and_step_arguments(blocks):
         ntf.ContactNewtonSolver(problem, comm)
     with pytest.raises(ValueError, match="max_it must be an integer >= 1, got 0"):
         ntf.ContactNewtonSolver(comm, problem, max_it=0)
+    with pytest.raises(
+        ValueError, match=r"divergence_rule must be one of \('growth', 'ccx'\), got 'x'"
+    ):
+        ntf.ContactNewtonSolver(comm, problem, divergence_rule="x")
     with pytest.raises(TypeError, match="set_load must be a function of the step time"):
         ntf.StaticStep(10.0)
     with pytest.raises(ValueError, match=r"min_increment \(0.5\) <= initial_increment \(0.25\)"):

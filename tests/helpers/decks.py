@@ -58,17 +58,25 @@ YSYM, 2, 2
 *SOLID SECTION, ELSET=EALL, MATERIAL=M
 """
 
+#: The corners of the unit cube in ccx's C3D8 order (bottom face, then top face).
+UNIT_CUBE_CORNERS = ((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1),
+                     (0, 1, 1))  # fmt: skip
+#: The unit cube's nodes 1-8 as ``*NODE`` data lines.
+UNIT_CUBE_NODES = "".join(
+    f"{k}, {x}, {y}, {z}\n" for k, (x, y, z) in enumerate(UNIT_CUBE_CORNERS, 1)
+)
+#: One C3D8 unit cube (nodes 1-8, element 1 in ELSET EALL) under ``*NODE, NSET=NALL``.
+UNIT_C3D8 = (
+    "*NODE, NSET=NALL\n"
+    + UNIT_CUBE_NODES
+    + "*ELEMENT, TYPE=C3D8, ELSET=EALL\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"
+)
+
 #: Two unit C3D8 cubes side by side along x (nodes 1-12, elements 1, 2 in ELSET EALL), to follow
 #: ``*NODE, NSET=NALL``.
-TWO_C3D8 = """1, 0, 0, 0
-2, 1, 0, 0
-3, 1, 1, 0
-4, 0, 1, 0
-5, 0, 0, 1
-6, 1, 0, 1
-7, 1, 1, 1
-8, 0, 1, 1
-9, 2, 0, 0
+TWO_C3D8 = (
+    UNIT_CUBE_NODES
+    + """9, 2, 0, 0
 10, 2, 1, 0
 11, 2, 0, 1
 12, 2, 1, 1
@@ -76,6 +84,61 @@ TWO_C3D8 = """1, 0, 0, 0
 1, 1, 2, 3, 4, 5, 6, 7, 8
 2, 2, 9, 10, 3, 6, 11, 12, 7
 """
+)
+
+#: metalforming's sheet: elastic, then isotropic hardening from yield at 1 % strain.
+SHEET_ELASTIC = "*ELASTIC\n5000.0, 0.3\n"
+SHEET_PLASTIC = "*PLASTIC\n50.0, 0.0\n100.0, 0.3\n"
+
+
+def mixed_sections(plastic: bool = True) -> str:
+    """Material cards of :func:`pulled_bar`: element 1 the sheet (``SHEET``), element 2 elastic."""
+    return (
+        "*ELSET, ELSET=E1\n1\n*ELSET, ELSET=E2\n2\n*MATERIAL, NAME=SHEET\n"
+        + SHEET_ELASTIC
+        + (SHEET_PLASTIC if plastic else "")
+        + "*MATERIAL, NAME=ELASTIC\n"
+        + SHEET_ELASTIC
+        + "*SOLID SECTION, ELSET=E1, MATERIAL=SHEET\n*SOLID SECTION, ELSET=E2, MATERIAL=ELASTIC\n"
+    )
+
+
+def pulled_bar(
+    sections: str,
+    requests: str,
+    nlgeom: str = "",
+    heading: str = "",
+    second_requests: str | None = None,
+) -> str:
+    """``TWO_C3D8`` on symmetry rollers, pulled to 5 % in ccx's automatic increments, then to 4 %.
+
+    Args:
+        sections: The ``*MATERIAL`` and ``*SOLID SECTION`` cards.
+        requests: The output requests of both steps.
+        nlgeom: ``", NLGEOM"`` or ``""``, after ``*STEP``.
+        heading: A ``*HEADING`` line if not empty.
+        second_requests: The second step's requests if not ``requests``.
+    """
+    steps = "".join(
+        f"*STEP{nlgeom}\n*STATIC\n{start}, 1.0\n*CONTROLS, PARAMETERS=FIELD\n"
+        "1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12\n"
+        f"*BOUNDARY\nEND, 1, 1, {end}\n{asked}*END STEP\n"
+        for start, end, asked in (
+            (0.125, 0.1, requests),
+            (0.25, 0.08, requests if second_requests is None else second_requests),
+        )
+    )
+    return (
+        (f"*HEADING\n{heading}\n" if heading else "")
+        + "*NODE, NSET=NALL\n"
+        + TWO_C3D8
+        + "*NSET, NSET=X0\n1, 4, 5, 8\n*NSET, NSET=Y0\n1, 2, 5, 6, 9, 11\n"
+        "*NSET, NSET=Z0\n1, 2, 3, 4, 9, 10\n*NSET, NSET=END\n9, 10, 11, 12\n"
+        + sections
+        + "*BOUNDARY\nX0, 1, 1\nY0, 2, 2\nZ0, 3, 3\n"
+        + steps
+    )
+
 
 _CLOCK = re.compile(r"^\s*1U(TIME|DATE)")  # .frd header lines with the wall-clock time
 

@@ -52,7 +52,7 @@ def build_prism_on_hex(
     """A new gmsh model: the punch (origin, size, divisions) on the base, meshed; see module.
 
     ``structured``: prisms on a grid cut along diagonals (see ``_box``); ``order``: gmsh's element
-    order (2 makes 18-node prisms, which the reader refuses).
+    order (2 makes 18-node prisms beside 27-node hexahedra, which the reader refuses).
     """
     gmsh.model.add("prism_on_hex")
     b_volume, b_bottom, b_top = _box(*base, base_cell, structured)

@@ -14,6 +14,8 @@ from dolfinx_ntf.kernels.faces import (
     face_points,
     face_tangents,
     face_type_from_num_nodes,
+    film_matrices,
+    flux_flows,
 )
 
 ALL = list(FACE_TYPES.values())
@@ -315,3 +317,45 @@ def test_clamp_triangle_cases():
     expected = np.array([[0.5, 0.5], [0.0, 0.0], [1.0, 0.0], [0.0, 0.5], [0.5, 0.5], [0.2, 0.3]])
     np.testing.assert_allclose(TRI3.clamp(xi), expected, atol=1e-15)
     np.testing.assert_array_equal(QUAD4.clamp([[2.0, -0.5], [-3, 3]]), [[1.0, -0.5], [-1, 1]])
+
+
+def test_flux_flows_of_flat_faces():
+    """A uniform flux on a flat face: the consistent flows (quad8: -A/12 at the corners, A/3 at
+    the midsides; tri6: 0 and A/3, times q), summing to q A; ccx's 2 x 2 rule on quad8 and the
+    3-point rule on tri6 are exact there; a curved face's flows sum to q times its area."""
+    q = np.array([3.0, -2.0])
+    square = 2.0 * QUAD8.node_parameters  # flat, side 2 then 4 (A = 16)
+    quad = np.stack([np.column_stack([square, np.zeros(8)]) * s for s in (1.0, 2.0)])
+    rule = (np.array([[x, y] for y in (-1, 1) for x in (-1, 1)]) / np.sqrt(3.0), np.ones(4))
+    flows = flux_flows(QUAD8, quad, q, rule)
+    areas = np.array([16.0, 64.0])
+    corner, mid = np.repeat(-(q * areas)[:, None] / 12.0, 4, axis=1), (q * areas)[:, None] / 3.0
+    np.testing.assert_allclose(flows[:, :4], corner, rtol=1e-13)
+    np.testing.assert_allclose(flows[:, 4:], np.repeat(mid, 4, axis=1), rtol=1e-13)
+    tri = np.column_stack([TRI6.node_parameters, np.zeros(6)])[None] * 2.0  # A = 2
+    flows = flux_flows(TRI6, tri, q[:1])
+    np.testing.assert_allclose(flows[0, :3], 0.0, atol=1e-14)
+    np.testing.assert_allclose(flows[0, 3:], np.full(3, 3.0 * 2.0 / 3.0), rtol=1e-13)
+    curved = quad[:1].copy()
+    curved[0, 4:, 2] = 0.3  # midsides lifted: a curved face
+    flows = flux_flows(QUAD8, curved, q[:1])  # the face type's own 3 x 3 rule
+    q_xi, q_eta = face_tangents(QUAD8, curved[0], QUAD8.quadrature_points)
+    area = np.sum(QUAD8.quadrature_weights * np.linalg.norm(np.cross(q_xi, q_eta), axis=-1))
+    assert area > 16.0
+    np.testing.assert_allclose(flows.sum(), q[0] * area, rtol=1e-13)
+
+
+@pytest.mark.parametrize("ft", [TRI6, QUAD8], ids=["tri6", "quad8"])
+def test_film_matrices_are_face_masses(ft):
+    """Symmetric, row sums the consistent flows of a unit flux (``M 1`` is :func:`flux_flows`);
+    positive semi-definite of rank ``min(n, points)`` on a curved face (tri6's 3 points give
+    rank 3, quad8's 3 x 3 points a positive definite matrix)."""
+    coords = np.column_stack([ft.node_parameters, np.zeros(ft.num_nodes)])
+    coords[ft.num_corners :, 2] = 0.2  # curved
+    M = film_matrices(ft, coords[None])[0]
+    np.testing.assert_allclose(M, M.T, atol=1e-15)
+    np.testing.assert_allclose(M.sum(axis=1), flux_flows(ft, coords[None], [1.0])[0], rtol=1e-13)
+    eigenvalues = np.linalg.eigvalsh(M)
+    assert eigenvalues.min() > -1e-14 * eigenvalues.max()
+    rank = min(ft.num_nodes, ft.quadrature_points.shape[0])
+    assert np.count_nonzero(eigenvalues > 1e-12 * eigenvalues.max()) == rank

@@ -46,20 +46,21 @@ def test_punch_held_only_by_open_contact_stops_at_once():
 
 
 def test_divergence_rule_gives_up_a_growing_residual():
-    """CalculiX's rule: from update I_0 on, a residual above the two before it ends the attempt;
-    a change of the spring count defers it."""
+    """The Python API's rule: from update I_0 on, a residual above the two before it ends the
+    attempt; a change of the spring count defers it."""
     from dolfinx_ntf.solvers.convergence import DivergenceRule
 
     rule = DivergenceRule(4)
-    rule.check(3, [1.0, 0.5], 2.0, lambda: "")  # before I_0: no check
-    rule.check(4, [1.0, 0.5], 0.9, lambda: "")  # below the larger of the two before
+    rule.check(3, [1.0, 0.5, 2.0], lambda: "")  # before I_0: no check
+    rule.check(4, [1.0, 0.5, 0.9], lambda: "")  # below the larger of the two before
+    rule.check(4, [1.0, 0.5, 1.005], lambda: "")  # within DIVERGENCE_GROWTH of it
     rule.defer(4, 4)
-    rule.check(5, [1.0, 0.5], 2.0, lambda: "")  # deferred to update 8
+    rule.check(5, [1.0, 0.5, 2.0], lambda: "")  # deferred to update 8
     with pytest.raises(ntf.ContactDivergenceError, match=r"residual grows: 1.000e\+00, 5.000e-01"):
-        rule.check(8, [1.0, 0.5], 2.0, lambda: "; why")
+        rule.check(8, [1.0, 0.5, 2.0], lambda: "; why")
     rule.reset()
     with pytest.raises(ntf.ContactDivergenceError, match="; why"):
-        rule.check(4, [1.0, 0.5], 2.0, lambda: "; why")
+        rule.check(4, [1.0, 0.5, 2.0], lambda: "; why")
 
 
 def test_line_search_leaves_a_converging_solve_alone():

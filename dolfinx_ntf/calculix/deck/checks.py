@@ -16,8 +16,13 @@ from .data import (
     SurfaceInteraction,
 )
 from .errors import DeckError, Location
-from .state import ReaderState
+from .materials import table_at_temperature
+from .state import MaterialBuilder, ReaderState
 from .wedges import C3D6_AS_C3D8, check_wedge_orientation, wedge_faces, wedge_rotations
+
+#: Material cards of ``(value, temperature)`` lines resolved or refused like ``*ELASTIC`` tables
+#: (``Checks._material_data``).
+_TEMPERATURE_TABLES = ("*DENSITY", "*EXPANSION", "*CONDUCTIVITY", "*SPECIFIC HEAT")
 
 
 class Checks(ReaderState):
@@ -300,10 +305,102 @@ class Checks(ReaderState):
             raise DeckError(f"element {element} has no *SOLID SECTION (no material)", loc)
         return {
             name: Material(
-                m.name, m.elastic, dict(m.extra), m.location, m.plastic, m.plastic_location
+                m.name,
+                self._elastic_constants(m),
+                self._material_data(m),
+                m.location,
+                m.plastic,
+                m.plastic_location,
             )
             for name, m in self.materials.items()
         }
+
+    def _elastic_constants(self, material: MaterialBuilder) -> tuple[float, float] | None:
+        """``(E, nu)`` of a material: its ``*ELASTIC`` table at the deck's one temperature."""
+        rows = material.elastic_rows
+        if len(rows) <= 1:
+            return material.elastic
+        temperature = self._one_temperature("*ELASTIC", material, material.elastic_row_locations)
+        if temperature is None:
+            return rows[0][:2]
+        young, nu = table_at_temperature(rows, temperature)
+        return young, nu
+
+    def _material_data(self, material: MaterialBuilder) -> dict:
+        """The material's other cards, a ``*DENSITY`` table at the deck's one temperature.
+
+        A ``*DENSITY`` table in a deck whose temperatures do not change holds at its one
+        temperature, as ``*ELASTIC`` (measured on eigenvalues, docs/method.md §41.2); in other
+        decks it stays as read (the mass refuses it where it is used). ``*EXPANSION``,
+        ``*CONDUCTIVITY`` and ``*SPECIFIC HEAT`` tables are refused at their second line in
+        decks with coupled or heat transfer steps (which use them), left as read elsewhere.
+        """
+        extra = dict(material.extra)
+        thermal = any(s.coupled is not None for s in self.steps)
+        for card in _TEMPERATURE_TABLES:
+            rows = extra.get(card)
+            if rows is None or len(rows) <= 1:
+                continue
+            locations = material.extra_locations[card]
+            if card != "*DENSITY":
+                if thermal:
+                    self._one_temperature(card, material, locations)  # refuses
+                continue
+            if self._temperatures_change():
+                continue
+            for row, loc in zip(rows, locations):
+                if len(row) != 2 or row[0] is None or row[1] is None:
+                    raise DeckError(
+                        f"{card} with several data lines: a value and a temperature on each", loc
+                    )
+            for row, before, loc in zip(rows[1:], rows, locations[1:]):
+                if row[1] <= before[1]:
+                    raise DeckError(
+                        f"{card}: the temperatures must increase, {row[1]} follows {before[1]}",
+                        loc,
+                    )
+            temperature = self._one_temperature(card, material, locations)
+            value = (
+                rows[0][0] if temperature is None else table_at_temperature(rows, temperature)[0]
+            )
+            extra[card] = ((value,),)
+        return extra
+
+    def _temperatures_change(self) -> bool:
+        """Whether the deck's temperatures change (thermal steps, ``*TEMPERATURE``, dof 11)."""
+        return bool(self.temperature_boundaries) or any(
+            s.coupled is not None or s.temperatures or s.temperature_fields for s in self.steps
+        )
+
+    def _one_temperature(
+        self, card: str, material: MaterialBuilder, locations: tuple[Location, ...]
+    ) -> float | None:
+        """The one temperature at which a material table holds for the whole run.
+
+        ccx 2.20 (measured, docs/method.md §41.2): without any temperature in the deck a
+        table's first line holds (None); with one initial temperature everywhere the table is
+        interpolated there. Temperatures that vary in space or in time are refused at the
+        table's second line.
+        """
+        if self._temperatures_change():
+            raise DeckError(
+                f"temperature-dependent {card} of material {material.name} (several data "
+                "lines) in a deck whose temperatures change (coupled or heat transfer steps, "
+                "*TEMPERATURE, temperature *BOUNDARY) is not supported yet",
+                locations[1],
+            )
+        if not self.initial_temperatures:
+            return None
+        values = {t.value for t in self.initial_temperatures}
+        given = np.unique(np.concatenate([t.nodes for t in self.initial_temperatures]))
+        if len(values) > 1 or not np.all(np.isin(np.asarray(self.node_ids), given)):
+            raise DeckError(
+                f"temperature-dependent {card} of material {material.name} (several data "
+                "lines) needs one initial temperature at every node (*INITIAL CONDITIONS, "
+                "TYPE=TEMPERATURE); varying temperatures are not supported yet",
+                locations[1],
+            )
+        return values.pop()
 
     def _check_contact(self) -> dict[str, SurfaceInteraction]:
         self.contact_pairs = [

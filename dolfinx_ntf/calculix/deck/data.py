@@ -88,12 +88,15 @@ class SolidSection:
 
     ``thickness`` is the first value of its data line, if any: the out-of-plane thickness of
     plane strain and plane stress elements (ccx's default 1; ignored for 3D and CAX elements).
+    ``orientation`` names its ``*ORIENTATION``, if any.
     """
 
     elset: str
     material: str
     location: Location
     thickness: float | None = None
+    #: The ``ORIENTATION`` name (material axes; isotropic materials only, docs/method.md §41.3).
+    orientation: str | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,6 +213,18 @@ class CLoad:
     amplitude: str | None
     op: str
     target: str
+    location: Location
+
+
+@dataclass(frozen=True, eq=False)
+class Film:
+    """One ``*FILM`` data line: heat flow ``coefficient (T - sink)`` out of face ``face`` (1..6)."""
+
+    elements: np.ndarray
+    face: int
+    sink: float
+    coefficient: float
+    op: str
     location: Location
 
 
@@ -467,6 +482,11 @@ class Step:
             temperature, in order; the model accepts them where they keep the initial
             temperatures, docs/method.md §26.2).
         gravity: the ``*DLOAD ... GRAV`` lines of this step, in deck order.
+        cfluxes: the ``*CFLUX`` lines of this step (heat flow into nodes, dof 11), in deck
+            order.
+        dfluxes: the ``*DFLUX`` lines of this step (uniform heat flux into faces S1..S6; the
+            ``face`` of each line), in deck order.
+        films: the ``*FILM`` lines of this step (faces F1..F6), in deck order.
     """
 
     number: int
@@ -491,6 +511,9 @@ class Step:
     modal_damping: ModalDamping | None = None
     temperature_fields: tuple[InitialTemperature, ...] = ()
     gravity: tuple[Gravity, ...] = ()
+    cfluxes: tuple[CLoad, ...] = ()
+    dfluxes: tuple[DLoad, ...] = ()
+    films: tuple[Film, ...] = ()
 
     @property
     def node_prints(self) -> tuple[PrintRequest, ...]:

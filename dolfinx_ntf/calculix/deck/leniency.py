@@ -38,7 +38,6 @@ LENIENCY: dict[str, dict[str, tuple[str, str]]] = {
         "": ("warn", "restart files are not written"),
         "READ": ("refuse", "starts from the state of an earlier run"),
     },
-    "*SOLID SECTION": {"ORIENTATION": ("refuse", "turns the material axes")},
     "*BOUNDARY": {
         "FIXED": ("refuse", "holds the displacement of the previous step"),
         "USER": ("refuse", "values from a user subroutine"),

@@ -1,7 +1,8 @@
 """Load, constraint and initial condition cards.
 
 ``*AMPLITUDE``, ``*TIME POINTS``, ``*BOUNDARY``, ``*EQUATION``, ``*INITIAL CONDITIONS``,
-``*CLOAD``, ``*DLOAD`` (face pressures and ``GRAV``).
+``*CLOAD``, ``*CFLUX``, ``*DLOAD`` (face pressures and ``GRAV``), ``*DFLUX`` (face fluxes),
+``*FILM``.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from .data import (
     CLoad,
     DLoad,
     Equation,
+    Film,
     Gravity,
     InitialTemperature,
     InitialVelocity,
@@ -251,6 +253,69 @@ class LoadCards(ReaderState):
             value = self._float(fields[2], "load", loc)
             step.cloads.append(CLoad(frozen_array(nodes, np.int64), dof, value, amplitude, op,
                                      fields[0], loc))  # fmt: skip
+
+    def _k_CFLUX(self, card: Card) -> None:
+        """Concentrated heat flows into nodes (dof 11; docs/method.md §39)."""
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
+        op, amplitude = self._op(card), self._amplitude_param(card)
+        for fields, _, loc in card.lines:
+            if len(fields) != 3:
+                raise DeckError("*CFLUX data line: node or node set, 11, heat flow", loc)
+            nodes = self._nodes_of(fields[0], card, loc)
+            dof = self._int(fields[1], "*CFLUX degree of freedom", loc)
+            if dof != 11:
+                raise DeckError(f"*CFLUX degree of freedom must be 11, got {dof}", loc)
+            value = self._float(fields[2], "heat flow", loc)
+            step.cfluxes.append(CLoad(frozen_array(nodes, np.int64), dof, value, amplitude, op,
+                                      fields[0], loc))  # fmt: skip
+
+    def _k_DFLUX(self, card: Card) -> None:
+        """Uniform heat fluxes into element faces S1..S6 (docs/method.md §39)."""
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP", "AMPLITUDE"})
+        op, amplitude = self._op(card), self._amplitude_param(card)
+        for fields, _, loc in card.lines:
+            label = fields[1] if len(fields) > 1 else ""
+            if not re.fullmatch(r"S[1-6]", label):
+                raise DeckError(
+                    f"*DFLUX, {label or '(no label)'} is not supported yet (load types: uniform "
+                    "face fluxes S1..S6)",
+                    loc,
+                )
+            if len(fields) != 3:
+                raise DeckError("*DFLUX data line: element or element set, S1..S6, flux", loc)
+            elements = self._elements_of(fields[0], card, loc)
+            self.element_refs.append((f"{card.name} face {label}", elements, loc))
+            value = self._float(fields[2], "heat flux", loc)
+            step.dfluxes.append(DLoad(frozen_array(elements, np.int64), int(label[1]), value,
+                                      amplitude, op, fields[0], loc))  # fmt: skip
+
+    def _k_FILM(self, card: Card) -> None:
+        """Film conditions on element faces F1..F6 (docs/method.md §39)."""
+        step = self._in_step(card)
+        self._check_params(card, allowed={"OP"})
+        op = self._op(card)
+        for fields, _, loc in card.lines:
+            label = fields[1] if len(fields) > 1 else ""
+            if not re.fullmatch(r"F[1-6]", label):
+                raise DeckError(
+                    f"*FILM, {label or '(no label)'} is not supported yet (load types: uniform "
+                    "film conditions F1..F6)",
+                    loc,
+                )
+            if len(fields) != 4:
+                raise DeckError(
+                    "*FILM data line: element or element set, F1..F6, sink temperature, film "
+                    "coefficient",
+                    loc,
+                )
+            elements = self._elements_of(fields[0], card, loc)
+            self.element_refs.append((f"{card.name} face {label}", elements, loc))
+            sink = self._float(fields[2], "sink temperature", loc)
+            coefficient = self._float(fields[3], "film coefficient", loc)
+            step.films.append(Film(frozen_array(elements, np.int64), int(label[1]), sink,
+                                   coefficient, op, loc))  # fmt: skip
 
     def _k_DLOAD(self, card: Card) -> None:
         step = self._in_step(card)

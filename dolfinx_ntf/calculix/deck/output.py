@@ -5,7 +5,7 @@ from __future__ import annotations
 from .data import FileRequest, PrintRequest
 from .errors import DeckError
 from .lexer import Card
-from .state import ReaderState
+from .orientations import OrientationCards
 
 _FILE_KEYWORDS = {
     "NODEFILE": "NODE",
@@ -30,7 +30,7 @@ def _element_keys(kind: str, keys: tuple[str, ...]) -> tuple[str, ...]:
     return tuple("PEEQ" if k == "PE" else k for k in keys)
 
 
-class OutputCards(ReaderState):
+class OutputCards(OrientationCards):
     """Handlers of the print and file request cards."""
 
     def _print_card(self, card: Card, kind: str) -> None:
@@ -71,6 +71,8 @@ class OutputCards(ReaderState):
                             card.location)  # fmt: skip
         if not any(p.kind == kind for p in step.new_prints):
             self.prints = [p for p in self.prints if p.kind != kind]
+        if kind == "EL":
+            self._check_local_axes(card, set_name, keys)
         request = PrintRequest(kind, keys, set_name, totals, frequency, card.location, time_points)
         step.new_prints.append(request)
         self.prints.append(request)
@@ -101,6 +103,8 @@ class OutputCards(ReaderState):
                 raise DeckError(f"node set {set_name} is not defined (before this line)",
                                 card.location)  # fmt: skip
         frequency = self._frequency(card)
+        if kind == "EL":
+            self._check_local_axes(card, None, keys)
         if not any(r.kind == kind for r in step.new_files):
             self.files = [r for r in self.files if r.kind != kind]
         request = FileRequest(card.name, kind, keys, set_name, "CONTACTELEMENTS" in card.params,

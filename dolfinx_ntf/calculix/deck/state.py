@@ -20,6 +20,7 @@ from .data import (
     Dynamic,
     Equation,
     FileRequest,
+    Film,
     Frequency,
     Friction,
     FrictionChange,
@@ -60,6 +61,9 @@ class StepBuilder:
     temperatures: list[Boundary] = field(default_factory=list)
     temperature_fields: list[InitialTemperature] = field(default_factory=list)
     cloads: list[CLoad] = field(default_factory=list)
+    cfluxes: list[CLoad] = field(default_factory=list)
+    dfluxes: list[DLoad] = field(default_factory=list)
+    films: list[Film] = field(default_factory=list)
     dloads: list[DLoad] = field(default_factory=list)
     gravity: list[Gravity] = field(default_factory=list)
     new_prints: list[PrintRequest] = field(default_factory=list)
@@ -77,9 +81,15 @@ class MaterialBuilder:
     location: Location
     elastic: tuple[float, float] | None = None
     elastic_location: Location | None = None
+    #: ``*ELASTIC`` rows ``(E, nu, temperature or None)`` and their lines; ``elastic`` is the
+    #: first row until the deck's temperatures are known (``checks._check_materials``).
+    elastic_rows: tuple[tuple[float, float, float | None], ...] = ()
+    elastic_row_locations: tuple[Location, ...] = ()
     plastic: tuple[tuple[float, float], ...] | None = None
     plastic_location: Location | None = None
     extra: dict[str, tuple[tuple[float | None, ...], ...]] = field(default_factory=dict)
+    #: The data lines of each card of ``extra``.
+    extra_locations: dict[str, tuple[Location, ...]] = field(default_factory=dict)
 
 
 @dataclass
@@ -128,6 +138,8 @@ class ReaderState:
         self.surfaces: dict[str, Surface] = {}
         self.materials: dict[str, MaterialBuilder] = {}
         self.sections: list[SolidSection] = []
+        #: ``*ORIENTATION`` cards by name (``orientations.Orientation``).
+        self.orientations: dict = {}
         self.interactions: dict[str, InteractionBuilder] = {}
         self.contact_pairs: list[ContactPair] = []
         self.amplitudes: dict[str, Amplitude] = {}

@@ -210,6 +210,9 @@ class StepCards(ReaderState):
                 modal_damping=self.modal_damping,
                 temperature_fields=tuple(step.temperature_fields),
                 gravity=tuple(step.gravity),
+                cfluxes=tuple(step.cfluxes),
+                dfluxes=tuple(step.dfluxes),
+                films=tuple(step.films),
             )
         )
         self.step = None

@@ -15,14 +15,25 @@ from __future__ import annotations
 import typing
 from dataclasses import dataclass
 
+from petsc4py import PETSc
+
 import numpy as np
 
 import basix
+import dolfinx.fem
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
 from dolfinx_ntf.fem.surfaces import FaceNodesSurface
-from dolfinx_ntf.kernels.faces import QUAD8, QUAD8_GAUSS2, TRI6, pressure_forces
+from dolfinx_ntf.kernels.faces import (
+    QUAD8,
+    QUAD8_GAUSS2,
+    TRI6,
+    film_matrices,
+    flux_flows,
+    pressure_forces,
+)
 
 from ..deck import Deck, ElementBlock, Surface, not_supported
 from ..elements import ELEMENT_TYPES
@@ -30,8 +41,11 @@ from .mesh import MeshMaps
 
 __all__ = [
     "C3D15_MIN_DOLFINX",
+    "C3D15Films",
     "C3D15Pressures",
     "c3d15_exterior",
+    "c3d15_face_flows",
+    "c3d15_films",
     "c3d15_metadata",
     "c3d15_rule",
     "c3d15_surface",
@@ -75,7 +89,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
             and small-strain steps, cyclic symmetry ties, a master surface of triangles and
-            quadrilaterals, ADJUST node sets of contact pairs, thermal steps.
+            quadrilaterals, ADJUST node sets of contact pairs, contact pairs and ties in thermal
+            steps, transient coupled temperature-displacement steps.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -119,11 +134,20 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 f"{pair.location}: ADJUST={pair.adjust} (a node set) on C3D15 elements is not "
                 f"supported yet (a distance is; {where}; docs/method.md §38)"
             )
+    thermal = next((step for step in deck.steps if step.coupled), None)
+    if thermal is not None and (deck.contact_pairs or deck.ties):
+        card = deck.contact_pairs[0] if deck.contact_pairs else deck.ties[0]
+        raise NotImplementedError(
+            f"{card.location}: contact pairs and ties on C3D15 elements in a deck with thermal "
+            f"steps ({thermal.location}) are not supported yet (not checked against ccx; "
+            f"{where}; docs/method.md §38, §39)"
+        )
     for step in deck.steps:
-        if step.coupled:
+        if step.coupled and not step.coupled.heat and not step.coupled.steady:
             raise NotImplementedError(
-                f"{step.location}: thermal steps with C3D15 elements are not supported yet (not "
-                f"checked against ccx; {where})"
+                f"{step.location}: transient *COUPLED TEMPERATURE-DISPLACEMENT steps with C3D15 "
+                "elements are not supported yet (STEADY STATE ones and *HEAT TRANSFER are, "
+                f"docs/method.md §39; {where})"
             )
 
 
@@ -168,6 +192,110 @@ class C3D15Pressures:
             rows = np.repeat(group, columns.shape[1])
             np.add.at(out, (rows, columns.ravel()), forces.ravel())
         return out
+
+
+def c3d15_face_flows(
+    deck: Deck, block: ElementBlock, rows: np.ndarray, faces: np.ndarray, flux: np.ndarray
+) -> np.ndarray:
+    """``(nodes,)`` nodal heat flows of uniform fluxes into C3D15 faces (``*DFLUX``, §39).
+
+    Without ``ds`` on prism meshes (§34.4), as the pressures: the consistent flows of each face
+    from its deck nodes with ccx's face rules (6-node triangles 3 points, 8-node quadrilaterals
+    2 x 2), summed at the deck's nodes (the same on every process).
+
+    Args:
+        deck: The deck.
+        block: Its C3D15 block.
+        rows: ``(F,)`` element rows of the faces in the block.
+        faces: ``(F,)`` ccx face numbers 1..5.
+        flux: ``(F,)`` flux into each face.
+    """
+    out = np.zeros(deck.node_ids.size)
+    for face_type, which in ((TRI6, faces <= 2), (QUAD8, faces > 2)):
+        if np.any(which):
+            local = block.type.faces[faces[which] - 1, : face_type.num_nodes]
+            nodes = deck.node_index(block.connectivity[rows[which, None], local])
+            rule = _QUAD_RULE if face_type is QUAD8 else None
+            flows = flux_flows(face_type, deck.node_coords[nodes], flux[which], rule)
+            np.add.at(out, nodes.ravel(), flows.ravel())
+    return out
+
+
+class C3D15Films:
+    """``*FILM`` conditions on C3D15 faces of one face type, as element blocks of ``T`` (§39).
+
+    No ``ds`` on prism meshes (§34.4): each face of an owned cell is a block of its nodes with
+    the matrix ``h M`` (``M`` from :func:`~dolfinx_ntf.kernels.faces.film_matrices` with ccx's
+    face rule) and the residual ``h M (T - T_sink)``: the heat flow out of the face. The
+    :class:`~dolfinx_ntf.contact.thermal.HeatElementTerm` role.
+
+    Args:
+        T: The temperature.
+        dofs: ``(F, n)`` local dofs of the faces' nodes.
+        matrices: ``(F, n, n)`` face mass matrices.
+        prescribed: Local dofs with a prescribed temperature (skipped in the blocks).
+    """
+
+    def __init__(
+        self,
+        T: dolfinx.fem.Function,
+        dofs: np.ndarray,
+        matrices: np.ndarray,
+        prescribed: np.ndarray,
+    ) -> None:
+        index_map = T.function_space.dofmap.index_map
+        glob = index_map.local_to_global(dofs.ravel().astype(np.int32)).astype(np.int64)
+        glob = glob.reshape(dofs.shape)
+        self._local = dofs
+        self._dofs = np.where(np.isin(dofs, prescribed), -1, glob)
+        self._matrices = matrices
+        #: ``(F,)`` film coefficient and sink temperature of each face (0: no film).
+        self.coefficient = np.zeros(dofs.shape[0])
+        self.sink = np.zeros(dofs.shape[0])
+
+    def evaluate(self, x: PETSc.Vec) -> GlobalBlocks:
+        """The faces' blocks at the temperature ``x`` (local values, ghosts updated)."""
+        with x.localForm() as local:
+            T = local.array_r[self._local]
+        K = self.coefficient[:, None, None] * self._matrices
+        vector = np.einsum("fij,fj->fi", K, T - self.sink[:, None])
+        return GlobalBlocks(self._dofs, K, vector)
+
+
+def c3d15_films(
+    deck: Deck,
+    block: ElementBlock,
+    T: dolfinx.fem.Function,
+    node_dof: np.ndarray,
+    element_cell: np.ndarray,
+    keys: np.ndarray,
+    prescribed: np.ndarray,
+) -> list[tuple[C3D15Films, np.ndarray]]:
+    """The film terms of the faces ``keys`` per face type (docs/method.md §39).
+
+    Each with the positions in ``keys`` of its faces: those of cells this process owns.
+
+    Args:
+        deck: The deck.
+        block: Its C3D15 block.
+        T: The temperature.
+        node_dof: Local dof of each deck node (-1 where this process has none).
+        element_cell: Local cell of each element row (-1 elsewhere).
+        keys: ``(F, 2)`` element row and ccx face (1..5) of each face with a film.
+        prescribed: Local dofs with a prescribed temperature.
+    """
+    num_owned = T.function_space.mesh.topology.index_map(3).size_local
+    cell = element_cell[keys[:, 0]]
+    owned = (cell >= 0) & (cell < num_owned)
+    out = []
+    for face_type, which in ((TRI6, keys[:, 1] <= 2), (QUAD8, keys[:, 1] > 2)):
+        positions = np.flatnonzero(which & owned)
+        local = block.type.faces[keys[positions, 1] - 1, : face_type.num_nodes]
+        nodes = deck.node_index(block.connectivity[keys[positions, 0, None], local])
+        rule = _QUAD_RULE if face_type is QUAD8 else None
+        matrices = film_matrices(face_type, deck.node_coords[nodes], rule)
+        out.append((C3D15Films(T, node_dof[nodes], matrices, prescribed), positions))
+    return out
 
 
 def _check_jacobians(deck: Deck, block: ElementBlock) -> None:

@@ -185,9 +185,13 @@ class CalculixModel:
         """Whether the bulk Jacobian is symmetric.
 
         Not with finite-strain plastic laws, whose algorithmic tangent ``dP/dF`` is not
-        (docs/method.md §21.7).
+        (docs/method.md §21.7), nor with C3D15's thermal strain under NLGEOM: ``P = F S(E(H - x
+        I))`` is no energy's gradient (§39.1; C3D8's coupled steps factorize their own matrix).
         """
-        return not any(isinstance(law, FiniteStrainJ2Plasticity) for law in self.plasticity)
+        if any(isinstance(law, FiniteStrainJ2Plasticity) for law in self.plasticity):
+            return False
+        thermal = self.thermal is not None and self.thermal.strain_at_points
+        return not (thermal and any(step.nlgeom for step in self.deck.steps))
 
     @property
     def gdim(self) -> int:

@@ -23,10 +23,13 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.constraints import LinearConstraintBlock
+from dolfinx_ntf.fem.serendipity_wedge import wedge_serendipity_constraints
 from dolfinx_ntf.fem.thermal import CellTemperature
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 
 from ..deck import Boundary, Deck, ElementBlock
+from .c3d15 import C3D15Films, c3d15_face_flows, c3d15_films
 
 __all__ = ["ThermalModel", "is_thermal", "thermal_model"]
 
@@ -51,6 +54,15 @@ def is_thermal(deck: Deck) -> bool:
         *deck.temperature_boundaries,
         *(b for step in deck.steps for b in step.temperatures),
     ]
+    for step in deck.steps:
+        kinds = (("*CFLUX", step.cfluxes), ("*DFLUX", step.dfluxes), ("*FILM", step.films))
+        for name, cards in kinds:
+            if cards and step.coupled is None:
+                raise NotImplementedError(
+                    f"{cards[0].location}: {name} in step {step.number}, which is not "
+                    "*COUPLED TEMPERATURE-DISPLACEMENT or *HEAT TRANSFER: heat flows are "
+                    "supported in thermal steps only"
+                )
     heat = {step.coupled.heat for step in deck.steps if step.coupled is not None}
     if len(heat) > 1:
         raise NotImplementedError(
@@ -132,6 +144,15 @@ class ThermalModel:
         bc_dofs: Local dofs of ``Q`` with a prescribed temperature (the same in every step).
         bc_values: Per step, the prescribed temperatures at ``bc_dofs``.
         bc_value: Function holding the current prescribed values; ``bcs`` the conditions.
+        constraints: C3D15: the face centres of ``Q`` (docs/method.md §39), else empty.
+        strain_at_points: The thermal strain from ``T`` at the integration points (C3D15, §39)
+            instead of the element mean temperature (C3D8, §20.8).
+        flux: The current ``*CFLUX`` and ``*DFLUX`` heat flows into the nodes (``Q``'s dofs);
+            ``flux_dofs`` the local dofs of the deck's nodes and ``flux_values`` their flows per
+            step (§39).
+        films: C3D15's ``*FILM`` terms (one per face type, on the heat problem's element terms)
+            with the positions of their faces in ``film_values``' arrays; ``film_values`` per
+            step the film coefficient and sink temperature of every face (§39).
     """
 
     Q: dolfinx.fem.FunctionSpace
@@ -149,17 +170,31 @@ class ThermalModel:
     bc_values: list[np.ndarray]
     bc_value: dolfinx.fem.Function
     bcs: list[compat.DirichletBC]
+    constraints: list[LinearConstraintBlock]
+    flux: dolfinx.fem.Function
+    flux_dofs: np.ndarray
+    flux_values: list[np.ndarray]
+    films: list[tuple[C3D15Films, np.ndarray]]
+    film_values: list[tuple[np.ndarray, np.ndarray]]
+    strain_at_points: bool = False
     _steady: bool = False
     _start: np.ndarray | None = None
     _target: np.ndarray | None = None
+    _flux_start: np.ndarray | None = None
+    _flux_target: np.ndarray | None = None
+    _film_start: list[np.ndarray] | None = None
+    _step: int = 0
 
     def thermal_strain(self) -> ufl.core.expr.Expr:
         """``x I``, ``x = alpha (T_c - T_init,c)`` of the element mean temperatures.
 
         The mechanical strain is formed from ``grad u - x I`` (``bulk.stresses``): with
         ``NLGEOM`` its Green-Lagrange strain ``x^2/2`` off the small one where ``u = 0``, as ccx
-        2.20's (measured, docs/method.md §20.8).
+        2.20's (measured, docs/method.md §20.8). With :attr:`strain_at_points` (C3D15) ``x =
+        alpha (T - T_init)`` at each integration point, as ccx 2.20's C3D15 (measured, §39).
         """
+        if self.strain_at_points:
+            return self.alpha * (self.T - self.T_init) * ufl.Identity(3)
         x = self.alpha * (self.cell_temperature.T_c - self.T_init_c)
         return x * ufl.Identity(3)
 
@@ -169,8 +204,15 @@ class ThermalModel:
         ccx applies the temperatures of a transient step at once and ramps those of a steady one
         from their values at the step start (manual, ``*COUPLED TEMPERATURE-DISPLACEMENT``).
         """
+        self._step = step_index
         self._target = self.bc_values[step_index]
         self._start = self.T.x.array[self.bc_dofs].copy()
+        self._flux_target = self.flux_values[step_index]
+        self._flux_start = self.flux.x.array[self.flux_dofs].copy()
+        self._film_start = [term.coefficient.copy() for term, _ in self.films]
+        sink = self.film_values[step_index][1]
+        for term, positions in self.films:  # the sink temperatures at once (measured, §39)
+            term.sink[:] = sink[positions]
         self._steady = steady
         self.inverse_dt.value = 0.0
 
@@ -183,9 +225,15 @@ class ThermalModel:
         ``T_old``, measured on contact8). ``1/dt`` stays 0 in a steady step.
         """
         scale = fraction if self._steady else 1.0
+        flux = self._flux_start + (self._flux_target - self._flux_start) * scale
+        self.flux.x.array[self.flux_dofs] = flux  # ramped as the temperatures (measured, §39)
+        coefficient = self.film_values[self._step][0]
+        for (term, positions), start in zip(self.films, self._film_start):  # h ramped (§39)
+            term.coefficient[:] = start + (coefficient[positions] - start) * scale
         values = self._start + (self._target - self._start) * scale
         for f in (self.bc_value, self.T_old):
             f.x.array[self.bc_dofs] = values
+            _fill_centres(f, self.constraints)  # C3D15: T_old is C3D15's field of its nodes
             f.x.scatter_forward()
         self.T.x.array[:] = self.T_old.x.array
         self.T.x.scatter_forward()
@@ -195,6 +243,19 @@ class ThermalModel:
         """A converged increment: its temperature becomes the next one's ``T_old``."""
         self.T_old.x.array[:] = self.T.x.array
         self.T_old.x.scatter_forward()
+
+
+def _fill_centres(f: dolfinx.fem.Function, constraints: list[LinearConstraintBlock]) -> None:
+    """Set the dependent (first) dof of every constraint row from its other terms (local).
+
+    C3D15's face centres from their faces' 8 nodes (docs/method.md §39): a temperature given at
+    the deck's nodes (initial, prescribed) is then C3D15's field. Every row's dofs are local
+    (its face is in a local cell), so no communication is needed.
+    """
+    values = f.x.array
+    for block in constraints:
+        terms = block.coefficients[:, 1:] * values[block.nodes[:, 1:]]
+        values[block.nodes[:, 0]] = (block.values - terms.sum(axis=1)) / block.coefficients[:, 0]
 
 
 def _cell_values(
@@ -257,6 +318,99 @@ def _bc_nodes(deck: Deck) -> tuple[np.ndarray, list[dict[int, float]]]:
     return np.array(nodes, dtype=np.int64), per_step
 
 
+def _nodal_flows(deck: Deck, block: ElementBlock) -> list[np.ndarray]:
+    """Per step, ``(nodes,)`` heat flows into the deck's nodes: ``*CFLUX`` and ``*DFLUX``.
+
+    ``*CLOAD``'s and ``*DLOAD``'s rules (docs/method.md §39): a value stays from step to step
+    unless changed (``OP=MOD``) or removed (``OP=NEW``, the first card of a step); lines of one
+    step on the same node (face) add up (measured against ccx 2.20 for ``*CFLUX``), and a step's
+    first line on a node (face) replaces the earlier steps' value. ``*DFLUX`` faces: C3D15 only
+    (nodal flows from the deck's faces, :func:`~.c3d15.c3d15_face_flows`).
+    """
+    nodes: dict[int, float] = {}
+    faces: dict[tuple[int, int], float] = {}
+    order = np.argsort(block.ids)
+    per_step = []
+    for step in deck.steps:
+        for current, cards in ((nodes, step.cfluxes), (faces, step.dfluxes)):
+            if cards and cards[0].op == "NEW":
+                current.clear()
+            touched: set = set()
+            for card in cards:
+                if card.amplitude is not None:
+                    name = "*CFLUX" if current is nodes else "*DFLUX"
+                    raise NotImplementedError(
+                        f"{card.location}: {name} with an AMPLITUDE is not supported yet"
+                    )
+                if current is nodes:
+                    keys = card.nodes.tolist()
+                else:
+                    if block.type.name != "C3D15":
+                        raise NotImplementedError(
+                            f"{card.location}: *DFLUX on {block.type.name} faces is not "
+                            "supported yet (C3D15 only, docs/method.md §39)"
+                        )
+                    _check_face(card.face, block, card.location, "*DFLUX", "S")
+                    rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
+                    keys = [(int(r), card.face) for r in rows]
+                for key in keys:
+                    current[key] = (current[key] if key in touched else 0.0) + card.value
+                    touched.add(key)
+        flows = np.zeros(deck.node_ids.size)
+        if nodes:
+            np.add.at(flows, deck.node_index(np.array(list(nodes))), list(nodes.values()))
+        if faces:
+            keys = np.array(list(faces), dtype=np.int64)
+            values = np.array(list(faces.values()))
+            flows += c3d15_face_flows(deck, block, keys[:, 0], keys[:, 1], values)
+        per_step.append(flows)
+    return per_step
+
+
+def _film_faces(
+    deck: Deck, block: ElementBlock
+) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+    """The faces with a ``*FILM`` ``(K, 2)`` (element row, face); per step their ``h, T_sink``.
+
+    Coefficients and sink temperatures are 0 where a face has no film in a step.
+
+    A face keeps its film from step to step unless given again (its last line replaces it) or
+    removed (``OP=NEW``, the first card of a step). C3D15 faces only (§39).
+    """
+    order = np.argsort(block.ids)
+    current: dict[tuple[int, int], tuple[float, float]] = {}
+    per_step = []
+    for step in deck.steps:
+        if step.films and step.films[0].op == "NEW":
+            current = {}
+        for card in step.films:
+            if block.type.name != "C3D15":
+                raise NotImplementedError(
+                    f"{card.location}: *FILM on {block.type.name} faces is not supported yet "
+                    "(C3D15 only, docs/method.md §39)"
+                )
+            _check_face(card.face, block, card.location, "*FILM", "F")
+            rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
+            current.update({(int(r), card.face): (card.coefficient, card.sink) for r in rows})
+        per_step.append(dict(current))
+    keys = sorted(set().union(*per_step)) if per_step else []
+    values = [
+        tuple(np.array([film.get(k, (0.0, 0.0))[i] for k in keys]) for i in (0, 1))
+        for film in per_step
+    ]
+    return np.array(keys, dtype=np.int64).reshape(-1, 2), values
+
+
+def _check_face(face: int, block: ElementBlock, location: object, card: str, letter: str) -> None:
+    """Raise ``ValueError`` naming the line if ``face`` is not a face of the block's elements."""
+    count = len(block.type.faces)
+    if face > count:
+        raise ValueError(
+            f"{location}: {card} {letter}{face}: {block.type.name} elements have faces "
+            f"{letter}1..{letter}{count}"
+        )
+
+
 def _check_heat_boundaries(deck: Deck) -> None:
     """Refuse prescribed displacements other than 0 in a deck of ``*HEAT TRANSFER`` steps.
 
@@ -304,11 +458,12 @@ def thermal_model(
     T = dolfinx.fem.Function(Q, name="temperature")
     Q0 = compat.scalar_space(mesh, "DG", 0)
     heat = all(s.coupled.heat for s in deck.steps)  # no thermal strain: C3D8I conducts as C3D8
-    if block.type.name != "C3D8" and not (heat and block.type.name == "C3D8I"):
+    conducting = ("C3D8", "C3D8I", "C3D15") if heat else ("C3D8", "C3D15")  # C3D15: §39
+    if block.type.name not in conducting:
         procedure = "*HEAT TRANSFER" if heat else "*COUPLED TEMPERATURE-DISPLACEMENT"
         raise NotImplementedError(
             f"{block.locations[0]}: {procedure} with {block.type.name} elements is not supported "
-            "yet (measured against ccx for C3D8 only, and C3D8I in heat transfer)"
+            "yet (measured against ccx for C3D8 and C3D15 only, and C3D8I in heat transfer)"
         )
     if heat:
         _check_heat_boundaries(deck)
@@ -326,6 +481,8 @@ def thermal_model(
     for condition in deck.initial_temperatures:
         dofs = node_dof[deck.node_index(condition.nodes)]
         T.x.array[dofs[dofs >= 0]] = condition.value
+    constraints = wedge_serendipity_constraints(Q) if block.type.name == "C3D15" else []
+    _fill_centres(T, constraints)
     T.x.scatter_forward()
     T_old = dolfinx.fem.Function(Q, name="temperature_old")
     T_init = dolfinx.fem.Function(Q, name="initial_temperature")
@@ -349,8 +506,18 @@ def thermal_model(
     bc_values = [np.array([values[n] for n in nodes.tolist()])[held] for values in per_step]
     bc_value = dolfinx.fem.Function(Q, name="prescribed_temperature")
     bcs = [dolfinx.fem.dirichletbc(bc_value, bc_dofs)]
+    flux_held = node_dof >= 0
+    flux_values = [flows[flux_held] for flows in _nodal_flows(deck, block)]
+    flux = dolfinx.fem.Function(Q, name="nodal_heat_flow")
+    film_keys, film_values = _film_faces(deck, block)
+    films = []
+    if film_keys.size:
+        films = c3d15_films(deck, block, T, node_dof, element_cell, film_keys, bc_dofs)
     return ThermalModel(Q, T, T_old, T_init, cell_temperature, T_init_c, inverse_dt, alpha, k,
-                        residual, conductances, bc_dofs, bc_values, bc_value, bcs)  # fmt: skip
+                        residual, conductances, bc_dofs, bc_values, bc_value, bcs,
+                        constraints, flux, node_dof[flux_held].astype(np.int32), flux_values,
+                        films, film_values,
+                        strain_at_points=block.type.name == "C3D15")  # fmt: skip
 
 
 def _conductance(rows: tuple | None, interaction: str) -> GapConductance:
