@@ -39,7 +39,7 @@ API_GROUPS: list[tuple[str, str, list[str]]] = [
     (
         "Problem, surfaces and pairs",
         "dolfinx_ntf",
-        ["ContactProblem", "ContactPair", "FacetSurface", "NodeSurface"],
+        ["ContactProblem", "ContactPair", "FacetSurface", "NodeSurface", "FaceNodesSurface"],
     ),
     (
         "Pressure-overclosure laws and friction",

@@ -58,11 +58,18 @@ def match_rows(table: np.ndarray, query: np.ndarray) -> np.ndarray:
 
 
 def surface_face_nodes(deck: Deck, block, name: str) -> np.ndarray:
-    """Ccx node numbers ``(F, n)`` of an element-face surface's faces, in ccx face order."""
+    """Ccx node numbers ``(F, n)`` of an element-face surface's faces, in ccx face order.
+
+    C3D15's triangles (padded to 8 nodes in the element table) give 6 columns: its surfaces
+    hold one kind of face (docs/method.md §38).
+    """
     surface = deck.surfaces[name]
     order = np.argsort(block.ids)
     rows = order[np.searchsorted(block.ids, surface.elements, sorter=order)]
-    return block.connectivity[rows[:, None], block.type.faces[surface.faces - 1]]
+    local = block.type.faces[surface.faces - 1]
+    sizes = block.type.face_sizes[surface.faces - 1]
+    width = int(sizes.max()) if sizes.size else local.shape[1]
+    return block.connectivity[rows[:, None], local[:, :width]]
 
 
 def _padded(values: np.ndarray) -> np.ndarray:

@@ -150,10 +150,12 @@ def area_block(state: PairState, coords: np.ndarray, *, values: bool = True) -> 
             faces.face_type, faces.faces, coords, slave.nodes,
             thickness=slave.thickness, axisymmetric=slave.axisymmetric,
         )  # fmt: skip
-    else:
-        slave_index, node, gradient = spring_area_gradients(
-            faces.face_type, faces.faces, coords, slave.nodes
-        )
+    else:  # every face type's (a C3D15 surface of triangles and quadrilaterals, §38)
+        parts = [
+            spring_area_gradients(group.face_type, group.faces, coords, slave.nodes)
+            for group in slave.face_groups
+        ]
+        slave_index, node, gradient = (np.concatenate(arrays) for arrays in zip(*parts))
     spring_of_slave = np.full(state.slave.nodes.size, -1, dtype=np.int64)
     spring_of_slave[state.spring_slave] = np.arange(state.num_springs)
     spring = spring_of_slave[slave_index]

@@ -12,7 +12,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dolfinx_ntf import validation
-from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface, SlaveSurface, SurfaceFaces
+from dolfinx_ntf.fem.surfaces import (
+    FaceNodesSurface,
+    FacetSurface,
+    NodeSurface,
+    SlaveSurface,
+    SurfaceFaces,
+)
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.laws import PressureOverclosureLaw, SurfaceInteraction
 from dolfinx_ntf.kernels.master import ContactMaster
@@ -48,9 +54,10 @@ class ContactPair:
     """One node-to-face contact pair (CalculiX ``*CONTACT PAIR, TYPE=NODE TO SURFACE``).
 
     Args:
-        slave: Face-based (:class:`FacetSurface`) or node-based (:class:`NodeSurface`) slave
-            surface.
-        master: Face-based master surface, or a rigid analytical surface (one-node springs,
+        slave: Face-based (:class:`FacetSurface`, or :class:`FaceNodesSurface` on meshes
+            without facet numbering) or node-based (:class:`NodeSurface`) slave surface.
+        master: Face-based master surface (:class:`FacetSurface` or
+            :class:`FaceNodesSurface`), or a rigid analytical surface (one-node springs,
             docs/method.md §15.1).
         interaction: Pressure-overclosure law and optional friction; may be replaced between
             steps (new mu and lambda act from then on, the friction state is kept).
@@ -88,8 +95,8 @@ class ContactPair:
             §26.3).
     """
 
-    slave: FacetSurface | NodeSurface
-    master: FacetSurface | RigidSurface
+    slave: FacetSurface | NodeSurface | FaceNodesSurface
+    master: FacetSurface | FaceNodesSurface | RigidSurface
     interaction: SurfaceInteraction
     small_sliding: bool = False
     name: str = ""
@@ -107,13 +114,17 @@ class ContactPair:
             if isinstance(self.name, str) and self.name
             else ("ContactPair")
         )
-        validation.check_type(self.slave, (FacetSurface, NodeSurface), f"{owner}: slave")
+        validation.check_type(
+            self.slave, (FacetSurface, NodeSurface, FaceNodesSurface), f"{owner}: slave"
+        )
         if isinstance(self.master, NodeSurface):
             raise ValueError(
                 f"{owner}: the master surface must be a FacetSurface (face-based), got a "
                 "NodeSurface; only the slave surface may be node-based"
             )
-        validation.check_type(self.master, (FacetSurface, RigidSurface), f"{owner}: master")
+        validation.check_type(
+            self.master, (FacetSurface, FaceNodesSurface, RigidSurface), f"{owner}: master"
+        )
         validation.check_type(
             self.interaction,
             SurfaceInteraction,

@@ -182,7 +182,9 @@ class Pairing:
             faces = self._as_quad8(slave.faces)
             keep = ~np.isin(slave.nodes, self._face_centres) & ~np.isin(slave.nodes, self._midsides)
             faceless = None if slave.faceless is None else slave.faceless[keep]
-            slave = SlaveSurface(slave.nodes[keep], faces, faceless)
+            slave = dataclasses.replace(
+                slave, nodes=slave.nodes[keep], faces=faces, faceless=faceless
+            )
         if isinstance(pair.master, RigidSurface):  # docs/method.md §15.1
             if pair.interaction.friction is not None or pair.adjust is not None:
                 raise NotImplementedError(
@@ -387,13 +389,13 @@ class Pairing:
     # -- checks ------------------------------------------------------------------------------------
 
     def _surfaces(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
-        """(name, slave nodes, master facets) of every pair, for checks and messages."""
+        """(name, slave nodes, master face keys) of every pair, for checks and messages.
+
+        A master face is known by its sorted nodes (:func:`_face_keys`), not by its facet: faces
+        given by their nodes (``FaceNodesSurface``) and other processes' faces have none.
+        """
         return [
-            (
-                s.pair.name or f"pair {i + 1}",
-                s.slave.nodes,
-                s.master_faces.facets[s.master_faces.facets >= 0],  # -1: another process's
-            )
+            (s.pair.name or f"pair {i + 1}", s.slave.nodes, _face_keys(s.master_faces))
             for i, s in enumerate(self.states)
         ]
 
@@ -408,11 +410,14 @@ class Pairing:
         surfaces = self._surfaces()
         for i, (name_i, slave_i, master_i) in enumerate(surfaces):
             for name_j, slave_j, master_j in surfaces[i + 1 :]:
-                same = np.array_equal(slave_i, slave_j) and np.array_equal(
-                    np.sort(master_i), np.sort(master_j)
+                comparable = master_i.dtype == master_j.dtype  # faces of one node count
+                same = (
+                    comparable
+                    and np.array_equal(slave_i, slave_j)
+                    and np.array_equal(master_i, master_j)
                 )
                 shared = np.intersect1d(slave_i, slave_j)
-                if not np.intersect1d(master_i, master_j).size:
+                if not comparable or not np.intersect1d(master_i, master_j).size:
                     shared = shared[:0]
                 if comm.allreduce(bool(same), op=MPI.LAND):
                     raise ValueError(
@@ -805,6 +810,18 @@ class Pairing:
         return xi0
 
 
+def _face_keys(faces: SurfaceFaces) -> np.ndarray:
+    """Sorted unique faces as one scalar each (their sorted nodes), for set comparisons.
+
+    A rigid master's face has no nodes: no keys, as its facets were none.
+    """
+    rows = np.ascontiguousarray(np.sort(faces.faces.astype(np.int64), axis=1))
+    if rows.shape[1] == 0:
+        return np.zeros(0, dtype=np.dtype((np.void, rows.dtype.itemsize)))
+    key = np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))
+    return np.unique(rows.view(key).ravel())
+
+
 def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
     """Spring areas of the slave nodes (0 for ``faceless`` nodes: the fallback applies)."""
     faces = slave.faces
@@ -819,8 +836,11 @@ def slave_areas(slave: SlaveSurface, coords: np.ndarray) -> np.ndarray:
         areas = slave.thickness * edge_spring_areas(
             faces.face_type, faces.faces, coords, slave.nodes
         )
-    else:
-        areas = spring_areas(faces.face_type, faces.faces, coords, slave.nodes)
+    else:  # each face type's shares (a C3D15 surface of triangles and quadrilaterals, §38)
+        areas = sum(
+            spring_areas(group.face_type, group.faces, coords, slave.nodes)
+            for group in slave.face_groups
+        )
     if slave.faceless is not None:
         areas[slave.faceless] = 0.0
     return areas

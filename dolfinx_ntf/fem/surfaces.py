@@ -7,8 +7,9 @@ then midside nodes (see ``faces.py``).
 
 Users name surfaces with :class:`FacetSurface` (facet-tag values, the face-based surfaces of
 CalculiX) or :class:`NodeSurface` (a vertex set, CalculiX's ``*SURFACE, TYPE=NODE``);
-:func:`resolve_master` and :func:`resolve_slave` turn them into numbering-level data for the
-pure-numpy layers.
+:class:`FaceNodesSurface` gives a face-based surface by its faces' nodes where dolfinx numbers no
+facets (prism meshes on dolfinx 0.11, docs/method.md §38). :func:`resolve_master` and
+:func:`resolve_slave` turn them into numbering-level data for the pure-numpy layers.
 """
 
 from __future__ import annotations
@@ -29,11 +30,14 @@ from dolfinx_ntf.kernels.edges import EdgeType, edge_type_from_num_nodes
 from dolfinx_ntf.kernels.faces import FaceType, face_type_from_num_nodes
 
 __all__ = [
+    "NO_FACET",
+    "FaceNodesSurface",
     "FacetSurface",
     "NodeSurface",
     "SlaveSurface",
     "SurfaceFaces",
     "boundary_faces",
+    "faces_touching",
     "facet_cells",
     "reference_coordinates",
     "resolve_master",
@@ -103,17 +107,23 @@ class NodeSurface:
             the fallback area (``ContactPair.fallback_area``). ccx does this to the node sets
             of 2D elements, whose 2D nodes belong to none of its expanded 3D elements
             (docs/method.md §26.3).
+        exterior: The exterior faces of the mesh given by their nodes, for meshes whose facets
+            dolfinx does not number (C3D15's prisms, docs/method.md §38); this process's, each
+            process the same face types. None: dolfinx's exterior facets.
     """
 
     vertices: np.ndarray = field(repr=False)
     name: str = "nodes"
     midside_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32), repr=False)
     faceless: bool = False
+    exterior: FaceNodesSurface | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         """Check the indices and store them as an int32 array."""
         validation.check_type(self.name, str, "NodeSurface: name")
         validation.check_type(self.faceless, bool, "NodeSurface: faceless")
+        if self.exterior is not None:
+            validation.check_type(self.exterior, FaceNodesSurface, "NodeSurface: exterior")
         owner = f"NodeSurface '{self.name}'"
         object.__setattr__(self, "vertices", validation.vertex_indices(self.vertices, owner))
         midside = np.asarray(self.midside_nodes).ravel()
@@ -134,13 +144,18 @@ class NodeSurface:
         return cls(dolfinx.mesh.locate_entities(mesh, 0, marker), name)
 
 
+#: The facet index of a face that is no dolfinx facet of this process: another process's face,
+#: or a face given by its nodes (:class:`FaceNodesSurface`). Facet-based code skips it.
+NO_FACET = -1
+
+
 @dataclass(frozen=True)
 class SurfaceFaces:
     """Faces of one face type as node (block dof) connectivity in CalculiX order."""
 
     face_type: FaceType | EdgeType
     faces: np.ndarray  # (F, n) local block dofs
-    facets: np.ndarray  # (F,) local facet index of each face
+    facets: np.ndarray  # (F,) local facet index of each face, NO_FACET for none
 
     @property
     def nodes(self) -> np.ndarray:
@@ -149,11 +164,99 @@ class SurfaceFaces:
 
 
 @dataclass(frozen=True)
+class FaceNodesSurface:
+    """A face-based surface given by the nodes of its faces instead of dolfinx facets.
+
+    For meshes whose facets dolfinx does not number: dolfinx 0.11 gives a prism mesh two facet
+    types, and ``ds``, ``exterior_facet_indices`` and ``connectivity(2, 0)`` raise "Multiple
+    entity types in mesh" there (C3D15 decks, docs/method.md §38). Its faces have no facet
+    index (:data:`NO_FACET`), so facet-based outputs (the recovered pressure) leave them out.
+
+    Args:
+        face_type: The type of every face (e.g. ``TRI6`` or ``QUAD8`` of ``kernels.faces``).
+        faces: ``(F, n)`` local block dofs of the displacement space, one row per face in
+            CalculiX order: corners counter-clockwise seen from outside the body, then the
+            midside nodes. On several processes each gives the faces of its cells (owned and
+            ghost); a process may give none.
+        name: Label used in messages.
+        more: Faces of further types, ``(face_type, faces)`` each, e.g. the triangles of a
+            surface of triangles and quadrilaterals (C3D15). A slave surface only: a master
+            holds one face type. Every process gives the same types.
+    """
+
+    face_type: FaceType
+    faces: np.ndarray = field(repr=False)
+    name: str = "faces"
+    more: tuple[tuple[FaceType, np.ndarray], ...] = field(default=(), repr=False)
+
+    def __post_init__(self) -> None:
+        """Check the face types and the node rows; store them as int32 arrays."""
+        validation.check_type(self.name, str, "FaceNodesSurface: name")
+        object.__setattr__(self, "faces", self._checked(self.face_type, self.faces))
+        more = tuple(self.more)
+        for k, group in enumerate(more):
+            if not isinstance(group, tuple) or len(group) != 2:
+                raise TypeError(
+                    f"FaceNodesSurface '{self.name}': more[{k}] must be a (face_type, faces) "
+                    f"tuple, got {validation.describe(group)}"
+                )
+        groups = tuple((t, self._checked(t, f)) for t, f in more)
+        types = [self.face_type, *(t for t, _ in groups)]
+        if len({id(t) for t in types}) < len(types):
+            raise ValueError(
+                f"FaceNodesSurface '{self.name}': a face type is given twice "
+                f"({', '.join(t.name for t in types)}); give the faces of each type once"
+            )
+        object.__setattr__(self, "more", groups)
+
+    def _checked(self, face_type: object, faces: np.ndarray) -> np.ndarray:
+        """``faces`` as a contiguous int32 ``(F, n)`` array of ``face_type`` (or an error)."""
+        owner = f"FaceNodesSurface '{self.name}'"
+        validation.check_type(face_type, FaceType, f"{owner}: face_type")
+        faces = np.asarray(faces)
+        n = face_type.num_nodes
+        if faces.size == 0:
+            faces = np.zeros((0, n), dtype=np.int32)
+        if faces.ndim != 2 or faces.shape[1] != n or not np.issubdtype(faces.dtype, np.integer):
+            raise ValueError(
+                f"{owner}: faces must be an integer array of shape (F, {n}) for "
+                f"{face_type.name} faces, got shape {faces.shape} and dtype {faces.dtype}"
+            )
+        if faces.size and int(faces.min()) < 0:
+            raise ValueError(f"{owner}: faces must hold block dofs >= 0, got {int(faces.min())}")
+        return np.ascontiguousarray(faces, dtype=np.int32)
+
+    def surface_faces(self, V: dolfinx.fem.FunctionSpace, what: str) -> SurfaceFaces:
+        """The faces as :class:`SurfaceFaces` of ``V`` (a ``ValueError`` for a node outside V)."""
+        return self._surface_faces(V, what, self.face_type, self.faces)
+
+    def face_groups(self, V: dolfinx.fem.FunctionSpace, what: str) -> tuple[SurfaceFaces, ...]:
+        """The faces of every type as :class:`SurfaceFaces` of ``V``, the first type first."""
+        more = (self._surface_faces(V, what, t, f) for t, f in self.more)
+        return (self.surface_faces(V, what), *more)
+
+    def _surface_faces(
+        self, V: dolfinx.fem.FunctionSpace, what: str, face_type: FaceType, faces: np.ndarray
+    ) -> SurfaceFaces:
+        index_map = V.dofmap.index_map
+        num_nodes = index_map.size_local + index_map.num_ghosts
+        if faces.size and int(faces.max()) >= num_nodes:
+            raise ValueError(
+                f"{what}: FaceNodesSurface '{self.name}' has node {int(faces.max())}, "
+                f"outside 0..{num_nodes - 1} (the displacement space's nodes on this process)"
+            )
+        facets = np.full(faces.shape[0], NO_FACET, dtype=np.int32)
+        return SurfaceFaces(face_type, faces, facets)
+
+
+@dataclass(frozen=True)
 class SlaveSurface:
     """Slave nodes and the faces (edges of a 2D mesh) that give them spring area (§2.1).
 
     ``faceless`` marks slave nodes that take no share of the faces' area and get CalculiX's
     fallback area instead (ccx: the midside nodes of a node-based surface, §13.5); None: none.
+    ``more_faces`` holds faces of further types (a C3D15 surface of 6-node triangles and 8-node
+    quadrilaterals, docs/method.md §38.4): their areas add to the nodes' as ``faces``' do.
     """
 
     nodes: np.ndarray  # (S,) sorted local block dofs
@@ -162,6 +265,12 @@ class SlaveSurface:
     thickness: float = 1.0  # 2D meshes: the spring areas are tributary lengths times this
     axisymmetric: bool = False  # 2D meshes: ring areas 2 pi ∫ r φ_p ds instead (§17.2)
     area_weights: str = "consistent"  # 2D meshes: "ccx" for ccx's expanded faces' shares (§23)
+    more_faces: tuple[SurfaceFaces, ...] = ()
+
+    @property
+    def face_groups(self) -> tuple[SurfaceFaces, ...]:
+        """``faces`` and ``more_faces``: the slave faces of each face type."""
+        return (self.faces, *self.more_faces)
 
 
 def reference_coordinates(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
@@ -345,16 +454,24 @@ def _tagged_facets(surface: FacetSurface, mesh: dolfinx.mesh.Mesh, what: str) ->
 
 def resolve_master(
     V: dolfinx.fem.FunctionSpace,
-    surface: FacetSurface,
+    surface: FacetSurface | FaceNodesSurface,
     what: str = "master",
     *,
     reference: np.ndarray | None = None,
 ) -> SurfaceFaces:
-    """Master faces of a facet surface (``reference``: as :func:`boundary_faces` takes it)."""
+    """Master faces of a face-based surface (``reference``: as :func:`boundary_faces` takes it)."""
+    if isinstance(surface, FaceNodesSurface):
+        if surface.more:
+            types = ", ".join(g.face_type.name for g in surface.face_groups(V, what))
+            raise NotImplementedError(
+                f"{what}: FaceNodesSurface '{surface.name}' holds faces of several types "
+                f"({types}): a master surface of one face type only is supported"
+            )
+        return surface.surface_faces(V, what)
     if not isinstance(surface, FacetSurface):
         raise ValueError(
-            f"{what}: the master surface must be a FacetSurface (face-based), "
-            f"got {type(surface).__name__}"
+            f"{what}: the master surface must be a FacetSurface or a FaceNodesSurface "
+            f"(face-based), got {type(surface).__name__}"
         )
     facets = _tagged_facets(surface, V.mesh, what)
     return boundary_faces(V, facets, what=what, reference=reference)
@@ -362,7 +479,7 @@ def resolve_master(
 
 def resolve_slave(
     V: dolfinx.fem.FunctionSpace,
-    surface: FacetSurface | NodeSurface,
+    surface: FacetSurface | NodeSurface | FaceNodesSurface,
     what: str = "slave",
     *,
     reference: np.ndarray | None = None,
@@ -373,13 +490,18 @@ def resolve_slave(
     all exterior faces of the mesh with at least one corner among the slave nodes.
     ``reference``: as :func:`boundary_faces` takes it.
     """
+    if isinstance(surface, FaceNodesSurface):
+        first, *more = surface.face_groups(V, what)
+        nodes = np.unique(np.concatenate([first.faces.ravel(), *(g.faces.ravel() for g in more)]))
+        return SlaveSurface(nodes.astype(first.faces.dtype), first, more_faces=tuple(more))
     if isinstance(surface, FacetSurface):
         facets = _tagged_facets(surface, V.mesh, what)
         faces = boundary_faces(V, facets, what=what, reference=reference)
         return SlaveSurface(faces.nodes, faces)
     if not isinstance(surface, NodeSurface):
         raise TypeError(
-            f"{what}: expected a FacetSurface or NodeSurface, got {type(surface).__name__}"
+            f"{what}: expected a FacetSurface, NodeSurface or FaceNodesSurface, got "
+            f"{type(surface).__name__}"
         )
     vertices = surface.vertices
     mesh = V.mesh
@@ -401,18 +523,21 @@ def resolve_slave(
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(0, tdim)
     nodes = np.unique(dolfinx.fem.locate_dofs_topological(V, 0, vertices))
-    mesh.topology.create_connectivity(tdim - 1, tdim)
-    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
     X = reference_coordinates(V) if reference is None else reference
-    all_faces = boundary_faces(V, exterior, what=what, reference=X)
-    corners = all_faces.faces[:, : all_faces.face_type.num_corners]
+    if surface.exterior is not None:  # no facet numbering (C3D15's prisms, §38)
+        groups = surface.exterior.face_groups(V, what)
+    else:
+        mesh.topology.create_connectivity(tdim - 1, tdim)
+        exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+        groups = (boundary_faces(V, exterior, what=what, reference=X),)
+    corners = np.concatenate([g.faces[:, : g.face_type.num_corners].ravel() for g in groups])
     to_global = V.dofmap.index_map.local_to_global
     _check_on_boundary(comm, label, nodes, corners, X, to_global)
-    touching = np.isin(corners, nodes).any(axis=1)
-    faces = SurfaceFaces(all_faces.face_type, all_faces.faces[touching], all_faces.facets[touching])
+    faces, *more = (faces_touching(g, np.isin(np.arange(X.shape[0]), nodes)) for g in groups)
+    more = tuple(more)
     midside = surface.midside_nodes
     if comm.allreduce(int(midside.size), op=MPI.MAX):
-        on_faces = np.isin(midside, all_faces.faces)
+        on_faces = np.isin(midside, np.concatenate([g.faces.ravel() for g in groups]))
         if comm.size > 1:  # on global numbers: another process may hold the node's faces
             held = np.asarray(to_global(midside[on_faces].astype(np.int32)), dtype=np.int64)
             held = np.concatenate(comm.allgather(held))
@@ -426,10 +551,16 @@ def resolve_slave(
             )
         nodes = np.union1d(nodes, midside).astype(nodes.dtype)
         faceless = np.ones(nodes.size, bool) if surface.faceless else np.isin(nodes, midside)
-        return SlaveSurface(nodes, faces, faceless)
+        return SlaveSurface(nodes, faces, faceless, more_faces=more)
     if surface.faceless:
-        return SlaveSurface(nodes, faces, np.ones(nodes.size, dtype=bool))
-    return SlaveSurface(nodes, faces)
+        return SlaveSurface(nodes, faces, np.ones(nodes.size, dtype=bool), more_faces=more)
+    return SlaveSurface(nodes, faces, more_faces=more)
+
+
+def faces_touching(faces: SurfaceFaces, marked: np.ndarray) -> SurfaceFaces:
+    """The faces with a corner among the ``marked`` nodes (a flag per local node)."""
+    touching = marked[faces.faces[:, : faces.face_type.num_corners]].any(axis=1)
+    return SurfaceFaces(faces.face_type, faces.faces[touching], faces.facets[touching])
 
 
 def _check_on_boundary(

@@ -21,6 +21,7 @@ products of Simpson's rule (1/36 corners, 1/9 midside, 4/9 centre).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,6 +30,7 @@ __all__ = [
     "FACE_TYPES",
     "QUAD4",
     "QUAD8",
+    "QUAD8_GAUSS2",
     "QUAD9",
     "TRI3",
     "TRI6",
@@ -318,6 +320,13 @@ QUAD8 = _make_face_type(
     [(0, 4, 7), (4, 1, 5), (6, 5, 2), (7, 6, 3), (7, 4, 6), (4, 5, 6)],
     _Q3,
     _W3,
+)
+
+#: ``QUAD8`` with ccx's 2 x 2 Gauss points for the face area ``|f|`` of the spring areas: ccx's
+#: rule on the quadrilateral faces of C3D15 (3 x 3 on C3D20's; docs/method.md §38). Its name
+#: stays ``"quad8"``: the layout, weights and triangles are QUAD8's; not in ``FACE_TYPES``.
+QUAD8_GAUSS2 = dataclasses.replace(
+    QUAD8, quadrature_points=_readonly(_Q1.copy()), quadrature_weights=_readonly(_W1.copy())
 )
 
 QUAD9 = _make_face_type(

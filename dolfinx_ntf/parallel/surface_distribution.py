@@ -22,6 +22,7 @@ from dolfinx_ntf.fem.surfaces import (
     SlaveSurface,
     SurfaceFaces,
     boundary_faces,
+    faces_touching,
 )
 from dolfinx_ntf.parallel.collectives import alltoallv, send_to_owners
 from dolfinx_ntf.parallel.halo import NodeHalo
@@ -161,12 +162,28 @@ def distribute_slave(
     """
     comm = halo.comm
     mine = _marked_at_owners(halo, slave.nodes)  # owned nodes some process lists as slave
-    faces = slave.faces
-    if isinstance(surface, NodeSurface):  # vertices given on one process touch faces of others
+    groups = slave.face_groups  # C3D15: triangles beside quadrilaterals, per type (§38)
+    if isinstance(surface, NodeSurface) and surface.exterior is not None:  # C3D15 (§38)
+        marked = _marked_locally(V, halo, mine)
+        exterior = surface.exterior.face_groups(V, f"{what} slave")
+        groups = tuple(faces_touching(g, marked) for g in exterior)
+    elif isinstance(surface, NodeSurface):  # vertices given on one process touch faces of others
         faces = _exterior_faces_touching(V, _marked_locally(V, halo, mine), f"{what} slave")
         if faces.face_type is not slave.faces.face_type:  # C3D20: quad9 facets as quad8 (§13.5)
             n = slave.faces.face_type.num_nodes
             faces = SurfaceFaces(slave.faces.face_type, faces.faces[:, :n], faces.facets)
+        groups = (faces,)
+    slave_faces, *more = (_faces_at_owners(halo, group, mine) for group in groups)
+    nodes = np.flatnonzero(mine)
+    faceless = None  # midside nodes of a node-based surface (docs/method.md §13.5, §14.10)
+    marked = slave.nodes[slave.faceless] if slave.faceless is not None else slave.nodes[:0]
+    if comm.allreduce(int(marked.size), op=MPI.MAX):
+        faceless = _marked_at_owners(halo, marked)[nodes]
+    return SlaveSurface(nodes, slave_faces, faceless, more_faces=tuple(more))
+
+
+def _faces_at_owners(halo: NodeHalo, faces: SurfaceFaces, mine: np.ndarray) -> SurfaceFaces:
+    """Every process's ``faces`` holding one of the ``mine`` owned nodes, extended. Collective."""
     g, x = _send_faces_to_owners(halo, faces)
     # the faces received and this process's own (for their facets); duplicates dropped, sorted
     g = np.vstack([g, halo.local_global[faces.faces]])
@@ -176,12 +193,6 @@ def distribute_slave(
     facets[inverse[g.shape[0] - faces.faces.shape[0] :]] = faces.facets
     g, x = g[first], x[first]
     keep = np.isin(g, halo.local_global[: halo.num_owned][mine]).any(axis=1)
-    slave_faces = SurfaceFaces(
+    return SurfaceFaces(
         faces.face_type, halo.local(g[keep], x[keep]).astype(np.int32), facets[keep]
     )
-    nodes = np.flatnonzero(mine)
-    faceless = None  # midside nodes of a node-based surface (docs/method.md §13.5, §14.10)
-    marked = slave.nodes[slave.faceless] if slave.faceless is not None else slave.nodes[:0]
-    if comm.allreduce(int(marked.size), op=MPI.MAX):
-        faceless = _marked_at_owners(halo, marked)[nodes]
-    return SlaveSurface(nodes, slave_faces, faceless)

@@ -194,8 +194,12 @@ def test_law_passed_as_interaction(blocks):
 def test_wrong_surface_kinds(blocks):
     with pytest.raises(ValueError, match="master surface must be a FacetSurface"):
         ntf.ContactPair(blocks["slave"], ntf.NodeSurface([0]), blocks["interaction"])
-    with pytest.raises(TypeError, match=r"slave must be a FacetSurface or NodeSurface, got int"):
+    with pytest.raises(
+        TypeError, match=r"slave must be a FacetSurface or NodeSurface or FaceNodesSurface, got int"
+    ):
         ntf.ContactPair(UPPER_BOTTOM, blocks["master"], blocks["interaction"])
+    with pytest.raises(TypeError, match=r"master must be a FacetSurface or FaceNodesSurface or"):
+        ntf.ContactPair(blocks["slave"], UPPER_BOTTOM, blocks["interaction"])
 
 
 def test_bare_contact_pair_instead_of_list(blocks):

@@ -41,17 +41,23 @@ def face_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
         return np.zeros((0, 0), dtype=np.int64)
     type_index, row = deck.element_location(surf.elements)
     blocks = list(deck.elements.values())
-    sizes = {blocks[k].type.faces.shape[1] for k in np.unique(type_index)}
+    # C3D15's 6-node triangles pad the element's face table with -1 (ElementType.face_sizes)
+    sizes = {
+        int(size)
+        for k in np.unique(type_index)
+        for size in blocks[k].type.face_sizes[surf.faces[type_index == k] - 1]
+    }
     if len(sizes) > 1:
         raise ValueError(
             f"surface {surf.name} ({surf.location}) mixes faces with {sorted(sizes)} nodes; "
-            "split it by element type"
+            "split it by element type (or C3D15 triangles and quadrilaterals)"
         )
-    result = np.empty((surf.elements.size, sizes.pop()), dtype=np.int64)
+    width = sizes.pop()
+    result = np.empty((surf.elements.size, width), dtype=np.int64)
     for k in np.unique(type_index):
         block = blocks[k]
         mask = type_index == k
-        local = block.type.faces[surf.faces[mask] - 1]  # (m, n) element-local indices
+        local = block.type.faces[surf.faces[mask] - 1, :width]  # (m, n) element-local indices
         result[mask] = block.connectivity[row[mask][:, None], local]
     return result
 
@@ -64,7 +70,17 @@ def surface_nodes(deck: Deck, surface: Surface | str) -> np.ndarray:
     surf = _surface(deck, surface)
     if surf.type == "NODE":
         return np.unique(surf.nodes)
-    return np.unique(face_nodes(deck, surf))
+    if surf.elements.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    type_index, row = deck.element_location(surf.elements)
+    blocks = list(deck.elements.values())
+    nodes = []
+    for k in np.unique(type_index):  # faces of any sizes (C3D15's triangles beside quadrilaterals)
+        mask = type_index == k
+        local = blocks[k].type.faces[surf.faces[mask] - 1]  # -1 pads C3D15's triangles
+        picked = blocks[k].connectivity[row[mask][:, None], np.maximum(local, 0)]
+        nodes.append(picked[local >= 0])
+    return np.unique(np.concatenate(nodes))
 
 
 def external_faces(deck: Deck) -> np.ndarray:

@@ -5,7 +5,9 @@ centres are constrained to the serendipity wedge (``fem/serendipity_wedge.py``),
 ccx's 9 points. dolfinx holds one cell type per mesh and runs degree-2 spaces on prisms from 0.11
 on only (0.5.2's FFCx refuses prisms, 0.9 aborts the process while assembling P2 on prisms,
 §32.5): older releases refuse the deck, naming the element's line. A prism mesh has no ``ds``
-in dolfinx 0.11, so ``*DLOAD`` pressures become nodal forces with ccx's face rules (§34.4).
+in dolfinx 0.11, so ``*DLOAD`` pressures become nodal forces with ccx's face rules (§34.4), and
+element-face ``*SURFACE``s become :class:`~dolfinx_ntf.FaceNodesSurface`s of the deck's faces
+for contact (§38).
 """
 
 from __future__ import annotations
@@ -23,19 +25,30 @@ import dolfinx.fem
 from dolfinx_ntf import compat
 from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
 from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
-from dolfinx_ntf.kernels.faces import QUAD8, TRI6, film_matrices, flux_flows, pressure_forces
+from dolfinx_ntf.fem.surfaces import FaceNodesSurface
+from dolfinx_ntf.kernels.faces import (
+    QUAD8,
+    QUAD8_GAUSS2,
+    TRI6,
+    film_matrices,
+    flux_flows,
+    pressure_forces,
+)
 
-from ..deck import Deck, ElementBlock
+from ..deck import Deck, ElementBlock, Surface, not_supported
 from ..elements import ELEMENT_TYPES
+from .mesh import MeshMaps
 
 __all__ = [
     "C3D15_MIN_DOLFINX",
     "C3D15Films",
     "C3D15Pressures",
+    "c3d15_exterior",
     "c3d15_face_flows",
     "c3d15_films",
     "c3d15_metadata",
     "c3d15_rule",
+    "c3d15_surface",
     "check_c3d15_deck",
 ]
 
@@ -75,8 +88,9 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     Raises:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
-            and small-strain steps, element-face surfaces, contact or tie surfaces, transient
-            coupled temperature-displacement steps.
+            and small-strain steps, cyclic symmetry ties, a master surface of triangles and
+            quadrilaterals, ADJUST node sets of contact pairs, contact pairs and ties in thermal
+            steps, transient coupled temperature-displacement steps.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -97,18 +111,36 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 "NLGEOM and small-strain steps are not supported yet (they are nodal forces on "
                 f"the reference faces in the one, on the current faces in the other; {where})"
             )
-    if any(s.type == "ELEMENT" for s in deck.surfaces.values()):
-        name, surface = next((n, s) for n, s in deck.surfaces.items() if s.type == "ELEMENT")
-        raise NotImplementedError(
-            f"{surface.location}: *SURFACE {name}: element faces of C3D15 elements are not "
-            f"supported yet (prism meshes have two facet types; {where})"
-        )
     _check_jacobians(deck, block)
-    if deck.contact_pairs or deck.ties:
+    for tie in deck.ties:
+        if tie.cyclic:
+            raise NotImplementedError(
+                f"{tie.location}: *TIE {tie.name}, CYCLIC SYMMETRY on C3D15 elements is not "
+                f"supported yet (not checked against ccx; {where}; docs/method.md §38)"
+            )
+    for pair in deck.contact_pairs:
+        master = deck.surfaces[pair.master]
+        kinds = np.unique(np.minimum(master.faces, 3)) if master.type == "ELEMENT" else []
+        if len(kinds) > 1:
+            raise not_supported(
+                f"*SURFACE {pair.master} with both 6-node triangles (S1, S2) and 8-node "
+                f"quadrilaterals (S3..S5) of C3D15 elements as the master surface of a contact "
+                f"pair (the pair at {pair.location}; a slave surface may mix them, a master "
+                f"holds one kind; {where}; docs/method.md §38)",
+                master.location,
+            )
+        if pair.adjust is not None and not isinstance(pair.adjust, float):
+            raise NotImplementedError(
+                f"{pair.location}: ADJUST={pair.adjust} (a node set) on C3D15 elements is not "
+                f"supported yet (a distance is; {where}; docs/method.md §38)"
+            )
+    thermal = next((step for step in deck.steps if step.coupled), None)
+    if thermal is not None and (deck.contact_pairs or deck.ties):
         card = deck.contact_pairs[0] if deck.contact_pairs else deck.ties[0]
         raise NotImplementedError(
-            f"{card.location}: contact and tie surfaces on C3D15 elements are not supported yet "
-            f"({where}; docs/method.md §34)"
+            f"{card.location}: contact pairs and ties on C3D15 elements in a deck with thermal "
+            f"steps ({thermal.location}) are not supported yet (not checked against ccx; "
+            f"{where}; docs/method.md §38, §39)"
         )
     for step in deck.steps:
         if step.coupled and not step.coupled.heat and not step.coupled.steady:
@@ -292,3 +324,68 @@ def _check_jacobians(deck: Deck, block: ElementBlock) -> None:
             f"on 1-2, 2-3, 3-1, 4-5, 5-6, 6-4, 1-4, 2-5, 3-6) or it is folded "
             f"({bad.size} such element(s))"
         )
+
+
+def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> FaceNodesSurface:
+    """An element-face ``*SURFACE`` of a C3D15 deck as the faces' nodes (docs/method.md §38).
+
+    ccx's faces S1, S2 are 6-node triangles, S3..S5 8-node quadrilaterals, in ccx's outward
+    order (``ELEMENT_TYPES["C3D15"].faces``); a surface of both kinds gives the triangles as
+    ``more`` faces (slave surfaces only, :func:`check_c3d15_deck` refuses such masters). The
+    quadrilaterals' spring areas take ccx's 2 x 2 points (``QUAD8_GAUSS2``, 3 x 3 differ by up
+    to 3e-6 of the contact stress on faces with curved edges, measured). On
+    several processes each gives the faces of the elements it holds (owned and ghost cells).
+
+    Raises:
+        ValueError: a face that lies between two elements.
+    """
+    block = maps.block
+    order = np.argsort(block.ids)
+    rows = order[np.searchsorted(block.ids, surface.elements, sorter=order)]
+    faces = surface.faces - 1
+    inner = ~_exterior_faces(block)[rows, faces]
+    if np.any(inner):
+        k = int(np.argmax(inner))
+        raise ValueError(
+            f"{surface.location}: *SURFACE {name}: face S{surface.faces[k]} of element "
+            f"{surface.elements[k]} lies between two elements, not on the boundary"
+        )
+    return _face_nodes_surface(deck, maps, rows, faces, name)
+
+
+def c3d15_exterior(deck: Deck, maps: MeshMaps, name: str) -> FaceNodesSurface:
+    """Every exterior face of a C3D15 deck by its nodes: a node-based surface's faces (§38).
+
+    ccx's slave faces of a ``TYPE=NODE`` surface are the exterior faces with a corner in it
+    (docs/method.md §2.1); the model's ``NodeSurface`` picks them from these.
+    """
+    rows, faces = np.nonzero(_exterior_faces(maps.block))
+    return _face_nodes_surface(deck, maps, rows, faces, f"{name} (exterior faces)")
+
+
+def _face_nodes_surface(
+    deck: Deck, maps: MeshMaps, rows: np.ndarray, faces: np.ndarray, name: str
+) -> FaceNodesSurface:
+    """Faces (element rows, 0-based ccx faces) of the elements this process holds, per type."""
+    block = maps.block
+    held = maps.element_cell[rows] >= 0
+    groups = []  # quadrilaterals with ccx's 2 x 2 area rule (§38.2), triangles
+    for face_type, which in ((QUAD8_GAUSS2, faces >= 2), (TRI6, faces < 2)):
+        if np.any(which):  # decided on the deck: the same types on every process
+            take = which & held
+            local = block.type.faces[faces[take], : face_type.num_nodes]
+            nodes = block.connectivity[rows[take, None], local]
+            groups.append((face_type, maps.node_dof[deck.node_index(nodes)].astype(np.int32)))
+    (face_type, dofs), *more = groups
+    return FaceNodesSurface(face_type, dofs, name, more=tuple(more))
+
+
+def _exterior_faces(block: ElementBlock) -> np.ndarray:
+    """``(E, 5)``: face ``f`` of element row ``e`` belongs to that element only."""
+    etype = block.type
+    corners = etype.faces[:, :4].copy()
+    corners[etype.face_corner_counts == 3, 3] = -1
+    keys = np.where(corners >= 0, block.connectivity[:, np.maximum(corners, 0)], -1)
+    keys = np.sort(keys.reshape(-1, 4), axis=1)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    return (counts[inverse.ravel()] == 1).reshape(block.ids.size, etype.num_faces)

@@ -34,7 +34,7 @@ from dolfinx_ntf.fem.plasticity import J2Plasticity
 from dolfinx_ntf.fem.serendipity import serendipity_constraints, trilinear_constraints
 from dolfinx_ntf.fem.serendipity_quad import quad_serendipity_constraints
 from dolfinx_ntf.fem.serendipity_wedge import wedge_serendipity_constraints
-from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.fem.surfaces import FaceNodesSurface, FacetSurface, NodeSurface
 from dolfinx_ntf.parallel import collectives
 from dolfinx_ntf.parallel.global_constraints import global_constraint_block, global_constraints
 
@@ -151,7 +151,7 @@ class CalculixModel:
     node_vertex: np.ndarray
     element_cell: np.ndarray
     cell_element: np.ndarray
-    surfaces: dict[str, FacetSurface | NodeSurface]
+    surfaces: dict[str, FacetSurface | NodeSurface | FaceNodesSurface]
     surface_tags: dict[str, compat.MeshTags]
     surface_faces: dict[str, tuple[np.ndarray, np.ndarray]]
     pairs: list[ContactPair]

@@ -7,7 +7,7 @@ import logging
 import numpy as np
 
 from dolfinx_ntf.contact.problem import ContactPair
-from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.fem.surfaces import FaceNodesSurface, FacetSurface, NodeSurface
 from dolfinx_ntf.kernels.laws import (
     ContactDamping,
     ExponentialLaw,
@@ -132,7 +132,7 @@ def surface_section(
 
 def contact_pairs(
     deck: Deck,
-    surfaces: dict[str, FacetSurface | NodeSurface],
+    surfaces: dict[str, FacetSurface | NodeSurface | FaceNodesSurface],
     maps: MeshMaps,
     *,
     thickness: np.ndarray | None = None,

@@ -1,9 +1,11 @@
-"""The deck's ``*SURFACE`` cards as dolfinx surfaces.
+r"""The deck's ``*SURFACE`` cards as dolfinx surfaces.
 
 Element-face surfaces become facet tags (one ``MeshTags`` per ccx surface, value 1) wrapped in
 :class:`~dolfinx_ntf.FacetSurface`, with the ccx node numbers of each face for the contact-element
 output; ``TYPE=NODE`` surfaces become :class:`~dolfinx_ntf.NodeSurface` (corner vertices, and the
-midside nodes of C3D20 elements; on 2D elements all of them faceless, as in ccx).
+midside nodes of C3D20 elements; on 2D elements all of them faceless, as in ccx). On C3D15's prism
+meshes, which have no facet numbering in dolfinx 0.11, element-face surfaces are
+:class:`~dolfinx_ntf.FaceNodesSurface`\ s of the deck's faces, without tags (docs/method.md §38).
 """
 
 from __future__ import annotations
@@ -13,9 +15,10 @@ import numpy as np
 import dolfinx.mesh
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.fem.surfaces import FacetSurface, NodeSurface
+from dolfinx_ntf.fem.surfaces import FaceNodesSurface, FacetSurface, NodeSurface
 
 from ..deck import Deck, not_supported
+from .c3d15 import c3d15_exterior, c3d15_surface
 from .mesh import MeshMaps, element_faces_to_facets, exterior
 
 __all__ = ["deck_surfaces"]
@@ -24,16 +27,17 @@ __all__ = ["deck_surfaces"]
 def deck_surfaces(
     deck: Deck, mesh: dolfinx.mesh.Mesh, maps: MeshMaps
 ) -> tuple[
-    dict[str, FacetSurface | NodeSurface],
+    dict[str, FacetSurface | NodeSurface | FaceNodesSurface],
     dict[str, compat.MeshTags],
     dict[str, tuple[np.ndarray, np.ndarray]],
 ]:
     """Every ``*SURFACE`` of the deck: the dolfinx surfaces, facet tags and ccx face nodes.
 
-    Returns ``(surfaces, surface_tags, surface_faces)`` as :class:`CalculixModel` holds them.
-    Local work: a bad face is a ``ValueError`` on the processes that see it.
+    Returns ``(surfaces, surface_tags, surface_faces)`` as :class:`CalculixModel` holds them
+    (C3D15's element-face surfaces have no tags and no facets). Local work: a bad face is a
+    ``ValueError`` on the processes that see it.
     """
-    surfaces: dict[str, FacetSurface | NodeSurface] = {}
+    surfaces: dict[str, FacetSurface | NodeSurface | FaceNodesSurface] = {}
     tags: dict[str, compat.MeshTags] = {}
     faces: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     node_vertex, corner = maps.node_vertex, maps.corner
@@ -56,16 +60,24 @@ def deck_surfaces(
             # elements, every spring gets the fallback area (docs/method.md §26.3)
             faceless = maps.block.type.tdim == 2
             known = corner[rows] | carried
-            if not np.all(known) and maps.block.type.num_nodes != 20 and not faceless:
+            if not np.all(known) and maps.block.type.num_nodes not in (15, 20) and not faceless:
                 node = int(surface.nodes[np.argmax(~known)])
                 raise not_supported(
                     f"*SURFACE {name}, TYPE=NODE with node {node}, which is not an element "
                     f"corner, on {maps.block.type.name} elements (midside nodes of "
-                    "node-based surfaces: C3D20 only)",
+                    "node-based surfaces: C3D20 and C3D15 only)",
                     surface.location,
                 )
             vertices = np.unique(vertices[vertices >= 0]).astype(np.int32)  # this process's
-            surfaces[name] = NodeSurface(vertices, name, midside_nodes=midside, faceless=faceless)
+            # C3D15: the exterior faces by their nodes, a prism mesh has no facets (§38)
+            wedges = maps.block.type.name == "C3D15"
+            outer = c3d15_exterior(deck, maps, name) if wedges else None
+            surfaces[name] = NodeSurface(
+                vertices, name, midside_nodes=midside, faceless=faceless, exterior=outer
+            )
+            continue
+        if maps.block.type.name == "C3D15":  # no facets on prism meshes (docs/method.md §38)
+            surfaces[name] = c3d15_surface(deck, maps, name, surface)
             continue
         facets, nodes = element_faces_to_facets(
             deck, maps, surface.elements, surface.faces, f"*SURFACE {name}", surface.location

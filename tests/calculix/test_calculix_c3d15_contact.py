@@ -1,0 +1,197 @@
+"""Contact on C3D15 faces (docs/method.md §38): runs on dolfinx 0.11, refused before it.
+
+The decks are ``tests/data/calculix/c3d15/make_contact.py``'s punch of C3D15 wedges pressed onto
+a block of C3D15 wedges (LINEAR law, 2 increments), with 8-node quadrilaterals or 6-node
+triangles in contact; the ``.dat.ref`` files are ccx 2.20's output.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import shutil
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx_ntf import compat
+from dolfinx_ntf.calculix.dat import read_dat
+from dolfinx_ntf.calculix.deck import read_deck
+from dolfinx_ntf.calculix.job import run_job
+
+DATA = Path(__file__).parent.parent / "data" / "calculix" / "c3d15"
+ON_011 = compat.DOLFINX_VERSION >= (0, 11)
+#: The contact decks: the wedges' axes of punch and block (y: quadrilaterals in contact, z:
+#: triangles) and whether the punch's edges are curved.
+DECKS = {
+    "wedge_punch_quad": (1, 1, False),
+    "wedge_punch_tri": (2, 2, False),
+    "wedge_punch_quad_on_tri": (1, 2, False),
+    "wedge_punch_quad_curved": (1, 1, True),
+    "wedge_punch_tri_curved": (2, 2, True),
+    "wedge_punch_mixed": ((1, 2), 1, False),  # a slave surface of quadrilaterals and triangles
+    "wedge_node_mixed": ((1, 2), 1, False),  # a node-based slave surface (TYPE=NODE)
+}
+#: A node-based slave surface where ccx stops increment 2 after 2 iterations, ours after 3
+#: (docs/method.md §38.3): compared in increment 1 only.
+NODE_QUAD = "wedge_node_quad"
+#: The tie decks: the punch tied to the block (quadrilaterals, triangles, both).
+TIES = {"wedge_tie_quad": (1, 1), "wedge_tie_tri": (2, 2), "wedge_tie_mixed": ((1, 2), 1)}
+
+
+def _generator():
+    """``make_contact.py`` as a module (it writes the decks)."""
+    spec = importlib.util.spec_from_file_location("make_contact", DATA / "make_contact.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _run(tmp_path: Path, job: str, comm: MPI.Comm) -> tuple[list, list]:
+    """ccx's stored blocks and ours (rank 0's directory for all processes; both on every one)."""
+    root = Path(comm.bcast(str(tmp_path), root=0))
+    if comm.rank == 0:
+        shutil.copy(DATA / f"{job}.inp", root / f"{job}.inp")
+    comm.barrier()
+    assert run_job(job, root, comm=comm, progress=False).completed
+    comm.barrier()
+    return read_dat(DATA / f"{job}.dat.ref"), read_dat(root / f"{job}.dat")
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+@pytest.mark.parametrize("job", DECKS)
+def test_c3d15_contact_matches_ccx(tmp_path, job):
+    """U, RF and the contact blocks (CDIS, CSTR, CELS, CNUM) of both increments equal ccx 2.20's
+    printed digits, on the same slave nodes (serial and 2 processes).
+
+    ``wedge_punch_quad``: quad8 slave faces (ccx's 1/100, 24/100 shares) on quad8 master faces;
+    ``wedge_punch_tri``: tri6 on tri6 (1/999, 332/999); ``wedge_punch_quad_on_tri``: quad8 on
+    tri6. Some punch nodes lift off: ccx's open springs (positive clearance) are in CDIS too.
+    ``*_curved``: the punch's edges curved, where the quadrilaterals' face areas need ccx's
+    2 x 2 points (3 x 3 give CDIS, CSTR, CELS 3e-6 off). ``wedge_punch_mixed``: the slave
+    surface holds quadrilaterals and triangles (per-type spring areas). ``wedge_node_mixed``:
+    the node set of that bottom (``TYPE=NODE``): the exterior faces touching it, bottom and
+    sides, both kinds, the midside nodes with ccx's fallback area.
+    """
+    ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
+    names = ["U", "RF", "CDIS", "CSTR", "CELS", "CNUM"]
+    assert [(b.name, b.time) for b in ccx] == [(n, t) for t in (0.5, 1.0) for n in names]
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
+    worst: dict[str, float] = {}
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(b.labels, a.labels)  # the same slave nodes, in ccx order
+        scale = np.abs(a.values).max()
+        assert scale > 0.0
+        worst[a.name] = max(
+            worst.get(a.name, 0.0), float(np.abs(a.values - b.values).max() / scale)
+        )
+    assert all(value < 1e-6 for value in worst.values()), worst
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+def test_c3d15_node_surface_of_quadrilaterals(tmp_path):
+    """The node set of the quadrilateral bottom (``TYPE=NODE``): increment 1 equals ccx's
+    printed digits; in increment 2 ccx stops after 2 iterations (its residual printed as 0, the
+    last correction 3.3e-6), ours after 3, and CSTR differs by up to 1.2e-6 of the largest at
+    midside nodes (docs/method.md §38.3): the same springs there, compared by their nodes."""
+    ccx, ours = _run(tmp_path, NODE_QUAD, MPI.COMM_WORLD)
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(b.labels, a.labels)
+        if a.time == 0.5 or a.name == "CNUM":
+            assert np.abs(a.values - b.values).max() < 1e-6 * np.abs(a.values).max(), a.name
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+@pytest.mark.parametrize("job", TIES)
+def test_c3d15_tie_matches_ccx(tmp_path, job):
+    """``*TIE`` of the punch's bottom (slave, midside nodes included) to the block's top: U and
+    RF equal ccx 2.20's printed digits (serial and 2 processes)."""
+    comm = MPI.COMM_WORLD
+    ccx, ours = _run(tmp_path, job, comm)
+    assert [(b.name, b.time) for b in ccx] == [("U", 1.0), ("RF", 1.0)]
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(b.labels, a.labels)
+        assert np.abs(a.values - b.values).max() < 1e-6 * np.abs(a.values).max(), a.name
+
+
+def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
+    """The stored decks are what ``make_contact.py`` writes, with the faces each names: S3..S5
+    (quadrilaterals) or S1, S2 (triangles) in contact."""
+    module = _generator()
+    decks = {
+        **DECKS,
+        **{job: (*axes, False) for job, axes in TIES.items()},
+        NODE_QUAD: (1, 1, False),
+    }
+    for job, (slave_axis, master_axis, curved) in decks.items():
+        nodes = job.startswith("wedge_node")
+        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis, curved, job in TIES, nodes)
+        assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
+        deck = read_deck(DATA / f"{job}.inp")
+        for name, axes in (("SLAVE", slave_axis), ("MASTER", master_axis)):
+            if deck.surfaces[name].type == "NODE":  # the punch's nodes at z = 1
+                z = deck.node_coords[deck.node_index(deck.surfaces[name].nodes), 2]
+                assert nodes and np.allclose(z, 1.0) and z.size >= 21, (job, z.size)
+                continue
+            faces = set(deck.surfaces[name].faces.tolist())
+            expected = [{1, 2} if axis == 2 else {3, 4, 5} for axis in np.atleast_1d(axes)]
+            assert faces <= set().union(*expected), (job, name, faces)
+            assert all(faces & kind for kind in expected), (job, name, faces)
+
+
+def _edited(tmp_path: Path, job: str, old: str, new: str) -> str:
+    """``job``'s deck with ``old`` replaced by ``new``, written as ``e.inp``: the job name."""
+    text = (DATA / f"{job}.inp").read_text()
+    assert old in text
+    (tmp_path / "e.inp").write_text(text.replace(old, new, 1))
+    return "e"
+
+
+@pytest.mark.skipif(ON_011, reason="dolfinx 0.11 runs C3D15")
+def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
+    shutil.copy(DATA / "wedge_punch_quad.inp", tmp_path / "wedge_punch_quad.inp")
+    with pytest.raises(
+        NotImplementedError, match=r"wedge_punch_quad\.inp:\d+: C3D15 \(element 1\)"
+    ):
+        run_job("wedge_punch_quad", tmp_path, progress=False)
+
+
+@pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
+def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
+    """What is not built stays refused with the deck line: cyclic symmetry, contact and ties in
+    decks with thermal steps, ADJUST node sets, a master surface of triangles and quadrilaterals;
+    a face inside the mesh is an error naming it."""
+    cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
+    job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
+    (tmp_path / "e.inp").write_text(
+        (tmp_path / "e.inp").read_text()
+        + "*CYCLIC SYMMETRY MODEL, N=12, TIE=T\n0., 0., 0., 0., 0., 1.\n"
+    )
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*TIE T, CYCLIC SYMMETRY on C3D15"):
+        run_job(job, tmp_path, progress=False)
+    heat = "*STEP\n*HEAT TRANSFER, STEADY STATE\n*END STEP\n"
+    job = _edited(tmp_path, "wedge_tie_quad", "*STEP, INC=100", heat + "*STEP, INC=100")
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: contact pairs and ties on C3D15"):
+        run_job(job, tmp_path, progress=False)
+    adjust = "TYPE=NODE TO SURFACE, ADJUST=TOP"
+    job = _edited(tmp_path, "wedge_punch_quad", "TYPE=NODE TO SURFACE", adjust)
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ADJUST=TOP \(a node set\)"):
+        run_job(job, tmp_path, progress=False)
+    job = _edited(
+        tmp_path, "wedge_punch_quad", "*SURFACE, NAME=MASTER\n", "*SURFACE, NAME=MASTER\n1, S1\n"
+    )
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*SURFACE MASTER with both 6-node"):
+        run_job(job, tmp_path, progress=False)
+    # the block's wedges along z: element 1's top triangle (z = 0.5) is shared by the layer above
+    job = _edited(
+        tmp_path, "wedge_punch_tri", "*SURFACE, NAME=SLAVE\n", "*SURFACE, NAME=SLAVE\n1, S2\n"
+    )
+    with pytest.raises(ValueError, match=r"e\.inp:\d+: \*SURFACE SLAVE: face S2 of element 1 lies"):
+        run_job(job, tmp_path, progress=False)
