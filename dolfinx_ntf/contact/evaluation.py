@@ -68,11 +68,16 @@ def evaluate_pair(
     if linearize_area:  # areas follow the deformation between pairings too
         areas = slave_areas(state.slave, coords)
         state.spring_area = areas[state.spring_slave]
+    areas = state.spring_area
+    held = state.held_springs
+    if held.size and state.held_areas is not None:  # ccx's fallback areas, held (§38.5)
+        areas = areas.copy()
+        areas[held] = state.held_areas
     ev = state.master.evaluate_springs(
         state.master_faces.face_type,
         coords[nodes[:, :-1]],
         coords[nodes[:, -1]],
-        state.spring_area,
+        areas,
         law,
         gap_shift=gap_shift,
         xi0=state.xi,
@@ -84,6 +89,8 @@ def evaluate_pair(
     )
     state.evaluation = ev
     state.xi = ev.xi
+    if held.size and state.held_areas is None:  # the first evaluation after the pairing
+        state.held_areas = np.array(ev.area[held], dtype=float)
     if ev.tangential is not None:
         tf = ev.tangential
         state.friction.store(state.spring_slave, tf.a, tf.t, tf.slip)

@@ -93,6 +93,11 @@ class ContactPair:
             ``"ccx_ring"`` (the same of an axisymmetric master's 2-degree sector, scaled to the
             ring: ``2 |q_ξ| 2 pi r sin(1 deg)/(1 deg)`` at the projection point; docs/method.md
             §26.3).
+        hold_fallback_area: The fallback area of a spring whose slave node has no share of a
+            slave face (``4|m|`` or ``|m|/2`` of its master face, docs/method.md §2.2) is taken
+            at the first evaluation after each pairing and held until the next pairing, as ccx
+            2.20 does (docs/method.md §38.5); False (default): taken at every evaluation, at the
+            current projection point.
     """
 
     slave: FacetSurface | NodeSurface | FaceNodesSurface
@@ -106,6 +111,7 @@ class ContactPair:
     axisymmetric: bool = False
     area_weights: str = "consistent"
     fallback_area: str = "edge"
+    hold_fallback_area: bool = False
 
     def __post_init__(self) -> None:
         """Check the kinds of the arguments (``TypeError``/``ValueError`` naming them)."""
@@ -136,6 +142,7 @@ class ContactPair:
         validation.check_type(self.name, str, f"{owner}: name")
         validation.check_positive(self.thickness, f"{owner}: thickness")
         validation.check_type(self.axisymmetric, bool, f"{owner}: axisymmetric")
+        validation.check_type(self.hold_fallback_area, bool, f"{owner}: hold_fallback_area")
         if self.area_weights not in ("consistent", "ccx"):
             raise ValueError(
                 f"{owner}: area_weights must be 'consistent' or 'ccx', got {self.area_weights!r}"
@@ -183,6 +190,10 @@ class PairState:
     friction: FrictionState | None = None  # friction history per slave node (docs/method.md §11.3)
     adjust_nodes: np.ndarray | None = None  # ADJUST node set as slave dofs
     was_active: bool = True  # the pair was active at the previous pairing
+    # springs whose fallback area is held (``pair.hold_fallback_area``), and their held areas:
+    # None until the first evaluation after the pairing (docs/method.md §38.5)
+    held_springs: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    held_areas: np.ndarray | None = None
 
     @property
     def num_springs(self) -> int:

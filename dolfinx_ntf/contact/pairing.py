@@ -629,6 +629,7 @@ class Pairing:
                 None,
             )
             state.was_active = False
+            state.held_springs, state.held_areas = empty, None
             return
         if not state.was_active:  # reactivated: a fresh friction history (ccx keeps the old one)
             if self.reset_friction_on_separation:
@@ -659,6 +660,10 @@ class Pairing:
             create
         ]  # 0 = no slave face: springs.py applies the fallback
         state.xi = evaluation.xi[create]
+        state.held_springs = (
+            np.flatnonzero(state.spring_area == 0.0) if state.pair.hold_fallback_area else empty
+        )
+        state.held_areas = None
         if state.pair.interaction.friction is not None:
             fresh = state.friction.fresh(state.spring_slave)
             if np.any(fresh):  # anchor at the increment start (docs/method.md §11.3)

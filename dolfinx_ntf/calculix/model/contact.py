@@ -188,6 +188,7 @@ def contact_pairs(
                 small_sliding=pair.small_sliding,
                 name=f"{pair.slave}-{pair.master}",
                 adjust=adjust_of(deck, pair, maps),
+                hold_fallback_area=not two_d_deck,  # ccx's, docs/method.md §38.5
                 **two_d,
             )
         )
