@@ -126,6 +126,8 @@ class Pairing:
         self.step_count = 0
         self.time_fraction = 1.0  # relative step time tau at the end of the current increment
         self.static = True
+        #: Slave nodes ADJUST moved (over all processes, all pairs; docs/method.md §11.5).
+        self.adjusted = 0
         self._extend_numbering = extend_numbering
         self._reference = reference_coordinates(V)
         #: ``reference_coordinates(V)`` for the surfaces' faces while the pairs are resolved
@@ -773,6 +775,7 @@ class Pairing:
                 self.halo,
             )
             details_logger.info(" ADJUST: %d slave node(s) moved onto the master", count)
+        self.adjusted += count
         return count
 
     def _creates_spring(

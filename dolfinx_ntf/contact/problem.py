@@ -28,6 +28,7 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat, validation
+from dolfinx_ntf.contact.adjust import follow_geometric_rows
 from dolfinx_ntf.contact.assembly import ContactAssembler, SpringBlocks
 from dolfinx_ntf.contact.evaluation import area_block, evaluate_pair
 from dolfinx_ntf.contact.pair import ContactPair, PairState
@@ -547,9 +548,12 @@ class ContactProblem:
         Returns:
             The number of springs (over all processes).
         """
+        adjusted = self.pairing.adjusted
         count, changes = self.pairing.pair(
             record_overlap=record_overlap, large_sliding_only=large_sliding_only
         )
+        if self.pairing.adjusted > adjusted:  # ADJUST moved nodes: the centres follow (§38.6)
+            follow_geometric_rows(self.u.function_space, self.pairing.reference, self.constraints)
         self.pairings += 1
         self._pattern_checked = False
         self.total_springs = count

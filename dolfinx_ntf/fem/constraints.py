@@ -116,6 +116,9 @@ class LinearConstraintBlock:
             consistent).
         block_size: Components per node of the space (3; 2 on a 2D mesh, e.g. the centres of
             8-node quadrilaterals, §23; 1 on a scalar space, C3D15's temperatures, §39).
+        geometric: The rows hold for the node positions too (shape rows: serendipity centres,
+            C3D8's straight midside nodes): when ADJUST moves nodes, the dependent nodes'
+            positions follow them (docs/method.md §38.6).
     """
 
     nodes: np.ndarray
@@ -125,6 +128,7 @@ class LinearConstraintBlock:
     name: str = "constraint block"
     drop_prescribed: bool = False
     block_size: int = 3
+    geometric: bool = False
 
     def __post_init__(self) -> None:
         """Check shapes and values (``ValueError`` naming the block)."""

@@ -113,6 +113,7 @@ def serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearConstrai
                 np.tile(np.arange(3), nodes.shape[0])[:, None],
                 coefficients,
                 name=f"C3D20 {what}",
+                geometric=True,
             )
         )
     return blocks
@@ -150,6 +151,7 @@ def trilinear_constraints(V: dolfinx.fem.FunctionSpace, cells: np.ndarray) -> Li
         np.tile(np.arange(3), nodes.shape[0])[:, None],
         _EDGE_ROW,
         name="C3D8 midside nodes",
+        geometric=True,
     )
 
 

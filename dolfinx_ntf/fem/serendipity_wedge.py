@@ -108,6 +108,7 @@ def wedge_serendipity_constraints(V: dolfinx.fem.FunctionSpace) -> list[LinearCo
             np.tile(np.arange(bs), nodes.shape[0])[:, None],
             np.concatenate([[1.0], -_FACE_WEIGHTS]),
             name="C3D15 face centres",
+            geometric=True,
             block_size=bs,
         )
     ]

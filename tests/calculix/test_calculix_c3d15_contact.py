@@ -35,7 +35,11 @@ DECKS = {
     "wedge_punch_mixed": ((1, 2), 1, False),  # a slave surface of quadrilaterals and triangles
     "wedge_node_mixed": ((1, 2), 1, False),  # a node-based slave surface (TYPE=NODE)
     "wedge_node_quad": (1, 1, False),  # the node set of the quadrilateral bottom
+    "wedge_adjust_set": (1, 1, False),  # ADJUST: the bottom's corner nodes
+    "wedge_adjust_distance": (1, 1, False),  # ADJUST=0.005: every slave node
 }
+#: The ADJUST decks: the punch 0.002 above the block, ADJUST by node set or distance.
+ADJUST = {"wedge_adjust_set": "set", "wedge_adjust_distance": "0.005"}
 #: The node-based decks, whose midside nodes take ccx's fallback area held between pairings
 #: (docs/method.md §38.5); their ``.sta.ref`` files are ccx 2.20's.
 NODE_DECKS = ("wedge_node_mixed", "wedge_node_quad")
@@ -77,7 +81,10 @@ def test_c3d15_contact_matches_ccx(tmp_path, job):
     surface holds quadrilaterals and triangles (per-type spring areas). ``wedge_node_mixed``:
     the node set of that bottom (``TYPE=NODE``): the exterior faces touching it, bottom and
     sides, both kinds, the midside nodes with ccx's fallback area (held between pairings);
-    ``wedge_node_quad``: the node set of the quadrilateral bottom.
+    ``wedge_node_quad``: the node set of the quadrilateral bottom. ``wedge_adjust_*``: the
+    punch 0.002 above the block, ADJUST moves the bottom's corners (a node set) or all its
+    nodes (a distance) onto the block; the 18-node geometry's face centres follow them
+    (docs/method.md §38.6: without, CDIS and CSTR were 1 % off).
     """
     ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     names = ["U", "RF", "CDIS", "CSTR", "CELS", "CNUM"]
@@ -134,7 +141,15 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
     }
     for job, (slave_axis, master_axis, curved) in decks.items():
         nodes = job.startswith("wedge_node")
-        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis, curved, job in TIES, nodes)
+        module.write(
+            tmp_path / f"{job}.inp",
+            slave_axis,
+            master_axis,
+            curved,
+            job in TIES,
+            nodes,
+            ADJUST.get(job),
+        )
         assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
         deck = read_deck(DATA / f"{job}.inp")
         for name, axes in (("SLAVE", slave_axis), ("MASTER", master_axis)):
@@ -168,8 +183,8 @@ def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
 @pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
 def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     """What is not built stays refused with the deck line: cyclic symmetry, contact and ties in
-    decks with thermal steps, ADJUST node sets, a master surface of triangles and quadrilaterals;
-    a face inside the mesh is an error naming it."""
+    decks with thermal steps, ADJUST node sets with midside nodes (as on C3D20, §11.5), a master
+    surface of triangles and quadrilaterals; a face inside the mesh is an error naming it."""
     cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
     job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
     (tmp_path / "e.inp").write_text(
@@ -184,7 +199,9 @@ def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
         run_job(job, tmp_path, progress=False)
     adjust = "TYPE=NODE TO SURFACE, ADJUST=TOP"
     job = _edited(tmp_path, "wedge_punch_quad", "TYPE=NODE TO SURFACE", adjust)
-    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ADJUST=TOP \(a node set\)"):
+    with pytest.raises(
+        NotImplementedError, match=r"e\.inp:\d+: ADJUST=TOP with node \d+, which is not an element"
+    ):
         run_job(job, tmp_path, progress=False)
     job = _edited(
         tmp_path, "wedge_punch_quad", "*SURFACE, NAME=MASTER\n", "*SURFACE, NAME=MASTER\n1, S1\n"

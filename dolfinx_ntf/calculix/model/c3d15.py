@@ -129,11 +129,6 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
                 f"holds one kind; {where}; docs/method.md §38)",
                 master.location,
             )
-        if pair.adjust is not None and not isinstance(pair.adjust, float):
-            raise NotImplementedError(
-                f"{pair.location}: ADJUST={pair.adjust} (a node set) on C3D15 elements is not "
-                f"supported yet (a distance is; {where}; docs/method.md §38)"
-            )
     thermal = next((step for step in deck.steps if step.coupled), None)
     if thermal is not None and (deck.contact_pairs or deck.ties):
         card = deck.contact_pairs[0] if deck.contact_pairs else deck.ties[0]

@@ -21,6 +21,7 @@ from dolfinx_ntf.kernels.laws import (
 from ..deck import ContactPair as ContactPairCard
 from ..deck import Deck, Location, not_supported
 from ..deck import Friction as FrictionCard
+from .c3d15 import c3d15_exterior
 from .mesh import MeshMaps
 
 __all__ = [
@@ -104,7 +105,11 @@ def adjust_of(deck: Deck, pair: ContactPairCard, maps: MeshMaps) -> float | Node
             f"ADJUST={pair.adjust} with node {node}, which is not an element corner",
             pair.location,
         )
-    return NodeSurface(np.unique(vertices[vertices >= 0]).astype(np.int32), pair.adjust)
+    # C3D15: the exterior faces by their nodes, a prism mesh has no facets (§38)
+    outer = c3d15_exterior(deck, maps, pair.adjust) if maps.block.type.name == "C3D15" else None
+    return NodeSurface(
+        np.unique(vertices[vertices >= 0]).astype(np.int32), pair.adjust, exterior=outer
+    )
 
 
 def surface_section(

@@ -20,7 +20,10 @@ no slave node lies above a master edge. Decks:
   triangles (in contact with, or tied to, the block's quadrilaterals);
 - ``wedge_node_quad``, ``wedge_node_mixed``: the slave surface is the node set of the punch's
   bottom (``TYPE=NODE``, corner and midside nodes), whose faces are every exterior face with a
-  corner in it: the bottom's and the sides' (triangles and quadrilaterals).
+  corner in it: the bottom's and the sides' (triangles and quadrilaterals);
+- ``wedge_adjust_set``, ``wedge_adjust_distance``: ``wedge_punch_quad`` with the punch 0.002
+  above the block and ``ADJUST`` on the pair: the node set of the bottom's corner nodes, or the
+  distance 0.005 (every slave node; docs/method.md §38.6).
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -111,16 +114,21 @@ def write(
     curved: bool = False,
     tie: bool = False,
     nodes: bool = False,
+    adjust: str | None = None,
 ) -> None:
     """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
 
     ``curved``: the punch's edges curved in x and y (:func:`_curve`); ``tie``: the punch tied
     to the block instead of in contact, its top also moved by 0.01 in x; ``nodes``: the slave
-    surface is the node set of the punch's bottom (``TYPE=NODE``).
+    surface is the node set of the punch's bottom (``TYPE=NODE``); ``adjust``: the punch 0.002
+    higher and the pair's ``ADJUST`` (``"set"``: the bottom's corner nodes, else a distance).
     """
+    lift = 0.0 if adjust is None else 0.002
     block_x, block_w = wedge_body((0, 0, 0), (2, 1, 1), (4, 2, 2), master_axis, 1)
     n0 = block_x.shape[0] + 1
-    punch_x, punch_w = wedge_body((0.52, 0.13, 1), (0.95, 0.68, 0.5), (2, 2, 1), slave_axis, n0)
+    punch_x, punch_w = wedge_body(
+        (0.52, 0.13, 1 + lift), (0.95, 0.68, 0.5), (2, 2, 1), slave_axis, n0
+    )
     if curved:
         punch_x = _curve(punch_x, punch_w, n0)
     x = np.vstack([block_x, punch_x])
@@ -138,16 +146,18 @@ def write(
             lines.append(", ".join(map(str, w[10:])))
     lines += ["*ELSET, ELSET=EALL", "BLOCK, PUNCH"]
     base = np.flatnonzero(np.isclose(x[:, 2], 0.0)) + 1
-    top = np.flatnonzero(np.isclose(x[:, 2], 1.5)) + 1
-    bottom = n0 + np.flatnonzero(np.isclose(punch_x[:, 2], 1.0))
+    top = np.flatnonzero(np.isclose(x[:, 2], 1.5 + lift)) + 1
+    bottom = n0 + np.flatnonzero(np.isclose(punch_x[:, 2], 1.0 + lift))
+    corners = np.intersect1d(bottom, np.array(punch_w)[:, :6])
     sets = [("BASE", base), ("TOP", top)] + ([("BOTTOM", bottom)] if nodes else [])
+    sets += [("ADJ", corners)] if adjust == "set" else []
     for name, members in sets:
         lines.append(f"*NSET, NSET={name}")
         lines += [", ".join(map(str, members[i : i + 8])) for i in range(0, members.size, 8)]
     for name, e, nu, elset in (("SOFT", 1000.0, 0.3, "BLOCK"), ("HARD", 2000.0, 0.25, "PUNCH")):
         lines += [f"*MATERIAL, NAME={name}", "*ELASTIC", f"{e}, {nu}"]
         lines.append(f"*SOLID SECTION, ELSET={elset}, MATERIAL={name}")
-    slave = _faces_on(x, punch_w, e0, 2, 1.0)
+    slave = _faces_on(x, punch_w, e0, 2, 1.0 + lift)
     master = _faces_on(x, block_w, 1, 2, 1.0)
     for name, faces in (("SLAVE", slave), ("MASTER", master)):
         if name == "SLAVE" and nodes:
@@ -159,7 +169,8 @@ def write(
         lines += ["*TIE, NAME=T", "SLAVE, MASTER"]
     else:
         lines += [
-            "*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE",
+            "*CONTACT PAIR, INTERACTION=SI, TYPE=NODE TO SURFACE"
+            + ("" if adjust is None else f", ADJUST={'ADJ' if adjust == 'set' else adjust}"),
             "SLAVE, MASTER",
             "*SURFACE INTERACTION, NAME=SI",
             "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
@@ -198,3 +209,5 @@ if __name__ == "__main__":
     write(here / "wedge_tie_mixed.inp", slave_axis=(1, 2), master_axis=1, tie=True)
     write(here / "wedge_node_quad.inp", slave_axis=1, master_axis=1, nodes=True)
     write(here / "wedge_node_mixed.inp", slave_axis=(1, 2), master_axis=1, nodes=True)
+    write(here / "wedge_adjust_set.inp", slave_axis=1, master_axis=1, adjust="set")
+    write(here / "wedge_adjust_distance.inp", slave_axis=1, master_axis=1, adjust="0.005")
