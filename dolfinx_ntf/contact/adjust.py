@@ -93,6 +93,11 @@ def follow_geometric_rows(
     (C3D8's midside rows feed C3D20's face rows). Every process moves its own copies (its
     cells' rows, ghosts included), the mesh geometry and ``reference`` alike.
 
+    Args:
+        V: The displacement space (the degree of the mesh geometry).
+        reference: The contact code's reference coordinates (local nodes first), updated in place.
+        constraints: The problem's constraints; only ``geometric`` blocks are used.
+
     Returns:
         The number of this process's nodes moved.
     """
