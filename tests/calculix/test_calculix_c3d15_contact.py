@@ -40,6 +40,8 @@ DECKS = {
 }
 #: The ADJUST decks: the punch 0.002 above the block, ADJUST by node set or distance.
 ADJUST = {"wedge_adjust_set": "set", "wedge_adjust_distance": "0.005"}
+#: A steady heat transfer deck: heat across the contact springs (docs/method.md §38.7).
+HEAT = "wedge_heat_punch"
 #: The node-based decks, whose midside nodes take ccx's fallback area held between pairings
 #: (docs/method.md §38.5); their ``.sta.ref`` files are ccx 2.20's.
 NODE_DECKS = ("wedge_node_mixed", "wedge_node_quad")
@@ -131,6 +133,32 @@ def test_c3d15_tie_matches_ccx(tmp_path, job):
         assert np.abs(a.values - b.values).max() < 1e-6 * np.abs(a.values).max(), a.name
 
 
+@pytest.mark.mpi
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+def test_c3d15_heat_across_contact_matches_ccx(tmp_path):
+    """``*HEAT TRANSFER, STEADY STATE`` with the punch on the block: the heat crosses the contact
+    springs (quad8 on quad8, ``*GAP CONDUCTANCE`` 30); NT and HFL of both increments equal ccx
+    2.20's printed digits (serial and 2 processes)."""
+    ccx, ours = _run(tmp_path, HEAT, MPI.COMM_WORLD)
+    assert [(b.name, b.time) for b in ccx] == [(n, t) for t in (0.5, 1.0) for n in ("NT", "HFL")]
+    assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
+    for a, b in zip(ccx, ours):
+        np.testing.assert_array_equal(b.labels, a.labels)
+        assert np.abs(a.values - b.values).max() < 1e-6 * np.abs(a.values).max(), a.name
+
+
+@pytest.mark.skipif(not ON_011, reason="C3D15 needs dolfinx 0.11 (docs/method.md §32.5)")
+def test_c3d15_heat_across_contact_depends_on_the_conductance(tmp_path):
+    """The springs carry the heat: twice the gap conductance moves the temperatures by more than
+    1 % of the largest off ccx's (so the agreement above is the springs')."""
+    job = _edited(tmp_path, HEAT, "30., 0.\n30., 1e6", "60., 0.\n60., 1e6")
+    assert run_job(job, tmp_path, comm=MPI.COMM_SELF, progress=False).completed
+    ccx, ours = read_dat(DATA / f"{HEAT}.dat.ref"), read_dat(tmp_path / f"{job}.dat")
+    a, b = ccx[-2], ours[-2]  # NT at the end
+    assert a.name == b.name == "NT"
+    assert np.abs(a.values - b.values).max() > 1e-2 * np.abs(a.values).max()
+
+
 def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
     """The stored decks are what ``make_contact.py`` writes, with the faces each names: S3..S5
     (quadrilaterals) or S1, S2 (triangles) in contact."""
@@ -138,6 +166,7 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
     decks = {
         **DECKS,
         **{job: (*axes, False) for job, axes in TIES.items()},
+        HEAT: (1, 1, False),
     }
     for job, (slave_axis, master_axis, curved) in decks.items():
         nodes = job.startswith("wedge_node")
@@ -149,6 +178,7 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
             job in TIES,
             nodes,
             ADJUST.get(job),
+            job == HEAT,
         )
         assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
         deck = read_deck(DATA / f"{job}.inp")
@@ -183,7 +213,8 @@ def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
 @pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
 def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     """What is not built stays refused with the deck line: cyclic symmetry, contact and ties in
-    decks with thermal steps, ADJUST node sets with midside nodes (as on C3D20, §11.5), a master
+    decks with coupled temperature-displacement steps (ties: any thermal step), ADJUST node sets
+    with midside nodes (as on C3D20, §11.5), a master
     surface of triangles and quadrilaterals; a face inside the mesh is an error naming it."""
     cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
     job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
@@ -195,7 +226,13 @@ def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
         run_job(job, tmp_path, progress=False)
     heat = "*STEP\n*HEAT TRANSFER, STEADY STATE\n*END STEP\n"
     job = _edited(tmp_path, "wedge_tie_quad", "*STEP, INC=100", heat + "*STEP, INC=100")
-    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: contact pairs and ties on C3D15"):
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ties on C3D15 elements in a deck"):
+        run_job(job, tmp_path, progress=False)
+    coupled = "*COUPLED TEMPERATURE-DISPLACEMENT, STEADY STATE"
+    job = _edited(tmp_path, HEAT, "*HEAT TRANSFER, STEADY STATE", coupled)
+    with pytest.raises(
+        NotImplementedError, match=r"e\.inp:\d+: contact pairs on C3D15 elements in a deck with"
+    ):
         run_job(job, tmp_path, progress=False)
     adjust = "TYPE=NODE TO SURFACE, ADJUST=TOP"
     job = _edited(tmp_path, "wedge_punch_quad", "TYPE=NODE TO SURFACE", adjust)

@@ -23,7 +23,10 @@ no slave node lies above a master edge. Decks:
   corner in it: the bottom's and the sides' (triangles and quadrilaterals);
 - ``wedge_adjust_set``, ``wedge_adjust_distance``: ``wedge_punch_quad`` with the punch 0.002
   above the block and ``ADJUST`` on the pair: the node set of the bottom's corner nodes, or the
-  distance 0.005 (every slave node; docs/method.md §38.6).
+  distance 0.005 (every slave node; docs/method.md §38.6);
+- ``wedge_heat_punch``: ``wedge_punch_quad`` as a ``*HEAT TRANSFER, STEADY STATE`` step: the
+  block's bottom at 0, the punch's top at 100, heat across the contact springs by a ``*GAP
+  CONDUCTANCE`` of 30 (docs/method.md §38.7).
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -115,13 +118,15 @@ def write(
     tie: bool = False,
     nodes: bool = False,
     adjust: str | None = None,
+    heat: bool = False,
 ) -> None:
     """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
 
     ``curved``: the punch's edges curved in x and y (:func:`_curve`); ``tie``: the punch tied
     to the block instead of in contact, its top also moved by 0.01 in x; ``nodes``: the slave
     surface is the node set of the punch's bottom (``TYPE=NODE``); ``adjust``: the punch 0.002
-    higher and the pair's ``ADJUST`` (``"set"``: the bottom's corner nodes, else a distance).
+    higher and the pair's ``ADJUST`` (``"set"``: the bottom's corner nodes, else a distance);
+    ``heat``: a steady heat transfer step instead (conductivities, a gap conductance).
     """
     lift = 0.0 if adjust is None else 0.002
     block_x, block_w = wedge_body((0, 0, 0), (2, 1, 1), (4, 2, 2), master_axis, 1)
@@ -156,6 +161,7 @@ def write(
         lines += [", ".join(map(str, members[i : i + 8])) for i in range(0, members.size, 8)]
     for name, e, nu, elset in (("SOFT", 1000.0, 0.3, "BLOCK"), ("HARD", 2000.0, 0.25, "PUNCH")):
         lines += [f"*MATERIAL, NAME={name}", "*ELASTIC", f"{e}, {nu}"]
+        lines += ["*CONDUCTIVITY", "50." if name == "SOFT" else "20."] if heat else []
         lines.append(f"*SOLID SECTION, ELSET={elset}, MATERIAL={name}")
     slave = _faces_on(x, punch_w, e0, 2, 1.0 + lift)
     master = _faces_on(x, block_w, 1, 2, 1.0)
@@ -175,7 +181,16 @@ def write(
             "*SURFACE INTERACTION, NAME=SI",
             "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
             "50000.0, 0.014285714285714285, 0.001",
+            *(["*GAP CONDUCTANCE", "30., 0.", "30., 1e6"] if heat else []),
         ]
+    if heat:
+        lines += ["*BOUNDARY", "BASE, 1, 3, 0.0", "TOP, 1, 2, 0.0"]
+        lines += ["*INITIAL CONDITIONS, TYPE=TEMPERATURE", "NALL, 20."]
+        lines += ["*STEP, INC=100", "*HEAT TRANSFER, STEADY STATE", "0.5, 1.0"]
+        lines += ["*BOUNDARY", "BASE, 11, 11, 0.", "TOP, 11, 11, 100."]
+        lines += ["*NODE PRINT, NSET=NALL", "NT", "*EL PRINT, ELSET=EALL", "HFL", "*END STEP"]
+        path.write_text("\n".join(lines) + "\n")
+        return
     lines += [
         "*BOUNDARY",
         "BASE, 1, 3, 0.0",
@@ -211,3 +226,4 @@ if __name__ == "__main__":
     write(here / "wedge_node_mixed.inp", slave_axis=(1, 2), master_axis=1, nodes=True)
     write(here / "wedge_adjust_set.inp", slave_axis=1, master_axis=1, adjust="set")
     write(here / "wedge_adjust_distance.inp", slave_axis=1, master_axis=1, adjust="0.005")
+    write(here / "wedge_heat_punch.inp", slave_axis=1, master_axis=1, heat=True)
