@@ -50,7 +50,11 @@ from dolfinx.mesh import Mesh
 from dolfinx_ntf import compat
 from dolfinx_ntf.compat import MeshTags
 from dolfinx_ntf.fem.collapsed_wedges import create_collapsed_mesh
-from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres, wedge15_rule
+from dolfinx_ntf.fem.serendipity_wedge import (
+    add_wedge_centres,
+    require_quadratic_prisms,
+    wedge15_rule,
+)
 from dolfinx_ntf.fem.wedge_faces import WEDGE_FACES, PrismFaces
 from dolfinx_ntf.kernels.collapsed_wedges import (
     WedgeRotationError,
@@ -71,8 +75,6 @@ _TRIANGLE, _QUADRILATERAL, _HEXAHEDRON, _PRISM = 2, 3, 5, 6
 _OTHER_PRISMS = {13: "18-node prisms", 18: "15-node prisms"}
 #: Their faces: 6-node triangles, 9-node and 8-node quadrilaterals (gmsh element types).
 _QUADRATIC_FACES = {9: 6, 10: 9, 16: 8}
-#: The first dolfinx release that assembles degree-2 spaces on prisms (docs/method.md §32.5).
-QUADRATIC_PRISMS_MIN_DOLFINX = (0, 11)
 #: A second-order prism mirrored (triangle 1-3-2 below 4-6-5), the same element: basix's nodes.
 _MIRROR = np.array([0, 2, 1, 3, 5, 4, 7, 6, 8, 9, 11, 10, 13, 12, 14, 16, 15, 17])
 #: gmsh's hexahedron (and ccx's C3D8) corner order to dolfinx's.
@@ -636,17 +638,7 @@ def _quadratic_prism_mesh(
 
     Collective. The faces are broadcast (the same on every process).
     """
-    if compat.DOLFINX_VERSION < QUADRATIC_PRISMS_MIN_DOLFINX:
-        version = ".".join(map(str, compat.DOLFINX_VERSION))
-        why = (
-            "its FFCx refuses forms on prisms"
-            if compat.DOLFINX_VERSION < (0, 7)
-            else "degree-2 spaces on prisms abort the process while assembling"
-        )
-        raise NotImplementedError(
-            "gmsh's 15- and 18-node prisms need dolfinx 0.11 or later (an 18-node prism mesh "
-            f"with a degree-2 space); dolfinx {version} cannot: {why} (docs/method.md §32.5, §40)"
-        )
+    require_quadratic_prisms("gmsh's 15- and 18-node prisms", "§32.5, §40")
     if gdim != 3:
         raise ValueError(f"a mesh of prisms needs gdim = 3, got {gdim!r}")
     error, groups, faces = None, None, None
