@@ -517,11 +517,7 @@ def _collapsed_prism_mesh(comm: MPI.Comm, rank: int, gdim: int) -> tuple[Mesh, M
     domain = compat.coordinate_element("hexahedron", 1, gdim)
     mesh = create_collapsed_mesh(comm, cells, points[:, :gdim], domain, rank)
     tdim = mesh.topology.dim
-    cell_map = mesh.topology.index_map(tdim)
-    num_cells = cell_map.size_local + cell_map.num_ghosts
-    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
-    local = np.arange(original.size, dtype=np.int32)
-    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
+    cell_tags = _cell_tags(mesh, groups)
 
     mesh.topology.create_entities(tdim - 1)
     facet_map = mesh.topology.index_map(tdim - 1)
@@ -631,6 +627,16 @@ def _tagged_faces(model: str, cells: np.ndarray) -> PrismFaces:
     )
 
 
+def _cell_tags(mesh: Mesh, groups: np.ndarray) -> MeshTags:
+    """Tags of this process's cells (owned and ghosts): ``groups`` of their input cells."""
+    tdim = mesh.topology.dim
+    cell_map = mesh.topology.index_map(tdim)
+    num_cells = cell_map.size_local + cell_map.num_ghosts
+    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
+    local = np.arange(original.size, dtype=np.int32)
+    return dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
+
+
 def _quadratic_prism_mesh(
     comm: MPI.Comm, rank: int, gdim: int
 ) -> tuple[Mesh, MeshTags, PrismFaces]:
@@ -654,13 +660,7 @@ def _quadratic_prism_mesh(
     groups, faces = comm.bcast((groups, faces), root=rank)
     domain = compat.coordinate_element("prism", 2, 3)
     mesh = compat.create_mesh(comm, cells.astype(np.int64), points, domain)
-    tdim = mesh.topology.dim
-    cell_map = mesh.topology.index_map(tdim)
-    num_cells = cell_map.size_local + cell_map.num_ghosts
-    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
-    local = np.arange(original.size, dtype=np.int32)
-    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
-    return mesh, cell_tags, faces
+    return mesh, _cell_tags(mesh, groups), faces
 
 
 def write_msh(path: str | Path) -> None:
