@@ -19,7 +19,10 @@ them. Older releases refuse such models (NotImplementedError).
 
 Shared rules:
     * Every public function is collective over ``comm``. gmsh is touched on rank ``rank`` only,
-      so the other ranks need neither gmsh initialized nor a model.
+      so the other ranks need neither gmsh initialized nor a model. ``comm`` is the only
+      communicator used: ``MPI.COMM_SELF`` on one process of several builds a serial mesh there,
+      provided every process imported dolfinx (its import initializes PETSc, collective over
+      COMM_WORLD; docs/method.md §44).
     * Errors found on ``rank`` (missing file, unreadable file, no physical groups, mixed cell types,
       builder failures) are broadcast so that *all* ranks raise the same exception type instead of
       deadlocking in the next collective.
