@@ -27,8 +27,9 @@ import dolfinx.mesh
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.fem.serendipity_wedge import QUADRATIC_PRISMS_MIN_DOLFINX
 from dolfinx_ntf.meshes import punch
-from dolfinx_ntf.meshes.gmsh_io import QUADRATIC_PRISMS_MIN_DOLFINX, mesh_from_gmsh
+from dolfinx_ntf.meshes.gmsh_io import mesh_from_gmsh
 
 WORLD = MPI.COMM_WORLD
 #: Seconds after which a hung process is ended with its traceback.
