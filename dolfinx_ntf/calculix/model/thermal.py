@@ -28,7 +28,7 @@ from dolfinx_ntf.fem.serendipity_wedge import wedge_serendipity_constraints
 from dolfinx_ntf.fem.thermal import CellTemperature
 from dolfinx_ntf.kernels.gap_conductance import GapConductance
 
-from ..deck import Boundary, Deck, ElementBlock
+from ..deck import Boundary, Deck, DLoad, ElementBlock, Film
 from .c3d15 import C3D15Films, c3d15_face_flows, c3d15_films
 
 __all__ = ["ThermalModel", "is_thermal", "thermal_model"]
@@ -345,13 +345,7 @@ def _nodal_flows(deck: Deck, block: ElementBlock) -> list[np.ndarray]:
                 if current is nodes:
                     keys = card.nodes.tolist()
                 else:
-                    if block.type.name != "C3D15":
-                        raise NotImplementedError(
-                            f"{card.location}: *DFLUX on {block.type.name} faces is not "
-                            "supported yet (C3D15 only, docs/method.md §39)"
-                        )
-                    _check_face(card.face, block, card.location, "*DFLUX", "S")
-                    rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
+                    rows = _loaded_face_rows(block, order, card, "*DFLUX", "S")
                     keys = [(int(r), card.face) for r in rows]
                 for key in keys:
                     current[key] = (current[key] if key in touched else 0.0) + card.value
@@ -365,6 +359,22 @@ def _nodal_flows(deck: Deck, block: ElementBlock) -> list[np.ndarray]:
             flows += c3d15_face_flows(deck, block, keys[:, 0], keys[:, 1], values)
         per_step.append(flows)
     return per_step
+
+
+def _loaded_face_rows(
+    block: ElementBlock, order: np.ndarray, card: DLoad | Film, name: str, label: str
+) -> np.ndarray:
+    """Block rows of the elements of a face-load ``card`` (``*DFLUX``, ``*FILM``), checked.
+
+    ``order``: ``argsort(block.ids)``; ``label``: the card's load label letter (S, F).
+    """
+    if block.type.name != "C3D15":
+        raise NotImplementedError(
+            f"{card.location}: {name} on {block.type.name} faces is not supported yet "
+            "(C3D15 only, docs/method.md §39)"
+        )
+    _check_face(card.face, block, card.location, name, label)
+    return order[np.searchsorted(block.ids, card.elements, sorter=order)]
 
 
 def _film_faces(
@@ -384,13 +394,7 @@ def _film_faces(
         if step.films and step.films[0].op == "NEW":
             current = {}
         for card in step.films:
-            if block.type.name != "C3D15":
-                raise NotImplementedError(
-                    f"{card.location}: *FILM on {block.type.name} faces is not supported yet "
-                    "(C3D15 only, docs/method.md §39)"
-                )
-            _check_face(card.face, block, card.location, "*FILM", "F")
-            rows = order[np.searchsorted(block.ids, card.elements, sorter=order)]
+            rows = _loaded_face_rows(block, order, card, "*FILM", "F")
             current.update({(int(r), card.face): (card.coefficient, card.sink) for r in rows})
         per_step.append(dict(current))
     keys = sorted(set().union(*per_step)) if per_step else []
