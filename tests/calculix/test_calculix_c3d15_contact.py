@@ -39,6 +39,9 @@ DECKS = {
 NODE_QUAD = "wedge_node_quad"
 #: The tie decks: the punch tied to the block (quadrilaterals, triangles, both).
 TIES = {"wedge_tie_quad": (1, 1), "wedge_tie_tri": (2, 2), "wedge_tie_mixed": ((1, 2), 1)}
+#: Master surfaces of triangles and quadrilaterals (the block's columns alternate their wedges'
+#: axis): ccx's output is stored, the deck runner refuses them (docs/method.md §38.4).
+MIXED_MASTERS = {"wedge_master_mixed": (1, (1, 2)), "wedge_master_mixed_tri": (2, (1, 2))}
 
 
 def _generator():
@@ -128,6 +131,7 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
     decks = {
         **DECKS,
         **{job: (*axes, False) for job, axes in TIES.items()},
+        **{job: (*axes, False) for job, axes in MIXED_MASTERS.items()},
         NODE_QUAD: (1, 1, False),
     }
     for job, (slave_axis, master_axis, curved) in decks.items():
@@ -144,6 +148,24 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
             expected = [{1, 2} if axis == 2 else {3, 4, 5} for axis in np.atleast_1d(axes)]
             assert faces <= set().union(*expected), (job, name, faces)
             assert all(faces & kind for kind in expected), (job, name, faces)
+
+
+@pytest.mark.parametrize("job", MIXED_MASTERS)
+def test_mixed_master_references_land_on_both_face_types(job):
+    """ccx's springs of the mixed-master decks: slave nodes over the master's triangles (block
+    columns 0.5 < x < 1, 1.5 < x < 2) and over its quadrilaterals (0 < x < 0.5, 1 < x < 1.5) in
+    both increments, one spring per slave node (CNUM equal to the rows)."""
+    deck = read_deck(DATA / f"{job}.inp")
+    blocks = read_dat(DATA / f"{job}.dat.ref")
+    cdis = [b for b in blocks if b.name == "CDIS"]
+    cnum = [b for b in blocks if b.name == "CNUM"]
+    assert [b.time for b in cdis] == [0.5, 1.0] == [b.time for b in cnum]
+    for springs, count in zip(cdis, cnum):
+        assert springs.labels.size == int(count.values.ravel()[0]) == np.unique(springs.labels).size
+        x = deck.node_coords[deck.node_index(springs.labels), 0]
+        on_triangles = ((x > 0.5) & (x < 1.0)) | (x > 1.5)
+        assert 0 < on_triangles.sum() < x.size, (job, springs.time, x)
+        assert np.all(springs.values[:, 0] < 0)  # closed springs: penetration
 
 
 def _edited(tmp_path: Path, job: str, old: str, new: str) -> str:
@@ -189,6 +211,12 @@ def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     )
     with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*SURFACE MASTER with both 6-node"):
         run_job(job, tmp_path, progress=False)
+    for job in MIXED_MASTERS:  # the generator's master of both kinds (§38.4)
+        shutil.copy(DATA / f"{job}.inp", tmp_path / f"{job}.inp")
+        with pytest.raises(
+            NotImplementedError, match=rf"{job}\.inp:\d+: \*SURFACE MASTER with both 6-node"
+        ):
+            run_job(job, tmp_path, progress=False)
     # the block's wedges along z: element 1's top triangle (z = 0.5) is shared by the layer above
     job = _edited(
         tmp_path, "wedge_punch_tri", "*SURFACE, NAME=SLAVE\n", "*SURFACE, NAME=SLAVE\n1, S2\n"

@@ -20,7 +20,12 @@ no slave node lies above a master edge. Decks:
   triangles (in contact with, or tied to, the block's quadrilaterals);
 - ``wedge_node_quad``, ``wedge_node_mixed``: the slave surface is the node set of the punch's
   bottom (``TYPE=NODE``, corner and midside nodes), whose faces are every exterior face with a
-  corner in it: the bottom's and the sides' (triangles and quadrilaterals).
+  corner in it: the bottom's and the sides' (triangles and quadrilaterals);
+- ``wedge_master_mixed``, ``wedge_master_mixed_tri``: a block whose columns of cells along x
+  alternate their wedges' axis (y, z, y, z): its top, the master surface, is quadrilaterals at
+  0 < x < 0.5 and 1 < x < 1.5 and triangles at 0.5 < x < 1 and 1.5 < x < 2; the punch (wedges
+  along y: quadrilaterals, along z: triangles) spans x = 0.52..1.47, so its nodes land on both
+  kinds of master face (docs/method.md §38.4: the deck runner refuses such a master).
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -107,7 +112,7 @@ def _curve(x: np.ndarray, wedges: list, first_node: int) -> np.ndarray:
 def write(
     path: Path,
     slave_axis: int | tuple,
-    master_axis: int,
+    master_axis: int | tuple,
     curved: bool = False,
     tie: bool = False,
     nodes: bool = False,
@@ -127,8 +132,9 @@ def write(
     e0 = len(block_w) + 1
     shape = "curved punch" if curved else "punch"
     axes = "".join("xyz"[a] for a in np.atleast_1d(slave_axis))
+    block_axes = "".join("xyz"[a] for a in np.atleast_1d(master_axis))
     heading = f"C3D15 {shape} (wedge axis {axes}) on a C3D15 block (axis "
-    lines = ["*HEADING", heading + f"{'xyz'[master_axis]}), dolfinx_ntf method §38"]
+    lines = ["*HEADING", heading + f"{block_axes}), dolfinx_ntf method §38"]
     lines.append("*NODE, NSET=NALL")
     lines += [f"{n + 1}, {p[0]:.12g}, {p[1]:.12g}, {p[2]:.12g}" for n, p in enumerate(x)]
     for name, wedges, first in (("BLOCK", block_w, 1), ("PUNCH", punch_w, e0)):
@@ -198,3 +204,5 @@ if __name__ == "__main__":
     write(here / "wedge_tie_mixed.inp", slave_axis=(1, 2), master_axis=1, tie=True)
     write(here / "wedge_node_quad.inp", slave_axis=1, master_axis=1, nodes=True)
     write(here / "wedge_node_mixed.inp", slave_axis=(1, 2), master_axis=1, nodes=True)
+    write(here / "wedge_master_mixed.inp", slave_axis=1, master_axis=(1, 2))
+    write(here / "wedge_master_mixed_tri.inp", slave_axis=2, master_axis=(1, 2))
