@@ -21,7 +21,7 @@ from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 
-__all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterSurface"]
+__all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterFaceGroup", "MasterSurface"]
 
 MAX_WALK_STEPS = 100
 """A walk taking more steps than this finds no face (docs/method.md §3.2)."""
@@ -601,6 +601,115 @@ class MasterSurface(springs.MeshedMasterSprings):
         if max_depth is not None and not (np.isfinite(max_depth) and max_depth >= 0.0):
             raise ValueError(f"max_depth = {max_depth} must be finite and >= 0")
         return points, tol
+
+
+class _JointSearch:
+    """The last search of a surface of several face types, shared by its groups' views."""
+
+    def __init__(self, surface: MasterSurface) -> None:
+        self.surface = surface
+        self.coords: np.ndarray | None = None  # master node coordinates of the last update
+        self.points: np.ndarray | None = None
+        self.tolerances: np.ndarray | None = None
+        self.faces: np.ndarray | None = None  # (S,) face numbers of the last search
+
+
+class MasterFaceGroup(springs.MeshedMasterSprings):
+    """The faces of one type of a :class:`MasterSurface` of several types (docs/method.md §38.5).
+
+    Plays the :class:`~dolfinx_ntf.kernels.master.ContactMaster` role for the pair state of
+    that face type: the surface is updated and searched once for all its groups (the walk
+    crosses between the kinds, the nodal normals sum both), and each group keeps the slave nodes
+    whose face is one of its own, numbered within the group. The groups of one surface search
+    the same slave nodes (one slave surface): every node falls in at most one group. The
+    stable search (``start_faces`` given) starts each walk at the face the last search found,
+    of whichever type (the groups' own previous faces cannot name the others').
+
+    Args:
+        surface: The surface of all faces.
+        group: Index of this face type in ``surface.face_groups``.
+        name: Label for messages.
+    """
+
+    collective = False
+
+    def __init__(
+        self, surface: MasterSurface, group: int, name: str, *, joint: _JointSearch
+    ) -> None:
+        self.name = name
+        self._surface = surface
+        self._group = int(group)
+        self._first, self._end = (int(v) for v in surface.group_offsets[group : group + 2])
+        self._joint = joint
+
+    @classmethod
+    def groups(cls, surface: MasterSurface, name: str) -> list[MasterFaceGroup]:
+        """One view per face type of ``surface``, sharing its search."""
+        joint = _JointSearch(surface)
+        return [
+            cls(surface, g, f"{name} ({face_type.name} faces)", joint=joint)
+            for g, (face_type, _) in enumerate(surface.face_groups)
+        ]
+
+    @property
+    def face_type(self) -> FaceType:
+        """This group's face type."""
+        return self._surface.face_groups[self._group][0]
+
+    def update(self, coords: np.ndarray) -> None:
+        """Update the shared surface (once for all groups at the same coordinates)."""
+        x = np.asarray(coords, dtype=float)[self._surface.nodes]
+        joint = self._joint
+        if joint.coords is not None and np.array_equal(joint.coords, x):
+            return
+        self._surface.update(coords)
+        joint.coords = x
+
+    def locate(
+        self,
+        points: np.ndarray,
+        tolerances: np.ndarray | float,
+        *,
+        max_depth: float | None = None,
+        start_faces: np.ndarray | None = None,
+        tie_frame: TieFrame | None = None,
+        ccx_ties: bool = False,
+    ) -> np.ndarray:
+        """This group's face holding each point (-1: none, or a face of another type)."""
+        joint = self._joint
+        points = np.asarray(points, dtype=float)
+        tol = np.broadcast_to(np.asarray(tolerances, dtype=float), points.shape[:1])
+        same = (
+            joint.points is not None
+            and np.array_equal(joint.points, points)
+            and np.array_equal(joint.tolerances, tol)
+        )
+        if not same:
+            start = None
+            if start_faces is not None and joint.faces is not None:
+                start = joint.faces if joint.faces.size == points.shape[0] else None
+            joint.faces = self._surface.locate(
+                points,
+                tol,
+                max_depth=max_depth,
+                start_faces=start,
+                tie_frame=tie_frame,
+                ccx_ties=ccx_ties,
+            )
+            joint.points, joint.tolerances = points.copy(), tol.copy()
+        face = joint.faces
+        mine = (face >= self._first) & (face < self._end)
+        return np.where(mine, face - self._first, -1)
+
+    def face_patches(self, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The faces of this group sharing a corner with each of ``faces`` (group numbers)."""
+        which, patch = self._surface.face_patches(np.asarray(faces, dtype=np.int64) + self._first)
+        keep = (patch >= self._first) & (patch < self._end)
+        return which[keep], patch[keep] - self._first
+
+    def surface_moments(self) -> tuple[np.ndarray, np.ndarray]:
+        """The whole surface's moments (the tie frame of the one search)."""
+        return self._surface.surface_moments()
 
 
 def _check_faces(face_type: FaceType, faces: np.ndarray, name: str) -> np.ndarray:

@@ -88,9 +88,9 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     Raises:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
-            and small-strain steps, cyclic symmetry ties, a master surface of triangles and
-            quadrilaterals, ADJUST node sets of contact pairs, contact pairs and ties in thermal
-            steps, transient coupled temperature-displacement steps.
+            and small-strain steps, cyclic symmetry ties, ADJUST node sets of contact pairs,
+            contact pairs and ties in thermal steps, transient coupled temperature-displacement
+            steps, the ``.cel`` file of a master surface of triangles and quadrilaterals.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -121,13 +121,13 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     for pair in deck.contact_pairs:
         master = deck.surfaces[pair.master]
         kinds = np.unique(np.minimum(master.faces, 3)) if master.type == "ELEMENT" else []
-        if len(kinds) > 1:
+        requests = [r for step in deck.steps for r in step.file_requests if r.contact_elements]
+        if len(kinds) > 1 and requests:
             raise not_supported(
-                f"*SURFACE {pair.master} with both 6-node triangles (S1, S2) and 8-node "
-                f"quadrilaterals (S3..S5) of C3D15 elements as the master surface of a contact "
-                f"pair (the pair at {pair.location}; a slave surface may mix them, a master "
-                f"holds one kind; {where}; docs/method.md §38)",
-                master.location,
+                f"CONTACT ELEMENTS (the .cel file) with the master surface {pair.master} of both "
+                f"6-node triangles and 8-node quadrilaterals of C3D15 elements (the pair at "
+                f"{pair.location}; {where}; docs/method.md §38.5)",
+                requests[0].location,
             )
         if pair.adjust is not None and not isinstance(pair.adjust, float):
             raise NotImplementedError(
@@ -331,7 +331,7 @@ def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> Fa
 
     ccx's faces S1, S2 are 6-node triangles, S3..S5 8-node quadrilaterals, in ccx's outward
     order (``ELEMENT_TYPES["C3D15"].faces``); a surface of both kinds gives the triangles as
-    ``more`` faces (slave surfaces only, :func:`check_c3d15_deck` refuses such masters). The
+    ``more`` faces (a master of both is searched as one surface, docs/method.md §38.5). The
     quadrilaterals' spring areas take ccx's 2 x 2 points (``QUAD8_GAUSS2``, 3 x 3 differ by up
     to 3e-6 of the contact stress on faces with curved edges, measured). On
     several processes each gives the faces of the elements it holds (owned and ghost cells).
