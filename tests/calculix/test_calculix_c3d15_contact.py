@@ -35,7 +35,11 @@ DECKS = {
     "wedge_node_mixed": ((1, 2), 1, False),  # a node-based slave surface (TYPE=NODE)
     "wedge_master_mixed": (1, (1, 2), False),  # a master of quadrilaterals and triangles
     "wedge_master_mixed_tri": (2, (1, 2), False),  # the same under triangular slave faces
+    "wedge_master_mixed_slide": (1, (1, 2), False),  # friction; nodes slide across the kinds
 }
+#: The sliding deck's second step: 10 increments of 0.1 (the others print 0.5 and 1).
+SLIDE = "wedge_master_mixed_slide"
+SLIDE_TIMES = (0.5, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6, 1.7, 1.8, 1.9, 2.0)
 #: A node-based slave surface where ccx stops increment 2 after 2 iterations, ours after 3
 #: (docs/method.md §38.3): compared in increment 1 only.
 NODE_QUAD = "wedge_node_quad"
@@ -81,11 +85,15 @@ def test_c3d15_contact_matches_ccx(tmp_path, job):
     the node set of that bottom (``TYPE=NODE``): the exterior faces touching it, bottom and
     sides, both kinds, the midside nodes with ccx's fallback area. ``wedge_master_mixed``,
     ``wedge_master_mixed_tri``: the master holds quadrilaterals and triangles (one search over
-    both, springs of 9 and 7 nodes): slave nodes on both kinds, and some 0.005 from the border.
+    both, springs of 9 and 7 nodes): slave nodes on both kinds, and some 0.005 from the border;
+    ``wedge_master_mixed_slide``: with friction, the punch then slid 0.15 in 10 increments,
+    slave nodes moving from triangles onto quadrilaterals and back (a friction history across
+    the kinds).
     """
     ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     names = ["U", "RF", "CDIS", "CSTR", "CELS", "CNUM"]
-    assert [(b.name, b.time) for b in ccx] == [(n, t) for t in (0.5, 1.0) for n in names]
+    times = SLIDE_TIMES if job == SLIDE else (0.5, 1.0)
+    assert [(b.name, b.time) for b in ccx] == [(n, t) for t in times for n in names]
     assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
     worst: dict[str, float] = {}
     for a, b in zip(ccx, ours):
@@ -139,7 +147,10 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
     }
     for job, (slave_axis, master_axis, curved) in decks.items():
         nodes = job.startswith("wedge_node")
-        module.write(tmp_path / f"{job}.inp", slave_axis, master_axis, curved, job in TIES, nodes)
+        slide = 0.15 if job == SLIDE else 0.0
+        module.write(
+            tmp_path / f"{job}.inp", slave_axis, master_axis, curved, job in TIES, nodes, slide
+        )
         assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
         deck = read_deck(DATA / f"{job}.inp")
         for name, axes in (("SLAVE", slave_axis), ("MASTER", master_axis)):
@@ -169,6 +180,23 @@ def test_mixed_master_references_land_on_both_face_types(job):
         on_triangles = ((x > 0.5) & (x < 1.0)) | (x > 1.5)
         assert 0 < on_triangles.sum() < x.size, (job, springs.time, x)
         assert np.all(springs.values[:, 0] < 0)  # closed springs: penetration
+
+
+def test_sliding_reference_moves_nodes_across_the_kinds():
+    """ccx's springs of ``wedge_master_mixed_slide``: in the sliding step slave nodes change
+    from triangles to quadrilaterals and the other way (current x = X + U_x), with slip."""
+    deck = read_deck(DATA / f"{SLIDE}.inp")
+    blocks = read_dat(DATA / f"{SLIDE}.dat.ref")
+    on_triangles = {}
+    for time in (1.0, 2.0):
+        springs = next(b for b in blocks if b.name == "CDIS" and b.time == time)
+        u = next(b for b in blocks if b.name == "U" and b.time == time)
+        x = deck.node_coords[deck.node_index(springs.labels), 0]
+        x = x + u.values[np.searchsorted(u.labels, springs.labels), 0]
+        on_triangles[time] = set(springs.labels[((x > 0.5) & (x < 1.0)) | (x > 1.5)].tolist())
+    assert on_triangles[1.0] - on_triangles[2.0] and on_triangles[2.0] - on_triangles[1.0]
+    last = next(b for b in blocks if b.name == "CDIS" and b.time == 2.0)
+    assert np.abs(last.values[:, 1:]).max() > 0.1  # slipped by most of the 0.15
 
 
 def _edited(tmp_path: Path, job: str, old: str, new: str) -> str:

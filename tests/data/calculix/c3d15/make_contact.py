@@ -25,7 +25,9 @@ no slave node lies above a master edge. Decks:
   alternate their wedges' axis (y, z, y, z): its top, the master surface, is quadrilaterals at
   0 < x < 0.5 and 1 < x < 1.5 and triangles at 0.5 < x < 1 and 1.5 < x < 2; the punch (wedges
   along y: quadrilaterals, along z: triangles) spans x = 0.52..1.47, so its nodes land on both
-  kinds of master face (docs/method.md §38.4: the deck runner refuses such a master).
+  kinds of master face (docs/method.md §38.5); ``wedge_master_mixed_slide``: the first with
+  friction and a second step sliding the punch 0.15 in x, so that slave nodes move from the
+  triangles onto the quadrilaterals.
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -116,12 +118,15 @@ def write(
     curved: bool = False,
     tie: bool = False,
     nodes: bool = False,
+    slide: float = 0.0,
 ) -> None:
     """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
 
     ``curved``: the punch's edges curved in x and y (:func:`_curve`); ``tie``: the punch tied
     to the block instead of in contact, its top also moved by 0.01 in x; ``nodes``: the slave
-    surface is the node set of the punch's bottom (``TYPE=NODE``).
+    surface is the node set of the punch's bottom (``TYPE=NODE``); ``slide``: Coulomb friction
+    (mu 0.2, stick slope 5000) and a second step moving the punch's top by ``slide`` in x in
+    increments of 0.1.
     """
     block_x, block_w = wedge_body((0, 0, 0), (2, 1, 1), (4, 2, 2), master_axis, 1)
     n0 = block_x.shape[0] + 1
@@ -170,6 +175,7 @@ def write(
             "*SURFACE INTERACTION, NAME=SI",
             "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
             "50000.0, 0.014285714285714285, 0.001",
+            *(["*FRICTION", "0.2, 5000."] if slide else []),
         ]
     lines += [
         "*BOUNDARY",
@@ -188,6 +194,21 @@ def write(
         *([] if tie else ["*CONTACT PRINT", "CDIS, CSTR, CELS, CNUM"]),
         "*END STEP",
     ]
+    if slide:
+        lines += [
+            "*STEP, INC=100",
+            "*STATIC, DIRECT",
+            "0.1, 1.0",
+            "*CONTROLS, PARAMETERS=FIELD",
+            "1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12",
+            "*BOUNDARY",
+            f"TOP, 1, 1, {slide}",
+            "*NODE PRINT, NSET=NALL",
+            "U, RF",
+            "*CONTACT PRINT",
+            "CDIS, CSTR, CELS, CNUM",
+            "*END STEP",
+        ]
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -206,3 +227,4 @@ if __name__ == "__main__":
     write(here / "wedge_node_mixed.inp", slave_axis=(1, 2), master_axis=1, nodes=True)
     write(here / "wedge_master_mixed.inp", slave_axis=1, master_axis=(1, 2))
     write(here / "wedge_master_mixed_tri.inp", slave_axis=2, master_axis=(1, 2))
+    write(here / "wedge_master_mixed_slide.inp", slave_axis=1, master_axis=(1, 2), slide=0.15)
