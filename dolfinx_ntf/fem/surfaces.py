@@ -467,7 +467,8 @@ def resolve_master(
             types = ", ".join(g.face_type.name for g in surface.face_groups(V, what))
             raise NotImplementedError(
                 f"{what}: FaceNodesSurface '{surface.name}' holds faces of several types "
-                f"({types}): a master surface of one face type only is supported"
+                f"({types}): here a master surface of one face type only is supported (contact "
+                "pairs take several, master_face_groups)"
             )
         return surface.surface_faces(V, what)
     if not isinstance(surface, FacetSurface):

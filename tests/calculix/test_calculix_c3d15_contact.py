@@ -219,8 +219,8 @@ def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
 @pytest.mark.skipif(not ON_011, reason="the refusals of a C3D15 deck on dolfinx 0.11")
 def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     """What is not built stays refused with the deck line: cyclic symmetry, contact and ties in
-    decks with thermal steps, ADJUST node sets, the ``.cel`` file of a master surface of
-    triangles and quadrilaterals; a face inside the mesh is an error naming it."""
+    decks with thermal steps, ADJUST node sets, ADJUST and the ``.cel`` file with a master
+    surface of triangles and quadrilaterals; a face inside the mesh is an error naming it."""
     cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
     job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
     (tmp_path / "e.inp").write_text(
@@ -236,6 +236,9 @@ def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     adjust = "TYPE=NODE TO SURFACE, ADJUST=TOP"
     job = _edited(tmp_path, "wedge_punch_quad", "TYPE=NODE TO SURFACE", adjust)
     with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ADJUST=TOP \(a node set\)"):
+        run_job(job, tmp_path, progress=False)
+    job = _edited(tmp_path, "wedge_master_mixed", "NODE TO SURFACE", "NODE TO SURFACE, ADJUST=0.01")
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ADJUST with the master surface"):
         run_job(job, tmp_path, progress=False)
     cel = "*NODE FILE, CONTACT ELEMENTS\nU\n*END STEP"
     job = _edited(tmp_path, "wedge_master_mixed", "*END STEP", cel)

@@ -90,7 +90,8 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
             and small-strain steps, cyclic symmetry ties, ADJUST node sets of contact pairs,
             contact pairs and ties in thermal steps, transient coupled temperature-displacement
-            steps, the ``.cel`` file of a master surface of triangles and quadrilaterals.
+            steps, ADJUST and the ``.cel`` file with a master surface of triangles and
+            quadrilaterals.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
@@ -122,6 +123,12 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
         master = deck.surfaces[pair.master]
         kinds = np.unique(np.minimum(master.faces, 3)) if master.type == "ELEMENT" else []
         requests = [r for step in deck.steps for r in step.file_requests if r.contact_elements]
+        if len(kinds) > 1 and pair.adjust is not None:
+            raise NotImplementedError(
+                f"{pair.location}: ADJUST with the master surface {pair.master} of both 6-node "
+                f"triangles and 8-node quadrilaterals of C3D15 elements is not supported yet "
+                f"({where}; docs/method.md §38.5)"
+            )
         if len(kinds) > 1 and requests:
             raise not_supported(
                 f"CONTACT ELEMENTS (the .cel file) with the master surface {pair.master} of both "
