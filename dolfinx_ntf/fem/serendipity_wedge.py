@@ -24,13 +24,40 @@ from dolfinx_ntf import compat
 from dolfinx_ntf.fem.constraints import LinearConstraintBlock
 
 __all__ = [
+    "QUADRATIC_PRISMS_MIN_DOLFINX",
     "add_wedge_centres",
+    "require_quadratic_prisms",
     "wedge15_metadata",
     "wedge15_rule",
     "wedge15_space",
     "wedge_forces_on_nodes",
     "wedge_serendipity_constraints",
 ]
+
+#: The first dolfinx release that assembles degree-2 spaces on prisms (docs/method.md §32.5).
+QUADRATIC_PRISMS_MIN_DOLFINX = (0, 11)
+
+
+def require_quadratic_prisms(what: str, sections: str) -> None:
+    """Refuse ``what`` (the subject of the message) on a dolfinx that cannot run P2 on prisms.
+
+    Raises:
+        NotImplementedError: dolfinx older than 0.11: its reason, and the ``sections`` of
+            docs/method.md to read.
+    """
+    if compat.DOLFINX_VERSION >= QUADRATIC_PRISMS_MIN_DOLFINX:
+        return
+    version = ".".join(map(str, compat.DOLFINX_VERSION))
+    why = (
+        "its FFCx refuses forms on prisms"
+        if compat.DOLFINX_VERSION < (0, 7)
+        else "degree-2 spaces on prisms abort the process while assembling"
+    )
+    raise NotImplementedError(
+        f"{what} need dolfinx 0.11 or later (an 18-node prism mesh with a degree-2 space); "
+        f"dolfinx {version} cannot: {why} (docs/method.md {sections})"
+    )
+
 
 # basix reference prism: edges and quadrilateral faces by their vertices.
 _EDGES = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 4), (2, 5), (3, 4), (3, 5), (4, 5)]

@@ -403,6 +403,29 @@ def face_tangents(
     return q[..., 0, :], q[..., 1, :]
 
 
+def _at_rule_points(
+    face_type: FaceType, face_coords: np.ndarray, rule: tuple[np.ndarray, np.ndarray] | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Points ``(q, 2)``, weights ``(q,)``, shape functions ``(q, n)`` and tangents ``(F, q, 3)``.
+
+    ``rule`` as for :func:`pressure_forces` (None: the face type's area rule).
+    """
+    coords = face_coords_array(face_type, face_coords)
+    if rule is None:
+        rule = (face_type.quadrature_points, face_type.quadrature_weights)
+    xi, weights = (np.asarray(a, dtype=float) for a in rule)
+    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])
+    return xi, weights, face_type.shape_functions(xi), q_xi, q_eta
+
+
+def _areas_at_rule_points(
+    face_type: FaceType, face_coords: np.ndarray, rule: tuple[np.ndarray, np.ndarray] | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted area elements ``w_q |q_ξ × q_η|`` ``(F, q)`` and shape functions ``(q, n)``."""
+    _, weights, phi, q_xi, q_eta = _at_rule_points(face_type, face_coords, rule)
+    return np.linalg.norm(np.cross(q_xi, q_eta), axis=-1) * weights[None, :], phi
+
+
 def pressure_forces(
     face_type: FaceType,
     face_coords: np.ndarray,
@@ -416,12 +439,7 @@ def pressure_forces(
     the face's parameters; default the face type's area rule (tri6: 3 points, quad8: 3 x 3
     Gauss). Exact for flat faces with straight edges.
     """
-    coords = face_coords_array(face_type, face_coords)
-    if rule is None:
-        rule = (face_type.quadrature_points, face_type.quadrature_weights)
-    xi, weights = (np.asarray(a, dtype=float) for a in rule)
-    phi = face_type.shape_functions(xi)  # (q, n)
-    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
+    _, weights, phi, q_xi, q_eta = _at_rule_points(face_type, face_coords, rule)
     normal = np.cross(q_xi, q_eta) * weights[None, :, None]
     return -np.asarray(pressure, dtype=float)[:, None, None] * np.einsum("qn,fqd->fnd", phi, normal)
 
@@ -437,13 +455,7 @@ def flux_flows(
     ``h_j = q Σ_q w_q φ_j(ξ_q) |q_ξ × q_η|(ξ_q)`` (CalculiX's ``*DFLUX``: positive into the
     body). ``rule`` as for :func:`pressure_forces`.
     """
-    coords = face_coords_array(face_type, face_coords)
-    if rule is None:
-        rule = (face_type.quadrature_points, face_type.quadrature_weights)
-    xi, weights = (np.asarray(a, dtype=float) for a in rule)
-    phi = face_type.shape_functions(xi)  # (q, n)
-    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
-    area = np.linalg.norm(np.cross(q_xi, q_eta), axis=-1) * weights[None, :]  # (F, q)
+    area, phi = _areas_at_rule_points(face_type, face_coords, rule)
     return np.asarray(flux, dtype=float)[:, None] * (area @ phi)
 
 
@@ -457,13 +469,7 @@ def film_matrices(
     Times a film coefficient ``h``: the Jacobian of CalculiX's ``*FILM`` heat flow
     ``h (T - T_sink)`` out of the face. ``rule`` as for :func:`pressure_forces`.
     """
-    coords = face_coords_array(face_type, face_coords)
-    if rule is None:
-        rule = (face_type.quadrature_points, face_type.quadrature_weights)
-    xi, weights = (np.asarray(a, dtype=float) for a in rule)
-    phi = face_type.shape_functions(xi)  # (q, n)
-    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
-    area = np.linalg.norm(np.cross(q_xi, q_eta), axis=-1) * weights[None, :]  # (F, q)
+    area, phi = _areas_at_rule_points(face_type, face_coords, rule)
     return np.einsum("fq,qi,qj->fij", area, phi, phi)
 
 
@@ -487,13 +493,8 @@ def pressure_stiffness(
     A follower pressure (on the current faces): ``d(q_ξ x q_η)/dx_k = b_k [q_ξ]_x - a_k
     [q_η]_x`` with ``a_k, b_k`` the shape derivatives of node ``k``; not symmetric.
     """
-    coords = face_coords_array(face_type, face_coords)
-    if rule is None:
-        rule = (face_type.quadrature_points, face_type.quadrature_weights)
-    xi, weights = (np.asarray(a, dtype=float) for a in rule)
-    phi = face_type.shape_functions(xi)  # (q, n)
+    xi, weights, phi, q_xi, q_eta = _at_rule_points(face_type, face_coords, rule)
     dphi = face_type.shape_derivatives(xi)  # (q, n, 2)
-    q_xi, q_eta = face_tangents(face_type, coords[:, None], xi[None])  # (F, q, 3)
     # (F, q, n, 3, 3): d n_q / d x_k
     dn = (
         dphi[None, :, :, 1, None, None] * _skew(q_xi)[:, :, None]

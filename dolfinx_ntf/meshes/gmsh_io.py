@@ -19,7 +19,10 @@ them. Older releases refuse such models (NotImplementedError).
 
 Shared rules:
     * Every public function is collective over ``comm``. gmsh is touched on rank ``rank`` only,
-      so the other ranks need neither gmsh initialized nor a model.
+      so the other ranks need neither gmsh initialized nor a model. ``comm`` is the only
+      communicator used: ``MPI.COMM_SELF`` on one process of several builds a serial mesh there,
+      provided every process imported dolfinx (its import initializes PETSc, collective over
+      COMM_WORLD; docs/method.md §44).
     * Errors found on ``rank`` (missing file, unreadable file, no physical groups, mixed cell types,
       builder failures) are broadcast so that *all* ranks raise the same exception type instead of
       deadlocking in the next collective.
@@ -50,7 +53,11 @@ from dolfinx.mesh import Mesh
 from dolfinx_ntf import compat
 from dolfinx_ntf.compat import MeshTags
 from dolfinx_ntf.fem.collapsed_wedges import create_collapsed_mesh
-from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres, wedge15_rule
+from dolfinx_ntf.fem.serendipity_wedge import (
+    add_wedge_centres,
+    require_quadratic_prisms,
+    wedge15_rule,
+)
 from dolfinx_ntf.fem.wedge_faces import WEDGE_FACES, PrismFaces
 from dolfinx_ntf.kernels.collapsed_wedges import (
     WedgeRotationError,
@@ -71,8 +78,6 @@ _TRIANGLE, _QUADRILATERAL, _HEXAHEDRON, _PRISM = 2, 3, 5, 6
 _OTHER_PRISMS = {13: "18-node prisms", 18: "15-node prisms"}
 #: Their faces: 6-node triangles, 9-node and 8-node quadrilaterals (gmsh element types).
 _QUADRATIC_FACES = {9: 6, 10: 9, 16: 8}
-#: The first dolfinx release that assembles degree-2 spaces on prisms (docs/method.md §32.5).
-QUADRATIC_PRISMS_MIN_DOLFINX = (0, 11)
 #: A second-order prism mirrored (triangle 1-3-2 below 4-6-5), the same element: basix's nodes.
 _MIRROR = np.array([0, 2, 1, 3, 5, 4, 7, 6, 8, 9, 11, 10, 13, 12, 14, 16, 15, 17])
 #: gmsh's hexahedron (and ccx's C3D8) corner order to dolfinx's.
@@ -515,11 +520,7 @@ def _collapsed_prism_mesh(comm: MPI.Comm, rank: int, gdim: int) -> tuple[Mesh, M
     domain = compat.coordinate_element("hexahedron", 1, gdim)
     mesh = create_collapsed_mesh(comm, cells, points[:, :gdim], domain, rank)
     tdim = mesh.topology.dim
-    cell_map = mesh.topology.index_map(tdim)
-    num_cells = cell_map.size_local + cell_map.num_ghosts
-    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
-    local = np.arange(original.size, dtype=np.int32)
-    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
+    cell_tags = _cell_tags(mesh, groups)
 
     mesh.topology.create_entities(tdim - 1)
     facet_map = mesh.topology.index_map(tdim - 1)
@@ -629,6 +630,16 @@ def _tagged_faces(model: str, cells: np.ndarray) -> PrismFaces:
     )
 
 
+def _cell_tags(mesh: Mesh, groups: np.ndarray) -> MeshTags:
+    """Tags of this process's cells (owned and ghosts): ``groups`` of their input cells."""
+    tdim = mesh.topology.dim
+    cell_map = mesh.topology.index_map(tdim)
+    num_cells = cell_map.size_local + cell_map.num_ghosts
+    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
+    local = np.arange(original.size, dtype=np.int32)
+    return dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
+
+
 def _quadratic_prism_mesh(
     comm: MPI.Comm, rank: int, gdim: int
 ) -> tuple[Mesh, MeshTags, PrismFaces]:
@@ -636,17 +647,7 @@ def _quadratic_prism_mesh(
 
     Collective. The faces are broadcast (the same on every process).
     """
-    if compat.DOLFINX_VERSION < QUADRATIC_PRISMS_MIN_DOLFINX:
-        version = ".".join(map(str, compat.DOLFINX_VERSION))
-        why = (
-            "its FFCx refuses forms on prisms"
-            if compat.DOLFINX_VERSION < (0, 7)
-            else "degree-2 spaces on prisms abort the process while assembling"
-        )
-        raise NotImplementedError(
-            "gmsh's 15- and 18-node prisms need dolfinx 0.11 or later (an 18-node prism mesh "
-            f"with a degree-2 space); dolfinx {version} cannot: {why} (docs/method.md §32.5, §40)"
-        )
+    require_quadratic_prisms("gmsh's 15- and 18-node prisms", "§32.5, §40")
     if gdim != 3:
         raise ValueError(f"a mesh of prisms needs gdim = 3, got {gdim!r}")
     error, groups, faces = None, None, None
@@ -662,13 +663,7 @@ def _quadratic_prism_mesh(
     groups, faces = comm.bcast((groups, faces), root=rank)
     domain = compat.coordinate_element("prism", 2, 3)
     mesh = compat.create_mesh(comm, cells.astype(np.int64), points, domain)
-    tdim = mesh.topology.dim
-    cell_map = mesh.topology.index_map(tdim)
-    num_cells = cell_map.size_local + cell_map.num_ghosts
-    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:num_cells]
-    local = np.arange(original.size, dtype=np.int32)
-    cell_tags = dolfinx.mesh.meshtags(mesh, tdim, local, groups[original].astype(np.int32))
-    return mesh, cell_tags, faces
+    return mesh, _cell_tags(mesh, groups), faces
 
 
 def write_msh(path: str | Path) -> None:

@@ -108,7 +108,7 @@ def test_c3d15_deck_writes_wedge15_xdmf(tmp_path: Path, job: str, volume: float 
     for step, u in zip(steps, blocks):
         assert set(step) - {"t"} == names
         assert step["contact_pressure"].shape == (points.shape[0], 1)
-        assert not step["contact_status"].any()  # no contact pairs on C3D15 decks
+        assert not step["contact_status"].any()  # these decks have no contact pairs
         largest = np.abs(u.values).max()
         rows = deck.node_index(u.labels)
         error = np.abs(step["displacement"][rows] - u.values).max()
@@ -132,3 +132,27 @@ def test_c3d15_xdmf_is_the_serial_file(tmp_path: Path) -> None:
             scale = max(np.abs(values).max(), 1e-300)
             assert np.abs(steps[0][name] - values).max() <= 1e-12 * scale, name
     COMM.barrier()
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("job", ["wedge_punch_quad", "wedge_punch_mixed"])
+def test_c3d15_contact_deck_writes_its_contact_fields(tmp_path: Path, job: str) -> None:
+    """A C3D15 contact deck's file holds the springs' pressures: the ``.dat``'s CSTR, each step."""
+    directory = Path(COMM.bcast(str(tmp_path), root=0))
+    path = _run(directory / "world", job, COMM)
+    if COMM.rank != 0:
+        return
+    deck = read_deck(directory / "world" / f"{job}.inp")
+    _, _, steps = read_xdmf(path)
+    blocks = [b for b in read_dat(directory / "world" / f"{job}.dat") if b.name == "CSTR"]
+    assert len(blocks) == len(steps) > 0
+    for step, cstr in zip(steps, blocks):
+        assert step["t"] == pytest.approx(cstr.time, abs=1e-12)
+        rows = deck.node_index(cstr.labels)
+        pressure = cstr.values[:, 0]
+        largest = np.abs(pressure).max()
+        assert largest > 0
+        np.testing.assert_allclose(step["contact_pressure"][rows, 0], pressure, atol=1e-6 * largest)
+        np.testing.assert_array_equal(step["contact_status"][rows, 0] > 0, pressure > 0)
+        others = np.setdiff1d(np.arange(deck.node_coords.shape[0]), rows)
+        assert not step["contact_pressure"][others].any()

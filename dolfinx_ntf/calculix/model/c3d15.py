@@ -22,9 +22,12 @@ import numpy as np
 import basix
 import dolfinx.fem
 
-from dolfinx_ntf import compat
 from dolfinx_ntf.fem.discrete_springs import GlobalBlocks
-from dolfinx_ntf.fem.serendipity_wedge import add_wedge_centres
+from dolfinx_ntf.fem.serendipity_wedge import (
+    QUADRATIC_PRISMS_MIN_DOLFINX,
+    add_wedge_centres,
+    require_quadratic_prisms,
+)
 from dolfinx_ntf.fem.surfaces import FaceNodesSurface
 from dolfinx_ntf.kernels.faces import (
     QUAD8,
@@ -53,7 +56,7 @@ __all__ = [
 ]
 
 #: The first dolfinx release that assembles degree-2 spaces on prisms (docs/method.md §32.5).
-C3D15_MIN_DOLFINX = (0, 11)
+C3D15_MIN_DOLFINX = QUADRATIC_PRISMS_MIN_DOLFINX
 
 _G2 = 1.0 / np.sqrt(3.0)
 #: ccx's rule for pressures on C3D15's quadrilaterals: 2 x 2 Gauss points (measured, §34.3).
@@ -94,17 +97,7 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
             quadrilaterals.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
-    if compat.DOLFINX_VERSION < C3D15_MIN_DOLFINX:
-        version = ".".join(map(str, compat.DOLFINX_VERSION))
-        why = (
-            "its FFCx refuses forms on prisms"
-            if compat.DOLFINX_VERSION < (0, 7)
-            else "degree-2 spaces on prisms abort the process while assembling"
-        )
-        raise NotImplementedError(
-            f"{where}: 15-node wedges need dolfinx 0.11 or later (an 18-node prism mesh with a "
-            f"degree-2 space); dolfinx {version} cannot: {why} (docs/method.md §32.5, §34)"
-        )
+    require_quadratic_prisms(f"{where}: 15-node wedges", "§32.5, §34")
     for step in deck.steps:
         if step.dloads and any(other.nlgeom != step.nlgeom for other in deck.steps):
             raise NotImplementedError(
