@@ -612,6 +612,7 @@ class _JointSearch:
         self.points: np.ndarray | None = None
         self.tolerances: np.ndarray | None = None
         self.faces: np.ndarray | None = None  # (S,) face numbers of the last search
+        # the search is repeated for new points or after an update of the surface
 
 
 class MasterFaceGroup(springs.MeshedMasterSprings):
@@ -664,6 +665,7 @@ class MasterFaceGroup(springs.MeshedMasterSprings):
             return
         self._surface.update(coords)
         joint.coords = x
+        joint.points = None  # the last search was on the surface before this update
 
     def locate(
         self,

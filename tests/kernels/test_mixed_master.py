@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from dolfinx_ntf.kernels.faces import QUAD8, TRI6
-from dolfinx_ntf.kernels.search import MasterSurface
+from dolfinx_ntf.kernels.search import MasterFaceGroup, MasterSurface
 
 
 def _surface(slope: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -96,3 +96,25 @@ def test_a_face_of_the_other_kind_is_checked():
     flipped[0, [3, 5]] = flipped[0, [5, 3]]
     with pytest.raises(ValueError, match="inconsistently oriented"):
         MasterSurface(QUAD8, quad, more=((TRI6, flipped),), name="m")
+
+
+def test_groups_share_one_search_and_follow_the_surface():
+    """The views of the two types: each keeps its own faces (group numbers, -1 for the other
+    type's), a point is in at most one group, and a search after the surface moved (the same
+    points) is a new one."""
+    x, quad, tris = _surface(0.0)
+    master = MasterSurface(QUAD8, quad, more=((TRI6, tris),), coords=x)
+    quads, triangles = MasterFaceGroup.groups(master, "m")
+    assert (quads.face_type, triangles.face_type) == (QUAD8, TRI6)
+    points = np.array([[0.3, 0.6, 0.05], [1.8, 0.2, -0.05], [1.2, 0.8, 0.02]])
+    for view in (quads, triangles):
+        view.update(x)
+    np.testing.assert_array_equal(quads.locate(points, 1e-9), [0, -1, -1])
+    np.testing.assert_array_equal(triangles.locate(points, 1e-9), [-1, 0, 1])
+    _, patch = triangles.face_patches(np.array([0]))
+    assert sorted(patch.tolist()) == [0, 1]  # its own type's faces only, in its numbering
+    moved = x + np.array([1.0, 0.0, 0.0])  # the surface slides by 1 in x under the points
+    for view in (quads, triangles):
+        view.update(moved)
+    np.testing.assert_array_equal(quads.locate(points, 1e-9), [-1, 0, 0])
+    np.testing.assert_array_equal(triangles.locate(points, 1e-9), [-1, -1, -1])
