@@ -60,8 +60,8 @@ def match_rows(table: np.ndarray, query: np.ndarray) -> np.ndarray:
 def surface_face_nodes(deck: Deck, block, name: str) -> np.ndarray:
     """Ccx node numbers ``(F, n)`` of an element-face surface's faces, in ccx face order.
 
-    C3D15's triangles (padded to 8 nodes in the element table) give 6 columns: its surfaces
-    hold one kind of face (docs/method.md §38).
+    C3D15's triangles (padded to 8 nodes in the element table) give 6 columns; in a surface of
+    triangles and quadrilaterals (a master, docs/method.md §38.8) the triangles' last two are -1.
     """
     surface = deck.surfaces[name]
     order = np.argsort(block.ids)
@@ -69,7 +69,10 @@ def surface_face_nodes(deck: Deck, block, name: str) -> np.ndarray:
     local = block.type.faces[surface.faces - 1]
     sizes = block.type.face_sizes[surface.faces - 1]
     width = int(sizes.max()) if sizes.size else local.shape[1]
-    return block.connectivity[rows[:, None], local[:, :width]]
+    nodes = block.connectivity[rows[:, None], local[:, :width]]
+    if sizes.size and sizes.min() < width:
+        nodes = np.where(np.arange(width) < sizes[:, None], nodes, -1)
+    return nodes
 
 
 def _padded(values: np.ndarray) -> np.ndarray:
@@ -213,7 +216,8 @@ class CcxNumbering:
             [np.zeros(0, np.int64)],
             [np.zeros((0, 3))],
         )
-        for p, state in enumerate(problem.states):
+        numbers = problem.pairing.pair_numbers  # a master of several face types: one (§38.8)
+        for p, state in zip(numbers, problem.states, strict=True):
             if state.evaluation is None or not state.num_springs:
                 continue
             nodes = self.ccx_nodes(problem, state.element_nodes)

@@ -20,11 +20,12 @@ import dolfinx.fem
 import ufl
 
 from dolfinx_ntf import compat
+from dolfinx_ntf.contact.pair import PairState
 from dolfinx_ntf.contact.problem import ContactProblem
 from dolfinx_ntf.fem.collapsed_wedges import wedge_cells
 from dolfinx_ntf.kernels.friction import output_tangents
 from dolfinx_ntf.kernels.wedge_rule import NUM_CLASSES, wedge_rule
-from dolfinx_ntf.outputs.results import contact_results
+from dolfinx_ntf.outputs.results import ContactResults, contact_results
 
 from .deck import Deck
 from .elements import AXISYMMETRIC_SECTOR, C3D6_EXTRAPOLATION
@@ -619,38 +620,24 @@ class OutputValues:
         rows = []
         numbering = self.numbering
         length = self.field_accuracy().length
-        for state, results, pair in zip(
-            self.problem.states, contact_results(self.problem), self.deck.contact_pairs
-        ):
-            faces = numbering.ccx_nodes(self.problem, state.master_faces.faces[state.spring_face])
-            normal, slip, shear = (
-                _vectors3(v) for v in (results.normal, results.slip, results.shear)
-            )
-            t1, t2 = output_tangents(normal)
-            slip = np.column_stack([np.einsum("ni,ni->n", slip, t) for t in (t1, t2)])
-            shear = np.column_stack([np.einsum("ni,ni->n", shear, t) for t in (t1, t2)])
-            # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4), 2.23 not
-            energy = results.energy + (2.0 if ccx == "2.20" else 1.0) * results.friction_energy
-            energy = energy * self.model.printed_scale  # CAX: ccx's sector (§23)
-            dp, de = law_accuracy(
-                state.pair.interaction.law, -results.clearance, results.area, length
-            )
+        groups = _pair_groups(self.problem.states, contact_results(self.problem))
+        for group, pair in zip(groups, self.deck.contact_pairs):
+            parts = [self._contact_values(state, results, ccx, length) for state, results in group]
+            if len(parts) > 1:  # a master of several face types (docs/method.md §38.8)
+                width = max(part[4].shape[1] for part in parts)
+                for part in parts:
+                    part[4] = np.pad(
+                        part[4], ((0, 0), (0, width - part[4].shape[1])), constant_values=-1
+                    )
+            values = [np.concatenate(arrays) for arrays in zip(*parts)]
             nodes, clearance, pressure, energy, faces, slip, shear, dp, de = numbering.allgather(
-                numbering.ccx_nodes(self.problem, results.node),
-                results.clearance,
-                results.pressure,
-                energy,
-                faces,
-                slip.reshape(-1, 2),
-                shear.reshape(-1, 2),
-                dp,
-                de,
+                *values
             )
             faces = numbering.master_faces(pair.master, faces)
             order = np.argsort(nodes, kind="stable")
             rows.append(
                 ContactRows(
-                    results.pair,
+                    group[0][1].pair,
                     nodes[order],
                     clearance[order],
                     pressure[order],
@@ -663,6 +650,32 @@ class OutputValues:
             )
         return rows
 
+    def _contact_values(
+        self, state: PairState, results: ContactResults, ccx: str, length: float
+    ) -> list[np.ndarray]:
+        """This process's contact rows of one pair state, unsorted, in ccx numbering."""
+        numbering = self.numbering
+        faces = numbering.ccx_nodes(self.problem, state.master_faces.faces[state.spring_face])
+        normal, slip, shear = (_vectors3(v) for v in (results.normal, results.slip, results.shear))
+        t1, t2 = output_tangents(normal)
+        slip = np.column_stack([np.einsum("ni,ni->n", slip, t) for t in (t1, t2)])
+        shear = np.column_stack([np.einsum("ni,ni->n", shear, t) for t in (t1, t2)])
+        # ccx 2.20 prints twice the tangential spring energy (docs/method.md §11.4), 2.23 not
+        energy = results.energy + (2.0 if ccx == "2.20" else 1.0) * results.friction_energy
+        energy = energy * self.model.printed_scale  # CAX: ccx's sector (§23)
+        dp, de = law_accuracy(state.pair.interaction.law, -results.clearance, results.area, length)
+        return [
+            numbering.ccx_nodes(self.problem, results.node),
+            results.clearance,
+            results.pressure,
+            energy,
+            faces,
+            slip.reshape(-1, 2),
+            shear.reshape(-1, 2),
+            dp,
+            de,
+        ]
+
     def contact_elements(self, problem: ContactProblem) -> list[tuple[np.ndarray, np.ndarray]]:
         """Master faces ``(k, n)`` and slave nodes ``(k,)`` of each pair's springs (``.cel``).
 
@@ -670,7 +683,13 @@ class OutputValues:
         """
         numbering = self.numbering
         elements = []
-        for state, pair in zip(problem.states, self.deck.contact_pairs):
+        groups = _pair_groups(problem.states, problem.states)
+        for group, pair in zip(groups, self.deck.contact_pairs):
+            if len(group) > 1:  # refused by the model (docs/method.md §38.8)
+                raise NotImplementedError(
+                    f"{pair.location}: the CONTACT ELEMENTS file of a master of several face types"
+                )
+            state = group[0][0]
             slaves, faces = numbering.allgather(
                 numbering.ccx_nodes(problem, state.slave.nodes[state.spring_slave]),
                 numbering.ccx_nodes(problem, state.master_faces.faces[state.spring_face]),
@@ -679,6 +698,21 @@ class OutputValues:
             order = np.argsort(slaves, kind="stable")
             elements.append((faces[order], slaves[order]))
         return elements
+
+
+def _pair_groups(states: list[PairState], values: list) -> list[list[tuple[PairState, object]]]:
+    """``(state, value)`` of each pair's states, pairs in order.
+
+    One state per pair, or one per face type of a master of several types (consecutive states
+    of one pair, docs/method.md §38.8).
+    """
+    groups: list[list[tuple[PairState, object]]] = []
+    for state, value in zip(states, values, strict=True):
+        if groups and groups[-1][0][0].pair is state.pair:
+            groups[-1].append((state, value))
+        else:
+            groups.append([(state, value)])
+    return groups
 
 
 def _put_law_values(

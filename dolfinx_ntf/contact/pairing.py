@@ -28,6 +28,7 @@ from dolfinx_ntf.fem.surfaces import (
     NodeSurface,
     SlaveSurface,
     SurfaceFaces,
+    master_face_groups,
     reference_coordinates,
     resolve_master,
     resolve_slave,
@@ -41,7 +42,7 @@ from dolfinx_ntf.kernels.edges import (
 from dolfinx_ntf.kernels.faces import QUAD4
 from dolfinx_ntf.kernels.friction_state import FrictionState
 from dolfinx_ntf.kernels.rigid import RigidSurface, check_in_plane, rigid_master
-from dolfinx_ntf.kernels.search import MasterSurface
+from dolfinx_ntf.kernels.search import MasterFaceGroup, MasterSurface
 from dolfinx_ntf.kernels.segment_search import MasterCurve
 from dolfinx_ntf.kernels.spring_areas import spring_areas
 from dolfinx_ntf.kernels.springs import SpringEvaluation
@@ -138,7 +139,12 @@ class Pairing:
         self._face_centres = face_centres
         self._midsides = np.zeros(0, np.int64) if linear_midsides is None else linear_midsides
         self._serendipity = bool(V.mesh.comm.allreduce(face_centres.size, op=MPI.MAX))
-        self.states = [self._resolve(i, pair) for i, pair in enumerate(pairs)]
+        #: One state per pair, several for a master of several face types (one per type, in
+        #: a row, sharing the pair, its slave surface and search, docs/method.md §38.8).
+        self.states: list[PairState] = []
+        for i, pair in enumerate(pairs):
+            resolved = self._resolve(i, pair)
+            self.states += resolved if isinstance(resolved, list) else [resolved]
         self._surface_reference = None
         if self.halo is not None:
             self._reference = self.halo.reference
@@ -155,7 +161,7 @@ class Pairing:
                 return SurfaceFaces(QUAD4, np.zeros((0, 4), faces.faces.dtype), faces.facets)
         return faces
 
-    def _resolve(self, index: int, pair: ContactPair) -> PairState:
+    def _resolve(self, index: int, pair: ContactPair) -> PairState | list[PairState]:
         name = pair.name or f"pair {index + 1}"
         V = self.u.function_space
         comm = V.mesh.comm
@@ -209,10 +215,13 @@ class Pairing:
                 pair, slave, faces, master, np.zeros(slave.nodes.size), friction=friction,
                 was_active=pair.active,
             )  # fmt: skip
-        master_faces = collectives.collectively(
-            comm, resolve_master, V, pair.master, what=f"{name} master",
+        groups = collectives.collectively(
+            comm, master_face_groups, V, pair.master, what=f"{name} master",
             reference=self._surface_reference,
         )  # fmt: skip
+        if len(groups) > 1:  # a master of several face types (docs/method.md §38.8)
+            return self._resolve_face_groups(name, pair, slave, groups)
+        master_faces = groups[0]
         if self._serendipity:
             master_faces = self._as_quad8(master_faces)
         patch = None
@@ -264,6 +273,78 @@ class Pairing:
             was_active=pair.active,
             adjust_nodes=adjust_nodes,
         )
+
+    def _resolve_face_groups(
+        self,
+        name: str,
+        pair: ContactPair,
+        slave: SlaveSurface,
+        groups: tuple[SurfaceFaces, ...],
+    ) -> list[PairState]:
+        """One state per face type of a master of several types, one search (§38.8).
+
+        The states share the slave surface, the friction history (a node moving from a face of
+        one type to one of the other keeps it) and the initial overlaps; the surface is
+        triangulated and searched once (:class:`~dolfinx_ntf.kernels.search.MasterFaceGroup`).
+        On several processes every process holds every master face (the exchanged patches of
+        §14.8 hold one type: refused above their threshold). ADJUST is refused.
+        """
+        comm = self.u.function_space.mesh.comm
+        if pair.adjust is not None:
+            raise NotImplementedError(
+                f"{name}: ADJUST with a master surface of several face types "
+                f"({', '.join(g.face_type.name for g in groups)}) is not supported"
+            )
+        if self._serendipity:
+            groups = tuple(self._as_quad8(g) for g in groups)
+        if self.halo is not None:
+            total = comm.allreduce(sum(int(g.faces.shape[0]) for g in groups))
+            if total > master_exchange.EXCHANGE_ABOVE_FACES:
+                raise NotImplementedError(
+                    f"{name}: a master surface of several face types with {total} faces on "
+                    f"{comm.size} processes: above {master_exchange.EXCHANGE_ABOVE_FACES} faces "
+                    "the master is exchanged by patches of one face type (docs/method.md §14.8)"
+                )
+            slave = collectives.collectively(
+                comm, surface_distribution.distribute_slave, self.u.function_space, self.halo,
+                pair.slave, slave, name,
+            )  # fmt: skip
+            groups = tuple(
+                collectives.collectively(
+                    comm, surface_distribution.distribute_master, self.halo, g, f"{name} master"
+                )
+                for g in groups
+            )
+        kept = [g for g in groups if g.faces.shape[0]]  # the same on every process (gathered)
+        if not kept:
+            raise ValueError(f"{name}: the master surface has no faces")
+        reference = self._reference if self.halo is None else self.halo.reference
+        surface = MasterSurface(
+            kept[0].face_type,
+            kept[0].faces,
+            name=f"{name} master",
+            coords=reference,
+            more=tuple((g.face_type, g.faces) for g in kept[1:]),
+        )
+        nodes = np.unique(np.concatenate([g.nodes for g in kept]))
+        both = np.intersect1d(slave.nodes, nodes)
+        error = None
+        if both.size:
+            x = reference[both[0]]
+            error = ValueError(
+                f"{name}: {both.size} node(s) belong to both the slave and the master surface "
+                f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
+            )
+        validation.raise_collectively(comm, error)
+        friction = FrictionState(
+            slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
+        )
+        overlap = np.zeros(slave.nodes.size)
+        views = MasterFaceGroup.groups(surface, f"{name} master")
+        return [
+            PairState(pair, slave, g, view, overlap, friction=friction, was_active=pair.active)
+            for g, view in zip(kept, views, strict=True)
+        ]
 
     def _resolve_2d(self, name: str, pair: ContactPair) -> PairState:
         """A pair on a 2D mesh: springs on master edges, rigid lines or circles.
@@ -494,6 +575,15 @@ class Pairing:
         return sum(s.face_changes for s in self.states)
 
     @property
+    def pair_numbers(self) -> list[int]:
+        """The pair (0-based, in the problem's order) of each state.
+
+        The states of one master's face types share it (docs/method.md §38.8).
+        """
+        numbers: dict[int, int] = {}
+        return [numbers.setdefault(id(s.pair), len(numbers)) for s in self.states]
+
+    @property
     def num_springs(self) -> int:
         """Contact spring elements of this process over all pairs."""
         return sum(s.num_springs for s in self.states)
@@ -586,9 +676,18 @@ class Pairing:
             state.friction.begin_increment()
 
     def end_increment(self) -> None:
-        """Accept the converged increment: commit the friction state (docs/method.md §11.3)."""
+        """Accept the converged increment: commit the friction state (docs/method.md §11.3).
+
+        States sharing a friction history (the face types of one master, §38.8) commit it once
+        with all their springs.
+        """
+        shared: dict[int, tuple[FrictionState, list[np.ndarray]]] = {}
         for state in self.states:
-            state.friction.commit(state.spring_slave)
+            shared.setdefault(id(state.friction), (state.friction, []))[1].append(
+                state.spring_slave
+            )
+        for friction, springs in shared.values():
+            friction.commit(np.concatenate(springs))
 
     # -- pairing -----------------------------------------------------------------------------------
 
@@ -604,6 +703,7 @@ class Pairing:
         Returns:
             The springs and the face changes (:attr:`face_changes`) summed over the processes.
         """
+        before = {id(state): state.spring_slave for state in self.states}
         coords = self.current_coordinates()
         comm = self.u.function_space.mesh.comm
         with collectives.collective_errors(
@@ -616,10 +716,28 @@ class Pairing:
                 if record_overlap and state.pair.adjust is not None:  # ADJUST may have moved nodes
                     collectives.checkpoint(comm)
                     coords = self.current_coordinates()
+        self._count_changes_between_types(before)
         count, changes = (
             int(v) for v in comm.allreduce(np.array([self.num_springs, self.face_changes]))
         )
         return count, changes
+
+    def _count_changes_between_types(self, before: dict[int, np.ndarray]) -> None:
+        """Add to ``face_changes`` the nodes that moved between a master's face types (§38.8).
+
+        The states of one master's face types share its friction history; a slave node whose
+        spring moved from one of them to another changed its face.
+        """
+        siblings: dict[int, list[PairState]] = {}
+        for state in self.states:
+            siblings.setdefault(id(state.friction), []).append(state)
+        for group in siblings.values():
+            if len(group) < 2:
+                continue
+            for state in group:
+                others = [before[id(o)] for o in group if o is not state]
+                moved = np.intersect1d(state.spring_slave, np.concatenate(others))
+                state.face_changes += int(moved.size)
 
     def _pair_one(self, state: PairState, coords: np.ndarray, record_overlap: bool) -> None:
         empty = np.empty(0, dtype=np.int64)

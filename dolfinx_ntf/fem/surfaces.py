@@ -39,6 +39,7 @@ __all__ = [
     "boundary_faces",
     "faces_touching",
     "facet_cells",
+    "master_face_groups",
     "reference_coordinates",
     "resolve_master",
     "resolve_slave",
@@ -180,8 +181,9 @@ class FaceNodesSurface:
             ghost); a process may give none.
         name: Label used in messages.
         more: Faces of further types, ``(face_type, faces)`` each, e.g. the triangles of a
-            surface of triangles and quadrilaterals (C3D15). A slave surface only: a master
-            holds one face type. Every process gives the same types.
+            surface of triangles and quadrilaterals (C3D15). Every process gives the same
+            types. A master of several types is searched as one surface, its springs per type
+            (``master_face_groups``, docs/method.md §38.8).
     """
 
     face_type: FaceType
@@ -465,7 +467,8 @@ def resolve_master(
             types = ", ".join(g.face_type.name for g in surface.face_groups(V, what))
             raise NotImplementedError(
                 f"{what}: FaceNodesSurface '{surface.name}' holds faces of several types "
-                f"({types}): a master surface of one face type only is supported"
+                f"({types}): here a master surface of one face type only is supported (contact "
+                "pairs take several, master_face_groups)"
             )
         return surface.surface_faces(V, what)
     if not isinstance(surface, FacetSurface):
@@ -475,6 +478,26 @@ def resolve_master(
         )
     facets = _tagged_facets(surface, V.mesh, what)
     return boundary_faces(V, facets, what=what, reference=reference)
+
+
+def master_face_groups(
+    V: dolfinx.fem.FunctionSpace,
+    surface: FacetSurface | FaceNodesSurface,
+    what: str = "master",
+    *,
+    reference: np.ndarray | None = None,
+) -> tuple[SurfaceFaces, ...]:
+    """Master faces of each face type (one group but for a ``FaceNodesSurface`` with ``more``).
+
+    Args:
+        V: The displacement space.
+        surface: The face-based master surface.
+        what: Label for messages.
+        reference: As :func:`boundary_faces` takes it.
+    """
+    if isinstance(surface, FaceNodesSurface) and surface.more:  # docs/method.md §38.8
+        return surface.face_groups(V, what)
+    return (resolve_master(V, surface, what, reference=reference),)
 
 
 def resolve_slave(

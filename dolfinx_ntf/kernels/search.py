@@ -21,7 +21,7 @@ from dolfinx_ntf.kernels import springs
 from dolfinx_ntf.kernels.faces import FaceType
 from dolfinx_ntf.kernels.tie_frame import TieFrame, triangle_moments
 
-__all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterSurface"]
+__all__ = ["MAX_WALK_STEPS", "NOT_HELD", "MasterFaceGroup", "MasterSurface"]
 
 MAX_WALK_STEPS = 100
 """A walk taking more steps than this finds no face (docs/method.md §3.2)."""
@@ -42,6 +42,10 @@ class MasterSurface(springs.MeshedMasterSprings):
         name: Surface name used in error messages.
         coords: Optional (num_nodes, 3) coordinates. When given, error messages about invalid
             edges include the node coordinates, and `update(coords)` is run at construction.
+        more: Faces of other types ``((face_type, faces), ...)`` on the same surface (a C3D15
+            master of triangles and quadrilaterals, docs/method.md §38.8): one triangulation
+            and one search over all; their faces are numbered after ``faces``, group by group
+            (:attr:`face_groups`).
 
     Raises:
         ValueError: If `faces` is malformed, if a face edge is shared by more than two faces, or
@@ -60,40 +64,65 @@ class MasterSurface(springs.MeshedMasterSprings):
         *,
         name: str = "master",
         coords: np.ndarray | None = None,
+        more: tuple[tuple[FaceType, np.ndarray], ...] = (),
     ) -> None:
         self._face_type = face_type
         self._name = name
-        faces = _check_faces(face_type, faces, name)
+        groups = [(face_type, _check_faces(face_type, faces, name))]
+        for more_type, more_faces in more:  # docs/method.md §38.8: one search over both kinds
+            if np.asarray(more_faces).size:
+                groups.append((more_type, _check_faces(more_type, more_faces, name)))
+        self._groups = tuple(groups)
+        sizes = [g.shape[0] for _, g in groups]
+        self._group_offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        faces = groups[0][1] if len(groups) == 1 else _padded_faces(groups)
         self._faces = faces
-        self._nodes, local = np.unique(faces, return_inverse=True)
-        self._local_faces = local.reshape(faces.shape)
+        self._nodes = np.unique(np.concatenate([g.ravel() for _, g in groups]))
+        #: per group: (F_g, n_g) master-local node indices of its faces
+        self._local_groups = tuple(np.searchsorted(self._nodes, g) for _, g in groups)
+        self._local_faces = self._local_groups[0] if len(groups) == 1 else None
         ref = None if coords is None else np.asarray(coords, dtype=float)
 
-        nc = face_type.num_corners
-        corners = faces[:, :nc]
-        face_edges = np.stack([corners, np.roll(corners, -1, axis=1)], axis=2).reshape(-1, 2)
+        face_edges, face_of_edge, corner_faces, corner_nodes = [], [], [], []
+        triangles, local_triangles, triangle_faces, degenerate = [], [], [], []
+        for (ft, g), local, offset in zip(groups, self._local_groups, self._group_offsets):
+            nc = ft.num_corners
+            corners = g[:, :nc]
+            face_edges.append(
+                np.stack([corners, np.roll(corners, -1, axis=1)], axis=2).reshape(-1, 2)
+            )
+            face_of_edge.append(offset + np.repeat(np.arange(g.shape[0]), nc))
+            corner_faces.append(offset + np.repeat(np.arange(g.shape[0]), nc))
+            corner_nodes.append(local[:, :nc].ravel())
+            tri_local = np.asarray(ft.triangles, dtype=np.int64)
+            t_per_face = tri_local.shape[0]
+            tri = g[:, tri_local].reshape(-1, 3)
+            # ... and one sub-triangle with a repeated node, left out: such a face has one
+            # triangle
+            kept = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 2] != tri[:, 0])
+            if np.any(~kept.reshape(-1, t_per_face).any(axis=1)):
+                f = int(np.flatnonzero(~kept.reshape(-1, t_per_face).any(axis=1))[0])
+                raise ValueError(
+                    f"Master surface '{name}': face {offset + f} ({g[f].tolist()}) has no area"
+                )
+            degenerate.append(~kept.reshape(-1, t_per_face).all(axis=1))
+            triangle_faces.append(offset + np.repeat(np.arange(g.shape[0]), t_per_face)[kept])
+            triangles.append(tri[kept])
+            local_triangles.append(local[:, tri_local].reshape(-1, 3)[kept])
+        face_edges = np.concatenate(face_edges)
         # a quad4 face with a repeated corner (a collapsed wedge's triangle, docs/method.md
         # §30) has a zero-length edge, which borders nothing
+        item = groups[0][0].num_corners if len(groups) == 1 else np.concatenate(face_of_edge)
         _group_edges(
-            face_edges, nc, name, ref, "face", "faces", face_edges[:, 0] != face_edges[:, 1]
+            face_edges, item, name, ref, "face", "faces", face_edges[:, 0] != face_edges[:, 1]
         )
-
-        tri_local = np.asarray(face_type.triangles, dtype=np.int64)
-        t_per_face = tri_local.shape[0]
-        triangles = faces[:, tri_local].reshape(-1, 3)
-        # ... and one sub-triangle with a repeated node, left out: such a face has one triangle
-        kept = (triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
-        kept &= triangles[:, 2] != triangles[:, 0]
-        self._degenerate = ~kept.reshape(-1, t_per_face).all(axis=1)  # (F,) faces
-        if np.any(~kept.reshape(-1, t_per_face).any(axis=1)):
-            f = int(np.flatnonzero(~kept.reshape(-1, t_per_face).any(axis=1))[0])
-            raise ValueError(f"Master surface '{name}': face {f} ({faces[f].tolist()}) has no area")
-        self._triangle_faces = np.repeat(np.arange(faces.shape[0]), t_per_face)[kept]
+        self._degenerate = np.concatenate(degenerate)  # (F,) faces
+        self._triangle_faces = np.concatenate(triangle_faces)
         self._first_triangle_of_face = np.searchsorted(
-            self._triangle_faces, np.arange(faces.shape[0])
+            self._triangle_faces, np.arange(self._group_offsets[-1])
         )
-        self._triangles = triangles[kept]
-        self._local_triangles = self._local_faces[:, tri_local].reshape(-1, 3)[kept]
+        self._triangles = np.concatenate(triangles)
+        self._local_triangles = np.concatenate(local_triangles)
         tri_edges = np.stack(
             [self._triangles, np.roll(self._triangles, -1, axis=1)], axis=2
         ).reshape(-1, 2)
@@ -111,12 +140,10 @@ class MasterSurface(springs.MeshedMasterSprings):
         self._edge_id = edge_id.reshape(-1, 3)
         self._edge_sign = sign.reshape(-1, 3).astype(float)
 
+        corner_faces, corner_nodes = np.concatenate(corner_faces), np.concatenate(corner_nodes)
         incidence = scipy.sparse.csr_matrix(
-            (
-                np.ones(corners.size, dtype=np.int8),
-                (np.repeat(np.arange(faces.shape[0]), nc), self._local_faces[:, :nc].ravel()),
-            ),
-            shape=(faces.shape[0], self._nodes.size),
+            (np.ones(corner_faces.size, dtype=np.int8), (corner_faces, corner_nodes)),
+            shape=(int(self._group_offsets[-1]), self._nodes.size),
         )
         patches = (incidence @ incidence.T).tocsr()
         patches.sort_indices()
@@ -134,12 +161,22 @@ class MasterSurface(springs.MeshedMasterSprings):
 
     @property
     def face_type(self) -> FaceType:
-        """Type of all faces."""
+        """Type of all faces (of the first group where there are several)."""
         return self._face_type
 
     @property
+    def face_groups(self) -> tuple[tuple[FaceType, np.ndarray], ...]:
+        """``(face_type, faces)`` of each face type, in face-number order (one if one type)."""
+        return self._groups
+
+    @property
+    def group_offsets(self) -> np.ndarray:
+        """(G + 1,) the first face number of each group of :attr:`face_groups`, then F."""
+        return self._group_offsets
+
+    @property
     def faces(self) -> np.ndarray:
-        """(F, n) node ids of the faces."""
+        """(F, n) node ids of the faces (several types: padded with -1 to the widest)."""
         return self._faces
 
     @property
@@ -293,31 +330,32 @@ class MasterSurface(springs.MeshedMasterSprings):
         A face with a repeated corner (a collapsed wedge's triangle) counts once per node with
         its plane's normal, as ccx's 3-node triangle (docs/method.md §30).
         """
-        ft = self._face_type
-        dphi = np.asarray(ft.shape_derivatives(np.asarray(ft.node_parameters, dtype=float)))
-        xf = x[self._local_faces]  # (F, n, 3)
-        q_xi = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 0])
-        q_eta = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 1])
-        m = np.cross(q_xi, q_eta)  # (F, n, 3)
-        counted = np.ones(self._local_faces.shape, dtype=bool)
-        if np.any(self._degenerate):
-            faces = np.flatnonzero(self._degenerate)
-            tri = self._local_triangles[np.searchsorted(self._triangle_faces, faces)]
-            a, b, c = (x[tri[:, k]] for k in range(3))
-            m[faces] = np.cross(b - a, c - a)[:, None, :]
-            local = self._local_faces[faces]
-            repeat = np.triu(local[:, :, None] == local[:, None, :], 1).any(axis=1)
-            counted[faces] = ~repeat  # a repeated node's later slots
-        norm = np.linalg.norm(m, axis=2)
-        if np.any(~(norm > 0.0)):
-            f, k = (int(v[0]) for v in np.nonzero(~(norm > 0.0)))
-            raise ValueError(
-                f"Master surface '{self._name}': face {f} (nodes {self._faces[f].tolist()}) has "
-                f"a zero normal at its node {self._faces[f, k]}"
-            )
-        unit = m / norm[:, :, None]
         acc = np.zeros((self._nodes.size, 3))
-        np.add.at(acc, self._local_faces[counted], unit[counted])
+        for (ft, g), local, offset in zip(self._groups, self._local_groups, self._group_offsets):
+            dphi = np.asarray(ft.shape_derivatives(np.asarray(ft.node_parameters, dtype=float)))
+            xf = x[local]  # (F, n, 3)
+            q_xi = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 0])
+            q_eta = np.einsum("fjc,kj->fkc", xf, dphi[:, :, 1])
+            m = np.cross(q_xi, q_eta)  # (F, n, 3)
+            counted = np.ones(local.shape, dtype=bool)
+            degenerate = self._degenerate[offset : offset + g.shape[0]]
+            if np.any(degenerate):
+                faces = np.flatnonzero(degenerate)
+                tri = self._local_triangles[np.searchsorted(self._triangle_faces, offset + faces)]
+                a, b, c = (x[tri[:, k]] for k in range(3))
+                m[faces] = np.cross(b - a, c - a)[:, None, :]
+                here = local[faces]
+                repeat = np.triu(here[:, :, None] == here[:, None, :], 1).any(axis=1)
+                counted[faces] = ~repeat  # a repeated node's later slots
+            norm = np.linalg.norm(m, axis=2)
+            if np.any(~(norm > 0.0)):
+                f, k = (int(v[0]) for v in np.nonzero(~(norm > 0.0)))
+                raise ValueError(
+                    f"Master surface '{self._name}': face {offset + f} (nodes {g[f].tolist()}) "
+                    f"has a zero normal at its node {g[f, k]}"
+                )
+            unit = m / norm[:, :, None]
+            np.add.at(acc, local[counted], unit[counted])
         anorm = np.linalg.norm(acc, axis=1)
         if np.any(~(anorm > 1e-12)):
             k = int(np.flatnonzero(~(anorm > 1e-12))[0])
@@ -565,6 +603,117 @@ class MasterSurface(springs.MeshedMasterSprings):
         return points, tol
 
 
+class _JointSearch:
+    """The last search of a surface of several face types, shared by its groups' views."""
+
+    def __init__(self, surface: MasterSurface) -> None:
+        self.surface = surface
+        self.coords: np.ndarray | None = None  # master node coordinates of the last update
+        self.points: np.ndarray | None = None
+        self.tolerances: np.ndarray | None = None
+        self.faces: np.ndarray | None = None  # (S,) face numbers of the last search
+        # the search is repeated for new points or after an update of the surface
+
+
+class MasterFaceGroup(springs.MeshedMasterSprings):
+    """The faces of one type of a :class:`MasterSurface` of several types (docs/method.md §38.8).
+
+    Plays the :class:`~dolfinx_ntf.kernels.master.ContactMaster` role for the pair state of
+    that face type: the surface is updated and searched once for all its groups (the walk
+    crosses between the kinds, the nodal normals sum both), and each group keeps the slave nodes
+    whose face is one of its own, numbered within the group. The groups of one surface search
+    the same slave nodes (one slave surface): every node falls in at most one group. The
+    stable search (``start_faces`` given) starts each walk at the face the last search found,
+    of whichever type (the groups' own previous faces cannot name the others').
+
+    Args:
+        surface: The surface of all faces.
+        group: Index of this face type in ``surface.face_groups``.
+        name: Label for messages.
+    """
+
+    collective = False
+
+    def __init__(
+        self, surface: MasterSurface, group: int, name: str, *, joint: _JointSearch
+    ) -> None:
+        self.name = name
+        self._surface = surface
+        self._group = int(group)
+        self._first, self._end = (int(v) for v in surface.group_offsets[group : group + 2])
+        self._joint = joint
+
+    @classmethod
+    def groups(cls, surface: MasterSurface, name: str) -> list[MasterFaceGroup]:
+        """One view per face type of ``surface``, sharing its search."""
+        joint = _JointSearch(surface)
+        return [
+            cls(surface, g, f"{name} ({face_type.name} faces)", joint=joint)
+            for g, (face_type, _) in enumerate(surface.face_groups)
+        ]
+
+    @property
+    def face_type(self) -> FaceType:
+        """This group's face type."""
+        return self._surface.face_groups[self._group][0]
+
+    def update(self, coords: np.ndarray) -> None:
+        """Update the shared surface (once for all groups at the same coordinates)."""
+        x = np.asarray(coords, dtype=float)[self._surface.nodes]
+        joint = self._joint
+        if joint.coords is not None and np.array_equal(joint.coords, x):
+            return
+        self._surface.update(coords)
+        joint.coords = x
+        joint.points = None  # the last search was on the surface before this update
+
+    def locate(
+        self,
+        points: np.ndarray,
+        tolerances: np.ndarray | float,
+        *,
+        max_depth: float | None = None,
+        start_faces: np.ndarray | None = None,
+        tie_frame: TieFrame | None = None,
+        ccx_ties: bool = False,
+    ) -> np.ndarray:
+        """This group's face holding each point (-1: none, or a face of another type)."""
+        joint = self._joint
+        points = np.asarray(points, dtype=float)
+        tol = np.broadcast_to(np.asarray(tolerances, dtype=float), points.shape[:1])
+        same = (
+            joint.points is not None
+            and np.array_equal(joint.points, points)
+            and np.array_equal(joint.tolerances, tol)
+        )
+        if not same:
+            start = None
+            if start_faces is not None and joint.faces is not None:
+                start = joint.faces if joint.faces.size == points.shape[0] else None
+            joint.faces = self._surface.locate(
+                points,
+                tol,
+                max_depth=max_depth,
+                start_faces=start,
+                tie_frame=tie_frame,
+                ccx_ties=ccx_ties,
+            )
+            joint.points, joint.tolerances = points.copy(), tol.copy()
+        face = joint.faces
+        mine = (face >= self._first) & (face < self._end)
+        return np.where(mine, face - self._first, -1)
+
+    def face_patches(self, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The faces of this group sharing a corner with each of ``faces`` (group numbers)."""
+        which, patch = self._surface.face_patches(np.asarray(faces, dtype=np.int64) + self._first)
+        keep = (patch >= self._first) & (patch < self._end)
+        return which[keep], patch[keep] - self._first
+
+    def surface_moments(self) -> tuple[np.ndarray, np.ndarray]:
+        """The whole surface's moments (the tie frame of the one search)."""
+        return self._surface.surface_moments()
+
+
 def _check_faces(face_type: FaceType, faces: np.ndarray, name: str) -> np.ndarray:
     """Validate the (F, n) connectivity array and return it as int64."""
     arr = np.asarray(faces)
@@ -594,9 +743,17 @@ def _check_faces(face_type: FaceType, faces: np.ndarray, name: str) -> np.ndarra
     return arr
 
 
+def _padded_faces(groups: list[tuple[FaceType, np.ndarray]]) -> np.ndarray:
+    """(F, n) faces of several types, each row padded with -1 to the widest type."""
+    width = max(g.shape[1] for _, g in groups)
+    return np.vstack(
+        [np.pad(g, ((0, 0), (0, width - g.shape[1])), constant_values=-1) for _, g in groups]
+    )
+
+
 def _group_edges(
     edges: np.ndarray,
-    per_item: int,
+    per_item: int | np.ndarray,
     name: str,
     coords: np.ndarray | None,
     item: str,
@@ -607,7 +764,8 @@ def _group_edges(
 
     Args:
         edges: (E, 2) directed edges; edge k belongs to item k // per_item.
-        per_item: Edges per item (face or triangle).
+        per_item: Edges per item (face or triangle), or (E,) the item of each edge (faces of
+            several types).
         name: Surface name for messages.
         coords: Optional coordinates for messages.
         item: Singular item name for messages.
@@ -620,6 +778,9 @@ def _group_edges(
         edge runs like its representative, else -1) per edge, and (P, 2) pairs of edge indices
         shared by two items.
     """
+    item_of = (
+        (lambda k: k // per_item) if np.ndim(per_item) == 0 else (lambda k: np.asarray(per_item)[k])
+    )
     lo, hi = edges.min(axis=1), edges.max(axis=1)
     keys = lo * (int(edges.max()) + 1) + hi
     if real is not None:
@@ -635,7 +796,7 @@ def _group_edges(
         members = order[starts[g] : starts[g] + counts[g]]
         raise ValueError(
             f"Master surface '{name}': edge {_describe(edges[members[0]], coords)} is shared by "
-            f"{counts[g]} {items} ({items} {sorted((members // per_item).tolist())}); a master "
+            f"{counts[g]} {items} ({items} {sorted(item_of(members).tolist())}); a master "
             "edge may border at most two faces (docs/method.md §2.3)"
         )
     group = np.cumsum(new) - 1
@@ -648,7 +809,7 @@ def _group_edges(
         a, b = pairs[int(np.flatnonzero(same_dir)[0])]
         raise ValueError(
             f"Master surface '{name}': edge {_describe(edges[a], coords)} is traversed in the "
-            f"same direction by {item}s {a // per_item} and {b // per_item}: neighbouring faces "
+            f"same direction by {item}s {item_of(a)} and {item_of(b)}: neighbouring faces "
             "are inconsistently oriented (the node order must give outward normals)"
         )
     sign = np.where(edges[:, 0] == edges[rep[edge_id], 0], 1, -1)

@@ -153,13 +153,19 @@ def _pair_results(
     results = contact_results(problem)
     if pair is None:
         return results
-    names = [r.pair for r in results]
+    # a master of several face types gives a state (and results) per type, one pair number
+    pair_numbers = problem.pairing.pair_numbers
+    names = [
+        r.pair for n, r in enumerate(results) if n == 0 or pair_numbers[n] != pair_numbers[n - 1]
+    ]
     if isinstance(pair, ContactPair):
-        index = next((i for i, s in enumerate(problem.pairing.states) if s.pair is pair), None)
+        index = next(
+            (n for n, s in zip(pair_numbers, problem.pairing.states) if s.pair is pair), None
+        )
     elif isinstance(pair, str):
-        index = names.index(pair) if pair in names else None
+        index = next((n for n, r in zip(pair_numbers, results) if r.pair == pair), None)
     elif isinstance(pair, numbers.Integral) and not isinstance(pair, bool):
-        index = int(pair) if 0 <= pair < len(results) else None
+        index = int(pair) if 0 <= pair < len(names) else None
     else:
         raise TypeError(
             f"{owner}: pair must be an index, a name, a ContactPair or None, got "
@@ -167,7 +173,7 @@ def _pair_results(
         )
     if index is None:
         raise ValueError(f"{owner}: no pair {pair!r} in the problem (pairs: {names})")
-    return [results[index]]
+    return [res for n, res in zip(pair_numbers, results, strict=True) if n == index]
 
 
 def contact_force(

@@ -143,7 +143,11 @@ def contact_results(problem: ContactProblem, *, recovered: bool = False) -> list
     _evaluated(problem)
     coords = problem.pairing.current_coordinates()
     dim = problem.u.function_space.dofmap.index_map_bs
-    results = [_pair_results(i, s, coords, dim) for i, s in enumerate(problem.pairing.states)]
+    pairing = problem.pairing  # a master of several face types: a state per type (§38.8)
+    results = [
+        _pair_results(i, s, coords, dim)
+        for i, s in zip(pairing.pair_numbers, pairing.states, strict=True)
+    ]
     if recovered:
         fields = problem.output_cache.get(RECOVERY_FIELDS)
         if fields is None:

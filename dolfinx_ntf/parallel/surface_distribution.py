@@ -27,7 +27,7 @@ from dolfinx_ntf.fem.surfaces import (
 from dolfinx_ntf.parallel.collectives import alltoallv, send_to_owners
 from dolfinx_ntf.parallel.halo import NodeHalo
 
-__all__ = ["distribute_pair", "distribute_slave"]
+__all__ = ["distribute_master", "distribute_pair", "distribute_slave"]
 
 
 def _gather_faces(
@@ -143,9 +143,20 @@ def distribute_pair(
     every slave face (of any process) holding one of them, so that spring areas are complete at
     partition cuts (docs/method.md §14.1).
     """
-    g, x, facets = _gather_faces(halo, master, f"{what} master")
-    master = SurfaceFaces(master.face_type, halo.local(g, x).astype(np.int32), facets)
+    master = distribute_master(halo, master, f"{what} master")
     return distribute_slave(V, halo, surface, slave, what), master
+
+
+def distribute_master(halo: NodeHalo, master: SurfaceFaces, what: str) -> SurfaceFaces:
+    """Every master face of every process, in the halo's extended numbering. Collective.
+
+    Args:
+        halo: The problem's node halo (the gathered faces' nodes are appended to it).
+        master: This process's master faces (one face type).
+        what: Label for messages.
+    """
+    g, x, facets = _gather_faces(halo, master, what)
+    return SurfaceFaces(master.face_type, halo.local(g, x).astype(np.int32), facets)
 
 
 def distribute_slave(

@@ -37,6 +37,9 @@ DECKS = {
     "wedge_node_quad": (1, 1, False),  # the node set of the quadrilateral bottom
     "wedge_adjust_set": (1, 1, False),  # ADJUST: the bottom's corner nodes
     "wedge_adjust_distance": (1, 1, False),  # ADJUST=0.005: every slave node
+    "wedge_master_mixed": (1, (1, 2), False),  # a master of quadrilaterals and triangles
+    "wedge_master_mixed_tri": (2, (1, 2), False),  # the same under triangular slave faces
+    "wedge_master_mixed_slide": (1, (1, 2), False),  # friction; nodes slide across the kinds
 }
 #: The ADJUST decks: the punch 0.002 above the block, ADJUST by node set or distance.
 ADJUST = {"wedge_adjust_set": "set", "wedge_adjust_distance": "0.005"}
@@ -45,8 +48,14 @@ HEAT = "wedge_heat_punch"
 #: The node-based decks, whose midside nodes take ccx's fallback area held between pairings
 #: (docs/method.md §38.5); their ``.sta.ref`` files are ccx 2.20's.
 NODE_DECKS = ("wedge_node_mixed", "wedge_node_quad")
+#: The sliding deck's second step: 10 increments of 0.1 (the others print 0.5 and 1).
+SLIDE = "wedge_master_mixed_slide"
+SLIDE_TIMES = (0.5, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6, 1.7, 1.8, 1.9, 2.0)
 #: The tie decks: the punch tied to the block (quadrilaterals, triangles, both).
 TIES = {"wedge_tie_quad": (1, 1), "wedge_tie_tri": (2, 2), "wedge_tie_mixed": ((1, 2), 1)}
+#: Master surfaces of triangles and quadrilaterals (the block's columns alternate their wedges'
+#: axis, docs/method.md §38.8).
+MIXED_MASTERS = ("wedge_master_mixed", "wedge_master_mixed_tri")
 
 
 def _generator():
@@ -86,11 +95,17 @@ def test_c3d15_contact_matches_ccx(tmp_path, job):
     ``wedge_node_quad``: the node set of the quadrilateral bottom. ``wedge_adjust_*``: the
     punch 0.002 above the block, ADJUST moves the bottom's corners (a node set) or all its
     nodes (a distance) onto the block; the 18-node geometry's face centres follow them
-    (docs/method.md §38.6: without, CDIS and CSTR were 1 % off).
+    (docs/method.md §38.6: without, CDIS and CSTR were 1 % off). ``wedge_master_mixed``,
+    ``wedge_master_mixed_tri``: the master holds quadrilaterals and triangles (one search over
+    both, springs of 9 and 7 nodes): slave nodes on both kinds, and some 0.005 from the border;
+    ``wedge_master_mixed_slide``: with friction, the punch then slid 0.15 in 10 increments,
+    slave nodes moving from triangles onto quadrilaterals and back (a friction history across
+    the kinds).
     """
     ccx, ours = _run(tmp_path, job, MPI.COMM_WORLD)
     names = ["U", "RF", "CDIS", "CSTR", "CELS", "CNUM"]
-    assert [(b.name, b.time) for b in ccx] == [(n, t) for t in (0.5, 1.0) for n in names]
+    times = SLIDE_TIMES if job == SLIDE else (0.5, 1.0)
+    assert [(b.name, b.time) for b in ccx] == [(n, t) for t in times for n in names]
     assert [(b.name, b.time) for b in ours] == [(b.name, b.time) for b in ccx]
     worst: dict[str, float] = {}
     for a, b in zip(ccx, ours):
@@ -177,8 +192,9 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
             curved,
             job in TIES,
             nodes,
-            ADJUST.get(job),
-            job == HEAT,
+            adjust=ADJUST.get(job),
+            heat=job == HEAT,
+            slide=0.15 if job == SLIDE else 0.0,
         )
         assert (tmp_path / f"{job}.inp").read_text() == (DATA / f"{job}.inp").read_text(), job
         deck = read_deck(DATA / f"{job}.inp")
@@ -191,6 +207,41 @@ def test_c3d15_contact_decks_are_the_generator_s(tmp_path):
             expected = [{1, 2} if axis == 2 else {3, 4, 5} for axis in np.atleast_1d(axes)]
             assert faces <= set().union(*expected), (job, name, faces)
             assert all(faces & kind for kind in expected), (job, name, faces)
+
+
+@pytest.mark.parametrize("job", MIXED_MASTERS)
+def test_mixed_master_references_land_on_both_face_types(job):
+    """ccx's springs of the mixed-master decks: slave nodes over the master's triangles (block
+    columns 0.5 < x < 1, 1.5 < x < 2) and over its quadrilaterals (0 < x < 0.5, 1 < x < 1.5) in
+    both increments, one spring per slave node (CNUM equal to the rows)."""
+    deck = read_deck(DATA / f"{job}.inp")
+    blocks = read_dat(DATA / f"{job}.dat.ref")
+    cdis = [b for b in blocks if b.name == "CDIS"]
+    cnum = [b for b in blocks if b.name == "CNUM"]
+    assert [b.time for b in cdis] == [0.5, 1.0] == [b.time for b in cnum]
+    for springs, count in zip(cdis, cnum):
+        assert springs.labels.size == int(count.values.ravel()[0]) == np.unique(springs.labels).size
+        x = deck.node_coords[deck.node_index(springs.labels), 0]
+        on_triangles = ((x > 0.5) & (x < 1.0)) | (x > 1.5)
+        assert 0 < on_triangles.sum() < x.size, (job, springs.time, x)
+        assert np.all(springs.values[:, 0] < 0)  # closed springs: penetration
+
+
+def test_sliding_reference_moves_nodes_across_the_kinds():
+    """ccx's springs of ``wedge_master_mixed_slide``: in the sliding step slave nodes change
+    from triangles to quadrilaterals and the other way (current x = X + U_x), with slip."""
+    deck = read_deck(DATA / f"{SLIDE}.inp")
+    blocks = read_dat(DATA / f"{SLIDE}.dat.ref")
+    on_triangles = {}
+    for time in (1.0, 2.0):
+        springs = next(b for b in blocks if b.name == "CDIS" and b.time == time)
+        u = next(b for b in blocks if b.name == "U" and b.time == time)
+        x = deck.node_coords[deck.node_index(springs.labels), 0]
+        x = x + u.values[np.searchsorted(u.labels, springs.labels), 0]
+        on_triangles[time] = set(springs.labels[((x > 0.5) & (x < 1.0)) | (x > 1.5)].tolist())
+    assert on_triangles[1.0] - on_triangles[2.0] and on_triangles[2.0] - on_triangles[1.0]
+    last = next(b for b in blocks if b.name == "CDIS" and b.time == 2.0)
+    assert np.abs(last.values[:, 1:]).max() > 0.1  # slipped by most of the 0.15
 
 
 def _edited(tmp_path: Path, job: str, old: str, new: str) -> str:
@@ -214,7 +265,7 @@ def test_c3d15_contact_refused_before_dolfinx_011(tmp_path):
 def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
     """What is not built stays refused with the deck line: cyclic symmetry, contact and ties in
     decks with coupled temperature-displacement steps (ties: any thermal step), ADJUST node sets
-    with midside nodes (as on C3D20, §11.5), a master
+    with midside nodes (as on C3D20, §11.5), ADJUST and the ``.cel`` file with a master
     surface of triangles and quadrilaterals; a face inside the mesh is an error naming it."""
     cyclic = "*TIE, NAME=T, CYCLIC SYMMETRY"
     job = _edited(tmp_path, "wedge_tie_quad", "*TIE, NAME=T", cyclic)
@@ -240,10 +291,14 @@ def test_c3d15_contact_refusals_name_the_deck_line(tmp_path):
         NotImplementedError, match=r"e\.inp:\d+: ADJUST=TOP with node \d+, which is not an element"
     ):
         run_job(job, tmp_path, progress=False)
-    job = _edited(
-        tmp_path, "wedge_punch_quad", "*SURFACE, NAME=MASTER\n", "*SURFACE, NAME=MASTER\n1, S1\n"
-    )
-    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: \*SURFACE MASTER with both 6-node"):
+    job = _edited(tmp_path, "wedge_master_mixed", "NODE TO SURFACE", "NODE TO SURFACE, ADJUST=0.01")
+    with pytest.raises(NotImplementedError, match=r"e\.inp:\d+: ADJUST with the master surface"):
+        run_job(job, tmp_path, progress=False)
+    cel = "*NODE FILE, CONTACT ELEMENTS\nU\n*END STEP"
+    job = _edited(tmp_path, "wedge_master_mixed", "*END STEP", cel)
+    with pytest.raises(
+        NotImplementedError, match=r"e\.inp:\d+: CONTACT ELEMENTS \(the \.cel file\)"
+    ):
         run_job(job, tmp_path, progress=False)
     # the block's wedges along z: element 1's top triangle (z = 0.5) is shared by the layer above
     job = _edited(

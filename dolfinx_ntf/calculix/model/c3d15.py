@@ -91,9 +91,10 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     Raises:
         ValueError: an element whose Jacobian is not positive at one of ccx's 9 points.
         NotImplementedError: dolfinx older than 0.11, pressures in decks mixing NLGEOM
-            and small-strain steps, cyclic symmetry ties, a master surface of triangles and
-            quadrilaterals, ADJUST node sets of contact pairs, contact pairs and ties in thermal
-            steps, transient coupled temperature-displacement steps.
+            and small-strain steps, cyclic symmetry ties, ADJUST node sets of contact pairs,
+            contact pairs and ties in thermal steps, transient coupled temperature-displacement
+            steps, ADJUST and the ``.cel`` file with a master surface of triangles and
+            quadrilaterals.
     """
     where = f"{block.locations[0]}: C3D15 (element {int(block.ids[0])})"
     require_quadratic_prisms(f"{where}: 15-node wedges", "§32.5, §34")
@@ -114,13 +115,19 @@ def check_c3d15_deck(deck: Deck, block: ElementBlock) -> None:
     for pair in deck.contact_pairs:
         master = deck.surfaces[pair.master]
         kinds = np.unique(np.minimum(master.faces, 3)) if master.type == "ELEMENT" else []
-        if len(kinds) > 1:
+        requests = [r for step in deck.steps for r in step.file_requests if r.contact_elements]
+        if len(kinds) > 1 and pair.adjust is not None:
+            raise NotImplementedError(
+                f"{pair.location}: ADJUST with the master surface {pair.master} of both 6-node "
+                f"triangles and 8-node quadrilaterals of C3D15 elements is not supported yet "
+                f"({where}; docs/method.md §38.8)"
+            )
+        if len(kinds) > 1 and requests:
             raise not_supported(
-                f"*SURFACE {pair.master} with both 6-node triangles (S1, S2) and 8-node "
-                f"quadrilaterals (S3..S5) of C3D15 elements as the master surface of a contact "
-                f"pair (the pair at {pair.location}; a slave surface may mix them, a master "
-                f"holds one kind; {where}; docs/method.md §38)",
-                master.location,
+                f"CONTACT ELEMENTS (the .cel file) with the master surface {pair.master} of both "
+                f"6-node triangles and 8-node quadrilaterals of C3D15 elements (the pair at "
+                f"{pair.location}; {where}; docs/method.md §38.8)",
+                requests[0].location,
             )
     thermal = next((step for step in deck.steps if step.coupled), None)
     coupled = next((step for step in deck.steps if step.coupled and not step.coupled.heat), None)
@@ -326,7 +333,7 @@ def c3d15_surface(deck: Deck, maps: MeshMaps, name: str, surface: Surface) -> Fa
 
     ccx's faces S1, S2 are 6-node triangles, S3..S5 8-node quadrilaterals, in ccx's outward
     order (``ELEMENT_TYPES["C3D15"].faces``); a surface of both kinds gives the triangles as
-    ``more`` faces (slave surfaces only, :func:`check_c3d15_deck` refuses such masters). The
+    ``more`` faces (a master of both is searched as one surface, docs/method.md §38.8). The
     quadrilaterals' spring areas take ccx's 2 x 2 points (``QUAD8_GAUSS2``, 3 x 3 differ by up
     to 3e-6 of the contact stress on faces with curved edges, measured). On
     several processes each gives the faces of the elements it holds (owned and ghost cells).

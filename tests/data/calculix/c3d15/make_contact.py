@@ -26,7 +26,14 @@ no slave node lies above a master edge. Decks:
   distance 0.005 (every slave node; docs/method.md §38.6);
 - ``wedge_heat_punch``: ``wedge_punch_quad`` as a ``*HEAT TRANSFER, STEADY STATE`` step: the
   block's bottom at 0, the punch's top at 100, heat across the contact springs by a ``*GAP
-  CONDUCTANCE`` of 30 (docs/method.md §38.7).
+  CONDUCTANCE`` of 30 (docs/method.md §38.7);
+- ``wedge_master_mixed``, ``wedge_master_mixed_tri``: a block whose columns of cells along x
+  alternate their wedges' axis (y, z, y, z): its top, the master surface, is quadrilaterals at
+  0 < x < 0.5 and 1 < x < 1.5 and triangles at 0.5 < x < 1 and 1.5 < x < 2; the punch (wedges
+  along y: quadrilaterals, along z: triangles) spans x = 0.52..1.47, so its nodes land on both
+  kinds of master face (docs/method.md §38.8); ``wedge_master_mixed_slide``: the first with
+  friction and a second step sliding the punch 0.15 in x, so that slave nodes move from the
+  triangles onto the quadrilaterals.
 
 Run ``python make_contact.py`` (deterministic: no random numbers).
 """
@@ -113,12 +120,13 @@ def _curve(x: np.ndarray, wedges: list, first_node: int) -> np.ndarray:
 def write(
     path: Path,
     slave_axis: int | tuple,
-    master_axis: int,
+    master_axis: int | tuple,
     curved: bool = False,
     tie: bool = False,
     nodes: bool = False,
     adjust: str | None = None,
     heat: bool = False,
+    slide: float = 0.0,
 ) -> None:
     """The punch (wedges along ``slave_axis``) on the block (along ``master_axis``).
 
@@ -126,7 +134,9 @@ def write(
     to the block instead of in contact, its top also moved by 0.01 in x; ``nodes``: the slave
     surface is the node set of the punch's bottom (``TYPE=NODE``); ``adjust``: the punch 0.002
     higher and the pair's ``ADJUST`` (``"set"``: the bottom's corner nodes, else a distance);
-    ``heat``: a steady heat transfer step instead (conductivities, a gap conductance).
+    ``heat``: a steady heat transfer step instead (conductivities, a gap conductance);
+    ``slide``: Coulomb friction (mu 0.2, stick slope 5000) and a second step moving the punch's
+    top by ``slide`` in x in increments of 0.1.
     """
     lift = 0.0 if adjust is None else 0.002
     block_x, block_w = wedge_body((0, 0, 0), (2, 1, 1), (4, 2, 2), master_axis, 1)
@@ -140,8 +150,9 @@ def write(
     e0 = len(block_w) + 1
     shape = "curved punch" if curved else "punch"
     axes = "".join("xyz"[a] for a in np.atleast_1d(slave_axis))
+    block_axes = "".join("xyz"[a] for a in np.atleast_1d(master_axis))
     heading = f"C3D15 {shape} (wedge axis {axes}) on a C3D15 block (axis "
-    lines = ["*HEADING", heading + f"{'xyz'[master_axis]}), dolfinx_ntf method §38"]
+    lines = ["*HEADING", heading + f"{block_axes}), dolfinx_ntf method §38"]
     lines.append("*NODE, NSET=NALL")
     lines += [f"{n + 1}, {p[0]:.12g}, {p[1]:.12g}, {p[2]:.12g}" for n, p in enumerate(x)]
     for name, wedges, first in (("BLOCK", block_w, 1), ("PUNCH", punch_w, e0)):
@@ -182,6 +193,7 @@ def write(
             "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR",
             "50000.0, 0.014285714285714285, 0.001",
             *(["*GAP CONDUCTANCE", "30., 0.", "30., 1e6"] if heat else []),
+            *(["*FRICTION", "0.2, 5000."] if slide else []),
         ]
     if heat:
         lines += ["*BOUNDARY", "BASE, 1, 3, 0.0", "TOP, 1, 2, 0.0"]
@@ -208,6 +220,21 @@ def write(
         *([] if tie else ["*CONTACT PRINT", "CDIS, CSTR, CELS, CNUM"]),
         "*END STEP",
     ]
+    if slide:
+        lines += [
+            "*STEP, INC=100",
+            "*STATIC, DIRECT",
+            "0.1, 1.0",
+            "*CONTROLS, PARAMETERS=FIELD",
+            "1e-10, 1e-08, , , 1e-10, 1e-05, 1e-08, 1e-12",
+            "*BOUNDARY",
+            f"TOP, 1, 1, {slide}",
+            "*NODE PRINT, NSET=NALL",
+            "U, RF",
+            "*CONTACT PRINT",
+            "CDIS, CSTR, CELS, CNUM",
+            "*END STEP",
+        ]
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -227,3 +254,7 @@ if __name__ == "__main__":
     write(here / "wedge_adjust_set.inp", slave_axis=1, master_axis=1, adjust="set")
     write(here / "wedge_adjust_distance.inp", slave_axis=1, master_axis=1, adjust="0.005")
     write(here / "wedge_heat_punch.inp", slave_axis=1, master_axis=1, heat=True)
+
+    write(here / "wedge_master_mixed.inp", slave_axis=1, master_axis=(1, 2))
+    write(here / "wedge_master_mixed_tri.inp", slave_axis=2, master_axis=(1, 2))
+    write(here / "wedge_master_mixed_slide.inp", slave_axis=1, master_axis=(1, 2), slide=0.15)
