@@ -223,7 +223,8 @@ def prism_face_surface(
     dof_of_input = np.full(int(largest) + 1, -1, dtype=np.int64)
     dof_of_input[input_index] = _geometry_node_dofs(V)
     given = np.concatenate([triangles.ravel(), quads.ravel()])
-    held = mesh.comm.allreduce(np.isin(given, input_index).astype(np.int8), op=MPI.MAX)
+    held = np.isin(given, input_index).astype(np.int32)
+    mesh.comm.Allreduce(MPI.IN_PLACE, held, op=MPI.MAX)
     if not np.all(held):
         missing = int(given[np.argmin(held)])
         raise ValueError(
