@@ -337,3 +337,36 @@ def test_flat_punch_carries_a_uniform_pressure(axis):
     smallest = comm.allreduce(pressure.min(initial=np.inf), op=MPI.MIN)
     largest = comm.allreduce(pressure.max(initial=-np.inf), op=MPI.MAX)
     print(f"{axis}: top uz {low:.6e} .. {high:.6e}; CSTR {smallest:.6g} .. {largest:.6g}")
+
+
+@pytest.mark.mpi
+@needs_011
+def test_a_tag_of_triangles_and_quadrilaterals_is_a_slave_only():
+    """The block's top (triangles) and end (quadrilaterals) under one tag: a slave surface of
+    two face types whose areas sum to both faces' (serial), refused as a master; a face node
+    outside the mesh is named."""
+    from helpers.quadratic_prisms import END, TOP, build_prism_block
+
+    mesh, _, faces = mesh_from_gmsh(build_prism_block, COMM)
+    V, _ = wedge15_space(mesh)
+    both = PrismFaces(
+        faces.triangles,
+        np.where(faces.triangle_tags == TOP, 99, faces.triangle_tags),
+        faces.quadrilaterals,
+        np.where(faces.quadrilateral_tags == END, 99, faces.quadrilateral_tags),
+    )
+    surface = prism_face_surface(V, both, 99, "top and end")
+    assert surface.face_type is QUAD8_GAUSS2 and [t for t, _ in surface.more] == [TRI6]
+    with pytest.raises(NotImplementedError, match="a master surface of one face type only"):
+        resolve_master(V, surface)
+    slave = resolve_slave(V, surface)
+    assert [g.face_type for g in slave.face_groups] == [QUAD8_GAUSS2, TRI6]
+    if COMM.size == 1:
+        X = V.tabulate_dof_coordinates()
+        assert slave_areas(slave, X).sum() == pytest.approx(2.0 + 1.0, rel=1e-12)
+    far = np.array(faces.triangles)
+    far[0, 0] = 10**6
+    outside = PrismFaces(far, faces.triangle_tags, faces.quadrilaterals, faces.quadrilateral_tags)
+    tag = int(faces.triangle_tags[0])
+    with pytest.raises(ValueError, match=rf"face node 1000000 \(input index\) of tag {tag} is not"):
+        prism_face_surface(V, outside, tag)
