@@ -224,7 +224,10 @@ API_MODULES: list[tuple[str, str]] = [
     ("XDMF files of 18-node prism meshes", "dolfinx_ntf.outputs.prism_xdmf"),
     ("Meshes from gmsh", "dolfinx_ntf.meshes.gmsh_io"),
     ("C3D15's space: the serendipity wedge on 18-node prisms", "dolfinx_ntf.fem.serendipity_wedge"),
-    ("Faces of 18-node prism meshes and their pressures", "dolfinx_ntf.fem.wedge_faces"),
+    (
+        "Faces of 18-node prism meshes: pressures and contact surfaces",
+        "dolfinx_ntf.fem.wedge_faces",
+    ),
     ("The punch geometry of the demos", "dolfinx_ntf.meshes.punch"),
     ("The Hertz geometry of the demos", "dolfinx_ntf.meshes.hertz"),
     ("The plane-strain Hertz geometry of the demos", "dolfinx_ntf.meshes.cylinder"),

@@ -5,7 +5,9 @@ neither ``ds`` nor ``exterior_facet_indices`` on it ("Multiple entity types in m
 docs/method.md §34.4). The faces of such a mesh are therefore held as rows of mesh input nodes
 (:class:`PrismFaces`, made by ``meshes/gmsh_io.py``), and a pressure on them becomes consistent
 nodal forces (``kernels.faces.pressure_forces``, ccx's face rules), as the deck runner's C3D15
-pressures (docs/method.md §40).
+pressures (docs/method.md §40). :func:`prism_face_surface` gives them as a contact surface
+(:class:`~dolfinx_ntf.fem.surfaces.FaceNodesSurface`, docs/method.md §40.6); the deck runner's
+C3D15 surfaces are built by the same :func:`c3d15_face_surface` (§38).
 
 Local nodes of basix's degree-2 prism (``fem/serendipity_wedge.py``): 0..5 the vertices, 6..14
 the edges (0-1, 0-2, 0-3, 1-2, 1-4, 2-5, 3-4, 3-5, 4-5), 15..17 the quadrilateral face centres
@@ -25,9 +27,16 @@ import numpy as np
 import dolfinx.fem
 
 from dolfinx_ntf import compat
-from dolfinx_ntf.kernels.faces import QUAD9, TRI6, pressure_forces
+from dolfinx_ntf.fem.surfaces import FaceNodesSurface
+from dolfinx_ntf.kernels.faces import QUAD8_GAUSS2, QUAD9, TRI6, pressure_forces
 
-__all__ = ["WEDGE_FACES", "PrismFaces", "prism_face_forces"]
+__all__ = [
+    "WEDGE_FACES",
+    "PrismFaces",
+    "c3d15_face_surface",
+    "prism_face_forces",
+    "prism_face_surface",
+]
 
 #: The five faces of the 18-node prism (basix local nodes), outward, in ccx's order S1..S5:
 #: triangles as tri6, quadrilaterals as quad9 (quad8 order, then the centre).
@@ -133,15 +142,100 @@ def prism_face_forces(
         f = pressure_forces(QUAD9, coords[quads], np.full(quads.shape[0], pressure), _QUAD_RULE)
         f = f[:, :8] + _CENTRE_WEIGHTS[None, :, None] * f[:, 8:9]
         np.add.at(forces, quads[:, :8], f)
-    geometry = compat.geometry_dofs(mesh)
-    space = compat.cell_dofs(V)
-    dof_of_node = np.full(x.shape[0], -1, dtype=np.int64)
-    dof_of_node[geometry.ravel()] = space.ravel()
+    dof_of_node = _geometry_node_dofs(V)
     out = dolfinx.fem.Function(V)
     values = out.x.array.reshape(-1, 3)
     has = dof_of_node >= 0
     values[dof_of_node[has]] = forces[input_index[has]]
     return out
+
+
+def _geometry_node_dofs(V: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """The local block dof of ``V`` at each local geometry node (-1 for none)."""
+    mesh = V.mesh
+    dof_of_node = np.full(mesh.geometry.x.shape[0], -1, dtype=np.int64)
+    dof_of_node[compat.geometry_dofs(mesh).ravel()] = compat.cell_dofs(V).ravel()
+    return dof_of_node
+
+
+def c3d15_face_surface(
+    name: str,
+    quadrilaterals: np.ndarray | None = None,
+    triangles: np.ndarray | None = None,
+) -> FaceNodesSurface:
+    """A contact surface of C3D15 faces given by their nodes, with ccx's face rules.
+
+    The quadrilaterals are 8-node faces whose spring areas take ccx's 2 x 2 Gauss points
+    (``QUAD8_GAUSS2``, docs/method.md §38.2), the triangles 6-node faces; a surface of both
+    kinds gives the triangles as the ``more`` faces (a slave, or a contact pair's master:
+    docs/method.md §38.8). Shared by the deck runner (``calculix/model/c3d15.py``) and
+    :func:`prism_face_surface`.
+
+    Args:
+        name: Label used in messages.
+        quadrilaterals: ``(Q, 8)`` local block dofs in ccx's face order, or None where the
+            surface has no quadrilaterals on any process (an array, maybe empty, where some
+            process has them: every process gives the same kinds).
+        triangles: ``(T, 6)`` local block dofs, or None likewise.
+    """
+    groups = [
+        (face_type, faces)
+        for face_type, faces in ((QUAD8_GAUSS2, quadrilaterals), (TRI6, triangles))
+        if faces is not None
+    ]
+    if not groups:
+        raise ValueError(f"c3d15_face_surface: surface '{name}' has no faces of either kind")
+    (face_type, faces), *more = groups
+    return FaceNodesSurface(face_type, faces, name, more=tuple(more))
+
+
+def prism_face_surface(
+    V: dolfinx.fem.FunctionSpace, faces: PrismFaces, tag: int, name: str | None = None
+) -> FaceNodesSurface:
+    """The faces tagged ``tag`` as a contact surface of ``V`` (a slave or a master).
+
+    Each face becomes the block dofs of its nodes in ccx's order, outward (the quadrilaterals'
+    centres left out: C3D15's quad8 faces, whose centre the face-centre constraints of
+    :func:`~dolfinx_ntf.fem.serendipity_wedge.wedge15_space` fix), with ccx's face rules
+    (:func:`c3d15_face_surface`). On several processes each process gives the faces whose nodes
+    it holds (owned or ghost: those of its owned and ghost cells); the contact problem drops
+    the faces two processes give. Pass ``constraints`` of :func:`wedge15_space` to the
+    contact problem, so that its springs see C3D15's faces (docs/method.md §40.6).
+
+    Args:
+        V: The vector degree-2 space on the 18-node prism mesh the faces were read with
+            (:func:`~dolfinx_ntf.fem.serendipity_wedge.wedge15_space`).
+        faces: The mesh's tagged faces (``meshes.gmsh_io.mesh_from_gmsh``).
+        tag: Physical group of the surface. Triangles and quadrilaterals both make a surface
+            of two face types (a slave, or a contact pair's master, docs/method.md §38.8).
+        name: Label used in messages (default ``"faces <tag>"``).
+
+    Raises:
+        ValueError: no face has the tag; a face node that is not a node of the mesh.
+    """
+    if V.dofmap.index_map_bs != 3:
+        raise ValueError("prism_face_surface: a 3-component vector space is needed")
+    name = f"faces {tag}" if name is None else name
+    triangles, quads = faces.find(tag)
+    mesh = V.mesh
+    input_index = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    largest = max(input_index.max(initial=-1), triangles.max(initial=-1), quads.max(initial=-1))
+    dof_of_input = np.full(int(largest) + 1, -1, dtype=np.int64)
+    dof_of_input[input_index] = _geometry_node_dofs(V)
+    given = np.concatenate([triangles.ravel(), quads.ravel()])
+    held = np.isin(given, input_index).astype(np.int32)
+    mesh.comm.Allreduce(MPI.IN_PLACE, held, op=MPI.MAX)
+    if not np.all(held):
+        missing = int(given[np.argmin(held)])
+        raise ValueError(
+            f"prism_face_surface: face node {missing} (input index) of tag {tag} is not a node "
+            "of the mesh"
+        )
+    kinds = []
+    for rows in (quads[:, :8], triangles):
+        dofs = dof_of_input[rows]
+        kinds.append(dofs[np.all(dofs >= 0, axis=1)] if rows.size else None)
+    return c3d15_face_surface(name, quadrilaterals=kinds[0], triangles=kinds[1])
 
 
 def _gathered(

@@ -140,3 +140,76 @@ def solve_wedge15(V, constraints, bcs, forces: dolfinx.fem.Function) -> dolfinx.
         obj.destroy()
     elimination.destroy()
     return out
+
+
+#: Physical groups of the punch model: the two volumes and the contact and loaded faces.
+BLOCK_VOLUME, PUNCH_VOLUME = 1, 2
+BASE, MASTER, SLAVE, PUNCH_TOP = 11, 12, 21, 22
+
+
+def _body(x0: float, y0: float, z0: float, dx: float, dy: float, dz: float, axis: str, n: int):
+    """A box of prisms extruded along ``axis`` ("y" or "z") in ``n`` layers: its volume tag."""
+    occ = gmsh.model.occ
+    if axis == "z":
+        surface = occ.addRectangle(x0, y0, z0, dx, dy)
+        extruded = occ.extrude([(2, surface)], 0, 0, dz, numElements=[n], recombine=True)
+    else:  # the rectangle in the x-z plane at y0 (rotated about x), extruded along y
+        surface = occ.addRectangle(x0, z0, 0, dx, dz)
+        occ.rotate([(2, surface)], 0, 0, 0, 1, 0, 0, np.pi / 2)
+        occ.translate([(2, surface)], 0, y0, 0)
+        extruded = occ.extrude([(2, surface)], 0, dy, 0, numElements=[n], recombine=True)
+    return next(t for d, t in extruded if d == 3)
+
+
+def build_prism_punch(
+    *, incomplete: bool = True, axis: str = "y", punch: tuple = (0.6, 0.25, 0.85, 0.5)
+) -> None:
+    """A punch of second-order prisms on a block of them, in the current gmsh session.
+
+    The block [0, 2] x [0, 1] x [0, 1] (mesh size 0.5, 3 layers along the axis), the punch
+    ``[x0, x0 + dx] x [y0, y0 + dy] x [1, 1.5]`` (``punch = (x0, y0, dx, dy)``, size 0.3, 2
+    layers) on its top, touching, the meshes not matching and no node shared. The prisms' axis
+    is ``axis``: "y" puts quadrilaterals on the contact faces, "z" triangles. Groups: the
+    volumes, the block's base and top (``MASTER``), the punch's bottom (``SLAVE``) and top.
+    """
+    gmsh.model.add("quadratic_prism_punch")
+    x0, y0, dx, dy = punch
+    block = _body(0, 0, 0, 2, 1, 1, axis, 3)
+    punch_volume = _body(x0, y0, 1, dx, dy, 0.5, axis, 2)
+    occ = gmsh.model.occ
+    occ.synchronize()
+    e = 1e-6
+    for volume, size in ((block, 0.5), (punch_volume, 0.3)):
+        points = gmsh.model.getBoundary([(3, volume)], recursive=True)
+        gmsh.model.mesh.setSize(points, size)
+    gmsh.model.addPhysicalGroup(3, [block], BLOCK_VOLUME)
+    gmsh.model.addPhysicalGroup(3, [punch_volume], PUNCH_VOLUME)
+    for volume, groups in (
+        (
+            block,
+            {BASE: (-e, -e, -e, 2 + e, 1 + e, e), MASTER: (-e, -e, 1 - e, 2 + e, 1 + e, 1 + e)},
+        ),
+        (
+            punch_volume,
+            {
+                SLAVE: (x0 - e, y0 - e, 1 - e, x0 + dx + e, y0 + dy + e, 1 + e),
+                PUNCH_TOP: (x0 - e, y0 - e, 1.5 - e, x0 + dx + e, y0 + dy + e, 1.5 + e),
+            },
+        ),
+    ):
+        own = {t for _, t in gmsh.model.getBoundary([(3, volume)], oriented=False)}
+        for tag, box in groups.items():
+            found = [t for _, t in occ.getEntitiesInBoundingBox(*box, dim=2) if t in own]
+            gmsh.model.addPhysicalGroup(2, found, tag)
+    _second_order(incomplete)
+    _snap_nodes()
+
+
+def _snap_nodes(grid: float = 0.125) -> None:
+    """Node coordinates within 1e-12 of a multiple of ``grid`` put on it (the rotation's 1e-16)."""
+    tags, x, _ = gmsh.model.mesh.getNodes()
+    x = x.reshape(-1, 3)
+    snapped = np.round(x / grid) * grid
+    near = np.abs(x - snapped) < 1e-12
+    for k in np.flatnonzero(near.any(axis=1)):
+        gmsh.model.mesh.setNode(int(tags[k]), np.where(near[k], snapped[k], x[k]).tolist(), [])

@@ -29,9 +29,9 @@ from dolfinx_ntf.fem.serendipity_wedge import (
     require_quadratic_prisms,
 )
 from dolfinx_ntf.fem.surfaces import FaceNodesSurface
+from dolfinx_ntf.fem.wedge_faces import c3d15_face_surface
 from dolfinx_ntf.kernels.faces import (
     QUAD8,
-    QUAD8_GAUSS2,
     TRI6,
     film_matrices,
     flux_flows,
@@ -371,15 +371,16 @@ def _face_nodes_surface(
     """Faces (element rows, 0-based ccx faces) of the elements this process holds, per type."""
     block = maps.block
     held = maps.element_cell[rows] >= 0
-    groups = []  # quadrilaterals with ccx's 2 x 2 area rule (§38.2), triangles
-    for face_type, which in ((QUAD8_GAUSS2, faces >= 2), (TRI6, faces < 2)):
-        if np.any(which):  # decided on the deck: the same types on every process
+    kinds = []  # quadrilaterals (ccx's 2 x 2 area rule, §38.2), triangles
+    for size, which in ((8, faces >= 2), (6, faces < 2)):
+        dofs = None
+        if np.any(which):  # decided on the deck: the same kinds on every process
             take = which & held
-            local = block.type.faces[faces[take], : face_type.num_nodes]
+            local = block.type.faces[faces[take], :size]
             nodes = block.connectivity[rows[take, None], local]
-            groups.append((face_type, maps.node_dof[deck.node_index(nodes)].astype(np.int32)))
-    (face_type, dofs), *more = groups
-    return FaceNodesSurface(face_type, dofs, name, more=tuple(more))
+            dofs = maps.node_dof[deck.node_index(nodes)].astype(np.int32)
+        kinds.append(dofs)
+    return c3d15_face_surface(name, quadrilaterals=kinds[0], triangles=kinds[1])
 
 
 def _exterior_faces(block: ElementBlock) -> np.ndarray:
