@@ -461,6 +461,7 @@ EXTRA_TYPES: list[str] = [
     "dolfinx_ntf.contact.problem.ResidualTerm",
     "dolfinx_ntf.contact.problem.ElementTerm",
     "dolfinx_ntf.contact.problem.MaterialHistory",
+    "dolfinx_ntf.contact.thermal.HeatElementTerm",
     "dolfinx_ntf.kernels.gap_conductance.ThermalSpringEvaluation",
     "dolfinx_ntf.contact.pairing.Pairing",
     "dolfinx_ntf.solvers.convergence.ForceScaledTest",

@@ -49,7 +49,7 @@ class HeatElementTerm(typing.Protocol):
     """Element blocks added to the heat residual and Jacobian, in the global numbering.
 
     For example film conditions on faces the mesh has no ``ds`` for (C3D15's, docs/method.md
-    §39); see :attr:`ThermalContactProblem.element_terms`. Their couplings must be in the
+    §39); see ``ThermalContactProblem.element_terms``. Their couplings must be in the
     matrix pattern (nodes of one cell).
     """
 

@@ -171,7 +171,7 @@ class FaceNodesSurface:
     For meshes whose facets dolfinx does not number: dolfinx 0.11 gives a prism mesh two facet
     types, and ``ds``, ``exterior_facet_indices`` and ``connectivity(2, 0)`` raise "Multiple
     entity types in mesh" there (C3D15 decks, docs/method.md §38). Its faces have no facet
-    index (:data:`NO_FACET`), so facet-based outputs (the recovered pressure) leave them out.
+    index (``NO_FACET``), so facet-based outputs (the recovered pressure) leave them out.
 
     Args:
         face_type: The type of every face (e.g. ``TRI6`` or ``QUAD8`` of ``kernels.faces``).

@@ -199,8 +199,9 @@ def prism_face_surface(
     :func:`~dolfinx_ntf.fem.serendipity_wedge.wedge15_space` fix), with ccx's face rules
     (:func:`c3d15_face_surface`). On several processes each process gives the faces whose nodes
     it holds (owned or ghost: those of its owned and ghost cells); the contact problem drops
-    the faces two processes give. Pass ``constraints`` of :func:`wedge15_space` to the
-    contact problem, so that its springs see C3D15's faces (docs/method.md §40.6).
+    the faces two processes give. Pass the ``constraints`` of
+    :func:`~dolfinx_ntf.fem.serendipity_wedge.wedge15_space` to the contact problem, so that its
+    springs see C3D15's faces (docs/method.md §40.6).
 
     Args:
         V: The vector degree-2 space on the 18-node prism mesh the faces were read with

@@ -37,10 +37,13 @@ __all__ = [
     "collapsed_wedges",
 ]
 
-#: XDMF's cell type numbers in a ``Mixed`` topology.
+#: XDMF's cell type number of a hexahedron in a ``Mixed`` topology.
 XDMF_HEXAHEDRON = 9
+#: XDMF's cell type number of a 6-node wedge.
 XDMF_WEDGE = 8
+#: XDMF's cell type number of a 15-node wedge (``VTK_QUADRATIC_WEDGE``).
 XDMF_WEDGE_15 = 40
+#: XDMF's cell type number of an 18-node wedge (``VTK_BIQUADRATIC_QUADRATIC_WEDGE``).
 XDMF_WEDGE_18 = 41
 
 #: Nodes per cell of the XDMF types written.

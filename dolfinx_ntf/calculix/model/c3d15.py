@@ -227,7 +227,7 @@ class C3D15Films:
     """``*FILM`` conditions on C3D15 faces of one face type, as element blocks of ``T`` (§39).
 
     No ``ds`` on prism meshes (§34.4): each face of an owned cell is a block of its nodes with
-    the matrix ``h M`` (``M`` from :func:`~dolfinx_ntf.kernels.faces.film_matrices` with ccx's
+    the matrix ``h M`` (``M`` from ``kernels.faces.film_matrices`` with ccx's
     face rule) and the residual ``h M (T - T_sink)``: the heat flow out of the face. The
     :class:`~dolfinx_ntf.contact.thermal.HeatElementTerm` role.
 
