@@ -59,6 +59,26 @@ logger = logging.getLogger("dolfinx_ntf")
 SEARCH_TOLERANCE = 1e-3
 
 
+def _refuse_shared_nodes(
+    comm: MPI.Comm,
+    name: str,
+    slave_nodes: np.ndarray,
+    master_nodes: np.ndarray,
+    reference: np.ndarray,
+    gdim: int,
+) -> None:
+    """Raise on every process if a node is on both surfaces of pair ``name`` (naming the first)."""
+    both = np.intersect1d(slave_nodes, master_nodes)
+    error = None
+    if both.size:
+        where = ", ".join(f"{c:.6g}" for c in reference[both[0]][:gdim])
+        error = ValueError(
+            f"{name}: {both.size} node(s) belong to both the slave and the master surface "
+            f"(first at ({where}))"
+        )
+    validation.raise_collectively(comm, error)
+
+
 class Pairing:
     """The contact pairs' states and their (re-)pairing at the current displacement.
 
@@ -244,21 +264,11 @@ class Pairing:
             )
         if patch is None and master_faces.faces.shape[0] == 0:
             raise ValueError(f"{name}: the master surface has no faces")
+        reference = self._reference if self.halo is None else self.halo.reference
         master = patch or MasterSurface(
-            master_faces.face_type,
-            master_faces.faces,
-            name=f"{name} master",
-            coords=self._reference if self.halo is None else self.halo.reference,
+            master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference
         )
-        both = np.intersect1d(slave.nodes, master_faces.nodes)
-        error = None
-        if both.size:
-            x = (self._reference if self.halo is None else self.halo.reference)[both[0]]
-            error = ValueError(
-                f"{name}: {both.size} node(s) belong to both the slave and the master surface "
-                f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
-            )
-        validation.raise_collectively(comm, error)
+        _refuse_shared_nodes(comm, name, slave.nodes, master_faces.nodes, reference, 3)
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
@@ -327,15 +337,7 @@ class Pairing:
             more=tuple((g.face_type, g.faces) for g in kept[1:]),
         )
         nodes = np.unique(np.concatenate([g.nodes for g in kept]))
-        both = np.intersect1d(slave.nodes, nodes)
-        error = None
-        if both.size:
-            x = reference[both[0]]
-            error = ValueError(
-                f"{name}: {both.size} node(s) belong to both the slave and the master surface "
-                f"(first at ({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}))"
-            )
-        validation.raise_collectively(comm, error)
+        _refuse_shared_nodes(comm, name, slave.nodes, nodes, reference, 3)
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
@@ -407,15 +409,7 @@ class Pairing:
             master_faces.face_type, master_faces.faces, name=f"{name} master", coords=reference,
             fallback_factor=factor, fallback_ring=ring,
         )  # fmt: skip
-        both = np.intersect1d(slave.nodes, master_faces.nodes)
-        error = None
-        if both.size:
-            x = reference[both[0]]
-            error = ValueError(
-                f"{name}: {both.size} node(s) belong to both the slave and the master surface "
-                f"(first at ({x[0]:.6g}, {x[1]:.6g}))"
-            )
-        validation.raise_collectively(comm, error)
+        _refuse_shared_nodes(comm, name, slave.nodes, master_faces.nodes, reference, 2)
         friction = FrictionState(
             slave.nodes.size, reset_on_separation=self.reset_friction_on_separation
         )
